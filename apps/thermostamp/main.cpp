@@ -1,0 +1,178 @@
+// thermostamp: the command line. See docs/user-guide.md.
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <boost/dll/runtime_symbol_info.hpp>
+
+#include "commands.hpp"
+#include "io/logging.hpp"
+#include "job/job.hpp"
+#include "plugins/describe.hpp"
+#include "plugins/registry.hpp"
+#include "solve/simulation.hpp"
+#include "version.hpp"
+
+namespace {
+
+constexpr const char* kUsage = R"(usage:
+  thermostamp run JOB.json [--out DIR] [--threads N] [--set PATH=VALUE ...] [--quiet]
+  thermostamp validate JOB.json [--set PATH=VALUE ...]
+  thermostamp plugins [--json | --markdown]
+  thermostamp study STUDY.json [--out DIR] [--threads N] [--quiet]
+  thermostamp report DIR
+  thermostamp --version
+
+exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed
+)";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Args {
+  std::string command;
+  std::vector<std::string> positional;
+  std::vector<std::string> sets;
+  std::string out;
+  int threads = 0;
+  bool quiet = false, json = false, markdown = false;
+};
+
+Args parse(int argc, char** argv) {
+  Args a;
+  std::vector<std::string> v(argv + 1, argv + argc);
+  if (v.empty()) throw UsageError("no command given");
+  a.command = v[0];
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    const std::string& s = v[i];
+    auto value = [&](const std::string& opt) {
+      if (i + 1 >= v.size()) throw UsageError(opt + " needs a value");
+      return v[++i];
+    };
+    if (s == "--set") {
+      a.sets.push_back(value(s));
+    } else if (s.rfind("--set=", 0) == 0) {
+      a.sets.push_back(s.substr(6));
+    } else if (s == "--out") {
+      a.out = value(s);
+    } else if (s == "--threads") {
+      const std::string t = value(s);
+      try {
+        std::size_t used = 0;
+        a.threads = std::stoi(t, &used);
+        if (used != t.size() || a.threads < 1) throw std::invalid_argument(t);
+      } catch (const std::exception&) {
+        throw UsageError("--threads expects a positive integer, found '" + t + "'");
+      }
+    } else if (s == "--quiet") {
+      a.quiet = true;
+    } else if (s == "--json") {
+      a.json = true;
+    } else if (s == "--markdown") {
+      a.markdown = true;
+    } else if (s.rfind("--", 0) == 0) {
+      throw UsageError("unknown option '" + s + "'");
+    } else {
+      a.positional.push_back(s);
+    }
+  }
+  return a;
+}
+
+int cmd_run(const Args& a, bool validate_only) {
+  if (a.positional.size() != 1) throw UsageError("expected one job file");
+  ts::log_to_terminal(a.quiet);
+  const ts::Job job = ts::load_job(a.positional[0], a.sets);
+  ts::PluginRegistry registry;
+  ts::Simulation sim(job, registry);
+  if (validate_only) {
+    std::cout << "job '" << job.name << "' is valid: " << job.parts.size() << " part(s), " << job.tools.size()
+              << " tool(s), " << job.contacts.size() + job.heat_exchanges.size() << " interaction(s); plugins: "
+              << ts::join(sim.plugins_loaded()) << "\n";
+    return 0;
+  }
+  ts::RunOptions opt;
+  opt.out_dir = a.out.empty() ? std::filesystem::path("results") / job.name : std::filesystem::path(a.out);
+  opt.threads = a.threads;
+  opt.quiet = a.quiet;
+  std::filesystem::create_directories(opt.out_dir);
+  ts::log_to_file(opt.out_dir / "log.txt");
+  ts::logger("job")->info("thermostamp {} running {} -> {}", ts::kVersion, job.file.string(), opt.out_dir.string());
+  for (const auto& s : a.sets) ts::logger("job")->info("override: {}", s);
+  const ts::RunResult r = sim.run(opt);
+  ts::log_close_file();
+  if (!r.ok) {
+    std::cerr << "error: run failed: " << r.error << "\n(frames and probes up to the failure are in "
+              << opt.out_dir.string() << ")\n";
+    return 3;
+  }
+  if (!a.quiet) std::cout << "results: " << opt.out_dir.string() << "\n";
+  return 0;
+}
+
+int cmd_plugins(const Args& a) {
+  ts::PluginRegistry registry;
+  registry.load_all();
+  const auto all = registry.all();
+  if (a.json) {
+    ts::json out = ts::json::array();
+    for (const auto* r : all) out.push_back(ts::descriptor_json(*r));
+    std::cout << out.dump(2) << "\n";
+  } else if (a.markdown) {
+    std::cout << ts::reference_markdown(all);
+  } else {
+    if (all.empty()) std::cout << "no plugin found\n";
+    for (const auto* r : all) std::cout << ts::descriptor_text(*r) << "\n";
+    std::cout << "searched: ";
+    std::vector<std::string> dirs;
+    for (const auto& d : registry.search_dirs()) dirs.push_back(d.string());
+    std::cout << ts::join(dirs) << "\n";
+  }
+  for (const auto& e : registry.load_errors()) std::cerr << "warning: " << e << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    if (argc >= 2 && (std::string(argv[1]) == "--version" || std::string(argv[1]) == "version")) {
+      std::cout << "thermostamp " << ts::kVersion << " (plugin SDK " << ts::sdk::kSdkVersion << ", ABI "
+                << ts::sdk::kAbiVersion << ")\n";
+      return 0;
+    }
+    if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h" ||
+                      std::string(argv[1]) == "help")) {
+      std::cout << kUsage;
+      return 0;
+    }
+    const Args a = parse(argc, argv);
+    if (a.command == "run") return cmd_run(a, false);
+    if (a.command == "validate") return cmd_run(a, true);
+    if (a.command == "plugins") return cmd_plugins(a);
+    if (a.command == "study") {
+      if (a.positional.size() != 1) throw UsageError("expected one study file");
+      ts::log_to_terminal(a.quiet);
+      return ts::cli::run_study(a.positional[0], a.out, a.threads, a.quiet);
+    }
+    if (a.command == "report") {
+      if (a.positional.size() != 1) throw UsageError("expected one output folder");
+      return ts::cli::run_report(a.positional[0]);
+    }
+    throw UsageError("unknown command '" + a.command + "'");
+  } catch (const UsageError& e) {
+    std::cerr << "error: " << e.what() << "\n" << kUsage;
+    return 2;
+  } catch (const ts::JobError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  } catch (const ts::RunError& e) {
+    std::cerr << "error: run failed: " << e.what() << "\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 3;
+  }
+}

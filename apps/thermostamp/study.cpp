@@ -1,0 +1,200 @@
+// `thermostamp study`: error against run time for several variants of a job.
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include <boost/dll/runtime_symbol_info.hpp>
+
+#include "commands.hpp"
+#include "io/logging.hpp"
+#include "job/job.hpp"
+#include "plugins/registry.hpp"
+#include "solve/simulation.hpp"
+
+namespace ts::cli {
+
+std::filesystem::path share_dir() {
+  try {
+    const std::filesystem::path exe = boost::dll::program_location().parent_path().string();
+    const auto installed = exe / ".." / "share" / "thermostamp";
+    if (std::filesystem::exists(installed / "scripts" / "report.py")) return std::filesystem::weakly_canonical(installed);
+  } catch (...) {
+  }
+  return THERMOSTAMP_SOURCE_SHARE_DIR;
+}
+
+int run_report(const std::filesystem::path& dir) {
+  if (!std::filesystem::is_directory(dir)) {
+    std::cerr << "error: '" << dir.string() << "' is not a folder\n";
+    return 2;
+  }
+  const auto script = share_dir() / "scripts" / "report.py";
+  const std::string python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const std::string cmd = python + " '" + script.string() + "' '" + dir.string() + "'";
+  const int rc = std::system(cmd.c_str());
+  return rc == 0 ? 0 : 3;
+}
+
+namespace {
+
+struct Variant {
+  std::string label;
+  json set;
+};
+
+// Reference profile interpolated at z (linear; constant for one value).
+double interpolate(const ProbeSample& s, double z) {
+  if (s.values.size() == 1) return s.values[0];
+  if (z <= s.z.front()) return s.values.front();
+  if (z >= s.z.back()) return s.values.back();
+  const auto it = std::upper_bound(s.z.begin(), s.z.end(), z);
+  const std::size_t k = static_cast<std::size_t>(it - s.z.begin());
+  const double a = (z - s.z[k - 1]) / (s.z[k] - s.z[k - 1]);
+  return (1 - a) * s.values[k - 1] + a * s.values[k];
+}
+
+std::string key_of(const ProbeSample& s) {
+  std::ostringstream k;
+  k << s.probe << "|" << s.quantity << "|" << std::llround(s.time * 1e9);
+  return k.str();
+}
+
+}  // namespace
+
+int run_study(const std::filesystem::path& study_file, const std::filesystem::path& out_arg, int threads, bool quiet) {
+  const json doc = read_job_document(study_file);
+  ObjectReader top(doc, "");
+  if (top.text("format") != "thermostamp-study/1")
+    throw JobError("/format", "unsupported study format; this version reads 'thermostamp-study/1'");
+  const std::filesystem::path base = study_file.has_parent_path() ? study_file.parent_path() : ".";
+  const std::filesystem::path job_file = base / top.text("job");
+  Variant reference{"reference", json::object()};
+  {
+    ObjectReader r(top.raw("reference"), "/reference");
+    if (r.has("analytic")) throw JobError("/reference/analytic", "analytic references are not available in this version");
+    if (const json* s = r.optional_raw("set")) {
+      if (!s->is_object()) throw JobError("/reference/set", "expected an object of path: value");
+      reference.set = *s;
+    }
+    r.finish();
+  }
+  std::vector<Variant> variants;
+  const json& vs = top.raw("variants");
+  if (!vs.is_array() || vs.empty()) throw JobError("/variants", "expected a non-empty array");
+  for (std::size_t i = 0; i < vs.size(); ++i) {
+    ObjectReader r(vs[i], pointer_append("/variants", i));
+    Variant v;
+    v.label = r.text("label");
+    if (v.label.empty() || v.label == "reference" || v.label.find_first_of("/,") != std::string::npos)
+      throw JobError(r.at("label"), "a label must be non-empty, not 'reference', without '/' or ','");
+    if (const json* s = r.optional_raw("set")) {
+      if (!s->is_object()) throw JobError(r.at("set"), "expected an object of path: value");
+      v.set = *s;
+    } else {
+      v.set = json::object();
+    }
+    r.finish();
+    variants.push_back(v);
+  }
+  std::string quantity = "temperature_profile", norm = "max";
+  if (const json* e = top.optional_raw("error")) {
+    ObjectReader r(*e, "/error");
+    quantity = r.choice("quantity", {"temperature_profile", "temperature_mean"}, std::string("temperature_profile"));
+    norm = r.choice("norm", {"max", "rms"}, std::string("max"));
+    r.finish();
+  }
+  top.declare("name");
+  top.finish();
+
+  const json base_doc = read_job_document(job_file);
+  // Validate every variant before running anything.
+  std::vector<Variant> all = {reference};
+  all.insert(all.end(), variants.begin(), variants.end());
+  std::vector<Job> jobs;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    json d = base_doc;
+    const std::string ptr = i == 0 ? "/reference/set" : "/variants/" + std::to_string(i - 1) + "/set";
+    for (auto it = all[i].set.begin(); it != all[i].set.end(); ++it) {
+      try {
+        apply_set_value(d, it.key(), it.value());
+      } catch (const JobError& e) {
+        throw JobError(pointer_append(ptr, it.key()), e.what());
+      }
+    }
+    try {
+      jobs.push_back(parse_job(d, job_file));
+    } catch (const JobError& e) {
+      throw JobError("", "study " + ptr + " gives an invalid job: " + std::string(e.what()));
+    }
+  }
+  const std::string study_name = doc.contains("name") && doc["name"].is_string() ? doc["name"].get<std::string>()
+                                                                                  : study_file.stem().string();
+  const std::filesystem::path out = out_arg.empty() ? std::filesystem::path("results") / study_name : out_arg;
+  std::filesystem::create_directories(out);
+
+  PluginRegistry registry;
+  std::vector<RunResult> results;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    Simulation sim(jobs[i], registry);
+    RunOptions opt;
+    opt.out_dir = out / all[i].label;
+    opt.threads = threads;
+    opt.quiet = true;
+    std::filesystem::create_directories(opt.out_dir);
+    log_to_file(opt.out_dir / "log.txt");
+    if (!quiet) std::cerr << "study: running " << all[i].label << "\n";
+    results.push_back(sim.run(opt));
+    log_close_file();
+    if (!results.back().ok) {
+      std::cerr << "error: run failed: study variant '" << all[i].label << "': " << results.back().error << "\n";
+      return 3;
+    }
+  }
+  // Errors against the reference at common probe samples.
+  std::map<std::string, const ProbeSample*> ref;
+  for (const auto& s : results[0].probes)
+    if (s.quantity == quantity) ref[key_of(s)] = &s;
+  std::ofstream csv(out / "study.csv");
+  csv << "label,wall_time_s,error_K,norm,samples,thermal_steps,thermal_dt_s\n";
+  csv << "reference," << results[0].wall_time_s << ",0," << norm << "," << ref.size() << ","
+      << results[0].thermal_steps << "," << results[0].thermal_dt << "\n";
+  for (std::size_t i = 1; i < all.size(); ++i) {
+    double err_max = 0, err_sq = 0;
+    long long count = 0;
+    for (const auto& s : results[i].probes) {
+      if (s.quantity != quantity) continue;
+      const auto it = ref.find(key_of(s));
+      if (it == ref.end()) continue;
+      const ProbeSample& r = *it->second;
+      // The variant interpolated at the reference's through-thickness points.
+      const std::size_t n = r.z.empty() ? 1 : r.z.size();
+      for (std::size_t k = 0; k < n; ++k) {
+        const double v = r.z.empty() ? s.values[0] : interpolate(s, r.z[k]);
+        const double d = std::abs(v - r.values[k]);
+        err_max = std::max(err_max, d);
+        err_sq += d * d;
+        ++count;
+      }
+    }
+    if (count == 0) {
+      std::cerr << "error: study variant '" << all[i].label
+                << "' has no probe sample at the reference's times; give the probes an \"interval\"\n";
+      return 2;
+    }
+    const double err = norm == "max" ? err_max : std::sqrt(err_sq / count);
+    csv << all[i].label << "," << results[i].wall_time_s << "," << err << "," << norm << "," << count << ","
+        << results[i].thermal_steps << "," << results[i].thermal_dt << "\n";
+    if (!quiet)
+      std::cout << all[i].label << ": error " << err << " K (" << norm << "), wall " << results[i].wall_time_s
+                << " s\n";
+  }
+  csv.close();
+  run_report(out);
+  if (!quiet) std::cout << "study: " << (out / "study.csv").string() << "\n";
+  return 0;
+}
+
+}  // namespace ts::cli

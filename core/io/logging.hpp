@@ -1,0 +1,16 @@
+#pragma once
+// One logger per module ("job", "plugins", "solve", "io"), all writing to
+// the same sinks: the terminal (warnings and above when quiet) and, during
+// a run, DIR/log.txt.
+#include <filesystem>
+#include <memory>
+#include <spdlog/spdlog.h>
+
+namespace ts {
+
+std::shared_ptr<spdlog::logger> logger(const std::string& module);
+void log_to_terminal(bool quiet);
+void log_to_file(const std::filesystem::path& file);
+void log_close_file();
+
+}  // namespace ts

@@ -1,0 +1,188 @@
+#include "io/results_writer.hpp"
+
+#include <hdf5.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace ts {
+
+namespace {
+void write_dataset(hid_t loc, const std::string& name, const double* data, hsize_t rows, hsize_t cols) {
+  hsize_t dims[2] = {rows, cols};
+  const hid_t space = H5Screate_simple(cols > 1 ? 2 : 1, dims, nullptr);
+  const hid_t ds = H5Dcreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (ds < 0) throw std::runtime_error("HDF5: cannot create dataset " + name);
+  H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+  H5Dclose(ds);
+  H5Sclose(space);
+}
+void write_dataset(hid_t loc, const std::string& name, const int* data, hsize_t rows, hsize_t cols) {
+  hsize_t dims[2] = {rows, cols};
+  const hid_t space = H5Screate_simple(2, dims, nullptr);
+  const hid_t ds = H5Dcreate2(loc, name.c_str(), H5T_NATIVE_INT, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (ds < 0) throw std::runtime_error("HDF5: cannot create dataset " + name);
+  H5Dwrite(ds, H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+  H5Dclose(ds);
+  H5Sclose(space);
+}
+hid_t make_group(hid_t loc, const std::string& name) {
+  const hid_t g = H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (g < 0) throw std::runtime_error("HDF5: cannot create group " + name);
+  return g;
+}
+std::string frame_name(int k) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%06d", k);
+  return buf;
+}
+int extruded_levels(int nz) { return nz > 1 ? nz : 2; }
+}  // namespace
+
+ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts)
+    : dir_(dir), parts_(std::move(parts)) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const std::string path = (dir_ / "results.h5").string();
+  file_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (file_ < 0) throw std::runtime_error("cannot create " + path);
+  const hid_t g = make_group(file_, "parts");
+  for (const auto& p : parts_) {
+    const hid_t pg = make_group(g, p.name);
+    write_dataset(pg, "triangles", p.triangles->data(), p.num_elements, 3);
+    // Extruded through-thickness mesh: wedges between consecutive levels.
+    const int nl = extruded_levels(p.nz);
+    std::vector<int> wedges;
+    wedges.reserve(static_cast<std::size_t>(6) * p.num_elements * (nl - 1));
+    for (int l = 0; l + 1 < nl; ++l)
+      for (int e = 0; e < p.num_elements; ++e) {
+        for (int a = 0; a < 3; ++a) wedges.push_back((*p.triangles)[3 * e + a] * nl + l);
+        for (int a = 0; a < 3; ++a) wedges.push_back((*p.triangles)[3 * e + a] * nl + l + 1);
+      }
+    write_dataset(pg, "wedges", wedges.data(), static_cast<hsize_t>(p.num_elements) * (nl - 1), 6);
+    H5Gclose(pg);
+  }
+  H5Gclose(g);
+  H5Gclose(make_group(file_, "frames"));
+  H5Fflush(file_, H5F_SCOPE_GLOBAL);
+}
+
+ResultsWriter::~ResultsWriter() {
+  if (file_ >= 0) H5Fclose(file_);
+}
+
+void ResultsWriter::write_frame(double time, const std::vector<const double*>& x,
+                                const std::vector<const double*>& normals,
+                                const std::vector<std::vector<FrameField>>& fields) {
+  const int k = frames();
+  const hid_t frames_g = H5Gopen2(file_, "frames", H5P_DEFAULT);
+  const hid_t fg = make_group(frames_g, frame_name(k));
+  {
+    const hid_t space = H5Screate(H5S_SCALAR);
+    const hid_t at = H5Acreate2(fg, "time", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT);
+    H5Awrite(at, H5T_NATIVE_DOUBLE, &time);
+    H5Aclose(at);
+    H5Sclose(space);
+  }
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    const WriterPart& wp = parts_[p];
+    const hid_t pg = make_group(fg, wp.name);
+    write_dataset(pg, "nodes", x[p], wp.num_nodes, 3);
+    const int nl = extruded_levels(wp.nz);
+    std::vector<double> layer_nodes(static_cast<std::size_t>(3) * wp.num_nodes * nl);
+    for (int i = 0; i < wp.num_nodes; ++i)
+      for (int l = 0; l < nl; ++l) {
+        const double z = -0.5 * wp.thickness + wp.thickness * l / (nl - 1);
+        for (int d = 0; d < 3; ++d)
+          layer_nodes[3 * (static_cast<std::size_t>(i) * nl + l) + d] = x[p][3 * i + d] + z * normals[p][3 * i + d];
+      }
+    write_dataset(pg, "layer_nodes", layer_nodes.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 3);
+    for (const auto& f : fields[p]) {
+      if (f.on_layers) {
+        // Values bottom to top; a single value per node is repeated on both levels.
+        std::vector<double> v(static_cast<std::size_t>(wp.num_nodes) * nl);
+        for (int i = 0; i < wp.num_nodes; ++i)
+          for (int l = 0; l < nl; ++l) v[static_cast<std::size_t>(i) * nl + l] = f.data[static_cast<std::size_t>(i) * wp.nz + (wp.nz > 1 ? l : 0)];
+        write_dataset(pg, f.name, v.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 1);
+      } else {
+        const hsize_t rows = f.on_cells ? wp.num_elements : wp.num_nodes;
+        write_dataset(pg, f.name, f.data, rows, f.components);
+      }
+    }
+    H5Gclose(pg);
+  }
+  H5Gclose(fg);
+  H5Gclose(frames_g);
+  H5Fflush(file_, H5F_SCOPE_GLOBAL);
+  times_.push_back(time);
+  std::vector<std::vector<FrameField>> kinds = fields;
+  for (auto& v : kinds)
+    for (auto& f : v) f.data = nullptr;
+  frame_fields_.push_back(std::move(kinds));
+  write_xdmf();
+}
+
+void ResultsWriter::write_xdmf() const {
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n <Domain>\n";
+  x << "  <Grid Name=\"frames\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  for (std::size_t k = 0; k < times_.size(); ++k) {
+    const std::string fpath = "results.h5:/frames/" + frame_name(static_cast<int>(k));
+    x << "   <Grid Name=\"frame_" << k << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n";
+    x << "    <Time Value=\"" << times_[k] << "\" />\n";
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      const WriterPart& wp = parts_[p];
+      const int nl = extruded_levels(wp.nz);
+      const std::string ppath = fpath + "/" + wp.name;
+      // Mid-surface.
+      x << "    <Grid Name=\"" << wp.name << "\" GridType=\"Uniform\">\n";
+      x << "     <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << wp.num_elements << "\">\n";
+      x << "      <DataItem Dimensions=\"" << wp.num_elements << " 3\" NumberType=\"Int\" Format=\"HDF\">results.h5:/parts/"
+        << wp.name << "/triangles</DataItem>\n     </Topology>\n";
+      x << "     <Geometry GeometryType=\"XYZ\">\n      <DataItem Dimensions=\"" << wp.num_nodes
+        << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << ppath << "/nodes</DataItem>\n     </Geometry>\n";
+      for (const auto& f : frame_fields_[k][p]) {
+        if (f.on_layers) continue;
+        const int rows = f.on_cells ? wp.num_elements : wp.num_nodes;
+        x << "     <Attribute Name=\"" << f.name << "\" AttributeType=\"" << (f.components == 3 ? "Vector" : "Scalar")
+          << "\" Center=\"" << (f.on_cells ? "Cell" : "Node") << "\">\n      <DataItem Dimensions=\"" << rows;
+        if (f.components > 1) x << " " << f.components;
+        x << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << ppath << "/" << f.name
+          << "</DataItem>\n     </Attribute>\n";
+      }
+      x << "    </Grid>\n";
+      // Extruded through-thickness view.
+      bool any_layer = false;
+      for (const auto& f : frame_fields_[k][p]) any_layer = any_layer || f.on_layers;
+      if (any_layer) {
+        const long long nw = static_cast<long long>(wp.num_elements) * (nl - 1);
+        x << "    <Grid Name=\"" << wp.name << "_thickness\" GridType=\"Uniform\">\n";
+        x << "     <Topology TopologyType=\"Wedge\" NumberOfElements=\"" << nw << "\">\n";
+        x << "      <DataItem Dimensions=\"" << nw << " 6\" NumberType=\"Int\" Format=\"HDF\">results.h5:/parts/"
+          << wp.name << "/wedges</DataItem>\n     </Topology>\n";
+        x << "     <Geometry GeometryType=\"XYZ\">\n      <DataItem Dimensions=\""
+          << static_cast<long long>(wp.num_nodes) * nl << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+          << ppath << "/layer_nodes</DataItem>\n     </Geometry>\n";
+        for (const auto& f : frame_fields_[k][p]) {
+          if (!f.on_layers) continue;
+          x << "     <Attribute Name=\"" << f.name << "\" AttributeType=\"Scalar\" Center=\"Node\">\n"
+            << "      <DataItem Dimensions=\"" << static_cast<long long>(wp.num_nodes) * nl
+            << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << ppath << "/" << f.name
+            << "</DataItem>\n     </Attribute>\n";
+        }
+        x << "    </Grid>\n";
+      }
+    }
+    x << "   </Grid>\n";
+  }
+  x << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  const auto tmp = dir_ / "results.xdmf.tmp";
+  {
+    std::ofstream out(tmp);
+    out << x.str();
+  }
+  std::filesystem::rename(tmp, dir_ / "results.xdmf");
+}
+
+}  // namespace ts

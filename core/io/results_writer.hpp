@@ -1,0 +1,49 @@
+#pragma once
+// results.h5 + results.xdmf: fields per frame, readable in ParaView as a time
+// series. Each frame is flushed to disk as soon as it is written and the
+// XDMF index is rewritten, so a run that fails keeps every frame so far.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace ts {
+
+struct WriterPart {
+  std::string name;
+  int num_nodes = 0, num_elements = 0;
+  const std::vector<int>* triangles = nullptr;
+  double thickness = 0;
+  int nz = 1;  // through-thickness values per node
+};
+
+struct FrameField {
+  std::string name;
+  const double* data = nullptr;
+  int components = 1;            // 1 scalar, 3 vector
+  bool on_cells = false;         // element data instead of node data
+  bool on_layers = false;        // extruded through-thickness mesh
+};
+
+class ResultsWriter {
+ public:
+  ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts);
+  ~ResultsWriter();
+  ResultsWriter(const ResultsWriter&) = delete;
+  ResultsWriter& operator=(const ResultsWriter&) = delete;
+
+  // Geometry of one part for this frame: mid-surface nodes and node normals
+  // (for the extruded through-thickness mesh).
+  void write_frame(double time, const std::vector<const double*>& x, const std::vector<const double*>& normals,
+                   const std::vector<std::vector<FrameField>>& fields);
+  int frames() const { return static_cast<int>(times_.size()); }
+
+ private:
+  void write_xdmf() const;
+  std::filesystem::path dir_;
+  std::vector<WriterPart> parts_;
+  long long file_ = -1;
+  std::vector<double> times_;
+  std::vector<std::vector<std::vector<FrameField>>> frame_fields_;  // names/kinds only
+};
+
+}  // namespace ts

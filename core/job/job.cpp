@@ -1,0 +1,483 @@
+#include "job/job.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+namespace ts {
+
+bool RegionDef::contains(double x, double y) const {
+  switch (kind) {
+    case Kind::All: return true;
+    case Kind::Circle: return (x - centre[0]) * (x - centre[0]) + (y - centre[1]) * (y - centre[1]) <= radius * radius;
+    case Kind::Box: return x >= lo[0] && x <= hi[0] && y >= lo[1] && y <= hi[1];
+  }
+  return false;
+}
+
+json read_job_document(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw JobError("", "cannot open job file '" + file.string() + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  try {
+    return json::parse(text);
+  } catch (const json::parse_error& e) {
+    // Translate the byte offset into line:column for the user.
+    std::size_t line = 1, col = 1;
+    for (std::size_t i = 0; i < std::min<std::size_t>(e.byte, text.size()); ++i) {
+      if (text[i] == '\n') {
+        ++line;
+        col = 1;
+      } else {
+        ++col;
+      }
+    }
+    std::string what = e.what();
+    const auto pos = what.find("syntax error");
+    if (pos != std::string::npos) what = what.substr(pos);
+    throw JobError("", file.string() + ":" + std::to_string(line) + ":" + std::to_string(col) +
+                           ": not valid JSON (" + what + ")");
+  }
+}
+
+namespace {
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : s) {
+    if (c == sep) {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+bool is_index(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+}
+
+void set_path(json& node, const std::vector<std::string>& keys, std::size_t k, const json& value,
+              const std::string& shown) {
+  const std::string& key = keys[k];
+  const bool last = k + 1 == keys.size();
+  if (key == "*") {
+    if (!node.is_array() && !node.is_object())
+      throw JobError("", "--set " + shown + ": '*' needs an array or object");
+    for (auto& child : node) {
+      if (last) child = value;
+      else set_path(child, keys, k + 1, value, shown);
+    }
+    return;
+  }
+  if (node.is_array()) {
+    if (!is_index(key)) throw JobError("", "--set " + shown + ": '" + key + "' is not an array index");
+    const std::size_t i = std::stoul(key);
+    if (i >= node.size())
+      throw JobError("", "--set " + shown + ": index " + key + " out of range (size " + std::to_string(node.size()) + ")");
+    if (last) node[i] = value;
+    else set_path(node[i], keys, k + 1, value, shown);
+    return;
+  }
+  if (node.is_null()) node = json::object();
+  if (!node.is_object()) throw JobError("", "--set " + shown + ": '" + key + "' is inside a non-object value");
+  if (last) node[key] = value;
+  else set_path(node[key], keys, k + 1, value, shown);
+}
+}  // namespace
+
+void apply_set(json& doc, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw JobError("", "--set expects PATH=VALUE, found '" + assignment + "'");
+  const std::string path = assignment.substr(0, eq);
+  const std::string text = assignment.substr(eq + 1);
+  json value;
+  try {
+    value = json::parse(text);
+  } catch (...) {
+    value = text;  // a bare word is a string
+  }
+  set_path(doc, split(path, '.'), 0, value, assignment);
+}
+
+void apply_set_value(json& doc, const std::string& path, const json& value) {
+  set_path(doc, split(path, '.'), 0, value, path + "=" + value.dump());
+}
+
+namespace {
+
+MeshDef parse_mesh(const json& j, const std::string& ptr, const std::filesystem::path& base) {
+  ObjectReader r(j, ptr);
+  MeshDef m;
+  if (r.has("file")) {
+    m.kind = MeshDef::Kind::File;
+    const std::string f = r.text("file");
+    m.file = std::filesystem::path(f).is_absolute() ? std::filesystem::path(f) : base / f;
+    if (!std::filesystem::exists(m.file)) throw JobError(r.at("file"), "mesh file '" + m.file.string() + "' not found");
+  } else {
+    const std::string gen = r.choice("generator", {"rectangle"});
+    (void)gen;
+    const auto o = r.reals("origin", 3, std::vector<double>{0, 0, 0});
+    const auto s = r.reals("size", 2);
+    for (int d = 0; d < 2; ++d)
+      if (!(s[d] > 0)) throw JobError(pointer_append(r.at("size"), d), "must be > 0, found " + std::to_string(s[d]));
+    const auto dv = r.raw("divisions");
+    if (!dv.is_array() || dv.size() != 2) throw JobError(r.at("divisions"), "expected two integers [nx, ny]");
+    for (int d = 0; d < 2; ++d) {
+      if (!dv[d].is_number_integer() || dv[d].get<long long>() < 1 || dv[d].get<long long>() > 100000)
+        throw JobError(pointer_append(r.at("divisions"), d), "expected an integer >= 1, found " + json_type_name(dv[d]));
+      m.divisions[d] = dv[d].get<int>();
+    }
+    m.origin = {o[0], o[1], o[2]};
+    m.size = {s[0], s[1]};
+  }
+  r.finish();
+  return m;
+}
+
+int find_index(const std::vector<std::string>& names, const std::string& name) {
+  auto it = std::find(names.begin(), names.end(), name);
+  return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+}
+
+std::string unknown_name(const std::string& what, const std::string& name, const std::vector<std::string>& known) {
+  std::string msg = "unknown " + what + " '" + name + "'";
+  const std::string dym = did_you_mean(name, known);
+  if (!dym.empty()) msg += "; " + dym;
+  msg += known.empty() ? "; none is defined" : "; known: " + join(known);
+  return msg;
+}
+
+}  // namespace
+
+Job parse_job(const json& doc, const std::filesystem::path& file) {
+  Job job;
+  job.file = file;
+  job.base_dir = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
+  job.document = doc;
+  ObjectReader top(doc, "");
+  const std::string format = top.text("format");
+  if (format != "thermostamp-job/1")
+    throw JobError("/format", "unsupported format '" + format + "'; this version reads 'thermostamp-job/1'");
+  job.name = top.text("name");
+  if (job.name.empty() || job.name.find_first_of("/\\") != std::string::npos)
+    throw JobError("/name", "must be a non-empty name without '/' (it names the output folder)");
+  {
+    ObjectReader t(top.raw("time"), "/time");
+    job.t_end = t.real("end", std::nullopt, 0.0, true);
+    t.finish();
+  }
+
+  // plugin_paths (optional): extra folders searched for plugin libraries.
+  for (const auto& p : top.texts("plugin_paths", std::vector<std::string>{})) {
+    std::filesystem::path path(p);
+    job.plugin_paths.push_back(path.is_absolute() ? path : job.base_dir / path);
+  }
+
+  // materials
+  std::vector<std::string> material_names;
+  {
+    const json& mats = top.raw("materials");
+    if (!mats.is_object() || mats.empty())
+      throw JobError("/materials", "expected an object with at least one material, found " + json_type_name(mats));
+    for (auto it = mats.begin(); it != mats.end(); ++it) {
+      MaterialDef m;
+      m.name = it.key();
+      m.pointer = pointer_append("/materials", it.key());
+      ObjectReader r(it.value(), m.pointer);
+      m.has_thermal = r.has("density") || r.has("specific_heat") || r.has("conductivity");
+      if (m.has_thermal) {
+        m.density = r.real("density", std::nullopt, 0.0, true);
+        m.specific_heat = r.real("specific_heat", std::nullopt, 0.0, true);
+        const auto k = r.reals("conductivity", 3);
+        for (int d = 0; d < 3; ++d)
+          if (!(k[d] > 0)) throw JobError(pointer_append(r.at("conductivity"), d), "conductivity must be > 0");
+        m.conductivity = {k[0], k[1], k[2]};
+      }
+      if (const json* v = r.optional_raw("membrane")) m.membrane = *v;
+      if (const json* v = r.optional_raw("bending")) m.bending = *v;
+      r.declare("source");
+      r.declare("description");
+      r.finish();
+      material_names.push_back(m.name);
+      job.materials.push_back(std::move(m));
+    }
+  }
+
+  // parts
+  std::vector<std::string> part_names;
+  {
+    const json& parts = top.raw("parts");
+    if (!parts.is_array() || parts.empty())
+      throw JobError("/parts", "expected an array with at least one part, found " + json_type_name(parts));
+    for (std::size_t i = 0; i < parts.size(); ++i) {
+      PartDef p;
+      p.pointer = pointer_append("/parts", i);
+      ObjectReader r(parts[i], p.pointer);
+      p.name = r.text("name");
+      if (find_index(part_names, p.name) >= 0) throw JobError(r.at("name"), "duplicate part name '" + p.name + "'");
+      p.mesh = parse_mesh(r.raw("mesh"), r.at("mesh"), job.base_dir);
+      p.thickness = r.real("thickness", std::nullopt, 0.0, true);
+      const std::string mat = r.text("material");
+      p.material = find_index(material_names, mat);
+      if (p.material < 0) throw JobError(r.at("material"), unknown_name("material", mat, material_names));
+      const auto f = r.reals("fibre_direction", 3, std::vector<double>{1, 0, 0});
+      p.fibre_direction = {f[0], f[1], f[2]};
+      if (f[0] * f[0] + f[1] * f[1] + f[2] * f[2] == 0.0)
+        throw JobError(r.at("fibre_direction"), "must not be the zero vector");
+      p.element = r.text("element", std::string("shell_rf_t3"));
+      p.initial_temperature = r.real("initial_temperature", 20.0, -273.15);
+      p.thickness_layers = static_cast<int>(r.integer("thickness_layers", 8, 1, 10000));
+      r.finish();
+      part_names.push_back(p.name);
+      job.parts.push_back(std::move(p));
+    }
+  }
+
+  // tools
+  std::vector<std::string> tool_names;
+  if (const json* tools = top.optional_raw("tools")) {
+    if (!tools->is_array()) throw JobError("/tools", "expected an array, found " + json_type_name(*tools));
+    for (std::size_t i = 0; i < tools->size(); ++i) {
+      ToolDef t;
+      t.pointer = pointer_append("/tools", i);
+      ObjectReader r((*tools)[i], t.pointer);
+      t.name = r.text("name");
+      if (find_index(tool_names, t.name) >= 0 || find_index(part_names, t.name) >= 0)
+        throw JobError(r.at("name"), "name '" + t.name + "' is already used by another part or tool");
+      ObjectReader s(r.raw("surface"), r.at("surface"));
+      t.surface.type = s.choice("type", {"plane", "sphere", "revolved", "mesh"});
+      if (t.surface.type == "plane") {
+        const auto p = s.reals("point", 3);
+        const auto n = s.reals("normal", 3);
+        t.surface.point = {p[0], p[1], p[2]};
+        t.surface.normal = {n[0], n[1], n[2]};
+        if (n[0] * n[0] + n[1] * n[1] + n[2] * n[2] == 0.0) throw JobError(s.at("normal"), "must not be the zero vector");
+      } else if (t.surface.type == "sphere") {
+        const auto c = s.reals("centre", 3);
+        t.surface.centre = {c[0], c[1], c[2]};
+        t.surface.radius = s.real("radius", std::nullopt, 0.0, true);
+      } else {
+        throw JobError(s.at("type"), "tool surface '" + t.surface.type +
+                                         "' is not available in this version; available: plane, sphere");
+      }
+      s.finish();
+      if (const json* m = r.optional_raw("motion")) t.motion = *m;
+      t.temperature = r.real("temperature", 20.0, -273.15);
+      r.finish();
+      tool_names.push_back(t.name);
+      job.tools.push_back(std::move(t));
+    }
+  }
+
+  auto find_body = [&](const std::string& name, const std::string& ptr) {
+    BodyDef b;
+    b.index = find_index(part_names, name);
+    if (b.index >= 0) return b;
+    b.index = find_index(tool_names, name);
+    b.is_tool = true;
+    if (b.index >= 0) return b;
+    std::vector<std::string> all = part_names;
+    all.insert(all.end(), tool_names.begin(), tool_names.end());
+    throw JobError(ptr, unknown_name("part or tool", name, all));
+  };
+
+  // interactions
+  if (const json* inter = top.optional_raw("interactions")) {
+    if (!inter->is_array()) throw JobError("/interactions", "expected an array, found " + json_type_name(*inter));
+    for (std::size_t i = 0; i < inter->size(); ++i) {
+      const std::string ptr = pointer_append("/interactions", i);
+      ObjectReader r((*inter)[i], ptr);
+      const std::string type = r.choice("type", {"contact", "heat_exchange"});
+      if (type == "contact") {
+        ContactDef c;
+        c.pointer = ptr;
+        c.handler = r.text("handler", std::string("penalty_node_surface"));
+        const auto between = r.texts("between");
+        if (between.size() != 2) throw JobError(r.at("between"), "expected two body names");
+        c.first = find_body(between[0], pointer_append(r.at("between"), 0));
+        c.second = find_body(between[1], pointer_append(r.at("between"), 1));
+        if (c.first.is_tool && c.second.is_tool)
+          throw JobError(r.at("between"), "contact between two rigid tools is not meaningful");
+        if (c.first.is_tool) std::swap(c.first, c.second);  // first is always a part
+        c.params = json::object();
+        for (auto it = (*inter)[i].begin(); it != (*inter)[i].end(); ++it)
+          if (it.key() != "type" && it.key() != "handler" && it.key() != "between") c.params[it.key()] = it.value();
+        const bool self = c.params.contains("self") && c.params["self"].is_boolean() && c.params["self"].get<bool>();
+        if (!c.first.is_tool && !c.second.is_tool && c.first.index == c.second.index && !self)
+          throw JobError(r.at("between"), "a body in contact with itself needs \"self\": true");
+        job.contacts.push_back(std::move(c));
+        continue;  // the handler's descriptor checks the remaining keys
+      }
+      HeatExchangeDef h;
+      h.pointer = ptr;
+      const std::string part = r.text("part");
+      if (part == "*") {
+        for (std::size_t p = 0; p < job.parts.size(); ++p) h.parts.push_back(static_cast<int>(p));
+      } else {
+        const int p = find_index(part_names, part);
+        if (p < 0) throw JobError(r.at("part"), unknown_name("part", part, part_names));
+        h.parts.push_back(p);
+      }
+      const std::string face = r.choice("face", {"top", "bottom", "both"});
+      h.top = face != "bottom";
+      h.bottom = face != "top";
+      h.h = r.real("h", std::nullopt, 0.0);
+      h.ambient = r.real("ambient", std::nullopt, -273.15);
+      if (const json* reg = r.optional_raw("region")) {
+        ObjectReader g(*reg, r.at("region"));
+        if (g.has("circle")) {
+          ObjectReader c(g.raw("circle"), g.at("circle"));
+          const auto ctr = c.reals("centre", 2);
+          h.region.kind = RegionDef::Kind::Circle;
+          h.region.centre = {ctr[0], ctr[1]};
+          h.region.radius = c.real("radius", std::nullopt, 0.0, true);
+          c.finish();
+        } else if (g.has("box")) {
+          const json& b = g.raw("box");
+          if (!b.is_array() || b.size() != 2) throw JobError(g.at("box"), "expected [[xmin, ymin], [xmax, ymax]]");
+          const auto lo = as_reals(b[0], pointer_append(g.at("box"), 0), 2);
+          const auto hi = as_reals(b[1], pointer_append(g.at("box"), 1), 2);
+          if (!(hi[0] > lo[0] && hi[1] > lo[1])) throw JobError(g.at("box"), "max corner must be above the min corner");
+          h.region.kind = RegionDef::Kind::Box;
+          h.region.lo = {lo[0], lo[1]};
+          h.region.hi = {hi[0], hi[1]};
+        } else {
+          throw JobError(r.at("region"), "expected { \"circle\": {...} } or { \"box\": [[...], [...]] }");
+        }
+        g.finish();
+      }
+      r.finish();
+      job.heat_exchanges.push_back(std::move(h));
+    }
+  }
+
+  if (const json* c = top.optional_raw("constraints")) {
+    if (!c->is_array()) throw JobError("/constraints", "expected an array, found " + json_type_name(*c));
+    job.constraints = *c;
+    for (std::size_t i = 0; i < c->size(); ++i) {
+      const std::string ptr = pointer_append("/constraints", i);
+      ObjectReader r((*c)[i], ptr);
+      const std::string type = r.choice("type", {"symmetry", "fix", "velocity"});
+      const std::string part = r.text("part");
+      if (part != "*" && find_index(part_names, part) < 0) throw JobError(r.at("part"), unknown_name("part", part, part_names));
+      if (type == "symmetry") {
+        r.choice("plane", {"x", "y", "z"});
+      } else {
+        const json& box = r.raw("box");
+        if (!box.is_array() || box.size() != 2) throw JobError(r.at("box"), "expected [[x0, y0, z0], [x1, y1, z1]]");
+        as_reals(box[0], pointer_append(r.at("box"), 0), 3);
+        as_reals(box[1], pointer_append(r.at("box"), 1), 3);
+        if (type == "fix") {
+          for (const auto& d : r.texts("dofs")) {
+            if (d != "x" && d != "y" && d != "z") throw JobError(r.at("dofs"), "unknown dof '" + d + "'; valid: x, y, z");
+          }
+        } else {
+          r.reals("velocity", 3);
+        }
+      }
+      r.finish();
+    }
+  }
+
+  // solvers
+  if (const json* s = top.optional_raw("solvers")) {
+    ObjectReader r(*s, "/solvers");
+    if (const json* m = r.optional_raw("mechanics")) {
+      job.mechanics = true;
+      job.mechanics_settings = *m;
+    }
+    if (const json* t = r.optional_raw("thermal")) {
+      ThermalSolverDef th;
+      ObjectReader tr(*t, "/solvers/thermal");
+      th.splitter = tr.text("splitter");
+      th.subcycle = static_cast<int>(tr.integer("subcycle", 0, 0, 1000000000));
+      th.dt = tr.real("dt", 0.0, 0.0);
+      th.params = json::object();
+      for (auto it = t->begin(); it != t->end(); ++it)
+        if (it.key() != "splitter" && it.key() != "subcycle" && it.key() != "dt") th.params[it.key()] = it.value();
+      job.thermal = th;
+    }
+    r.finish();
+  }
+  if (job.mechanics)
+    throw JobError("/solvers/mechanics",
+                   "the mechanics solver is not available in this version; set it to null for a thermal-only job");
+  if (job.thermal) {
+    for (const auto& p : job.parts) {
+      const auto& m = job.materials[p.material];
+      if (!m.has_thermal)
+        throw JobError(m.pointer, "material '" + m.name + "' has no thermal data (density, specific_heat, conductivity) "
+                                  "but part '" + p.name + "' uses it in a thermal job");
+    }
+  }
+
+  // output
+  if (const json* o = top.optional_raw("output")) {
+    ObjectReader r(*o, "/output");
+    job.output.interval = r.real("interval", job.t_end, 0.0, true);
+    job.output.fields = r.texts("fields", std::vector<std::string>{"temperature"});
+    for (std::size_t i = 0; i < job.output.fields.size(); ++i) {
+      const auto& f = job.output.fields[i];
+      if (std::find(known_fields().begin(), known_fields().end(), f) == known_fields().end()) {
+        std::string msg = "unknown field '" + f + "'";
+        const std::string dym = did_you_mean(f, known_fields());
+        if (!dym.empty()) msg += "; " + dym;
+        throw JobError(pointer_append(r.at("fields"), i), msg + "; valid fields: " + join(known_fields()));
+      }
+    }
+    if (const json* pr = r.optional_raw("probes")) {
+      if (!pr->is_array()) throw JobError(r.at("probes"), "expected an array, found " + json_type_name(*pr));
+      std::vector<std::string> probe_names;
+      for (std::size_t i = 0; i < pr->size(); ++i) {
+        ProbeDef p;
+        p.pointer = pointer_append("/output/probes", i);
+        ObjectReader q((*pr)[i], p.pointer);
+        p.name = q.text("name");
+        if (find_index(probe_names, p.name) >= 0) throw JobError(q.at("name"), "duplicate probe name '" + p.name + "'");
+        if (p.name.find_first_of(",\"\n") != std::string::npos)
+          throw JobError(q.at("name"), "a probe name cannot contain commas, quotes or newlines");
+        const std::string part = q.text("part");
+        p.part = find_index(part_names, part);
+        if (p.part < 0) throw JobError(q.at("part"), unknown_name("part", part, part_names));
+        const auto at = q.reals("at", 3);
+        p.at = {at[0], at[1], at[2]};
+        p.quantities = q.texts("quantities", std::vector<std::string>{"temperature_profile", "temperature_mean"});
+        for (std::size_t k = 0; k < p.quantities.size(); ++k) {
+          const auto& v = p.quantities[k];
+          const auto& known = known_probe_quantities();
+          if (std::find(known.begin(), known.end(), v) == known.end()) {
+            std::string msg = "unknown quantity '" + v + "'";
+            const std::string dym = did_you_mean(v, known);
+            if (!dym.empty()) msg += "; " + dym;
+            throw JobError(pointer_append(q.at("quantities"), k), msg + "; valid quantities: " + join(known));
+          }
+        }
+        p.interval = q.real("interval", 0.0, 0.0);
+        q.finish();
+        probe_names.push_back(p.name);
+        job.output.probes.push_back(std::move(p));
+      }
+    }
+    r.finish();
+  } else {
+    job.output.interval = job.t_end;
+    job.output.fields = {"temperature"};
+  }
+  top.finish();
+  return job;
+}
+
+Job load_job(const std::filesystem::path& file, const std::vector<std::string>& sets) {
+  json doc = read_job_document(file);
+  for (const auto& s : sets) apply_set(doc, s);
+  return parse_job(doc, file);
+}
+
+}  // namespace ts

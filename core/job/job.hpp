@@ -1,0 +1,140 @@
+#pragma once
+// The validated content of a job file (format thermostamp-job/1).
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "job/json_reader.hpp"
+
+namespace ts {
+
+struct MaterialDef {
+  std::string name;
+  std::string pointer;
+  double density = 0, specific_heat = 0;
+  std::array<double, 3> conductivity{0, 0, 0};  // k11, k22, k33
+  bool has_thermal = false;
+  json membrane, bending;  // null when absent
+};
+
+struct MeshDef {
+  enum class Kind { Rectangle, File } kind = Kind::Rectangle;
+  std::array<double, 3> origin{0, 0, 0};
+  std::array<double, 2> size{0, 0};
+  std::array<int, 2> divisions{1, 1};
+  std::filesystem::path file;
+};
+
+struct PartDef {
+  std::string name, pointer;
+  MeshDef mesh;
+  double thickness = 0;
+  int material = -1;
+  std::array<double, 3> fibre_direction{1, 0, 0};
+  std::string element;
+  double initial_temperature = 20.0;
+  int thickness_layers = 8;
+};
+
+struct SurfaceDef {
+  std::string type;  // plane, sphere
+  std::array<double, 3> point{0, 0, 0}, normal{0, 0, 1}, centre{0, 0, 0};
+  double radius = 0;
+};
+
+struct ToolDef {
+  std::string name, pointer;
+  SurfaceDef surface;
+  json motion;
+  double temperature = 20.0;
+};
+
+struct BodyDef {
+  bool is_tool = false;
+  int index = -1;
+};
+
+struct ContactDef {
+  std::string pointer, handler;
+  BodyDef first, second;
+  json params;  // everything but type / handler / between, validated by the handler's descriptor
+};
+
+struct RegionDef {
+  enum class Kind { All, Circle, Box } kind = Kind::All;
+  std::array<double, 2> centre{0, 0};
+  double radius = 0;
+  std::array<double, 2> lo{0, 0}, hi{0, 0};
+  bool contains(double x, double y) const;
+};
+
+struct HeatExchangeDef {
+  std::string pointer;
+  std::vector<int> parts;
+  bool top = false, bottom = false;
+  double h = 0, ambient = 0;
+  RegionDef region;
+};
+
+struct ProbeDef {
+  std::string name, pointer;
+  int part = -1;
+  std::array<double, 3> at{0, 0, 0};
+  std::vector<std::string> quantities;
+  double interval = 0;  // 0: every thermal step
+};
+
+struct ThermalSolverDef {
+  std::string pointer = "/solvers/thermal";
+  std::string splitter;
+  json params;  // validated by the splitter's descriptor
+  int subcycle = 0;
+  double dt = 0;  // 0: automatic
+};
+
+struct OutputDef {
+  double interval = 0;
+  std::vector<std::string> fields;
+  std::vector<ProbeDef> probes;
+};
+
+struct Job {
+  std::string name;
+  std::filesystem::path file, base_dir;
+  json document;  // after --set overrides
+  double t_end = 0;
+  std::vector<MaterialDef> materials;
+  std::vector<PartDef> parts;
+  std::vector<ToolDef> tools;
+  std::vector<ContactDef> contacts;
+  std::vector<HeatExchangeDef> heat_exchanges;
+  json constraints = json::array();
+  bool mechanics = false;
+  json mechanics_settings;
+  std::optional<ThermalSolverDef> thermal;
+  OutputDef output;
+  std::vector<std::filesystem::path> plugin_paths;
+};
+
+// Reads a job file; throws JobError. `sets` are "path=value" overrides.
+json read_job_document(const std::filesystem::path& file);
+void apply_set(json& doc, const std::string& assignment);
+void apply_set_value(json& doc, const std::string& path, const json& value);
+Job parse_job(const json& doc, const std::filesystem::path& file);
+Job load_job(const std::filesystem::path& file, const std::vector<std::string>& sets);
+
+inline const std::vector<std::string>& known_fields() {
+  static const std::vector<std::string> f = {"temperature", "temperature_mean", "temperature_top",
+                                             "temperature_bottom", "displacement", "shear_angle",
+                                             "fibre_direction", "contact_status"};
+  return f;
+}
+inline const std::vector<std::string>& known_probe_quantities() {
+  static const std::vector<std::string> q = {"temperature_profile", "temperature_mean", "displacement_x",
+                                             "displacement_y", "displacement_z", "shear_angle"};
+  return q;
+}
+
+}  // namespace ts

@@ -1,0 +1,626 @@
+#include "solve/simulation.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include <thermostamp/sdk/math.hpp>
+
+#include "io/logging.hpp"
+#include "io/results_writer.hpp"
+#include "version.hpp"
+
+namespace ts {
+
+using sdk::Vec3;
+
+struct PartState {
+  const PartDef* def = nullptr;
+  ShellMesh mesh;
+  std::vector<double> x0, x, fibre, area, normals, displacement, shear_angle, contact_status;
+  int nz = 1;
+  std::vector<double> T, cap, mean, top, bottom;
+  std::vector<double> h_bottom, t_bottom, h_top, t_top;
+};
+
+struct ToolState {
+  const ToolDef* def = nullptr;
+  static void query(const void* ctx, std::size_t n, const double* p, double* dist, double* normal) {
+    const auto* t = static_cast<const ToolState*>(ctx);
+    const SurfaceDef& s = t->def->surface;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 x = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+      Vec3 nn;
+      if (s.type == "plane") {
+        nn = sdk::normalized({s.normal[0], s.normal[1], s.normal[2]});
+        dist[i] = sdk::dot(sdk::sub(x, {s.point[0], s.point[1], s.point[2]}), nn);
+      } else {  // sphere
+        const Vec3 r = sdk::sub(x, {s.centre[0], s.centre[1], s.centre[2]});
+        const double len = sdk::norm(r);
+        nn = len > 0 ? sdk::scale(r, 1.0 / len) : Vec3{0, 0, 1};
+        dist[i] = len - s.radius;
+      }
+      for (int d = 0; d < 3; ++d) normal[3 * i + d] = nn[d];
+    }
+  }
+};
+
+namespace {
+void compute_normals(const ShellMesh& m, const std::vector<double>& x, std::vector<double>& nn) {
+  nn.assign(x.size(), 0.0);
+  for (int e = 0; e < m.num_elements(); ++e) {
+    const int* t = &m.triangles[3 * e];
+    const Vec3 a = sdk::load3(x.data(), t[0]), b = sdk::load3(x.data(), t[1]), c = sdk::load3(x.data(), t[2]);
+    const Vec3 n = sdk::cross(sdk::sub(b, a), sdk::sub(c, a));
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) nn[3 * t[k] + d] += n[d];
+  }
+  for (std::size_t i = 0; i < nn.size() / 3; ++i) {
+    const Vec3 u = sdk::normalized(sdk::load3(nn.data(), static_cast<int>(i)));
+    for (int d = 0; d < 3; ++d) nn[3 * i + d] = u[d];
+  }
+}
+
+std::string fmt_g(double v, int prec = 6) {
+  std::ostringstream s;
+  s << std::setprecision(prec) << v;
+  return s.str();
+}
+}  // namespace
+
+Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), registry_(registry) {
+  for (const auto& p : job_.plugin_paths) registry_.add_search_dir(p);
+  if (!job_.thermal && !job_.mechanics)
+    throw JobError("/solvers", "nothing to run: set solvers.thermal (a thermal splitter such as \"adi\")");
+  build_parts();
+  build_tools();
+  build_thermal();
+  build_probes();
+}
+
+Simulation::~Simulation() = default;
+
+void Simulation::build_parts() {
+  for (std::size_t p = 0; p < job_.parts.size(); ++p) {
+    const PartDef& def = job_.parts[p];
+    auto st = std::make_unique<PartState>();
+    st->def = &def;
+    try {
+      st->mesh = def.mesh.kind == MeshDef::Kind::File
+                     ? read_gmsh(def.mesh.file)
+                     : rectangle_mesh(def.mesh.origin, def.mesh.size, def.mesh.divisions);
+    } catch (const std::exception& e) {
+      throw JobError(def.pointer + "/mesh", e.what());
+    }
+    st->x0 = st->mesh.x;
+    st->x = st->mesh.x;
+    const int ne = st->mesh.num_elements(), nn = st->mesh.num_nodes();
+    st->area = node_areas(st->mesh);
+    compute_normals(st->mesh, st->x, st->normals);
+    // Fibre direction projected on each element; refuse one normal to the ply.
+    st->fibre.assign(3 * ne, 0.0);
+    const Vec3 f0 = sdk::normalized({def.fibre_direction[0], def.fibre_direction[1], def.fibre_direction[2]});
+    for (int e = 0; e < ne; ++e) {
+      const int* t = &st->mesh.triangles[3 * e];
+      const Vec3 a = sdk::load3(st->x.data(), t[0]), b = sdk::load3(st->x.data(), t[1]), c = sdk::load3(st->x.data(), t[2]);
+      const Vec3 n = sdk::normalized(sdk::cross(sdk::sub(b, a), sdk::sub(c, a)));
+      const Vec3 f = sdk::sub(f0, sdk::scale(n, sdk::dot(f0, n)));
+      if (sdk::norm(f) < 1e-3)
+        throw JobError(def.pointer + "/fibre_direction",
+                       "the fibre direction is normal to the ply at element " + std::to_string(e) +
+                           "; give a direction in the ply's plane");
+      const Vec3 u = sdk::normalized(f);
+      for (int d = 0; d < 3; ++d) st->fibre[3 * e + d] = u[d];
+    }
+    st->displacement.assign(3 * nn, 0.0);
+    st->shear_angle.assign(ne, 0.0);
+    st->contact_status.assign(nn, 0.0);
+    for (auto* v : {&st->h_bottom, &st->t_bottom, &st->h_top, &st->t_top}) v->assign(nn, 0.0);
+    parts_.push_back(std::move(st));
+  }
+  part_views_.resize(parts_.size());
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    const MaterialDef& mat = job_.materials[st.def->material];
+    sdk::PartView& v = part_views_[p];
+    v.index = static_cast<int>(p);
+    v.name = st.def->name;
+    v.num_nodes = st.mesh.num_nodes();
+    v.num_elements = st.mesh.num_elements();
+    v.x0 = st.x0;
+    v.x = st.x;
+    v.triangles = st.mesh.triangles;
+    v.neighbours = st.mesh.neighbours;
+    v.fibre = st.fibre;
+    v.thickness = st.def->thickness;
+    v.thickness_layers = st.def->thickness_layers;
+    v.initial_temperature = st.def->initial_temperature;
+    v.thermal = {mat.density, mat.specific_heat, mat.conductivity[0], mat.conductivity[1], mat.conductivity[2]};
+  }
+}
+
+void Simulation::build_tools() {
+  for (std::size_t t = 0; t < job_.tools.size(); ++t) {
+    auto st = std::make_unique<ToolState>();
+    st->def = &job_.tools[t];
+    if (!st->def->motion.is_null() && !job_.mechanics)
+      logger("job")->warn("{}/motion: ignored, tools do not move in a thermal-only job", st->def->pointer);
+    tools_.push_back(std::move(st));
+  }
+  for (std::size_t t = 0; t < tools_.size(); ++t) {
+    sdk::ToolView v;
+    v.index = static_cast<int>(t);
+    v.name = tools_[t]->def->name;
+    v.temperature = tools_[t]->def->temperature;
+    v.context = tools_[t].get();
+    v.query = &ToolState::query;
+    tool_views_.push_back(v);
+  }
+}
+
+void Simulation::build_thermal() {
+  // Contact handlers: needed for the thermal contact map.
+  for (const auto& c : job_.contacts) {
+    const PluginRecord& rec = registry_.require(sdk::PluginKind::Contact, c.handler, c.pointer + "/handler");
+    const sdk::Params params = validate_params(c.params, c.pointer, rec.descriptor);
+    std::unique_ptr<sdk::ContactHandler> h(reinterpret_cast<sdk::ContactHandler* (*)()>(rec.create)());
+    sdk::ContactPair pair;
+    pair.first = {sdk::BodyRef::Type::Part, c.first.index};
+    pair.second = {c.second.is_tool ? sdk::BodyRef::Type::Tool : sdk::BodyRef::Type::Part, c.second.index};
+    if (auto s = h->configure(params, pair, part_views_, tool_views_); !s)
+      throw JobError(c.pointer, "contact handler '" + c.handler + "': " + s.message);
+    contacts_.push_back(std::move(h));
+  }
+  if (!job_.thermal) return;
+  const ThermalSolverDef& th = *job_.thermal;
+  const PluginRecord& rec = registry_.require(sdk::PluginKind::Thermal, th.splitter, th.pointer + "/splitter");
+  const sdk::Params params = validate_params(th.params, th.pointer, rec.descriptor, {"splitter", "subcycle", "dt"});
+  splitter_.reset(reinterpret_cast<sdk::ThermalSplitter* (*)()>(rec.create)());
+  if (auto s = splitter_->configure(params, part_views_); !s)
+    throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    st.nz = splitter_->values_per_node(static_cast<int>(p));
+    const std::size_t n = static_cast<std::size_t>(st.mesh.num_nodes()) * st.nz;
+    st.T.assign(n, st.def->initial_temperature);
+    st.cap.assign(n, 0.0);
+    if (auto s = splitter_->capacities(static_cast<int>(p), st.cap); !s)
+      throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);
+    st.mean.assign(st.mesh.num_nodes(), 0.0);
+    st.top.assign(st.mesh.num_nodes(), 0.0);
+    st.bottom.assign(st.mesh.num_nodes(), 0.0);
+  }
+  assemble_faces();
+  faces_.resize(parts_.size());
+  for (std::size_t p = 0; p < parts_.size(); ++p)
+    faces_[p] = {parts_[p]->h_bottom, parts_[p]->t_bottom, parts_[p]->h_top, parts_[p]->t_top};
+  sdk::ThermalStepInput in;
+  in.faces = faces_;
+  in.links = contact_map_.links;
+  in.links_changed = true;
+  if (auto s = splitter_->step_limits(in, &thermal_stable_dt_, &thermal_accurate_dt_); !s)
+    throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);
+  double dt = thermal_accurate_dt_;
+  if (th.dt > 0) {
+    if (th.dt > thermal_stable_dt_ * (1 + 1e-12))
+      throw JobError(th.pointer + "/dt", "thermal step " + fmt_g(th.dt) + " s exceeds the stable step " +
+                                             fmt_g(thermal_stable_dt_) +
+                                             " s of the explicit scheme (dt_safety included); lower it or use "
+                                             "\"through_thickness\": \"implicit\"");
+    dt = th.dt;
+  }
+  if (!(dt > 0) || !std::isfinite(dt)) dt = job_.output.interval;
+  const double steps = job_.t_end / dt;
+  if (steps > 2e8)
+    throw JobError(th.pointer, "the thermal step " + fmt_g(dt) + " s would need " + fmt_g(steps, 3) +
+                                   " steps to reach " + fmt_g(job_.t_end) +
+                                   " s; the explicit scheme is limited by thin layers or high conductances here: "
+                                   "use \"through_thickness\": \"implicit\"");
+  // Land on the frame times: an integer number of steps per output interval.
+  const double interval = std::min(job_.output.interval, job_.t_end);
+  const double per = std::ceil(interval / dt * (1 - 1e-12));
+  thermal_dt_ = interval / std::max(1.0, per);
+}
+
+void Simulation::assemble_faces() {
+  for (auto& st : parts_) {
+    std::fill(st->h_bottom.begin(), st->h_bottom.end(), 0.0);
+    std::fill(st->h_top.begin(), st->h_top.end(), 0.0);
+    std::fill(st->t_bottom.begin(), st->t_bottom.end(), 0.0);
+    std::fill(st->t_top.begin(), st->t_top.end(), 0.0);
+    std::fill(st->contact_status.begin(), st->contact_status.end(), 0.0);
+  }
+  for (const auto& h : job_.heat_exchanges)
+    for (int p : h.parts) {
+      PartState& st = *parts_[p];
+      for (int i = 0; i < st.mesh.num_nodes(); ++i) {
+        if (!h.region.contains(st.x0[3 * i], st.x0[3 * i + 1])) continue;
+        if (h.top) {
+          st.h_top[i] = h.h;
+          st.t_top[i] = h.ambient;
+        }
+        if (h.bottom) {
+          st.h_bottom[i] = h.h;
+          st.t_bottom[i] = h.ambient;
+        }
+      }
+    }
+  contact_map_.tool_contacts.clear();
+  contact_map_.links.clear();
+  std::vector<std::span<const double>> areas;
+  for (auto& st : parts_) areas.emplace_back(st->area);
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    if (auto s = contacts_[c]->thermal_contacts(part_views_, tool_views_, areas, contact_map_); !s)
+      throw RunError("contact handler of " + job_.contacts[c].pointer + ": " + s.message);
+  }
+  for (const auto& tc : contact_map_.tool_contacts) {
+    PartState& st = *parts_[tc.part];
+    const double T = tool_views_[tc.tool].temperature;
+    if (tc.face == sdk::kTop) {
+      st.h_top[tc.node] = tc.conductance;
+      st.t_top[tc.node] = T;
+    } else {
+      st.h_bottom[tc.node] = tc.conductance;
+      st.t_bottom[tc.node] = T;
+    }
+    st.contact_status[tc.node] = std::max(st.contact_status[tc.node], 1.0);
+  }
+  for (const auto& l : contact_map_.links) {
+    parts_[l.part_a]->contact_status[l.node_a] = 2.0;
+    for (int j = 0; j < 3; ++j)
+      if (l.w_b[j] > 0) parts_[l.part_b]->contact_status[l.nodes_b[j]] = 2.0;
+  }
+}
+
+void Simulation::build_probes() {
+  for (const auto& pr : job_.output.probes) {
+    const PartState& st = *parts_[pr.part];
+    int best = -1;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < st.mesh.num_nodes(); ++i) {
+      double d = 0;
+      for (int k = 0; k < 3; ++k) d += (st.x0[3 * i + k] - pr.at[k]) * (st.x0[3 * i + k] - pr.at[k]);
+      if (d < best_d) {
+        best_d = d;
+        best = i;
+      }
+    }
+    const double reach = 2.0 * max_edge_length(st.mesh) + st.def->thickness;
+    if (std::sqrt(best_d) > reach)
+      throw JobError(pr.pointer + "/at", "probe '" + pr.name + "' is outside part '" + st.def->name +
+                                             "': the nearest node is " + fmt_g(std::sqrt(best_d), 4) + " m away");
+    probe_node_.push_back(best);
+  }
+}
+
+double Simulation::stored_heat() const {
+  double e = 0;
+  for (const auto& st : parts_)
+    for (std::size_t k = 0; k < st->T.size(); ++k) e += st->cap[k] * st->T[k];
+  return e;
+}
+
+void Simulation::check_field(double time, long long step) {
+  for (const auto& st : parts_)
+    for (std::size_t k = 0; k < st->T.size(); ++k)
+      if (!std::isfinite(st->T[k])) {
+        const int i = static_cast<int>(k / st->nz);
+        throw RunError("non-finite temperature in part '" + st->def->name + "' at node " + std::to_string(i) + " (" +
+                       fmt_g(st->x0[3 * i], 4) + ", " + fmt_g(st->x0[3 * i + 1], 4) + ", " +
+                       fmt_g(st->x0[3 * i + 2], 4) + "), layer value " + std::to_string(k % st->nz) + ", at t = " +
+                       fmt_g(time) + " s (thermal step " + std::to_string(step) + ")");
+      }
+}
+
+namespace {
+
+struct Progress {
+  bool tty = false, quiet = false;
+  double t_end = 1;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now(), last = start;
+  int last_decile = -1;
+  void update(double t, long long steps, bool force = false) {
+    const auto now = std::chrono::steady_clock::now();
+    const double el = std::chrono::duration<double>(now - start).count();
+    const double frac = std::min(1.0, t / t_end);
+    const double eta = frac > 0 ? el * (1 - frac) / frac : 0;
+    const double rate = el > 0 ? steps / el : 0;
+    if (tty && !quiet) {
+      if (!force && std::chrono::duration<double>(now - last).count() < 0.2) return;
+      last = now;
+      std::fprintf(stderr, "\r  t = %.4g / %.4g s  %5.1f %%  %.0f steps/s  ETA %.0f s   ", t, t_end, 100 * frac, rate,
+                   eta);
+      if (force) std::fprintf(stderr, "\n");
+      std::fflush(stderr);
+    } else {
+      const int decile = static_cast<int>(10 * frac);
+      if (decile == last_decile && !force) return;
+      last_decile = decile;
+      logger("solve")->info("t = {:.4g} / {:.4g} s ({:.0f} %), {:.0f} steps/s, ETA {:.0f} s", t, t_end, 100 * frac,
+                            rate, eta);
+    }
+  }
+};
+
+std::string csv_number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+}  // namespace
+
+RunResult Simulation::run(const RunOptions& opt) {
+  RunResult result;
+  const auto wall0 = std::chrono::steady_clock::now();
+#ifdef _OPENMP
+  if (opt.threads > 0) omp_set_num_threads(opt.threads);
+  const int threads = omp_get_max_threads();
+#else
+  const int threads = 1;
+#endif
+  auto log = logger("solve");
+  std::unique_ptr<ResultsWriter> writer;
+  std::ofstream probes_csv;
+  if (opt.write_files) {
+    std::filesystem::create_directories(opt.out_dir);
+    std::vector<WriterPart> wparts;
+    for (const auto& st : parts_)
+      wparts.push_back({st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(), &st->mesh.triangles,
+                        st->def->thickness, st->nz});
+    writer = std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts));
+    probes_csv.open(opt.out_dir / "probes.csv");
+    probes_csv << "probe,quantity,time,z,value\n";
+  }
+  log->info("job '{}': {} part(s), {} tool(s), splitter '{}', thermal step {:.4g} s (stable {:.4g} s, "
+            "accurate {:.4g} s), {} thread(s)",
+            job_.name, parts_.size(), tools_.size(), job_.thermal->splitter, thermal_dt_, thermal_stable_dt_,
+            thermal_accurate_dt_, threads);
+  log->info("thermal contact: {} tool face node(s), {} ply/ply link(s)", contact_map_.tool_contacts.size(),
+            contact_map_.links.size());
+
+  auto update_derived = [&] {
+    for (auto& st : parts_) {
+      const int nz = st->nz;
+      const double h = st->def->thickness;
+      for (int i = 0; i < st->mesh.num_nodes(); ++i) {
+        const double* t = &st->T[static_cast<std::size_t>(nz) * i];
+        double s = 0;
+        if (nz == 1) {
+          s = t[0];
+        } else {
+          const double e = h / (nz - 1);
+          for (int k = 0; k < nz; ++k) s += (k == 0 || k == nz - 1 ? 0.5 * e : e) * t[k];
+          s /= h;
+        }
+        st->mean[i] = s;
+        st->bottom[i] = t[0];
+        st->top[i] = t[nz - 1];
+      }
+    }
+  };
+
+  auto write_frame = [&](double t) {
+    if (!writer) return;
+    update_derived();
+    std::vector<const double*> xs, ns;
+    std::vector<std::vector<FrameField>> fields(parts_.size());
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      PartState& st = *parts_[p];
+      xs.push_back(st.x.data());
+      ns.push_back(st.normals.data());
+      for (const auto& f : job_.output.fields) {
+        if (f == "temperature") {
+          fields[p].push_back({"temperature", st.T.data(), 1, false, true});
+          fields[p].push_back({"temperature_mean", st.mean.data()});
+          fields[p].push_back({"temperature_top", st.top.data()});
+          fields[p].push_back({"temperature_bottom", st.bottom.data()});
+        } else if (f == "temperature_mean") {
+          fields[p].push_back({"temperature_mean", st.mean.data()});
+        } else if (f == "temperature_top") {
+          fields[p].push_back({"temperature_top", st.top.data()});
+        } else if (f == "temperature_bottom") {
+          fields[p].push_back({"temperature_bottom", st.bottom.data()});
+        } else if (f == "displacement") {
+          fields[p].push_back({"displacement", st.displacement.data(), 3});
+        } else if (f == "shear_angle") {
+          fields[p].push_back({"shear_angle", st.shear_angle.data(), 1, true});
+        } else if (f == "fibre_direction") {
+          fields[p].push_back({"fibre_direction", st.fibre.data(), 3, true});
+        } else if (f == "contact_status") {
+          fields[p].push_back({"contact_status", st.contact_status.data()});
+        }
+      }
+      // No field twice (e.g. "temperature" and "temperature_mean").
+      auto& v = fields[p];
+      std::vector<FrameField> unique;
+      for (const auto& ff : v)
+        if (std::none_of(unique.begin(), unique.end(), [&](const FrameField& u) { return u.name == ff.name; }))
+          unique.push_back(ff);
+      v = std::move(unique);
+    }
+    writer->write_frame(t, xs, ns, fields);
+  };
+
+  auto sample_probes = [&](double t, std::size_t only = static_cast<std::size_t>(-1)) {
+    for (std::size_t q = 0; q < job_.output.probes.size(); ++q) {
+      if (only != static_cast<std::size_t>(-1) && q != only) continue;
+      const ProbeDef& pr = job_.output.probes[q];
+      const PartState& st = *parts_[pr.part];
+      const int i = probe_node_[q];
+      const int nz = st.nz;
+      const double* T = &st.T[static_cast<std::size_t>(nz) * i];
+      for (const auto& quantity : pr.quantities) {
+        ProbeSample s;
+        s.probe = static_cast<int>(q);
+        s.time = t;
+        s.quantity = quantity;
+        if (quantity == "temperature_profile") {
+          for (int k = 0; k < nz; ++k) {
+            s.z.push_back(nz > 1 ? -0.5 * st.def->thickness + st.def->thickness * k / (nz - 1) : 0.0);
+            s.values.push_back(T[k]);
+          }
+        } else if (quantity == "temperature_mean") {
+          double m = T[0];
+          if (nz > 1) {
+            m = 0;
+            for (int k = 0; k < nz; ++k) m += (k == 0 || k == nz - 1 ? 0.5 : 1.0) * T[k];
+            m /= (nz - 1);
+          }
+          s.values.push_back(m);
+        } else if (quantity.rfind("displacement_", 0) == 0) {
+          const int d = quantity.back() - 'x';
+          s.values.push_back(st.x[3 * i + d] - st.x0[3 * i + d]);
+        } else {  // shear_angle: not computed without mechanics
+          s.values.push_back(0.0);
+        }
+        if (probes_csv.is_open()) {
+          for (std::size_t k = 0; k < s.values.size(); ++k)
+            probes_csv << pr.name << ',' << quantity << ',' << csv_number(t) << ','
+                       << (s.z.empty() ? "" : csv_number(s.z[k])) << ',' << csv_number(s.values[k]) << '\n';
+        }
+        result.probes.push_back(std::move(s));
+      }
+    }
+    if (probes_csv.is_open()) probes_csv.flush();
+  };
+
+  const double t_end = job_.t_end;
+  const double interval = job_.output.interval;
+  double t = 0;
+  long long steps = 0;
+  const double stored0 = stored_heat();
+  double heat_in = 0;
+  int substeps_max = 1;
+  std::vector<double> next_probe(job_.output.probes.size(), 0.0);
+  for (std::size_t q = 0; q < next_probe.size(); ++q) next_probe[q] = job_.output.probes[q].interval;
+  long long frame_index = 1;
+  Progress progress;
+  progress.tty = isatty(STDERR_FILENO) && !opt.quiet;
+  progress.quiet = opt.quiet;
+  progress.t_end = t_end;
+
+  std::vector<std::span<double>> Tspans;
+  for (auto& st : parts_) Tspans.emplace_back(st->T);
+  sdk::ThermalStepInput in;
+  in.faces = faces_;
+  in.links = contact_map_.links;
+  in.links_changed = true;
+
+  const double eps_t = 1e-9 * thermal_dt_;
+  std::string failure;
+  try {
+    write_frame(0.0);
+    sample_probes(0.0);
+    while (t < t_end - eps_t) {
+      double next_frame = std::min(t_end, frame_index * interval);
+      double step = std::min(thermal_dt_, next_frame - t);
+      for (std::size_t q = 0; q < next_probe.size(); ++q)
+        if (job_.output.probes[q].interval > 0) step = std::min(step, next_probe[q] - t);
+      if (step <= eps_t) step = std::min(thermal_dt_, t_end - t);
+      in.dt = step;
+      sdk::ThermalStepReport rep;
+      if (auto s = splitter_->advance(in, Tspans, &rep); !s)
+        throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);
+      in.links_changed = false;
+      ++steps;
+      t += step;
+      heat_in += rep.heat_in;
+      substeps_max = std::max(substeps_max, rep.substeps);
+      check_field(t, steps);
+      if (std::abs(t - next_frame) <= eps_t) t = next_frame;
+      bool any_step_probe = false;
+      for (std::size_t q = 0; q < next_probe.size(); ++q) {
+        const double iv = job_.output.probes[q].interval;
+        if (iv <= 0) {
+          any_step_probe = true;
+        } else if (t >= next_probe[q] - eps_t) {
+          sample_probes(t, q);
+          while (next_probe[q] <= t + eps_t) next_probe[q] += iv;
+        }
+      }
+      if (any_step_probe)
+        for (std::size_t q = 0; q < next_probe.size(); ++q)
+          if (job_.output.probes[q].interval <= 0) sample_probes(t, q);
+      if (t >= next_frame - eps_t) {
+        write_frame(t);
+        ++frame_index;
+      }
+      progress.update(t, steps);
+    }
+    progress.update(t, steps, true);
+  } catch (const RunError& e) {
+    failure = e.what();
+  } catch (const std::exception& e) {
+    failure = std::string("unexpected error: ") + e.what();
+  }
+
+  const double stored_change = stored_heat() - stored0;
+  const double scale = std::max({std::abs(stored_change), std::abs(heat_in), 1e-300});
+  result.ok = failure.empty();
+  result.error = failure;
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  result.simulated_time_s = t;
+  result.thermal_steps = steps;
+  result.thermal_dt = thermal_dt_;
+  result.heat_in = heat_in;
+  result.stored_change = stored_change;
+  result.heat_balance_error = std::abs(stored_change - heat_in) / scale;
+
+  if (opt.write_files) {
+    update_derived();
+    json summary;
+    summary["job"] = job_.name;
+    summary["status"] = result.ok ? "completed" : "failed";
+    summary["version"] = kVersion;
+    summary["threads"] = threads;
+    summary["wall_time_s"] = result.wall_time_s;
+    summary["simulated_time_s"] = t;
+    summary["steps"] = {{"mechanics", 0}, {"thermal", steps}};
+    summary["dt"] = {{"mechanics", nullptr}, {"thermal", thermal_dt_}};
+    summary["thermal"] = {{"splitter", job_.thermal->splitter},
+                          {"stable_dt", std::isfinite(thermal_stable_dt_) ? json(thermal_stable_dt_) : json(nullptr)},
+                          {"accurate_dt", thermal_accurate_dt_},
+                          {"inplane_substeps_max", substeps_max}};
+    summary["plugins_loaded"] = registry_.loaded_names();
+    summary["energy"] = {{"kinetic", 0.0}, {"internal", 0.0}, {"external_work", 0.0},
+                         {"contact", 0.0}, {"damping", 0.0},  {"balance_error", 0.0}};
+    summary["heat"] = {{"stored_change_J", stored_change},
+                       {"faces_in_J", heat_in},
+                       {"balance_error", result.heat_balance_error}};
+    json plies = json::array();
+    for (const auto& st : parts_) {
+      const auto [mn, mx] = std::minmax_element(st->T.begin(), st->T.end());
+      plies.push_back({{"name", st->def->name},
+                       {"nodes", st->mesh.num_nodes()},
+                       {"elements", st->mesh.num_elements()},
+                       {"values_per_node", st->nz},
+                       {"temperature_min", *mn},
+                       {"temperature_max", *mx}});
+    }
+    summary["parts"] = plies;
+    summary["frames"] = writer ? writer->frames() : 0;
+    summary["error"] = result.ok ? json(nullptr) : json(failure);
+    std::ofstream(opt.out_dir / "summary.json") << summary.dump(2) << '\n';
+  }
+  if (result.ok) {
+    log->info("completed: {} thermal steps in {:.3g} s wall; heat into the plies {:.6g} J, stored change {:.6g} J "
+              "(balance error {:.2e})",
+              steps, result.wall_time_s, heat_in, stored_change, result.heat_balance_error);
+  } else {
+    log->error("run failed: {}", failure);
+  }
+  return result;
+}
+
+}  // namespace ts

@@ -1,0 +1,78 @@
+#pragma once
+// A job turned into a runnable model: meshes, tools, plugins, state arrays,
+// and the time loop. Construction validates everything a run needs (throws
+// JobError); run() integrates and writes the output folder.
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <thermostamp/sdk/plugin.hpp>
+
+#include "job/job.hpp"
+#include "mesh/shell_mesh.hpp"
+#include "plugins/registry.hpp"
+
+namespace ts {
+
+struct RunOptions {
+  std::filesystem::path out_dir;
+  int threads = 0;        // 0: OpenMP default
+  bool quiet = false;
+  bool write_files = true;
+};
+
+struct ProbeSample {
+  int probe = 0;
+  double time = 0;
+  std::string quantity;
+  std::vector<double> z;       // empty for scalars
+  std::vector<double> values;  // one per z (or one)
+};
+
+struct RunResult {
+  bool ok = true;
+  std::string error;
+  double wall_time_s = 0;
+  double simulated_time_s = 0;
+  long long thermal_steps = 0;
+  double thermal_dt = 0;
+  double heat_in = 0, stored_change = 0, heat_balance_error = 0;
+  std::vector<ProbeSample> probes;
+};
+
+struct PartState;
+struct ToolState;
+
+class Simulation {
+ public:
+  Simulation(const Job& job, PluginRegistry& registry);
+  ~Simulation();
+  RunResult run(const RunOptions& options);
+  std::vector<std::string> plugins_loaded() const { return registry_.loaded_names(); }
+  // Heat stored in the plies, J (sum of capacity x temperature, relative to 0 degC).
+  double stored_heat() const;
+
+ private:
+  void build_parts();
+  void build_tools();
+  void build_thermal();
+  void build_probes();
+  void assemble_faces();
+  void check_field(double time, long long step);
+
+  const Job& job_;
+  PluginRegistry& registry_;
+  std::vector<std::unique_ptr<PartState>> parts_;
+  std::vector<std::unique_ptr<ToolState>> tools_;
+  std::vector<sdk::PartView> part_views_;
+  std::vector<sdk::ToolView> tool_views_;
+  std::unique_ptr<sdk::ThermalSplitter> splitter_;
+  std::vector<std::unique_ptr<sdk::ContactHandler>> contacts_;
+  sdk::ThermalContactMap contact_map_;
+  std::vector<sdk::FaceConditions> faces_;
+  std::vector<int> probe_node_;
+  double thermal_stable_dt_ = 0, thermal_accurate_dt_ = 0, thermal_dt_ = 0;
+};
+
+}  // namespace ts

@@ -1,0 +1,284 @@
+#include "split_thermal.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "linked_solver.hpp"
+
+namespace ts::thermal {
+
+namespace {
+int thread_id() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+int max_threads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+}  // namespace
+
+SplitThermal::SplitThermal(bool layered) : layered_(layered), linked_solver_(std::make_unique<LinkedSolver>()) {}
+SplitThermal::~SplitThermal() = default;
+
+sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const sdk::PartView> parts) {
+  return sdk::guarded([&] {
+    implicit_ = params.text("through_thickness") == "implicit";
+    dt_safety_ = params.real("dt_safety");
+    plies_.resize(parts.size());
+    int nz_max = 1;
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+      const int nz = layered_ ? parts[p].thickness_layers + 1 : 1;
+      setup_ply(plies_[p], parts[p], nz);
+      nz_max = std::max(nz_max, nz);
+    }
+    node_heat_.resize(parts.size());
+    scratch_.resize(parts.size());
+    mean_.resize(parts.size());
+    t_old_.resize(parts.size());
+    linked_.resize(parts.size());
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+      const int n = parts[p].num_nodes;
+      node_heat_[p].assign(n, 0.0);
+      scratch_[p].assign(n, 0.0);
+      mean_[p].assign(n, 0.0);
+      t_old_[p].assign(static_cast<std::size_t>(n) * plies_[p].nz, 0.0);
+      linked_[p].assign(n, 0);
+    }
+    thread_work_.assign(max_threads(), std::vector<double>(5 * nz_max, 0.0));
+    return sdk::Status::success();
+  });
+}
+
+sdk::Status SplitThermal::capacities(int part, std::span<double> cap) const {
+  const PlyThermal& ply = plies_[part];
+  for (int i = 0; i < ply.view->num_nodes; ++i)
+    for (int k = 0; k < ply.nz; ++k) cap[ply.nz * i + k] = ply.rho_c * ply.w[k] * ply.area[i];
+  return sdk::Status::success();
+}
+
+sdk::Status SplitThermal::step_limits(const sdk::ThermalStepInput& in, double* stable, double* accurate) {
+  return sdk::guarded([&] {
+    if (in.geometry_changed)
+      for (auto& p : plies_) update_geometry(p);
+    *stable = implicit_ ? std::numeric_limits<double>::infinity() : dt_safety_ * rods_stable_dt(plies_, in.faces, in.links);
+    *accurate = accurate_dt(plies_, in.faces);
+    if (!implicit_) *accurate = std::min(*accurate, *stable);
+    return sdk::Status::success();
+  });
+}
+
+double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T) {
+  const double dt = in.dt;
+  for (std::size_t p = 0; p < plies_.size(); ++p) {
+    const PlyThermal& ply = plies_[p];
+    const int nz = ply.nz;
+    const int n = ply.view->num_nodes;
+    const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
+    const auto& f = in.faces[p];
+    double* t = T[p].data();
+    double* heat = node_heat_[p].data();
+    const char* linked = linked_[p].data();
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      if (linked[i]) continue;
+      double* ti = t + static_cast<std::size_t>(nz) * i;
+      const double hb = f.h_bottom[i], ht = f.h_top[i];
+      if (nz == 1) {
+        const double cap = ply.rho_c * ply.w[0] / dt;
+        ti[0] = (cap * ti[0] + hb * f.t_bottom[i] + ht * f.t_top[i]) / (cap + hb + ht);
+      } else {
+        double* work = thread_work_[thread_id()].data();
+        double *a = work, *b = work + nz, *c = work + 2 * nz, *d = work + 3 * nz, *cp = work + 4 * nz;
+        for (int k = 0; k < nz; ++k) {
+          const double cap = ply.rho_c * ply.w[k] / dt;
+          a[k] = k > 0 ? -g : 0.0;
+          c[k] = k + 1 < nz ? -g : 0.0;
+          b[k] = cap + (k > 0 ? g : 0.0) + (k + 1 < nz ? g : 0.0);
+          d[k] = cap * ti[k];
+        }
+        b[0] += hb;
+        d[0] += hb * f.t_bottom[i];
+        b[nz - 1] += ht;
+        d[nz - 1] += ht * f.t_top[i];
+        solve_tridiagonal(nz, a, b, c, d, cp);
+        for (int k = 0; k < nz; ++k) ti[k] = d[k];
+      }
+      heat[i] = dt * ply.area[i] * (hb * (f.t_bottom[i] - ti[0]) + ht * (f.t_top[i] - ti[nz - 1]));
+    }
+  }
+  if (in.links.empty()) return 0.0;
+
+  // Rods joined by links: one sparse symmetric system in W/K.
+  std::vector<std::vector<int>> offset(plies_.size());
+  int count = 0;
+  for (std::size_t p = 0; p < plies_.size(); ++p) {
+    offset[p].assign(plies_[p].view->num_nodes, -1);
+    for (int i = 0; i < plies_[p].view->num_nodes; ++i)
+      if (linked_[p][i]) {
+        offset[p][i] = count;
+        count += plies_[p].nz;
+      }
+  }
+  LinkedSolver& s = *linked_solver_;
+  s.begin(count);
+  std::vector<double> rhs(count, 0.0);
+  for (std::size_t p = 0; p < plies_.size(); ++p) {
+    const PlyThermal& ply = plies_[p];
+    const int nz = ply.nz;
+    const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
+    const auto& f = in.faces[p];
+    for (int i = 0; i < ply.view->num_nodes; ++i) {
+      const int o = offset[p][i];
+      if (o < 0) continue;
+      const double A = ply.area[i];
+      const double* ti = T[p].data() + static_cast<std::size_t>(nz) * i;
+      for (int k = 0; k < nz; ++k) {
+        const double cap = ply.rho_c * ply.w[k] * A / dt;
+        s.add(o + k, o + k, cap);
+        rhs[o + k] += cap * ti[k];
+        if (k + 1 < nz) {
+          s.add(o + k, o + k, g * A);
+          s.add(o + k + 1, o + k + 1, g * A);
+          s.add(o + k, o + k + 1, -g * A);
+          s.add(o + k + 1, o + k, -g * A);
+        }
+      }
+      s.add(o, o, f.h_bottom[i] * A);
+      rhs[o] += f.h_bottom[i] * A * f.t_bottom[i];
+      s.add(o + nz - 1, o + nz - 1, f.h_top[i] * A);
+      rhs[o + nz - 1] += f.h_top[i] * A * f.t_top[i];
+    }
+  }
+  for (const auto& l : in.links) {
+    // G (e_a - sum w_j e_j)(e_a - sum w_j e_j)^T
+    int idx[4];
+    double coef[4];
+    idx[0] = offset[l.part_a][l.node_a] + (l.face_a == sdk::kTop ? plies_[l.part_a].nz - 1 : 0);
+    coef[0] = 1.0;
+    for (int j = 0; j < 3; ++j) {
+      idx[j + 1] = offset[l.part_b][l.nodes_b[j]] + (l.face_b == sdk::kTop ? plies_[l.part_b].nz - 1 : 0);
+      coef[j + 1] = -l.w_b[j];
+    }
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c)
+        if (coef[r] != 0 && coef[c] != 0) s.add(idx[r], idx[c], l.conductance * coef[r] * coef[c]);
+  }
+  if (!s.finish()) throw std::runtime_error("the linked through-thickness system could not be factorised");
+  s.solve(rhs);
+  for (std::size_t p = 0; p < plies_.size(); ++p) {
+    const PlyThermal& ply = plies_[p];
+    const int nz = ply.nz;
+    const auto& f = in.faces[p];
+    for (int i = 0; i < ply.view->num_nodes; ++i) {
+      const int o = offset[p][i];
+      if (o < 0) continue;
+      double* ti = T[p].data() + static_cast<std::size_t>(nz) * i;
+      for (int k = 0; k < nz; ++k) ti[k] = rhs[o + k];
+      node_heat_[p][i] = dt * ply.area[i] *
+                         (f.h_bottom[i] * (f.t_bottom[i] - ti[0]) + f.h_top[i] * (f.t_top[i] - ti[nz - 1]));
+    }
+  }
+  return 0.0;
+}
+
+double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T) {
+  const double dt = in.dt;
+  if (!in.links.empty())
+    for (std::size_t p = 0; p < plies_.size(); ++p) std::copy(T[p].begin(), T[p].end(), t_old_[p].begin());
+  for (std::size_t p = 0; p < plies_.size(); ++p) {
+    const PlyThermal& ply = plies_[p];
+    const int nz = ply.nz;
+    const int n = ply.view->num_nodes;
+    const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
+    const auto& f = in.faces[p];
+    double* t = T[p].data();
+    double* heat = node_heat_[p].data();
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      double* ti = t + static_cast<std::size_t>(nz) * i;
+      double* old = thread_work_[thread_id()].data();
+      std::copy(ti, ti + nz, old);
+      const double hb = f.h_bottom[i], ht = f.h_top[i];
+      for (int k = 0; k < nz; ++k) {
+        double q = 0;  // W/m^2 leaving value k
+        if (k > 0) q += g * (old[k] - old[k - 1]);
+        if (k + 1 < nz) q += g * (old[k] - old[k + 1]);
+        if (k == 0) q += hb * (old[0] - f.t_bottom[i]);
+        if (k == nz - 1) q += ht * (old[nz - 1] - f.t_top[i]);
+        ti[k] = old[k] - dt * q / (ply.rho_c * ply.w[k]);
+      }
+      heat[i] = dt * ply.area[i] * (hb * (f.t_bottom[i] - old[0]) + ht * (f.t_top[i] - old[nz - 1]));
+    }
+  }
+  for (const auto& l : in.links) {  // serial: deterministic order
+    const PlyThermal& pa = plies_[l.part_a];
+    const int ka = l.face_a == sdk::kTop ? pa.nz - 1 : 0;
+    const double ta = t_old_[l.part_a][static_cast<std::size_t>(pa.nz) * l.node_a + ka];
+    const PlyThermal& pb = plies_[l.part_b];
+    const int kb = l.face_b == sdk::kTop ? pb.nz - 1 : 0;
+    double tb = 0;
+    for (int j = 0; j < 3; ++j) tb += l.w_b[j] * t_old_[l.part_b][static_cast<std::size_t>(pb.nz) * l.nodes_b[j] + kb];
+    const double q = dt * l.conductance * (ta - tb);  // J from a to b
+    T[l.part_a][static_cast<std::size_t>(pa.nz) * l.node_a + ka] -= q / (pa.rho_c * pa.w[ka] * pa.area[l.node_a]);
+    for (int j = 0; j < 3; ++j)
+      T[l.part_b][static_cast<std::size_t>(pb.nz) * l.nodes_b[j] + kb] +=
+          l.w_b[j] * q / (pb.rho_c * pb.w[kb] * pb.area[l.nodes_b[j]]);
+  }
+  return 0.0;
+}
+
+sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T,
+                                  sdk::ThermalStepReport* report) {
+  return sdk::guarded([&] {
+    if (in.geometry_changed)
+      for (auto& p : plies_) update_geometry(p);
+    for (auto& l : linked_) std::fill(l.begin(), l.end(), 0);
+    if (implicit_) {
+      for (const auto& l : in.links) {
+        linked_[l.part_a][l.node_a] = 1;
+        for (int j = 0; j < 3; ++j) linked_[l.part_b][l.nodes_b[j]] = 1;
+      }
+      rods_implicit(in, T);
+    } else {
+      rods_explicit(in, T);
+    }
+    int substeps = 1;
+    for (std::size_t p = 0; p < plies_.size(); ++p) {
+      const PlyThermal& ply = plies_[p];
+      const int nz = ply.nz;
+      const int n = ply.view->num_nodes;
+      double* t = T[p].data();
+      double* m = mean_[p].data();
+#pragma omp parallel for schedule(static)
+      for (int i = 0; i < n; ++i) m[i] = rod_mean(ply, t + static_cast<std::size_t>(nz) * i);
+      substeps = std::max(substeps, advance_inplane(ply, in.dt, mean_[p], scratch_[p]));
+#pragma omp parallel for schedule(static)
+      for (int i = 0; i < n; ++i) {
+        double* ti = t + static_cast<std::size_t>(nz) * i;
+        const double delta = m[i] - rod_mean(ply, ti);  // <T>new - <T>: T = <T>new + T~
+        for (int k = 0; k < nz; ++k) ti[k] += delta;
+      }
+    }
+    double heat = 0;
+    for (const auto& h : node_heat_)
+      for (double q : h) heat += q;
+    if (report) {
+      report->heat_in = heat;
+      report->substeps = substeps;
+    }
+    return sdk::Status::success();
+  });
+}
+
+}  // namespace ts::thermal

@@ -1,0 +1,53 @@
+#pragma once
+// The operator-split thermal shell used by the `adi` and `shell2d` plugins
+// (physics.md section 3):
+//   1. through the thickness, at every node, over dt with the face
+//      conditions (explicit, or implicit backward Euler with a tridiagonal
+//      solve; rods joined by ply/ply contact conductances are solved
+//      together in one sparse system so the exchange is implicit and
+//      conserves heat exactly);
+//   2. mean <T> = (1/h) int T dz and deviation T~ = T - <T>;
+//   3. the mean alone by the in-plane problem rho c h d<T>/dt = div(h Ks grad <T>);
+//   4. T = <T>new + T~ (the paper's Eq. 31 prints -T~; +T~ is right, Eq. 20).
+// With one value per node (shell2d) step 1 reduces to the face fluxes as
+// sources of a plain thermal shell and steps 2-4 to its in-plane conduction.
+#include <memory>
+#include <vector>
+
+#include <thermostamp/sdk/thermal.hpp>
+
+#include "thermal_common.hpp"
+
+namespace ts::thermal {
+
+class LinkedSolver;  // sparse solve of rods joined by links
+
+class SplitThermal : public sdk::ThermalSplitter {
+ public:
+  explicit SplitThermal(bool layered);
+  ~SplitThermal() override;
+  sdk::Status configure(const sdk::Params& params, std::span<const sdk::PartView> parts) override;
+  int values_per_node(int part) const override { return plies_[part].nz; }
+  sdk::Status capacities(int part, std::span<double> capacity) const override;
+  sdk::Status step_limits(const sdk::ThermalStepInput& in, double* stable_dt, double* accurate) override;
+  sdk::Status advance(const sdk::ThermalStepInput& in, std::span<const std::span<double>> temperature,
+                      sdk::ThermalStepReport* report) override;
+
+ private:
+  double rods_explicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T);
+  double rods_implicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T);
+
+  bool layered_;          // true: one rod of thickness_layers elements per node (adi)
+  bool implicit_ = true;  // through-thickness scheme
+  double dt_safety_ = 0.9;
+  std::vector<PlyThermal> plies_;
+  std::vector<std::vector<double>> node_heat_;   // per part, per node: J in this step
+  std::vector<std::vector<double>> scratch_;     // per part
+  std::vector<std::vector<double>> mean_;        // per part
+  std::vector<std::vector<double>> t_old_;       // per part (explicit links)
+  std::vector<std::vector<double>> thread_work_; // per thread, 4 * nz
+  std::vector<std::vector<char>> linked_;        // per part, per node
+  std::unique_ptr<LinkedSolver> linked_solver_;
+};
+
+}  // namespace ts::thermal

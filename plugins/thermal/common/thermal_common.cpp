@@ -1,0 +1,182 @@
+#include "thermal_common.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <thermostamp/sdk/math.hpp>
+
+namespace ts::thermal {
+
+using sdk::Vec3;
+
+void setup_ply(PlyThermal& ply, const sdk::PartView& part, int nz) {
+  ply.view = &part;
+  ply.nz = nz;
+  ply.h = part.thickness;
+  ply.e = nz > 1 ? part.thickness / (nz - 1) : part.thickness;
+  ply.rho_c = part.thermal.density * part.thermal.specific_heat;
+  ply.k33 = part.thermal.k33;
+  ply.w.assign(nz, ply.e);
+  if (nz > 1) {
+    ply.w.front() = 0.5 * ply.e;
+    ply.w.back() = 0.5 * ply.e;
+  }
+  // Node-node pattern from the triangles.
+  const int n = part.num_nodes;
+  std::vector<std::vector<int>> adj(n);
+  for (int el = 0; el < part.num_elements; ++el)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) adj[part.triangles[3 * el + a]].push_back(part.triangles[3 * el + b]);
+  Csr& m = ply.k2d;
+  m.n = n;
+  m.row_start.assign(n + 1, 0);
+  m.col.clear();
+  for (int i = 0; i < n; ++i) {
+    auto& r = adj[i];
+    r.push_back(i);
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+    m.col.insert(m.col.end(), r.begin(), r.end());
+    m.row_start[i + 1] = static_cast<int>(m.col.size());
+  }
+  m.val.assign(m.col.size(), 0.0);
+  m.elem_slot.assign(9 * part.num_elements, 0);
+  for (int el = 0; el < part.num_elements; ++el)
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        const int i = part.triangles[3 * el + a], j = part.triangles[3 * el + b];
+        const auto first = m.col.begin() + m.row_start[i], last = m.col.begin() + m.row_start[i + 1];
+        m.elem_slot[9 * el + 3 * a + b] = static_cast<int>(std::lower_bound(first, last, j) - m.col.begin());
+      }
+  ply.area.assign(n, 0.0);
+  update_geometry(ply);
+}
+
+void update_geometry(PlyThermal& ply) {
+  const sdk::PartView& part = *ply.view;
+  const double* x = part.x.data();
+  std::fill(ply.area.begin(), ply.area.end(), 0.0);
+  std::fill(ply.k2d.val.begin(), ply.k2d.val.end(), 0.0);
+  const double k11 = part.thermal.k11, k22 = part.thermal.k22;
+  for (int el = 0; el < part.num_elements; ++el) {
+    const int* t = &part.triangles[3 * el];
+    const Vec3 x0 = sdk::load3(x, t[0]), x1 = sdk::load3(x, t[1]), x2 = sdk::load3(x, t[2]);
+    const Vec3 nn = sdk::cross(sdk::sub(x1, x0), sdk::sub(x2, x0));
+    const double two_a = sdk::norm(nn);
+    const double A = 0.5 * two_a;
+    const Vec3 n = sdk::scale(nn, 1.0 / two_a);
+    // Fibre direction projected on the element plane; t = n x f.
+    Vec3 f = sdk::load3(part.fibre.data(), el);
+    f = sdk::normalized(sdk::sub(f, sdk::scale(n, sdk::dot(f, n))));
+    const Vec3 tdir = sdk::cross(n, f);
+    // grad N_a = n x (x_c - x_b) / (2A), (a, b, c) cyclic.
+    const Vec3 xs[3] = {x0, x1, x2};
+    double gf[3], gt[3];
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 g = sdk::scale(sdk::cross(n, sdk::sub(xs[(a + 2) % 3], xs[(a + 1) % 3])), 1.0 / two_a);
+      gf[a] = sdk::dot(g, f);
+      gt[a] = sdk::dot(g, tdir);
+    }
+    for (int a = 0; a < 3; ++a) {
+      ply.area[t[a]] += A / 3.0;
+      for (int b = 0; b < 3; ++b)
+        ply.k2d.val[ply.k2d.elem_slot[9 * el + 3 * a + b]] += A * (k11 * gf[a] * gf[b] + k22 * gt[a] * gt[b]);
+    }
+  }
+  // Gershgorin bound of C^-1 K for the in-plane problem (h cancels).
+  double rate = 0;
+  for (int i = 0; i < ply.k2d.n; ++i) {
+    double s = 0;
+    for (int p = ply.k2d.row_start[i]; p < ply.k2d.row_start[i + 1]; ++p) s += std::abs(ply.k2d.val[p]);
+    rate = std::max(rate, s / (ply.rho_c * ply.area[i]));
+  }
+  ply.inplane_rate = rate;
+}
+
+double rods_stable_dt(std::span<const PlyThermal> plies, std::span<const sdk::FaceConditions> faces,
+                      std::span<const sdk::HeatLink> links) {
+  // Per value: (|diag| + sum |off-diagonal|) / capacity, per unit area.
+  double rate = 0;
+  std::vector<std::vector<double>> link_rate(plies.size());
+  for (std::size_t p = 0; p < plies.size(); ++p) link_rate[p].assign(2 * plies[p].view->num_nodes, 0.0);
+  for (const auto& l : links) {
+    const PlyThermal& a = plies[l.part_a];
+    link_rate[l.part_a][2 * l.node_a + l.face_a] += 2.0 * l.conductance / a.area[l.node_a];
+    for (int j = 0; j < 3; ++j) {
+      if (l.w_b[j] == 0) continue;
+      const PlyThermal& b = plies[l.part_b];
+      link_rate[l.part_b][2 * l.nodes_b[j] + l.face_b] += 2.0 * l.conductance * std::abs(l.w_b[j]) / b.area[l.nodes_b[j]];
+    }
+  }
+  for (std::size_t p = 0; p < plies.size(); ++p) {
+    const PlyThermal& ply = plies[p];
+    const double g = ply.nz > 1 ? ply.k33 / ply.e : 0.0;
+    for (int i = 0; i < ply.view->num_nodes; ++i) {
+      const double hb = faces[p].h_bottom[i] + link_rate[p][2 * i];
+      const double ht = faces[p].h_top[i] + link_rate[p][2 * i + 1];
+      if (ply.nz == 1) {
+        rate = std::max(rate, (hb + ht) / (ply.rho_c * ply.w[0]));
+      } else {
+        rate = std::max(rate, (2 * g + hb) / (ply.rho_c * ply.w[0]));
+        rate = std::max(rate, (2 * g + ht) / (ply.rho_c * ply.w[ply.nz - 1]));
+        if (ply.nz > 2) rate = std::max(rate, 4 * g / (ply.rho_c * ply.e));
+      }
+    }
+  }
+  return rate > 0 ? 2.0 / rate : std::numeric_limits<double>::infinity();
+}
+
+double accurate_dt(std::span<const PlyThermal> plies, std::span<const sdk::FaceConditions> faces) {
+  double tau = std::numeric_limits<double>::infinity();
+  for (std::size_t p = 0; p < plies.size(); ++p) {
+    const PlyThermal& ply = plies[p];
+    tau = std::min(tau, ply.rho_c * ply.h * ply.h / ply.k33);
+    double hmax = 0;
+    for (int i = 0; i < ply.view->num_nodes; ++i)
+      hmax = std::max({hmax, faces[p].h_bottom[i], faces[p].h_top[i]});
+    if (hmax > 0) tau = std::min(tau, ply.rho_c * ply.h / hmax);
+  }
+  return 0.01 * tau;
+}
+
+void solve_tridiagonal(int n, const double* a, const double* b, const double* c, double* d, double* cp) {
+  // a: sub-diagonal (a[0] unused), b: diagonal, c: super-diagonal (c[n-1] unused).
+  double denom = b[0];
+  cp[0] = n > 1 ? c[0] / denom : 0.0;
+  d[0] = d[0] / denom;
+  for (int i = 1; i < n; ++i) {
+    denom = b[i] - a[i] * cp[i - 1];
+    cp[i] = i + 1 < n ? c[i] / denom : 0.0;
+    d[i] = (d[i] - a[i] * d[i - 1]) / denom;
+  }
+  for (int i = n - 2; i >= 0; --i) d[i] -= cp[i] * d[i + 1];
+}
+
+int advance_inplane(const PlyThermal& ply, double dt, std::span<double> mean, std::span<double> scratch) {
+  if (ply.inplane_rate <= 0) return 0;
+  const double dt_max = 0.9 * 2.0 / ply.inplane_rate;
+  const int steps = std::max(1, static_cast<int>(std::ceil(dt / dt_max - 1e-12)));
+  const double ds = dt / steps;
+  const int n = ply.k2d.n;
+  const int* rs = ply.k2d.row_start.data();
+  const int* col = ply.k2d.col.data();
+  const double* val = ply.k2d.val.data();
+  const double* area = ply.area.data();
+  const double inv_rc = 1.0 / ply.rho_c;
+  double* m = mean.data();
+  double* r = scratch.data();
+  for (int s = 0; s < steps; ++s) {
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      double acc = 0;
+      for (int p = rs[i]; p < rs[i + 1]; ++p) acc += val[p] * m[col[p]];
+      r[i] = acc;
+    }
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i) m[i] -= ds * inv_rc * r[i] / area[i];
+  }
+  return steps;
+}
+
+}  // namespace ts::thermal

@@ -1,0 +1,66 @@
+#pragma once
+// Building blocks shared by the thermal splitters (adi, shell2d, layered3d):
+// lumped through-thickness discretisation of a ply, the in-plane conduction
+// matrix of its triangles, a tridiagonal solver. Only SDK headers are used.
+#include <span>
+#include <vector>
+
+#include <thermostamp/sdk/thermal.hpp>
+#include <thermostamp/sdk/views.hpp>
+
+namespace ts::thermal {
+
+// Compressed sparse rows, node-node, symmetric pattern with the diagonal.
+struct Csr {
+  std::vector<int> row_start;  // n + 1
+  std::vector<int> col;
+  std::vector<double> val;
+  std::vector<int> elem_slot;  // per element, 9 positions into val (a-major)
+  int n = 0;
+};
+
+// One ply as the thermal splitters see it.
+struct PlyThermal {
+  const sdk::PartView* view = nullptr;
+  int nz = 1;              // values per node (thickness_layers + 1, or 1 for a plain shell)
+  double h = 0;            // thickness, m
+  double e = 0;            // layer thickness, m (h when nz == 1)
+  double rho_c = 0;        // J/(m^3 K)
+  double k33 = 0;          // W/(m K)
+  std::vector<double> w;   // nz through-thickness lumping weights, m; sum = h
+  std::vector<double> area;  // lumped node area, m^2
+  Csr k2d;                 // in-plane conduction of one unit thickness: K_ab = A grad Na . Ks grad Nb (W/(m K))
+  double inplane_rate = 0; // Gershgorin bound of max eigenvalue of C^-1 K in plane, 1/s
+};
+
+// Sets nz, weights, pattern and values for the current geometry of `part`.
+void setup_ply(PlyThermal& ply, const sdk::PartView& part, int nz);
+void update_geometry(PlyThermal& ply);
+
+// Largest stable forward-Euler step of the rods, Robin faces and (explicit)
+// links (Gershgorin bound, 2 / lambda_max), s.
+double rods_stable_dt(std::span<const PlyThermal> plies, std::span<const sdk::FaceConditions> faces,
+                      std::span<const sdk::HeatLink> links);
+
+// Step recommended for the accuracy of backward Euler: 1 % of the shortest
+// through-thickness diffusion time rho c h^2 / k33 and Robin time rho c h / H.
+double accurate_dt(std::span<const PlyThermal> plies, std::span<const sdk::FaceConditions> faces);
+
+// Solves a tridiagonal system in place (Thomas algorithm); d is overwritten
+// with the solution; c' is kept in `work` (size n).
+void solve_tridiagonal(int n, const double* a, const double* b, const double* c, double* d, double* work);
+
+// Advances the through-thickness-mean of every node of `ply` over dt by the
+// in-plane problem rho c h dT/dt = div(h Ks grad T) with forward Euler
+// sub-steps (at most 0.9 of the stable step). `mean` is updated in place;
+// `scratch` has num_nodes entries. Returns the number of sub-steps.
+int advance_inplane(const PlyThermal& ply, double dt, std::span<double> mean, std::span<double> scratch);
+
+// Mean through the thickness of node i (consistent with linear elements).
+inline double rod_mean(const PlyThermal& ply, const double* t) {
+  double s = 0;
+  for (int k = 0; k < ply.nz; ++k) s += ply.w[k] * t[k];
+  return s / ply.h;
+}
+
+}  // namespace ts::thermal

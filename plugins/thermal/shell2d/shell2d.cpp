@@ -1,0 +1,31 @@
+// shell2d: the plain thermal shell, one temperature per node; the face
+// fluxes are sources of the in-plane problem and the face temperature is the
+// node temperature (no through-thickness gradient).
+#include <thermostamp/sdk/plugin.hpp>
+
+#include "split_thermal.hpp"
+
+namespace {
+
+ts::sdk::ThermalSplitter* create() { return new ts::thermal::SplitThermal(false); }
+
+void register_all(ts::sdk::Registrar& r) {
+  ts::sdk::Descriptor d;
+  d.kind = ts::sdk::PluginKind::Thermal;
+  d.name = "shell2d";
+  d.version = "1.0.0";
+  d.summary = "Plain thermal shell: one temperature per node, face fluxes as sources";
+  d.params = {
+      ts::sdk::choice_param("through_thickness", "implicit", {"implicit", "explicit"},
+                            "treatment of the face fluxes: implicit (backward Euler, unconditionally stable) or "
+                            "explicit (forward Euler)"),
+      ts::sdk::real_param("dt_safety", "0.9", "-", "fraction of the critical step used by the explicit scheme", 0.0,
+                          1.0, true),
+  };
+  d.example = R"({ "splitter": "shell2d" })";
+  r.add_thermal(d, &create);
+}
+
+}  // namespace
+
+THERMOSTAMP_PLUGIN("thermal_shell2d", "1.0.0", register_all)

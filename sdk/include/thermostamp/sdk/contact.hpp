@@ -1,0 +1,69 @@
+#pragma once
+// Contact handlers: detect which faces of plies touch tools or other plies,
+// produce the thermal contact map (always) and contact forces (when the
+// mechanics solver runs).
+#include <span>
+#include <vector>
+
+#include "parameters.hpp"
+#include "status.hpp"
+#include "thermal.hpp"
+#include "views.hpp"
+
+namespace ts::sdk {
+
+// A body taking part in a contact pair: a ply or a rigid tool.
+struct BodyRef {
+  enum class Type { Part, Tool } type = Type::Part;
+  int index = 0;  // into the parts or tools spans
+};
+
+struct ContactPair {
+  BodyRef first;   // nodes of `first` are searched against `second` (ply/ply)
+  BodyRef second;
+};
+
+// A face of a ply node touching a tool: Robin condition (h, tool temperature).
+struct ToolHeatContact {
+  int part = 0;
+  int node = 0;
+  int face = kTop;
+  int tool = 0;
+  double conductance = 0.0;  // W/(m^2 K)
+};
+
+// What a handler fills every detection pass (kernel-owned; cleared by the kernel).
+struct ThermalContactMap {
+  std::vector<ToolHeatContact> tool_contacts;
+  std::vector<HeatLink> links;  // ply/ply, conductance already times the node's area
+};
+
+// Mechanical contact (design for the explicit solver): forces are
+// accumulated into f (3 per node per part), the reaction on tools into
+// tool_force (3 per tool); energy is the penalty energy stored.
+struct ContactForceInput {
+  double dt = 0.0;
+  std::span<const std::span<const double>> velocity;  // per part, 3 * num_nodes
+};
+struct ContactForceOutput {
+  std::span<const std::span<double>> force;  // per part, 3 * num_nodes (accumulate)
+  std::span<double> tool_force;              // 3 * num_tools (accumulate)
+  double energy = 0.0;
+  double stable_dt = 0.0;  // contact contribution to the critical step
+};
+
+class ContactHandler {
+ public:
+  virtual ~ContactHandler() = default;
+  virtual Status configure(const Params& params, const ContactPair& pair,
+                           std::span<const PartView> parts, std::span<const ToolView> tools) = 0;
+  // Node areas (m^2) per part are given so that links carry h_c * area.
+  virtual Status thermal_contacts(std::span<const PartView> parts, std::span<const ToolView> tools,
+                                  std::span<const std::span<const double>> node_area,
+                                  ThermalContactMap& out) = 0;
+  virtual Status contact_forces(const ContactForceInput&, ContactForceOutput&) {
+    return Status::failure("this contact handler has no mechanical contact");
+  }
+};
+
+}  // namespace ts::sdk

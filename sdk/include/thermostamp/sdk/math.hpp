@@ -1,0 +1,43 @@
+#pragma once
+// Storage conventions used everywhere in ThermoStamp (kernel and plugins).
+//
+//  * Node coordinates, displacements, velocities, forces, normals: flat
+//    arrays of doubles, node-major, xyz interleaved: v[3*i + d], d = 0,1,2.
+//  * Triangles: flat int array, tri[3*e + a], a = 0,1,2, counter-clockwise
+//    seen from the ply's top face (element normal (x1-x0) x (x2-x0) points
+//    to the top face, +h/2).
+//  * Edge k of a triangle is the edge opposite its node k; neighbour[3*e+k]
+//    is the element across that edge, or -1.
+//  * Through-thickness fields: node-major, bottom to top:
+//    T[nz*i + k], k = 0 (z = -h/2) ... nz-1 (z = +h/2).
+//  * Symmetric 2x2 membrane tensors (C, S, strain): Voigt order
+//    [11, 22, 12] with the 12 entry stored once (tensor component, not the
+//    engineering shear): v = {A(0,0), A(1,1), A(0,1)}.
+//  * 2x2 matrices that are not symmetric (F): row-major {F00, F01, F10, F11}.
+//  * Temperatures in degrees Celsius, everything else SI.
+#include <array>
+#include <cmath>
+
+namespace ts::sdk {
+
+using Vec3 = std::array<double, 3>;
+
+inline constexpr int kVoigt11 = 0;
+inline constexpr int kVoigt22 = 1;
+inline constexpr int kVoigt12 = 2;
+
+inline Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+inline Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
+inline Vec3 scale(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
+inline double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
+inline Vec3 normalized(const Vec3& a) {
+  const double n = norm(a);
+  return n > 0 ? scale(a, 1.0 / n) : a;
+}
+inline Vec3 load3(const double* p, int i) { return {p[3 * i], p[3 * i + 1], p[3 * i + 2]}; }
+
+}  // namespace ts::sdk

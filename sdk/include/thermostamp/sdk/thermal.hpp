@@ -1,0 +1,72 @@
+#pragma once
+// Thermal splitters: plugins that advance the temperature of every ply over
+// one thermal step. The kernel owns the temperature arrays (one per part,
+// values_per_node(part) values per node, bottom to top, see math.hpp) and
+// the face conditions; the splitter owns its work arrays.
+#include <span>
+
+#include "parameters.hpp"
+#include "status.hpp"
+#include "views.hpp"
+
+namespace ts::sdk {
+
+enum Face : int { kBottom = 0, kTop = 1 };
+
+// Robin condition on each face of each node: q = h (T_face - T_ext), leaving
+// the ply. h = 0 means adiabatic. Filled by the kernel every thermal step
+// from heat_exchange interactions and tool contact.
+struct FaceConditions {
+  std::span<const double> h_bottom;  // W/(m^2 K), per node
+  std::span<const double> t_bottom;  // degC, per node
+  std::span<const double> h_top;
+  std::span<const double> t_top;
+};
+
+// Conductance between face `face_a` of node `node_a` (part `part_a`) and the
+// point of face `face_b` of part `part_b` at weights w_b of nodes nodes_b.
+// Heat W = conductance * (T_a - sum w_b T_b) leaves a and enters b: the
+// exchange conserves heat exactly.
+struct HeatLink {
+  int part_a = 0;
+  int node_a = 0;
+  int face_a = kBottom;
+  int part_b = 0;
+  int nodes_b[3] = {0, 0, 0};
+  double w_b[3] = {0, 0, 0};
+  int face_b = kTop;
+  double conductance = 0.0;  // W/K (h_c times the area of node a)
+};
+
+struct ThermalStepInput {
+  double dt = 0.0;                                // s
+  std::span<const FaceConditions> faces;          // one per part
+  std::span<const HeatLink> links;                // ply-to-ply conductances
+  bool geometry_changed = false;                  // parts' x or fibre moved since last step
+  bool links_changed = false;                     // links differ from the last step
+};
+
+struct ThermalStepReport {
+  double heat_in = 0.0;     // J that entered the plies through Robin faces during the step
+  int substeps = 1;         // internal sub-steps taken (in-plane explicit sub-cycling, ...)
+};
+
+class ThermalSplitter {
+ public:
+  virtual ~ThermalSplitter() = default;
+  // Called once with the validated parameters and every part.
+  virtual Status configure(const Params& params, std::span<const PartView> parts) = 0;
+  // Through-thickness values per node of a part (1 for a plain shell).
+  virtual int values_per_node(int part) const = 0;
+  // Lumped heat capacity (J/K) of each value of a part, node-major like T;
+  // sum(capacity * T) is the stored heat the kernel audits.
+  virtual Status capacities(int part, std::span<double> capacity) const = 0;
+  // Largest step the scheme accepts for these conditions (infinity when
+  // unconditionally stable), and the step it recommends for accuracy.
+  virtual Status step_limits(const ThermalStepInput& in, double* stable_dt, double* accurate_dt) = 0;
+  // Advances every part's temperature from t to t + in.dt, in place.
+  virtual Status advance(const ThermalStepInput& in, std::span<const std::span<double>> temperature,
+                         ThermalStepReport* report) = 0;
+};
+
+}  // namespace ts::sdk

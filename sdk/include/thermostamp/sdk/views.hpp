@@ -1,0 +1,51 @@
+#pragma once
+// Views over kernel-owned data. The kernel owns every array; a plugin reads
+// (and, where the interface says so, writes) through these spans and never
+// keeps them beyond the call unless the interface says they are stable.
+// Storage order: see math.hpp.
+#include <span>
+#include <string_view>
+
+namespace ts::sdk {
+
+// Effective thermal properties of a ply (in its material frame).
+struct ThermalProps {
+  double density = 0.0;        // kg/m^3
+  double specific_heat = 0.0;  // J/(kg K)
+  double k11 = 0.0;            // W/(m K), along the fibres (warp)
+  double k22 = 0.0;            // W/(m K), across the fibres, in the plane
+  double k33 = 0.0;            // W/(m K), through the thickness
+};
+
+// One ply (a shell part). Arrays are stable for the life of the run: the
+// kernel updates x and fibre in place when the ply deforms.
+struct PartView {
+  int index = 0;
+  std::string_view name;
+  int num_nodes = 0;
+  int num_elements = 0;
+  std::span<const double> x0;          // 3 * num_nodes, initial mid-surface coordinates (m)
+  std::span<const double> x;           // 3 * num_nodes, current mid-surface coordinates (m)
+  std::span<const int> triangles;      // 3 * num_elements
+  std::span<const int> neighbours;     // 3 * num_elements, element across edge k, -1 if none
+  std::span<const double> fibre;       // 3 * num_elements, unit fibre (warp) direction, current
+  double thickness = 0.0;              // m
+  int thickness_layers = 1;            // through-thickness thermal elements
+  double initial_temperature = 0.0;    // degC
+  ThermalProps thermal;
+};
+
+// A rigid tool as contact handlers see it. `query` gives, for a batch of
+// points, the signed distance to the tool surface (positive on the side the
+// outward normal points to, i.e. outside the tool) and that outward unit
+// normal at the closest surface point. One call per batch, not per node.
+struct ToolView {
+  int index = 0;
+  std::string_view name;
+  double temperature = 0.0;  // degC
+  const void* context = nullptr;
+  void (*query)(const void* context, std::size_t n, const double* points, double* distance,
+                double* normal) = nullptr;
+};
+
+}  // namespace ts::sdk
