@@ -310,9 +310,23 @@ double Simulation::stored_heat() const {
   return e;
 }
 
+void Simulation::set_initial_temperature(int part, std::span<const double> per_node) {
+  PartState& st = *parts_.at(part);
+  if (static_cast<int>(per_node.size()) != st.mesh.num_nodes())
+    throw std::invalid_argument("set_initial_temperature: one value per node expected");
+  for (int i = 0; i < st.mesh.num_nodes(); ++i)
+    for (int k = 0; k < st.nz; ++k) st.T[static_cast<std::size_t>(st.nz) * i + k] = per_node[i];
+}
+
+std::span<const double> Simulation::initial_coordinates(int part) const { return parts_.at(part)->x0; }
+std::span<const double> Simulation::temperature(int part) const { return parts_.at(part)->T; }
+int Simulation::values_per_node(int part) const { return parts_.at(part)->nz; }
+
 void Simulation::check_field(double time, long long step) {
   for (const auto& st : parts_)
-    for (std::size_t k = 0; k < st->T.size(); ++k)
+    for (std::size_t k = 0; k < st->T.size(); ++k) {
+      seen_min_ = std::min(seen_min_, st->T[k]);
+      seen_max_ = std::max(seen_max_, st->T[k]);
       if (!std::isfinite(st->T[k])) {
         const int i = static_cast<int>(k / st->nz);
         throw RunError("non-finite temperature in part '" + st->def->name + "' at node " + std::to_string(i) + " (" +
@@ -320,6 +334,7 @@ void Simulation::check_field(double time, long long step) {
                        fmt_g(st->x0[3 * i + 2], 4) + "), layer value " + std::to_string(k % st->nz) + ", at t = " +
                        fmt_g(time) + " s (thermal step " + std::to_string(step) + ")");
       }
+    }
 }
 
 namespace {
@@ -502,6 +517,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   const double stored0 = stored_heat();
   double heat_in = 0;
   int substeps_max = 1;
+  long long limited_total = 0;
   std::vector<double> next_probe(job_.output.probes.size(), 0.0);
   for (std::size_t q = 0; q < next_probe.size(); ++q) next_probe[q] = job_.output.probes[q].interval;
   long long frame_index = 1;
@@ -519,7 +535,10 @@ RunResult Simulation::run(const RunOptions& opt) {
 
   const double eps_t = 1e-9 * thermal_dt_;
   std::string failure;
+  seen_min_ = std::numeric_limits<double>::infinity();
+  seen_max_ = -seen_min_;
   try {
+    check_field(0.0, 0);
     write_frame(0.0);
     sample_probes(0.0);
     while (t < t_end - eps_t) {
@@ -537,6 +556,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       t += step;
       heat_in += rep.heat_in;
       substeps_max = std::max(substeps_max, rep.substeps);
+      limited_total += rep.limited;
       check_field(t, steps);
       if (std::abs(t - next_frame) <= eps_t) t = next_frame;
       bool any_step_probe = false;
@@ -558,7 +578,8 @@ RunResult Simulation::run(const RunOptions& opt) {
       }
       progress.update(t, steps);
     }
-    progress.update(t, steps, true);
+    if (!progress.tty) progress.last_decile = 10;  // the last line was printed at 100 %
+    progress.update(t, steps, progress.tty);
   } catch (const RunError& e) {
     failure = e.what();
   } catch (const std::exception& e) {
@@ -576,6 +597,9 @@ RunResult Simulation::run(const RunOptions& opt) {
   result.heat_in = heat_in;
   result.stored_change = stored_change;
   result.heat_balance_error = std::abs(stored_change - heat_in) / scale;
+  result.limited_node_steps = limited_total;
+  result.temperature_min = seen_min_;
+  result.temperature_max = seen_max_;
 
   if (opt.write_files) {
     update_derived();
@@ -591,7 +615,8 @@ RunResult Simulation::run(const RunOptions& opt) {
     summary["thermal"] = {{"splitter", job_.thermal->splitter},
                           {"stable_dt", std::isfinite(thermal_stable_dt_) ? json(thermal_stable_dt_) : json(nullptr)},
                           {"accurate_dt", thermal_accurate_dt_},
-                          {"inplane_substeps_max", substeps_max}};
+                          {"inplane_substeps_max", substeps_max},
+                          {"limited_node_steps", limited_total}};
     summary["plugins_loaded"] = registry_.loaded_names();
     summary["energy"] = {{"kinetic", 0.0}, {"internal", 0.0}, {"external_work", 0.0},
                          {"contact", 0.0}, {"damping", 0.0},  {"balance_error", 0.0}};
@@ -613,6 +638,10 @@ RunResult Simulation::run(const RunOptions& opt) {
     summary["error"] = result.ok ? json(nullptr) : json(failure);
     std::ofstream(opt.out_dir / "summary.json") << summary.dump(2) << '\n';
   }
+  if (limited_total > 0)
+    log->warn("the thermal splitter limited {} node-step(s) to keep temperatures inside their local range "
+              "(steep through-thickness profiles next to strong in-plane conduction)",
+              limited_total);
   if (result.ok) {
     log->info("completed: {} thermal steps in {:.3g} s wall; heat into the plies {:.6g} J, stored change {:.6g} J "
               "(balance error {:.2e})",

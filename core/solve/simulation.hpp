@@ -38,6 +38,8 @@ struct RunResult {
   long long thermal_steps = 0;
   double thermal_dt = 0;
   double heat_in = 0, stored_change = 0, heat_balance_error = 0;
+  double temperature_min = 0, temperature_max = 0;  // over every value and every step
+  long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
   std::vector<ProbeSample> probes;
 };
 
@@ -52,6 +54,15 @@ class Simulation {
   std::vector<std::string> plugins_loaded() const { return registry_.loaded_names(); }
   // Heat stored in the plies, J (sum of capacity x temperature, relative to 0 degC).
   double stored_heat() const;
+  // Replaces the initial temperature of a part by one value per node
+  // (uniform through the thickness), before run().
+  void set_initial_temperature(int part, std::span<const double> per_node);
+  int num_parts() const { return static_cast<int>(parts_.size()); }
+  // Current temperature of a part (values_per_node per node, bottom to top).
+  std::span<const double> temperature(int part) const;
+  int values_per_node(int part) const;
+  // Initial mid-surface coordinates of a part, 3 per node.
+  std::span<const double> initial_coordinates(int part) const;
 
  private:
   void build_parts();
@@ -60,6 +71,7 @@ class Simulation {
   void build_probes();
   void assemble_faces();
   void check_field(double time, long long step);
+  double seen_min_ = 0, seen_max_ = 0;
 
   const Job& job_;
   PluginRegistry& registry_;

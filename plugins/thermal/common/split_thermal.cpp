@@ -45,6 +45,8 @@ sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const s
     node_heat_.resize(parts.size());
     scratch_.resize(parts.size());
     mean_.resize(parts.size());
+    rod_lo_.resize(parts.size());
+    rod_hi_.resize(parts.size());
     t_old_.resize(parts.size());
     linked_.resize(parts.size());
     for (std::size_t p = 0; p < parts.size(); ++p) {
@@ -52,9 +54,12 @@ sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const s
       node_heat_[p].assign(n, 0.0);
       scratch_[p].assign(n, 0.0);
       mean_[p].assign(n, 0.0);
+      rod_lo_[p].assign(n, 0.0);
+      rod_hi_[p].assign(n, 0.0);
       t_old_[p].assign(static_cast<std::size_t>(n) * plies_[p].nz, 0.0);
       linked_[p].assign(n, 0);
     }
+    nz_max_ = nz_max;
     thread_work_.assign(max_threads(), std::vector<double>(5 * nz_max, 0.0));
     return sdk::Status::success();
   });
@@ -161,18 +166,17 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
     }
   }
   for (const auto& l : in.links) {
-    // G (e_a - sum w_j e_j)(e_a - sum w_j e_j)^T
-    int idx[4];
-    double coef[4];
-    idx[0] = offset[l.part_a][l.node_a] + (l.face_a == sdk::kTop ? plies_[l.part_a].nz - 1 : 0);
-    coef[0] = 1.0;
+    // Three node-to-node conductances G w_j between a and b_j.
+    const int ia = offset[l.part_a][l.node_a] + (l.face_a == sdk::kTop ? plies_[l.part_a].nz - 1 : 0);
     for (int j = 0; j < 3; ++j) {
-      idx[j + 1] = offset[l.part_b][l.nodes_b[j]] + (l.face_b == sdk::kTop ? plies_[l.part_b].nz - 1 : 0);
-      coef[j + 1] = -l.w_b[j];
+      const double g = l.conductance * l.w_b[j];
+      if (g == 0) continue;
+      const int ib = offset[l.part_b][l.nodes_b[j]] + (l.face_b == sdk::kTop ? plies_[l.part_b].nz - 1 : 0);
+      s.add(ia, ia, g);
+      s.add(ib, ib, g);
+      s.add(ia, ib, -g);
+      s.add(ib, ia, -g);
     }
-    for (int r = 0; r < 4; ++r)
-      for (int c = 0; c < 4; ++c)
-        if (coef[r] != 0 && coef[c] != 0) s.add(idx[r], idx[c], l.conductance * coef[r] * coef[c]);
   }
   if (!s.finish()) throw std::runtime_error("the linked through-thickness system could not be factorised");
   s.solve(rhs);
@@ -224,16 +228,15 @@ double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<co
   for (const auto& l : in.links) {  // serial: deterministic order
     const PlyThermal& pa = plies_[l.part_a];
     const int ka = l.face_a == sdk::kTop ? pa.nz - 1 : 0;
-    const double ta = t_old_[l.part_a][static_cast<std::size_t>(pa.nz) * l.node_a + ka];
+    const std::size_t ia = static_cast<std::size_t>(pa.nz) * l.node_a + ka;
     const PlyThermal& pb = plies_[l.part_b];
     const int kb = l.face_b == sdk::kTop ? pb.nz - 1 : 0;
-    double tb = 0;
-    for (int j = 0; j < 3; ++j) tb += l.w_b[j] * t_old_[l.part_b][static_cast<std::size_t>(pb.nz) * l.nodes_b[j] + kb];
-    const double q = dt * l.conductance * (ta - tb);  // J from a to b
-    T[l.part_a][static_cast<std::size_t>(pa.nz) * l.node_a + ka] -= q / (pa.rho_c * pa.w[ka] * pa.area[l.node_a]);
-    for (int j = 0; j < 3; ++j)
-      T[l.part_b][static_cast<std::size_t>(pb.nz) * l.nodes_b[j] + kb] +=
-          l.w_b[j] * q / (pb.rho_c * pb.w[kb] * pb.area[l.nodes_b[j]]);
+    for (int j = 0; j < 3; ++j) {
+      const std::size_t ib = static_cast<std::size_t>(pb.nz) * l.nodes_b[j] + kb;
+      const double q = dt * l.conductance * l.w_b[j] * (t_old_[l.part_a][ia] - t_old_[l.part_b][ib]);  // J, a -> b_j
+      T[l.part_a][ia] -= q / (pa.rho_c * pa.w[ka] * pa.area[l.node_a]);
+      T[l.part_b][ib] += q / (pb.rho_c * pb.w[kb] * pb.area[l.nodes_b[j]]);
+    }
   }
   return 0.0;
 }
@@ -243,6 +246,9 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
   return sdk::guarded([&] {
     if (in.geometry_changed)
       for (auto& p : plies_) update_geometry(p);
+    // The thread count may have changed since configure().
+    if (static_cast<int>(thread_work_.size()) < max_threads())
+      thread_work_.resize(max_threads(), std::vector<double>(5 * nz_max_, 0.0));
     for (auto& l : linked_) std::fill(l.begin(), l.end(), 0);
     if (implicit_) {
       for (const auto& l : in.links) {
@@ -254,21 +260,55 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
       rods_explicit(in, T);
     }
     int substeps = 1;
+    long long limited_nodes = 0;
     for (std::size_t p = 0; p < plies_.size(); ++p) {
       const PlyThermal& ply = plies_[p];
       const int nz = ply.nz;
       const int n = ply.view->num_nodes;
       double* t = T[p].data();
       double* m = mean_[p].data();
-#pragma omp parallel for schedule(static)
-      for (int i = 0; i < n; ++i) m[i] = rod_mean(ply, t + static_cast<std::size_t>(nz) * i);
-      substeps = std::max(substeps, advance_inplane(ply, in.dt, mean_[p], scratch_[p]));
+      double* lo = rod_lo_[p].data();
+      double* hi = rod_hi_[p].data();
 #pragma omp parallel for schedule(static)
       for (int i = 0; i < n; ++i) {
-        double* ti = t + static_cast<std::size_t>(nz) * i;
-        const double delta = m[i] - rod_mean(ply, ti);  // <T>new - <T>: T = <T>new + T~
-        for (int k = 0; k < nz; ++k) ti[k] += delta;
+        const double* ti = t + static_cast<std::size_t>(nz) * i;
+        m[i] = rod_mean(ply, ti);
+        lo[i] = *std::min_element(ti, ti + nz);
+        hi[i] = *std::max_element(ti, ti + nz);
       }
+      substeps = std::max(substeps, advance_inplane(ply, in.dt, mean_[p], scratch_[p]));
+      const Csr& k2d = ply.k2d;
+      long long limited = 0;
+#pragma omp parallel for schedule(static) reduction(+ : limited)
+      for (int i = 0; i < n; ++i) {
+        double* ti = t + static_cast<std::size_t>(nz) * i;
+        const double delta = m[i] - rod_mean(ply, ti);  // <T>new - <T>: T = <T>new + T~ (Eq. 20)
+        if (delta == 0.0) continue;
+        // Range of the values this node's in-plane stencil held before the step.
+        double lower = lo[i], upper = hi[i];
+        for (int q = k2d.row_start[i]; q < k2d.row_start[i + 1]; ++q) {
+          lower = std::min(lower, lo[k2d.col[q]]);
+          upper = std::max(upper, hi[k2d.col[q]]);
+        }
+        if (hi[i] + delta <= upper && lo[i] + delta >= lower) {
+          for (int k = 0; k < nz; ++k) ti[k] += delta;
+          continue;
+        }
+        // The uniform shift would leave the stencil's range (steep profiles
+        // next to strong in-plane conduction): give the same heat to the
+        // values in proportion to the room they have below the bound, which
+        // conserves heat and keeps every value inside the range.
+        double room_sum = 0;
+        for (int k = 0; k < nz; ++k) room_sum += ply.w[k] * (delta > 0 ? upper - ti[k] : ti[k] - lower);
+        if (room_sum <= 0) {
+          for (int k = 0; k < nz; ++k) ti[k] += delta;
+          continue;
+        }
+        ++limited;
+        const double f = delta * ply.h / room_sum;
+        for (int k = 0; k < nz; ++k) ti[k] += f * (delta > 0 ? upper - ti[k] : ti[k] - lower);
+      }
+      limited_nodes += limited;
     }
     double heat = 0;
     for (const auto& h : node_heat_)
@@ -276,6 +316,7 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
     if (report) {
       report->heat_in = heat;
       report->substeps = substeps;
+      report->limited = limited_nodes;
     }
     return sdk::Status::success();
   });

@@ -9,6 +9,12 @@
 //   2. mean <T> = (1/h) int T dz and deviation T~ = T - <T>;
 //   3. the mean alone by the in-plane problem rho c h d<T>/dt = div(h Ks grad <T>);
 //   4. T = <T>new + T~ (the paper's Eq. 31 prints -T~; +T~ is right, Eq. 20).
+//      Where this uniform shift would carry a value outside the range its
+//      in-plane stencil held before the step (a steep through-thickness
+//      profile next to strong in-plane conduction), the same heat is given
+//      to the values in proportion to their room below that range instead:
+//      heat is conserved and no value leaves the range. The step report
+//      counts these nodes; with ordinary profiles there are none.
 // With one value per node (shell2d) step 1 reduces to the face fluxes as
 // sources of a plain thermal shell and steps 2-4 to its in-plane conduction.
 #include <memory>
@@ -40,10 +46,12 @@ class SplitThermal : public sdk::ThermalSplitter {
   bool layered_;          // true: one rod of thickness_layers elements per node (adi)
   bool implicit_ = true;  // through-thickness scheme
   double dt_safety_ = 0.9;
+  int nz_max_ = 1;
   std::vector<PlyThermal> plies_;
   std::vector<std::vector<double>> node_heat_;   // per part, per node: J in this step
   std::vector<std::vector<double>> scratch_;     // per part
   std::vector<std::vector<double>> mean_;        // per part
+  std::vector<std::vector<double>> rod_lo_, rod_hi_;  // per part: range of each rod before the in-plane step
   std::vector<std::vector<double>> t_old_;       // per part (explicit links)
   std::vector<std::vector<double>> thread_work_; // per thread, 4 * nz
   std::vector<std::vector<char>> linked_;        // per part, per node

@@ -37,8 +37,8 @@ struct PlyThermal {
 void setup_ply(PlyThermal& ply, const sdk::PartView& part, int nz);
 void update_geometry(PlyThermal& ply);
 
-// Largest stable forward-Euler step of the rods, Robin faces and (explicit)
-// links (Gershgorin bound, 2 / lambda_max), s.
+// Largest forward-Euler step of the rods, Robin faces and (explicit) links
+// that keeps the discrete maximum principle: min_i C_i / K_ii, s.
 double rods_stable_dt(std::span<const PlyThermal> plies, std::span<const sdk::FaceConditions> faces,
                       std::span<const sdk::HeatLink> links);
 

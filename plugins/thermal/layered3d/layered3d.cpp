@@ -31,6 +31,7 @@ class Layered3d final : public sdk::ThermalSplitter {
       }
       n_ = offset_.back();
       cap_.assign(n_, 0.0);
+      update_capacities();
       rhs_.resize(n_);
       return sdk::Status::success();
     });
@@ -48,13 +49,10 @@ class Layered3d final : public sdk::ThermalSplitter {
       if (implicit_) {
         *stable = std::numeric_limits<double>::infinity();
       } else {
+        // Forward Euler keeps the maximum principle for dt <= C_i / K_ii.
         double rate = 0;
-        for (int c = 0; c < k_.outerSize(); ++c) {
-          double s = 0;
-          for (Eigen::SparseMatrix<double>::InnerIterator it(k_, c); it; ++it) s += std::abs(it.value());
-          rate = std::max(rate, s / cap_[c]);
-        }
-        *stable = rate > 0 ? dt_safety_ * 2.0 / rate : std::numeric_limits<double>::infinity();
+        for (int c = 0; c < k_.outerSize(); ++c) rate = std::max(rate, k_.coeff(c, c) / cap_[c]);
+        *stable = rate > 0 ? dt_safety_ / rate : std::numeric_limits<double>::infinity();
         *accurate = std::min(*accurate, *stable);
       }
       return sdk::Status::success();
@@ -121,6 +119,14 @@ class Layered3d final : public sdk::ThermalSplitter {
   }
 
  private:
+  void update_capacities() {
+    for (std::size_t p = 0; p < plies_.size(); ++p) {
+      const PlyThermal& ply = plies_[p];
+      for (int i = 0; i < ply.view->num_nodes; ++i)
+        for (int k = 0; k < ply.nz; ++k) cap_[offset_[p] + ply.nz * i + k] = ply.rho_c * ply.w[k] * ply.area[i];
+    }
+  }
+
   void assemble_if_needed(const sdk::ThermalStepInput& in) {
     bool changed = !assembled_ || in.geometry_changed || in.links_changed;
     if (!changed) {
@@ -130,8 +136,10 @@ class Layered3d final : public sdk::ThermalSplitter {
           if (f.h_bottom[i] != last_h_[q] || f.h_top[i] != last_h_[q + 1]) changed = true;
     }
     if (!changed) return;
-    if (in.geometry_changed)
+    if (in.geometry_changed) {
       for (auto& p : plies_) update_geometry(p);
+      update_capacities();
+    }
     last_h_.clear();
     for (const auto& f : in.faces)
       for (std::size_t i = 0; i < f.h_bottom.size(); ++i) {
@@ -149,7 +157,6 @@ class Layered3d final : public sdk::ThermalSplitter {
         const int o = offset_[p] + nz * i;
         const double A = ply.area[i];
         for (int k = 0; k < nz; ++k) {
-          cap_[o + k] = ply.rho_c * ply.w[k] * A;
           // In-plane conduction in the slice of value k (lumped weight w_k).
           for (int q = m.row_start[i]; q < m.row_start[i + 1]; ++q)
             trip.emplace_back(o + k, offset_[p] + nz * m.col[q] + k, m.val[q] * ply.w[k]);
@@ -165,19 +172,19 @@ class Layered3d final : public sdk::ThermalSplitter {
       }
     }
     for (const auto& l : in.links) {
-      int idx[4];
-      double coef[4];
+      // Three node-to-node conductances G w_j (sdk/thermal.hpp).
       const PlyThermal& pa = plies_[l.part_a];
-      idx[0] = offset_[l.part_a] + pa.nz * l.node_a + (l.face_a == sdk::kTop ? pa.nz - 1 : 0);
-      coef[0] = 1.0;
       const PlyThermal& pb = plies_[l.part_b];
+      const int ia = offset_[l.part_a] + pa.nz * l.node_a + (l.face_a == sdk::kTop ? pa.nz - 1 : 0);
       for (int j = 0; j < 3; ++j) {
-        idx[j + 1] = offset_[l.part_b] + pb.nz * l.nodes_b[j] + (l.face_b == sdk::kTop ? pb.nz - 1 : 0);
-        coef[j + 1] = -l.w_b[j];
+        const double g = l.conductance * l.w_b[j];
+        if (g == 0) continue;
+        const int ib = offset_[l.part_b] + pb.nz * l.nodes_b[j] + (l.face_b == sdk::kTop ? pb.nz - 1 : 0);
+        trip.emplace_back(ia, ia, g);
+        trip.emplace_back(ib, ib, g);
+        trip.emplace_back(ia, ib, -g);
+        trip.emplace_back(ib, ia, -g);
       }
-      for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c)
-          if (coef[r] != 0 && coef[c] != 0) trip.emplace_back(idx[r], idx[c], l.conductance * coef[r] * coef[c]);
     }
     const bool pattern_may_change = in.links_changed || !assembled_;
     k_.resize(n_, n_);

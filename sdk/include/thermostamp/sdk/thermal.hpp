@@ -24,9 +24,13 @@ struct FaceConditions {
 };
 
 // Conductance between face `face_a` of node `node_a` (part `part_a`) and the
-// point of face `face_b` of part `part_b` at weights w_b of nodes nodes_b.
-// Heat W = conductance * (T_a - sum w_b T_b) leaves a and enters b: the
-// exchange conserves heat exactly.
+// point of face `face_b` of part `part_b` at weights w_b (sum 1) of nodes
+// nodes_b. It acts as three node-to-node conductances conductance * w_b[j]:
+// heat W_j = conductance * w_b[j] * (T_a - T_b[j]) leaves a and enters b_j.
+// Node a thus loses conductance * (T_a - sum_j w_b[j] T_b[j]), the Robin
+// flux towards the facing surface temperature interpolated at its
+// projection; the exchange conserves heat exactly and keeps the discrete
+// maximum principle (every coupling is a positive conductance).
 struct HeatLink {
   int part_a = 0;
   int node_a = 0;
@@ -49,6 +53,7 @@ struct ThermalStepInput {
 struct ThermalStepReport {
   double heat_in = 0.0;     // J that entered the plies through Robin faces during the step
   int substeps = 1;         // internal sub-steps taken (in-plane explicit sub-cycling, ...)
+  long long limited = 0;    // nodes where a bound-preserving correction acted
 };
 
 class ThermalSplitter {

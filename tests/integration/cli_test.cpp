@@ -1,0 +1,186 @@
+// The command line as a user meets it: exit codes, one-line errors with
+// JSON pointers, output files, plugin discovery and ABI checks.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "job/job.hpp"
+#include "test_support.hpp"
+
+namespace ts::test {
+namespace {
+
+std::filesystem::path demo_job() { return source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json"; }
+
+// The demo job made small and short, written to a folder.
+std::filesystem::path small_job(const std::string& dir_name, const std::function<void(json&)>& edit = nullptr) {
+  const auto dir = temp_dir(dir_name);
+  json j = read_job_document(demo_job());
+  j["time"]["end"] = 1.0;
+  j["output"]["interval"] = 0.25;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {8, 8};
+  if (edit) edit(j);
+  std::ofstream(dir / "job.json") << j.dump(2);
+  return dir / "job.json";
+}
+
+std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+TEST(Cli, Version) {
+  const auto r = thermostamp("--version");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("thermostamp 0.1.0"), std::string::npos);
+}
+
+TEST(Cli, PluginsListsEveryInTreePlugin) {
+  const auto r = thermostamp("plugins");
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* n : {"thermal/adi", "thermal/shell2d", "thermal/layered3d", "contact/penalty_node_surface"})
+    EXPECT_NE(r.out.find(n), std::string::npos) << n;
+  const auto j = thermostamp("plugins --json");
+  EXPECT_EQ(j.exit_code, 0);
+  const json list = json::parse(j.out);
+  EXPECT_GE(list.size(), 4u);
+  EXPECT_TRUE(list[0].contains("params"));
+}
+
+TEST(Cli, RunWritesTheOutputFolder) {
+  const auto job = small_job("run_ok");
+  const auto out = job.parent_path() / "out";
+  const auto r = thermostamp("run " + q(job) + " --out " + q(out) + " --quiet --threads 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"summary.json", "probes.csv", "results.h5", "results.xdmf", "log.txt"})
+    EXPECT_TRUE(std::filesystem::exists(out / f)) << f;
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["status"], "completed");
+  EXPECT_EQ(s["threads"], 2);
+  EXPECT_EQ(s["frames"], 5);
+  EXPECT_DOUBLE_EQ(s["simulated_time_s"].get<double>(), 1.0);
+  EXPECT_EQ(s["plugins_loaded"], json({"contact/penalty_node_surface", "thermal/adi"}));
+  EXPECT_LT(s["heat"]["balance_error"].get<double>(), 1e-9);
+  std::ifstream csv(out / "probes.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "probe,quantity,time,z,value");
+  std::stringstream xdmf;
+  xdmf << std::ifstream(out / "results.xdmf").rdbuf();
+  EXPECT_NE(xdmf.str().find("TopologyType=\"Wedge\""), std::string::npos);
+  EXPECT_NE(xdmf.str().find("<Time Value=\"1\" />"), std::string::npos);
+}
+
+TEST(Cli, SetOverridesAValue) {
+  const auto job = small_job("set");
+  const auto out = job.parent_path() / "out";
+  const auto r = thermostamp("run " + q(job) + " --out " + q(out) +
+                             " --quiet --set solvers.thermal.splitter=shell2d --set parts.*.thickness_layers=3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["thermal"]["splitter"], "shell2d");
+  EXPECT_EQ(s["parts"][0]["values_per_node"], 1);
+}
+
+struct BadCase {
+  std::string name;
+  std::function<void(json&)> edit;
+  std::string expected;  // substring of the one-line error
+};
+
+TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
+  const std::vector<BadCase> cases = {
+      {"unknown_key", [](json& j) { j["solver"] = j["solvers"]; }, "error: /solver: unknown key 'solver'; did you mean 'solvers'?"},
+      {"wrong_type", [](json& j) { j["parts"][0]["thickness"] = "thin"; }, "error: /parts/0/thickness: expected a number, found a string"},
+      {"negative_thickness", [](json& j) { j["parts"][0]["thickness"] = -0.0005; }, "error: /parts/0/thickness: must be > 0, found -0.0005"},
+      {"zero_layers", [](json& j) { j["parts"][1]["thickness_layers"] = 0; }, "error: /parts/1/thickness_layers: must be >= 1, found 0"},
+      {"missing_material", [](json& j) { j["parts"][0]["material"] = "pa66"; }, "error: /parts/0/material: unknown material 'pa66'; known: pa66_cf_ud"},
+      {"unknown_splitter", [](json& j) { j["solvers"]["thermal"]["splitter"] = "adii"; }, "error: /solvers/thermal/splitter: unknown thermal plugin 'adii'; did you mean 'adi'?; valid types are:"},
+      {"unknown_param", [](json& j) { j["solvers"]["thermal"]["through_thicknes"] = "implicit"; }, "error: /solvers/thermal/through_thicknes: unknown parameter 'through_thicknes' for thermal plugin 'adi'; did you mean 'through_thickness'?"},
+      {"bad_choice", [](json& j) { j["solvers"]["thermal"]["through_thickness"] = "semi"; }, "error: /solvers/thermal/through_thickness: unknown value 'semi'; valid values are: implicit, explicit"},
+      {"probe_outside", [](json& j) { j["output"]["probes"][0]["at"] = {1.0, 1.0, 0.0}; }, "error: /output/probes/0/at: probe 'centre_top' is outside part 'ply_top'"},
+      {"unknown_body", [](json& j) { j["interactions"][1]["between"][0] = "dye"; }, "error: /interactions/1/between/0: unknown part or tool 'dye'; did you mean 'die'?"},
+      {"self_contact", [](json& j) { j["interactions"][0]["between"] = {"ply_top", "ply_top"}; }, "error: /interactions/0/between: a body in contact with itself needs \"self\": true"},
+      {"negative_conductance", [](json& j) { j["interactions"][0]["conductance"] = -1.0; }, "error: /interactions/0/conductance: must be >= 0"},
+      {"negative_penalty", [](json& j) { j["interactions"][0]["penalty"] = -1.0; }, "error: /interactions/0/penalty: must be >= 0"},
+      {"mesh_file_missing", [](json& j) { j["parts"][0]["mesh"] = {{"file", "nowhere.msh"}}; }, "error: /parts/0/mesh/file: mesh file"},
+      {"mechanics_on", [](json& j) { j["solvers"]["mechanics"] = {{"dt_safety", 0.8}}; }, "error: /solvers/mechanics: the mechanics solver is not available"},
+      {"explicit_dt", [](json& j) { j["solvers"]["thermal"]["through_thickness"] = "explicit"; j["solvers"]["thermal"]["dt"] = 0.1; }, "error: /solvers/thermal/dt: thermal step 0.1 s exceeds the stable step"},
+      {"fibre_normal", [](json& j) { j["parts"][0]["fibre_direction"] = {0, 0, 1}; }, "error: /parts/0/fibre_direction: the fibre direction is normal to the ply"},
+      {"bad_field", [](json& j) { j["output"]["fields"] = {"temprature"}; }, "error: /output/fields/0: unknown field 'temprature'; did you mean 'temperature'?"},
+      {"bad_format", [](json& j) { j["format"] = "thermostamp-job/9"; }, "error: /format: unsupported format"},
+  };
+  for (const auto& c : cases) {
+    const auto job = small_job("bad_" + c.name, c.edit);
+    const auto out = job.parent_path() / "out";
+    const auto r = thermostamp("run " + q(job) + " --out " + q(out));
+    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.err;
+    EXPECT_EQ(r.err.rfind(c.expected, 0), 0u) << c.name << ": got '" << r.err << "'";
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.name << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out)) << c.name << ": nothing may run before the job is valid";
+  }
+}
+
+TEST(Cli, NotJsonAndTruncatedFiles) {
+  const auto dir = temp_dir("notjson");
+  std::ofstream(dir / "a.json") << "this is not json";
+  std::ofstream(dir / "b.json") << "{ \"format\": \"thermostamp-job/1\", \"name\": ";
+  auto r = thermostamp("run " + q(dir / "a.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("a.json:1:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("not valid JSON"), std::string::npos) << r.err;
+  r = thermostamp("run " + q(dir / "b.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("b.json:1:"), std::string::npos) << r.err;
+  r = thermostamp("run " + q(dir / "missing.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("cannot open job file"), std::string::npos);
+  r = thermostamp("run " + q(demo_job()) + " --set parts.9.thickness=1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("index 9 out of range"), std::string::npos) << r.err;
+  r = thermostamp("run " + q(demo_job()) + " --threads zero");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(Cli, ValidateRunsNothing) {
+  const auto r = thermostamp("validate " + q(demo_job()));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("is valid"), std::string::npos);
+}
+
+TEST(Plugins, AnotherAbiIsRefusedNamingBothVersions) {
+  const auto job = small_job("badabi", [](json& j) {
+    j["solvers"]["thermal"]["splitter"] = "badabi";
+    j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR};
+  });
+  const auto r = thermostamp("run " + q(job));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: /solvers/thermal/splitter: plugin library"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("SDK ABI version 999"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("this ThermoStamp has SDK ABI version 1"), std::string::npos) << r.err;
+}
+
+TEST(Plugins, FoundThroughEnvironmentAndFailureKeepsFrames) {
+  const auto job = small_job("nan", [](json& j) {
+    j["solvers"]["thermal"] = {{"splitter", "nan_after"}, {"fail_time", 0.6}};
+  });
+  const auto out = job.parent_path() / "out";
+  const auto r = thermostamp("run " + q(job) + " --out " + q(out) + " --quiet");
+  EXPECT_EQ(r.exit_code, 2) << "not on the search path without THERMOSTAMP_PLUGIN_PATH";
+  const std::string env = std::string("THERMOSTAMP_PLUGIN_PATH=") + THERMOSTAMP_TEST_PLUGIN_DIR + " ";
+  const int rc = std::system((env + (binary_dir() / "bin" / "thermostamp").string() + " run " + q(job) + " --out " +
+                              q(out) + " --quiet 2>" + q(out.parent_path() / "err.txt"))
+                                 .c_str());
+  EXPECT_EQ(WEXITSTATUS(rc), 3);
+  std::stringstream err;
+  err << std::ifstream(out.parent_path() / "err.txt").rdbuf();
+  EXPECT_NE(err.str().find("non-finite temperature in part 'ply_bottom' at node 1"), std::string::npos) << err.str();
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["status"], "failed");
+  EXPECT_NE(s["error"].get<std::string>().find("at t = 0.68"), std::string::npos) << s["error"];
+  EXPECT_EQ(s["frames"], 3);  // 0, 0.25, 0.5 were written before the failure at 0.683 s
+  std::stringstream xdmf;
+  xdmf << std::ifstream(out / "results.xdmf").rdbuf();
+  EXPECT_NE(xdmf.str().find("<Time Value=\"0.5\" />"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ts::test

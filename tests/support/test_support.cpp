@@ -1,0 +1,117 @@
+#include "test_support.hpp"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+#include "io/logging.hpp"
+#include "plugins/registry.hpp"
+
+namespace ts::test {
+
+json ply_job(const std::string& splitter, int layers, double t_end, double interval) {
+  json j = {
+      {"format", "thermostamp-job/1"},
+      {"name", "test"},
+      {"time", {{"end", t_end}}},
+      {"materials",
+       {{"ply", {{"density", 1294.0}, {"specific_heat", 1775.0}, {"conductivity", {3.89, 0.31, 0.31}}}}}},
+      {"parts",
+       {{{"name", "ply"},
+         {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {0.01, 0.01}}, {"divisions", {2, 2}}}},
+         {"thickness", 0.0005},
+         {"material", "ply"},
+         {"initial_temperature", 300.0},
+         {"thickness_layers", layers}}}},
+      {"solvers", {{"mechanics", nullptr}, {"thermal", {{"splitter", splitter}, {"through_thickness", "implicit"}}}}},
+      {"output",
+       {{"interval", interval},
+        {"fields", {"temperature"}},
+        {"probes",
+         {{{"name", "c"}, {"part", "ply"}, {"at", {0.005, 0.005, 0}}, {"quantities", {"temperature_profile"}},
+           {"interval", interval}}}}}}};
+  return j;
+}
+
+const ProbeSample* JobRun::sample(int probe, const std::string& quantity, double t) const {
+  const ProbeSample* best = nullptr;
+  double bd = 1e300;
+  for (const auto& s : result.probes)
+    if (s.probe == probe && s.quantity == quantity && std::abs(s.time - t) < bd) {
+      bd = std::abs(s.time - t);
+      best = &s;
+    }
+  return best;
+}
+
+JobRun run_json(const json& doc, int threads, const std::filesystem::path& out) {
+  log_to_terminal(true);
+  const Job job = parse_job(doc, source_dir() / "tests" / "inline.json");
+  PluginRegistry registry;
+  Simulation sim(job, registry);
+  RunOptions opt;
+  opt.threads = threads;
+  opt.quiet = true;
+  opt.write_files = !out.empty();
+  opt.out_dir = out;
+  JobRun r;
+  r.result = sim.run(opt);
+  return r;
+}
+
+std::filesystem::path binary_dir() { return THERMOSTAMP_TEST_BINARY_DIR; }
+std::filesystem::path source_dir() { return THERMOSTAMP_TEST_SOURCE_DIR; }
+
+std::filesystem::path temp_dir(const std::string& name) {
+  auto d = binary_dir() / "test_tmp" / name;
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+static std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+CommandResult thermostamp(const std::string& args) {
+  static int counter = 0;
+  const auto dir = binary_dir() / "test_tmp" / "cmd";
+  std::filesystem::create_directories(dir);
+  const std::string tag = std::to_string(getpid()) + "_" + std::to_string(counter++);
+  const auto out = dir / ("out" + tag + ".txt");
+  const auto err = dir / ("err" + tag + ".txt");
+  const std::string cmd = (binary_dir() / "bin" / "thermostamp").string() + " " + args + " >" + out.string() +
+                          " 2>" + err.string() + " </dev/null";
+  const int rc = std::system(cmd.c_str());
+  CommandResult r;
+  r.exit_code = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+double slab_robin_series(double x, double t, double L, double alpha, double Bi, double T0, double Tinf) {
+  double theta = 0;
+  const double pi = 3.14159265358979323846;
+  for (int n = 0; n < 400; ++n) {
+    // Root of f(l) = l tan l - Bi in (n pi, n pi + pi/2), by bisection.
+    double lo = n * pi + 1e-12, hi = n * pi + pi / 2 - 1e-12;
+    for (int it = 0; it < 200; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      if (mid * std::tan(mid) - Bi > 0) hi = mid;
+      else lo = mid;
+    }
+    const double l = 0.5 * (lo + hi);
+    const double c = 4 * std::sin(l) / (2 * l + std::sin(2 * l));
+    theta += c * std::exp(-l * l * alpha * t / (L * L)) * std::cos(l * x / L);
+  }
+  return Tinf + (T0 - Tinf) * theta;
+}
+
+}  // namespace ts::test

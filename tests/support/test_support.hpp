@@ -1,0 +1,39 @@
+#pragma once
+// Helpers shared by the tests: build a job from JSON, run it in-process,
+// read probe samples, run the command line.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "job/job.hpp"
+#include "solve/simulation.hpp"
+
+namespace ts::test {
+
+// A thermal-only job for one or more flat plies; callers edit the JSON.
+json ply_job(const std::string& splitter, int layers, double t_end, double interval);
+
+struct JobRun {
+  RunResult result;
+  // Profile of probe `probe` at time t (nearest sample), bottom to top.
+  const ProbeSample* sample(int probe, const std::string& quantity, double t) const;
+};
+
+// Runs the job in-process (no files unless out is given).
+JobRun run_json(const json& doc, int threads = 0, const std::filesystem::path& out = {});
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+// Runs the thermostamp executable with arguments (shell-quoted by the caller).
+CommandResult thermostamp(const std::string& args);
+std::filesystem::path binary_dir();
+std::filesystem::path source_dir();
+std::filesystem::path temp_dir(const std::string& name);
+
+// Plane wall, thickness L, insulated at x = 0, Robin (h, T_inf) at x = L,
+// initially T0: T(x, t) from the eigen-series (lambda tan lambda = Bi).
+double slab_robin_series(double x, double t, double L, double alpha, double Bi, double T0, double Tinf);
+
+}  // namespace ts::test

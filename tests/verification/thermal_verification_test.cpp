@@ -1,0 +1,274 @@
+// Verification of the thermal strategies against analytic solutions and an
+// independent fine 1D reference. Each tolerance is stated with its reason.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <vector>
+
+#include "io/logging.hpp"
+#include "plugins/registry.hpp"
+#include "test_support.hpp"
+
+namespace ts::test {
+namespace {
+
+constexpr double kRhoC = 1294.0 * 1775.0;
+constexpr double kH = 0.0005;
+
+// Max error of a profile against the eigen-series (Robin on top, bottom adiabatic).
+double series_error(const ProbeSample& s, double t, double hconv) {
+  const double alpha = 0.31 / kRhoC;
+  const double Bi = hconv * kH / 0.31;
+  double e = 0;
+  for (std::size_t k = 0; k < s.values.size(); ++k) {
+    const double x = s.z[k] + 0.5 * kH;  // from the adiabatic face
+    e = std::max(e, std::abs(s.values[k] - slab_robin_series(x, t, kH, alpha, Bi, 300.0, 260.0)));
+  }
+  return e;
+}
+
+json robin_job(const std::string& splitter, const std::string& scheme, int layers, double dt = 0) {
+  json j = ply_job(splitter, layers, 2.0, 0.1);
+  j["solvers"]["thermal"]["through_thickness"] = scheme;
+  if (dt > 0) j["solvers"]["thermal"]["dt"] = dt;
+  j["interactions"] = {{{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", 1000.0}, {"ambient", 260.0}}};
+  return j;
+}
+
+// Tolerance: 1 % of the 40 K drop, as required; with 16 layers the spatial
+// error of linear elements is ~ (e/h)^2/12 of the drop, well below that.
+TEST(EigenSeries, ProfileWithin1PercentOfDrop) {
+  for (const auto& [splitter, scheme] : std::vector<std::pair<std::string, std::string>>{
+           {"adi", "implicit"}, {"adi", "explicit"}, {"layered3d", "implicit"}, {"layered3d", "explicit"}}) {
+    const JobRun r = run_json(robin_job(splitter, scheme, 16));
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    EXPECT_EQ(r.result.limited_node_steps, 0);
+    for (double t : {0.2, 0.5, 1.0, 2.0}) {
+      const ProbeSample* s = r.sample(0, "temperature_profile", t);
+      ASSERT_NE(s, nullptr);
+      ASSERT_NEAR(s->time, t, 1e-9);
+      const double err = series_error(*s, t, 1000.0);
+      EXPECT_LT(err, 0.01 * 40.0) << splitter << " " << scheme << " at t = " << t;
+      RecordProperty(splitter + "_" + scheme + "_t" + std::to_string(t), std::to_string(err));
+    }
+  }
+}
+
+// Convergence with the number of layers (explicit path with a step
+// proportional to e^2, so that the time error follows the space error):
+// linear elements give second order; the observed order must be >= 1.8.
+TEST(EigenSeries, SecondOrderInLayers) {
+  std::vector<double> errs;
+  for (int layers : {4, 8, 16}) {
+    const double e = kH / layers;
+    const JobRun r = run_json(robin_job("adi", "explicit", layers, 0.25 * kRhoC * e * e / (2 * 0.31)));
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    errs.push_back(series_error(*r.sample(0, "temperature_profile", 0.5), 0.5, 1000.0));
+  }
+  const double order1 = std::log2(errs[0] / errs[1]), order2 = std::log2(errs[1] / errs[2]);
+  std::printf("layers 4/8/16: error %.4g %.4g %.4g K, order %.2f %.2f\n", errs[0], errs[1], errs[2], order1, order2);
+  EXPECT_GT(order1, 1.8);
+  EXPECT_GT(order2, 1.8);
+}
+
+// Convergence with the step (implicit = backward Euler, first order): fine
+// layers so that the time error dominates; observed order at least 0.9.
+TEST(EigenSeries, FirstOrderInTime) {
+  std::vector<double> errs;
+  for (double dt : {0.1, 0.05, 0.025}) {
+    const JobRun r = run_json(robin_job("adi", "implicit", 64, dt));
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    errs.push_back(series_error(*r.sample(0, "temperature_profile", 0.5), 0.5, 1000.0));
+  }
+  const double order1 = std::log2(errs[0] / errs[1]), order2 = std::log2(errs[1] / errs[2]);
+  std::printf("dt 0.1/0.05/0.025: error %.4g %.4g %.4g K, order %.2f %.2f\n", errs[0], errs[1], errs[2], order1,
+              order2);
+  EXPECT_GT(order1, 0.9);
+  EXPECT_GT(order2, 0.9);
+}
+
+// Independent reference for two plies: lumped linear elements, 400 per ply,
+// backward Euler with dt = 1e-4 s, interface conductance between the two
+// facing end nodes. Bottom face Robin (h, 260), top face adiabatic.
+struct TwoPlyReference {
+  int n = 400;
+  std::vector<double> T;  // 2 (n+1) values: lower ply then upper ply
+  void run(double t_end, double h, double hc) {
+    const int m = n + 1;
+    T.assign(2 * m, 300.0);
+    const double e = kH / n, dt = 1e-4, g = 0.31 / e;
+    const int N = 2 * m;
+    std::vector<double> a(N), b(N), c(N), d(N), cp(N);
+    for (int step = 0; step < static_cast<int>(std::round(t_end / dt)); ++step) {
+      for (int i = 0; i < N; ++i) {
+        const int k = i % m;
+        const double w = (k == 0 || k == n) ? 0.5 * e : e;
+        const double cap = kRhoC * w / dt;
+        a[i] = b[i] = c[i] = 0;
+        b[i] = cap;
+        d[i] = cap * T[i];
+        if (k > 0) {
+          a[i] = -g;
+          b[i] += g;
+        }
+        if (k < n) {
+          c[i] = -g;
+          b[i] += g;
+        }
+      }
+      b[0] += h;
+      d[0] += h * 260.0;
+      // interface link between node n (top of lower ply) and node m (bottom of upper)
+      b[n] += hc;
+      c[n] = -hc;
+      b[m] += hc;
+      a[m] = -hc;
+      // Thomas
+      cp[0] = c[0] / b[0];
+      d[0] /= b[0];
+      for (int i = 1; i < N; ++i) {
+        const double den = b[i] - a[i] * cp[i - 1];
+        cp[i] = c[i] / den;
+        d[i] = (d[i] - a[i] * d[i - 1]) / den;
+      }
+      for (int i = N - 2; i >= 0; --i) d[i] -= cp[i] * d[i + 1];
+      T = d;
+    }
+  }
+  double at(int ply, double z) const {  // z from -h/2 to h/2 in that ply
+    const double s = (z / kH + 0.5) * n;
+    const int k = std::min(n - 1, static_cast<int>(s));
+    const double f = s - k;
+    const int o = ply * (n + 1);
+    return (1 - f) * T[o + k] + f * T[o + k + 1];
+  }
+};
+
+json two_ply_job(const std::string& splitter, int layers, double hc) {
+  json j = ply_job(splitter, layers, 2.0, 0.5);
+  json lower = j["parts"][0];
+  lower["name"] = "lower";
+  lower["mesh"]["origin"] = {0, 0, 0.00025};
+  json upper = lower;
+  upper["name"] = "upper";
+  upper["mesh"]["origin"] = {0, 0, 0.00075};
+  j["parts"] = {lower, upper};
+  j["tools"] = {{{"name", "die"}, {"surface", {{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 0, 1}}}},
+                 {"temperature", 260.0}}};
+  j["interactions"] = {
+      {{"type", "contact"}, {"handler", "penalty_node_surface"}, {"between", {"die", "lower"}}, {"conductance", 1000.0}},
+      {{"type", "contact"}, {"handler", "penalty_node_surface"}, {"between", {"upper", "lower"}}, {"conductance", hc}}};
+  j["output"]["probes"] = {
+      {{"name", "lo"}, {"part", "lower"}, {"at", {0.005, 0.005, 0.00025}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}},
+      {{"name", "up"}, {"part", "upper"}, {"at", {0.005, 0.005, 0.00075}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}}};
+  return j;
+}
+
+// Tolerances: profile within 1 % of the 40 K drop (16 layers, as above);
+// the interface jump T_upper,bottom - T_lower,top within 2 % of the
+// reference jump plus 0.02 K (the jump is h_c times the interface flux; its
+// error is the flux error of 16 layers).
+TEST(TwoPlies, InterfaceJumpAgainstFine1D) {
+  for (double hc : {1000.0, 300.0}) {
+    for (const std::string splitter : {"adi", "layered3d"}) {
+      const JobRun r = run_json(two_ply_job(splitter, 16, hc));
+      ASSERT_TRUE(r.result.ok) << r.result.error;
+      EXPECT_LT(r.result.heat_balance_error, 1e-9);
+      for (double t : {0.5, 1.0, 2.0}) {
+        TwoPlyReference ref;
+        ref.run(t, 1000.0, hc);
+        const ProbeSample* lo = r.sample(0, "temperature_profile", t);
+        const ProbeSample* up = r.sample(1, "temperature_profile", t);
+        double err = 0;
+        for (std::size_t k = 0; k < lo->z.size(); ++k) {
+          err = std::max(err, std::abs(lo->values[k] - ref.at(0, lo->z[k])));
+          err = std::max(err, std::abs(up->values[k] - ref.at(1, up->z[k])));
+        }
+        EXPECT_LT(err, 0.4) << splitter << " hc " << hc << " t " << t;
+        const double jump = up->values.front() - lo->values.back();
+        const double ref_jump = ref.at(1, -0.5 * kH) - ref.at(0, 0.5 * kH);
+        EXPECT_GT(ref_jump, 0.1);  // the case must have a visible jump
+        EXPECT_NEAR(jump, ref_jump, 0.02 * std::abs(ref_jump) + 0.02) << splitter << " hc " << hc << " t " << t;
+        std::printf("%s hc=%g t=%g: max error %.4f K, jump %.4f K (reference %.4f K)\n", splitter.c_str(), hc, t, err,
+                    jump, ref_jump);
+      }
+    }
+  }
+}
+
+// Writes a Gmsh 2.2 mesh of the parallelogram x = xi + s y, xi in [0, L],
+// y in [0, W]: its slanted edges follow the level lines of cos(pi xi / L).
+void write_parallelogram(const std::filesystem::path& file, double L, double W, double s, int nx, int ny) {
+  std::ofstream f(file);
+  f << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << (nx + 1) * (ny + 1) << "\n";
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      const double y = W * j / ny, xi = L * i / nx;
+      f << j * (nx + 1) + i + 1 << " " << xi + s * y << " " << y << " 0\n";
+    }
+  f << "$EndNodes\n$Elements\n" << 2 * nx * ny << "\n";
+  int id = 1;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int a = j * (nx + 1) + i + 1, b = a + 1, c = b + nx + 1, d = a + nx + 1;
+      f << id++ << " 2 2 0 1 " << a << " " << b << " " << c << "\n";
+      f << id++ << " 2 2 0 1 " << a << " " << c << " " << d << "\n";
+    }
+  f << "$EndElements\n";
+}
+
+// In-plane anisotropic diffusion, fibres at 30 degrees: on the parallelogram
+// whose slant is s = k_xy / k_yy, cos(pi (x - s y) / L) is an exact mode that
+// decays at k_eff pi^2 / (rho c L^2) with k_eff = 1 / (K^-1)_xx. Tolerance
+// 1 %: the discrete rate of 40 linear elements per half wave is within
+// (pi/40)^2/12 = 0.05 % of it, and the time error is smaller still.
+TEST(InPlane, AnisotropicCosineDecayRate) {
+  const double k11 = 3.89, k22 = 0.31, th = 30.0 * M_PI / 180.0;
+  const double c = std::cos(th), s = std::sin(th);
+  const double kxx = k11 * c * c + k22 * s * s, kyy = k11 * s * s + k22 * c * c, kxy = (k11 - k22) * s * c;
+  const double slant = kxy / kyy, keff = kxx - kxy * kxy / kyy;
+  const double L = 0.02, W = 0.01;
+  const auto dir = temp_dir("inplane");
+  write_parallelogram(dir / "para.msh", L, W, slant, 40, 20);
+  for (const std::string splitter : {"adi", "layered3d", "shell2d"}) {
+    json j = ply_job(splitter, 4, 20.0, 5.0);
+    j["parts"][0]["mesh"] = {{"file", (dir / "para.msh").string()}};
+    j["parts"][0]["fibre_direction"] = {c, s, 0.0};
+    j["output"]["probes"] = json::array();
+    log_to_terminal(true);
+    const Job job = parse_job(j, dir / "job.json");
+    PluginRegistry reg;
+    Simulation sim(job, reg);
+    const auto x0 = sim.initial_coordinates(0);
+    const int n = static_cast<int>(x0.size() / 3);
+    std::vector<double> T0(n), mode(n);
+    for (int i = 0; i < n; ++i) {
+      mode[i] = std::cos(M_PI * (x0[3 * i] - slant * x0[3 * i + 1]) / L);
+      T0[i] = 300.0 + 10.0 * mode[i];
+    }
+    sim.set_initial_temperature(0, T0);
+    RunOptions opt;
+    opt.write_files = false;
+    opt.quiet = true;
+    const RunResult r = sim.run(opt);
+    ASSERT_TRUE(r.ok) << r.error;
+    const auto T = sim.temperature(0);
+    const int nz = sim.values_per_node(0);
+    double num = 0, den = 0;
+    for (int i = 0; i < n; ++i) {
+      double m = 0;  // through-thickness mean (uniform here)
+      for (int k = 0; k < nz; ++k) m += T[static_cast<std::size_t>(nz) * i + k] / nz;
+      num += (m - 300.0) * mode[i];
+      den += 10.0 * mode[i] * mode[i];
+    }
+    const double rate = -std::log(num / den) / 20.0;
+    const double exact = keff * M_PI * M_PI / (kRhoC * L * L);
+    std::printf("%s: decay rate %.6g 1/s, exact %.6g 1/s, error %.3f %%\n", splitter.c_str(), rate, exact,
+                100 * (rate / exact - 1));
+    EXPECT_NEAR(rate / exact, 1.0, 0.01) << splitter;
+  }
+}
+
+}  // namespace
+}  // namespace ts::test
