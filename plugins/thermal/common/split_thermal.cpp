@@ -94,7 +94,7 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
     const char* linked = linked_[p].data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 1024)
     for (int i = 0; i < n; ++i) {
       if (linked[i]) continue;
       double* ti = t + static_cast<std::size_t>(nz) * i;
@@ -124,61 +124,100 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
   }
   if (in.links.empty()) return 0.0;
 
-  // Rods joined by links: one sparse symmetric system in W/K.
-  std::vector<std::vector<int>> offset(plies_.size());
-  int count = 0;
-  for (std::size_t p = 0; p < plies_.size(); ++p) {
-    offset[p].assign(plies_[p].view->num_nodes, -1);
-    for (int i = 0; i < plies_[p].view->num_nodes; ++i)
-      if (linked_[p][i]) {
-        offset[p][i] = count;
-        count += plies_[p].nz;
-      }
+  // Rods joined by links: one sparse symmetric system in W/K, assembled and
+  // factorised again only when the step, the links, the geometry or the face
+  // conductances of the linked rods change.
+  const bool links_changed = in.links_changed && !same_links(in.links, last_links_);
+  if (links_changed) last_links_.assign(in.links.begin(), in.links.end());
+  bool rebuild = !linked_valid_ || links_changed || in.geometry_changed || in.dt != linked_dt_;
+  if (links_changed || !linked_valid_) {
+    linked_offset_.resize(plies_.size());
+    linked_count_ = 0;
+    for (std::size_t p = 0; p < plies_.size(); ++p) {
+      linked_offset_[p].assign(plies_[p].view->num_nodes, -1);
+      for (int i = 0; i < plies_[p].view->num_nodes; ++i)
+        if (linked_[p][i]) {
+          linked_offset_[p][i] = linked_count_;
+          linked_count_ += plies_[p].nz;
+        }
+    }
+    linked_rhs_.assign(linked_count_, 0.0);
+  }
+  const auto& offset = linked_offset_;
+  const int count = linked_count_;
+  if (!rebuild) {  // face conductances of the linked rods
+    std::size_t q = 0;
+    for (std::size_t p = 0; p < plies_.size() && !rebuild; ++p)
+      for (int i = 0; i < plies_[p].view->num_nodes; ++i)
+        if (offset[p][i] >= 0) {
+          if (linked_h_[q] != in.faces[p].h_bottom[i] || linked_h_[q + 1] != in.faces[p].h_top[i]) {
+            rebuild = true;
+            break;
+          }
+          q += 2;
+        }
   }
   LinkedSolver& s = *linked_solver_;
-  s.begin(count);
-  std::vector<double> rhs(count, 0.0);
+  if (rebuild) {
+    linked_h_.clear();
+    s.begin(count);
+    for (std::size_t p = 0; p < plies_.size(); ++p) {
+      const PlyThermal& ply = plies_[p];
+      const int nz = ply.nz;
+      const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
+      const auto& f = in.faces[p];
+      for (int i = 0; i < ply.view->num_nodes; ++i) {
+        const int o = offset[p][i];
+        if (o < 0) continue;
+        const double A = ply.area[i];
+        for (int k = 0; k < nz; ++k) {
+          s.add(o + k, o + k, ply.rho_c * ply.w[k] * A / dt);
+          if (k + 1 < nz) {
+            s.add(o + k, o + k, g * A);
+            s.add(o + k + 1, o + k + 1, g * A);
+            s.add(o + k, o + k + 1, -g * A);
+            s.add(o + k + 1, o + k, -g * A);
+          }
+        }
+        s.add(o, o, f.h_bottom[i] * A);
+        s.add(o + nz - 1, o + nz - 1, f.h_top[i] * A);
+        linked_h_.push_back(f.h_bottom[i]);
+        linked_h_.push_back(f.h_top[i]);
+      }
+    }
+    for (const auto& l : in.links) {
+      // Three node-to-node conductances G w_j between a and b_j.
+      const int ia = offset[l.part_a][l.node_a] + (l.face_a == sdk::kTop ? plies_[l.part_a].nz - 1 : 0);
+      for (int j = 0; j < 3; ++j) {
+        const double gl = l.conductance * l.w_b[j];
+        if (gl == 0) continue;
+        const int ib = offset[l.part_b][l.nodes_b[j]] + (l.face_b == sdk::kTop ? plies_[l.part_b].nz - 1 : 0);
+        s.add(ia, ia, gl);
+        s.add(ib, ib, gl);
+        s.add(ia, ib, -gl);
+        s.add(ib, ia, -gl);
+      }
+    }
+    if (!s.finish()) throw std::runtime_error("the linked through-thickness system could not be factorised");
+    linked_valid_ = true;
+    linked_dt_ = dt;
+  }
+  std::vector<double>& rhs = linked_rhs_;
   for (std::size_t p = 0; p < plies_.size(); ++p) {
     const PlyThermal& ply = plies_[p];
     const int nz = ply.nz;
-    const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
     const auto& f = in.faces[p];
+#pragma omp parallel for schedule(static) if (ply.view->num_nodes > 1024)
     for (int i = 0; i < ply.view->num_nodes; ++i) {
       const int o = offset[p][i];
       if (o < 0) continue;
       const double A = ply.area[i];
       const double* ti = T[p].data() + static_cast<std::size_t>(nz) * i;
-      for (int k = 0; k < nz; ++k) {
-        const double cap = ply.rho_c * ply.w[k] * A / dt;
-        s.add(o + k, o + k, cap);
-        rhs[o + k] += cap * ti[k];
-        if (k + 1 < nz) {
-          s.add(o + k, o + k, g * A);
-          s.add(o + k + 1, o + k + 1, g * A);
-          s.add(o + k, o + k + 1, -g * A);
-          s.add(o + k + 1, o + k, -g * A);
-        }
-      }
-      s.add(o, o, f.h_bottom[i] * A);
+      for (int k = 0; k < nz; ++k) rhs[o + k] = ply.rho_c * ply.w[k] * A / dt * ti[k];
       rhs[o] += f.h_bottom[i] * A * f.t_bottom[i];
-      s.add(o + nz - 1, o + nz - 1, f.h_top[i] * A);
       rhs[o + nz - 1] += f.h_top[i] * A * f.t_top[i];
     }
   }
-  for (const auto& l : in.links) {
-    // Three node-to-node conductances G w_j between a and b_j.
-    const int ia = offset[l.part_a][l.node_a] + (l.face_a == sdk::kTop ? plies_[l.part_a].nz - 1 : 0);
-    for (int j = 0; j < 3; ++j) {
-      const double g = l.conductance * l.w_b[j];
-      if (g == 0) continue;
-      const int ib = offset[l.part_b][l.nodes_b[j]] + (l.face_b == sdk::kTop ? plies_[l.part_b].nz - 1 : 0);
-      s.add(ia, ia, g);
-      s.add(ib, ib, g);
-      s.add(ia, ib, -g);
-      s.add(ib, ia, -g);
-    }
-  }
-  if (!s.finish()) throw std::runtime_error("the linked through-thickness system could not be factorised");
   s.solve(rhs);
   for (std::size_t p = 0; p < plies_.size(); ++p) {
     const PlyThermal& ply = plies_[p];
@@ -208,7 +247,7 @@ double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<co
     const auto& f = in.faces[p];
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 1024)
     for (int i = 0; i < n; ++i) {
       double* ti = t + static_cast<std::size_t>(nz) * i;
       double* old = thread_work_[thread_id()].data();
@@ -269,7 +308,7 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
       double* m = mean_[p].data();
       double* lo = rod_lo_[p].data();
       double* hi = rod_hi_[p].data();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 1024)
       for (int i = 0; i < n; ++i) {
         const double* ti = t + static_cast<std::size_t>(nz) * i;
         m[i] = rod_mean(ply, ti);
@@ -279,7 +318,7 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
       substeps = std::max(substeps, advance_inplane(ply, in.dt, mean_[p], scratch_[p]));
       const Csr& k2d = ply.k2d;
       long long limited = 0;
-#pragma omp parallel for schedule(static) reduction(+ : limited)
+#pragma omp parallel for schedule(static) reduction(+ : limited) if (n > 1024)
       for (int i = 0; i < n; ++i) {
         double* ti = t + static_cast<std::size_t>(nz) * i;
         const double delta = m[i] - rod_mean(ply, ti);  // <T>new - <T>: T = <T>new + T~ (Eq. 20)

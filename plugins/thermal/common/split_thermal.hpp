@@ -56,6 +56,12 @@ class SplitThermal : public sdk::ThermalSplitter {
   std::vector<std::vector<double>> thread_work_; // per thread, 4 * nz
   std::vector<std::vector<char>> linked_;        // per part, per node
   std::unique_ptr<LinkedSolver> linked_solver_;
+  std::vector<sdk::HeatLink> last_links_;
+  std::vector<std::vector<int>> linked_offset_;  // per part, per node: first unknown or -1
+  std::vector<double> linked_rhs_, linked_h_;
+  int linked_count_ = 0;
+  bool linked_valid_ = false;
+  double linked_dt_ = 0;
 };
 
 }  // namespace ts::thermal

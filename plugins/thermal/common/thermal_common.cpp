@@ -138,6 +138,19 @@ double accurate_dt(std::span<const PlyThermal> plies, std::span<const sdk::FaceC
   return 0.01 * tau;
 }
 
+bool same_links(std::span<const sdk::HeatLink> a, std::span<const sdk::HeatLink> b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const auto &x = a[i], &y = b[i];
+    if (x.part_a != y.part_a || x.node_a != y.node_a || x.face_a != y.face_a || x.part_b != y.part_b ||
+        x.face_b != y.face_b || x.conductance != y.conductance)
+      return false;
+    for (int j = 0; j < 3; ++j)
+      if (x.nodes_b[j] != y.nodes_b[j] || x.w_b[j] != y.w_b[j]) return false;
+  }
+  return true;
+}
+
 void solve_tridiagonal(int n, const double* a, const double* b, const double* c, double* d, double* cp) {
   // a: sub-diagonal (a[0] unused), b: diagonal, c: super-diagonal (c[n-1] unused).
   double denom = b[0];
@@ -165,13 +178,13 @@ int advance_inplane(const PlyThermal& ply, double dt, std::span<double> mean, st
   double* m = mean.data();
   double* r = scratch.data();
   for (int s = 0; s < steps; ++s) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 1024)
     for (int i = 0; i < n; ++i) {
       double acc = 0;
       for (int p = rs[i]; p < rs[i + 1]; ++p) acc += val[p] * m[col[p]];
       r[i] = acc;
     }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 1024)
     for (int i = 0; i < n; ++i) m[i] -= ds * inv_rc * r[i] / area[i];
   }
   return steps;

@@ -56,6 +56,9 @@ void solve_tridiagonal(int n, const double* a, const double* b, const double* c,
 // `scratch` has num_nodes entries. Returns the number of sub-steps.
 int advance_inplane(const PlyThermal& ply, double dt, std::span<double> mean, std::span<double> scratch);
 
+// True when two link lists are identical.
+bool same_links(std::span<const sdk::HeatLink> a, std::span<const sdk::HeatLink> b);
+
 // Mean through the thickness of node i (consistent with linear elements).
 inline double rod_mean(const PlyThermal& ply, const double* t) {
   double s = 0;
