@@ -157,13 +157,20 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   std::map<std::string, const ProbeSample*> ref;
   for (const auto& s : results[0].probes)
     if (s.quantity == quantity) ref[key_of(s)] = &s;
+  const auto& probes = jobs[0].output.probes;
   std::ofstream csv(out / "study.csv");
-  csv << "label,wall_time_s,error_K,norm,samples,thermal_steps,thermal_dt_s\n";
+  csv << "label,wall_time_s,error_K,norm,samples,thermal_steps,thermal_dt_s";
+  for (const auto& p : probes) csv << ",error_" << p.name << "_K";
+  csv << "\n";
   csv << "reference," << results[0].wall_time_s << ",0," << norm << "," << ref.size() << ","
-      << results[0].thermal_steps << "," << results[0].thermal_dt << "\n";
+      << results[0].thermal_steps << "," << results[0].thermal_dt;
+  for (std::size_t k = 0; k < probes.size(); ++k) csv << ",0";
+  csv << "\n";
   for (std::size_t i = 1; i < all.size(); ++i) {
     double err_max = 0, err_sq = 0;
     long long count = 0;
+    std::vector<double> probe_max(probes.size(), 0.0), probe_sq(probes.size(), 0.0);
+    std::vector<long long> probe_n(probes.size(), 0);
     for (const auto& s : results[i].probes) {
       if (s.quantity != quantity) continue;
       const auto it = ref.find(key_of(s));
@@ -177,6 +184,9 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
         err_max = std::max(err_max, d);
         err_sq += d * d;
         ++count;
+        probe_max[s.probe] = std::max(probe_max[s.probe], d);
+        probe_sq[s.probe] += d * d;
+        ++probe_n[s.probe];
       }
     }
     if (count == 0) {
@@ -186,7 +196,10 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     }
     const double err = norm == "max" ? err_max : std::sqrt(err_sq / count);
     csv << all[i].label << "," << results[i].wall_time_s << "," << err << "," << norm << "," << count << ","
-        << results[i].thermal_steps << "," << results[i].thermal_dt << "\n";
+        << results[i].thermal_steps << "," << results[i].thermal_dt;
+    for (std::size_t k = 0; k < probes.size(); ++k)
+      csv << "," << (norm == "max" ? probe_max[k] : (probe_n[k] ? std::sqrt(probe_sq[k] / probe_n[k]) : 0.0));
+    csv << "\n";
     if (!quiet)
       std::cout << all[i].label << ": error " << err << " K (" << norm << "), wall " << results[i].wall_time_s
                 << " s\n";

@@ -51,6 +51,10 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
   for (const auto& p : parts_) {
     const hid_t pg = make_group(g, p.name);
     write_dataset(pg, "triangles", p.triangles->data(), p.num_elements, 3);
+    if (!p.layers) {
+      H5Gclose(pg);
+      continue;
+    }
     // Extruded through-thickness mesh: wedges between consecutive levels.
     const int nl = extruded_levels(p.nz);
     std::vector<int> wedges;
@@ -90,6 +94,7 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
     const hid_t pg = make_group(fg, wp.name);
     write_dataset(pg, "nodes", x[p], wp.num_nodes, 3);
     const int nl = extruded_levels(wp.nz);
+    if (wp.layers) {
     std::vector<double> layer_nodes(static_cast<std::size_t>(3) * wp.num_nodes * nl);
     for (int i = 0; i < wp.num_nodes; ++i)
       for (int l = 0; l < nl; ++l) {
@@ -98,6 +103,7 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
           layer_nodes[3 * (static_cast<std::size_t>(i) * nl + l) + d] = x[p][3 * i + d] + z * normals[p][3 * i + d];
       }
     write_dataset(pg, "layer_nodes", layer_nodes.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 3);
+    }
     for (const auto& f : fields[p]) {
       if (f.on_layers) {
         // Values bottom to top; a single value per node is repeated on both levels.

@@ -14,6 +14,7 @@ struct WriterPart {
   const std::vector<int>* triangles = nullptr;
   double thickness = 0;
   int nz = 1;  // through-thickness values per node
+  bool layers = true;  // write the extruded through-thickness mesh
 };
 
 struct FrameField {

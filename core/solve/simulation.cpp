@@ -390,9 +390,11 @@ RunResult Simulation::run(const RunOptions& opt) {
   if (opt.write_files) {
     std::filesystem::create_directories(opt.out_dir);
     std::vector<WriterPart> wparts;
+    const bool layers = std::find(job_.output.fields.begin(), job_.output.fields.end(), "temperature") !=
+                        job_.output.fields.end();
     for (const auto& st : parts_)
       wparts.push_back({st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(), &st->mesh.triangles,
-                        st->def->thickness, st->nz});
+                        st->def->thickness, st->nz, layers});
     writer = std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts));
     probes_csv.open(opt.out_dir / "probes.csv");
     probes_csv << "probe,quantity,time,z,value\n";

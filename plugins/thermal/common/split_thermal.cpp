@@ -1,6 +1,7 @@
 #include "split_thermal.hpp"
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <limits>
 #ifdef _OPENMP
@@ -46,6 +47,8 @@ sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const s
     scratch_.resize(parts.size());
     mean_.resize(parts.size());
     rod_lo_.resize(parts.size());
+    mean_old_.resize(parts.size());
+    factors_.assign(parts.size(), RodFactors{});
     rod_hi_.resize(parts.size());
     t_old_.resize(parts.size());
     linked_.resize(parts.size());
@@ -55,6 +58,7 @@ sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const s
       scratch_[p].assign(n, 0.0);
       mean_[p].assign(n, 0.0);
       rod_lo_[p].assign(n, 0.0);
+      mean_old_[p].assign(n, 0.0);
       rod_hi_[p].assign(n, 0.0);
       t_old_[p].assign(static_cast<std::size_t>(n) * plies_[p].nz, 0.0);
       linked_[p].assign(n, 0);
@@ -83,14 +87,61 @@ sdk::Status SplitThermal::step_limits(const sdk::ThermalStepInput& in, double* s
   });
 }
 
+void SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
+  // The rods of a ply differ only by their two face conductances; their
+  // tridiagonal factorisations are shared by every node with the same pair.
+  const double dt = in.dt;
+  for (std::size_t p = 0; p < plies_.size(); ++p) {
+    const PlyThermal& ply = plies_[p];
+    const int n = ply.view->num_nodes, nz = ply.nz;
+    const auto& f = in.faces[p];
+    RodFactors& rf = factors_[p];
+    bool same = rf.dt == dt && !in.geometry_changed && static_cast<int>(rf.hb.size()) == n;
+    for (int i = 0; same && i < n; ++i) same = rf.hb[i] == f.h_bottom[i] && rf.ht[i] == f.h_top[i];
+    if (same) continue;
+    rf.dt = dt;
+    rf.hb.assign(f.h_bottom.begin(), f.h_bottom.end());
+    rf.ht.assign(f.h_top.begin(), f.h_top.end());
+    rf.cap.resize(nz);
+    for (int k = 0; k < nz; ++k) rf.cap[k] = ply.rho_c * ply.w[k] / dt;
+    const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
+    std::map<std::pair<double, double>, int> ids;
+    rf.id.resize(n);
+    rf.inv_den.clear();
+    rf.g_inv_den.clear();
+    for (int i = 0; i < n; ++i) {
+      const auto key = std::make_pair(f.h_bottom[i], f.h_top[i]);
+      auto it = ids.find(key);
+      if (it == ids.end()) {
+        it = ids.emplace(key, static_cast<int>(ids.size())).first;
+        // Thomas forward elimination of (C/dt + K_rod + Robin) for this pair.
+        double cp_prev = 0;
+        for (int k = 0; k < nz; ++k) {
+          double b = rf.cap[k] + (k > 0 ? g : 0.0) + (k + 1 < nz ? g : 0.0);
+          if (k == 0) b += key.first;
+          if (k == nz - 1) b += key.second;
+          const double den = b - (k > 0 ? -g : 0.0) * cp_prev;
+          rf.inv_den.push_back(1.0 / den);
+          rf.g_inv_den.push_back(g / den);  // -c_k / den
+          cp_prev = (k + 1 < nz ? -g : 0.0) / den;
+        }
+      }
+      rf.id[i] = it->second;
+    }
+  }
+}
+
 double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T) {
   const double dt = in.dt;
+  update_rod_factors(in);
   for (std::size_t p = 0; p < plies_.size(); ++p) {
     const PlyThermal& ply = plies_[p];
     const int nz = ply.nz;
     const int n = ply.view->num_nodes;
     const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
     const auto& f = in.faces[p];
+    const RodFactors& rf = factors_[p];
+    const double* cap = rf.cap.data();
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
     const char* linked = linked_[p].data();
@@ -99,26 +150,19 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
       if (linked[i]) continue;
       double* ti = t + static_cast<std::size_t>(nz) * i;
       const double hb = f.h_bottom[i], ht = f.h_top[i];
-      if (nz == 1) {
-        const double cap = ply.rho_c * ply.w[0] / dt;
-        ti[0] = (cap * ti[0] + hb * f.t_bottom[i] + ht * f.t_top[i]) / (cap + hb + ht);
-      } else {
-        double* work = thread_work_[thread_id()].data();
-        double *a = work, *b = work + nz, *c = work + 2 * nz, *d = work + 3 * nz, *cp = work + 4 * nz;
-        for (int k = 0; k < nz; ++k) {
-          const double cap = ply.rho_c * ply.w[k] / dt;
-          a[k] = k > 0 ? -g : 0.0;
-          c[k] = k + 1 < nz ? -g : 0.0;
-          b[k] = cap + (k > 0 ? g : 0.0) + (k + 1 < nz ? g : 0.0);
-          d[k] = cap * ti[k];
-        }
-        b[0] += hb;
-        d[0] += hb * f.t_bottom[i];
-        b[nz - 1] += ht;
-        d[nz - 1] += ht * f.t_top[i];
-        solve_tridiagonal(nz, a, b, c, d, cp);
-        for (int k = 0; k < nz; ++k) ti[k] = d[k];
+      const double* inv = rf.inv_den.data() + static_cast<std::size_t>(nz) * rf.id[i];
+      const double* gi = rf.g_inv_den.data() + static_cast<std::size_t>(nz) * rf.id[i];
+      // Forward substitution (a_k = -g), in place.
+      double prev = (cap[0] * ti[0] + hb * f.t_bottom[i]) * inv[0];
+      ti[0] = prev;
+      for (int k = 1; k < nz; ++k) {
+        double r = cap[k] * ti[k];
+        if (k == nz - 1) r += ht * f.t_top[i];
+        prev = (r + g * prev) * inv[k];
+        ti[k] = prev;
       }
+      // Back substitution: T_k = d_k - c'_k T_{k+1}, c'_k = -g / den_k.
+      for (int k = nz - 2; k >= 0; --k) ti[k] += gi[k] * ti[k + 1];
       heat[i] = dt * ply.area[i] * (hb * (f.t_bottom[i] - ti[0]) + ht * (f.t_top[i] - ti[nz - 1]));
     }
   }
@@ -307,13 +351,21 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
       double* t = T[p].data();
       double* m = mean_[p].data();
       double* lo = rod_lo_[p].data();
+      double* m_old = mean_old_[p].data();
       double* hi = rod_hi_[p].data();
 #pragma omp parallel for schedule(static) if (n > 1024)
       for (int i = 0; i < n; ++i) {
         const double* ti = t + static_cast<std::size_t>(nz) * i;
-        m[i] = rod_mean(ply, ti);
-        lo[i] = *std::min_element(ti, ti + nz);
-        hi[i] = *std::max_element(ti, ti + nz);
+        double s = 0, mn = ti[0], mx = ti[0];
+        for (int k = 0; k < nz; ++k) {
+          s += ply.w[k] * ti[k];
+          mn = std::min(mn, ti[k]);
+          mx = std::max(mx, ti[k]);
+        }
+        m[i] = s / ply.h;
+        m_old[i] = m[i];
+        lo[i] = mn;
+        hi[i] = mx;
       }
       substeps = std::max(substeps, advance_inplane(ply, in.dt, mean_[p], scratch_[p]));
       const Csr& k2d = ply.k2d;
@@ -321,7 +373,7 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
 #pragma omp parallel for schedule(static) reduction(+ : limited) if (n > 1024)
       for (int i = 0; i < n; ++i) {
         double* ti = t + static_cast<std::size_t>(nz) * i;
-        const double delta = m[i] - rod_mean(ply, ti);  // <T>new - <T>: T = <T>new + T~ (Eq. 20)
+        const double delta = m[i] - m_old[i];  // <T>new - <T>: T = <T>new + T~ (Eq. 20)
         if (delta == 0.0) continue;
         // Range of the values this node's in-plane stencil held before the step.
         double lower = lo[i], upper = hi[i];

@@ -41,6 +41,7 @@ class SplitThermal : public sdk::ThermalSplitter {
 
  private:
   double rods_explicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T);
+  void update_rod_factors(const sdk::ThermalStepInput& in);
   double rods_implicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T);
 
   bool layered_;          // true: one rod of thickness_layers elements per node (adi)
@@ -51,7 +52,13 @@ class SplitThermal : public sdk::ThermalSplitter {
   std::vector<std::vector<double>> node_heat_;   // per part, per node: J in this step
   std::vector<std::vector<double>> scratch_;     // per part
   std::vector<std::vector<double>> mean_;        // per part
-  std::vector<std::vector<double>> rod_lo_, rod_hi_;  // per part: range of each rod before the in-plane step
+  std::vector<std::vector<double>> rod_lo_, rod_hi_, mean_old_;
+  struct RodFactors {  // shared tridiagonal factorisations, one per (h_bottom, h_top) pair
+    double dt = -1;
+    std::vector<double> hb, ht, cap, inv_den, g_inv_den;
+    std::vector<int> id;  // per node
+  };
+  std::vector<RodFactors> factors_;  // per part  // per part: range of each rod before the in-plane step
   std::vector<std::vector<double>> t_old_;       // per part (explicit links)
   std::vector<std::vector<double>> thread_work_; // per thread, 4 * nz
   std::vector<std::vector<char>> linked_;        // per part, per node

@@ -1,0 +1,97 @@
+#!/usr/bin/env python3
+"""Thermal benchmarks: cost of the adi splitter per node-layer-step against
+mesh size and threads, and adi against layered3d on the contact patch.
+
+Usage: scripts/bench/thermal.py [--quick]   (after a Release build in build/)
+Prints Markdown tables (copied into docs/benchmarks.md).
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+EXE = os.path.join(ROOT, "build", "bin", "thermostamp")
+
+
+def plate_job(divisions, layers, splitter, steps, dt, linked=False):
+    size = divisions * 0.001  # 1 mm elements
+    part = {
+        "name": "ply", "thickness": 0.0005, "material": "m", "fibre_direction": [1, 1, 0],
+        "mesh": {"generator": "rectangle", "origin": [0, 0, 0.00025], "size": [size, size],
+                 "divisions": [divisions, divisions]},
+        "initial_temperature": 300.0, "thickness_layers": layers,
+    }
+    parts = [part]
+    inter = [
+        {"type": "heat_exchange", "part": "ply", "face": "top", "h": 1000.0, "ambient": 260.0,
+         "region": {"circle": {"centre": [0, 0], "radius": size / 2}}},
+        {"type": "heat_exchange", "part": "ply", "face": "bottom", "h": 500.0, "ambient": 250.0},
+    ]
+    if linked:
+        upper = dict(part, name="upper", mesh=dict(part["mesh"], origin=[0, 0, 0.00075]))
+        parts.append(upper)
+        inter = [{"type": "contact", "handler": "penalty_node_surface", "between": ["upper", "ply"],
+                  "conductance": 1000.0},
+                 {"type": "heat_exchange", "part": "upper", "face": "top", "h": 1000.0, "ambient": 260.0},
+                 {"type": "heat_exchange", "part": "ply", "face": "bottom", "h": 500.0, "ambient": 250.0}]
+    return {
+        "format": "thermostamp-job/1", "name": "bench",
+        "time": {"end": steps * dt},
+        "materials": {"m": {"density": 1294.0, "specific_heat": 1775.0, "conductivity": [3.89, 0.31, 0.31]}},
+        "parts": parts, "interactions": inter,
+        "solvers": {"mechanics": None, "thermal": {"splitter": splitter, "through_thickness": "implicit", "dt": dt}},
+        "output": {"interval": steps * dt, "fields": ["temperature_mean"]},
+    }
+
+
+def run(job, threads):
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "job.json")
+        json.dump(job, open(path, "w"))
+        out = os.path.join(d, "out")
+        subprocess.run([EXE, "run", path, "--out", out, "--threads", str(threads), "--quiet"], check=True)
+        return json.load(open(os.path.join(out, "summary.json")))
+
+
+def main():
+    quick = "--quick" in sys.argv
+    sizes = [100, 316] if quick else [100, 316, 1000]
+    layers, steps, dt = 16, 20, 0.01
+    print("### adi (implicit) cost per node-layer-step, one ply, %d layers, %d steps\n" % (layers, steps))
+    print("| nodes | threads | wall time (s) | ns per node-layer-step | speed-up |")
+    print("|---|---|---|---|---|")
+    for n in sizes:
+        base = None
+        for th in (1, 2):
+            s = run(plate_job(n, layers, "adi", steps, dt), th)
+            nodes = (n + 1) ** 2
+            ns = s["wall_time_s"] / (nodes * (layers + 1) * s["steps"]["thermal"]) * 1e9
+            base = base or s["wall_time_s"]
+            print("| %d | %d | %.3f | %.2f | %.2f |" % (nodes, th, s["wall_time_s"], ns, base / s["wall_time_s"]))
+    print()
+    print("### two plies in full contact (linked rods), %d layers, %d steps, 1 thread\n" % (layers, steps))
+    print("| nodes | splitter | wall time (s) | ns per node-layer-step |")
+    print("|---|---|---|---|")
+    for n in sizes[:2]:
+        for sp in ("adi", "layered3d"):
+            s = run(plate_job(n, layers, sp, steps, dt, linked=True), 1)
+            nodes = 2 * (n + 1) ** 2
+            ns = s["wall_time_s"] / (nodes * (layers + 1) * s["steps"]["thermal"]) * 1e9
+            print("| %d | %s | %.3f | %.2f |" % (nodes, sp, s["wall_time_s"], ns))
+    print()
+    print("### contact patch study (share/verification/patch_study.json)\n")
+    with tempfile.TemporaryDirectory() as d:
+        subprocess.run([EXE, "study", os.path.join(ROOT, "share", "verification", "patch_study.json"),
+                        "--out", d, "--quiet", "--threads", "1"], check=True, stdout=subprocess.DEVNULL)
+        rows = [l.strip().split(",") for l in open(os.path.join(d, "study.csv"))]
+    head = rows[0]
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    for r in rows[1:]:
+        print("| " + " | ".join(r) + " |")
+
+
+if __name__ == "__main__":
+    main()
