@@ -272,3 +272,31 @@ TEST(InPlane, AnisotropicCosineDecayRate) {
 
 }  // namespace
 }  // namespace ts::test
+
+namespace ts::test {
+namespace {
+
+// shell2d is a lumped body per node: with Robin on both faces and no
+// in-plane gradient, backward Euler gives T_n = T_inf + (T0 - T_inf) /
+// (1 + (h_b + h_t) dt / (rho c h))^n exactly (round-off tolerance), and
+// forward Euler (1 - (h_b + h_t) dt / (rho c h))^n.
+TEST(Shell2d, LumpedCoolingMatchesClosedForm) {
+  for (const std::string scheme : {"implicit", "explicit"}) {
+    json j = ply_job("shell2d", 4, 2.0, 0.1);
+    j["solvers"]["thermal"]["through_thickness"] = scheme;
+    j["solvers"]["thermal"]["dt"] = 0.05;
+    j["interactions"] = {{{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", 1000.0}, {"ambient", 260.0}},
+                         {{"type", "heat_exchange"}, {"part", "ply"}, {"face", "bottom"}, {"h", 500.0}, {"ambient", 260.0}}};
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    const double a = 1500.0 * 0.05 / (kRhoC * kH);
+    for (double t : {0.5, 1.0, 2.0}) {
+      const int n = static_cast<int>(std::round(t / 0.05));
+      const double factor = scheme == "implicit" ? std::pow(1 + a, -n) : std::pow(1 - a, n);
+      EXPECT_NEAR(r.sample(0, "temperature_profile", t)->values[0], 260.0 + 40.0 * factor, 1e-9) << scheme << " " << t;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ts::test

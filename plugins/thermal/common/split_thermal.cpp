@@ -87,7 +87,8 @@ sdk::Status SplitThermal::step_limits(const sdk::ThermalStepInput& in, double* s
   });
 }
 
-void SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
+bool SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
+  bool any = false;
   // The rods of a ply differ only by their two face conductances; their
   // tridiagonal factorisations are shared by every node with the same pair.
   const double dt = in.dt;
@@ -99,6 +100,7 @@ void SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
     bool same = rf.dt == dt && !in.geometry_changed && static_cast<int>(rf.hb.size()) == n;
     for (int i = 0; same && i < n; ++i) same = rf.hb[i] == f.h_bottom[i] && rf.ht[i] == f.h_top[i];
     if (same) continue;
+    any = true;
     rf.dt = dt;
     rf.hb.assign(f.h_bottom.begin(), f.h_bottom.end());
     rf.ht.assign(f.h_top.begin(), f.h_top.end());
@@ -109,6 +111,8 @@ void SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
     rf.id.resize(n);
     rf.inv_den.clear();
     rf.g_inv_den.clear();
+    rf.v_bottom.clear();
+    rf.v_top.clear();
     for (int i = 0; i < n; ++i) {
       const auto key = std::make_pair(f.h_bottom[i], f.h_top[i]);
       auto it = ids.find(key);
@@ -125,15 +129,31 @@ void SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
           rf.g_inv_den.push_back(g / den);  // -c_k / den
           cp_prev = (k + 1 < nz ? -g : 0.0) / den;
         }
+        // Responses to a unit flux on each face: M^-1 e_bottom, M^-1 e_top.
+        const double* inv = rf.inv_den.data() + rf.inv_den.size() - nz;
+        const double* gi = rf.g_inv_den.data() + rf.g_inv_den.size() - nz;
+        for (int face = 0; face < 2; ++face) {
+          std::vector<double> v(nz, 0.0);
+          v[face == 0 ? 0 : nz - 1] = 1.0;
+          double prev = 0;
+          for (int k = 0; k < nz; ++k) {
+            prev = (v[k] + g * prev) * inv[k];
+            v[k] = prev;
+          }
+          for (int k = nz - 2; k >= 0; --k) v[k] += gi[k] * v[k + 1];
+          auto& dst = face == 0 ? rf.v_bottom : rf.v_top;
+          dst.insert(dst.end(), v.begin(), v.end());
+        }
       }
       rf.id[i] = it->second;
     }
   }
+  return any;
 }
 
 double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T) {
   const double dt = in.dt;
-  update_rod_factors(in);
+  const bool factors_changed = update_rod_factors(in);
   for (std::size_t p = 0; p < plies_.size(); ++p) {
     const PlyThermal& ply = plies_[p];
     const int nz = ply.nz;
@@ -147,13 +167,12 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
     const char* linked = linked_[p].data();
 #pragma omp parallel for schedule(static) if (n > 1024)
     for (int i = 0; i < n; ++i) {
-      if (linked[i]) continue;
       double* ti = t + static_cast<std::size_t>(nz) * i;
       const double hb = f.h_bottom[i], ht = f.h_top[i];
       const double* inv = rf.inv_den.data() + static_cast<std::size_t>(nz) * rf.id[i];
       const double* gi = rf.g_inv_den.data() + static_cast<std::size_t>(nz) * rf.id[i];
       // Forward substitution (a_k = -g), in place.
-      double prev = (cap[0] * ti[0] + hb * f.t_bottom[i]) * inv[0];
+      double prev = (cap[0] * ti[0] + hb * f.t_bottom[i] + (nz == 1 ? ht * f.t_top[i] : 0.0)) * inv[0];
       ti[0] = prev;
       for (int k = 1; k < nz; ++k) {
         double r = cap[k] * ti[k];
@@ -163,115 +182,136 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
       }
       // Back substitution: T_k = d_k - c'_k T_{k+1}, c'_k = -g / den_k.
       for (int k = nz - 2; k >= 0; --k) ti[k] += gi[k] * ti[k + 1];
+      if (linked[i]) continue;  // corrected below for the link fluxes
       heat[i] = dt * ply.area[i] * (hb * (f.t_bottom[i] - ti[0]) + ht * (f.t_top[i] - ti[nz - 1]));
     }
   }
   if (in.links.empty()) return 0.0;
 
-  // Rods joined by links: one sparse symmetric system in W/K, assembled and
-  // factorised again only when the step, the links, the geometry or the face
-  // conductances of the linked rods change.
+  // Rods joined by links. Each rod was solved above without its link
+  // fluxes (u = M^-1 b); its face values respond to face fluxes f through
+  // S = E M^-1 E^T. The face values y of all linked rods solve the small
+  // interface system (S^-1 + L) y = S^-1 E u, L the link conductances, and
+  // the rods are corrected by x = u - M^-1 E^T (L y). Exact, conservative,
+  // and only two unknowns per linked node enter the sparse factorisation,
+  // which is redone only when the step, links, geometry or faces change.
   const bool links_changed = in.links_changed && !same_links(in.links, last_links_);
   if (links_changed) last_links_.assign(in.links.begin(), in.links.end());
-  bool rebuild = !linked_valid_ || links_changed || in.geometry_changed || in.dt != linked_dt_;
+  const bool rebuild = !linked_valid_ || links_changed || factors_changed;
   if (links_changed || !linked_valid_) {
     linked_offset_.resize(plies_.size());
     linked_count_ = 0;
     for (std::size_t p = 0; p < plies_.size(); ++p) {
       linked_offset_[p].assign(plies_[p].view->num_nodes, -1);
+      const int ne = plies_[p].nz > 1 ? 2 : 1;
       for (int i = 0; i < plies_[p].view->num_nodes; ++i)
         if (linked_[p][i]) {
           linked_offset_[p][i] = linked_count_;
-          linked_count_ += plies_[p].nz;
+          linked_count_ += ne;
         }
     }
     linked_rhs_.assign(linked_count_, 0.0);
+    linked_flux_.assign(linked_count_, 0.0);
   }
   const auto& offset = linked_offset_;
-  const int count = linked_count_;
-  if (!rebuild) {  // face conductances of the linked rods
-    std::size_t q = 0;
-    for (std::size_t p = 0; p < plies_.size() && !rebuild; ++p)
-      for (int i = 0; i < plies_[p].view->num_nodes; ++i)
-        if (offset[p][i] >= 0) {
-          if (linked_h_[q] != in.faces[p].h_bottom[i] || linked_h_[q + 1] != in.faces[p].h_top[i]) {
-            rebuild = true;
-            break;
-          }
-          q += 2;
-        }
-  }
+  auto end_index = [&](int part, int node, int face) {
+    return offset[part][node] + (plies_[part].nz > 1 && face == sdk::kTop ? 1 : 0);
+  };
+  // S^-1 per unit area for a rod (2x2, or 1x1 for one value per node).
+  auto s_inverse = [&](int p, int i, double out[4]) {
+    const RodFactors& rf = factors_[p];
+    const int nz = plies_[p].nz;
+    const std::size_t o = static_cast<std::size_t>(nz) * rf.id[i];
+    if (nz == 1) {
+      out[0] = 1.0 / rf.v_bottom[o];
+      return;
+    }
+    const double s00 = rf.v_bottom[o], s01 = rf.v_top[o], s10 = rf.v_bottom[o + nz - 1], s11 = rf.v_top[o + nz - 1];
+    const double det = s00 * s11 - s01 * s10;
+    out[0] = s11 / det;
+    out[1] = -s01 / det;
+    out[2] = -s10 / det;
+    out[3] = s00 / det;
+  };
   LinkedSolver& s = *linked_solver_;
   if (rebuild) {
-    linked_h_.clear();
-    s.begin(count);
-    for (std::size_t p = 0; p < plies_.size(); ++p) {
-      const PlyThermal& ply = plies_[p];
-      const int nz = ply.nz;
-      const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
-      const auto& f = in.faces[p];
-      for (int i = 0; i < ply.view->num_nodes; ++i) {
+    s.begin(linked_count_);
+    for (std::size_t p = 0; p < plies_.size(); ++p)
+      for (int i = 0; i < plies_[p].view->num_nodes; ++i) {
         const int o = offset[p][i];
         if (o < 0) continue;
-        const double A = ply.area[i];
-        for (int k = 0; k < nz; ++k) {
-          s.add(o + k, o + k, ply.rho_c * ply.w[k] * A / dt);
-          if (k + 1 < nz) {
-            s.add(o + k, o + k, g * A);
-            s.add(o + k + 1, o + k + 1, g * A);
-            s.add(o + k, o + k + 1, -g * A);
-            s.add(o + k + 1, o + k, -g * A);
-          }
+        double si[4];
+        s_inverse(static_cast<int>(p), i, si);
+        const double A = plies_[p].area[i];
+        if (plies_[p].nz == 1) {
+          s.add(o, o, A * si[0]);
+        } else {
+          s.add(o, o, A * si[0]);
+          s.add(o, o + 1, A * si[1]);
+          s.add(o + 1, o, A * si[2]);
+          s.add(o + 1, o + 1, A * si[3]);
         }
-        s.add(o, o, f.h_bottom[i] * A);
-        s.add(o + nz - 1, o + nz - 1, f.h_top[i] * A);
-        linked_h_.push_back(f.h_bottom[i]);
-        linked_h_.push_back(f.h_top[i]);
       }
-    }
     for (const auto& l : in.links) {
-      // Three node-to-node conductances G w_j between a and b_j.
-      const int ia = offset[l.part_a][l.node_a] + (l.face_a == sdk::kTop ? plies_[l.part_a].nz - 1 : 0);
+      const int ia = end_index(l.part_a, l.node_a, l.face_a);
       for (int j = 0; j < 3; ++j) {
         const double gl = l.conductance * l.w_b[j];
         if (gl == 0) continue;
-        const int ib = offset[l.part_b][l.nodes_b[j]] + (l.face_b == sdk::kTop ? plies_[l.part_b].nz - 1 : 0);
+        const int ib = end_index(l.part_b, l.nodes_b[j], l.face_b);
         s.add(ia, ia, gl);
         s.add(ib, ib, gl);
         s.add(ia, ib, -gl);
         s.add(ib, ia, -gl);
       }
     }
-    if (!s.finish()) throw std::runtime_error("the linked through-thickness system could not be factorised");
+    if (!s.finish()) throw std::runtime_error("the ply/ply interface system could not be factorised");
     linked_valid_ = true;
-    linked_dt_ = dt;
   }
-  std::vector<double>& rhs = linked_rhs_;
+  std::vector<double>& y = linked_rhs_;
   for (std::size_t p = 0; p < plies_.size(); ++p) {
-    const PlyThermal& ply = plies_[p];
-    const int nz = ply.nz;
-    const auto& f = in.faces[p];
-#pragma omp parallel for schedule(static) if (ply.view->num_nodes > 1024)
-    for (int i = 0; i < ply.view->num_nodes; ++i) {
+    const int nz = plies_[p].nz;
+    for (int i = 0; i < plies_[p].view->num_nodes; ++i) {
       const int o = offset[p][i];
       if (o < 0) continue;
-      const double A = ply.area[i];
       const double* ti = T[p].data() + static_cast<std::size_t>(nz) * i;
-      for (int k = 0; k < nz; ++k) rhs[o + k] = ply.rho_c * ply.w[k] * A / dt * ti[k];
-      rhs[o] += f.h_bottom[i] * A * f.t_bottom[i];
-      rhs[o + nz - 1] += f.h_top[i] * A * f.t_top[i];
+      double si[4];
+      s_inverse(static_cast<int>(p), i, si);
+      const double A = plies_[p].area[i];
+      if (nz == 1) {
+        y[o] = A * si[0] * ti[0];
+      } else {
+        y[o] = A * (si[0] * ti[0] + si[1] * ti[nz - 1]);
+        y[o + 1] = A * (si[2] * ti[0] + si[3] * ti[nz - 1]);
+      }
     }
   }
-  s.solve(rhs);
+  s.solve(y);
+  // Link fluxes into each face value (W), then the rod corrections.
+  std::vector<double>& fl = linked_flux_;
+  std::fill(fl.begin(), fl.end(), 0.0);
+  for (const auto& l : in.links) {
+    const int ia = end_index(l.part_a, l.node_a, l.face_a);
+    for (int j = 0; j < 3; ++j) {
+      const double gl = l.conductance * l.w_b[j];
+      if (gl == 0) continue;
+      const int ib = end_index(l.part_b, l.nodes_b[j], l.face_b);
+      const double q = gl * (y[ia] - y[ib]);
+      fl[ia] += q;
+      fl[ib] -= q;
+    }
+  }
   for (std::size_t p = 0; p < plies_.size(); ++p) {
     const PlyThermal& ply = plies_[p];
     const int nz = ply.nz;
+    const RodFactors& rf = factors_[p];
     const auto& f = in.faces[p];
     for (int i = 0; i < ply.view->num_nodes; ++i) {
       const int o = offset[p][i];
       if (o < 0) continue;
       double* ti = T[p].data() + static_cast<std::size_t>(nz) * i;
-      for (int k = 0; k < nz; ++k) ti[k] = rhs[o + k];
+      const std::size_t v = static_cast<std::size_t>(nz) * rf.id[i];
+      const double fb = fl[o] / ply.area[i], ft = nz > 1 ? fl[o + 1] / ply.area[i] : 0.0;
+      for (int k = 0; k < nz; ++k) ti[k] -= fb * rf.v_bottom[v + k] + ft * rf.v_top[v + k];
       node_heat_[p][i] = dt * ply.area[i] *
                          (f.h_bottom[i] * (f.t_bottom[i] - ti[0]) + f.h_top[i] * (f.t_top[i] - ti[nz - 1]));
     }

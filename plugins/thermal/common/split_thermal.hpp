@@ -3,9 +3,9 @@
 // (physics.md section 3):
 //   1. through the thickness, at every node, over dt with the face
 //      conditions (explicit, or implicit backward Euler with a tridiagonal
-//      solve; rods joined by ply/ply contact conductances are solved
-//      together in one sparse system so the exchange is implicit and
-//      conserves heat exactly);
+//      solve; rods joined by ply/ply contact conductances are coupled
+//      through a small interface system of their face values, so that the
+//      exchange is implicit and conserves heat exactly);
 //   2. mean <T> = (1/h) int T dz and deviation T~ = T - <T>;
 //   3. the mean alone by the in-plane problem rho c h d<T>/dt = div(h Ks grad <T>);
 //   4. T = <T>new + T~ (the paper's Eq. 31 prints -T~; +T~ is right, Eq. 20).
@@ -41,7 +41,7 @@ class SplitThermal : public sdk::ThermalSplitter {
 
  private:
   double rods_explicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T);
-  void update_rod_factors(const sdk::ThermalStepInput& in);
+  bool update_rod_factors(const sdk::ThermalStepInput& in);
   double rods_implicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T);
 
   bool layered_;          // true: one rod of thickness_layers elements per node (adi)
@@ -55,7 +55,7 @@ class SplitThermal : public sdk::ThermalSplitter {
   std::vector<std::vector<double>> rod_lo_, rod_hi_, mean_old_;
   struct RodFactors {  // shared tridiagonal factorisations, one per (h_bottom, h_top) pair
     double dt = -1;
-    std::vector<double> hb, ht, cap, inv_den, g_inv_den;
+    std::vector<double> hb, ht, cap, inv_den, g_inv_den, v_bottom, v_top;
     std::vector<int> id;  // per node
   };
   std::vector<RodFactors> factors_;  // per part  // per part: range of each rod before the in-plane step
@@ -65,10 +65,9 @@ class SplitThermal : public sdk::ThermalSplitter {
   std::unique_ptr<LinkedSolver> linked_solver_;
   std::vector<sdk::HeatLink> last_links_;
   std::vector<std::vector<int>> linked_offset_;  // per part, per node: first unknown or -1
-  std::vector<double> linked_rhs_, linked_h_;
+  std::vector<double> linked_rhs_, linked_flux_;
   int linked_count_ = 0;
   bool linked_valid_ = false;
-  double linked_dt_ = 0;
 };
 
 }  // namespace ts::thermal
