@@ -56,6 +56,50 @@ double interpolate(const ProbeSample& s, double z) {
   return (1 - a) * s.values[k - 1] + a * s.values[k];
 }
 
+// Plane wall insulated at the bottom face, Robin (h, T_inf) on the top
+// face, uniform T0: the eigen-series with lambda tan lambda = Bi.
+double slab_robin(double x, double t, double L, double alpha, double Bi, double T0, double Tinf) {
+  if (t <= 0) return T0;  // the truncated series is not the initial condition
+  double theta = 0;
+  for (int n = 0; n < 400; ++n) {
+    double lo = n * M_PI + 1e-12, hi = n * M_PI + M_PI / 2 - 1e-12;
+    for (int it = 0; it < 200; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (mid * std::tan(mid) - Bi > 0 ? hi : lo) = mid;
+    }
+    const double l = 0.5 * (lo + hi);
+    theta += 4 * std::sin(l) / (2 * l + std::sin(2 * l)) * std::exp(-l * l * alpha * t / (L * L)) * std::cos(l * x / L);
+  }
+  return Tinf + (T0 - Tinf) * theta;
+}
+
+void check_slab_robin(const Job& j, const std::string& ptr) {
+  const bool ok = j.parts.size() == 1 && j.contacts.empty() && j.heat_exchanges.size() == 1 &&
+                  j.heat_exchanges[0].top && !j.heat_exchanges[0].bottom &&
+                  j.heat_exchanges[0].region.kind == RegionDef::Kind::All;
+  if (!ok)
+    throw JobError(ptr, "the analytic reference 'slab_robin' needs one part, no contact and one heat_exchange on "
+                        "its whole top face");
+}
+
+// The analytic profile at the sample's time, on the variant's own z points
+// (or 17 points for a single-value variant).
+ProbeSample slab_robin_sample(const Job& j, const ProbeSample& s) {
+  const PartDef& p = j.parts[0];
+  const MaterialDef& m = j.materials[p.material];
+  const HeatExchangeDef& hx = j.heat_exchanges[0];
+  const double L = p.thickness, alpha = m.conductivity[2] / (m.density * m.specific_heat);
+  const double Bi = hx.h * L / m.conductivity[2];
+  ProbeSample r = s;
+  if (r.z.size() < 2) {
+    r.z.clear();
+    for (int k = 0; k <= 16; ++k) r.z.push_back(-0.5 * L + L * k / 16);
+  }
+  r.values.clear();
+  for (double z : r.z) r.values.push_back(slab_robin(z + 0.5 * L, s.time, L, alpha, Bi, p.initial_temperature, hx.ambient));
+  return r;
+}
+
 std::string key_of(const ProbeSample& s) {
   std::ostringstream k;
   k << s.probe << "|" << s.quantity << "|" << std::llround(s.time * 1e9);
@@ -72,9 +116,10 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   const std::filesystem::path base = study_file.has_parent_path() ? study_file.parent_path() : ".";
   const std::filesystem::path job_file = base / top.text("job");
   Variant reference{"reference", json::object()};
+  std::string analytic;
   {
     ObjectReader r(top.raw("reference"), "/reference");
-    if (r.has("analytic")) throw JobError("/reference/analytic", "analytic references are not available in this version");
+    if (r.has("analytic")) analytic = r.choice("analytic", {"slab_robin"});
     if (const json* s = r.optional_raw("set")) {
       if (!s->is_object()) throw JobError("/reference/set", "expected an object of path: value");
       reference.set = *s;
@@ -135,9 +180,15 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   const std::filesystem::path out = out_arg.empty() ? std::filesystem::path("results") / study_name : out_arg;
   std::filesystem::create_directories(out);
 
+  if (!analytic.empty())
+    for (std::size_t i = 1; i < jobs.size(); ++i) check_slab_robin(jobs[i], "/variants/" + std::to_string(i - 1));
   PluginRegistry registry;
   std::vector<RunResult> results;
   for (std::size_t i = 0; i < all.size(); ++i) {
+    if (i == 0 && !analytic.empty()) {
+      results.emplace_back();
+      continue;
+    }
     Simulation sim(jobs[i], registry);
     RunOptions opt;
     opt.out_dir = out / all[i].label;
@@ -171,11 +222,24 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     long long count = 0;
     std::vector<double> probe_max(probes.size(), 0.0), probe_sq(probes.size(), 0.0);
     std::vector<long long> probe_n(probes.size(), 0);
+    std::vector<ProbeSample> exact;
+    if (!analytic.empty()) {
+      exact.reserve(results[i].probes.size());
+      for (const auto& s : results[i].probes)
+        if (s.quantity == quantity) exact.push_back(slab_robin_sample(jobs[i], s));
+    }
+    std::size_t next_exact = 0;
     for (const auto& s : results[i].probes) {
       if (s.quantity != quantity) continue;
-      const auto it = ref.find(key_of(s));
-      if (it == ref.end()) continue;
-      const ProbeSample& r = *it->second;
+      const ProbeSample* rp = nullptr;
+      if (!analytic.empty()) {
+        rp = &exact[next_exact++];
+      } else {
+        const auto it = ref.find(key_of(s));
+        if (it == ref.end()) continue;
+        rp = it->second;
+      }
+      const ProbeSample& r = *rp;
       // The variant interpolated at the reference's through-thickness points.
       const std::size_t n = r.z.empty() ? 1 : r.z.size();
       for (std::size_t k = 0; k < n; ++k) {

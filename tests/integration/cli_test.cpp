@@ -184,3 +184,21 @@ TEST(Plugins, FoundThroughEnvironmentAndFailureKeepsFrames) {
 
 }  // namespace
 }  // namespace ts::test
+
+namespace ts::test {
+namespace {
+
+// docs/reference/plugins.md is generated from the descriptors; it must match
+// what this build's plugins declare (regenerate with
+// `build/bin/thermostamp plugins --markdown > docs/reference/plugins.md`).
+TEST(Docs, PluginReferenceIsUpToDate) {
+  const auto r = thermostamp("plugins --markdown");
+  ASSERT_EQ(r.exit_code, 0);
+  std::stringstream doc;
+  doc << std::ifstream(source_dir() / "docs" / "reference" / "plugins.md").rdbuf();
+  EXPECT_EQ(doc.str(), r.out) << "docs/reference/plugins.md is stale: regenerate it with "
+                                 "'build/bin/thermostamp plugins --markdown > docs/reference/plugins.md'";
+}
+
+}  // namespace
+}  // namespace ts::test

@@ -309,7 +309,8 @@ void register_all(sdk::Registrar& r) {
   d.summary = "Full 3D reference: every ply as a stack of prisms, in-plane and through-thickness conduction coupled";
   d.params = {
       sdk::choice_param("through_thickness", "implicit", {"implicit", "explicit"},
-                        "implicit: backward Euler on the whole 3D system (sparse LDL^T); explicit: forward Euler "
+                        "implicit: backward Euler on the whole 3D system (conjugate gradients with exact "
+                        "through-thickness line solves as preconditioner); explicit: forward Euler "
                         "within the stable step"),
       sdk::real_param("dt_safety", "0.9", "-", "fraction of the critical step used by the explicit scheme", 0.0, 1.0,
                       true),
