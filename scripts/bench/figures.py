@@ -1,0 +1,75 @@
+#!/usr/bin/env python3
+"""Regenerates the figures of docs/verification.md (after a Release build).
+
+Runs share/verification/slab_robin_study.json, patch_study.json and the
+demo job, and writes PNG files into docs/figures/.
+"""
+import csv
+import os
+import shutil
+import subprocess
+import tempfile
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+EXE = os.path.join(ROOT, "build", "bin", "thermostamp")
+FIG = os.path.join(ROOT, "docs", "figures")
+
+
+def profiles(folder, probe):
+    out = {}
+    with open(os.path.join(folder, "probes.csv")) as f:
+        for r in csv.DictReader(f):
+            if r["probe"] == probe and r["quantity"] == "temperature_profile":
+                out.setdefault(float(r["time"]), []).append((float(r["z"]), float(r["value"])))
+    return out
+
+
+def closest(d, t):
+    return d[min(d, key=lambda k: abs(k - t))]
+
+
+def main():
+    os.makedirs(FIG, exist_ok=True)
+    tmp = tempfile.mkdtemp()
+    ver = os.path.join(ROOT, "share", "verification")
+    for study in ("slab_robin_study", "patch_study"):
+        out = os.path.join(tmp, study)
+        subprocess.run([EXE, "study", os.path.join(ver, study + ".json"), "--out", out, "--quiet", "--threads", "1"],
+                       check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        shutil.copy(os.path.join(out, "study.png"), os.path.join(FIG, study + ".png"))
+        shutil.copy(os.path.join(out, "study.csv"), os.path.join(FIG, study + ".csv"))
+    # Patch case: profiles at the patch edge and centre, adi / layered3d / shell2d.
+    base = os.path.join(tmp, "patch_study")
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharey=True)
+    for ax, probe in zip(axes, ("upper_centre", "upper_edge")):
+        for label, style in (("reference", "k-"), ("adi-8", "C0o-"), ("layered3d-8", "C1s--"), ("shell2d", "C2:")):
+            d = profiles(os.path.join(base, label), probe)
+            for t, alpha in ((0.5, 0.5), (2.0, 1.0)):
+                pts = sorted(closest(d, t))
+                ax.plot([p[1] for p in pts], [p[0] * 1e3 for p in pts], style, alpha=alpha, ms=3,
+                        label="%s, t = %g s" % ("layered3d-32 (reference)" if label == "reference" else label, t))
+        ax.set_title("probe %s (upper ply)" % probe)
+        ax.set_xlabel("temperature (degC)")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("z from mid-plane (mm)")
+    axes[1].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(FIG, "patch_profiles.png"), dpi=110)
+    plt.close(fig)
+    # Demo job figures.
+    demo = os.path.join(tmp, "demo")
+    subprocess.run([EXE, "run", os.path.join(ROOT, "share", "jobs", "two_ply_thermal_demo.json"), "--out", demo,
+                    "--quiet"], check=True)
+    subprocess.run([EXE, "report", demo], check=True, stdout=subprocess.DEVNULL)
+    for name in ("map_ply_top.png", "map_ply_bottom.png", "profile_centre_top.png", "profile_centre_bottom.png"):
+        shutil.copy(os.path.join(demo, "figures", name), os.path.join(FIG, "demo_" + name))
+    shutil.rmtree(tmp)
+    print("figures written to", FIG)
+
+
+if __name__ == "__main__":
+    main()
