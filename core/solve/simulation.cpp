@@ -641,7 +641,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     std::ofstream(opt.out_dir / "summary.json") << summary.dump(2) << '\n';
   }
   if (limited_total > 0)
-    log->warn("the thermal splitter limited {} node-step(s) to keep temperatures inside their local range "
+    log->info("the thermal splitter limited {} node-step(s) to keep temperatures inside their local range "
               "(steep through-thickness profiles next to strong in-plane conduction)",
               limited_total);
   if (result.ok) {
