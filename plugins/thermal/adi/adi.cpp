@@ -4,6 +4,7 @@
 #include <thermostamp/sdk/plugin.hpp>
 
 #include "split_thermal.hpp"
+#include "thermal_common.hpp"
 
 namespace {
 
@@ -15,13 +16,9 @@ void register_all(ts::sdk::Registrar& r) {
   d.name = "adi";
   d.version = "1.0.0";
   d.summary = "ADI split: through-thickness rods at every node + in-plane conduction of the mean";
-  d.params = {
-      ts::sdk::choice_param("through_thickness", "implicit", {"implicit", "explicit"},
-                            "1D rod scheme: implicit = backward Euler with a tridiagonal solve (unconditionally "
-                            "stable); explicit = forward Euler as in the reference method (dt <= rho c e^2 / 2 k33)"),
-      ts::sdk::real_param("dt_safety", "0.9", "-", "fraction of the critical step used by the explicit scheme", 0.0,
-                          1.0, true),
-  };
+  d.params = ts::thermal::splitter_params(
+      "1D rod scheme: implicit = backward Euler with a tridiagonal solve (unconditionally "
+                            "stable); explicit = forward Euler as in the reference method (dt <= rho c e^2 / 2 k33)");
   d.example = R"({ "splitter": "adi", "through_thickness": "implicit" })";
   r.add_thermal(d, &create);
 }

@@ -138,6 +138,12 @@ double accurate_dt(std::span<const PlyThermal> plies, std::span<const sdk::FaceC
   return 0.01 * tau;
 }
 
+std::vector<sdk::ParamSpec> splitter_params(const std::string& through_thickness_doc) {
+  return {sdk::choice_param("through_thickness", "implicit", {"implicit", "explicit"}, through_thickness_doc),
+          sdk::real_param("dt_safety", "0.9", "-", "fraction of the critical step used by the explicit scheme", 0.0,
+                          1.0, true)};
+}
+
 bool same_links(std::span<const sdk::HeatLink> a, std::span<const sdk::HeatLink> b) {
   if (a.size() != b.size()) return false;
   for (std::size_t i = 0; i < a.size(); ++i) {

@@ -5,6 +5,9 @@
 #include <span>
 #include <vector>
 
+#include <string>
+
+#include <thermostamp/sdk/parameters.hpp>
 #include <thermostamp/sdk/thermal.hpp>
 #include <thermostamp/sdk/views.hpp>
 
@@ -55,6 +58,10 @@ void solve_tridiagonal(int n, const double* a, const double* b, const double* c,
 // sub-steps (at most 0.9 of the stable step). `mean` is updated in place;
 // `scratch` has num_nodes entries. Returns the number of sub-steps.
 int advance_inplane(const PlyThermal& ply, double dt, std::span<double> mean, std::span<double> scratch);
+
+// The parameters every thermal splitter declares (the job contract writes
+// them for any splitter): through_thickness and dt_safety.
+std::vector<sdk::ParamSpec> splitter_params(const std::string& through_thickness_doc);
 
 // True when two link lists are identical.
 bool same_links(std::span<const sdk::HeatLink> a, std::span<const sdk::HeatLink> b);

@@ -307,14 +307,10 @@ void register_all(sdk::Registrar& r) {
   d.name = "layered3d";
   d.version = "1.0.0";
   d.summary = "Full 3D reference: every ply as a stack of prisms, in-plane and through-thickness conduction coupled";
-  d.params = {
-      sdk::choice_param("through_thickness", "implicit", {"implicit", "explicit"},
-                        "implicit: backward Euler on the whole 3D system (conjugate gradients with exact "
+  d.params = splitter_params(
+      "implicit: backward Euler on the whole 3D system (conjugate gradients with exact "
                         "through-thickness line solves as preconditioner); explicit: forward Euler "
-                        "within the stable step"),
-      sdk::real_param("dt_safety", "0.9", "-", "fraction of the critical step used by the explicit scheme", 0.0, 1.0,
-                      true),
-  };
+                        "within the stable step");
   d.example = R"({ "splitter": "layered3d", "through_thickness": "implicit" })";
   r.add_thermal(d, &create);
 }

@@ -4,6 +4,7 @@
 #include <thermostamp/sdk/plugin.hpp>
 
 #include "split_thermal.hpp"
+#include "thermal_common.hpp"
 
 namespace {
 
@@ -15,13 +16,9 @@ void register_all(ts::sdk::Registrar& r) {
   d.name = "shell2d";
   d.version = "1.0.0";
   d.summary = "Plain thermal shell: one temperature per node, face fluxes as sources";
-  d.params = {
-      ts::sdk::choice_param("through_thickness", "implicit", {"implicit", "explicit"},
-                            "treatment of the face fluxes: implicit (backward Euler, unconditionally stable) or "
-                            "explicit (forward Euler)"),
-      ts::sdk::real_param("dt_safety", "0.9", "-", "fraction of the critical step used by the explicit scheme", 0.0,
-                          1.0, true),
-  };
+  d.params = ts::thermal::splitter_params(
+      "treatment of the face fluxes: implicit (backward Euler, unconditionally stable) or "
+                            "explicit (forward Euler)");
   d.example = R"({ "splitter": "shell2d" })";
   r.add_thermal(d, &create);
 }
