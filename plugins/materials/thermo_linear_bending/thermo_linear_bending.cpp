@@ -1,0 +1,75 @@
+// thermo_linear_bending: moments linear in the curvature in the fibre frame,
+// with rigidities linear in temperature (physics.md section 2):
+//   R_1(T) = beta1_T T + beta1_B, R_2(T) = beta2_T T + beta2_B,
+//   M11 = R_1 chi11, M22 = R_2 chi22, M12 = R_12 chi12, R_12 = twist_ratio (R_1 + R_2) / 2,
+//   w = 1/2 (R_1 chi11^2 + R_2 chi22^2 + 2 R_12 chi12^2)   (J/m^2).
+// Rigidities in N m (moment per unit width per unit curvature), clamped at 0.
+#include <algorithm>
+
+#include <thermostamp/sdk/plugin.hpp>
+
+namespace {
+
+using namespace ts::sdk;
+
+class ThermoLinearBending final : public MaterialLaw {
+ public:
+  Status configure(const Params& p) override {
+    return guarded([&] {
+      b1t_ = p.real("beta1_T");
+      b1b_ = p.real("beta1_B");
+      b2t_ = p.real("beta2_T");
+      b2b_ = p.real("beta2_B");
+      twist_ = p.real("twist_ratio");
+      return Status::success();
+    });
+  }
+  LawRole role() const override { return LawRole::Bending; }
+  void rigidities(double T, double* r1, double* r2, double* r12) const {
+    *r1 = std::max(0.0, b1t_ * T + b1b_);
+    *r2 = std::max(0.0, b2t_ * T + b2b_);
+    *r12 = twist_ * 0.5 * (*r1 + *r2);
+  }
+  Status evaluate(const MaterialBlock& b) const override {
+    for (std::size_t q = 0; q < b.n; ++q) {
+      double r1, r2, r12;
+      rigidities(b.temperature[q], &r1, &r2, &r12);
+      const double* chi = &b.strain[3 * q];
+      b.stress[3 * q] = r1 * chi[0];
+      b.stress[3 * q + 1] = r2 * chi[1];
+      b.stress[3 * q + 2] = r12 * chi[2];
+      if (!b.energy.empty())
+        b.energy[q] = 0.5 * (r1 * chi[0] * chi[0] + r2 * chi[1] * chi[1] + 2 * r12 * chi[2] * chi[2]);
+    }
+    return Status::success();
+  }
+  double max_stiffness(double T) const override {
+    double r1, r2, r12;
+    rigidities(T, &r1, &r2, &r12);
+    return std::max({r1, r2, r12});
+  }
+
+ private:
+  double b1t_ = 0, b1b_ = 0, b2t_ = 0, b2b_ = 0, twist_ = 0;
+};
+
+MaterialLaw* create() { return new ThermoLinearBending(); }
+
+void register_all(Registrar& r) {
+  Descriptor d;
+  d.kind = PluginKind::Material;
+  d.name = "thermo_linear_bending";
+  d.version = "1.0.0";
+  d.summary = "Bending: moments linear in curvature, rigidities linear in temperature, fibre frame";
+  d.params = {real_param("beta1_T", "0.0", "N m/degC", "slope of the rigidity along the fibres R_1(T)"),
+              real_param("beta1_B", "", "N m", "R_1 at 0 degC"),
+              real_param("beta2_T", "0.0", "N m/degC", "slope of the rigidity across the fibres R_2(T)"),
+              real_param("beta2_B", "", "N m", "R_2 at 0 degC"),
+              real_param("twist_ratio", "0.0", "-", "twist rigidity R_12 as a fraction of (R_1 + R_2)/2", 0.0, 1.0)};
+  d.example = R"({ "law": "thermo_linear_bending", "beta1_T": -2.0e-5, "beta1_B": 6.4e-3, "beta2_T": -2.0e-6, "beta2_B": 6.4e-4 })";
+  r.add_material(d, &create);
+}
+
+}  // namespace
+
+THERMOSTAMP_PLUGIN("material_thermo_linear_bending", "1.0.0", register_all)

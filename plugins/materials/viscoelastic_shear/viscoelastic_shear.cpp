@@ -1,0 +1,156 @@
+// viscoelastic_shear: in-plane shear with a temperature-dependent scale and
+// a generalised Maxwell (Prony) relaxation (physics.md section 2):
+//   S0_sh = 2 d/dC [ omega(T) sum_i k_sh_i I_sh^(2i) ],
+//   S_sh(t) = int G(t - s) d/ds[S0_sh] ds, G = g_inf + sum_i g_i exp(-t/tau_i).
+// omega, g_i and tau_i are piecewise linear in T with a break at t_break
+// (270 degC in the reference data). Out of range values are clamped:
+// omega >= 0, g_i >= 0, sum g_i <= 1, tau_i >= 1e-9 s. Listed next to
+// ud_hyperelastic or woven_hyperelastic, its stress adds to theirs.
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include <thermostamp/sdk/invariants.hpp>
+#include <thermostamp/sdk/plugin.hpp>
+#include <thermostamp/sdk/prony.hpp>
+
+namespace {
+
+using namespace ts::sdk;
+
+class ViscoelasticShear final : public MaterialLaw {
+ public:
+  Status configure(const Params& p) override {
+    return guarded([&]() -> Status {
+      const auto& ks = p.list("k_sh");
+      for (int i = 0; i < 3; ++i) k_sh_[i] = ks[i];
+      const double tb = p.real("t_break");
+      omega_ = {tb, p.real("omega_at_break"), p.real("omega_slope_below"), p.real("omega_slope_above")};
+      const auto& g = p.list("g");
+      const auto& tau = p.list("tau");
+      const auto& gb = p.list("g_slope_below");
+      const auto& ga = p.list("g_slope_above");
+      const auto& tb_ = p.list("tau_slope_below");
+      const auto& ta = p.list("tau_slope_above");
+      n_ = static_cast<int>(g.size());
+      if (tau.size() != g.size())
+        return Status::failure("tau has " + std::to_string(tau.size()) + " entries, g has " + std::to_string(g.size()));
+      auto slopes = [&](const std::vector<double>& v, const char* name) -> std::vector<double> {
+        if (v.empty()) return std::vector<double>(n_, 0.0);
+        if (static_cast<int>(v.size()) != n_)
+          throw std::invalid_argument(std::string(name) + " needs one entry per branch (" + std::to_string(n_) + ")");
+        return v;
+      };
+      const auto gb2 = slopes(gb, "g_slope_below"), ga2 = slopes(ga, "g_slope_above");
+      const auto tb2 = slopes(tb_, "tau_slope_below"), ta2 = slopes(ta, "tau_slope_above");
+      double sum = 0;
+      for (int i = 0; i < n_; ++i) {
+        if (!(tau[i] > 0))
+          return Status::failure("tau[" + std::to_string(i) + "] must be > 0 s, found " + std::to_string(tau[i]));
+        sum += g[i];
+        g_.push_back({tb, g[i], gb2[i], ga2[i]});
+        tau_.push_back({tb, tau[i], tb2[i], ta2[i]});
+      }
+      if (sum > 1.0)
+        return Status::failure("the Maxwell weights g sum to " + std::to_string(sum) + " at t_break; it must be <= 1");
+      return Status::success();
+    });
+  }
+  LawRole role() const override { return LawRole::Membrane; }
+  int state_size() const override { return 3 + 3 * n_; }  // S0 at the previous step, then H_i
+
+  // Clamped parameters at temperature T.
+  void at(double T, double* omega, double* g, double* tau) const {
+    *omega = std::max(0.0, omega_(T));
+    double sum = 0;
+    for (int i = 0; i < n_; ++i) {
+      g[i] = std::max(0.0, g_[i](T));
+      tau[i] = std::max(1e-9, tau_[i](T));
+      sum += g[i];
+    }
+    if (sum > 1.0)
+      for (int i = 0; i < n_; ++i) g[i] /= sum;
+  }
+
+  Status evaluate(const MaterialBlock& b) const override {
+    const FibreFrame f;
+    double g[8], tau[8];
+    for (std::size_t q = 0; q < b.n; ++q) {
+      const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
+      FibreFrame fr = f;
+      if (!b.dir2.empty()) {
+        fr.c = b.dir2[2 * q];
+        fr.s = b.dir2[2 * q + 1];
+      }
+      const Invariants v = invariants(C, fr);
+      double omega;
+      at(b.temperature[q], &omega, g, tau);
+      double wsh, dwsh;
+      even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
+      Sym2 s0{0, 0, 0};
+      add_stress(s0, omega * dwsh, v.dsh);
+      double* st = b.state.data() + static_cast<std::size_t>(state_size()) * q;
+      double s[3];
+      prony_update(n_, g, tau, b.dt, st, s0.data(), st + 3, s);
+      for (int k = 0; k < 3; ++k) {
+        st[k] = s0[k];
+        b.stress[3 * q + k] = s[k];
+      }
+      if (!b.energy.empty()) b.energy[q] = omega * wsh;  // elastic (unrelaxed) energy
+    }
+    return Status::success();
+  }
+  double max_stiffness(double T) const override {
+    double omega, g[8], tau[8];
+    at(T, &omega, g, tau);
+    return 2 * omega * (2 * std::abs(k_sh_[0]) + 12 * std::abs(k_sh_[1]) + 30 * std::abs(k_sh_[2]));
+  }
+
+ private:
+  double k_sh_[3] = {0, 0, 0};
+  BrokenLine omega_;
+  std::vector<BrokenLine> g_, tau_;
+  int n_ = 0;
+};
+
+MaterialLaw* create() { return new ViscoelasticShear(); }
+
+ParamSpec list(const std::string& name, const std::string& def, const std::string& unit, const std::string& doc,
+               int size = -1, double min = -1e300) {
+  ParamSpec p;
+  p.name = name;
+  p.type = ParamType::RealList;
+  p.default_json = def;
+  p.unit = unit;
+  p.list_size = size;
+  p.min = min;
+  p.doc = doc;
+  return p;
+}
+
+void register_all(Registrar& r) {
+  Descriptor d;
+  d.kind = PluginKind::Material;
+  d.name = "viscoelastic_shear";
+  d.version = "1.0.0";
+  d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
+  d.params = {
+      list("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
+      real_param("t_break", "270.0", "degC", "temperature of the break of the piecewise-linear laws"),
+      real_param("omega_at_break", "1.0", "-", "shear scale omega at t_break"),
+      real_param("omega_slope_below", "0.0", "1/degC", "d omega / dT below t_break"),
+      real_param("omega_slope_above", "0.0", "1/degC", "d omega / dT above t_break"),
+      list("g", "[]", "-", "Maxwell weights g_i at t_break (sum <= 1; g_inf = 1 - sum)", -1, 0.0),
+      list("tau", "[]", "s", "relaxation times tau_i at t_break (> 0)", -1, 0.0),
+      list("g_slope_below", "[]", "1/degC", "d g_i / dT below t_break (empty: 0)"),
+      list("g_slope_above", "[]", "1/degC", "d g_i / dT above t_break (empty: 0)"),
+      list("tau_slope_below", "[]", "s/degC", "d tau_i / dT below t_break (empty: 0)"),
+      list("tau_slope_above", "[]", "s/degC", "d tau_i / dT above t_break (empty: 0)"),
+  };
+  d.example = R"({ "law": "viscoelastic_shear", "k_sh": [18.5, 46.4, -21.3], "omega_slope_below": -0.02, "omega_slope_above": -0.01, "g": [0.5, 0.3], "tau": [0.2, 2.0] })";
+  r.add_material(d, &create);
+}
+
+}  // namespace
+
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.0.0", register_all)

@@ -1,0 +1,205 @@
+// Material law plugins, loaded through the registry as a job would load
+// them: stresses against finite-difference derivatives of the energy,
+// rigid rotations, the transverse invariant under shear, the Prony-series
+// relaxation against closed forms, and bad parameters.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include <thermostamp/sdk/fd_check.hpp>
+#include <thermostamp/sdk/invariants.hpp>
+
+#include "plugins/registry.hpp"
+
+namespace ts {
+namespace {
+
+struct Law {
+  PluginRegistry registry;
+  std::unique_ptr<sdk::MaterialLaw> law;
+  sdk::Status status;
+  Law(const std::string& name, const json& params) {
+    const auto& rec = registry.require(sdk::PluginKind::Material, name, "/materials/m/membrane/law");
+    const sdk::Params p = validate_params(params, "/materials/m/membrane", rec.descriptor, {"law"});
+    law.reset(reinterpret_cast<sdk::MaterialLaw* (*)()>(rec.create)());
+    status = law->configure(p);
+  }
+};
+
+// Card values (share/materials): N/mm converted to N/m.
+const json kWoven = {{"k_warp", 1.0e5}, {"k_weft", 1.0e5}, {"k_sh", {18.5, 46.4, -21.3}}};
+const json kUd = {{"k_fibre", 5.0e6}, {"p_ct", 50.0}, {"k_sh", {18.5, 46.4, -21.3}}};
+const json kVisco = {{"k_sh", {18.5, 46.4, -21.3}}, {"omega_slope_below", -0.02}, {"omega_slope_above", -0.01},
+                     {"g", {0.5, 0.3}}, {"tau", {0.2, 2.0}}};
+const json kBending = {{"beta1_T", -2.0e-5}, {"beta1_B", 6.4e-3}, {"beta2_T", -2.0e-6}, {"beta2_B", 6.4e-4},
+                       {"twist_ratio", 0.1}};
+
+sdk::Sym2 cauchy_green(double f00, double f01, double f10, double f11) {
+  return {f00 * f00 + f10 * f10, f01 * f01 + f11 * f11, f00 * f01 + f10 * f11};
+}
+
+// S = 2 dw/dC to 1e-6 relative at random deformations (central differences
+// with step 1e-6 have a truncation error ~1e-12 and a round-off ~1e-10
+// relative here, so 1e-6 leaves room only for a wrong derivative).
+TEST(MaterialLaws, StressIsTheDerivativeOfTheEnergy) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.3, 0.3), temp(240.0, 330.0);
+  for (const auto& [name, params] : std::vector<std::pair<std::string, json>>{
+           {"woven_hyperelastic", kWoven}, {"ud_hyperelastic", kUd}, {"viscoelastic_shear", kVisco},
+           {"thermo_linear_bending", kBending}}) {
+    Law l(name, params);
+    ASSERT_TRUE(l.status.ok) << l.status.message;
+    for (int trial = 0; trial < 50; ++trial) {
+      sdk::Sym2 e = name == "thermo_linear_bending" ? sdk::Sym2{u(rng) * 50, u(rng) * 50, u(rng) * 50}
+                                                     : cauchy_green(1 + u(rng), u(rng), u(rng), 1 + u(rng));
+      sdk::Sym2 dir2 = {0.0, 1.0, 0.0};
+      if (name == "woven_hyperelastic") {  // a sheared initial weft direction too
+        const double a = 1.3 + 0.3 * u(rng);
+        dir2 = {std::cos(a), std::sin(a), 0.0};
+      }
+      const auto r = sdk::fd_check(*l.law, e, temp(rng), 1e-6, dir2);
+      EXPECT_LT(r.max_relative_error, 1e-6) << name << " trial " << trial;
+    }
+  }
+}
+
+// Any rigid rotation leaves C = I: no stress, no energy.
+TEST(MaterialLaws, RigidRotationsAreStressFree) {
+  for (const auto& [name, params] : std::vector<std::pair<std::string, json>>{
+           {"woven_hyperelastic", kWoven}, {"ud_hyperelastic", kUd}, {"viscoelastic_shear", kVisco}}) {
+    Law l(name, params);
+    for (double th = 0; th < 6.3; th += 0.7) {
+      const double c = std::cos(th), s = std::sin(th);
+      const auto r = sdk::fd_check(*l.law, cauchy_green(c, -s, s, c), 280.0);
+      for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(r.stress[k]), 1e-9) << name << " theta " << th;
+    }
+  }
+}
+
+// Shear at constant area with inextensible fibres: I_lt = 0 exactly, while
+// I_sh = sin(gamma) grows; the UD transverse term stores nothing.
+TEST(MaterialLaws, TransverseInvariantIgnoresShear) {
+  Law l("ud_hyperelastic", {{"k_fibre", 5.0e6}, {"p_ct", 50.0}});
+  for (double g : {0.1, 0.5, 1.0, 2.0}) {
+    const sdk::Sym2 C = cauchy_green(1.0, g, 0.0, 1.0);  // F = [[1, g], [0, 1]], det F = 1
+    const auto v = sdk::invariants(C);
+    EXPECT_NEAR(v.lt, 0.0, 1e-15);
+    EXPECT_NEAR(v.sh, g / std::sqrt(1 + g * g), 1e-15);
+    const auto r = sdk::fd_check(*l.law, C, 280.0);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(r.stress[k], 0.0, 1e-9);
+  }
+}
+
+// Shear stress history of the viscoelastic law for F = [[1, gamma(t)], [0, 1]].
+struct ShearHistory {
+  const sdk::MaterialLaw& law;
+  double T;
+  std::vector<double> state;
+  explicit ShearHistory(const sdk::MaterialLaw& l, double temperature)
+      : law(l), T(temperature), state(l.state_size(), 0.0) {}
+  double step(double gamma, double dt) {
+    const sdk::Sym2 C = cauchy_green(1.0, gamma, 0.0, 1.0);
+    double stress[3], t[1] = {T};
+    sdk::MaterialBlock b;
+    b.n = 1;
+    b.strain = std::span<const double>(C.data(), 3);
+    b.strain_old = b.strain;
+    b.temperature = std::span<const double>(t, 1);
+    b.dt = dt;
+    b.state = state;
+    b.stress = std::span<double>(stress, 3);
+    law.evaluate(b);
+    return stress[2];
+  }
+};
+
+// Closed form: S(t) = g_inf S0(t) + sum_i g_i int_0^t exp(-(t-s)/tau_i) dS0/ds ds,
+// by midpoint quadrature on 20000 sub-intervals (S0 from the same law with
+// no relaxation). Tolerance 0.5 % of the largest stress (required); the
+// recursion is exact for S0 linear within a step, so its error is O(dt^2).
+TEST(MaterialLaws, ViscoelasticShearAgainstPronyClosedForm) {
+  Law elastic("viscoelastic_shear", {{"k_sh", {18.5, 46.4, -21.3}}, {"omega_slope_below", -0.02}, {"omega_slope_above", -0.01}});
+  Law visco("viscoelastic_shear", kVisco);
+  const double g[2] = {0.5, 0.3}, tau[2] = {0.2, 2.0};
+  // gamma(t): relaxation after a ramp (0.4 s at 1.25 /s, then hold), and constant rate (0.5 /s).
+  const std::vector<std::pair<std::string, std::function<double(double)>>> histories = {
+      {"relaxation", [](double t) { return 1.25 * std::min(t, 0.4); }}, {"constant rate", [](double t) { return 0.5 * t; }}};
+  for (double T : {260.0, 290.0}) {
+    for (const auto& [hname, gamma] : histories) {
+      const double t_end = 2.0;
+      // Reference at the output times.
+      auto s0 = [&](double t) {
+        ShearHistory h(*elastic.law, T);
+        return h.step(gamma(t), 0.0);
+      };
+      auto reference = [&](double t) {
+        const int n = 20000;
+        double conv[2] = {0, 0};
+        double prev = s0(0.0);
+        for (int k = 0; k < n; ++k) {
+          const double a = t * k / n, b = t * (k + 1) / n, mid = 0.5 * (a + b);
+          const double cur = s0(b);
+          for (int i = 0; i < 2; ++i) conv[i] += std::exp(-(t - mid) / tau[i]) * (cur - prev);
+          prev = cur;
+        }
+        return (1 - g[0] - g[1]) * s0(t) + g[0] * conv[0] + g[1] * conv[1];
+      };
+      std::vector<double> times = {0.2, 0.4, 0.6, 1.0, 2.0};
+      std::vector<double> ref;
+      double scale = 0;
+      for (double t : times) {
+        ref.push_back(reference(t));
+        scale = std::max(scale, std::abs(ref.back()));
+      }
+      for (double dt : {0.002, 0.01, 0.05}) {
+        ShearHistory h(*visco.law, T);
+        h.step(gamma(0.0), 0.0);
+        const int steps = static_cast<int>(std::round(t_end / dt));
+        std::size_t next = 0;
+        double worst = 0;
+        for (int k = 1; k <= steps; ++k) {
+          const double s = h.step(gamma(k * dt), dt);
+          if (next < times.size() && std::abs(k * dt - times[next]) < 1e-9) {
+            worst = std::max(worst, std::abs(s - ref[next]) / scale);
+            ++next;
+          }
+        }
+        EXPECT_EQ(next, times.size());
+        EXPECT_LT(worst, 0.005) << hname << " T " << T << " dt " << dt;
+        std::printf("%s, T = %g degC, dt = %g s: max error %.2e of the peak stress %.4g N/m\n", hname.c_str(), T, dt,
+                    worst, scale);
+      }
+    }
+  }
+}
+
+TEST(MaterialLaws, BadParametersAreRefused) {
+  EXPECT_THROW(Law("ud_hyperelastic", {{"k_fibre", -1.0}, {"p_ct", 50.0}}), JobError);
+  Law sum("viscoelastic_shear", {{"k_sh", {1, 0, 0}}, {"g", {0.7, 0.5}}, {"tau", {0.2, 2.0}}});
+  EXPECT_FALSE(sum.status.ok);
+  EXPECT_NE(sum.status.message.find("sum to 1.2"), std::string::npos) << sum.status.message;
+  Law zero("viscoelastic_shear", {{"k_sh", {1, 0, 0}}, {"g", {0.5}}, {"tau", {0.0}}});
+  EXPECT_FALSE(zero.status.ok);
+  EXPECT_NE(zero.status.message.find("tau[0] must be > 0"), std::string::npos) << zero.status.message;
+  Law mismatch("viscoelastic_shear", {{"k_sh", {1, 0, 0}}, {"g", {0.5, 0.2}}, {"tau", {1.0}}});
+  EXPECT_FALSE(mismatch.status.ok);
+}
+
+// Outside the data (200-350 degC) the parameters are clamped: omega >= 0,
+// bending rigidities >= 0; the stress stays finite.
+TEST(MaterialLaws, ExtremeTemperaturesAreClamped) {
+  Law visco("viscoelastic_shear", kVisco);
+  Law bend("thermo_linear_bending", kBending);
+  for (double T : {200.0, 350.0, 400.0}) {
+    EXPECT_GE(visco.law->max_stiffness(T), 0.0);
+    EXPECT_GE(bend.law->max_stiffness(T), 0.0);
+    const auto r = sdk::fd_check(*visco.law, cauchy_green(1.0, 0.3, 0.0, 1.0), T);
+    for (double s : r.stress) EXPECT_TRUE(std::isfinite(s));
+  }
+  EXPECT_EQ(bend.law->max_stiffness(400.0), 0.0);  // R_1 = -2e-5 * 400 + 6.4e-3 < 0 -> 0
+}
+
+}  // namespace
+}  // namespace ts
