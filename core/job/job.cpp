@@ -360,29 +360,48 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
 
   if (const json* c = top.optional_raw("constraints")) {
     if (!c->is_array()) throw JobError("/constraints", "expected an array, found " + json_type_name(*c));
-    job.constraints = *c;
     for (std::size_t i = 0; i < c->size(); ++i) {
-      const std::string ptr = pointer_append("/constraints", i);
-      ObjectReader r((*c)[i], ptr);
+      ConstraintDef d;
+      d.pointer = pointer_append("/constraints", i);
+      ObjectReader r((*c)[i], d.pointer);
       const std::string type = r.choice("type", {"symmetry", "fix", "velocity"});
       const std::string part = r.text("part");
-      if (part != "*" && find_index(part_names, part) < 0) throw JobError(r.at("part"), unknown_name("part", part, part_names));
+      if (part == "*") {
+        for (std::size_t p = 0; p < job.parts.size(); ++p) d.parts.push_back(static_cast<int>(p));
+      } else {
+        const int p = find_index(part_names, part);
+        if (p < 0) throw JobError(r.at("part"), unknown_name("part", part, part_names));
+        d.parts.push_back(p);
+      }
       if (type == "symmetry") {
-        r.choice("plane", {"x", "y", "z"});
+        d.type = ConstraintDef::Type::Symmetry;
+        const std::string plane = r.choice("plane", {"x", "y", "z"});
+        d.plane = plane[0] - 'x';
       } else {
         const json& box = r.raw("box");
         if (!box.is_array() || box.size() != 2) throw JobError(r.at("box"), "expected [[x0, y0, z0], [x1, y1, z1]]");
-        as_reals(box[0], pointer_append(r.at("box"), 0), 3);
-        as_reals(box[1], pointer_append(r.at("box"), 1), 3);
+        const auto lo = as_reals(box[0], pointer_append(r.at("box"), 0), 3);
+        const auto hi = as_reals(box[1], pointer_append(r.at("box"), 1), 3);
+        d.lo = {lo[0], lo[1], lo[2]};
+        d.hi = {hi[0], hi[1], hi[2]};
         if (type == "fix") {
-          for (const auto& d : r.texts("dofs")) {
-            if (d != "x" && d != "y" && d != "z") throw JobError(r.at("dofs"), "unknown dof '" + d + "'; valid: x, y, z");
+          d.type = ConstraintDef::Type::Fix;
+          const auto dofs = r.texts("dofs", std::vector<std::string>{"x", "y", "z"});
+          for (std::size_t k = 0; k < dofs.size(); ++k) {
+            const auto& dof = dofs[k];
+            if (dof != "x" && dof != "y" && dof != "z")
+              throw JobError(pointer_append(r.at("dofs"), k), "unknown dof '" + dof + "'; valid: x, y, z");
+            d.dofs[dof[0] - 'x'] = true;
           }
         } else {
-          r.reals("velocity", 3);
+          d.type = ConstraintDef::Type::Velocity;
+          const auto v = r.reals("velocity", 3);
+          d.velocity = {v[0], v[1], v[2]};
+          d.dofs = {true, true, true};
         }
       }
       r.finish();
+      job.constraints.push_back(d);
     }
   }
 
@@ -391,7 +410,20 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
     ObjectReader r(*s, "/solvers");
     if (const json* m = r.optional_raw("mechanics")) {
       job.mechanics = true;
-      job.mechanics_settings = *m;
+      ObjectReader mr(*m, "/solvers/mechanics");
+      MechanicsDef& md = job.mechanics_settings;
+      md.dt_safety = mr.real("dt_safety", 0.8, 0.0, true, 2.0);
+      if (const json* ms = mr.optional_raw("mass_scaling")) {
+        ObjectReader sr(*ms, "/solvers/mechanics/mass_scaling");
+        md.target_dt = sr.real("target_dt", 0.0, 0.0);
+        md.mass_factor = sr.real("factor", 1.0, 1.0);
+        sr.finish();
+      }
+      md.damping = mr.real("damping", 0.0, 0.0);
+      const auto g = mr.reals("gravity", 3, std::vector<double>{0, 0, 0});
+      md.gravity = {g[0], g[1], g[2]};
+      md.energy_tolerance = mr.real("energy_tolerance", 0.05, 0.0, true);
+      mr.finish();
     }
     if (const json* t = r.optional_raw("thermal")) {
       ThermalSolverDef th;
@@ -406,9 +438,14 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
     }
     r.finish();
   }
-  if (job.mechanics)
-    throw JobError("/solvers/mechanics",
-                   "the mechanics solver is not available in this version; set it to null for a thermal-only job");
+  if (job.mechanics) {
+    for (std::size_t i = 0; i < job.parts.size(); ++i) {
+      const auto& m = job.materials[job.parts[i].material];
+      if (m.membrane.is_null())
+        throw JobError(m.pointer, "material '" + m.name + "' has no membrane law but part '" + job.parts[i].name +
+                                      "' uses it with the mechanics solver");
+    }
+  }
   if (job.thermal) {
     for (const auto& p : job.parts) {
       const auto& m = job.materials[p.material];

@@ -94,6 +94,25 @@ struct ThermalSolverDef {
   double dt = 0;  // 0: automatic
 };
 
+struct MechanicsDef {
+  double dt_safety = 0.8;
+  double target_dt = 0;      // mass scaling to this step (0: none)
+  double mass_factor = 1.0;  // uniform mass scaling factor
+  double damping = 0;        // mass-proportional damping coefficient, 1/s
+  std::array<double, 3> gravity{0, 0, 0};
+  double energy_tolerance = 0.05;  // relative energy balance error that stops the run
+};
+
+struct ConstraintDef {
+  enum class Type { Symmetry, Fix, Velocity } type = Type::Fix;
+  std::string pointer;
+  std::vector<int> parts;
+  int plane = 0;  // symmetry: 0 x, 1 y, 2 z
+  std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
+  std::array<bool, 3> dofs{false, false, false};
+  std::array<double, 3> velocity{0, 0, 0};
+};
+
 struct OutputDef {
   double interval = 0;
   std::vector<std::string> fields;
@@ -110,9 +129,9 @@ struct Job {
   std::vector<ToolDef> tools;
   std::vector<ContactDef> contacts;
   std::vector<HeatExchangeDef> heat_exchanges;
-  json constraints = json::array();
+  std::vector<ConstraintDef> constraints;
   bool mechanics = false;
-  json mechanics_settings;
+  MechanicsDef mechanics_settings;
   std::optional<ThermalSolverDef> thermal;
   OutputDef output;
   std::vector<std::filesystem::path> plugin_paths;

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <sstream>
 #ifdef _OPENMP
 #include <omp.h>
@@ -23,6 +24,16 @@
 namespace ts {
 
 using sdk::Vec3;
+
+struct MechPart {
+  std::unique_ptr<sdk::ElementKernel> element;
+  std::vector<const sdk::MaterialLaw*> membrane;
+  std::vector<double> mass, mass_node_physical, v, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, node_temperature, stress;
+  std::vector<int> inc_start, inc;  // node -> 9 e + 3 a entries of element_force
+  std::vector<char> fixed;          // 3 per node
+  std::vector<double> prescribed;   // 3 per node: velocity where fixed (0 for fix / symmetry)
+  double mass_physical = 0, mass_added = 0;
+};
 
 struct PartState {
   const PartDef* def = nullptr;
@@ -85,6 +96,17 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), re
   build_parts();
   build_tools();
   build_thermal();
+  if (!job_.thermal) {  // isothermal: one constant value per node
+    for (auto& st : parts_) {
+      st->nz = 1;
+      st->T.assign(st->mesh.num_nodes(), st->def->initial_temperature);
+      st->cap.assign(st->mesh.num_nodes(), 0.0);
+      st->mean.assign(st->mesh.num_nodes(), 0.0);
+      st->top.assign(st->mesh.num_nodes(), 0.0);
+      st->bottom.assign(st->mesh.num_nodes(), 0.0);
+    }
+  }
+  if (job_.mechanics) build_mechanics();
   build_probes();
 }
 
@@ -282,6 +304,268 @@ void Simulation::assemble_faces() {
   }
 }
 
+void Simulation::build_mechanics() {
+  std::map<std::string, const sdk::MaterialLaw*> made;  // one law object per material and position
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    const PartDef& def = *st.def;
+    const MaterialDef& mat = job_.materials[def.material];
+    auto m = std::make_unique<MechPart>();
+    // Membrane laws: one object or an array whose stresses add.
+    std::vector<std::pair<json, std::string>> blocks;
+    if (mat.membrane.is_array()) {
+      for (std::size_t i = 0; i < mat.membrane.size(); ++i)
+        blocks.emplace_back(mat.membrane[i], pointer_append(mat.pointer + "/membrane", i));
+    } else {
+      blocks.emplace_back(mat.membrane, mat.pointer + "/membrane");
+    }
+    for (const auto& [obj, ptr] : blocks) {
+      if (auto it = made.find(ptr); it != made.end()) {
+        m->membrane.push_back(it->second);
+        continue;
+      }
+      if (!obj.is_object()) throw JobError(ptr, "expected an object with a \"law\", found " + json_type_name(obj));
+      if (!obj.contains("law") || !obj["law"].is_string()) throw JobError(ptr + "/law", "required string, missing");
+      const PluginRecord& rec = registry_.require(sdk::PluginKind::Material, obj["law"], ptr + "/law");
+      const sdk::Params params = validate_params(obj, ptr, rec.descriptor, {"law"});
+      std::unique_ptr<sdk::MaterialLaw> law(reinterpret_cast<sdk::MaterialLaw* (*)()>(rec.create)());
+      if (auto s = law->configure(params); !s) throw JobError(ptr, "material law '" + obj["law"].get<std::string>() + "': " + s.message);
+      if (law->role() != sdk::LawRole::Membrane)
+        throw JobError(ptr + "/law", "'" + obj["law"].get<std::string>() + "' is not a membrane law");
+      made[ptr] = law.get();
+      m->membrane.push_back(law.get());
+      laws_.push_back(std::move(law));
+    }
+    if (!mat.bending.is_null() && !made.count(mat.pointer + "/bending")) {
+      const std::string ptr = mat.pointer + "/bending";
+      if (!mat.bending.is_object() || !mat.bending.contains("law") || !mat.bending["law"].is_string())
+        throw JobError(ptr + "/law", "required string, missing");
+      const PluginRecord& rec = registry_.require(sdk::PluginKind::Material, mat.bending["law"], ptr + "/law");
+      const sdk::Params params = validate_params(mat.bending, ptr, rec.descriptor, {"law"});
+      std::unique_ptr<sdk::MaterialLaw> law(reinterpret_cast<sdk::MaterialLaw* (*)()>(rec.create)());
+      if (auto s = law->configure(params); !s) throw JobError(ptr, "material law: " + s.message);
+      made[ptr] = law.get();
+      laws_.push_back(std::move(law));
+      logger("job")->warn("{}: validated but not used: this version's shell_rf_t3 carries no bending stiffness", ptr);
+    }
+    const PluginRecord& rec = registry_.require(sdk::PluginKind::Element, def.element, def.pointer + "/element");
+    const sdk::Params eparams = validate_params(json::object(), def.pointer + "/element", rec.descriptor);
+    m->element.reset(reinterpret_cast<sdk::ElementKernel* (*)()>(rec.create)());
+    sdk::ElementSetup setup;
+    setup.part = &part_views_[p];
+    setup.membrane = m->membrane;
+    setup.density = mat.density;
+    if (!(mat.density > 0)) throw JobError(mat.pointer + "/density", "a density > 0 is needed by the mechanics solver");
+    if (auto s = m->element->configure(eparams, setup); !s)
+      throw JobError(def.pointer + "/element", "element '" + def.element + "': " + s.message);
+    const int nn = st.mesh.num_nodes(), ne = st.mesh.num_elements();
+    m->v.assign(3 * nn, 0.0);
+    m->f_int.assign(3 * nn, 0.0);
+    m->f_prev.assign(3 * nn, 0.0);
+    m->dx.assign(3 * nn, 0.0);
+    m->elem_force.assign(9 * ne, 0.0);
+    m->elem_dt.assign(ne, 0.0);
+    m->elem_scale.assign(ne, 1.0);
+    m->stress.assign(3 * ne, 0.0);
+    m->node_temperature.assign(nn, def.initial_temperature);
+    // Node -> element force entries, in a fixed order (same sums for any thread count).
+    m->inc_start.assign(nn + 1, 0);
+    for (int e = 0; e < ne; ++e)
+      for (int a = 0; a < 3; ++a) ++m->inc_start[st.mesh.triangles[3 * e + a] + 1];
+    for (int i = 0; i < nn; ++i) m->inc_start[i + 1] += m->inc_start[i];
+    m->inc.assign(3 * ne, 0);
+    std::vector<int> fill(m->inc_start.begin(), m->inc_start.end() - 1);
+    for (int e = 0; e < ne; ++e)
+      for (int a = 0; a < 3; ++a) m->inc[fill[st.mesh.triangles[3 * e + a]]++] = 9 * e + 3 * a;
+    // Constraints.
+    m->fixed.assign(3 * nn, 0);
+    m->prescribed.assign(3 * nn, 0.0);
+    const double tol = 1e-6 * max_edge_length(st.mesh);
+    for (const auto& c : job_.constraints) {
+      if (std::find(c.parts.begin(), c.parts.end(), static_cast<int>(p)) == c.parts.end()) continue;
+      for (int i = 0; i < nn; ++i) {
+        const double* X = &st.x0[3 * i];
+        if (c.type == ConstraintDef::Type::Symmetry) {
+          if (std::abs(X[c.plane]) <= tol) m->fixed[3 * i + c.plane] = 1;
+          continue;
+        }
+        bool inside = true;
+        for (int d = 0; d < 3; ++d) inside = inside && X[d] >= c.lo[d] && X[d] <= c.hi[d];
+        if (!inside) continue;
+        for (int d = 0; d < 3; ++d)
+          if (c.dofs[d]) {
+            m->fixed[3 * i + d] = 1;
+            m->prescribed[3 * i + d] = c.type == ConstraintDef::Type::Velocity ? c.velocity[d] : 0.0;
+          }
+      }
+    }
+    mech_.push_back(std::move(m));
+  }
+  // Stable steps of the initial configuration; mass scaling per element.
+  const MechanicsDef& md = job_.mechanics_settings;
+  mechanics_stable_dt();
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    MechPart& m = *mech_[p];
+    const double rho_h = job_.materials[st.def->material].density * st.def->thickness;
+    const int nn = st.mesh.num_nodes();
+    m.mass.assign(nn, 0.0);
+    std::vector<double> phys(nn, 0.0);
+    for (int e = 0; e < st.mesh.num_elements(); ++e) {
+      double scale = md.mass_factor;
+      if (md.target_dt > 0 && std::isfinite(m.elem_dt[e])) {
+        const double dt_e = md.dt_safety * m.elem_dt[e];
+        if (dt_e < md.target_dt) scale = std::max(scale, (md.target_dt / dt_e) * (md.target_dt / dt_e));
+      }
+      m.elem_scale[e] = scale;
+      const int* t = &st.mesh.triangles[3 * e];
+      const Vec3 a = sdk::load3(st.x0.data(), t[0]), b = sdk::load3(st.x0.data(), t[1]), c = sdk::load3(st.x0.data(), t[2]);
+      const double me = rho_h * 0.5 * sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a)));
+      for (int k = 0; k < 3; ++k) {
+        m.mass[t[k]] += scale * me / 3.0;
+        phys[t[k]] += me / 3.0;
+      }
+    }
+    m.mass_node_physical = phys;
+    m.mass_physical = 0;
+    double total = 0;
+    for (int i = 0; i < nn; ++i) {
+      m.mass_physical += phys[i];
+      total += m.mass[i];
+    }
+    m.mass_added = total - m.mass_physical;
+  }
+}
+
+void Simulation::update_node_temperature() {
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    MechPart& m = *mech_[p];
+    const int nz = st.nz;
+    const double h = st.def->thickness;
+    for (int i = 0; i < st.mesh.num_nodes(); ++i) {
+      const double* t = &st.T[static_cast<std::size_t>(nz) * i];
+      double s = t[0];
+      if (nz > 1) {
+        const double e = h / (nz - 1);
+        s = 0;
+        for (int k = 0; k < nz; ++k) s += (k == 0 || k == nz - 1 ? 0.5 * e : e) * t[k];
+        s /= h;
+      }
+      m.node_temperature[i] = s;
+    }
+  }
+}
+
+// Internal forces of every part at the current positions; returns the
+// smallest stable step of the elements (mass scaling included).
+double Simulation::mechanics_stable_dt() {
+  double dt = std::numeric_limits<double>::infinity();
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    MechPart& m = *mech_[p];
+    const int ne = st.mesh.num_elements();
+    constexpr int kBlock = 512;
+    const int blocks = (ne + kBlock - 1) / kBlock;
+    std::vector<double> block_dt(blocks, std::numeric_limits<double>::infinity());
+    std::vector<double> block_energy(blocks, 0.0);
+    std::vector<int> block_fail(blocks, -1);
+    std::vector<std::string> block_error(blocks);
+#pragma omp parallel for schedule(static) if (blocks > 1)
+    for (int b = 0; b < blocks; ++b) {
+      sdk::ElementForceInput in;
+      in.range = {b * kBlock, std::min(ne, (b + 1) * kBlock)};
+      in.dt = last_mech_dt_;
+      in.node_temperature = m.node_temperature;
+      sdk::ElementForceOutput out;
+      out.element_force = m.elem_force;
+      out.element_dt = m.elem_dt;
+      if (auto s = m.element->internal_forces(in, out); !s) block_error[b] = s.message;
+      block_dt[b] = out.stable_dt;
+      block_energy[b] = out.energy;
+      block_fail[b] = out.failed_element;
+    }
+    for (int b = 0; b < blocks; ++b) {
+      if (!block_error[b].empty())
+        throw RunError("element '" + st.def->element + "' of part '" + st.def->name + "': " + block_error[b]);
+      if (block_fail[b] >= 0)
+        throw RunError("degenerate (collapsed or inverted) element " + std::to_string(block_fail[b]) + " in part '" +
+                       st.def->name + "'");
+    }
+    for (int e = 0; e < ne; ++e) dt = std::min(dt, m.elem_dt[e] * std::sqrt(m.elem_scale[e]));
+    // Gather: f_int at every node, in a fixed order.
+    const int nn = st.mesh.num_nodes();
+#pragma omp parallel for schedule(static) if (nn > 2048)
+    for (int i = 0; i < nn; ++i) {
+      double f[3] = {0, 0, 0};
+      for (int q = m.inc_start[i]; q < m.inc_start[i + 1]; ++q)
+        for (int d = 0; d < 3; ++d) f[d] += m.elem_force[m.inc[q] + d];
+      for (int d = 0; d < 3; ++d) m.f_int[3 * i + d] = f[d];
+    }
+  }
+  return dt;
+}
+
+// Central differences: v^{n+1/2} = v^{n-1/2} + dt_avg a^n, x^{n+1} = x^n + dt v^{n+1/2}.
+double Simulation::mechanics_step(double dt, double t, long long step, EnergyAudit& audit) {
+  const MechanicsDef& md = job_.mechanics_settings;
+  const double dt_avg = step == 0 ? 0.5 * dt : 0.5 * (last_mech_dt_ + dt);
+  double w_int = 0, w_ext = 0, w_damp = 0, kin = 0;
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    MechPart& m = *mech_[p];
+    const int nn = st.mesh.num_nodes();
+    for (int i = 0; i < nn; ++i) {
+      const double mi = m.mass[i];
+      for (int d = 0; d < 3; ++d) {
+        const int k = 3 * i + d;
+        // Internal work of the previous step (trapezoid with the forces at both ends).
+        w_int += 0.5 * (m.f_prev[k] + m.f_int[k]) * m.dx[k];
+        const double f_ext = md.gravity[d] * m.mass_node_physical[i];
+        const double f_damp = md.damping * mi * m.v[k];
+        double v_new = m.v[k] + dt_avg * (f_ext - m.f_int[k] - f_damp) / mi;
+        if (m.fixed[k]) {
+          const double v_free = v_new;
+          v_new = m.prescribed[k];
+          // Reaction force of the constraint and its work over this step.
+          const double reaction = mi * (v_new - v_free) / dt_avg;
+          w_ext += reaction * v_new * dt;
+        }
+        w_ext += f_ext * v_new * dt;
+        w_damp += f_damp * v_new * dt;
+        m.v[k] = v_new;
+        m.dx[k] = dt * v_new;
+        st.x[k] += m.dx[k];
+        kin += 0.5 * mi * v_new * v_new;
+        m.f_prev[k] = m.f_int[k];
+      }
+    }
+    for (int i = 0; i < 3 * nn; ++i) st.displacement[i] = st.x[i] - st.x0[i];
+    for (int k = 0; k < 3 * nn; ++k)
+      if (!std::isfinite(st.x[k]))
+        throw RunError("non-finite position in part '" + st.def->name + "' at node " + std::to_string(k / 3) +
+                       ", t = " + fmt_g(t + dt) + " s (mechanical step " + std::to_string(step + 1) + ")");
+  }
+  audit.internal += w_int;
+  audit.external += w_ext;
+  audit.damping += w_damp;
+  audit.kinetic = kin;
+  last_mech_dt_ = dt;
+  return dt;
+}
+
+void Simulation::update_element_fields() {
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    MechPart& m = *mech_[p];
+    sdk::ElementFields f;
+    f.shear_angle = st.shear_angle;
+    f.stress = m.stress;
+    f.fibre = st.fibre;
+    m.element->fields(f);
+  }
+}
+
 void Simulation::build_probes() {
   for (const auto& pr : job_.output.probes) {
     const PartState& st = *parts_[pr.part];
@@ -399,10 +683,17 @@ RunResult Simulation::run(const RunOptions& opt) {
     probes_csv.open(opt.out_dir / "probes.csv");
     probes_csv << "probe,quantity,time,z,value\n";
   }
-  log->info("job '{}': {} part(s), {} tool(s), splitter '{}', thermal step {:.4g} s (stable {:.4g} s, "
-            "accurate {:.4g} s), {} thread(s)",
-            job_.name, parts_.size(), tools_.size(), job_.thermal->splitter, thermal_dt_, thermal_stable_dt_,
-            thermal_accurate_dt_, threads);
+  if (job_.thermal)
+    log->info("job '{}': {} part(s), {} tool(s), splitter '{}', thermal step {:.4g} s (stable {:.4g} s, "
+              "accurate {:.4g} s), {} thread(s)",
+              job_.name, parts_.size(), tools_.size(), job_.thermal->splitter, thermal_dt_, thermal_stable_dt_,
+              thermal_accurate_dt_, threads);
+  else
+    log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s)", job_.name, parts_.size(), tools_.size(),
+              threads);
+  for (std::size_t p = 0; p < mech_.size(); ++p)
+    log->info("part '{}': mass {:.6g} kg, added by mass scaling {:.6g} kg ({:.3g} %)", parts_[p]->def->name,
+              mech_[p]->mass_physical, mech_[p]->mass_added, 100 * mech_[p]->mass_added / mech_[p]->mass_physical);
   log->info("thermal contact: {} tool face node(s), {} ply/ply link(s)", contact_map_.tool_contacts.size(),
             contact_map_.links.size());
 
@@ -535,7 +826,15 @@ RunResult Simulation::run(const RunOptions& opt) {
   in.links = contact_map_.links;
   in.links_changed = true;
 
-  const double eps_t = 1e-9 * thermal_dt_;
+  const double eps_t = 1e-9 * (job_.thermal ? thermal_dt_ : interval);
+  EnergyAudit audit;
+  long long mech_steps = 0;
+  double mech_dt = 0;
+  std::ofstream energy_csv;
+  if (opt.write_files && job_.mechanics) {
+    energy_csv.open(opt.out_dir / "energy.csv");
+    energy_csv << "time,kinetic,internal,external_work,damping,balance_error\n";
+  }
   std::string failure;
   seen_min_ = std::numeric_limits<double>::infinity();
   seen_max_ = -seen_min_;
@@ -543,42 +842,118 @@ RunResult Simulation::run(const RunOptions& opt) {
     check_field(0.0, 0);
     write_frame(0.0);
     sample_probes(0.0);
-    while (t < t_end - eps_t) {
-      double next_frame = std::min(t_end, frame_index * interval);
-      double step = std::min(thermal_dt_, next_frame - t);
-      for (std::size_t q = 0; q < next_probe.size(); ++q)
-        if (job_.output.probes[q].interval > 0) step = std::min(step, next_probe[q] - t);
-      if (step <= eps_t) step = std::min(thermal_dt_, t_end - t);
-      in.dt = step;
-      sdk::ThermalStepReport rep;
-      if (auto s = splitter_->advance(in, Tspans, &rep); !s)
-        throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);
-      in.links_changed = false;
-      ++steps;
-      t += step;
-      heat_in += rep.heat_in;
-      substeps_max = std::max(substeps_max, rep.substeps);
-      limited_total += rep.limited;
-      check_field(t, steps);
-      if (std::abs(t - next_frame) <= eps_t) t = next_frame;
-      bool any_step_probe = false;
-      for (std::size_t q = 0; q < next_probe.size(); ++q) {
-        const double iv = job_.output.probes[q].interval;
-        if (iv <= 0) {
-          any_step_probe = true;
-        } else if (t >= next_probe[q] - eps_t) {
-          sample_probes(t, q);
-          while (next_probe[q] <= t + eps_t) next_probe[q] += iv;
+    if (job_.mechanics) {
+      // Explicit dynamics; the thermal splitter advances every `subcycle`
+      // mechanical steps over the time elapsed since its last step.
+      const MechanicsDef& md = job_.mechanics_settings;
+      double t_thermal = 0;
+      long long since_thermal = 0;
+      int subcycle = job_.thermal ? job_.thermal->subcycle : 0;
+      update_node_temperature();
+      double stable = mechanics_stable_dt();
+      if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
+      double next_sample = 0;
+      while (t < t_end - eps_t) {
+        const double next_frame = std::min(t_end, frame_index * interval);
+        double dt = std::min(md.dt_safety * stable, t_end - t);
+        if (dt < 1e-14) throw RunError("the mechanical step fell below 1e-14 s at t = " + fmt_g(t) + " s");
+        mechanics_step(dt, t, mech_steps, audit);
+        ++mech_steps;
+        t += dt;
+        mech_dt = dt;
+        // Forces and stable step at the new positions (also for the next step).
+        stable = mechanics_stable_dt();
+        double w_el = 0;
+        (void)w_el;
+        if (job_.thermal) {
+          ++since_thermal;
+          if (subcycle <= 0) subcycle = std::max(1, static_cast<int>(thermal_dt_ / (md.dt_safety * stable)));
+          if (since_thermal >= subcycle || t >= t_end - eps_t) {
+            update_element_fields();
+            assemble_faces();
+            in.dt = t - t_thermal;
+            in.geometry_changed = true;
+            in.links = contact_map_.links;
+            in.links_changed = true;
+            sdk::ThermalStepReport rep;
+            if (auto st = splitter_->advance(in, Tspans, &rep); !st)
+              throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + st.message);
+            heat_in += rep.heat_in;
+            limited_total += rep.limited;
+            ++steps;
+            t_thermal = t;
+            since_thermal = 0;
+            check_field(t, steps);
+            update_node_temperature();
+          }
         }
+        // Energy audit: W_int + kinetic + damping = external work.
+        const double scale = std::max({std::abs(audit.internal), audit.kinetic, std::abs(audit.external), 1e-30});
+        audit.balance_error = std::abs(audit.internal + audit.kinetic + audit.damping - audit.external) / scale;
+        if (audit.balance_error > md.energy_tolerance && scale > 1e-12 && mech_steps > 20)
+          throw RunError("energy balance error " + fmt_g(audit.balance_error, 3) + " above energy_tolerance " +
+                         fmt_g(md.energy_tolerance, 3) + " at t = " + fmt_g(t) + " s (mechanical step " +
+                         std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) +
+                         " s): the run is unstable (step too large?)");
+        if (energy_csv.is_open() && t >= next_sample - eps_t) {
+          energy_csv << csv_number(t) << ',' << csv_number(audit.kinetic) << ',' << csv_number(audit.internal) << ','
+                     << csv_number(audit.external) << ',' << csv_number(audit.damping) << ','
+                     << csv_number(audit.balance_error) << '\n';
+          next_sample += t_end / 200;
+        }
+        for (std::size_t q = 0; q < next_probe.size(); ++q) {
+          const double iv = job_.output.probes[q].interval > 0 ? job_.output.probes[q].interval : interval;
+          if (t >= next_probe[q] - eps_t || next_probe[q] <= 0) {
+            update_element_fields();
+            sample_probes(t, q);
+            while (next_probe[q] <= t + eps_t) next_probe[q] += iv;
+          }
+        }
+        if (t >= next_frame - eps_t) {
+          update_element_fields();
+          write_frame(t);
+          ++frame_index;
+        }
+        progress.update(t, mech_steps);
       }
-      if (any_step_probe)
+    } else {
+    while (t < t_end - eps_t) {
+        double next_frame = std::min(t_end, frame_index * interval);
+        double step = std::min(thermal_dt_, next_frame - t);
         for (std::size_t q = 0; q < next_probe.size(); ++q)
-          if (job_.output.probes[q].interval <= 0) sample_probes(t, q);
-      if (t >= next_frame - eps_t) {
-        write_frame(t);
-        ++frame_index;
+          if (job_.output.probes[q].interval > 0) step = std::min(step, next_probe[q] - t);
+        if (step <= eps_t) step = std::min(thermal_dt_, t_end - t);
+        in.dt = step;
+        sdk::ThermalStepReport rep;
+        if (auto s = splitter_->advance(in, Tspans, &rep); !s)
+          throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);
+        in.links_changed = false;
+        ++steps;
+        t += step;
+        heat_in += rep.heat_in;
+        substeps_max = std::max(substeps_max, rep.substeps);
+        limited_total += rep.limited;
+        check_field(t, steps);
+        if (std::abs(t - next_frame) <= eps_t) t = next_frame;
+        bool any_step_probe = false;
+        for (std::size_t q = 0; q < next_probe.size(); ++q) {
+          const double iv = job_.output.probes[q].interval;
+          if (iv <= 0) {
+            any_step_probe = true;
+          } else if (t >= next_probe[q] - eps_t) {
+            sample_probes(t, q);
+            while (next_probe[q] <= t + eps_t) next_probe[q] += iv;
+          }
+        }
+        if (any_step_probe)
+          for (std::size_t q = 0; q < next_probe.size(); ++q)
+            if (job_.output.probes[q].interval <= 0) sample_probes(t, q);
+        if (t >= next_frame - eps_t) {
+          write_frame(t);
+          ++frame_index;
+        }
+        progress.update(t, steps);
       }
-      progress.update(t, steps);
     }
     if (!progress.tty) progress.last_decile = 10;  // the last line was printed at 100 %
     progress.update(t, steps, progress.tty);
@@ -600,6 +975,10 @@ RunResult Simulation::run(const RunOptions& opt) {
   result.stored_change = stored_change;
   result.heat_balance_error = std::abs(stored_change - heat_in) / scale;
   result.limited_node_steps = limited_total;
+  result.mechanical_steps = mech_steps;
+  result.mechanical_dt = mech_dt;
+  result.energy = audit;
+  for (const auto& m : mech_) result.energy.added_mass_percent.push_back(100 * m->mass_added / m->mass_physical);
   result.temperature_min = seen_min_;
   result.temperature_max = seen_max_;
 
@@ -612,16 +991,24 @@ RunResult Simulation::run(const RunOptions& opt) {
     summary["threads"] = threads;
     summary["wall_time_s"] = result.wall_time_s;
     summary["simulated_time_s"] = t;
-    summary["steps"] = {{"mechanics", 0}, {"thermal", steps}};
-    summary["dt"] = {{"mechanics", nullptr}, {"thermal", thermal_dt_}};
+    summary["steps"] = {{"mechanics", mech_steps}, {"thermal", steps}};
+    summary["dt"] = {{"mechanics", job_.mechanics ? json(mech_dt) : json(nullptr)},
+                     {"thermal", job_.thermal ? json(thermal_dt_) : json(nullptr)}};
+    if (job_.thermal)
     summary["thermal"] = {{"splitter", job_.thermal->splitter},
                           {"stable_dt", std::isfinite(thermal_stable_dt_) ? json(thermal_stable_dt_) : json(nullptr)},
                           {"accurate_dt", thermal_accurate_dt_},
                           {"inplane_substeps_max", substeps_max},
                           {"limited_node_steps", limited_total}};
     summary["plugins_loaded"] = registry_.loaded_names();
-    summary["energy"] = {{"kinetic", 0.0}, {"internal", 0.0}, {"external_work", 0.0},
-                         {"contact", 0.0}, {"damping", 0.0},  {"balance_error", 0.0}};
+    summary["energy"] = {{"kinetic", audit.kinetic}, {"internal", audit.internal}, {"external_work", audit.external},
+                         {"contact", 0.0}, {"damping", audit.damping}, {"balance_error", audit.balance_error}};
+    if (job_.mechanics) {
+      json added = json::object();
+      for (std::size_t p = 0; p < mech_.size(); ++p)
+        added[parts_[p]->def->name] = 100 * mech_[p]->mass_added / mech_[p]->mass_physical;
+      summary["mass_scaling_added_percent"] = added;
+    }
     summary["heat"] = {{"stored_change_J", stored_change},
                        {"faces_in_J", heat_in},
                        {"balance_error", result.heat_balance_error}};

@@ -30,6 +30,11 @@ struct ProbeSample {
   std::vector<double> values;  // one per z (or one)
 };
 
+struct EnergyAudit {
+  double kinetic = 0, internal = 0, external = 0, damping = 0, balance_error = 0;
+  std::vector<double> added_mass_percent;  // per part, from mass scaling
+};
+
 struct RunResult {
   bool ok = true;
   std::string error;
@@ -41,10 +46,16 @@ struct RunResult {
   double temperature_min = 0, temperature_max = 0;  // over every value and every step
   long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
   std::vector<ProbeSample> probes;
+  long long mechanical_steps = 0;
+  double mechanical_dt = 0;  // last step
+  EnergyAudit energy;
 };
 
 struct PartState;
 struct ToolState;
+struct MechPart;
+
+
 
 class Simulation {
  public:
@@ -69,9 +80,16 @@ class Simulation {
   void build_tools();
   void build_thermal();
   void build_probes();
+  void build_mechanics();
+  // One explicit step of every part; returns the step taken.
+  double mechanics_step(double dt, double t, long long step, EnergyAudit& audit);
+  double mechanics_stable_dt();
+  void update_node_temperature();
+  void update_element_fields();
   void assemble_faces();
   void check_field(double time, long long step);
   double seen_min_ = 0, seen_max_ = 0;
+  double last_mech_dt_ = 0;
 
   const Job& job_;
   PluginRegistry& registry_;
@@ -80,6 +98,8 @@ class Simulation {
   std::vector<sdk::PartView> part_views_;
   std::vector<sdk::ToolView> tool_views_;
   std::unique_ptr<sdk::ThermalSplitter> splitter_;
+  std::vector<std::unique_ptr<MechPart>> mech_;
+  std::vector<std::unique_ptr<sdk::MaterialLaw>> laws_;
   std::vector<std::unique_ptr<sdk::ContactHandler>> contacts_;
   sdk::ThermalContactMap contact_map_;
   std::vector<sdk::FaceConditions> faces_;

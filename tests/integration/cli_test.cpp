@@ -102,7 +102,7 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"negative_conductance", [](json& j) { j["interactions"][0]["conductance"] = -1.0; }, "error: /interactions/0/conductance: must be >= 0"},
       {"negative_penalty", [](json& j) { j["interactions"][0]["penalty"] = -1.0; }, "error: /interactions/0/penalty: must be >= 0"},
       {"mesh_file_missing", [](json& j) { j["parts"][0]["mesh"] = {{"file", "nowhere.msh"}}; }, "error: /parts/0/mesh/file: mesh file"},
-      {"mechanics_on", [](json& j) { j["solvers"]["mechanics"] = {{"dt_safety", 0.8}}; }, "error: /solvers/mechanics: the mechanics solver is not available"},
+      {"mechanics_no_law", [](json& j) { j["solvers"]["mechanics"] = {{"dt_safety", 0.8}}; }, "error: /materials/pa66_cf_ud: material 'pa66_cf_ud' has no membrane law"},
       {"explicit_dt", [](json& j) { j["solvers"]["thermal"]["through_thickness"] = "explicit"; j["solvers"]["thermal"]["dt"] = 0.1; }, "error: /solvers/thermal/dt: thermal step 0.1 s exceeds the stable step"},
       {"fibre_normal", [](json& j) { j["parts"][0]["fibre_direction"] = {0, 0, 1}; }, "error: /parts/0/fibre_direction: the fibre direction is normal to the ply"},
       {"bad_field", [](json& j) { j["output"]["fields"] = {"temprature"}; }, "error: /output/fields/0: unknown field 'temprature'; did you mean 'temperature'?"},
@@ -196,7 +196,7 @@ TEST(Docs, PluginReferenceIsUpToDate) {
   ASSERT_EQ(r.exit_code, 0);
   std::stringstream doc;
   doc << std::ifstream(source_dir() / "docs" / "reference" / "plugins.md").rdbuf();
-  EXPECT_EQ(doc.str(), r.out) << "docs/reference/plugins.md is stale: regenerate it with "
+  EXPECT_TRUE(doc.str() == r.out) << "docs/reference/plugins.md is stale: regenerate it with "
                                  "'build/bin/thermostamp plugins --markdown > docs/reference/plugins.md'";
 }
 

@@ -7,6 +7,7 @@
 // omega >= 0, g_i >= 0, sum g_i <= 1, tau_i >= 1e-9 s. Listed next to
 // ud_hyperelastic or woven_hyperelastic, its stress adds to theirs.
 #include <algorithm>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -116,7 +117,7 @@ class ViscoelasticShear final : public MaterialLaw {
 MaterialLaw* create() { return new ViscoelasticShear(); }
 
 ParamSpec list(const std::string& name, const std::string& def, const std::string& unit, const std::string& doc,
-               int size = -1, double min = -1e300) {
+               int size = -1, double min = -std::numeric_limits<double>::infinity()) {
   ParamSpec p;
   p.name = name;
   p.type = ParamType::RealList;

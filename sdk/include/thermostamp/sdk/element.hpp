@@ -1,5 +1,6 @@
 #pragma once
-// Shell elements: internal forces and stable step over a range of elements.
+// Shell elements: internal forces, energy and stable step over a range of
+// elements, one call per range (OpenMP blocks), tight loops inside.
 #include <span>
 
 #include "material.hpp"
@@ -9,32 +10,46 @@
 
 namespace ts::sdk {
 
+struct ElementSetup {
+  const PartView* part = nullptr;
+  std::span<const MaterialLaw* const> membrane;  // laws whose stresses add
+  const MaterialLaw* bending = nullptr;          // may be null
+  double density = 0.0;                          // kg/m^3 (areal mass = density * thickness)
+};
+
 struct ElementRange {
   int begin = 0;  // first element
   int end = 0;    // one past the last
 };
 
 struct ElementForceInput {
-  const PartView* part = nullptr;
   ElementRange range;
-  double dt = 0.0;
-  std::span<const double> temperature;  // per node (mean through the thickness), degC
-  const MaterialLaw* membrane = nullptr;
-  const MaterialLaw* bending = nullptr;
+  double dt = 0.0;                          // s, step of the laws' history (viscoelasticity)
+  std::span<const double> node_temperature; // per node (mean through the thickness), degC
+  bool commit = true;                       // update the laws' history (false: trial evaluation)
 };
 
 struct ElementForceOutput {
-  std::span<double> element_force;  // 9 per element of the range (3 nodes x xyz), overwritten
-  double internal_energy = 0.0;     // J, accumulated over the range
-  double dissipated = 0.0;          // J, accumulated over the range
-  double stable_dt = 0.0;           // s, minimum over the range
+  std::span<double> element_force;  // 9 per element of the part (3 nodes x xyz), entries of the range overwritten
+  double energy = 0.0;              // J, hyperelastic energy of the range (accumulated)
+  double stable_dt = 0.0;           // s, minimum over the range (set by the call)
+  std::span<double> element_dt;     // optional: stable step of each element (entries of the range)
+  int failed_element = -1;          // first degenerate element found, -1 if none
+};
+
+// Per-element results for output.
+struct ElementFields {
+  std::span<double> shear_angle;  // degrees, one per element
+  std::span<double> stress;       // 3 per element, S (N/m) in the material frame
+  std::span<double> fibre;        // 3 per element, current fibre direction
 };
 
 class ElementKernel {
  public:
   virtual ~ElementKernel() = default;
-  virtual Status configure(const Params& params, const PartView& part) = 0;
+  virtual Status configure(const Params& params, const ElementSetup& setup) = 0;
   virtual Status internal_forces(const ElementForceInput& in, ElementForceOutput& out) = 0;
+  virtual Status fields(ElementFields& out) const = 0;
 };
 
 }  // namespace ts::sdk

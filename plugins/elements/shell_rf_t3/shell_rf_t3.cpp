@@ -1,0 +1,195 @@
+// shell_rf_t3: three-node shell triangle, translational dofs only
+// (physics.md section 1). Membrane: total-Lagrangian constant-strain
+// triangle; F = sum_a x_a (x) grad0 N_a maps the material frame of the
+// initial element (axis 1 along the initial fibre direction, axis 2 =
+// N x axis 1) to the current configuration, C = F^T F, the laws return S
+// (N/m) and the nodal forces are f_a = A0 F S grad0 N_a (f = A0 B^T S).
+// This version carries the membrane part; the rotation-free bending of the
+// S3 family is not included yet (a bending law is refused by the kernel).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <thermostamp/sdk/invariants.hpp>
+#include <thermostamp/sdk/math.hpp>
+#include <thermostamp/sdk/plugin.hpp>
+
+namespace {
+
+using namespace ts::sdk;
+
+class ShellRfT3 final : public ElementKernel {
+ public:
+  Status configure(const Params&, const ElementSetup& s) override {
+    return guarded([&]() -> Status {
+      part_ = s.part;
+      laws_.assign(s.membrane.begin(), s.membrane.end());
+      areal_mass_ = s.density * part_->thickness;
+      const int ne = part_->num_elements;
+      g1_.resize(3 * ne);
+      g2_.resize(3 * ne);
+      area0_.resize(ne);
+      e1_.resize(3 * ne);
+      e2_.resize(3 * ne);
+      for (int e = 0; e < ne; ++e) {
+        const int* t = &part_->triangles[3 * e];
+        const Vec3 X[3] = {load3(part_->x0.data(), t[0]), load3(part_->x0.data(), t[1]), load3(part_->x0.data(), t[2])};
+        const Vec3 nn = cross(sub(X[1], X[0]), sub(X[2], X[0]));
+        const double two_a = norm(nn);
+        if (!(two_a > 0)) return Status::failure("element " + std::to_string(e) + " has zero initial area");
+        const Vec3 n = scale(nn, 1.0 / two_a);
+        Vec3 f = load3(part_->fibre.data(), e);
+        f = normalized(sub(f, scale(n, dot(f, n))));
+        const Vec3 m = cross(n, f);
+        area0_[e] = 0.5 * two_a;
+        for (int d = 0; d < 3; ++d) {
+          e1_[3 * e + d] = f[d];
+          e2_[3 * e + d] = m[d];
+        }
+        // grad0 N_a = n x (X_c - X_b) / (2 A0), components on (f, m).
+        for (int a = 0; a < 3; ++a) {
+          const Vec3 g = scale(cross(n, sub(X[(a + 2) % 3], X[(a + 1) % 3])), 1.0 / two_a);
+          g1_[3 * e + a] = dot(g, f);
+          g2_[3 * e + a] = dot(g, m);
+        }
+      }
+      strain_.assign(3 * ne, 0.0);
+      strain_old_.assign(3 * ne, 0.0);
+      for (int e = 0; e < ne; ++e) {
+        strain_old_[3 * e] = 1.0;
+        strain_old_[3 * e + 1] = 1.0;
+      }
+      temp_.assign(ne, 0.0);
+      stress_.assign(3 * ne, 0.0);
+      law_stress_.assign(3 * ne, 0.0);
+      energy_.assign(ne, 0.0);
+      energy_tmp_.assign(ne, 0.0);
+      shear_.assign(ne, 0.0);
+      states_.clear();
+      for (const auto* l : laws_) states_.emplace_back(static_cast<std::size_t>(l->state_size()) * ne, 0.0);
+      return Status::success();
+    });
+  }
+
+  Status internal_forces(const ElementForceInput& in, ElementForceOutput& out) override {
+    return guarded([&]() -> Status {
+      const int b = in.range.begin, n = in.range.end - in.range.begin;
+      const double* x = part_->x.data();
+      // 1. Strains and temperatures of the block.
+      for (int e = b; e < in.range.end; ++e) {
+        const int* t = &part_->triangles[3 * e];
+        Vec3 f1{0, 0, 0}, f2{0, 0, 0};
+        double T = 0;
+        for (int a = 0; a < 3; ++a) {
+          const Vec3 xa = load3(x, t[a]);
+          f1 = add(f1, scale(xa, g1_[3 * e + a]));
+          f2 = add(f2, scale(xa, g2_[3 * e + a]));
+          T += in.node_temperature[t[a]] / 3.0;
+        }
+        strain_[3 * e] = dot(f1, f1);
+        strain_[3 * e + 1] = dot(f2, f2);
+        strain_[3 * e + 2] = dot(f1, f2);
+        temp_[e] = T;
+        const double det = strain_[3 * e] * strain_[3 * e + 1] - strain_[3 * e + 2] * strain_[3 * e + 2];
+        if (!(det > 1e-12) && out.failed_element < 0) out.failed_element = e;
+      }
+      if (out.failed_element >= 0) return Status::success();
+      // 2. The laws, one call per law for the whole block; stresses add.
+      std::fill(stress_.begin() + 3 * b, stress_.begin() + 3 * (b + n), 0.0);
+      std::fill(energy_.begin() + b, energy_.begin() + b + n, 0.0);
+      for (std::size_t k = 0; k < laws_.size(); ++k) {
+        const int ns = laws_[k]->state_size();
+        MaterialBlock blk;
+        blk.n = n;
+        blk.strain = std::span<const double>(strain_.data() + 3 * b, 3 * n);
+        blk.strain_old = std::span<const double>(strain_old_.data() + 3 * b, 3 * n);
+        blk.temperature = std::span<const double>(temp_.data() + b, n);
+        blk.dt = in.dt;
+        blk.state = std::span<double>(states_[k].data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
+        blk.stress = std::span<double>(law_stress_.data() + 3 * b, 3 * n);
+        blk.energy = std::span<double>(energy_tmp_.data() + b, n);
+        if (auto s = laws_[k]->evaluate(blk); !s) return s;
+        for (int q = 0; q < 3 * n; ++q) stress_[3 * b + q] += law_stress_[3 * b + q];
+        for (int q = 0; q < n; ++q) energy_[b + q] += energy_tmp_[b + q];
+      }
+      // 3. Nodal forces, energy, stable step.
+      double energy = 0, dt_min = std::numeric_limits<double>::infinity();
+      for (int e = b; e < in.range.end; ++e) {
+        const int* t = &part_->triangles[3 * e];
+        Vec3 f1{0, 0, 0}, f2{0, 0, 0};
+        Vec3 xa[3];
+        for (int a = 0; a < 3; ++a) {
+          xa[a] = load3(x, t[a]);
+          f1 = add(f1, scale(xa[a], g1_[3 * e + a]));
+          f2 = add(f2, scale(xa[a], g2_[3 * e + a]));
+        }
+        const double S11 = stress_[3 * e], S22 = stress_[3 * e + 1], S12 = stress_[3 * e + 2];
+        const double A0 = area0_[e];
+        for (int a = 0; a < 3; ++a) {
+          const double ga = g1_[3 * e + a], gb = g2_[3 * e + a];
+          const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
+          for (int d = 0; d < 3; ++d) out.element_force[9 * e + 3 * a + d] = c1 * f1[d] + c2 * f2[d];
+        }
+        energy += A0 * energy_[e];
+        // Stable step: smallest height over the largest wave speed of the tangent.
+        double kmax = 0;
+        for (const auto* l : laws_) kmax += l->max_stiffness(temp_[e]);
+        const double two_a = norm(cross(sub(xa[1], xa[0]), sub(xa[2], xa[0])));
+        double lmax = 0;
+        for (int a = 0; a < 3; ++a) lmax = std::max(lmax, norm(sub(xa[(a + 1) % 3], xa[a])));
+        const double h = two_a / lmax;
+        const double dte = kmax > 0 ? h / std::sqrt(kmax / areal_mass_) : std::numeric_limits<double>::infinity();
+        dt_min = std::min(dt_min, dte);
+        if (!out.element_dt.empty()) out.element_dt[e] = dte;
+        const double ish = strain_[3 * e + 2] / std::sqrt(strain_[3 * e] * strain_[3 * e + 1]);
+        shear_[e] = std::asin(std::clamp(ish, -1.0, 1.0)) * 180.0 / M_PI;
+      }
+      if (in.commit) std::copy(strain_.begin() + 3 * b, strain_.begin() + 3 * (b + n), strain_old_.begin() + 3 * b);
+      out.energy += energy;
+      out.stable_dt = dt_min;
+      return Status::success();
+    });
+  }
+
+  Status fields(ElementFields& out) const override {
+    const int ne = part_->num_elements;
+    for (int e = 0; e < ne; ++e) {
+      if (!out.shear_angle.empty()) out.shear_angle[e] = shear_[e];
+      if (!out.stress.empty())
+        for (int k = 0; k < 3; ++k) out.stress[3 * e + k] = stress_[3 * e + k];
+      if (!out.fibre.empty()) {
+        const int* t = &part_->triangles[3 * e];
+        Vec3 f1{0, 0, 0};
+        for (int a = 0; a < 3; ++a) f1 = add(f1, scale(load3(part_->x.data(), t[a]), g1_[3 * e + a]));
+        const Vec3 u = normalized(f1);
+        for (int d = 0; d < 3; ++d) out.fibre[3 * e + d] = u[d];
+      }
+    }
+    return Status::success();
+  }
+
+ private:
+  const PartView* part_ = nullptr;
+  std::vector<const MaterialLaw*> laws_;
+  double areal_mass_ = 0;
+  std::vector<double> g1_, g2_, area0_, e1_, e2_, strain_, strain_old_, temp_, stress_, law_stress_, energy_,
+      energy_tmp_, shear_;
+  std::vector<std::vector<double>> states_;
+};
+
+ElementKernel* create() { return new ShellRfT3(); }
+
+void register_all(Registrar& r) {
+  Descriptor d;
+  d.kind = PluginKind::Element;
+  d.name = "shell_rf_t3";
+  d.version = "0.1.0";
+  d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane (bending to come)";
+  d.example = R"({ "element": "shell_rf_t3" })";
+  r.add_element(d, &create);
+}
+
+}  // namespace
+
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.1.0", register_all)
