@@ -191,7 +191,8 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       m.name = it.key();
       m.pointer = pointer_append("/materials", it.key());
       ObjectReader r(it.value(), m.pointer);
-      m.has_thermal = r.has("density") || r.has("specific_heat") || r.has("conductivity");
+      if (r.has("density")) m.density = r.real("density", std::nullopt, 0.0, true);
+      m.has_thermal = r.has("specific_heat") || r.has("conductivity");
       if (m.has_thermal) {
         m.density = r.real("density", std::nullopt, 0.0, true);
         m.specific_heat = r.real("specific_heat", std::nullopt, 0.0, true);
@@ -444,6 +445,8 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       if (m.membrane.is_null())
         throw JobError(m.pointer, "material '" + m.name + "' has no membrane law but part '" + job.parts[i].name +
                                       "' uses it with the mechanics solver");
+      if (!(m.density > 0))
+        throw JobError(m.pointer + "/density", "required by the mechanics solver (kg/m3), missing");
     }
   }
   if (job.thermal) {

@@ -28,9 +28,10 @@ using sdk::Vec3;
 struct MechPart {
   std::unique_ptr<sdk::ElementKernel> element;
   std::vector<const sdk::MaterialLaw*> membrane;
-  std::vector<double> mass, mass_node_physical, v, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, node_temperature, stress;
+  std::vector<double> mass, mass_node_physical, v, r_prev, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, node_temperature, stress;
   std::vector<int> inc_start, inc;  // node -> 9 e + 3 a entries of element_force
   std::vector<char> fixed;          // 3 per node
+  std::vector<int> constraint_of;   // 3 per node: index of the constraint holding the dof, -1 if none
   std::vector<double> prescribed;   // 3 per node: velocity where fixed (0 for fix / symmetry)
   double mass_physical = 0, mass_added = 0;
 };
@@ -360,6 +361,7 @@ void Simulation::build_mechanics() {
       throw JobError(def.pointer + "/element", "element '" + def.element + "': " + s.message);
     const int nn = st.mesh.num_nodes(), ne = st.mesh.num_elements();
     m->v.assign(3 * nn, 0.0);
+    m->r_prev.assign(3 * nn, 0.0);
     m->f_int.assign(3 * nn, 0.0);
     m->f_prev.assign(3 * nn, 0.0);
     m->dx.assign(3 * nn, 0.0);
@@ -379,6 +381,7 @@ void Simulation::build_mechanics() {
       for (int a = 0; a < 3; ++a) m->inc[fill[st.mesh.triangles[3 * e + a]]++] = 9 * e + 3 * a;
     // Constraints.
     m->fixed.assign(3 * nn, 0);
+    m->constraint_of.assign(3 * nn, -1);
     m->prescribed.assign(3 * nn, 0.0);
     const double tol = 1e-6 * max_edge_length(st.mesh);
     for (const auto& c : job_.constraints) {
@@ -386,7 +389,10 @@ void Simulation::build_mechanics() {
       for (int i = 0; i < nn; ++i) {
         const double* X = &st.x0[3 * i];
         if (c.type == ConstraintDef::Type::Symmetry) {
-          if (std::abs(X[c.plane]) <= tol) m->fixed[3 * i + c.plane] = 1;
+          if (std::abs(X[c.plane]) <= tol) {
+            m->fixed[3 * i + c.plane] = 1;
+            m->constraint_of[3 * i + c.plane] = static_cast<int>(&c - job_.constraints.data());
+          }
           continue;
         }
         bool inside = true;
@@ -395,6 +401,7 @@ void Simulation::build_mechanics() {
         for (int d = 0; d < 3; ++d)
           if (c.dofs[d]) {
             m->fixed[3 * i + d] = 1;
+            m->constraint_of[3 * i + d] = static_cast<int>(&c - job_.constraints.data());
             m->prescribed[3 * i + d] = c.type == ConstraintDef::Type::Velocity ? c.velocity[d] : 0.0;
           }
       }
@@ -511,6 +518,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   const MechanicsDef& md = job_.mechanics_settings;
   const double dt_avg = step == 0 ? 0.5 * dt : 0.5 * (last_mech_dt_ + dt);
   double w_int = 0, w_ext = 0, w_damp = 0, kin = 0;
+  audit.reactions.assign(3 * job_.constraints.size(), 0.0);
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
@@ -522,15 +530,22 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         // Internal work of the previous step (trapezoid with the forces at both ends).
         w_int += 0.5 * (m.f_prev[k] + m.f_int[k]) * m.dx[k];
         const double f_ext = md.gravity[d] * m.mass_node_physical[i];
-        const double f_damp = md.damping * mi * m.v[k];
-        double v_new = m.v[k] + dt_avg * (f_ext - m.f_int[k] - f_damp) / mi;
         if (m.fixed[k]) {
-          const double v_free = v_new;
-          v_new = m.prescribed[k];
-          // Reaction force of the constraint and its work over this step.
-          const double reaction = mi * (v_new - v_free) / dt_avg;
-          w_ext += reaction * v_new * dt;
+          // A held or driven dof: the constraint supplies R = f_int - f_ext (its
+          // inertia is not part of the model); its work over the previous step
+          // by the same trapezoid as the internal work.
+          const double reaction = m.f_int[k] - f_ext;
+          w_ext += 0.5 * (m.r_prev[k] + reaction) * m.dx[k];
+          audit.reactions[3 * m.constraint_of[k] + d] += reaction;
+          m.r_prev[k] = reaction;
+          m.v[k] = m.prescribed[k];
+          m.dx[k] = dt * m.v[k];
+          st.x[k] += m.dx[k];
+          m.f_prev[k] = m.f_int[k];
+          continue;
         }
+        const double f_damp = md.damping * mi * m.v[k];
+        const double v_new = m.v[k] + dt_avg * (f_ext - m.f_int[k] - f_damp) / mi;
         w_ext += f_ext * v_new * dt;
         w_damp += f_damp * v_new * dt;
         m.v[k] = v_new;
@@ -833,7 +848,10 @@ RunResult Simulation::run(const RunOptions& opt) {
   std::ofstream energy_csv;
   if (opt.write_files && job_.mechanics) {
     energy_csv.open(opt.out_dir / "energy.csv");
-    energy_csv << "time,kinetic,internal,external_work,damping,balance_error\n";
+    energy_csv << "time,kinetic,internal,external_work,damping,balance_error";
+    for (std::size_t c = 0; c < job_.constraints.size(); ++c)
+      energy_csv << ",reaction" << c << "_x,reaction" << c << "_y,reaction" << c << "_z";
+    energy_csv << "\n";
   }
   std::string failure;
   seen_min_ = std::numeric_limits<double>::infinity();
@@ -898,7 +916,9 @@ RunResult Simulation::run(const RunOptions& opt) {
         if (energy_csv.is_open() && t >= next_sample - eps_t) {
           energy_csv << csv_number(t) << ',' << csv_number(audit.kinetic) << ',' << csv_number(audit.internal) << ','
                      << csv_number(audit.external) << ',' << csv_number(audit.damping) << ','
-                     << csv_number(audit.balance_error) << '\n';
+                     << csv_number(audit.balance_error);
+          for (double r : audit.reactions) energy_csv << ',' << csv_number(r);
+          energy_csv << '\n';
           next_sample += t_end / 200;
         }
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
@@ -1004,6 +1024,13 @@ RunResult Simulation::run(const RunOptions& opt) {
     summary["energy"] = {{"kinetic", audit.kinetic}, {"internal", audit.internal}, {"external_work", audit.external},
                          {"contact", 0.0}, {"damping", audit.damping}, {"balance_error", audit.balance_error}};
     if (job_.mechanics) {
+      json reactions = json::array();
+      for (std::size_t c = 0; c < job_.constraints.size(); ++c)
+        reactions.push_back({{"constraint", job_.constraints[c].pointer},
+                             {"force", {audit.reactions.size() > 3 * c ? audit.reactions[3 * c] : 0.0,
+                                        audit.reactions.size() > 3 * c ? audit.reactions[3 * c + 1] : 0.0,
+                                        audit.reactions.size() > 3 * c ? audit.reactions[3 * c + 2] : 0.0}}});
+      summary["reactions_N"] = reactions;
       json added = json::object();
       for (std::size_t p = 0; p < mech_.size(); ++p)
         added[parts_[p]->def->name] = 100 * mech_[p]->mass_added / mech_[p]->mass_physical;

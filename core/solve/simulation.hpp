@@ -33,6 +33,7 @@ struct ProbeSample {
 struct EnergyAudit {
   double kinetic = 0, internal = 0, external = 0, damping = 0, balance_error = 0;
   std::vector<double> added_mass_percent;  // per part, from mass scaling
+  std::vector<double> reactions;           // 3 per constraint: force the constraint applies to the plies (N), last step
 };
 
 struct RunResult {

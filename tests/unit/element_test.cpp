@@ -1,0 +1,125 @@
+// shell_rf_t3 membrane through the plugin interface: rigid motions give no
+// force, a homogeneous deformation of an irregular patch gives the same
+// stress in every element and no force at interior nodes (patch test).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include <thermostamp/sdk/math.hpp>
+
+#include "mesh/shell_mesh.hpp"
+#include "plugins/registry.hpp"
+
+namespace ts {
+namespace {
+
+struct Patch {
+  PluginRegistry registry;
+  ShellMesh mesh;
+  std::vector<double> x, fibre, temperature;
+  sdk::PartView view;
+  std::unique_ptr<sdk::MaterialLaw> law;
+  std::unique_ptr<sdk::ElementKernel> element;
+  std::vector<const sdk::MaterialLaw*> laws;
+
+  explicit Patch(double fibre_angle) {
+    mesh = rectangle_mesh({0, 0, 0}, {0.02, 0.01}, {4, 3});
+    // Move interior nodes to make the patch irregular.
+    for (int i = 0; i < mesh.num_nodes(); ++i) {
+      const double X = mesh.x[3 * i], Y = mesh.x[3 * i + 1];
+      if (X > 1e-9 && X < 0.02 - 1e-9 && Y > 1e-9 && Y < 0.01 - 1e-9) {
+        mesh.x[3 * i] += 0.0011 * std::sin(7 * i);
+        mesh.x[3 * i + 1] += 0.0007 * std::cos(5 * i);
+      }
+    }
+    x = mesh.x;
+    for (int e = 0; e < mesh.num_elements(); ++e)
+      fibre.insert(fibre.end(), {std::cos(fibre_angle), std::sin(fibre_angle), 0.0});
+    temperature.assign(mesh.num_nodes(), 280.0);
+    view.num_nodes = mesh.num_nodes();
+    view.num_elements = mesh.num_elements();
+    view.x0 = mesh.x;
+    view.x = x;
+    view.triangles = mesh.triangles;
+    view.neighbours = mesh.neighbours;
+    view.fibre = fibre;
+    view.thickness = 0.0005;
+    const auto& lr = registry.require(sdk::PluginKind::Material, "ud_hyperelastic", "/law");
+    law.reset(reinterpret_cast<sdk::MaterialLaw* (*)()>(lr.create)());
+    law->configure(validate_params(json{{"k_fibre", 5e4}, {"p_ct", 5e3}, {"k_sh", {100.0, 50.0, 0.0}}}, "/m",
+                                   lr.descriptor));
+    laws = {law.get()};
+    const auto& er = registry.require(sdk::PluginKind::Element, "shell_rf_t3", "/element");
+    element.reset(reinterpret_cast<sdk::ElementKernel* (*)()>(er.create)());
+    sdk::ElementSetup setup;
+    setup.part = &view;
+    setup.membrane = laws;
+    setup.density = 1294.0;
+    EXPECT_TRUE(element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
+  }
+  std::vector<double> forces(std::vector<double>* stress = nullptr) {
+    std::vector<double> ef(9 * mesh.num_elements(), 0.0), nf(3 * mesh.num_nodes(), 0.0);
+    sdk::ElementForceInput in;
+    in.range = {0, mesh.num_elements()};
+    in.node_temperature = temperature;
+    sdk::ElementForceOutput out;
+    out.element_force = ef;
+    EXPECT_TRUE(element->internal_forces(in, out).ok);
+    EXPECT_EQ(out.failed_element, -1);
+    for (int e = 0; e < mesh.num_elements(); ++e)
+      for (int a = 0; a < 3; ++a)
+        for (int d = 0; d < 3; ++d) nf[3 * mesh.triangles[3 * e + a] + d] += ef[9 * e + 3 * a + d];
+    if (stress) {
+      stress->assign(3 * mesh.num_elements(), 0.0);
+      sdk::ElementFields f;
+      f.stress = *stress;
+      element->fields(f);
+    }
+    return nf;
+  }
+  void map(const double R[3][3], const double t[3]) {
+    for (int i = 0; i < mesh.num_nodes(); ++i)
+      for (int d = 0; d < 3; ++d)
+        x[3 * i + d] = t[d] + R[d][0] * mesh.x[3 * i] + R[d][1] * mesh.x[3 * i + 1] + R[d][2] * mesh.x[3 * i + 2];
+  }
+};
+
+TEST(ShellRfT3, RigidRotationsAreForceFree) {
+  Patch p(0.5);
+  for (double angle : {M_PI / 2, M_PI, 2.0}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const double c = std::cos(angle), s = std::sin(angle);
+      double R[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+      const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+      R[i][i] = c;
+      R[i][j] = -s;
+      R[j][i] = s;
+      R[j][j] = c;
+      const double t[3] = {0.3, -0.1, 0.05};
+      p.map(R, t);
+      for (double f : p.forces()) EXPECT_NEAR(f, 0.0, 1e-9) << "axis " << axis << " angle " << angle;
+    }
+  }
+}
+
+TEST(ShellRfT3, PatchTestHomogeneousDeformation) {
+  Patch p(0.5);
+  const double F[3][3] = {{1.08, 0.05, 0}, {-0.02, 0.97, 0}, {0, 0, 1}};
+  const double t[3] = {0, 0, 0};
+  p.map(F, t);
+  std::vector<double> stress;
+  const auto f = p.forces(&stress);
+  for (int e = 1; e < p.mesh.num_elements(); ++e)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(stress[3 * e + k], stress[k], 1e-9 * std::abs(stress[0]) + 1e-9);
+  double fmax = 0;
+  for (double v : f) fmax = std::max(fmax, std::abs(v));
+  for (int i = 0; i < p.mesh.num_nodes(); ++i) {
+    const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
+    if (X > 1e-9 && X < 0.02 - 1e-9 && Y > 1e-9 && Y < 0.01 - 1e-9)
+      for (int d = 0; d < 3; ++d) EXPECT_NEAR(f[3 * i + d], 0.0, 1e-9 * fmax) << "interior node " << i;
+  }
+}
+
+}  // namespace
+}  // namespace ts
