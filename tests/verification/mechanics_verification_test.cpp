@@ -125,3 +125,33 @@ TEST(Determinism, MechanicsOneAndTwoThreadsIdentical) {
 }
 
 }  // namespace ts::test
+
+namespace ts::test {
+
+// Free axial vibration: a strip held at one end, gravity along it switched
+// on at t = 0, no damping. The motion oscillates about the static state
+// for 10 periods of the fixed-free bar (T = 4 L / c, c = sqrt(2 k / rho h));
+// the energy balance must hold within 0.5 % (required).
+TEST(Vibration, EnergyBalanceOverTenPeriods) {
+  const double k = 5.0e4, rho_h = 1294.0 * 0.0005;
+  const double c = std::sqrt(2 * k / rho_h), period = 4 * kL / c;
+  json j = strip_job(0.0, 0.0, 10 * period);
+  j["constraints"] = {{{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "y", "z"}}},
+                      {{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}}};
+  j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"gravity", {2000.0, 0.0, 0.0}}};
+  j["output"]["probes"] = {{{"name", "end"}, {"part", "strip"}, {"at", {kL, kW / 2, 0}}, {"quantities", {"displacement_x"}},
+                            {"interval", period / 20}}};
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  EXPECT_LT(r.result.energy.balance_error, 0.005);
+  // The end oscillates between 0 and twice the static displacement
+  // u_static = g L^2 rho h / (2 * 2k) (linear bar, small strain).
+  const double u_static = 2000.0 * kL * kL * rho_h / (2 * 2 * k);
+  double umax = 0;
+  for (const auto& s : r.result.probes) umax = std::max(umax, s.values[0]);
+  EXPECT_NEAR(umax / (2 * u_static), 1.0, 0.05);
+  std::printf("period %.4g s, %lld steps, energy balance %.2e, max end displacement %.4g m (2 u_static = %.4g m)\n",
+              period, r.result.mechanical_steps, r.result.energy.balance_error, umax, 2 * u_static);
+}
+
+}  // namespace ts::test
