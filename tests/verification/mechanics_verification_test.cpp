@@ -155,3 +155,48 @@ TEST(Vibration, EnergyBalanceOverTenPeriods) {
 }
 
 }  // namespace ts::test
+
+namespace ts::test {
+
+// Two clocks: a strip pulled on a cold die (thermal contact, adi) with two
+// mass-scaling factors 4x apart. Mass scaling changes the mechanical step,
+// not the thermal answer: the temperatures agree within 0.5 K (required).
+TEST(Coupling, ThermalAnswerIndependentOfMassScaling) {
+  std::vector<JobRun> runs;
+  for (double factor : {1.0, 4.0}) {
+    json j = strip_job(0.0, 0.05, 0.2);
+    j["materials"]["ud"]["specific_heat"] = 1775.0;
+    j["materials"]["ud"]["conductivity"] = {3.89, 0.31, 0.31};
+    j["parts"][0]["mesh"]["origin"] = {0, 0, 0.00025};
+    j["parts"][0]["initial_temperature"] = 300.0;
+    j["parts"][0]["thickness_layers"] = 8;
+    j["tools"] = {{{"name", "die"}, {"surface", {{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 0, 1}}}},
+                   {"temperature", 260.0}}};
+    j["interactions"] = {{{"type", "contact"}, {"between", {"die", "strip"}}, {"conductance", 1000.0}}};
+    j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"damping", 200.0}, {"mass_scaling", {{"factor", factor}}}};
+    j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", "implicit"}};
+    j["output"]["probes"] = {{{"name", "mid"}, {"part", "strip"}, {"at", {kL / 2, kW / 2, 0.00025}},
+                              {"quantities", {"temperature_profile"}}, {"interval", 0.05}}};
+    runs.push_back(run_json(j));
+    ASSERT_TRUE(runs.back().result.ok) << runs.back().result.error;
+    EXPECT_GT(runs.back().result.thermal_steps, 5);
+  }
+  EXPECT_GT(runs[1].result.mechanical_dt, 1.5 * runs[0].result.mechanical_dt);  // the clocks differ
+  double diff = 0, drop = 0;
+  for (double t : {0.05, 0.1, 0.15, 0.2}) {
+    const ProbeSample* a = runs[0].sample(0, "temperature_profile", t);
+    const ProbeSample* b = runs[1].sample(0, "temperature_profile", t);
+    for (std::size_t k = 0; k < a->values.size(); ++k) {
+      diff = std::max(diff, std::abs(a->values[k] - b->values[k]));
+      drop = std::max(drop, 300.0 - a->values[k]);
+    }
+  }
+  EXPECT_GT(drop, 5.0);  // the die does cool the strip
+  EXPECT_LT(diff, 0.5);
+  std::printf("mass factor 1 vs 4: mechanical steps %lld vs %lld, thermal steps %lld vs %lld, max difference %.4f K "
+              "(cooling %.2f K)\n",
+              runs[0].result.mechanical_steps, runs[1].result.mechanical_steps, runs[0].result.thermal_steps,
+              runs[1].result.thermal_steps, diff, drop);
+}
+
+}  // namespace ts::test

@@ -65,7 +65,7 @@ class ShellRfT3 final : public ElementKernel {
       law_stress_.assign(3 * ne, 0.0);
       energy_.assign(ne, 0.0);
       energy_tmp_.assign(ne, 0.0);
-      shear_.assign(ne, 0.0);
+      ff_.assign(6 * ne, 0.0);
       states_.clear();
       for (const auto* l : laws_) states_.emplace_back(static_cast<std::size_t>(l->state_size()) * ne, 0.0);
       return Status::success();
@@ -86,6 +86,10 @@ class ShellRfT3 final : public ElementKernel {
           f1 = add(f1, scale(xa, g1_[3 * e + a]));
           f2 = add(f2, scale(xa, g2_[3 * e + a]));
           T += in.node_temperature[t[a]] / 3.0;
+        }
+        for (int d = 0; d < 3; ++d) {
+          ff_[6 * e + d] = f1[d];
+          ff_[6 * e + 3 + d] = f2[d];
         }
         strain_[3 * e] = dot(f1, f1);
         strain_[3 * e + 1] = dot(f2, f2);
@@ -113,17 +117,21 @@ class ShellRfT3 final : public ElementKernel {
         for (int q = 0; q < 3 * n; ++q) stress_[3 * b + q] += law_stress_[3 * b + q];
         for (int q = 0; q < n; ++q) energy_[b + q] += energy_tmp_[b + q];
       }
-      // 3. Nodal forces, energy, stable step.
+      // 3. Nodal forces, energy, stable step. The largest tangent stiffness
+      // is taken over the block's temperature range (one call per law).
+      double t_lo = temp_[b], t_hi = temp_[b];
+      for (int e = b; e < in.range.end; ++e) {
+        t_lo = std::min(t_lo, temp_[e]);
+        t_hi = std::max(t_hi, temp_[e]);
+      }
+      double kmax = 0;
+      for (const auto* l : laws_) kmax += std::max(l->max_stiffness(t_lo), l->max_stiffness(t_hi));
+      const double inv_c = kmax > 0 ? 1.0 / std::sqrt(kmax / areal_mass_) : 0.0;
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
       for (int e = b; e < in.range.end; ++e) {
         const int* t = &part_->triangles[3 * e];
-        Vec3 f1{0, 0, 0}, f2{0, 0, 0};
-        Vec3 xa[3];
-        for (int a = 0; a < 3; ++a) {
-          xa[a] = load3(x, t[a]);
-          f1 = add(f1, scale(xa[a], g1_[3 * e + a]));
-          f2 = add(f2, scale(xa[a], g2_[3 * e + a]));
-        }
+        const Vec3 f1 = load3(ff_.data(), 2 * e), f2 = load3(ff_.data(), 2 * e + 1);
+        const Vec3 xa[3] = {load3(x, t[0]), load3(x, t[1]), load3(x, t[2])};
         const double S11 = stress_[3 * e], S22 = stress_[3 * e + 1], S12 = stress_[3 * e + 2];
         const double A0 = area0_[e];
         for (int a = 0; a < 3; ++a) {
@@ -133,17 +141,13 @@ class ShellRfT3 final : public ElementKernel {
         }
         energy += A0 * energy_[e];
         // Stable step: smallest height over the largest wave speed of the tangent.
-        double kmax = 0;
-        for (const auto* l : laws_) kmax += l->max_stiffness(temp_[e]);
         const double two_a = norm(cross(sub(xa[1], xa[0]), sub(xa[2], xa[0])));
         double lmax = 0;
         for (int a = 0; a < 3; ++a) lmax = std::max(lmax, norm(sub(xa[(a + 1) % 3], xa[a])));
         const double h = two_a / lmax;
-        const double dte = kmax > 0 ? h / std::sqrt(kmax / areal_mass_) : std::numeric_limits<double>::infinity();
+        const double dte = kmax > 0 ? h * inv_c : std::numeric_limits<double>::infinity();
         dt_min = std::min(dt_min, dte);
         if (!out.element_dt.empty()) out.element_dt[e] = dte;
-        const double ish = strain_[3 * e + 2] / std::sqrt(strain_[3 * e] * strain_[3 * e + 1]);
-        shear_[e] = std::asin(std::clamp(ish, -1.0, 1.0)) * 180.0 / M_PI;
       }
       if (in.commit) std::copy(strain_.begin() + 3 * b, strain_.begin() + 3 * (b + n), strain_old_.begin() + 3 * b);
       out.energy += energy;
@@ -155,7 +159,10 @@ class ShellRfT3 final : public ElementKernel {
   Status fields(ElementFields& out) const override {
     const int ne = part_->num_elements;
     for (int e = 0; e < ne; ++e) {
-      if (!out.shear_angle.empty()) out.shear_angle[e] = shear_[e];
+      if (!out.shear_angle.empty()) {  // gamma = asin(I_sh), I_sh = C12 / sqrt(C11 C22)
+        const double ish = strain_old_[3 * e + 2] / std::sqrt(strain_old_[3 * e] * strain_old_[3 * e + 1]);
+        out.shear_angle[e] = std::asin(std::clamp(ish, -1.0, 1.0)) * 180.0 / M_PI;
+      }
       if (!out.stress.empty())
         for (int k = 0; k < 3; ++k) out.stress[3 * e + k] = stress_[3 * e + k];
       if (!out.fibre.empty()) {
@@ -174,7 +181,7 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<const MaterialLaw*> laws_;
   double areal_mass_ = 0;
   std::vector<double> g1_, g2_, area0_, e1_, e2_, strain_, strain_old_, temp_, stress_, law_stress_, energy_,
-      energy_tmp_, shear_;
+      energy_tmp_, ff_;  // ff_: F e1 and F e2 of each element (6 per element)
   std::vector<std::vector<double>> states_;
 };
 

@@ -18,6 +18,7 @@ class UdHyperelastic final : public MaterialLaw {
       p_ct_ = p.real("p_ct");
       const auto& ks = p.list("k_sh");
       for (int i = 0; i < 3; ++i) k_sh_[i] = ks[i];
+      has_shear_ = ks[0] != 0 || ks[1] != 0 || ks[2] != 0;
       return Status::success();
     });
   }
@@ -26,7 +27,7 @@ class UdHyperelastic final : public MaterialLaw {
     const FibreFrame f;  // L2 = n x L1 = (0, 1) in the material frame
     for (std::size_t q = 0; q < b.n; ++q) {
       const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
-      const Invariants v = invariants(C, f);
+      const Invariants v = invariants(C, f, has_shear_ ? kE1 | kLt | kSh : kE1 | kLt);
       double wsh, dwsh;
       even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
       Sym2 S{0, 0, 0};
@@ -42,6 +43,7 @@ class UdHyperelastic final : public MaterialLaw {
 
  private:
   double k_fibre_ = 0, p_ct_ = 0, k_sh_[3] = {0, 0, 0};
+  bool has_shear_ = false;
 };
 
 MaterialLaw* create() { return new UdHyperelastic(); }

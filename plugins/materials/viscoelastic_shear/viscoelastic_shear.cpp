@@ -34,6 +34,7 @@ class ViscoelasticShear final : public MaterialLaw {
       const auto& tb_ = p.list("tau_slope_below");
       const auto& ta = p.list("tau_slope_above");
       n_ = static_cast<int>(g.size());
+      if (n_ > 16) return Status::failure("at most 16 Maxwell branches, found " + std::to_string(n_));
       if (tau.size() != g.size())
         return Status::failure("tau has " + std::to_string(tau.size()) + " entries, g has " + std::to_string(g.size()));
       auto slopes = [&](const std::vector<double>& v, const char* name) -> std::vector<double> {
@@ -75,7 +76,7 @@ class ViscoelasticShear final : public MaterialLaw {
 
   Status evaluate(const MaterialBlock& b) const override {
     const FibreFrame f;
-    double g[8], tau[8];
+    double g[16], tau[16], decay[16], ramp[16], omega = 0, T_last = 0;
     for (std::size_t q = 0; q < b.n; ++q) {
       const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
       FibreFrame fr = f;
@@ -83,16 +84,19 @@ class ViscoelasticShear final : public MaterialLaw {
         fr.c = b.dir2[2 * q];
         fr.s = b.dir2[2 * q + 1];
       }
-      const Invariants v = invariants(C, fr);
-      double omega;
-      at(b.temperature[q], &omega, g, tau);
+      const Invariants v = invariants(C, fr, kSh);
+      if (q == 0 || b.temperature[q] != T_last) {  // parameters change with temperature only
+        at(b.temperature[q], &omega, g, tau);
+        prony_factors(n_, tau, b.dt, decay, ramp);
+        T_last = b.temperature[q];
+      }
       double wsh, dwsh;
       even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
       Sym2 s0{0, 0, 0};
       add_stress(s0, omega * dwsh, v.dsh);
       double* st = b.state.data() + static_cast<std::size_t>(state_size()) * q;
       double s[3];
-      prony_update(n_, g, tau, b.dt, st, s0.data(), st + 3, s);
+      prony_step(n_, g, decay, ramp, st, s0.data(), st + 3, s);
       for (int k = 0; k < 3; ++k) {
         st[k] = s0[k];
         b.stress[3 * q + k] = s[k];
@@ -102,7 +106,7 @@ class ViscoelasticShear final : public MaterialLaw {
     return Status::success();
   }
   double max_stiffness(double T) const override {
-    double omega, g[8], tau[8];
+    double omega, g[16], tau[16];
     at(T, &omega, g, tau);
     return 2 * omega * (2 * std::abs(k_sh_[0]) + 12 * std::abs(k_sh_[1]) + 30 * std::abs(k_sh_[2]));
   }

@@ -38,26 +38,34 @@ struct Invariants {
   Sym2 de1{}, de2{}, dsh{}, dlt{};           // dI/dC
 };
 
-inline Invariants invariants(const Sym2& C, const FibreFrame& f = {}) {
+enum InvariantSet : unsigned { kE1 = 1, kE2 = 2, kSh = 4, kLt = 8, kAll = 15 };
+
+// Computes the invariants asked for in `which` (and I41, I42, I412, I3).
+inline Invariants invariants(const Sym2& C, const FibreFrame& f = {}, unsigned which = kAll) {
   Invariants v;
   const Sym2 l11 = f.l11(), l22 = f.l22(), l12 = f.l12sym();
   v.i41 = ddot(C, l11);
   v.i42 = ddot(C, l22);
   v.i412 = ddot(C, l12);
   v.i3 = C[0] * C[1] - C[2] * C[2];
-  v.e1 = 0.5 * std::log(v.i41);
-  v.e2 = 0.5 * std::log(v.i42);
-  const double r = std::sqrt(v.i41 * v.i42);
-  v.sh = v.i412 / r;
-  v.lt = 0.5 * std::log(v.i3 / v.i41);
-  for (int k = 0; k < 3; ++k) {
-    v.de1[k] = l11[k] / (2 * v.i41);
-    v.de2[k] = l22[k] / (2 * v.i42);
-    v.dsh[k] = l12[k] / r - 0.5 * v.sh * (l11[k] / v.i41 + l22[k] / v.i42);
+  if (which & kE1) {
+    v.e1 = 0.5 * std::log(v.i41);
+    for (int k = 0; k < 3; ++k) v.de1[k] = l11[k] / (2 * v.i41);
   }
-  // C^-1 in Voigt storage.
-  const Sym2 cinv = {C[1] / v.i3, C[0] / v.i3, -C[2] / v.i3};
-  for (int k = 0; k < 3; ++k) v.dlt[k] = 0.5 * (cinv[k] - l11[k] / v.i41);
+  if (which & kE2) {
+    v.e2 = 0.5 * std::log(v.i42);
+    for (int k = 0; k < 3; ++k) v.de2[k] = l22[k] / (2 * v.i42);
+  }
+  if (which & kSh) {
+    const double r = std::sqrt(v.i41 * v.i42);
+    v.sh = v.i412 / r;
+    for (int k = 0; k < 3; ++k) v.dsh[k] = l12[k] / r - 0.5 * v.sh * (l11[k] / v.i41 + l22[k] / v.i42);
+  }
+  if (which & kLt) {
+    v.lt = 0.5 * std::log(v.i3 / v.i41);
+    const Sym2 cinv = {C[1] / v.i3, C[0] / v.i3, -C[2] / v.i3};  // C^-1 in Voigt storage
+    for (int k = 0; k < 3; ++k) v.dlt[k] = 0.5 * (cinv[k] - l11[k] / v.i41);
+  }
   return v;
 }
 

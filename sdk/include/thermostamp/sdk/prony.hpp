@@ -10,24 +10,38 @@
 
 namespace ts::sdk {
 
+// Per-branch factors of the update for a step dt: decay = exp(-dt/tau),
+// ramp = (1 - decay) / (dt/tau) (1 for dt = 0). Compute once per
+// temperature and step, reuse for every point that shares them.
+inline void prony_factors(int branches, const double* tau, double dt, double* decay, double* ramp) {
+  for (int i = 0; i < branches; ++i) {
+    const double x = dt / tau[i];
+    decay[i] = std::exp(-x);
+    ramp[i] = x > 1e-8 ? (1.0 - decay[i]) / x : 1.0 - 0.5 * x;
+  }
+}
+
 // Advances the branch states h (3 per branch, Voigt) for the change s0_new -
-// s0_old and returns the relaxed stress in s. dt = 0 gives the instantaneous
-// response (H_i += g_i dS0).
-inline void prony_update(int branches, const double* g, const double* tau, double dt, const double s0_old[3],
-                         const double s0_new[3], double* h, double s[3]) {
+// s0_old and returns the relaxed stress in s.
+inline void prony_step(int branches, const double* g, const double* decay, const double* ramp,
+                       const double s0_old[3], const double s0_new[3], double* h, double s[3]) {
   double g_sum = 0;
   for (int i = 0; i < branches; ++i) g_sum += g[i];
   const double g_inf = 1.0 - g_sum;
   for (int k = 0; k < 3; ++k) s[k] = g_inf * s0_new[k];
-  for (int i = 0; i < branches; ++i) {
-    const double x = dt / tau[i];
-    const double decay = std::exp(-x);
-    const double ramp = x > 1e-8 ? (1.0 - decay) / x : 1.0 - 0.5 * x;
+  for (int i = 0; i < branches; ++i)
     for (int k = 0; k < 3; ++k) {
-      h[3 * i + k] = decay * h[3 * i + k] + g[i] * ramp * (s0_new[k] - s0_old[k]);
+      h[3 * i + k] = decay[i] * h[3 * i + k] + g[i] * ramp[i] * (s0_new[k] - s0_old[k]);
       s[k] += h[3 * i + k];
     }
-  }
+}
+
+// Both in one call. dt = 0 gives the instantaneous response (H_i += g_i dS0).
+inline void prony_update(int branches, const double* g, const double* tau, double dt, const double s0_old[3],
+                         const double s0_new[3], double* h, double s[3]) {
+  double decay[16], ramp[16];
+  prony_factors(branches, tau, dt, decay, ramp);
+  prony_step(branches, g, decay, ramp, s0_old, s0_new, h, s);
 }
 
 // A value piecewise-linear in temperature with one break: slope_below
