@@ -604,6 +604,11 @@ void Simulation::build_probes() {
       throw JobError(pr.pointer + "/at", "probe '" + pr.name + "' is outside part '" + st.def->name +
                                              "': the nearest node is " + fmt_g(std::sqrt(best_d), 4) + " m away");
     probe_node_.push_back(best);
+    std::vector<int> around;
+    for (int e = 0; e < st.mesh.num_elements(); ++e)
+      for (int k = 0; k < 3; ++k)
+        if (st.mesh.triangles[3 * e + k] == best) around.push_back(e);
+    probe_elements_.push_back(around);
   }
 }
 
@@ -809,8 +814,10 @@ RunResult Simulation::run(const RunOptions& opt) {
         } else if (quantity.rfind("displacement_", 0) == 0) {
           const int d = quantity.back() - 'x';
           s.values.push_back(st.x[3 * i + d] - st.x0[3 * i + d]);
-        } else {  // shear_angle: not computed without mechanics
-          s.values.push_back(0.0);
+        } else {  // shear_angle: mean of the elements around the node (0 without mechanics)
+          double a = 0;
+          for (int e : probe_elements_[q]) a += st.shear_angle[e];
+          s.values.push_back(probe_elements_[q].empty() ? 0.0 : a / probe_elements_[q].size());
         }
         if (probes_csv.is_open()) {
           for (std::size_t k = 0; k < s.values.size(); ++k)

@@ -105,6 +105,7 @@ class Simulation {
   sdk::ThermalContactMap contact_map_;
   std::vector<sdk::FaceConditions> faces_;
   std::vector<int> probe_node_;
+  std::vector<std::vector<int>> probe_elements_;  // elements around each probe's node
   double thermal_stable_dt_ = 0, thermal_accurate_dt_ = 0, thermal_dt_ = 0;
 };
 

@@ -56,7 +56,11 @@ void setup_ply(PlyThermal& ply, const sdk::PartView& part, int nz) {
 void update_geometry(PlyThermal& ply) {
   const sdk::PartView& part = *ply.view;
   const double* x = part.x.data();
-  std::fill(ply.area.begin(), ply.area.end(), 0.0);
+  // Lumped areas of the initial configuration: capacities and face
+  // exchanges follow the material (mass is conserved when the ply
+  // stretches); conduction follows the current geometry.
+  const bool first = !ply.area_set;
+  if (first) std::fill(ply.area.begin(), ply.area.end(), 0.0);
   std::fill(ply.k2d.val.begin(), ply.k2d.val.end(), 0.0);
   const double k11 = part.thermal.k11, k22 = part.thermal.k22;
   for (int el = 0; el < part.num_elements; ++el) {
@@ -78,12 +82,18 @@ void update_geometry(PlyThermal& ply) {
       gf[a] = sdk::dot(g, f);
       gt[a] = sdk::dot(g, tdir);
     }
+    if (first) {
+      const Vec3 y0 = sdk::load3(part.x0.data(), t[0]), y1 = sdk::load3(part.x0.data(), t[1]),
+                 y2 = sdk::load3(part.x0.data(), t[2]);
+      const double A0 = 0.5 * sdk::norm(sdk::cross(sdk::sub(y1, y0), sdk::sub(y2, y0)));
+      for (int a = 0; a < 3; ++a) ply.area[t[a]] += A0 / 3.0;
+    }
     for (int a = 0; a < 3; ++a) {
-      ply.area[t[a]] += A / 3.0;
       for (int b = 0; b < 3; ++b)
         ply.k2d.val[ply.k2d.elem_slot[9 * el + 3 * a + b]] += A * (k11 * gf[a] * gf[b] + k22 * gt[a] * gt[b]);
     }
   }
+  ply.area_set = true;
   // Gershgorin bound of C^-1 K for the in-plane problem (h cancels).
   double rate = 0;
   for (int i = 0; i < ply.k2d.n; ++i) {

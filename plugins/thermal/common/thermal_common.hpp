@@ -31,7 +31,8 @@ struct PlyThermal {
   double rho_c = 0;        // J/(m^3 K)
   double k33 = 0;          // W/(m K)
   std::vector<double> w;   // nz through-thickness lumping weights, m; sum = h
-  std::vector<double> area;  // lumped node area, m^2
+  std::vector<double> area;  // lumped node area of the initial configuration, m^2
+  bool area_set = false;
   Csr k2d;                 // in-plane conduction of one unit thickness: K_ab = A grad Na . Ks grad Nb (W/(m K))
   double inplane_rate = 0; // Gershgorin bound of max eigenvalue of C^-1 K in plane, 1/s
 };
