@@ -202,3 +202,66 @@ TEST(Docs, PluginReferenceIsUpToDate) {
 
 }  // namespace
 }  // namespace ts::test
+
+namespace ts::test {
+namespace {
+
+// Every job shipped in share/ is valid.
+TEST(SharedJobs, AllValidate) {
+  for (const auto& dir : {source_dir() / "share" / "jobs", source_dir() / "share" / "verification"}) {
+    for (const auto& e : std::filesystem::directory_iterator(dir)) {
+      if (e.path().extension() != ".json") continue;
+      const json j = read_job_document(e.path());
+      if (j.value("format", "") != "thermostamp-job/1") continue;  // studies
+      const auto r = thermostamp("validate " + q(e.path()));
+      EXPECT_EQ(r.exit_code, 0) << e.path() << ": " << r.err;
+    }
+  }
+}
+
+// A coupled thermo-mechanical job from the command line: outputs, reactions,
+// energy history, shear-angle probes.
+TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
+  const auto dir = temp_dir("mech_cli");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "ud_strip_tension.json");
+  j["time"]["end"] = 0.02;
+  j["output"]["interval"] = 0.01;
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(std::ifstream(dir / "out" / "summary.json"));
+  EXPECT_EQ(s["status"], "completed");
+  EXPECT_GT(s["steps"]["mechanics"].get<int>(), 100);
+  EXPECT_GT(s["steps"]["thermal"].get<int>(), 0);
+  EXPECT_EQ(s["reactions_N"].size(), 3u);
+  EXPECT_GT(s["reactions_N"][1]["force"][0].get<double>(), 0.0);  // the pulled end is pulled
+  EXPECT_LT(s["energy"]["balance_error"].get<double>(), 1e-3);
+  EXPECT_LT(s["heat"]["balance_error"].get<double>(), 1e-9);
+  EXPECT_TRUE(s["mass_scaling_added_percent"].contains("strip"));
+  std::ifstream csv(dir / "out" / "energy.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("time,kinetic,internal,external_work,damping,balance_error,reaction0_x", 0), 0u) << header;
+  const auto plugins = s["plugins_loaded"].get<std::vector<std::string>>();
+  for (const char* p : {"material/ud_hyperelastic", "material/viscoelastic_shear", "element/shell_rf_t3", "thermal/adi"})
+    EXPECT_NE(std::find(plugins.begin(), plugins.end(), p), plugins.end()) << p;
+}
+
+TEST(Cli, MechanicsBadMaterialParameter) {
+  const auto dir = temp_dir("mech_bad");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "ud_strip_tension.json");
+  j["materials"]["ud"]["membrane"][1]["g"] = {0.7, 0.5};
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err.rfind("error: /materials/ud/membrane/1: material law 'viscoelastic_shear': the Maxwell weights g sum to 1.2", 0), 0u) << r.err;
+  j = read_job_document(source_dir() / "share" / "jobs" / "ud_strip_tension.json");
+  j["materials"]["ud"]["membrane"][0]["k_fiber"] = 1.0;
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto r2 = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out"));
+  EXPECT_EQ(r2.exit_code, 2);
+  EXPECT_NE(r2.err.find("/materials/ud/membrane/0/k_fiber: unknown parameter 'k_fiber' for material plugin 'ud_hyperelastic'; did you mean 'k_fibre'?"), std::string::npos) << r2.err;
+}
+
+}  // namespace
+}  // namespace ts::test
