@@ -29,7 +29,7 @@ struct MechPart {
   std::unique_ptr<sdk::ElementKernel> element;
   std::vector<const sdk::MaterialLaw*> membrane;
   std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, node_temperature, stress;
-  std::vector<int> inc_start, inc;  // node -> 9 e + 3 a entries of element_force
+  std::vector<int> inc_start, inc;  // node -> 18 e + 3 a entries of element_force (6-node patches)
   std::vector<char> fixed;          // 3 per node
   std::vector<int> constraint_of;   // 3 per node: index of the constraint holding the dof, -1 if none
   std::vector<double> prescribed;   // 3 per node: velocity where fixed (0 for fix / symmetry)
@@ -337,17 +337,24 @@ void Simulation::build_mechanics() {
       m->membrane.push_back(law.get());
       laws_.push_back(std::move(law));
     }
-    if (!mat.bending.is_null() && !made.count(mat.pointer + "/bending")) {
+    const sdk::MaterialLaw* bending = nullptr;
+    if (!mat.bending.is_null()) {
       const std::string ptr = mat.pointer + "/bending";
-      if (!mat.bending.is_object() || !mat.bending.contains("law") || !mat.bending["law"].is_string())
-        throw JobError(ptr + "/law", "required string, missing");
-      const PluginRecord& rec = registry_.require(sdk::PluginKind::Material, mat.bending["law"], ptr + "/law");
-      const sdk::Params params = validate_params(mat.bending, ptr, rec.descriptor, {"law"});
-      std::unique_ptr<sdk::MaterialLaw> law(reinterpret_cast<sdk::MaterialLaw* (*)()>(rec.create)());
-      if (auto s = law->configure(params); !s) throw JobError(ptr, "material law: " + s.message);
-      made[ptr] = law.get();
-      laws_.push_back(std::move(law));
-      logger("job")->warn("{}: validated but not used: this version's shell_rf_t3 carries no bending stiffness", ptr);
+      if (auto it = made.find(ptr); it != made.end()) {
+        bending = it->second;
+      } else {
+        if (!mat.bending.is_object() || !mat.bending.contains("law") || !mat.bending["law"].is_string())
+          throw JobError(ptr + "/law", "required string, missing");
+        const PluginRecord& rec = registry_.require(sdk::PluginKind::Material, mat.bending["law"], ptr + "/law");
+        const sdk::Params params = validate_params(mat.bending, ptr, rec.descriptor, {"law"});
+        std::unique_ptr<sdk::MaterialLaw> law(reinterpret_cast<sdk::MaterialLaw* (*)()>(rec.create)());
+        if (auto s = law->configure(params); !s) throw JobError(ptr, "material law: " + s.message);
+        if (law->role() != sdk::LawRole::Bending)
+          throw JobError(ptr + "/law", "'" + mat.bending["law"].get<std::string>() + "' is not a bending law");
+        bending = law.get();
+        made[ptr] = law.get();
+        laws_.push_back(std::move(law));
+      }
     }
     const PluginRecord& rec = registry_.require(sdk::PluginKind::Element, def.element, def.pointer + "/element");
     const sdk::Params eparams = validate_params(json::object(), def.pointer + "/element", rec.descriptor);
@@ -355,6 +362,7 @@ void Simulation::build_mechanics() {
     sdk::ElementSetup setup;
     setup.part = &part_views_[p];
     setup.membrane = m->membrane;
+    setup.bending = bending;
     setup.density = mat.density;
     if (!(mat.density > 0)) throw JobError(mat.pointer + "/density", "a density > 0 is needed by the mechanics solver");
     if (auto s = m->element->configure(eparams, setup); !s)
@@ -366,20 +374,34 @@ void Simulation::build_mechanics() {
     m->f_int.assign(3 * nn, 0.0);
     m->f_prev.assign(3 * nn, 0.0);
     m->dx.assign(3 * nn, 0.0);
-    m->elem_force.assign(9 * ne, 0.0);
+    m->elem_force.assign(18 * ne, 0.0);
     m->elem_dt.assign(ne, 0.0);
     m->elem_scale.assign(ne, 1.0);
     m->stress.assign(3 * ne, 0.0);
     m->node_temperature.assign(nn, def.initial_temperature);
-    // Node -> element force entries, in a fixed order (same sums for any thread count).
+    // Node -> element force entries of the 6-node patches, in a fixed order
+    // (same sums for any thread count): own nodes, then the node opposite
+    // each edge in the neighbour.
+    std::vector<int> patch(6 * ne, -1);
+    for (int e = 0; e < ne; ++e)
+      for (int k = 0; k < 3; ++k) {
+        patch[6 * e + k] = st.mesh.triangles[3 * e + k];
+        const int n = st.mesh.neighbours[3 * e + k];
+        if (n < 0) continue;
+        const int p0 = st.mesh.triangles[3 * e + (k + 1) % 3], p1 = st.mesh.triangles[3 * e + (k + 2) % 3];
+        for (int a = 0; a < 3; ++a) {
+          const int o = st.mesh.triangles[3 * n + a];
+          if (o != p0 && o != p1) patch[6 * e + 3 + k] = o;
+        }
+      }
     m->inc_start.assign(nn + 1, 0);
-    for (int e = 0; e < ne; ++e)
-      for (int a = 0; a < 3; ++a) ++m->inc_start[st.mesh.triangles[3 * e + a] + 1];
+    for (int q = 0; q < 6 * ne; ++q)
+      if (patch[q] >= 0) ++m->inc_start[patch[q] + 1];
     for (int i = 0; i < nn; ++i) m->inc_start[i + 1] += m->inc_start[i];
-    m->inc.assign(3 * ne, 0);
+    m->inc.assign(m->inc_start[nn], 0);
     std::vector<int> fill(m->inc_start.begin(), m->inc_start.end() - 1);
-    for (int e = 0; e < ne; ++e)
-      for (int a = 0; a < 3; ++a) m->inc[fill[st.mesh.triangles[3 * e + a]]++] = 9 * e + 3 * a;
+    for (int q = 0; q < 6 * ne; ++q)
+      if (patch[q] >= 0) m->inc[fill[patch[q]]++] = 18 * (q / 6) + 3 * (q % 6);
     // Constraints.
     m->fixed.assign(3 * nn, 0);
     m->constraint_of.assign(3 * nn, -1);

@@ -23,10 +23,12 @@ struct Patch {
   std::unique_ptr<sdk::ElementKernel> element;
   std::vector<const sdk::MaterialLaw*> laws;
 
-  explicit Patch(double fibre_angle) {
-    mesh = rectangle_mesh({0, 0, 0}, {0.02, 0.01}, {4, 3});
+  std::unique_ptr<sdk::MaterialLaw> bend;
+  explicit Patch(double fibre_angle, bool with_bending = false, std::array<int, 2> div = {4, 3},
+                 bool irregular = true) {
+    mesh = rectangle_mesh({0, 0, 0}, {0.02, 0.01}, div);
     // Move interior nodes to make the patch irregular.
-    for (int i = 0; i < mesh.num_nodes(); ++i) {
+    for (int i = 0; irregular && i < mesh.num_nodes(); ++i) {
       const double X = mesh.x[3 * i], Y = mesh.x[3 * i + 1];
       if (X > 1e-9 && X < 0.02 - 1e-9 && Y > 1e-9 && Y < 0.01 - 1e-9) {
         mesh.x[3 * i] += 0.0011 * std::sin(7 * i);
@@ -56,24 +58,57 @@ struct Patch {
     setup.part = &view;
     setup.membrane = laws;
     setup.density = 1294.0;
+    if (with_bending) {
+      const auto& br = registry.require(sdk::PluginKind::Material, "thermo_linear_bending", "/bending");
+      bend.reset(reinterpret_cast<sdk::MaterialLaw* (*)()>(br.create)());
+      bend->configure(validate_params(json{{"beta1_B", 1e-3}, {"beta2_B", 3e-4}, {"twist_ratio", 0.2}}, "/b",
+                                      br.descriptor));
+      setup.bending = bend.get();
+    }
     EXPECT_TRUE(element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
   }
-  std::vector<double> forces(std::vector<double>* stress = nullptr) {
-    std::vector<double> ef(9 * mesh.num_elements(), 0.0), nf(3 * mesh.num_nodes(), 0.0);
+  double energy() {
+    std::vector<double> ef(18 * mesh.num_elements(), 0.0);
     sdk::ElementForceInput in;
     in.range = {0, mesh.num_elements()};
     in.node_temperature = temperature;
+    in.commit = false;
+    sdk::ElementForceOutput out;
+    out.element_force = ef;
+    element->internal_forces(in, out);
+    return out.energy;
+  }
+  std::vector<double> forces(std::vector<double>* stress = nullptr, std::vector<double>* curvature = nullptr) {
+    std::vector<double> ef(18 * mesh.num_elements(), 0.0), nf(3 * mesh.num_nodes(), 0.0);
+    sdk::ElementForceInput in;
+    in.range = {0, mesh.num_elements()};
+    in.node_temperature = temperature;
+    in.commit = false;
     sdk::ElementForceOutput out;
     out.element_force = ef;
     EXPECT_TRUE(element->internal_forces(in, out).ok);
     EXPECT_EQ(out.failed_element, -1);
-    for (int e = 0; e < mesh.num_elements(); ++e)
-      for (int a = 0; a < 3; ++a)
-        for (int d = 0; d < 3; ++d) nf[3 * mesh.triangles[3 * e + a] + d] += ef[9 * e + 3 * a + d];
-    if (stress) {
-      stress->assign(3 * mesh.num_elements(), 0.0);
+    for (int e = 0; e < mesh.num_elements(); ++e) {
+      int nodes[6] = {mesh.triangles[3 * e], mesh.triangles[3 * e + 1], mesh.triangles[3 * e + 2], -1, -1, -1};
+      for (int k = 0; k < 3; ++k) {
+        const int nb = mesh.neighbours[3 * e + k];
+        if (nb < 0) continue;
+        for (int a = 0; a < 3; ++a) {
+          const int o = mesh.triangles[3 * nb + a];
+          if (o != nodes[(k + 1) % 3] && o != nodes[(k + 2) % 3]) nodes[3 + k] = o;
+        }
+      }
+      for (int a = 0; a < 6; ++a)
+        if (nodes[a] >= 0)
+          for (int d = 0; d < 3; ++d) nf[3 * nodes[a] + d] += ef[18 * e + 3 * a + d];
+    }
+    if (stress || curvature) {
+      std::vector<double> dummy;
+      if (stress) stress->assign(3 * mesh.num_elements(), 0.0);
+      if (curvature) curvature->assign(3 * mesh.num_elements(), 0.0);
       sdk::ElementFields f;
-      f.stress = *stress;
+      if (stress) f.stress = *stress;
+      if (curvature) f.curvature = *curvature;
       element->fields(f);
     }
     return nf;
@@ -119,6 +154,58 @@ TEST(ShellRfT3, PatchTestHomogeneousDeformation) {
     if (X > 1e-9 && X < 0.02 - 1e-9 && Y > 1e-9 && Y < 0.01 - 1e-9)
       for (int d = 0; d < 3; ++d) EXPECT_NEAR(f[3 * i + d], 0.0, 1e-9 * fmax) << "interior node " << i;
   }
+}
+
+// Forces (membrane + rotation-free bending) are the derivative of the
+// energy: central differences on every coordinate of a curved, stretched
+// configuration. Tolerance 1e-5 of the largest force (step 1e-8 m).
+TEST(ShellRfT3, BendingForcesAreTheDerivativeOfTheEnergy) {
+  Patch p(0.5, true);
+  for (int i = 0; i < p.mesh.num_nodes(); ++i) {
+    const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
+    p.x[3 * i] = 1.01 * X;
+    p.x[3 * i + 2] = 2.0 * X * X + 1.5 * X * Y - 3.0 * Y * Y + 1e-4 * std::sin(11 * i);
+  }
+  const auto f = p.forces();
+  double fmax = 0;
+  for (double v : f) fmax = std::max(fmax, std::abs(v));
+  const double h = 1e-8;
+  double err = 0;
+  for (std::size_t k = 0; k < p.x.size(); ++k) {
+    const double keep = p.x[k];
+    p.x[k] = keep + h;
+    const double ep = p.energy();
+    p.x[k] = keep - h;
+    const double em = p.energy();
+    p.x[k] = keep;
+    err = std::max(err, std::abs((ep - em) / (2 * h) - f[k]));
+  }
+  EXPECT_LT(err, 1e-5 * fmax) << "max force " << fmax;
+}
+
+// Curvature patch test: a regular mesh wrapped on a cylinder of radius r
+// (axis along y) gives kappa = 1/r along the fibres (x) and 0 across, in
+// every element that has three neighbours. Tolerance 1 % (the bending
+// angle of chords of 1/20 rad is exact; round-off only).
+TEST(ShellRfT3, CylinderGivesItsCurvature) {
+  Patch p(0.0, true, {8, 6}, false);
+  const double r = 0.05;
+  for (int i = 0; i < p.mesh.num_nodes(); ++i) {
+    const double X = p.mesh.x[3 * i];
+    p.x[3 * i] = r * std::sin(X / r);
+    p.x[3 * i + 2] = r * (1 - std::cos(X / r));
+  }
+  std::vector<double> curvature;
+  p.forces(nullptr, &curvature);
+  int checked = 0;
+  for (int e = 0; e < p.mesh.num_elements(); ++e) {
+    if (p.mesh.neighbours[3 * e] < 0 || p.mesh.neighbours[3 * e + 1] < 0 || p.mesh.neighbours[3 * e + 2] < 0) continue;
+    EXPECT_NEAR(curvature[3 * e] * r, 1.0, 0.01) << "element " << e;
+    EXPECT_NEAR(curvature[3 * e + 1] * r, 0.0, 0.01) << "element " << e;
+    EXPECT_NEAR(curvature[3 * e + 2] * r, 0.0, 0.01) << "element " << e;
+    ++checked;
+  }
+  EXPECT_GT(checked, 40);
 }
 
 }  // namespace

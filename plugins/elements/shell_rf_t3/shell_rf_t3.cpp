@@ -4,8 +4,19 @@
 // initial element (axis 1 along the initial fibre direction, axis 2 =
 // N x axis 1) to the current configuration, C = F^T F, the laws return S
 // (N/m) and the nodal forces are f_a = A0 F S grad0 N_a (f = A0 B^T S).
-// This version carries the membrane part; the rotation-free bending of the
-// S3 family is not included yet (a bending law is refused by the kernel).
+//
+// Bending, rotation-free (S3/BST family, 6-node patch): the curvature of an
+// element is the boundary integral of the slope jumps at its edges,
+//   K = (1 / 2 A0) sum_i l_i (theta_i - theta0_i) nu_i (x) nu_i,
+// theta_i the bending angle between the element and its neighbour across
+// edge i (positive when the surface turns towards the element's normal),
+// l_i and nu_i the length and in-plane outward normal of the edge in the
+// initial configuration, K in the element's material frame. The law
+// returns the moments M (N m/m) and the energy; the forces are the
+// derivatives of sum A0 w through d theta_i / dx on the four nodes of each
+// hinge. A free edge carries no slope jump (zero normal moment for edges
+// along the material axes). A clamped edge is modelled by holding the first
+// two rows of nodes.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -25,6 +36,7 @@ class ShellRfT3 final : public ElementKernel {
     return guarded([&]() -> Status {
       part_ = s.part;
       laws_.assign(s.membrane.begin(), s.membrane.end());
+      bending_ = s.bending;
       areal_mass_ = s.density * part_->thickness;
       const int ne = part_->num_elements;
       g1_.resize(3 * ne);
@@ -54,6 +66,7 @@ class ShellRfT3 final : public ElementKernel {
           g2_[3 * e + a] = dot(g, m);
         }
       }
+      if (bending_) setup_bending();
       strain_.assign(3 * ne, 0.0);
       strain_old_.assign(3 * ne, 0.0);
       for (int e = 0; e < ne; ++e) {
@@ -137,8 +150,9 @@ class ShellRfT3 final : public ElementKernel {
         for (int a = 0; a < 3; ++a) {
           const double ga = g1_[3 * e + a], gb = g2_[3 * e + a];
           const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
-          for (int d = 0; d < 3; ++d) out.element_force[9 * e + 3 * a + d] = c1 * f1[d] + c2 * f2[d];
+          for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * a + d] = c1 * f1[d] + c2 * f2[d];
         }
+        for (int q = 9; q < 18; ++q) out.element_force[18 * e + q] = 0.0;
         energy += A0 * energy_[e];
         // Stable step: smallest height over the largest wave speed of the tangent.
         const double two_a = norm(cross(sub(xa[1], xa[0]), sub(xa[2], xa[0])));
@@ -148,6 +162,10 @@ class ShellRfT3 final : public ElementKernel {
         const double dte = kmax > 0 ? h * inv_c : std::numeric_limits<double>::infinity();
         dt_min = std::min(dt_min, dte);
         if (!out.element_dt.empty()) out.element_dt[e] = dte;
+      }
+      if (bending_) {
+        const double eb = bending_forces(in, b, in.range.end, out, &dt_min);
+        energy += eb;
       }
       if (in.commit) std::copy(strain_.begin() + 3 * b, strain_.begin() + 3 * (b + n), strain_old_.begin() + 3 * b);
       out.energy += energy;
@@ -160,11 +178,13 @@ class ShellRfT3 final : public ElementKernel {
     const int ne = part_->num_elements;
     for (int e = 0; e < ne; ++e) {
       if (!out.shear_angle.empty()) {  // gamma = asin(I_sh), I_sh = C12 / sqrt(C11 C22)
-        const double ish = strain_old_[3 * e + 2] / std::sqrt(strain_old_[3 * e] * strain_old_[3 * e + 1]);
+        const double ish = strain_[3 * e + 2] / std::sqrt(strain_[3 * e] * strain_[3 * e + 1]);
         out.shear_angle[e] = std::asin(std::clamp(ish, -1.0, 1.0)) * 180.0 / M_PI;
       }
       if (!out.stress.empty())
         for (int k = 0; k < 3; ++k) out.stress[3 * e + k] = stress_[3 * e + k];
+      if (!out.curvature.empty() && bending_)
+        for (int k = 0; k < 3; ++k) out.curvature[3 * e + k] = curv_[3 * e + k];
       if (!out.fibre.empty()) {
         const int* t = &part_->triangles[3 * e];
         Vec3 f1{0, 0, 0};
@@ -177,6 +197,144 @@ class ShellRfT3 final : public ElementKernel {
   }
 
  private:
+  // Bending angle of hinge k of element e at positions x (edge nodes p, q in
+  // the element's counter-clockwise order, c opposite in e, o in the
+  // neighbour), with its gradient on (c, o, p, q) when grad is given.
+  double hinge_angle(const double* x, int c, int p, int q, int o, Vec3* grad) const {
+    const Vec3 C = load3(x, c), P = load3(x, p), Q = load3(x, q), O = load3(x, o);
+    const Vec3 edge = sub(Q, P);
+    const double len = norm(edge);
+    const Vec3 eh = scale(edge, 1.0 / len);
+    const Vec3 ne = normalized(cross(sub(Q, P), sub(C, P)));  // element e: (p, q, c) is counter-clockwise
+    const Vec3 nn = normalized(cross(sub(P, Q), sub(O, Q)));  // neighbour: (q, p, o) is counter-clockwise
+    const double theta = std::atan2(dot(cross(nn, ne), eh), dot(ne, nn));
+    if (grad) {
+      const Vec3 cp = sub(C, P), op = sub(O, P);
+      const double sc = dot(cp, eh) / len, so = dot(op, eh) / len;
+      const double hc = norm(sub(cp, scale(eh, dot(cp, eh)))), ho = norm(sub(op, scale(eh, dot(op, eh))));
+      grad[0] = scale(ne, 1.0 / hc);
+      grad[1] = scale(nn, 1.0 / ho);
+      grad[2] = add(scale(grad[0], -(1 - sc)), scale(grad[1], -(1 - so)));
+      grad[3] = add(scale(grad[0], -sc), scale(grad[1], -so));
+    }
+    return theta;
+  }
+
+  void setup_bending() {
+    const int ne = part_->num_elements;
+    opp_.assign(3 * ne, -1);
+    d_.assign(3 * ne, 1.0);
+    theta0_.assign(3 * ne, 0.0);
+    ginv_.assign(9 * ne, 0.0);
+    curv_.assign(3 * ne, 0.0);
+    curv_old_.assign(3 * ne, 0.0);
+    moment_.assign(3 * ne, 0.0);
+    benergy_.assign(ne, 0.0);
+    bstate_.assign(static_cast<std::size_t>(bending_->state_size()) * ne, 0.0);
+    const double* x0 = part_->x0.data();
+    for (int e = 0; e < ne; ++e) {
+      const int* t = &part_->triangles[3 * e];
+      const Vec3 X[3] = {load3(x0, t[0]), load3(x0, t[1]), load3(x0, t[2])};
+      const Vec3 n = normalized(cross(sub(X[1], X[0]), sub(X[2], X[0])));
+      const Vec3 f = load3(e1_.data(), e), m = load3(e2_.data(), e);
+      const double A0 = area0_[e];
+      for (int k = 0; k < 3; ++k) {
+        const int p = t[(k + 1) % 3], q = t[(k + 2) % 3];
+        const Vec3 P = load3(x0, p), Q = load3(x0, q);
+        const double len = norm(sub(Q, P));
+        const Vec3 nu = normalized(cross(sub(Q, P), n));  // outward in-plane normal of edge k
+        const double a = dot(nu, f), bb = dot(nu, m);
+        // dK/dtheta_k = l_k / (2 A0) nu (x) nu, Voigt in the material frame.
+        ginv_[9 * e + 3 * k] = len / (2 * A0) * a * a;
+        ginv_[9 * e + 3 * k + 1] = len / (2 * A0) * bb * bb;
+        ginv_[9 * e + 3 * k + 2] = len / (2 * A0) * a * bb;
+        const int nb = part_->neighbours[3 * e + k];
+        if (nb < 0) continue;
+        for (int j = 0; j < 3; ++j) {
+          const int o = part_->triangles[3 * nb + j];
+          if (o != p && o != q) opp_[3 * e + k] = o;
+        }
+        const int o = opp_[3 * e + k];
+        const Vec3 C = X[k], O = load3(x0, o);
+        const Vec3 eh = normalized(sub(Q, P));
+        auto height = [&](const Vec3& V) {
+          const Vec3 v = sub(V, P);
+          return norm(sub(v, scale(eh, dot(v, eh))));
+        };
+        d_[3 * e + k] = std::min(height(C), height(O));
+        theta0_[3 * e + k] = hinge_angle(x0, t[k], p, q, o, nullptr);
+      }
+    }
+  }
+
+  // Bending curvatures, moments and forces of elements [b, end); returns the
+  // bending energy and lowers *dt_min with the bending stable step.
+  double bending_forces(const ElementForceInput& in, int b, int end, ElementForceOutput& out, double* dt_min) {
+    const double* x = part_->x.data();
+    for (int e = b; e < end; ++e) {
+      const int* t = &part_->triangles[3 * e];
+      const double* c = &ginv_[9 * e];
+      double K[3] = {0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        const int o = opp_[3 * e + k];
+        if (o < 0) continue;
+        const double th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, nullptr) - theta0_[3 * e + k];
+        for (int r = 0; r < 3; ++r) K[r] += c[3 * k + r] * th;
+      }
+      for (int r = 0; r < 3; ++r) curv_[3 * e + r] = K[r];
+    }
+    const int n = end - b;
+    MaterialBlock blk;
+    blk.n = n;
+    blk.strain = std::span<const double>(curv_.data() + 3 * b, 3 * n);
+    blk.strain_old = std::span<const double>(curv_old_.data() + 3 * b, 3 * n);
+    blk.temperature = std::span<const double>(temp_.data() + b, n);
+    blk.dt = in.dt;
+    const int ns = bending_->state_size();
+    blk.state = std::span<double>(bstate_.data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
+    blk.stress = std::span<double>(moment_.data() + 3 * b, 3 * n);
+    blk.energy = std::span<double>(benergy_.data() + b, n);
+    bending_->evaluate(blk);
+    double t_lo = temp_[b], t_hi = temp_[b];
+    for (int e = b; e < end; ++e) {
+      t_lo = std::min(t_lo, temp_[e]);
+      t_hi = std::max(t_hi, temp_[e]);
+    }
+    const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
+    double energy = 0;
+    for (int e = b; e < end; ++e) {
+      const int* t = &part_->triangles[3 * e];
+      const double A0 = area0_[e];
+      const double* M = &moment_[3 * e];
+      const double* gi = &ginv_[9 * e];
+      energy += A0 * benergy_[e];
+      double hmin = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3; ++k) {
+        const int o = opp_[3 * e + k];
+        if (o < 0) continue;
+        hmin = std::min(hmin, d_[3 * e + k]);
+        // dW/dtheta_k = A0 M : dK/dtheta_k = A0 (M11 c11 + M22 c22 + 2 M12 c12).
+        const double m = A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
+        Vec3 g[4];
+        hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, g);
+        const int slot[4] = {k, 3 + k, (k + 1) % 3, (k + 2) % 3};  // c, o, p, q in the patch
+        for (int j = 0; j < 4; ++j)
+          for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * slot[j] + d] += m * g[j][d];
+      }
+      // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative).
+      if (rmax > 0 && std::isfinite(hmin)) {
+        const double dtb = 0.5 * hmin * hmin * std::sqrt(areal_mass_ / rmax);
+        *dt_min = std::min(*dt_min, dtb);
+        if (!out.element_dt.empty()) out.element_dt[e] = std::min(out.element_dt[e], dtb);
+      }
+    }
+    if (in.commit) std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
+    return energy;
+  }
+
+  const MaterialLaw* bending_ = nullptr;
+  std::vector<int> opp_;
+  std::vector<double> d_, theta0_, ginv_, curv_, curv_old_, moment_, benergy_, bstate_;
   const PartView* part_ = nullptr;
   std::vector<const MaterialLaw*> laws_;
   double areal_mass_ = 0;
@@ -192,7 +350,7 @@ void register_all(Registrar& r) {
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
   d.version = "0.1.0";
-  d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane (bending to come)";
+  d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
 }

@@ -30,7 +30,11 @@ struct ElementForceInput {
 };
 
 struct ElementForceOutput {
-  std::span<double> element_force;  // 9 per element of the part (3 nodes x xyz), entries of the range overwritten
+  // 18 per element (6 nodes x xyz), entries of the range overwritten: the
+  // element's 3 nodes, then for k = 0..2 the node of the neighbour across
+  // edge k that is not on that edge (the 6-node patch of rotation-free
+  // bending; zero when edge k has no neighbour).
+  std::span<double> element_force;
   double energy = 0.0;              // J, hyperelastic energy of the range (accumulated)
   double stable_dt = 0.0;           // s, minimum over the range (set by the call)
   std::span<double> element_dt;     // optional: stable step of each element (entries of the range)
@@ -42,6 +46,7 @@ struct ElementFields {
   std::span<double> shear_angle;  // degrees, one per element
   std::span<double> stress;       // 3 per element, S (N/m) in the material frame
   std::span<double> fibre;        // 3 per element, current fibre direction
+  std::span<double> curvature;    // 3 per element, bending curvature (1/m) in the material frame
 };
 
 class ElementKernel {
