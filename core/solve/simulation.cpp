@@ -31,6 +31,7 @@ struct MechPart {
   std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, node_temperature, stress;
   std::vector<int> inc_start, inc;  // node -> 18 e + 3 a entries of element_force (6-node patches)
   std::vector<char> fixed;          // 3 per node
+  std::vector<int> edge_condition;  // 3 per element (sdk::kEdgeFree / kEdgeClamped)
   std::vector<int> constraint_of;   // 3 per node: index of the constraint holding the dof, -1 if none
   std::vector<double> prescribed;   // 3 per node: velocity where fixed (0 for fix / symmetry)
   double mass_physical = 0, mass_added = 0;
@@ -359,8 +360,28 @@ void Simulation::build_mechanics() {
     const PluginRecord& rec = registry_.require(sdk::PluginKind::Element, def.element, def.pointer + "/element");
     const sdk::Params eparams = validate_params(json::object(), def.pointer + "/element", rec.descriptor);
     m->element.reset(reinterpret_cast<sdk::ElementKernel* (*)()>(rec.create)());
+    // Boundary edges whose two nodes are fully held by `fix` constraints are
+    // clamped for bending.
+    const int nn0 = st.mesh.num_nodes(), ne0 = st.mesh.num_elements();
+    std::vector<char> held(nn0, 0);
+    for (const auto& c : job_.constraints) {
+      if (c.type != ConstraintDef::Type::Fix || !(c.dofs[0] && c.dofs[1] && c.dofs[2])) continue;
+      if (std::find(c.parts.begin(), c.parts.end(), static_cast<int>(p)) == c.parts.end()) continue;
+      for (int i = 0; i < nn0; ++i) {
+        bool inside = true;
+        for (int d = 0; d < 3; ++d) inside = inside && st.x0[3 * i + d] >= c.lo[d] && st.x0[3 * i + d] <= c.hi[d];
+        if (inside) held[i] = 1;
+      }
+    }
+    m->edge_condition.assign(3 * ne0, sdk::kEdgeFree);
+    for (int e = 0; e < ne0; ++e)
+      for (int k = 0; k < 3; ++k)
+        if (st.mesh.neighbours[3 * e + k] < 0 && held[st.mesh.triangles[3 * e + (k + 1) % 3]] &&
+            held[st.mesh.triangles[3 * e + (k + 2) % 3]])
+          m->edge_condition[3 * e + k] = sdk::kEdgeClamped;
     sdk::ElementSetup setup;
     setup.part = &part_views_[p];
+    setup.edge_condition = m->edge_condition;
     setup.membrane = m->membrane;
     setup.bending = bending;
     setup.density = mat.density;

@@ -24,6 +24,7 @@ struct Patch {
   std::vector<const sdk::MaterialLaw*> laws;
 
   std::unique_ptr<sdk::MaterialLaw> bend;
+  std::vector<int> edges;
   explicit Patch(double fibre_angle, bool with_bending = false, std::array<int, 2> div = {4, 3},
                  bool irregular = true) {
     mesh = rectangle_mesh({0, 0, 0}, {0.02, 0.01}, div);
@@ -58,6 +59,13 @@ struct Patch {
     setup.part = &view;
     setup.membrane = laws;
     setup.density = 1294.0;
+    edges.assign(3 * mesh.num_elements(), sdk::kEdgeFree);
+    for (int e = 0; e < mesh.num_elements(); ++e)  // left boundary clamped
+      for (int k = 0; k < 3; ++k)
+        if (mesh.neighbours[3 * e + k] < 0 && mesh.x[3 * mesh.triangles[3 * e + (k + 1) % 3]] < 1e-12 &&
+            mesh.x[3 * mesh.triangles[3 * e + (k + 2) % 3]] < 1e-12)
+          edges[3 * e + k] = sdk::kEdgeClamped;
+    setup.edge_condition = edges;
     if (with_bending) {
       const auto& br = registry.require(sdk::PluginKind::Material, "thermo_linear_bending", "/bending");
       bend.reset(reinterpret_cast<sdk::MaterialLaw* (*)()>(br.create)());

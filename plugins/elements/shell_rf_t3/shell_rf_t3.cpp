@@ -15,8 +15,9 @@
 // returns the moments M (N m/m) and the energy; the forces are the
 // derivatives of sum A0 w through d theta_i / dx on the four nodes of each
 // hinge. A free edge carries no slope jump (zero normal moment for edges
-// along the material axes). A clamped edge is modelled by holding the first
-// two rows of nodes.
+// along the material axes). At a clamped edge the slope jump is the
+// rotation of the element about the edge from its initial orientation
+// (the hinge angle to a mirrored ghost is twice that).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -37,6 +38,7 @@ class ShellRfT3 final : public ElementKernel {
       part_ = s.part;
       laws_.assign(s.membrane.begin(), s.membrane.end());
       bending_ = s.bending;
+      edge_condition_.assign(s.edge_condition.begin(), s.edge_condition.end());
       areal_mass_ = s.density * part_->thickness;
       const int ne = part_->num_elements;
       g1_.resize(3 * ne);
@@ -220,9 +222,49 @@ class ShellRfT3 final : public ElementKernel {
     return theta;
   }
 
+  // Rotation of element e about its edge (p, q) from its initial normal,
+  // with the gradient on (c, p, q) when grad is given.
+  double clamp_angle(const double* x, int e, int c, int p, int q, Vec3* grad) const {
+    const Vec3 C = load3(x, c), P = load3(x, p), Q = load3(x, q);
+    const Vec3 edge = sub(Q, P);
+    const double len = norm(edge);
+    const Vec3 eh = scale(edge, 1.0 / len);
+    const Vec3 ne = normalized(cross(sub(Q, P), sub(C, P)));
+    const Vec3 n0 = load3(n0_.data(), e);
+    const double theta = std::atan2(dot(cross(n0, ne), eh), dot(ne, n0));
+    if (grad) {
+      // theta = atan2(y, z), y = n . (e x n0), z = n . n0, with n the unit
+      // normal and e the unit edge: chain rule through N = (Q - P) x (C - P).
+      const Vec3 N = cross(sub(Q, P), sub(C, P));
+      const double nlen = norm(N);
+      const double y = dot(ne, cross(eh, n0)), z = dot(ne, n0);
+      const double r2 = y * y + z * z;
+      const Vec3 en0 = cross(eh, n0);
+      for (int v = 0; v < 3; ++v) grad[v] = {0, 0, 0};
+      for (int d = 0; d < 3; ++d) {
+        Vec3 u{0, 0, 0};
+        u[d] = 1.0;
+        // dN for a unit move of C, P, Q along axis d; dE for P and Q.
+        const Vec3 dN[3] = {cross(sub(Q, P), u), add(scale(cross(u, sub(C, P)), -1.0), scale(cross(sub(Q, P), u), -1.0)),
+                            cross(u, sub(C, P))};
+        const Vec3 dE[3] = {{0, 0, 0}, scale(u, -1.0), u};
+        for (int v = 0; v < 3; ++v) {
+          const Vec3 dn = scale(sub(dN[v], scale(ne, dot(ne, dN[v]))), 1.0 / nlen);
+          const Vec3 de = scale(sub(dE[v], scale(eh, dot(eh, dE[v]))), 1.0 / len);
+          const double dy = dot(dn, en0) + dot(ne, cross(de, n0));
+          const double dz = dot(dn, n0);
+          grad[v][d] = (z * dy - y * dz) / r2;
+        }
+      }
+    }
+    return theta;
+  }
+
   void setup_bending() {
     const int ne = part_->num_elements;
     opp_.assign(3 * ne, -1);
+    clamped_.assign(3 * ne, 0);
+    n0_.assign(3 * ne, 0.0);
     d_.assign(3 * ne, 1.0);
     theta0_.assign(3 * ne, 0.0);
     ginv_.assign(9 * ne, 0.0);
@@ -249,7 +291,13 @@ class ShellRfT3 final : public ElementKernel {
         ginv_[9 * e + 3 * k + 1] = len / (2 * A0) * bb * bb;
         ginv_[9 * e + 3 * k + 2] = len / (2 * A0) * a * bb;
         const int nb = part_->neighbours[3 * e + k];
-        if (nb < 0) continue;
+        if (nb < 0) {
+          if (!edge_condition_.empty() && edge_condition_[3 * e + k] == kEdgeClamped) {
+            clamped_[3 * e + k] = 1;
+            for (int d = 0; d < 3; ++d) n0_[3 * e + d] = n[d];
+          }
+          continue;
+        }
         for (int j = 0; j < 3; ++j) {
           const int o = part_->triangles[3 * nb + j];
           if (o != p && o != q) opp_[3 * e + k] = o;
@@ -277,8 +325,14 @@ class ShellRfT3 final : public ElementKernel {
       double K[3] = {0, 0, 0};
       for (int k = 0; k < 3; ++k) {
         const int o = opp_[3 * e + k];
-        if (o < 0) continue;
-        const double th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, nullptr) - theta0_[3 * e + k];
+        double th;
+        if (o >= 0) {
+          th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, nullptr) - theta0_[3 * e + k];
+        } else if (clamped_[3 * e + k]) {
+          th = 2 * clamp_angle(x, e, t[k], t[(k + 1) % 3], t[(k + 2) % 3], nullptr);
+        } else {
+          continue;
+        }
         for (int r = 0; r < 3; ++r) K[r] += c[3 * k + r] * th;
       }
       for (int r = 0; r < 3; ++r) curv_[3 * e + r] = K[r];
@@ -311,6 +365,15 @@ class ShellRfT3 final : public ElementKernel {
       double hmin = std::numeric_limits<double>::infinity();
       for (int k = 0; k < 3; ++k) {
         const int o = opp_[3 * e + k];
+        if (o < 0 && clamped_[3 * e + k]) {
+          const double m = 2 * A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
+          Vec3 g[3];
+          clamp_angle(x, e, t[k], t[(k + 1) % 3], t[(k + 2) % 3], g);
+          const int slot[3] = {k, (k + 1) % 3, (k + 2) % 3};
+          for (int j = 0; j < 3; ++j)
+            for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * slot[j] + d] += m * g[j][d];
+          continue;
+        }
         if (o < 0) continue;
         hmin = std::min(hmin, d_[3 * e + k]);
         // dW/dtheta_k = A0 M : dK/dtheta_k = A0 (M11 c11 + M22 c22 + 2 M12 c12).
@@ -333,7 +396,9 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   const MaterialLaw* bending_ = nullptr;
-  std::vector<int> opp_;
+  std::vector<int> opp_, edge_condition_;
+  std::vector<char> clamped_;
+  std::vector<double> n0_;  // initial element normals (clamped elements)
   std::vector<double> d_, theta0_, ginv_, curv_, curv_old_, moment_, benergy_, bstate_;
   const PartView* part_ = nullptr;
   std::vector<const MaterialLaw*> laws_;

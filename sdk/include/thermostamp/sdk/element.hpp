@@ -15,7 +15,14 @@ struct ElementSetup {
   std::span<const MaterialLaw* const> membrane;  // laws whose stresses add
   const MaterialLaw* bending = nullptr;          // may be null
   double density = 0.0;                          // kg/m^3 (areal mass = density * thickness)
+  // Per element, per edge k (opposite node k): kEdgeFree (interior or free
+  // boundary) or kEdgeClamped (boundary edge whose nodes are held: the
+  // slope normal to it is held too). Empty: all free.
+  std::span<const int> edge_condition;
 };
+
+inline constexpr int kEdgeFree = 0;
+inline constexpr int kEdgeClamped = 1;
 
 struct ElementRange {
   int begin = 0;  // first element
