@@ -264,6 +264,7 @@ class ShellRfT3 final : public ElementKernel {
     const int ne = part_->num_elements;
     opp_.assign(3 * ne, -1);
     clamped_.assign(3 * ne, 0);
+    hgrad_.assign(36 * ne, 0.0);
     n0_.assign(3 * ne, 0.0);
     d_.assign(3 * ne, 1.0);
     theta0_.assign(3 * ne, 0.0);
@@ -319,6 +320,7 @@ class ShellRfT3 final : public ElementKernel {
   // bending energy and lowers *dt_min with the bending stable step.
   double bending_forces(const ElementForceInput& in, int b, int end, ElementForceOutput& out, double* dt_min) {
     const double* x = part_->x.data();
+    static_assert(sizeof(Vec3) == 3 * sizeof(double));
     for (int e = b; e < end; ++e) {
       const int* t = &part_->triangles[3 * e];
       const double* c = &ginv_[9 * e];
@@ -326,10 +328,11 @@ class ShellRfT3 final : public ElementKernel {
       for (int k = 0; k < 3; ++k) {
         const int o = opp_[3 * e + k];
         double th;
+        Vec3* g = reinterpret_cast<Vec3*>(&hgrad_[36 * e + 12 * k]);  // gradients kept for the forces
         if (o >= 0) {
-          th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, nullptr) - theta0_[3 * e + k];
+          th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, g) - theta0_[3 * e + k];
         } else if (clamped_[3 * e + k]) {
-          th = 2 * clamp_angle(x, e, t[k], t[(k + 1) % 3], t[(k + 2) % 3], nullptr);
+          th = 2 * clamp_angle(x, e, t[k], t[(k + 1) % 3], t[(k + 2) % 3], g);
         } else {
           continue;
         }
@@ -367,8 +370,7 @@ class ShellRfT3 final : public ElementKernel {
         const int o = opp_[3 * e + k];
         if (o < 0 && clamped_[3 * e + k]) {
           const double m = 2 * A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
-          Vec3 g[3];
-          clamp_angle(x, e, t[k], t[(k + 1) % 3], t[(k + 2) % 3], g);
+          const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad_[36 * e + 12 * k]);
           const int slot[3] = {k, (k + 1) % 3, (k + 2) % 3};
           for (int j = 0; j < 3; ++j)
             for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * slot[j] + d] += m * g[j][d];
@@ -378,8 +380,7 @@ class ShellRfT3 final : public ElementKernel {
         hmin = std::min(hmin, d_[3 * e + k]);
         // dW/dtheta_k = A0 M : dK/dtheta_k = A0 (M11 c11 + M22 c22 + 2 M12 c12).
         const double m = A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
-        Vec3 g[4];
-        hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, g);
+        const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad_[36 * e + 12 * k]);
         const int slot[4] = {k, 3 + k, (k + 1) % 3, (k + 2) % 3};  // c, o, p, q in the patch
         for (int j = 0; j < 4; ++j)
           for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * slot[j] + d] += m * g[j][d];
@@ -398,7 +399,8 @@ class ShellRfT3 final : public ElementKernel {
   const MaterialLaw* bending_ = nullptr;
   std::vector<int> opp_, edge_condition_;
   std::vector<char> clamped_;
-  std::vector<double> n0_;  // initial element normals (clamped elements)
+  std::vector<double> n0_;     // initial element normals (clamped elements)
+  std::vector<double> hgrad_;  // per element and edge: d theta / dx on up to 4 nodes (36 per element)
   std::vector<double> d_, theta0_, ginv_, curv_, curv_old_, moment_, benergy_, bstate_;
   const PartView* part_ = nullptr;
   std::vector<const MaterialLaw*> laws_;
