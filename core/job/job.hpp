@@ -147,7 +147,8 @@ Job load_job(const std::filesystem::path& file, const std::vector<std::string>& 
 inline const std::vector<std::string>& known_fields() {
   static const std::vector<std::string> f = {"temperature", "temperature_mean", "temperature_top",
                                              "temperature_bottom", "displacement", "shear_angle",
-                                             "fibre_direction", "contact_status"};
+                                             "fibre_direction", "contact_status", "membrane_stress",
+                                             "curvature"};
   return f;
 }
 inline const std::vector<std::string>& known_probe_quantities() {

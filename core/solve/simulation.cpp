@@ -28,6 +28,7 @@ using sdk::Vec3;
 struct MechPart {
   std::unique_ptr<sdk::ElementKernel> element;
   std::vector<const sdk::MaterialLaw*> membrane;
+  std::vector<double> curvature;
   std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, node_temperature, stress;
   std::vector<int> inc_start, inc;  // node -> 18 e + 3 a entries of element_force (6-node patches)
   std::vector<char> fixed;          // 3 per node
@@ -374,11 +375,22 @@ void Simulation::build_mechanics() {
       }
     }
     m->edge_condition.assign(3 * ne0, sdk::kEdgeFree);
+    const double tol0 = 1e-6 * max_edge_length(st.mesh);
     for (int e = 0; e < ne0; ++e)
-      for (int k = 0; k < 3; ++k)
-        if (st.mesh.neighbours[3 * e + k] < 0 && held[st.mesh.triangles[3 * e + (k + 1) % 3]] &&
-            held[st.mesh.triangles[3 * e + (k + 2) % 3]])
+      for (int k = 0; k < 3; ++k) {
+        if (st.mesh.neighbours[3 * e + k] >= 0) continue;
+        const int a = st.mesh.triangles[3 * e + (k + 1) % 3], b = st.mesh.triangles[3 * e + (k + 2) % 3];
+        if (held[a] && held[b]) {
           m->edge_condition[3 * e + k] = sdk::kEdgeClamped;
+          continue;
+        }
+        for (const auto& c : job_.constraints) {
+          if (c.type != ConstraintDef::Type::Symmetry) continue;
+          if (std::find(c.parts.begin(), c.parts.end(), static_cast<int>(p)) == c.parts.end()) continue;
+          if (std::abs(st.x0[3 * a + c.plane]) <= tol0 && std::abs(st.x0[3 * b + c.plane]) <= tol0)
+            m->edge_condition[3 * e + k] = sdk::kEdgeSymmetryX + c.plane;
+        }
+      }
     sdk::ElementSetup setup;
     setup.part = &part_views_[p];
     setup.edge_condition = m->edge_condition;
@@ -399,6 +411,7 @@ void Simulation::build_mechanics() {
     m->elem_dt.assign(ne, 0.0);
     m->elem_scale.assign(ne, 1.0);
     m->stress.assign(3 * ne, 0.0);
+    m->curvature.assign(3 * ne, 0.0);
     m->node_temperature.assign(nn, def.initial_temperature);
     // Node -> element force entries of the 6-node patches, in a fixed order
     // (same sums for any thread count): own nodes, then the node opposite
@@ -624,6 +637,7 @@ void Simulation::update_element_fields() {
     sdk::ElementFields f;
     f.shear_angle = st.shear_angle;
     f.stress = m.stress;
+    f.curvature = m.curvature;
     f.fibre = st.fibre;
     m.element->fields(f);
   }
@@ -815,6 +829,10 @@ RunResult Simulation::run(const RunOptions& opt) {
           fields[p].push_back({"fibre_direction", st.fibre.data(), 3, true});
         } else if (f == "contact_status") {
           fields[p].push_back({"contact_status", st.contact_status.data()});
+        } else if ((f == "membrane_stress" || f == "curvature") && p < mech_.size()) {
+          // Material-frame components [11, 22, 12] per element, as vectors.
+          fields[p].push_back({f, f == "membrane_stress" ? mech_[p]->stress.data() : mech_[p]->curvature.data(), 3,
+                               true});
         }
       }
       // No field twice (e.g. "temperature" and "temperature_mean").

@@ -65,6 +65,9 @@ struct Patch {
         if (mesh.neighbours[3 * e + k] < 0 && mesh.x[3 * mesh.triangles[3 * e + (k + 1) % 3]] < 1e-12 &&
             mesh.x[3 * mesh.triangles[3 * e + (k + 2) % 3]] < 1e-12)
           edges[3 * e + k] = sdk::kEdgeClamped;
+        else if (mesh.neighbours[3 * e + k] < 0 && mesh.x[3 * mesh.triangles[3 * e + (k + 1) % 3] + 1] < 1e-12 &&
+                 mesh.x[3 * mesh.triangles[3 * e + (k + 2) % 3] + 1] < 1e-12)
+          edges[3 * e + k] = sdk::kEdgeSymmetryX + 1;  // bottom boundary on the plane y = 0
     setup.edge_condition = edges;
     if (with_bending) {
       const auto& br = registry.require(sdk::PluginKind::Material, "thermo_linear_bending", "/bending");

@@ -17,7 +17,8 @@
 // hinge. A free edge carries no slope jump (zero normal moment for edges
 // along the material axes). At a clamped edge the slope jump is the
 // rotation of the element about the edge from its initial orientation
-// (the hinge angle to a mirrored ghost is twice that).
+// (the hinge angle to a mirrored ghost is twice that). At a symmetry edge
+// the ghost is the element mirrored in the symmetry plane.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -260,6 +261,44 @@ class ShellRfT3 final : public ElementKernel {
     return theta;
   }
 
+  // Hinge angle between element (c, p, q) and its mirror in the plane
+  // x_axis = 0, with the gradient on (c, p, q) when grad is given.
+  double mirror_angle(const double* x, int axis, int c, int p, int q, Vec3* grad) const {
+    const Vec3 C = load3(x, c), P = load3(x, p), Q = load3(x, q);
+    const Vec3 edge = sub(Q, P);
+    const double len = norm(edge);
+    const Vec3 eh = scale(edge, 1.0 / len);
+    const Vec3 N = cross(sub(Q, P), sub(C, P));
+    const double nlen = norm(N);
+    const Vec3 n = scale(N, 1.0 / nlen);
+    auto reflect = [axis](Vec3 v) {
+      v[axis] = -v[axis];
+      return v;
+    };
+    const Vec3 rn = reflect(n);
+    const double y = dot(cross(rn, n), eh), z = dot(n, rn);
+    const double theta = std::atan2(y, z);
+    if (grad) {
+      const double r2 = y * y + z * z;
+      for (int v = 0; v < 3; ++v) grad[v] = {0, 0, 0};
+      for (int d = 0; d < 3; ++d) {
+        Vec3 u{0, 0, 0};
+        u[d] = 1.0;
+        const Vec3 dN[3] = {cross(sub(Q, P), u), add(scale(cross(u, sub(C, P)), -1.0), scale(cross(sub(Q, P), u), -1.0)),
+                            cross(u, sub(C, P))};
+        const Vec3 dE[3] = {{0, 0, 0}, scale(u, -1.0), u};
+        for (int v = 0; v < 3; ++v) {
+          const Vec3 dn = scale(sub(dN[v], scale(n, dot(n, dN[v]))), 1.0 / nlen);
+          const Vec3 de = scale(sub(dE[v], scale(eh, dot(eh, dE[v]))), 1.0 / len);
+          const double dy = dot(add(cross(reflect(dn), n), cross(rn, dn)), eh) + dot(cross(rn, n), de);
+          const double dz = 2 * dot(rn, dn);
+          grad[v][d] = (z * dy - y * dz) / r2;
+        }
+      }
+    }
+    return theta;
+  }
+
   void setup_bending() {
     const int ne = part_->num_elements;
     opp_.assign(3 * ne, -1);
@@ -293,9 +332,12 @@ class ShellRfT3 final : public ElementKernel {
         ginv_[9 * e + 3 * k + 2] = len / (2 * A0) * a * bb;
         const int nb = part_->neighbours[3 * e + k];
         if (nb < 0) {
-          if (!edge_condition_.empty() && edge_condition_[3 * e + k] == kEdgeClamped) {
+          const int ec = edge_condition_.empty() ? kEdgeFree : edge_condition_[3 * e + k];
+          if (ec == kEdgeClamped) {
             clamped_[3 * e + k] = 1;
             for (int d = 0; d < 3; ++d) n0_[3 * e + d] = n[d];
+          } else if (ec >= kEdgeSymmetryX) {
+            clamped_[3 * e + k] = static_cast<char>(2 + (ec - kEdgeSymmetryX));  // 2, 3, 4: plane x, y, z
           }
           continue;
         }
@@ -331,8 +373,10 @@ class ShellRfT3 final : public ElementKernel {
         Vec3* g = reinterpret_cast<Vec3*>(&hgrad_[36 * e + 12 * k]);  // gradients kept for the forces
         if (o >= 0) {
           th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, g) - theta0_[3 * e + k];
-        } else if (clamped_[3 * e + k]) {
+        } else if (clamped_[3 * e + k] == 1) {
           th = 2 * clamp_angle(x, e, t[k], t[(k + 1) % 3], t[(k + 2) % 3], g);
+        } else if (clamped_[3 * e + k] >= 2) {
+          th = mirror_angle(x, clamped_[3 * e + k] - 2, t[k], t[(k + 1) % 3], t[(k + 2) % 3], g);
         } else {
           continue;
         }
@@ -369,7 +413,8 @@ class ShellRfT3 final : public ElementKernel {
       for (int k = 0; k < 3; ++k) {
         const int o = opp_[3 * e + k];
         if (o < 0 && clamped_[3 * e + k]) {
-          const double m = 2 * A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
+          const double factor = clamped_[3 * e + k] == 1 ? 2.0 : 1.0;  // theta = 2 x clamp rotation
+          const double m = factor * A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
           const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad_[36 * e + 12 * k]);
           const int slot[3] = {k, (k + 1) % 3, (k + 2) % 3};
           for (int j = 0; j < 3; ++j)

@@ -16,13 +16,16 @@ struct ElementSetup {
   const MaterialLaw* bending = nullptr;          // may be null
   double density = 0.0;                          // kg/m^3 (areal mass = density * thickness)
   // Per element, per edge k (opposite node k): kEdgeFree (interior or free
-  // boundary) or kEdgeClamped (boundary edge whose nodes are held: the
-  // slope normal to it is held too). Empty: all free.
+  // boundary), kEdgeClamped (boundary edge whose nodes are held: the slope
+  // normal to it is held too), or kEdgeSymmetryX/Y/Z (boundary edge on the
+  // symmetry plane x = 0, y = 0 or z = 0: the mirrored ply continues it).
+  // Empty: all free.
   std::span<const int> edge_condition;
 };
 
 inline constexpr int kEdgeFree = 0;
 inline constexpr int kEdgeClamped = 1;
+inline constexpr int kEdgeSymmetryX = 2;  // + 1 for y, + 2 for z
 
 struct ElementRange {
   int begin = 0;  // first element
