@@ -129,6 +129,30 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
   write_xdmf();
 }
 
+void ResultsWriter::write_series(const std::string& name, const std::vector<std::string>& columns,
+                                 const std::vector<double>& rows) {
+  if (H5Lexists(file_, "series", H5P_DEFAULT) <= 0) H5Gclose(make_group(file_, "series"));
+  const hid_t g = H5Gopen2(file_, "series", H5P_DEFAULT);
+  if (H5Lexists(g, name.c_str(), H5P_DEFAULT) > 0) H5Ldelete(g, name.c_str(), H5P_DEFAULT);
+  const hsize_t cols = columns.size(), nrows = cols ? rows.size() / cols : 0;
+  write_dataset(g, name, rows.data(), nrows, cols);
+  // Column names as one attribute: "time,kinetic,...".
+  std::string joined;
+  for (std::size_t i = 0; i < columns.size(); ++i) joined += (i ? "," : "") + columns[i];
+  const hid_t ds = H5Dopen2(g, name.c_str(), H5P_DEFAULT);
+  const hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, joined.size() + 1);
+  const hid_t space = H5Screate(H5S_SCALAR);
+  const hid_t at = H5Acreate2(ds, "columns", type, space, H5P_DEFAULT, H5P_DEFAULT);
+  H5Awrite(at, type, joined.c_str());
+  H5Aclose(at);
+  H5Sclose(space);
+  H5Tclose(type);
+  H5Dclose(ds);
+  H5Gclose(g);
+  H5Fflush(file_, H5F_SCOPE_GLOBAL);
+}
+
 void ResultsWriter::write_xdmf() const {
   std::ostringstream x;
   x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"2.0\">\n <Domain>\n";

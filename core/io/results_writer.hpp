@@ -37,6 +37,9 @@ class ResultsWriter {
   void write_frame(double time, const std::vector<const double*>& x, const std::vector<const double*>& normals,
                    const std::vector<std::vector<FrameField>>& fields);
   int frames() const { return static_cast<int>(times_.size()); }
+  // A table of time series (rows x columns, row-major) under /series/<name>
+  // with its column names; replaces an earlier one of the same name.
+  void write_series(const std::string& name, const std::vector<std::string>& columns, const std::vector<double>& rows);
 
  private:
   void write_xdmf() const;

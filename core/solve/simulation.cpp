@@ -916,6 +916,7 @@ RunResult Simulation::run(const RunOptions& opt) {
 
   const double eps_t = 1e-9 * (job_.thermal ? thermal_dt_ : interval);
   EnergyAudit audit;
+  std::vector<double> energy_rows;  // the energy.csv table, also written to results.h5
   long long mech_steps = 0;
   double mech_dt = 0;
   std::ofstream energy_csv;
@@ -995,6 +996,9 @@ RunResult Simulation::run(const RunOptions& opt) {
                      << csv_number(audit.balance_error);
           for (double r : audit.reactions) energy_csv << ',' << csv_number(r);
           energy_csv << '\n';
+          energy_rows.insert(energy_rows.end(), {t, audit.kinetic, audit.internal, audit.external, audit.damping,
+                                                 audit.balance_error});
+          energy_rows.insert(energy_rows.end(), audit.reactions.begin(), audit.reactions.end());
           next_sample += t_end / 200;
         }
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
@@ -1059,6 +1063,12 @@ RunResult Simulation::run(const RunOptions& opt) {
     failure = std::string("unexpected error: ") + e.what();
   }
 
+  if (writer && job_.mechanics) {
+    std::vector<std::string> cols = {"time", "kinetic", "internal", "external_work", "damping", "balance_error"};
+    for (std::size_t c = 0; c < job_.constraints.size(); ++c)
+      for (const char* d : {"x", "y", "z"}) cols.push_back("reaction" + std::to_string(c) + "_" + d);
+    if (energy_rows.size() % cols.size() == 0) writer->write_series("energy", cols, energy_rows);
+  }
   const double stored_change = stored_heat() - stored0;
   const double scale = std::max({std::abs(stored_change), std::abs(heat_in), 1e-300});
   result.ok = failure.empty();
