@@ -269,3 +269,95 @@ TEST(Extreme, StiffnessRatioAndAspectRatio) {
 }
 
 }  // namespace ts::test
+
+#include <thermostamp/sdk/invariants.hpp>
+
+namespace ts::test {
+namespace {
+
+// S (global frame) of the UD law for a global C, fibres at angle a.
+sdk::Sym2 ud_stress_global(const sdk::MaterialLaw& law, const sdk::Sym2& Cg, double a) {
+  const double c = std::cos(a), s = std::sin(a);
+  // Material frame: e1 = (c, s), e2 = (-s, c); C_m = Q^T C Q.
+  const double C11 = c * c * Cg[0] + 2 * c * s * Cg[2] + s * s * Cg[1];
+  const double C22 = s * s * Cg[0] - 2 * c * s * Cg[2] + c * c * Cg[1];
+  const double C12 = -c * s * Cg[0] + (c * c - s * s) * Cg[2] + c * s * Cg[1];
+  const sdk::Sym2 Cm = {C11, C22, C12};
+  double S[3], T[1] = {280.0}, w[1];
+  sdk::MaterialBlock b;
+  b.n = 1;
+  b.strain = std::span<const double>(Cm.data(), 3);
+  b.strain_old = b.strain;
+  b.temperature = std::span<const double>(T, 1);
+  b.stress = std::span<double>(S, 3);
+  b.energy = std::span<double>(w, 1);
+  law.evaluate(b);
+  // S_g = Q S_m Q^T.
+  return {c * c * S[0] - 2 * c * s * S[2] + s * s * S[1], s * s * S[0] + 2 * c * s * S[2] + c * c * S[1],
+          c * s * S[0] + (c * c - s * s) * S[2] - c * s * S[1]};
+}
+
+}  // namespace
+
+// UD strips at 30 and 45 degrees to the pull: the homogeneous state of
+// uniaxial stress, F = [[a, g], [0, d]] with S_12 = S_22 = 0 (Newton on the
+// law), is imposed on every boundary node by a constant velocity reaching it
+// at t_end; the interior follows. The force on the pulled end must be
+// W P_xX (P = F S) within 1 %, the lateral edges free of x force.
+TEST(Strip, OffAxisHomogeneousUniaxialStress) {
+  PluginRegistry reg;
+  const auto& rec = reg.require(sdk::PluginKind::Material, "ud_hyperelastic", "/law");
+  std::unique_ptr<sdk::MaterialLaw> law(reinterpret_cast<sdk::MaterialLaw* (*)()>(rec.create)());
+  const json params = {{"k_fibre", 5.0e4}, {"p_ct", 5.0e3}, {"k_sh", {2.0e3, 0.0, 0.0}}};
+  law->configure(validate_params(params, "/m", rec.descriptor));
+  for (double deg : {30.0, 45.0}) {
+    const double ang = deg * M_PI / 180.0, a = 1.05;
+    double g = 0, d = 1;
+    auto residual = [&](double gg, double dd, double r[2]) {
+      const sdk::Sym2 S = ud_stress_global(*law, {a * a, gg * gg + dd * dd, a * gg}, ang);
+      r[0] = S[2];
+      r[1] = S[1];
+    };
+    for (int it = 0; it < 50; ++it) {
+      double r[2], rg[2], rd[2];
+      const double h = 1e-7;
+      residual(g, d, r);
+      residual(g + h, d, rg);
+      residual(g, d + h, rd);
+      const double J[2][2] = {{(rg[0] - r[0]) / h, (rd[0] - r[0]) / h}, {(rg[1] - r[1]) / h, (rd[1] - r[1]) / h}};
+      const double det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+      g -= (J[1][1] * r[0] - J[0][1] * r[1]) / det;
+      d -= (-J[1][0] * r[0] + J[0][0] * r[1]) / det;
+    }
+    const sdk::Sym2 S = ud_stress_global(*law, {a * a, g * g + d * d, a * g}, ang);
+    const double force_exact = kW * (a * S[0] + g * S[2]);  // W P_xX
+    ASSERT_LT(std::abs(S[1]) + std::abs(S[2]), 1e-9 * std::abs(S[0]));
+    // Job: every boundary node driven at v = (F - I) X / T.
+    const double T = 0.5;
+    json j = strip_job(deg, 0.0, T);
+    j["materials"]["ud"]["membrane"] = {{"law", "ud_hyperelastic"}, {"k_fibre", 5.0e4}, {"p_ct", 5.0e3}, {"k_sh", {2.0e3, 0.0, 0.0}}};
+    j["parts"][0]["mesh"]["divisions"] = {20, 4};
+    json cons = json::array();
+    std::vector<int> right;
+    for (int iy = 0; iy <= 4; ++iy)
+      for (int ix = 0; ix <= 20; ++ix) {
+        if (ix != 0 && ix != 20 && iy != 0 && iy != 4) continue;
+        const double X = kL * ix / 20, Y = kW * iy / 4, e = 1e-7;
+        if (ix == 20) right.push_back(static_cast<int>(cons.size()));
+        cons.push_back({{"type", "velocity"}, {"part", "strip"}, {"box", {{X - e, Y - e, -1}, {X + e, Y + e, 1}}},
+                        {"velocity", {((a - 1) * X + g * Y) / T, (d - 1) * Y / T, 0.0}}});
+      }
+    cons.push_back({{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}});
+    j["constraints"] = cons;
+    j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"damping", 200.0}};
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    double fx = 0;
+    for (int c : right) fx += r.result.energy.reactions[3 * c];
+    EXPECT_NEAR(fx / force_exact, 1.0, 0.01) << deg << " deg";
+    std::printf("%g deg: F = [[%.4f, %.4f], [0, %.4f]], end force %.5g N, homogeneous %.5g N (%.3f %%)\n", deg, a, g, d,
+                fx, force_exact, 100 * (fx / force_exact - 1));
+  }
+}
+
+}  // namespace ts::test
