@@ -223,47 +223,11 @@ class ShellRfT3 final : public ElementKernel {
     return theta;
   }
 
-  // Rotation of element e about its edge (p, q) from its initial normal,
-  // with the gradient on (c, p, q) when grad is given.
-  double clamp_angle(const double* x, int e, int c, int p, int q, Vec3* grad) const {
-    const Vec3 C = load3(x, c), P = load3(x, p), Q = load3(x, q);
-    const Vec3 edge = sub(Q, P);
-    const double len = norm(edge);
-    const Vec3 eh = scale(edge, 1.0 / len);
-    const Vec3 ne = normalized(cross(sub(Q, P), sub(C, P)));
-    const Vec3 n0 = load3(n0_.data(), e);
-    const double theta = std::atan2(dot(cross(n0, ne), eh), dot(ne, n0));
-    if (grad) {
-      // theta = atan2(y, z), y = n . (e x n0), z = n . n0, with n the unit
-      // normal and e the unit edge: chain rule through N = (Q - P) x (C - P).
-      const Vec3 N = cross(sub(Q, P), sub(C, P));
-      const double nlen = norm(N);
-      const double y = dot(ne, cross(eh, n0)), z = dot(ne, n0);
-      const double r2 = y * y + z * z;
-      const Vec3 en0 = cross(eh, n0);
-      for (int v = 0; v < 3; ++v) grad[v] = {0, 0, 0};
-      for (int d = 0; d < 3; ++d) {
-        Vec3 u{0, 0, 0};
-        u[d] = 1.0;
-        // dN for a unit move of C, P, Q along axis d; dE for P and Q.
-        const Vec3 dN[3] = {cross(sub(Q, P), u), add(scale(cross(u, sub(C, P)), -1.0), scale(cross(sub(Q, P), u), -1.0)),
-                            cross(u, sub(C, P))};
-        const Vec3 dE[3] = {{0, 0, 0}, scale(u, -1.0), u};
-        for (int v = 0; v < 3; ++v) {
-          const Vec3 dn = scale(sub(dN[v], scale(ne, dot(ne, dN[v]))), 1.0 / nlen);
-          const Vec3 de = scale(sub(dE[v], scale(eh, dot(eh, dE[v]))), 1.0 / len);
-          const double dy = dot(dn, en0) + dot(ne, cross(de, n0));
-          const double dz = dot(dn, n0);
-          grad[v][d] = (z * dy - y * dz) / r2;
-        }
-      }
-    }
-    return theta;
-  }
-
-  // Hinge angle between element (c, p, q) and its mirror in the plane
-  // x_axis = 0, with the gradient on (c, p, q) when grad is given.
-  double mirror_angle(const double* x, int axis, int c, int p, int q, Vec3* grad) const {
+  // Hinge angle between element (c, p, q) and a ghost neighbour across its
+  // edge (p, q) whose normal is g = G n (G = 0 with g = n0 fixed: a clamp;
+  // G = reflection: the mirror image in a symmetry plane), with the gradient
+  // on (c, p, q) when grad is given: theta = atan2((g x n) . e, n . g).
+  double ghost_angle(const double* x, int c, int p, int q, const Vec3& n0, int mirror_axis, Vec3* grad) const {
     const Vec3 C = load3(x, c), P = load3(x, p), Q = load3(x, q);
     const Vec3 edge = sub(Q, P);
     const double len = norm(edge);
@@ -271,14 +235,17 @@ class ShellRfT3 final : public ElementKernel {
     const Vec3 N = cross(sub(Q, P), sub(C, P));
     const double nlen = norm(N);
     const Vec3 n = scale(N, 1.0 / nlen);
-    auto reflect = [axis](Vec3 v) {
-      v[axis] = -v[axis];
-      return v;
+    auto ghost = [&](const Vec3& v, bool derivative) -> Vec3 {
+      if (mirror_axis < 0) return derivative ? Vec3{0, 0, 0} : n0;
+      Vec3 r = v;
+      r[mirror_axis] = -r[mirror_axis];
+      return r;
     };
-    const Vec3 rn = reflect(n);
-    const double y = dot(cross(rn, n), eh), z = dot(n, rn);
+    const Vec3 g = ghost(n, false);
+    const double y = dot(cross(g, n), eh), z = dot(n, g);
     const double theta = std::atan2(y, z);
     if (grad) {
+      // Chain rule through N = (Q - P) x (C - P) and e = (Q - P) / |Q - P|.
       const double r2 = y * y + z * z;
       for (int v = 0; v < 3; ++v) grad[v] = {0, 0, 0};
       for (int d = 0; d < 3; ++d) {
@@ -290,8 +257,9 @@ class ShellRfT3 final : public ElementKernel {
         for (int v = 0; v < 3; ++v) {
           const Vec3 dn = scale(sub(dN[v], scale(n, dot(n, dN[v]))), 1.0 / nlen);
           const Vec3 de = scale(sub(dE[v], scale(eh, dot(eh, dE[v]))), 1.0 / len);
-          const double dy = dot(add(cross(reflect(dn), n), cross(rn, dn)), eh) + dot(cross(rn, n), de);
-          const double dz = 2 * dot(rn, dn);
+          const Vec3 dg = ghost(dn, true);
+          const double dy = dot(add(cross(dg, n), cross(g, dn)), eh) + dot(cross(g, n), de);
+          const double dz = dot(dn, g) + dot(n, dg);
           grad[v][d] = (z * dy - y * dz) / r2;
         }
       }
@@ -374,9 +342,9 @@ class ShellRfT3 final : public ElementKernel {
         if (o >= 0) {
           th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, g) - theta0_[3 * e + k];
         } else if (clamped_[3 * e + k] == 1) {
-          th = 2 * clamp_angle(x, e, t[k], t[(k + 1) % 3], t[(k + 2) % 3], g);
+          th = 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g);
         } else if (clamped_[3 * e + k] >= 2) {
-          th = mirror_angle(x, clamped_[3 * e + k] - 2, t[k], t[(k + 1) % 3], t[(k + 2) % 3], g);
+          th = ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, g);
         } else {
           continue;
         }

@@ -54,13 +54,8 @@ void register_all(Registrar& r) {
   d.name = "ud_hyperelastic";
   d.version = "1.0.0";
   d.summary = "UD membrane: fibre elongation, transverse elongation I_lt = 1/2 ln(I3/I41), optional elastic shear";
-  ParamSpec ksh;
-  ksh.name = "k_sh";
-  ksh.type = ParamType::RealList;
-  ksh.default_json = "[0, 0, 0]";
-  ksh.unit = "N/m";
-  ksh.list_size = 3;
-  ksh.doc = "elastic shear coefficients of w_sh = sum k_sh^i I_sh^(2i) (zero when viscoelastic_shear carries the shear)";
+  const ParamSpec ksh = list_param("k_sh", "[0, 0, 0]", "N/m",
+                                   "elastic shear coefficients of w_sh = sum k_sh^i I_sh^(2i) (zero when viscoelastic_shear carries the shear)", 3);
   d.params = {real_param("k_fibre", "", "N/m", "fibre stiffness: w_e1 = k_fibre I_e1^2, I_e1 = 1/2 ln I41", 0.0, 1e15, true),
               real_param("p_ct", "", "N/m", "transverse stiffness: w_lt = p_ct I_lt^2", 0.0, 1e15, true), ksh};
   d.example = R"({ "law": "ud_hyperelastic", "k_fibre": 5.0e6, "p_ct": 50.0 })";

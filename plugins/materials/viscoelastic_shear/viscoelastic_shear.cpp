@@ -120,19 +120,6 @@ class ViscoelasticShear final : public MaterialLaw {
 
 MaterialLaw* create() { return new ViscoelasticShear(); }
 
-ParamSpec list(const std::string& name, const std::string& def, const std::string& unit, const std::string& doc,
-               int size = -1, double min = -std::numeric_limits<double>::infinity()) {
-  ParamSpec p;
-  p.name = name;
-  p.type = ParamType::RealList;
-  p.default_json = def;
-  p.unit = unit;
-  p.list_size = size;
-  p.min = min;
-  p.doc = doc;
-  return p;
-}
-
 void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
@@ -140,17 +127,17 @@ void register_all(Registrar& r) {
   d.version = "1.0.0";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
-      list("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
+      list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
       real_param("t_break", "270.0", "degC", "temperature of the break of the piecewise-linear laws"),
       real_param("omega_at_break", "1.0", "-", "shear scale omega at t_break"),
       real_param("omega_slope_below", "0.0", "1/degC", "d omega / dT below t_break"),
       real_param("omega_slope_above", "0.0", "1/degC", "d omega / dT above t_break"),
-      list("g", "[]", "-", "Maxwell weights g_i at t_break (sum <= 1; g_inf = 1 - sum)", -1, 0.0),
-      list("tau", "[]", "s", "relaxation times tau_i at t_break (> 0)", -1, 0.0),
-      list("g_slope_below", "[]", "1/degC", "d g_i / dT below t_break (empty: 0)"),
-      list("g_slope_above", "[]", "1/degC", "d g_i / dT above t_break (empty: 0)"),
-      list("tau_slope_below", "[]", "s/degC", "d tau_i / dT below t_break (empty: 0)"),
-      list("tau_slope_above", "[]", "s/degC", "d tau_i / dT above t_break (empty: 0)"),
+      list_param("g", "[]", "-", "Maxwell weights g_i at t_break (sum <= 1; g_inf = 1 - sum)", -1, 0.0),
+      list_param("tau", "[]", "s", "relaxation times tau_i at t_break (> 0)", -1, 0.0),
+      list_param("g_slope_below", "[]", "1/degC", "d g_i / dT below t_break (empty: 0)"),
+      list_param("g_slope_above", "[]", "1/degC", "d g_i / dT above t_break (empty: 0)"),
+      list_param("tau_slope_below", "[]", "s/degC", "d tau_i / dT below t_break (empty: 0)"),
+      list_param("tau_slope_above", "[]", "s/degC", "d tau_i / dT above t_break (empty: 0)"),
   };
   d.example = R"({ "law": "viscoelastic_shear", "k_sh": [18.5, 46.4, -21.3], "omega_slope_below": -0.02, "omega_slope_above": -0.01, "g": [0.5, 0.3], "tau": [0.2, 2.0] })";
   r.add_material(d, &create);

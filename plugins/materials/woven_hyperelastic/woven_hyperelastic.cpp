@@ -54,13 +54,8 @@ void register_all(Registrar& r) {
   d.name = "woven_hyperelastic";
   d.version = "1.0.0";
   d.summary = "Woven membrane: warp and weft elongation (log strain) and in-plane shear, by invariants";
-  ParamSpec ksh;
-  ksh.name = "k_sh";
-  ksh.type = ParamType::RealList;
-  ksh.default_json = "[0, 0, 0]";
-  ksh.unit = "N/m";
-  ksh.list_size = 3;
-  ksh.doc = "shear coefficients k_sh^1..3 of w_sh = sum k_sh^i I_sh^(2i), I_sh = sin(gamma)";
+  const ParamSpec ksh = list_param("k_sh", "[0, 0, 0]", "N/m",
+                                   "shear coefficients k_sh^1..3 of w_sh = sum k_sh^i I_sh^(2i), I_sh = sin(gamma)", 3);
   d.params = {real_param("k_warp", "", "N/m", "warp stiffness: w_e1 = k_warp I_e1^2, I_e1 = 1/2 ln I41", 0.0, 1e15, true),
               real_param("k_weft", "", "N/m", "weft stiffness: w_e2 = k_weft I_e2^2", 0.0, 1e15, true), ksh};
   d.example = R"({ "law": "woven_hyperelastic", "k_warp": 1.0e5, "k_weft": 1.0e5, "k_sh": [18.5, 46.4, -21.3] })";

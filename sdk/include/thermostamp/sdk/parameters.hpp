@@ -78,6 +78,18 @@ inline ParamSpec choice_param(std::string name, std::string def, std::vector<std
   p.doc = std::move(doc);
   return p;
 }
+inline ParamSpec list_param(std::string name, std::string def, std::string unit, std::string doc, int size = -1,
+                            double min = -std::numeric_limits<double>::infinity()) {
+  ParamSpec p;
+  p.name = std::move(name);
+  p.type = ParamType::RealList;
+  p.default_json = std::move(def);
+  p.unit = std::move(unit);
+  p.list_size = size;
+  p.min = min;
+  p.doc = std::move(doc);
+  return p;
+}
 inline ParamSpec bool_param(std::string name, bool def, std::string doc) {
   ParamSpec p;
   p.name = std::move(name);
