@@ -398,7 +398,14 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
           d.type = ConstraintDef::Type::Velocity;
           const auto v = r.reals("velocity", 3);
           d.velocity = {v[0], v[1], v[2]};
-          d.dofs = {true, true, true};
+          // Optional: only these components are prescribed (default all).
+          const auto dofs = r.texts("dofs", std::vector<std::string>{"x", "y", "z"});
+          for (std::size_t k = 0; k < dofs.size(); ++k) {
+            const auto& dof = dofs[k];
+            if (dof != "x" && dof != "y" && dof != "z")
+              throw JobError(pointer_append(r.at("dofs"), k), "unknown dof '" + dof + "'; valid: x, y, z");
+            d.dofs[dof[0] - 'x'] = true;
+          }
         }
       }
       r.finish();
