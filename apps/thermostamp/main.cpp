@@ -11,6 +11,7 @@
 #include "job/job.hpp"
 #include "plugins/describe.hpp"
 #include "plugins/registry.hpp"
+#include "plugins/schema.hpp"
 #include "solve/simulation.hpp"
 #include "version.hpp"
 
@@ -20,6 +21,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp run JOB.json [--out DIR] [--threads N] [--set PATH=VALUE ...] [--quiet]
   thermostamp validate JOB.json [--set PATH=VALUE ...]
   thermostamp plugins [--json | --markdown]
+  thermostamp schema                 # JSON Schema of job files, from the plugins found
   thermostamp study STUDY.json [--out DIR] [--threads N] [--quiet]
   thermostamp report DIR
   thermostamp --version
@@ -152,6 +154,12 @@ int main(int argc, char** argv) {
     if (a.command == "run") return cmd_run(a, false);
     if (a.command == "validate") return cmd_run(a, true);
     if (a.command == "plugins") return cmd_plugins(a);
+    if (a.command == "schema") {
+      ts::PluginRegistry registry;
+      registry.load_all();
+      std::cout << ts::job_schema(registry.all()).dump(2) << "\n";
+      return 0;
+    }
     if (a.command == "study") {
       if (a.positional.size() != 1) throw UsageError("expected one study file");
       ts::log_to_terminal(a.quiet);

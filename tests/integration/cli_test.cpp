@@ -265,3 +265,33 @@ TEST(Cli, MechanicsBadMaterialParameter) {
 
 }  // namespace
 }  // namespace ts::test
+
+namespace ts::test {
+namespace {
+
+// `thermostamp schema` describes every shipped job, and rejects a typo
+// (validated with Debian's python3-jsonschema).
+TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
+  const auto dir = temp_dir("schema");
+  const auto r = thermostamp("schema");
+  ASSERT_EQ(r.exit_code, 0);
+  std::ofstream(dir / "schema.json") << r.out;
+  std::ofstream(dir / "check.py") << "import json, sys, jsonschema\n"
+                                     "v = jsonschema.Draft202012Validator(json.load(open(sys.argv[1])))\n"
+                                     "bad = [p for p in sys.argv[2:] if list(v.iter_errors(json.load(open(p))))]\n"
+                                     "print(bad)\n"
+                                     "sys.exit(1 if bad else 0)\n";
+  json typo = read_job_document(source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json");
+  typo["parts"][0]["thicknes"] = 0.001;
+  std::ofstream(dir / "typo.json") << typo.dump();
+  const std::string py = "/usr/bin/python3 '" + (dir / "check.py").string() + "' '" + (dir / "schema.json").string() + "' ";
+  std::string good;
+  for (const char* f : {"share/jobs/two_ply_thermal_demo.json", "share/jobs/ud_strip_tension.json",
+                        "share/verification/patch_contact.json", "share/verification/slab_robin.json"})
+    good += "'" + (source_dir() / f).string() + "' ";
+  EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + "'" + (dir / "typo.json").string() + "' >/dev/null").c_str()), 0);
+}
+
+}  // namespace
+}  // namespace ts::test

@@ -1,0 +1,176 @@
+#include "plugins/schema.hpp"
+
+#include <cmath>
+
+#include "job/job.hpp"
+
+namespace ts {
+
+namespace {
+
+json param_schema(const sdk::ParamSpec& p) {
+  json s;
+  std::string doc = p.doc;
+  if (!p.unit.empty() && p.unit != "-") doc += " [" + p.unit + "]";
+  s["description"] = doc;
+  switch (p.type) {
+    case sdk::ParamType::Real:
+      s["type"] = "number";
+      break;
+    case sdk::ParamType::Integer:
+      s["type"] = "integer";
+      break;
+    case sdk::ParamType::Boolean:
+      s["type"] = "boolean";
+      break;
+    case sdk::ParamType::String:
+      s["type"] = "string";
+      break;
+    case sdk::ParamType::Choice:
+      s["enum"] = p.choices;
+      break;
+    case sdk::ParamType::RealList:
+      s["type"] = "array";
+      s["items"] = {{"type", "number"}};
+      if (p.list_size >= 0) s["minItems"] = s["maxItems"] = p.list_size;
+      break;
+  }
+  if (p.type == sdk::ParamType::Real || p.type == sdk::ParamType::Integer) {
+    if (std::isfinite(p.min)) s[p.min_exclusive ? "exclusiveMinimum" : "minimum"] = p.min;
+    if (std::isfinite(p.max)) s["maximum"] = p.max;
+  }
+  if (!p.default_json.empty()) s["default"] = json::parse(p.default_json);
+  return s;
+}
+
+// Object schema of a plugin's parameters plus the kernel keys `extra`.
+json plugin_schema(const PluginRecord& r, const json& extra) {
+  json props = extra;
+  json required = json::array();
+  for (const auto& p : r.descriptor.params) {
+    props[p.name] = param_schema(p);
+    if (p.default_json.empty()) required.push_back(p.name);
+  }
+  json s = {{"type", "object"},
+            {"description", r.descriptor.summary},
+            {"properties", props},
+            {"additionalProperties", false}};
+  if (!required.empty()) s["required"] = required;
+  return s;
+}
+
+json vec(int n) { return {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", n}, {"maxItems", n}}; }
+
+}  // namespace
+
+json job_schema(const std::vector<const PluginRecord*>& records) {
+  json defs = json::object();
+  json thermal = json::array(), contact = json::array(), materials = json::array(), elements = json::array();
+  for (const auto* r : records) {
+    const auto& d = r->descriptor;
+    const std::string key = std::string(sdk::to_string(d.kind)) + "_" + d.name;
+    json extra = json::object();
+    switch (d.kind) {
+      case sdk::PluginKind::Thermal:
+        extra = {{"splitter", {{"const", d.name}}},
+                 {"subcycle", {{"type", "integer"}, {"minimum", 0}, {"description", "mechanical steps per thermal step (0: automatic)"}}},
+                 {"dt", {{"type", "number"}, {"minimum", 0}, {"description", "thermal step [s] (0: automatic)"}}}};
+        defs[key] = plugin_schema(*r, extra);
+        defs[key]["required"].push_back("splitter");
+        thermal.push_back({{"$ref", "#/$defs/" + key}});
+        break;
+      case sdk::PluginKind::Contact:
+        extra = {{"type", {{"const", "contact"}}},
+                 {"handler", {{"const", d.name}}},
+                 {"between", {{"type", "array"}, {"items", {{"type", "string"}}}, {"minItems", 2}, {"maxItems", 2}}}};
+        defs[key] = plugin_schema(*r, extra);
+        defs[key]["required"] = json::array({"type", "between"});
+        contact.push_back({{"$ref", "#/$defs/" + key}});
+        break;
+      case sdk::PluginKind::Material:
+        extra = {{"law", {{"const", d.name}}}};
+        defs[key] = plugin_schema(*r, extra);
+        defs[key]["required"].push_back("law");
+        materials.push_back({{"$ref", "#/$defs/" + key}});
+        break;
+      case sdk::PluginKind::Element:
+        elements.push_back(d.name);
+        break;
+    }
+  }
+  const json law = {{"anyOf", materials}};
+  json conductivity = vec(3);
+  conductivity["description"] = "k11 (fibres), k22 (across), k33 (thickness) [W/m/K]";
+  json thermal_or_null = thermal;
+  thermal_or_null.push_back({{"type", "null"}});
+  const json material = {
+      {"type", "object"},
+      {"properties",
+       {{"density", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[kg/m3]"}}},
+        {"specific_heat", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[J/kg/K]"}}},
+        {"conductivity", conductivity},
+        {"membrane", {{"anyOf", {law, {{"type", "array"}, {"items", law}}}}}},
+        {"bending", law},
+        {"description", {{"type", "string"}}},
+        {"source", {{"type", "string"}}}}},
+      {"additionalProperties", false}};
+  const json mesh = {{"type", "object"},
+                     {"properties",
+                      {{"generator", {{"enum", {"rectangle"}}}},
+                       {"origin", vec(3)},
+                       {"size", vec(2)},
+                       {"divisions", {{"type", "array"}, {"items", {{"type", "integer"}, {"minimum", 1}}}, {"minItems", 2}, {"maxItems", 2}}},
+                       {"file", {{"type", "string"}, {"description", "Gmsh ASCII 2.2 or 4.1, relative to the job file"}}}}},
+                     {"additionalProperties", false}};
+  json element_prop = {{"type", "string"}};
+  if (!elements.empty()) element_prop["enum"] = elements;
+  const json part = {{"type", "object"},
+                     {"required", {"name", "mesh", "thickness", "material"}},
+                     {"properties",
+                      {{"name", {{"type", "string"}}},
+                       {"mesh", mesh},
+                       {"thickness", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[m]"}}},
+                       {"material", {{"type", "string"}}},
+                       {"fibre_direction", vec(3)},
+                       {"element", element_prop},
+                       {"initial_temperature", {{"type", "number"}, {"description", "[degC]"}}},
+                       {"thickness_layers", {{"type", "integer"}, {"minimum", 1}}}}},
+                     {"additionalProperties", false}};
+  const json heat_exchange = {{"type", "object"},
+                              {"required", {"type", "part", "face", "h", "ambient"}},
+                              {"properties",
+                               {{"type", {{"const", "heat_exchange"}}},
+                                {"part", {{"type", "string"}}},
+                                {"face", {{"enum", {"top", "bottom", "both"}}}},
+                                {"h", {{"type", "number"}, {"minimum", 0}, {"description", "[W/m2/K]"}}},
+                                {"ambient", {{"type", "number"}, {"description", "[degC]"}}},
+                                {"region", {{"type", "object"}}}}},
+                              {"additionalProperties", false}};
+  json interaction_kinds = contact;
+  interaction_kinds.push_back(heat_exchange);
+  const json schema = {
+      {"$schema", "https://json-schema.org/draft/2020-12/schema"},
+      {"title", "ThermoStamp job (thermostamp-job/1)"},
+      {"type", "object"},
+      {"required", {"format", "name", "time", "materials", "parts"}},
+      {"properties",
+       {{"format", {{"const", "thermostamp-job/1"}}},
+        {"name", {{"type", "string"}}},
+        {"time", {{"type", "object"}, {"properties", {{"end", {{"type", "number"}, {"exclusiveMinimum", 0}}}}}, {"required", {"end"}}, {"additionalProperties", false}}},
+        {"plugin_paths", {{"type", "array"}, {"items", {{"type", "string"}}}}},
+        {"materials", {{"type", "object"}, {"additionalProperties", material}}},
+        {"parts", {{"type", "array"}, {"items", part}}},
+        {"tools", {{"type", "array"}, {"items", {{"type", "object"}}}}},
+        {"interactions", {{"type", "array"}, {"items", {{"anyOf", interaction_kinds}}}}},
+        {"constraints", {{"type", "array"}, {"items", {{"type", "object"}}}}},
+        {"solvers",
+         {{"type", "object"},
+          {"properties", {{"mechanics", {{"type", {"object", "null"}}}}, {"thermal", {{"anyOf", thermal_or_null}}}}},
+          {"additionalProperties", false}}},
+        {"output", {{"type", "object"}, {"properties", {{"interval", {{"type", "number"}, {"exclusiveMinimum", 0}}}, {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}}, {"probes", {{"type", "array"}}}}}, {"additionalProperties", false}}}}},
+      {"additionalProperties", false},
+      {"$defs", defs}};
+  return schema;
+}
+
+}  // namespace ts
