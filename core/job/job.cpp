@@ -1,6 +1,7 @@
 #include "job/job.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -235,6 +236,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       p.element = r.text("element", std::string("shell_rf_t3"));
       p.initial_temperature = r.real("initial_temperature", 20.0, -273.15);
       p.thickness_layers = static_cast<int>(r.integer("thickness_layers", 8, 1, 10000));
+      p.flip = r.boolean("flip", false);
       r.finish();
       part_names.push_back(p.name);
       job.parts.push_back(std::move(p));
@@ -264,12 +266,103 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
         const auto c = s.reals("centre", 3);
         t.surface.centre = {c[0], c[1], c[2]};
         t.surface.radius = s.real("radius", std::nullopt, 0.0, true);
-      } else {
-        throw JobError(s.at("type"), "tool surface '" + t.surface.type +
-                                         "' is not available in this version; available: plane, sphere");
+      } else if (t.surface.type == "revolved") {
+        if (const json* ax = s.optional_raw("axis")) {
+          ObjectReader a(*ax, s.at("axis"));
+          const auto o = a.reals("origin", 3, std::vector<double>{0, 0, 0});
+          const auto d = a.reals("direction", 3, std::vector<double>{0, 0, 1});
+          t.surface.axis_origin = {o[0], o[1], o[2]};
+          t.surface.axis_direction = {d[0], d[1], d[2]};
+          if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] == 0.0)
+            throw JobError(a.at("direction"), "must not be the zero vector");
+          a.finish();
+        }
+        const json& prof = s.raw("profile");
+        const std::string pp = s.at("profile");
+        if (!prof.is_array() || prof.empty())
+          throw JobError(pp, "expected a non-empty array of {\"line\": ...} or {\"arc\": ...} pieces");
+        for (std::size_t k = 0; k < prof.size(); ++k) {
+          const std::string kp = pointer_append(pp, k);
+          ObjectReader g(prof[k], kp);
+          ProfileSegment seg;
+          auto point2 = [&](const json& v, const std::string& ptr) {
+            const auto q = as_reals(v, ptr, 2);
+            if (q[0] < 0) throw JobError(ptr, "the radius r must be >= 0");
+            return std::array<double, 2>{q[0], q[1]};
+          };
+          if (const json* line = g.optional_raw("line")) {
+            if (!line->is_array() || line->size() != 2)
+              throw JobError(g.at("line"), "expected two (r, z) points [[r0, z0], [r1, z1]]");
+            seg.a = point2((*line)[0], pointer_append(g.at("line"), 0));
+            seg.b = point2((*line)[1], pointer_append(g.at("line"), 1));
+          } else if (const json* arc = g.optional_raw("arc")) {
+            ObjectReader c(*arc, g.at("arc"));
+            seg.arc = true;
+            seg.a = point2(c.raw("from"), c.at("from"));
+            seg.b = point2(c.raw("to"), c.at("to"));
+            const auto cc = c.reals("centre", 2);
+            seg.centre = {cc[0], cc[1]};
+            c.finish();
+            const double ra = std::hypot(seg.a[0] - seg.centre[0], seg.a[1] - seg.centre[1]);
+            const double rb = std::hypot(seg.b[0] - seg.centre[0], seg.b[1] - seg.centre[1]);
+            if (!(ra > 0) || std::abs(ra - rb) > 1e-6 * ra)
+              throw JobError(c.at("centre"), "the arc's end points are not at the same distance from its centre (" +
+                                                 std::to_string(ra) + " and " + std::to_string(rb) + " m)");
+            const double cr = (seg.a[0] - seg.centre[0]) * (seg.b[1] - seg.centre[1]) -
+                              (seg.a[1] - seg.centre[1]) * (seg.b[0] - seg.centre[0]);
+            const double dt = (seg.a[0] - seg.centre[0]) * (seg.b[0] - seg.centre[0]) +
+                              (seg.a[1] - seg.centre[1]) * (seg.b[1] - seg.centre[1]);
+            if (std::abs(cr) < 1e-12 * ra * ra && dt < 0)
+              throw JobError(g.at("arc"), "a half circle is ambiguous: split it into two arcs");
+          } else {
+            throw JobError(kp, "expected {\"line\": [[r0, z0], [r1, z1]]} or {\"arc\": {\"from\", \"to\", \"centre\"}}");
+          }
+          g.finish();
+          if (std::hypot(seg.b[0] - seg.a[0], seg.b[1] - seg.a[1]) <= 0)
+            throw JobError(kp, "a profile piece of zero length");
+          t.surface.profile.push_back(seg);
+        }
+      } else {  // mesh
+        const std::string f = s.text("file");
+        t.surface.file = job.base_dir / f;
+        t.surface.flip = s.boolean("flip", false);
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(t.surface.file, ec))
+          throw JobError(s.at("file"), "cannot read the tool mesh '" + t.surface.file.string() + "'");
       }
       s.finish();
-      if (const json* m = r.optional_raw("motion")) t.motion = *m;
+      if (const json* m = r.optional_raw("motion")) {
+        ObjectReader mo(*m, r.at("motion"));
+        const bool hv = mo.optional_raw("velocity") != nullptr, hd = mo.optional_raw("displacement") != nullptr,
+                   hf = mo.optional_raw("force") != nullptr;
+        if (int(hv) + int(hd) + int(hf) != 1)
+          throw JobError(mo.pointer(), "give exactly one of \"velocity\", \"displacement\" or \"force\"");
+        if (hv) {
+          t.motion.kind = MotionDef::Kind::Velocity;
+          const auto v = mo.reals("velocity", 3);
+          t.motion.velocity = {v[0], v[1], v[2]};
+        } else if (hd) {
+          t.motion.kind = MotionDef::Kind::Displacement;
+          const json& tab = mo.raw("displacement");
+          const std::string tp = mo.at("displacement");
+          if (!tab.is_array() || tab.empty()) throw JobError(tp, "expected rows [t, dx, dy, dz]");
+          for (std::size_t k = 0; k < tab.size(); ++k) {
+            const auto row = as_reals(tab[k], pointer_append(tp, k), 4);
+            if (k > 0 && !(row[0] > t.motion.table.back()[0]))
+              throw JobError(pointer_append(tp, k), "times must increase from row to row");
+            t.motion.table.push_back({row[0], row[1], row[2], row[3]});
+          }
+        } else {
+          t.motion.kind = MotionDef::Kind::Force;
+          const auto f = mo.reals("force", 3);
+          t.motion.force = {f[0], f[1], f[2]};
+          if (f[0] * f[0] + f[1] * f[1] + f[2] * f[2] == 0.0)
+            throw JobError(mo.at("force"), "must not be the zero vector (the tool moves along the force)");
+          t.motion.mass = mo.real("mass", std::nullopt, 0.0, true);
+          t.motion.damping = mo.real("damping", 0.0, 0.0);
+        }
+        mo.finish();
+      }
       t.temperature = r.real("temperature", 20.0, -273.15);
       r.finish();
       tool_names.push_back(t.name);

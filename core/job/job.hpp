@@ -36,18 +36,38 @@ struct PartDef {
   std::string element;
   double initial_temperature = 20.0;
   int thickness_layers = 8;
+  bool flip = false;  // reverse the mesh orientation: the ply's top face looks the other way
+};
+
+// One piece of a revolved profile in the (r, z) half-plane: a line from
+// `a` to `b`, or an arc (less than 180 degrees) from `a` to `b` about `centre`.
+struct ProfileSegment {
+  bool arc = false;
+  std::array<double, 2> a{0, 0}, b{0, 0}, centre{0, 0};
 };
 
 struct SurfaceDef {
-  std::string type;  // plane, sphere
+  std::string type;  // plane, sphere, revolved, mesh
   std::array<double, 3> point{0, 0, 0}, normal{0, 0, 1}, centre{0, 0, 0};
   double radius = 0;
+  std::array<double, 3> axis_origin{0, 0, 0}, axis_direction{0, 0, 1};  // revolved
+  std::vector<ProfileSegment> profile;                                   // revolved
+  std::filesystem::path file;                                            // mesh
+  bool flip = false;                                                     // mesh: reverse the normals
+};
+
+struct MotionDef {
+  enum class Kind { Fixed, Velocity, Displacement, Force } kind = Kind::Fixed;
+  std::array<double, 3> velocity{0, 0, 0};
+  std::vector<std::array<double, 4>> table;  // t, dx, dy, dz
+  std::array<double, 3> force{0, 0, 0};
+  double mass = 0, damping = 0;
 };
 
 struct ToolDef {
   std::string name, pointer;
   SurfaceDef surface;
-  json motion;
+  MotionDef motion;
   double temperature = 20.0;
 };
 

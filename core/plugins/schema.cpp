@@ -134,7 +134,8 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                        {"fibre_direction", vec(3)},
                        {"element", element_prop},
                        {"initial_temperature", {{"type", "number"}, {"description", "[degC]"}}},
-                       {"thickness_layers", {{"type", "integer"}, {"minimum", 1}}}}},
+                       {"thickness_layers", {{"type", "integer"}, {"minimum", 1}}},
+                       {"flip", {{"type", "boolean"}, {"description", "reverse the orientation: the top face looks to -z"}}}}},
                      {"additionalProperties", false}};
   const json heat_exchange = {{"type", "object"},
                               {"required", {"type", "part", "face", "h", "ambient"}},

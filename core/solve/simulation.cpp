@@ -19,6 +19,7 @@
 
 #include "io/logging.hpp"
 #include "io/results_writer.hpp"
+#include "solve/tools.hpp"
 #include "version.hpp"
 
 namespace ts {
@@ -29,6 +30,7 @@ struct MechPart {
   std::unique_ptr<sdk::ElementKernel> element;
   std::vector<const sdk::MaterialLaw*> membrane;
   std::vector<double> curvature;
+  std::vector<double> f_con, fc_prev, k_contact;  // contact forces (N) now and at the previous step; stiffness bound (N/m)
   std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, node_temperature, stress;
   std::vector<int> inc_start, inc;  // node -> 18 e + 3 a entries of element_force (6-node patches)
   std::vector<char> fixed;          // 3 per node
@@ -45,28 +47,6 @@ struct PartState {
   int nz = 1;
   std::vector<double> T, cap, mean, top, bottom;
   std::vector<double> h_bottom, t_bottom, h_top, t_top;
-};
-
-struct ToolState {
-  const ToolDef* def = nullptr;
-  static void query(const void* ctx, std::size_t n, const double* p, double* dist, double* normal) {
-    const auto* t = static_cast<const ToolState*>(ctx);
-    const SurfaceDef& s = t->def->surface;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec3 x = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
-      Vec3 nn;
-      if (s.type == "plane") {
-        nn = sdk::normalized({s.normal[0], s.normal[1], s.normal[2]});
-        dist[i] = sdk::dot(sdk::sub(x, {s.point[0], s.point[1], s.point[2]}), nn);
-      } else {  // sphere
-        const Vec3 r = sdk::sub(x, {s.centre[0], s.centre[1], s.centre[2]});
-        const double len = sdk::norm(r);
-        nn = len > 0 ? sdk::scale(r, 1.0 / len) : Vec3{0, 0, 1};
-        dist[i] = len - s.radius;
-      }
-      for (int d = 0; d < 3; ++d) normal[3 * i + d] = nn[d];
-    }
-  }
 };
 
 namespace {
@@ -127,6 +107,11 @@ void Simulation::build_parts() {
     } catch (const std::exception& e) {
       throw JobError(def.pointer + "/mesh", e.what());
     }
+    if (def.flip)  // the ply lies upside down: its top face looks to -z
+      for (int e = 0; e < st->mesh.num_elements(); ++e) {
+        std::swap(st->mesh.triangles[3 * e + 1], st->mesh.triangles[3 * e + 2]);
+        std::swap(st->mesh.neighbours[3 * e + 1], st->mesh.neighbours[3 * e + 2]);
+      }
     st->x0 = st->mesh.x;
     st->x = st->mesh.x;
     const int ne = st->mesh.num_elements(), nn = st->mesh.num_nodes();
@@ -176,19 +161,21 @@ void Simulation::build_parts() {
 
 void Simulation::build_tools() {
   for (std::size_t t = 0; t < job_.tools.size(); ++t) {
-    auto st = std::make_unique<ToolState>();
-    st->def = &job_.tools[t];
-    if (!st->def->motion.is_null() && !job_.mechanics)
-      logger("job")->warn("{}/motion: ignored, tools do not move in a thermal-only job", st->def->pointer);
-    tools_.push_back(std::move(st));
+    auto tool = std::make_unique<RigidTool>(job_.tools[t]);
+    if (job_.tools[t].motion.kind != MotionDef::Kind::Fixed && !job_.mechanics)
+      logger("job")->warn("{}/motion: ignored, tools do not move in a thermal-only job", job_.tools[t].pointer);
+    tools_.push_back(std::move(tool));
   }
+  tool_force_.assign(3 * tools_.size(), 0.0);
+  tool_heat_.assign(tools_.size(), 0.0);
   for (std::size_t t = 0; t < tools_.size(); ++t) {
     sdk::ToolView v;
     v.index = static_cast<int>(t);
-    v.name = tools_[t]->def->name;
-    v.temperature = tools_[t]->def->temperature;
+    v.name = job_.tools[t].name;
+    v.temperature = job_.tools[t].temperature;
     v.context = tools_[t].get();
-    v.query = &ToolState::query;
+    v.query = &RigidTool::query_fn;
+    v.velocity = tools_[t]->velocity().data();
     tool_views_.push_back(v);
   }
 }
@@ -406,6 +393,9 @@ void Simulation::build_mechanics() {
     m->fd_prev.assign(3 * nn, 0.0);
     m->f_int.assign(3 * nn, 0.0);
     m->f_prev.assign(3 * nn, 0.0);
+    m->f_con.assign(3 * nn, 0.0);
+    m->fc_prev.assign(3 * nn, 0.0);
+    m->k_contact.assign(nn, 0.0);
     m->dx.assign(3 * nn, 0.0);
     m->elem_force.assign(18 * ne, 0.0);
     m->elem_dt.assign(ne, 0.0);
@@ -465,6 +455,26 @@ void Simulation::build_mechanics() {
     }
     mech_.push_back(std::move(m));
   }
+  // Contact stiffness bounds per node (for the stable step and mass scaling)
+  // and, for force-controlled tools, the total stiffness they can meet.
+  std::vector<std::span<const double>> areas;
+  for (auto& st : parts_) areas.emplace_back(st->area);
+  std::vector<double> tool_k(tools_.size(), 0.0);
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    std::vector<std::vector<double>> k(parts_.size());
+    std::vector<std::span<double>> ks;
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      k[p].assign(parts_[p]->mesh.num_nodes(), 0.0);
+      ks.emplace_back(k[p]);
+    }
+    if (auto s = contacts_[c]->node_stiffness(areas, ks); !s)
+      throw JobError(job_.contacts[c].pointer, "contact handler '" + job_.contacts[c].handler + "': " + s.message);
+    for (std::size_t p = 0; p < parts_.size(); ++p)
+      for (std::size_t i = 0; i < k[p].size(); ++i) {
+        mech_[p]->k_contact[i] += k[p][i];
+        if (job_.contacts[c].second.is_tool) tool_k[job_.contacts[c].second.index] += k[p][i];
+      }
+  }
   // Stable steps of the initial configuration; mass scaling per element.
   const MechanicsDef& md = job_.mechanics_settings;
   mechanics_stable_dt();
@@ -491,6 +501,15 @@ void Simulation::build_mechanics() {
       }
     }
     m.mass_node_physical = phys;
+    // Contact: a node against a penalty spring k is stable for dt < 2 sqrt(m / k).
+    // With mass scaling, add mass where the contact would cut the step below
+    // the target (the spring bound at twice the target step, so that element
+    // and contact bounds together stay within 12 % of the target).
+    if (md.target_dt > 0)
+      for (int i = 0; i < nn; ++i) {
+        const double need = m.k_contact[i] * (md.target_dt / md.dt_safety) * (md.target_dt / md.dt_safety);
+        if (m.mass[i] < need) m.mass[i] = need;
+      }
     m.mass_physical = 0;
     double total = 0;
     for (int i = 0; i < nn; ++i) {
@@ -498,7 +517,12 @@ void Simulation::build_mechanics() {
       total += m.mass[i];
     }
     m.mass_added = total - m.mass_physical;
+    for (int i = 0; i < nn; ++i)
+      if (m.k_contact[i] > 0) contact_dt_ = std::min(contact_dt_, 2.0 * std::sqrt(m.mass[i] / m.k_contact[i]));
   }
+  for (std::size_t t = 0; t < tools_.size(); ++t)
+    if (tools_[t]->force_controlled() && tool_k[t] > 0)
+      tool_dt_ = std::min(tool_dt_, 2.0 * std::sqrt(job_.tools[t].motion.mass / tool_k[t]));
 }
 
 void Simulation::update_node_temperature() {
@@ -567,14 +591,80 @@ double Simulation::mechanics_stable_dt() {
       for (int d = 0; d < 3; ++d) m.f_int[3 * i + d] = f[d];
     }
   }
-  return dt;
+  // Element and contact springs act on the same nodes: 1/dt^2 adds up.
+  if (std::isfinite(contact_dt_)) dt = 1.0 / std::sqrt(1.0 / (dt * dt) + 1.0 / (contact_dt_ * contact_dt_));
+  return std::min(dt, tool_dt_);
+}
+
+void Simulation::compute_contact_forces(double t, double dt) {
+  for (auto& m : mech_) std::fill(m->f_con.begin(), m->f_con.end(), 0.0);
+  std::fill(tool_force_.begin(), tool_force_.end(), 0.0);
+  contact_energy_ = 0;
+  contact_active_ = 0;
+  if (contacts_.empty()) return;
+  std::vector<std::span<const double>> vel, areas, mass;
+  std::vector<std::span<double>> force, status;
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    vel.emplace_back(mech_[p]->v);
+    mass.emplace_back(mech_[p]->mass);
+    areas.emplace_back(parts_[p]->area);
+    force.emplace_back(mech_[p]->f_con);
+    if (!job_.thermal) {  // isothermal: the status field shows the mechanical contact
+      std::fill(parts_[p]->contact_status.begin(), parts_[p]->contact_status.end(), 0.0);
+      status.emplace_back(parts_[p]->contact_status);
+    }
+  }
+  sdk::ContactForceInput in;
+  in.parts = part_views_;
+  in.tools = tool_views_;
+  in.time = t;
+  in.dt = dt;
+  in.velocity = vel;
+  in.node_area = areas;
+  in.mass = mass;
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    sdk::ContactForceOutput out;
+    out.force = force;
+    out.tool_force = tool_force_;
+    out.status = status;
+    if (auto s = contacts_[c]->contact_forces(in, out); !s)
+      throw RunError("contact handler of " + job_.contacts[c].pointer + " at t = " + fmt_g(t) + " s: " + s.message);
+    contact_energy_ += out.energy;
+    contact_active_ += out.active;
+  }
+}
+
+// Heat given by every tool to the plies over the thermal step just taken
+// (conductance times the jump at the end of the step, as the implicit
+// face condition uses it).
+void Simulation::accumulate_tool_heat(double dt) {
+  for (const auto& tc : contact_map_.tool_contacts) {
+    const PartState& st = *parts_[tc.part];
+    const std::size_t base = static_cast<std::size_t>(st.nz) * tc.node;
+    const double Tf = tc.face == sdk::kTop ? st.T[base + st.nz - 1] : st.T[base];
+    tool_heat_[tc.tool] += tc.conductance * st.area[tc.node] * (tool_views_[tc.tool].temperature - Tf) * dt;
+  }
+  // Ply/ply: G (T_b - T_a) into a, out of b, with the facing surface values.
+  if (link_heat_.size() != parts_.size()) link_heat_.assign(parts_.size(), 0.0);
+  auto face_value = [&](int part, int node, int face) {
+    const PartState& st = *parts_[part];
+    const std::size_t base = static_cast<std::size_t>(st.nz) * node;
+    return face == sdk::kTop ? st.T[base + st.nz - 1] : st.T[base];
+  };
+  for (const auto& l : contact_map_.links) {
+    double Tb = 0;
+    for (int j = 0; j < 3; ++j) Tb += l.w_b[j] * face_value(l.part_b, l.nodes_b[j], l.face_b);
+    const double q = l.conductance * (Tb - face_value(l.part_a, l.node_a, l.face_a)) * dt;
+    link_heat_[l.part_a] += q;
+    link_heat_[l.part_b] -= q;
+  }
 }
 
 // Central differences: v^{n+1/2} = v^{n-1/2} + dt_avg a^n, x^{n+1} = x^n + dt v^{n+1/2}.
 double Simulation::mechanics_step(double dt, double t, long long step, EnergyAudit& audit) {
   const MechanicsDef& md = job_.mechanics_settings;
   const double dt_avg = step == 0 ? 0.5 * dt : 0.5 * (last_mech_dt_ + dt);
-  double w_int = 0, w_ext = 0, w_damp = 0, kin = 0;
+  double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0;
   audit.reactions.assign(3 * job_.constraints.size(), 0.0);
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
@@ -584,15 +674,18 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
       const double mi = m.mass[i];
       for (int d = 0; d < 3; ++d) {
         const int k = 3 * i + d;
-        // Internal work of the previous step (trapezoid with the forces at both ends).
+        // Internal and contact work of the previous step (trapezoid with the
+        // forces at both ends).
         w_int += 0.5 * (m.f_prev[k] + m.f_int[k]) * m.dx[k];
+        w_con += 0.5 * (m.fc_prev[k] + m.f_con[k]) * m.dx[k];
+        m.fc_prev[k] = m.f_con[k];
         const double f_ext = md.gravity[d] * m.mass_node_physical[i];
         if (m.fixed[k]) {
-          // A held or driven dof: the constraint supplies R = f_int - f_ext (its
-          // inertia is not part of the model); its work over the previous step
-          // by the same trapezoid as the internal work.
-          const double reaction = m.f_int[k] - f_ext;
-          w_ext += 0.5 * (m.r_prev[k] + reaction) * m.dx[k];
+          // A held or driven dof: the constraint supplies R = f_int - f_ext -
+          // f_contact (its inertia is not part of the model); its work over the
+          // previous step by the same trapezoid as the internal work.
+          const double reaction = m.f_int[k] - f_ext - m.f_con[k];
+          w_ext += (0.5 * (m.r_prev[k] + reaction) + f_ext) * m.dx[k];
           audit.reactions[3 * m.constraint_of[k] + d] += reaction;
           m.r_prev[k] = reaction;
           m.v[k] = m.prescribed[k];
@@ -604,11 +697,13 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         // The audit is taken at x^n: works over the previous step by the
         // trapezoid rule, kinetic energy from v^n = (v^{n-1/2} + v^{n+1/2}) / 2.
         const double f_damp = md.damping * mi * m.v[k];
-        const double v_new = m.v[k] + dt_avg * (f_ext - m.f_int[k] - f_damp) / mi;
+        const double v_new = m.v[k] + dt_avg * (f_ext + m.f_con[k] - m.f_int[k] - f_damp) / mi;
         w_ext += f_ext * m.dx[k];
         w_damp += 0.5 * (m.fd_prev[k] + f_damp) * m.dx[k];
-        const double v_mid = 0.5 * (m.v[k] + v_new);
-        kin += 0.5 * mi * v_mid * v_mid;
+        // Kinetic energy at t^n as the product of the half-step velocities:
+        // the energy that central differences conserve exactly for a linear
+        // system, so that stiff short events (contact) do not upset the audit.
+        kin += 0.5 * mi * m.v[k] * v_new;
         m.fd_prev[k] = f_damp;
         m.v[k] = v_new;
         m.dx[k] = dt * v_new;
@@ -622,9 +717,13 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         throw RunError("non-finite position in part '" + st.def->name + "' at node " + std::to_string(k / 3) +
                        ", t = " + fmt_g(t + dt) + " s (mechanical step " + std::to_string(step + 1) + ")");
   }
+  // Tools move to t + dt (force control with the plies' force at t).
+  for (std::size_t q = 0; q < tools_.size(); ++q)
+    tools_[q]->advance(t, dt, dt_avg, {tool_force_[3 * q], tool_force_[3 * q + 1], tool_force_[3 * q + 2]});
   audit.internal += w_int;
   audit.external += w_ext;
   audit.damping += w_damp;
+  audit.contact -= w_con;
   audit.kinetic = kin;
   last_mech_dt_ = dt;
   return dt;
@@ -671,8 +770,14 @@ void Simulation::build_probes() {
 
 double Simulation::stored_heat() const {
   double e = 0;
-  for (const auto& st : parts_)
-    for (std::size_t k = 0; k < st->T.size(); ++k) e += st->cap[k] * st->T[k];
+  for (std::size_t p = 0; p < parts_.size(); ++p) e += stored_heat(static_cast<int>(p));
+  return e;
+}
+
+double Simulation::stored_heat(int part) const {
+  const PartState& st = *parts_.at(part);
+  double e = 0;
+  for (std::size_t k = 0; k < st.T.size(); ++k) e += st.cap[k] * st.T[k];
   return e;
 }
 
@@ -896,6 +1001,9 @@ RunResult Simulation::run(const RunOptions& opt) {
   double t = 0;
   long long steps = 0;
   const double stored0 = stored_heat();
+  std::vector<double> stored0_part;
+  for (std::size_t p = 0; p < parts_.size(); ++p) stored0_part.push_back(stored_heat(static_cast<int>(p)));
+  link_heat_.assign(parts_.size(), 0.0);
   double heat_in = 0;
   int substeps_max = 1;
   long long limited_total = 0;
@@ -917,22 +1025,48 @@ RunResult Simulation::run(const RunOptions& opt) {
   const double eps_t = 1e-9 * (job_.thermal ? thermal_dt_ : interval);
   EnergyAudit audit;
   std::vector<double> energy_rows;  // the energy.csv table, also written to results.h5
+  std::vector<double> tool_rows;    // the tools.csv table (wide), also written to results.h5
   long long mech_steps = 0;
   double mech_dt = 0;
-  std::ofstream energy_csv;
+  std::vector<std::string> energy_cols = {"time",    "kinetic", "internal",       "external_work",
+                                          "damping", "contact", "contact_stored", "balance_error"};
+  for (std::size_t c = 0; c < job_.constraints.size(); ++c)
+    for (const char* d : {"x", "y", "z"}) energy_cols.push_back("reaction" + std::to_string(c) + "_" + d);
+  std::vector<std::string> tool_cols = {"time"};
+  for (const auto& td : job_.tools)
+    for (const char* q : {"_ux", "_uy", "_uz", "_fx", "_fy", "_fz", "_heat_J"}) tool_cols.push_back(td.name + q);
+  std::ofstream energy_csv, tools_csv;
   if (opt.write_files && job_.mechanics) {
     energy_csv.open(opt.out_dir / "energy.csv");
-    energy_csv << "time,kinetic,internal,external_work,damping,balance_error";
-    for (std::size_t c = 0; c < job_.constraints.size(); ++c)
-      energy_csv << ",reaction" << c << "_x,reaction" << c << "_y,reaction" << c << "_z";
+    for (std::size_t c = 0; c < energy_cols.size(); ++c) energy_csv << (c ? "," : "") << energy_cols[c];
     energy_csv << "\n";
   }
+  if (opt.write_files && !job_.tools.empty()) {
+    tools_csv.open(opt.out_dir / "tools.csv");
+    tools_csv << "time,tool,ux,uy,uz,fx,fy,fz,heat_J\n";
+  }
+  auto sample_tools = [&](double t) {
+    tool_rows.push_back(t);
+    for (std::size_t q = 0; q < tools_.size(); ++q) {
+      const auto& u = tools_[q]->displacement();
+      const double row[7] = {u[0], u[1], u[2], tool_force_[3 * q], tool_force_[3 * q + 1], tool_force_[3 * q + 2],
+                             tool_heat_[q]};
+      tool_rows.insert(tool_rows.end(), row, row + 7);
+      if (tools_csv.is_open()) {
+        tools_csv << csv_number(t) << ',' << job_.tools[q].name;
+        for (double v : row) tools_csv << ',' << csv_number(v);
+        tools_csv << '\n';
+      }
+    }
+    if (tools_csv.is_open()) tools_csv.flush();
+  };
   std::string failure;
   seen_min_ = std::numeric_limits<double>::infinity();
   seen_max_ = -seen_min_;
   try {
     check_field(0.0, 0);
     write_frame(0.0);
+    if (!tools_.empty()) sample_tools(0.0);
     sample_probes(0.0);
     if (job_.mechanics) {
       // Explicit dynamics; the thermal splitter advances every `subcycle`
@@ -943,6 +1077,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       int subcycle = job_.thermal ? job_.thermal->subcycle : 0;
       update_node_temperature();
       double stable = mechanics_stable_dt();
+      compute_contact_forces(0.0, 0.0);
       if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
       double next_sample = 0, audit_scale = 0;
       while (t < t_end - eps_t) {
@@ -955,8 +1090,8 @@ RunResult Simulation::run(const RunOptions& opt) {
         mech_dt = dt;
         // Forces and stable step at the new positions (also for the next step).
         stable = mechanics_stable_dt();
-        double w_el = 0;
-        (void)w_el;
+        compute_contact_forces(t, dt);
+        audit.contact_stored = contact_energy_;
         if (job_.thermal) {
           ++since_thermal;
           if (subcycle <= 0) subcycle = std::max(1, static_cast<int>(thermal_dt_ / (md.dt_safety * stable)));
@@ -972,6 +1107,7 @@ RunResult Simulation::run(const RunOptions& opt) {
               throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + st.message);
             heat_in += rep.heat_in;
             limited_total += rep.limited;
+            accumulate_tool_heat(in.dt);
             ++steps;
             t_thermal = t;
             since_thermal = 0;
@@ -982,24 +1118,28 @@ RunResult Simulation::run(const RunOptions& opt) {
         // Energy audit: W_int + kinetic + damping = external work.
         // Relative to the largest energy seen so far (a vibrating body passes
         // through states where every energy is nearly zero).
-        audit_scale = std::max({audit_scale, std::abs(audit.internal), audit.kinetic, std::abs(audit.external)});
+        audit_scale = std::max({audit_scale, std::abs(audit.internal), audit.kinetic, std::abs(audit.external),
+                                std::abs(audit.contact)});
         const double scale = std::max(audit_scale, 1e-30);
-        audit.balance_error = std::abs(audit.internal + audit.kinetic + audit.damping - audit.external) / scale;
+        audit.balance_error =
+            std::abs(audit.internal + audit.kinetic + audit.damping + audit.contact - audit.external) / scale;
         if (audit.balance_error > md.energy_tolerance && scale > 1e-12 && mech_steps > 20)
           throw RunError("energy balance error " + fmt_g(audit.balance_error, 3) + " above energy_tolerance " +
                          fmt_g(md.energy_tolerance, 3) + " at t = " + fmt_g(t) + " s (mechanical step " +
                          std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) +
                          " s): the run is unstable (step too large?)");
-        if (energy_csv.is_open() && t >= next_sample - eps_t) {
-          energy_csv << csv_number(t) << ',' << csv_number(audit.kinetic) << ',' << csv_number(audit.internal) << ','
-                     << csv_number(audit.external) << ',' << csv_number(audit.damping) << ','
-                     << csv_number(audit.balance_error);
-          for (double r : audit.reactions) energy_csv << ',' << csv_number(r);
-          energy_csv << '\n';
-          energy_rows.insert(energy_rows.end(), {t, audit.kinetic, audit.internal, audit.external, audit.damping,
-                                                 audit.balance_error});
+        if (t >= next_sample - eps_t) {
+          const double row[8] = {t, audit.kinetic, audit.internal, audit.external, audit.damping, audit.contact,
+                                 audit.contact_stored, audit.balance_error};
+          energy_rows.insert(energy_rows.end(), row, row + 8);
           energy_rows.insert(energy_rows.end(), audit.reactions.begin(), audit.reactions.end());
-          next_sample += t_end / 200;
+          if (energy_csv.is_open()) {
+            for (int c = 0; c < 8; ++c) energy_csv << (c ? "," : "") << csv_number(row[c]);
+            for (double r : audit.reactions) energy_csv << ',' << csv_number(r);
+            energy_csv << '\n';
+          }
+          if (!tools_.empty()) sample_tools(t);
+          next_sample += t_end / 500;
         }
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
           const double iv = job_.output.probes[q].interval > 0 ? job_.output.probes[q].interval : interval;
@@ -1028,6 +1168,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         if (auto s = splitter_->advance(in, Tspans, &rep); !s)
           throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);
         in.links_changed = false;
+        accumulate_tool_heat(step);
         ++steps;
         t += step;
         heat_in += rep.heat_in;
@@ -1050,6 +1191,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             if (job_.output.probes[q].interval <= 0) sample_probes(t, q);
         if (t >= next_frame - eps_t) {
           write_frame(t);
+          if (!tools_.empty()) sample_tools(t);
           ++frame_index;
         }
         progress.update(t, steps);
@@ -1063,12 +1205,10 @@ RunResult Simulation::run(const RunOptions& opt) {
     failure = std::string("unexpected error: ") + e.what();
   }
 
-  if (writer && job_.mechanics) {
-    std::vector<std::string> cols = {"time", "kinetic", "internal", "external_work", "damping", "balance_error"};
-    for (std::size_t c = 0; c < job_.constraints.size(); ++c)
-      for (const char* d : {"x", "y", "z"}) cols.push_back("reaction" + std::to_string(c) + "_" + d);
-    if (energy_rows.size() % cols.size() == 0) writer->write_series("energy", cols, energy_rows);
-  }
+  if (writer && job_.mechanics && energy_rows.size() % energy_cols.size() == 0)
+    writer->write_series("energy", energy_cols, energy_rows);
+  if (writer && !tools_.empty() && tool_rows.size() % tool_cols.size() == 0 && !tool_rows.empty())
+    writer->write_series("tools", tool_cols, tool_rows);
   const double stored_change = stored_heat() - stored0;
   const double scale = std::max({std::abs(stored_change), std::abs(heat_in), 1e-300});
   result.ok = failure.empty();
@@ -1078,12 +1218,22 @@ RunResult Simulation::run(const RunOptions& opt) {
   result.thermal_steps = steps;
   result.thermal_dt = thermal_dt_;
   result.heat_in = heat_in;
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    result.part_heat_change.push_back(stored_heat(static_cast<int>(p)) - stored0_part[p]);
+    result.part_link_heat.push_back(link_heat_.size() > p ? link_heat_[p] : 0.0);
+  }
   result.stored_change = stored_change;
   result.heat_balance_error = std::abs(stored_change - heat_in) / scale;
   result.limited_node_steps = limited_total;
   result.mechanical_steps = mech_steps;
   result.mechanical_dt = mech_dt;
   result.energy = audit;
+  for (std::size_t q = 0; q < tools_.size(); ++q) {
+    const auto& u = tools_[q]->displacement();
+    result.energy.tool_displacements.insert(result.energy.tool_displacements.end(), u.begin(), u.end());
+    for (int d = 0; d < 3; ++d) result.energy.tool_forces.push_back(tool_force_[3 * q + d]);
+    result.energy.tool_heat.push_back(tool_heat_[q]);
+  }
   for (const auto& m : mech_) result.energy.added_mass_percent.push_back(100 * m->mass_added / m->mass_physical);
   result.temperature_min = seen_min_;
   result.temperature_max = seen_max_;
@@ -1108,7 +1258,17 @@ RunResult Simulation::run(const RunOptions& opt) {
                           {"limited_node_steps", limited_total}};
     summary["plugins_loaded"] = registry_.loaded_names();
     summary["energy"] = {{"kinetic", audit.kinetic}, {"internal", audit.internal}, {"external_work", audit.external},
-                         {"contact", 0.0}, {"damping", audit.damping}, {"balance_error", audit.balance_error}};
+                         {"contact", audit.contact}, {"contact_stored", audit.contact_stored},
+                         {"damping", audit.damping}, {"balance_error", audit.balance_error}};
+    json tools = json::array();
+    for (std::size_t q = 0; q < tools_.size(); ++q) {
+      const auto& u = tools_[q]->displacement();
+      tools.push_back({{"name", job_.tools[q].name},
+                       {"displacement_m", {u[0], u[1], u[2]}},
+                       {"force_N", {tool_force_[3 * q], tool_force_[3 * q + 1], tool_force_[3 * q + 2]}},
+                       {"heat_to_plies_J", tool_heat_[q]}});
+    }
+    summary["tools"] = tools;
     if (job_.mechanics) {
       json reactions = json::array();
       for (std::size_t c = 0; c < job_.constraints.size(); ++c)

@@ -3,6 +3,7 @@
 // and the time loop. Construction validates everything a run needs (throws
 // JobError); run() integrates and writes the output folder.
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,8 +33,13 @@ struct ProbeSample {
 
 struct EnergyAudit {
   double kinetic = 0, internal = 0, external = 0, damping = 0, balance_error = 0;
+  double contact = 0;         // energy taken from the plies by contact forces (penalty storage + friction - tool work)
+  double contact_stored = 0;  // elastic energy in the penalty springs, current
   std::vector<double> added_mass_percent;  // per part, from mass scaling
   std::vector<double> reactions;           // 3 per constraint: force the constraint applies to the plies (N), last step
+  std::vector<double> tool_forces;         // 3 per tool: force of the plies on the tool (N), last step
+  std::vector<double> tool_displacements;  // 3 per tool (m)
+  std::vector<double> tool_heat;           // per tool: heat given to the plies (J)
 };
 
 struct RunResult {
@@ -44,6 +50,8 @@ struct RunResult {
   long long thermal_steps = 0;
   double thermal_dt = 0;
   double heat_in = 0, stored_change = 0, heat_balance_error = 0;
+  std::vector<double> part_heat_change;  // per part: stored heat change (J)
+  std::vector<double> part_link_heat;    // per part: heat received through ply/ply contact (J)
   double temperature_min = 0, temperature_max = 0;  // over every value and every step
   long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
   std::vector<ProbeSample> probes;
@@ -53,7 +61,7 @@ struct RunResult {
 };
 
 struct PartState;
-struct ToolState;
+class RigidTool;
 struct MechPart;
 
 
@@ -66,6 +74,7 @@ class Simulation {
   std::vector<std::string> plugins_loaded() const { return registry_.loaded_names(); }
   // Heat stored in the plies, J (sum of capacity x temperature, relative to 0 degC).
   double stored_heat() const;
+  double stored_heat(int part) const;
   // Replaces the initial temperature of a part by one value per node
   // (uniform through the thickness), before run().
   void set_initial_temperature(int part, std::span<const double> per_node);
@@ -95,7 +104,16 @@ class Simulation {
   const Job& job_;
   PluginRegistry& registry_;
   std::vector<std::unique_ptr<PartState>> parts_;
-  std::vector<std::unique_ptr<ToolState>> tools_;
+  std::vector<std::unique_ptr<RigidTool>> tools_;
+  std::vector<double> tool_force_;  // 3 per tool: force of the plies on the tool (N), current
+  std::vector<double> tool_heat_;   // per tool: heat given to the plies (J), cumulative
+  std::vector<double> link_heat_;   // per part: net heat received through ply/ply contact (J), cumulative
+  double contact_energy_ = 0;       // penalty energy stored, current
+  double contact_dt_ = std::numeric_limits<double>::infinity();  // contact bound of the stable step
+  double tool_dt_ = std::numeric_limits<double>::infinity();     // force-controlled tools' bound
+  long long contact_active_ = 0;
+  void compute_contact_forces(double t, double dt);
+  void accumulate_tool_heat(double dt);
   std::vector<sdk::PartView> part_views_;
   std::vector<sdk::ToolView> tool_views_;
   std::unique_ptr<sdk::ThermalSplitter> splitter_;

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <thermostamp/sdk/plugin.hpp>
+
 #include "job/job.hpp"
 #include "test_support.hpp"
 
@@ -30,7 +32,7 @@ std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.1.0"), std::string::npos);
+  EXPECT_NE(r.out.find("thermostamp 0.2.0"), std::string::npos);
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {
@@ -155,7 +157,8 @@ TEST(Plugins, AnotherAbiIsRefusedNamingBothVersions) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("error: /solvers/thermal/splitter: plugin library"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("SDK ABI version 999"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("this ThermoStamp has SDK ABI version 1"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("this ThermoStamp has SDK ABI version " + std::to_string(sdk::kAbiVersion)), std::string::npos)
+      << r.err;
 }
 
 TEST(Plugins, FoundThroughEnvironmentAndFailureKeepsFrames) {
@@ -241,7 +244,7 @@ TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
   std::ifstream csv(dir / "out" / "energy.csv");
   std::string header;
   std::getline(csv, header);
-  EXPECT_EQ(header.rfind("time,kinetic,internal,external_work,damping,balance_error,reaction0_x", 0), 0u) << header;
+  EXPECT_EQ(header.rfind("time,kinetic,internal,external_work,damping,contact,contact_stored,balance_error,reaction0_x", 0), 0u) << header;
   const auto plugins = s["plugins_loaded"].get<std::vector<std::string>>();
   for (const char* p : {"material/ud_hyperelastic", "material/viscoelastic_shear", "element/shell_rf_t3", "thermal/adi"})
     EXPECT_NE(std::find(plugins.begin(), plugins.end(), p), plugins.end()) << p;

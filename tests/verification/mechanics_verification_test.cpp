@@ -183,7 +183,7 @@ TEST(Coupling, ThermalAnswerIndependentOfMassScaling) {
     // Heat is conserved on the deforming ply (capacities follow the material).
     EXPECT_LT(runs.back().result.heat_balance_error, 1e-9);
   }
-  EXPECT_GT(runs[1].result.mechanical_dt, 1.5 * runs[0].result.mechanical_dt);  // the clocks differ
+  EXPECT_LT(runs[1].result.mechanical_steps, 0.6 * runs[0].result.mechanical_steps);  // the clocks differ
   double diff = 0, drop = 0;
   for (double t : {0.05, 0.1, 0.15, 0.2}) {
     const ProbeSample* a = runs[0].sample(0, "temperature_profile", t);

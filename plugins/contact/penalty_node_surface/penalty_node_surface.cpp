@@ -1,12 +1,26 @@
-// penalty_node_surface: node-to-surface contact with shell thickness
-// (physics.md section 4). This version provides the thermal side: which
-// faces of a ply touch a tool or another ply (gap between the facing shell
-// surfaces, mid-surface +- h/2, at most gap_tolerance), with the contact
-// conductance. Ply/ply exchange is returned as conservative links.
+// penalty_node_surface: node-to-surface penalty contact with shell thickness
+// (physics.md section 4).
+//
+// Mechanics: a node of the first body (a ply) whose contact face (mid-surface
+// +- h/2) penetrates the second body (a tool surface, or the other ply's
+// face at +- h/2 of its mid-surface) gets the normal force
+//   f_n = penalty * A_i * penetration
+// (A_i: the node's tributary area), and a regularised Coulomb friction force:
+// an elastic tangential spring of the same stiffness, capped at mu * f_n
+// (stick below the cap, slip at it). The opposite force goes to the tool, or
+// to the three nodes of the other ply's element through its shape functions,
+// so momentum is conserved.
+//
+// Ply/ply side: which faces meet comes from the target element normal n_e,
+// the node's normal n_c and the approach velocity (physics.md section 4); it
+// is kept while the node stays near the target.
+//
+// Thermal: the faces found touching (gap between the facing shell surfaces
+// at most gap_tolerance) get the contact conductance: a Robin condition with
+// the tool temperature, or a conservative link between the two plies.
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 #include <vector>
 
 #include <thermostamp/sdk/math.hpp>
@@ -16,6 +30,7 @@ namespace ts::contact {
 namespace {
 
 using sdk::Vec3;
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Unit normals of the elements and (area-weighted) of the nodes.
 void normals(const sdk::PartView& p, std::vector<double>& en, std::vector<double>& nn) {
@@ -36,60 +51,110 @@ void normals(const sdk::PartView& p, std::vector<double>& en, std::vector<double
   }
 }
 
-// Uniform bucket grid over the bounding boxes of a ply's triangles.
-class TriangleGrid {
+// Candidate target elements of every node of body A: a uniform bucket grid
+// over B's triangles (inflated by the reach), flat arrays, rebuilt only when
+// a node of A or B has moved more than half the margin since the last build.
+class Candidates {
  public:
-  void build(const sdk::PartView& p, double margin) {
-    lo_ = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-           std::numeric_limits<double>::infinity()};
-    Vec3 hi = {-lo_[0], -lo_[1], -lo_[2]};
+  bool needs_rebuild(const sdk::PartView& a, const sdk::PartView& b) const {
+    if (xa_.size() != a.x.size() || xb_.size() != b.x.size()) return true;
+    const double lim = 0.25 * margin_ * margin_;
+    for (std::size_t k = 0; k < xa_.size(); k += 3)
+      if (dist2(&xa_[k], &a.x[k]) > lim) return true;
+    for (std::size_t k = 0; k < xb_.size(); k += 3)
+      if (dist2(&xb_[k], &b.x[k]) > lim) return true;
+    return false;
+  }
+  void build(const sdk::PartView& a, const sdk::PartView& b, double reach, double margin) {
+    margin_ = margin;
+    ++builds_;
+    xa_.assign(a.x.begin(), a.x.end());
+    xb_.assign(b.x.begin(), b.x.end());
+    const double inflate = reach + margin;
+    Vec3 lo = {kInf, kInf, kInf}, hi = {-kInf, -kInf, -kInf};
     double h = 0;
-    for (int e = 0; e < p.num_elements; ++e)
+    for (int e = 0; e < b.num_elements; ++e)
       for (int k = 0; k < 3; ++k) {
-        const Vec3 a = sdk::load3(p.x.data(), p.triangles[3 * e + k]);
-        const Vec3 b = sdk::load3(p.x.data(), p.triangles[3 * e + (k + 1) % 3]);
-        h = std::max(h, sdk::norm(sdk::sub(a, b)));
+        const Vec3 p = sdk::load3(b.x.data(), b.triangles[3 * e + k]);
+        const Vec3 q = sdk::load3(b.x.data(), b.triangles[3 * e + (k + 1) % 3]);
+        h = std::max(h, sdk::norm(sdk::sub(p, q)));
         for (int d = 0; d < 3; ++d) {
-          lo_[d] = std::min(lo_[d], a[d] - margin);
-          hi[d] = std::max(hi[d], a[d] + margin);
+          lo[d] = std::min(lo[d], p[d] - inflate);
+          hi[d] = std::max(hi[d], p[d] + inflate);
         }
       }
-    cell_ = std::max(h + 2 * margin, 1e-12);
-    for (int d = 0; d < 3; ++d) n_[d] = std::max(1, static_cast<int>(std::ceil((hi[d] - lo_[d]) / cell_)) + 1);
-    buckets_.clear();
-    for (int e = 0; e < p.num_elements; ++e) {
-      Vec3 blo = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                  std::numeric_limits<double>::infinity()};
-      Vec3 bhi = {-blo[0], -blo[1], -blo[2]};
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 a = sdk::load3(p.x.data(), p.triangles[3 * e + k]);
-        for (int d = 0; d < 3; ++d) {
-          blo[d] = std::min(blo[d], a[d] - margin);
-          bhi[d] = std::max(bhi[d], a[d] + margin);
-        }
-      }
-      int c0[3], c1[3];
+    double cell = std::max(h + 2 * inflate, 1e-12);
+    int n[3];
+    for (;;) {
+      long long cells = 1;
       for (int d = 0; d < 3; ++d) {
-        c0[d] = cell_of(blo[d], d);
-        c1[d] = cell_of(bhi[d], d);
+        n[d] = std::max(1, static_cast<int>(std::ceil((hi[d] - lo[d]) / cell)) + 1);
+        cells *= n[d];
       }
-      for (int i = c0[0]; i <= c1[0]; ++i)
-        for (int j = c0[1]; j <= c1[1]; ++j)
-          for (int k = c0[2]; k <= c1[2]; ++k) buckets_[key(i, j, k)].push_back(e);
+      if (cells <= 4'000'000) break;
+      cell *= 1.5;
+    }
+    auto cell_of = [&](double v, int d) { return std::clamp(static_cast<int>((v - lo[d]) / cell), 0, n[d] - 1); };
+    const std::size_t ncell = static_cast<std::size_t>(n[0]) * n[1] * n[2];
+    start_.assign(ncell + 1, 0);
+    std::vector<int> range(6 * static_cast<std::size_t>(b.num_elements));
+    for (int e = 0; e < b.num_elements; ++e) {
+      for (int d = 0; d < 3; ++d) {
+        double mn = kInf, mx = -kInf;
+        for (int k = 0; k < 3; ++k) {
+          const double v = b.x[3 * b.triangles[3 * e + k] + d];
+          mn = std::min(mn, v);
+          mx = std::max(mx, v);
+        }
+        range[6 * e + d] = cell_of(mn - inflate, d);
+        range[6 * e + 3 + d] = cell_of(mx + inflate, d);
+      }
+      const int* r = &range[6 * e];
+      for (int k = r[2]; k <= r[5]; ++k)
+        for (int j = r[1]; j <= r[4]; ++j)
+          for (int i = r[0]; i <= r[3]; ++i) ++start_[(static_cast<std::size_t>(k) * n[1] + j) * n[0] + i + 1];
+    }
+    for (std::size_t c = 0; c < ncell; ++c) start_[c + 1] += start_[c];
+    elems_.assign(start_[ncell], 0);
+    std::vector<int> fill(start_.begin(), start_.end() - 1);
+    for (int e = 0; e < b.num_elements; ++e) {
+      const int* r = &range[6 * e];
+      for (int k = r[2]; k <= r[5]; ++k)
+        for (int j = r[1]; j <= r[4]; ++j)
+          for (int i = r[0]; i <= r[3]; ++i) elems_[fill[(static_cast<std::size_t>(k) * n[1] + j) * n[0] + i]++] = e;
+    }
+    node_cell_.resize(a.num_nodes);
+    for (int i = 0; i < a.num_nodes; ++i) {
+      const Vec3 x = sdk::load3(a.x.data(), i);
+      bool outside = false;
+      for (int d = 0; d < 3; ++d) outside = outside || x[d] < lo[d] || x[d] > hi[d];
+      node_cell_[i] = outside ? -1
+                              : static_cast<int>((static_cast<std::size_t>(cell_of(x[2], 2)) * n[1] + cell_of(x[1], 1)) * n[0] +
+                                                 cell_of(x[0], 0));
     }
   }
-  const std::vector<int>* candidates(const Vec3& x) const {
-    const auto it = buckets_.find(key(cell_of(x[0], 0), cell_of(x[1], 1), cell_of(x[2], 2)));
-    return it == buckets_.end() ? nullptr : &it->second;
+  // Candidate elements of node i: [begin, end) into elements().
+  std::pair<const int*, const int*> of(int i) const {
+    const int c = node_cell_[i];
+    if (c < 0) return {nullptr, nullptr};
+    return {elems_.data() + start_[c], elems_.data() + start_[c + 1]};
   }
+  long long builds() const { return builds_; }
 
  private:
-  int cell_of(double v, int d) const { return std::clamp(static_cast<int>((v - lo_[d]) / cell_), 0, n_[d] - 1); }
-  long long key(int i, int j, int k) const { return (static_cast<long long>(k) * n_[1] + j) * n_[0] + i; }
-  Vec3 lo_{};
-  double cell_ = 1;
-  int n_[3] = {1, 1, 1};
-  std::unordered_map<long long, std::vector<int>> buckets_;
+  static double dist2(const double* p, const double* q) {
+    return (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+  }
+  std::vector<double> xa_, xb_;
+  std::vector<int> start_, elems_, node_cell_;
+  double margin_ = 0;
+  long long builds_ = 0;
+};
+
+struct Projection {
+  int element = -1;
+  double d = 0;  // signed distance of the node from the target's mid-surface, along n_e
+  double w[3] = {0, 0, 0};
 };
 
 class PenaltyNodeSurface final : public sdk::ContactHandler {
@@ -98,15 +163,34 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
                         std::span<const sdk::ToolView>) override {
     return sdk::guarded([&] {
       pair_ = pair;
+      penalty_ = params.real("penalty");
+      friction_ = params.real("friction");
+      damping_ = params.real("damping");
       conductance_ = params.real("conductance");
       gap_tol_ = params.real("gap_tolerance");
-      if (gap_tol_ < 0) {  // default: 1 % of the thinner ply
-        double h = parts[pair.first.index].thickness;
-        if (pair.second.type == sdk::BodyRef::Type::Part) h = std::min(h, parts[pair.second.index].thickness);
-        gap_tol_ = 0.01 * h;
-      }
+      const sdk::PartView& a = parts[pair.first.index];
+      double h = a.thickness;
+      if (pair.second.type == sdk::BodyRef::Type::Part) h = std::min(h, parts[pair.second.index].thickness);
+      if (gap_tol_ < 0) gap_tol_ = 0.01 * h;  // default: 1 % of the thinner ply
+      side_.assign(a.num_nodes, 0);
+      ft_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
       return sdk::Status::success();
     });
+  }
+
+  sdk::Status node_stiffness(std::span<const std::span<const double>> node_area,
+                             std::span<const std::span<double>> k) override {
+    // Node against a rigid tool: k = penalty * A. Ply against ply: the
+    // relative motion of the two bodies sees the spring from both sides, so
+    // each side is bounded with twice the node's own spring.
+    const int a = pair_.first.index;
+    const bool tool = pair_.second.type == sdk::BodyRef::Type::Tool;
+    for (std::size_t i = 0; i < node_area[a].size(); ++i) k[a][i] += (tool ? 1.0 : 2.0) * penalty_ * node_area[a][i];
+    if (!tool) {
+      const int b = pair_.second.index;
+      for (std::size_t i = 0; i < node_area[b].size(); ++i) k[b][i] += 2.0 * penalty_ * node_area[b][i];
+    }
+    return sdk::Status::success();
   }
 
   sdk::Status thermal_contacts(std::span<const sdk::PartView> parts, std::span<const sdk::ToolView> tools,
@@ -114,13 +198,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
                                sdk::ThermalContactMap& out) override {
     return sdk::guarded([&] {
       const sdk::PartView& a = parts[pair_.first.index];
-      normals(a, en_a_, nn_a_);
       if (conductance_ <= 0) return sdk::Status::success();
+      normals(a, en_a_, nn_a_);
       if (pair_.second.type == sdk::BodyRef::Type::Tool) {
         const sdk::ToolView& tool = tools[pair_.second.index];
-        dist_.resize(a.num_nodes);
-        tn_.resize(3 * a.num_nodes);
-        tool.query(tool.context, a.num_nodes, a.x.data(), dist_.data(), tn_.data());
+        query_tool(a, tool);
         for (int i = 0; i < a.num_nodes; ++i) {
           const double c = sdk::dot(sdk::load3(tn_.data(), i), sdk::load3(nn_a_.data(), i));
           // A tool whose outward normal opposes the ply normal lies above it.
@@ -132,52 +214,24 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       }
       const sdk::PartView& b = parts[pair_.second.index];
       normals(b, en_b_, nn_b_);
-      const double reach = 0.5 * (a.thickness + b.thickness) + gap_tol_;
-      grid_.build(b, reach);
-      const double eps = 1e-9;
+      const double hsum2 = 0.5 * (a.thickness + b.thickness);
+      refresh_candidates(a, b, hsum2 + gap_tol_);
       for (int i = 0; i < a.num_nodes; ++i) {
-        const Vec3 x = sdk::load3(a.x.data(), i);
-        const auto* cand = grid_.candidates(x);
-        if (!cand) continue;
-        int best = -1;
-        double best_gap = std::numeric_limits<double>::infinity(), best_d = 0, best_w[3] = {0, 0, 0};
-        for (int e : *cand) {
-          if (a.index == b.index) {  // self contact: skip the node's own elements
-            const int* t = &b.triangles[3 * e];
-            if (t[0] == i || t[1] == i || t[2] == i) continue;
-          }
-          const int* t = &b.triangles[3 * e];
-          const Vec3 p0 = sdk::load3(b.x.data(), t[0]), p1 = sdk::load3(b.x.data(), t[1]),
-                     p2 = sdk::load3(b.x.data(), t[2]);
-          const Vec3 n = sdk::load3(en_b_.data(), e);
-          const double d = sdk::dot(sdk::sub(x, p0), n);
-          const Vec3 xp = sdk::sub(x, sdk::scale(n, d));
-          const double two_a = sdk::dot(sdk::cross(sdk::sub(p1, p0), sdk::sub(p2, p0)), n);
-          const double w0 = sdk::dot(sdk::cross(sdk::sub(p1, xp), sdk::sub(p2, xp)), n) / two_a;
-          const double w1 = sdk::dot(sdk::cross(sdk::sub(p2, xp), sdk::sub(p0, xp)), n) / two_a;
-          const double w2 = 1.0 - w0 - w1;
-          if (w0 < -eps || w1 < -eps || w2 < -eps) continue;
-          const double gap = std::abs(d) - 0.5 * (a.thickness + b.thickness);
-          if (gap > gap_tol_ || gap >= best_gap) continue;
-          best = e;
-          best_gap = gap;
-          best_d = d;
-          best_w[0] = std::max(0.0, w0);
-          best_w[1] = std::max(0.0, w1);
-          best_w[2] = std::max(0.0, w2);
-        }
-        if (best < 0) continue;
-        const double s = best_w[0] + best_w[1] + best_w[2];
+        const Projection pr = project(a, b, i, hsum2 + gap_tol_);
+        if (pr.element < 0) continue;
+        const int s = side_[i] != 0 ? side_[i] : (pr.d >= 0 ? 1 : -1);
+        const double gap = s * pr.d - hsum2;
+        if (gap > gap_tol_) continue;
         sdk::HeatLink l;
         l.part_a = a.index;
         l.node_a = i;
         l.part_b = b.index;
         for (int j = 0; j < 3; ++j) {
-          l.nodes_b[j] = b.triangles[3 * best + j];
-          l.w_b[j] = best_w[j] / s;
+          l.nodes_b[j] = b.triangles[3 * pr.element + j];
+          l.w_b[j] = pr.w[j];
         }
-        const double c = sdk::dot(sdk::load3(nn_a_.data(), i), sdk::load3(en_b_.data(), best));
-        if (best_d >= 0) {  // node above the target: target's top face, node's face looking down
+        const double c = sdk::dot(sdk::load3(nn_a_.data(), i), sdk::load3(en_b_.data(), pr.element));
+        if (s > 0) {  // node above the target: target's top face, the node's face looking down
           l.face_b = sdk::kTop;
           l.face_a = c > 0 ? sdk::kBottom : sdk::kTop;
         } else {
@@ -191,11 +245,221 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     });
   }
 
+  sdk::Status contact_forces(const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) override {
+    return sdk::guarded([&] {
+      parts_ = in.parts;
+      tools_ = in.tools;
+      if (pair_.second.type == sdk::BodyRef::Type::Tool) return tool_forces(in, out);
+      return ply_forces(in, out);
+    });
+  }
+
  private:
+  void query_tool(const sdk::PartView& a, const sdk::ToolView& tool) {
+    dist_.resize(a.num_nodes);
+    tn_.resize(3 * static_cast<std::size_t>(a.num_nodes));
+    tool.query(tool.context, a.num_nodes, a.x.data(), a.thickness + gap_tol_, dist_.data(), tn_.data());
+  }
+
+  void refresh_candidates(const sdk::PartView& a, const sdk::PartView& b, double reach) {
+    double h = 0;
+    for (int e = 0; e < b.num_elements; ++e)
+      for (int k = 0; k < 3; ++k)
+        h = std::max(h, sdk::norm(sdk::sub(sdk::load3(b.x.data(), b.triangles[3 * e + k]),
+                                           sdk::load3(b.x.data(), b.triangles[3 * e + (k + 1) % 3]))));
+    if (cand_.needs_rebuild(a, b)) cand_.build(a, b, reach, std::max(0.5 * h, 2 * reach));
+  }
+
+  // The target element of node i within `reach` of B's mid-surface: the
+  // element whose projection contains the node, nearest first.
+  Projection project(const sdk::PartView& a, const sdk::PartView& b, int i, double reach) const {
+    Projection best;
+    double best_abs = kInf;
+    const Vec3 x = sdk::load3(a.x.data(), i);
+    const auto [begin, end] = cand_.of(i);
+    if (!begin) return best;
+    constexpr double eps = 1e-6;
+    for (const int* it = begin; it != end; ++it) {
+      const int e = *it;
+      const int* t = &b.triangles[3 * e];
+      if (a.index == b.index && (t[0] == i || t[1] == i || t[2] == i)) continue;  // self contact
+      const Vec3 p0 = sdk::load3(b.x.data(), t[0]), p1 = sdk::load3(b.x.data(), t[1]), p2 = sdk::load3(b.x.data(), t[2]);
+      const Vec3 n = sdk::load3(en_b_.data(), e);
+      const double d = sdk::dot(sdk::sub(x, p0), n);
+      if (std::abs(d) > reach || std::abs(d) >= best_abs) continue;
+      const Vec3 xp = sdk::sub(x, sdk::scale(n, d));
+      const double two_a = sdk::dot(sdk::cross(sdk::sub(p1, p0), sdk::sub(p2, p0)), n);
+      const double w0 = sdk::dot(sdk::cross(sdk::sub(p1, xp), sdk::sub(p2, xp)), n) / two_a;
+      const double w1 = sdk::dot(sdk::cross(sdk::sub(p2, xp), sdk::sub(p0, xp)), n) / two_a;
+      const double w2 = 1.0 - w0 - w1;
+      if (w0 < -eps || w1 < -eps || w2 < -eps) continue;
+      best.element = e;
+      best.d = d;
+      best_abs = std::abs(d);
+      const double c0 = std::max(0.0, w0), c1 = std::max(0.0, w1), c2 = std::max(0.0, w2), s = c0 + c1 + c2;
+      best.w[0] = c0 / s;
+      best.w[1] = c1 / s;
+      best.w[2] = c2 / s;
+    }
+    return best;
+  }
+
+  // Normal penalty force with its damper and the elastic-slip Coulomb
+  // friction force on one node: n is the unit normal pushing the node out,
+  // vrel the velocity relative to the target, m the effective mass. Updates
+  // the node's tangential spring; returns the stored spring energy.
+  double node_force(int i, double pen, double area, double m, const Vec3& n, const Vec3& vrel, double dt, double* f) {
+    const double k = penalty_ * area;
+    const double vn = sdk::dot(vrel, n);  // < 0 while approaching
+    // Viscous normal damping, a fraction of the critical value of the node on
+    // its penalty spring; the normal force never pulls.
+    const double fn = std::max(0.0, k * pen - damping_ * 2.0 * std::sqrt(k * m) * vn);
+    double energy = 0.5 * k * pen * pen;
+    Vec3 ft = {0, 0, 0};
+    if (friction_ > 0) {
+      Vec3 old = sdk::load3(ft_.data(), i);
+      const double mag = sdk::norm(old);
+      old = sdk::sub(old, sdk::scale(n, sdk::dot(old, n)));  // rotate into the current tangent plane
+      const double m2 = sdk::norm(old);
+      if (m2 > 0) old = sdk::scale(old, mag / m2);
+      const Vec3 vt = sdk::sub(vrel, sdk::scale(n, vn));
+      // Sticking: the spring plus the same fraction of critical damping;
+      // sliding: the Coulomb force, and the spring follows it.
+      Vec3 spring = sdk::sub(old, sdk::scale(vt, k * dt));
+      ft = sdk::sub(spring, sdk::scale(vt, damping_ * 2.0 * std::sqrt(k * m)));
+      const double lim = friction_ * fn, len = sdk::norm(ft);
+      if (len > lim) {
+        ft = sdk::scale(ft, lim / len);
+        spring = ft;
+      }
+      energy += 0.5 * sdk::dot(spring, spring) / k;
+      for (int d = 0; d < 3; ++d) ft_[3 * static_cast<std::size_t>(i) + d] = spring[d];
+    }
+    for (int d = 0; d < 3; ++d) f[d] = fn * n[d] + ft[d];
+    return energy;
+  }
+
+  sdk::Status tool_forces(const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
+    const sdk::PartView& a = parts_[pair_.first.index];
+    const sdk::ToolView& tool = tools_[pair_.second.index];
+    query_tool(a, tool);
+    const auto v = in.velocity[a.index];
+    const auto area = in.node_area[a.index];
+    const Vec3 vtool = tool.velocity ? Vec3{tool.velocity[0], tool.velocity[1], tool.velocity[2]} : Vec3{0, 0, 0};
+    const double h2 = 0.5 * a.thickness;
+    scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
+    energy_.assign(a.num_nodes, 0.0);
+#pragma omp parallel for schedule(static) if (a.num_nodes > 4096)
+    for (int i = 0; i < a.num_nodes; ++i) {
+      const double pen = h2 - dist_[i];
+      if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
+        for (int d = 0; d < 3; ++d) ft_[3 * static_cast<std::size_t>(i) + d] = 0.0;
+        continue;
+      }
+      const Vec3 n = sdk::load3(tn_.data(), i);
+      const Vec3 vrel = sdk::sub(sdk::load3(v.data(), i), vtool);
+      energy_[i] = node_force(i, pen, area[i], in.mass[a.index][i], n, vrel, in.dt, &scratch_[3 * static_cast<std::size_t>(i)]);
+    }
+    // Fixed-order sums: the same results for any thread count.
+    auto f = out.force[a.index];
+    for (int i = 0; i < a.num_nodes; ++i) {
+      if (!(energy_[i] > 0)) continue;
+      ++out.active;
+      out.energy += energy_[i];
+      if (!out.status.empty()) out.status[a.index][i] = std::max(out.status[a.index][i], 1.0);
+      for (int d = 0; d < 3; ++d) {
+        f[3 * i + d] += scratch_[3 * i + d];
+        out.tool_force[3 * tool.index + d] -= scratch_[3 * i + d];
+      }
+    }
+    return sdk::Status::success();
+  }
+
+  sdk::Status ply_forces(const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
+    const sdk::PartView& a = parts_[pair_.first.index];
+    const sdk::PartView& b = parts_[pair_.second.index];
+    normals(b, en_b_, nn_b_);
+    const double hsum2 = 0.5 * (a.thickness + b.thickness);
+    const double track = hsum2 + gap_tol_ + hsum2;  // keep the side while the node stays this close
+    refresh_candidates(a, b, track);
+    const auto va = in.velocity[a.index];
+    const auto vb = in.velocity[b.index];
+    const auto area = in.node_area[a.index];
+    scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
+    energy_.assign(a.num_nodes, 0.0);
+    target_.assign(4 * static_cast<std::size_t>(a.num_nodes), 0.0);
+#pragma omp parallel for schedule(static) if (a.num_nodes > 4096)
+    for (int i = 0; i < a.num_nodes; ++i) {
+      double* tg = &target_[4 * static_cast<std::size_t>(i)];
+      tg[0] = -1;
+      const Projection pr = project(a, b, i, track);
+      if (pr.element < 0) {
+        side_[i] = 0;
+        for (int d = 0; d < 3; ++d) ft_[3 * static_cast<std::size_t>(i) + d] = 0.0;
+        continue;
+      }
+      const int* t = &b.triangles[3 * pr.element];
+      const Vec3 ne = sdk::load3(en_b_.data(), pr.element);
+      Vec3 vt = {0, 0, 0};
+      for (int j = 0; j < 3; ++j) vt = sdk::add(vt, sdk::scale(sdk::load3(vb.data(), t[j]), pr.w[j]));
+      const Vec3 vrel = sdk::sub(sdk::load3(va.data(), i), vt);
+      if (side_[i] == 0) {
+        if (std::abs(pr.d) >= hsum2) {
+          side_[i] = pr.d >= 0 ? 1 : -1;  // not touching yet: the side it is on
+        } else {                          // touched within one step: the approach velocity decides
+          const double g = sdk::dot(ne, vrel);
+          side_[i] = g < 0 ? 1 : g > 0 ? -1 : (pr.d >= 0 ? 1 : -1);
+        }
+      }
+      const double pen = hsum2 - side_[i] * pr.d;
+      if (!(pen > 0)) {
+        for (int d = 0; d < 3; ++d) ft_[3 * static_cast<std::size_t>(i) + d] = 0.0;
+        continue;
+      }
+      if (pen > 2 * hsum2) {  // went through the other ply: release
+        side_[i] = 0;
+        continue;
+      }
+      double mb = 0;
+      for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
+      const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
+      energy_[i] = node_force(i, pen, area[i], m_eff, sdk::scale(ne, side_[i]), vrel, in.dt,
+                              &scratch_[3 * static_cast<std::size_t>(i)]);
+      tg[0] = pr.element;
+      tg[1] = pr.w[0];
+      tg[2] = pr.w[1];
+      tg[3] = pr.w[2];
+    }
+    auto fa = out.force[a.index];
+    auto fb = out.force[b.index];
+    for (int i = 0; i < a.num_nodes; ++i) {
+      const double* tg = &target_[4 * static_cast<std::size_t>(i)];
+      if (tg[0] < 0) continue;
+      ++out.active;
+      out.energy += energy_[i];
+      const int* t = &b.triangles[3 * static_cast<int>(tg[0])];
+      if (!out.status.empty()) {
+        out.status[a.index][i] = 2.0;
+        for (int j = 0; j < 3; ++j)
+          if (tg[1 + j] > 0) out.status[b.index][t[j]] = 2.0;
+      }
+      for (int d = 0; d < 3; ++d) {
+        const double f = scratch_[3 * i + d];
+        fa[3 * i + d] += f;
+        for (int j = 0; j < 3; ++j) fb[3 * t[j] + d] -= tg[1 + j] * f;
+      }
+    }
+    return sdk::Status::success();
+  }
+
   sdk::ContactPair pair_;
-  double conductance_ = 0, gap_tol_ = 0;
-  std::vector<double> en_a_, nn_a_, en_b_, nn_b_, dist_, tn_;
-  TriangleGrid grid_;
+  double penalty_ = 0, friction_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
+  std::span<const sdk::PartView> parts_;
+  std::span<const sdk::ToolView> tools_;
+  std::vector<signed char> side_;  // per node of A: +1 above the target, -1 below, 0 not tracked
+  std::vector<double> ft_;         // per node of A: tangential spring force (N)
+  std::vector<double> en_a_, nn_a_, en_b_, nn_b_, dist_, tn_, scratch_, energy_, target_;
+  Candidates cand_;
 };
 
 sdk::ContactHandler* create() { return new PenaltyNodeSurface(); }
@@ -204,24 +468,35 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.1.0";
-  d.summary = "Node-to-surface penalty contact with shell thickness; carries heat between touching faces";
+  d.version = "0.2.0";
+  d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
+              "touching faces";
   d.params = {
-      sdk::real_param("penalty", "1.0e9", "Pa/m", "contact pressure per unit penetration", 0.0),
-      sdk::real_param("friction", "0.0", "-", "Coulomb friction coefficient", 0.0),
+      sdk::real_param("penalty", "1.0e11", "Pa/m",
+                      "contact pressure per unit penetration; the default keeps the penetration under 1 % of a "
+                      "0.5 mm ply up to 0.5 MPa contact pressure",
+                      0.0),
+      sdk::real_param("friction", "0.0", "-",
+                      "Coulomb friction coefficient (elastic slip: a tangential spring of the penalty stiffness, "
+                      "capped at friction times the normal force)",
+                      0.0),
+      sdk::real_param("damping", "0.1", "-",
+                      "normal contact damping as a fraction of the critical damping of a node on its penalty spring "
+                      "(removes the energy a stiff penalty can gain when contact starts or ends within a step)",
+                      0.0, 1.0),
       sdk::real_param("conductance", "1000.0", "W/(m^2 K)",
                       "thermal contact conductance h_c (1 / contact resistance); 0 switches the heat exchange off",
                       0.0),
       sdk::real_param("gap_tolerance", "-1", "m",
-                      "largest gap between facing shell surfaces still counted as touching when mechanics is off; "
+                      "largest gap between facing shell surfaces still counted as touching for heat exchange; "
                       "negative = 1 % of the thinner ply"),
       sdk::bool_param("self", false, "allow a body in contact with itself"),
   };
-  d.example = R"({ "type": "contact", "handler": "penalty_node_surface", "between": ["die", "ply_bottom"], "conductance": 1000.0 })";
+  d.example = R"({ "type": "contact", "handler": "penalty_node_surface", "between": ["die", "ply_bottom"], "friction": 0.2, "conductance": 1000.0 })";
   r.add_contact(d, &create);
 }
 
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.1.0", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.2.0", ts::contact::register_all)

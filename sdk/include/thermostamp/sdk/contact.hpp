@@ -38,18 +38,26 @@ struct ThermalContactMap {
   std::vector<HeatLink> links;  // ply/ply, conductance already times the node's area
 };
 
-// Mechanical contact (design for the explicit solver): forces are
-// accumulated into f (3 per node per part), the reaction on tools into
-// tool_force (3 per tool); energy is the penalty energy stored.
+// Mechanical contact. Forces are computed at the current positions with
+// the current (half-step) velocities and accumulated into `force` (3 per
+// node per part); the reaction on each tool into `tool_force` (3 per tool,
+// the force the plies exert on the tool). `energy` is the elastic energy
+// stored in the penalty springs (normal and tangential) of this pair.
 struct ContactForceInput {
-  double dt = 0.0;
-  std::span<const std::span<const double>> velocity;  // per part, 3 * num_nodes
+  std::span<const PartView> parts;
+  std::span<const ToolView> tools;
+  double time = 0.0;
+  double dt = 0.0;                                    // the step just taken
+  std::span<const std::span<const double>> velocity;  // per part, 3 * num_nodes (m/s)
+  std::span<const std::span<const double>> node_area; // per part, num_nodes (m^2), initial tributary area
+  std::span<const std::span<const double>> mass;      // per part, num_nodes (kg), lumped, mass scaling included
 };
 struct ContactForceOutput {
   std::span<const std::span<double>> force;  // per part, 3 * num_nodes (accumulate)
   std::span<double> tool_force;              // 3 * num_tools (accumulate)
+  std::span<const std::span<double>> status; // per part, num_nodes: set to 1 (tool) or 2 (ply) where in contact
   double energy = 0.0;
-  double stable_dt = 0.0;  // contact contribution to the critical step
+  long long active = 0;  // nodes in contact
 };
 
 class ContactHandler {
@@ -63,6 +71,14 @@ class ContactHandler {
                                   ThermalContactMap& out) = 0;
   virtual Status contact_forces(const ContactForceInput&, ContactForceOutput&) {
     return Status::failure("this contact handler has no mechanical contact");
+  }
+  // Upper bound of the contact stiffness (N/m) the pair can put on every
+  // node, accumulated into `stiffness` (per part, num_nodes) for the nodes of
+  // both bodies. The kernel uses it for the stable step and mass scaling, so
+  // that a penalty never silently breaks the explicit step.
+  virtual Status node_stiffness(std::span<const std::span<const double>> /*node_area*/,
+                                std::span<const std::span<double>> /*stiffness*/) {
+    return Status::success();
   }
 };
 

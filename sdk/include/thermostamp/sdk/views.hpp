@@ -38,14 +38,18 @@ struct PartView {
 // A rigid tool as contact handlers see it. `query` gives, for a batch of
 // points, the signed distance to the tool surface (positive on the side the
 // outward normal points to, i.e. outside the tool) and that outward unit
-// normal at the closest surface point. One call per batch, not per node.
+// normal at the closest surface point, in the tool's current position. One
+// call per batch, not per node. Points farther than `cutoff` from the
+// surface may be answered with distance +infinity (mesh tools do so).
+// `velocity` is the tool's current rigid velocity (m/s, 3 values).
 struct ToolView {
   int index = 0;
   std::string_view name;
   double temperature = 0.0;  // degC
   const void* context = nullptr;
-  void (*query)(const void* context, std::size_t n, const double* points, double* distance,
+  void (*query)(const void* context, std::size_t n, const double* points, double cutoff, double* distance,
                 double* normal) = nullptr;
+  const double* velocity = nullptr;  // 3 values, kernel-owned, updated every step
 };
 
 }  // namespace ts::sdk

@@ -1,0 +1,382 @@
+#include "solve/tools.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <thermostamp/sdk/math.hpp>
+
+#include "job/errors.hpp"
+#include "mesh/shell_mesh.hpp"
+
+namespace ts {
+
+using sdk::Vec3;
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double cross2(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
+
+// Outward normal (left of the direction of travel) of a profile piece at a point c on it.
+std::array<double, 2> piece_normal(const ProfileSegment& s, const std::array<double, 2>& c) {
+  if (!s.arc) {
+    const double dr = s.b[0] - s.a[0], dz = s.b[1] - s.a[1], l = std::hypot(dr, dz);
+    return {-dz / l, dr / l};
+  }
+  const double ccw = cross2(s.a[0] - s.centre[0], s.a[1] - s.centre[1], s.b[0] - s.centre[0], s.b[1] - s.centre[1]);
+  const double rx = c[0] - s.centre[0], rz = c[1] - s.centre[1], l = std::hypot(rx, rz);
+  // Walking counter-clockwise the left side is the centre's side.
+  return ccw > 0 ? std::array<double, 2>{-rx / l, -rz / l} : std::array<double, 2>{rx / l, rz / l};
+}
+
+// Closest point on triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = sdk::sub(b, a), ac = sdk::sub(c, a), ap = sdk::sub(p, a);
+  const double d1 = sdk::dot(ab, ap), d2 = sdk::dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = sdk::sub(p, b);
+  const double d3 = sdk::dot(ab, bp), d4 = sdk::dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return sdk::add(a, sdk::scale(ab, d1 / (d1 - d3)));
+  const Vec3 cp = sdk::sub(p, c);
+  const double d5 = sdk::dot(ab, cp), d6 = sdk::dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return sdk::add(a, sdk::scale(ac, d2 / (d2 - d6)));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return sdk::add(b, sdk::scale(sdk::sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
+  const double denom = 1.0 / (va + vb + vc);
+  return sdk::add(a, sdk::add(sdk::scale(ab, vb * denom), sdk::scale(ac, vc * denom)));
+}
+
+// Triangle soup from an STL file (ASCII or binary).
+void read_stl(const std::filesystem::path& file, const std::string& ptr, std::vector<double>& xyz, std::vector<int>& tri) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw JobError(ptr, "cannot open the tool mesh '" + file.string() + "'");
+  std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto add_vertex = [&](double x, double y, double z) {
+    xyz.insert(xyz.end(), {x, y, z});
+    tri.push_back(static_cast<int>(xyz.size() / 3 - 1));
+  };
+  if (data.size() >= 84) {
+    std::uint32_t count = 0;
+    std::memcpy(&count, data.data() + 80, 4);
+    if (data.size() == 84 + 50ull * count) {  // binary
+      for (std::uint32_t f = 0; f < count; ++f) {
+        const char* rec = data.data() + 84 + 50ull * f + 12;
+        for (int k = 0; k < 3; ++k) {
+          float v[3];
+          std::memcpy(v, rec + 12 * k, 12);
+          add_vertex(v[0], v[1], v[2]);
+        }
+      }
+      return;
+    }
+  }
+  std::istringstream s(data);
+  std::string word;
+  if (!(s >> word) || word != "solid")
+    throw JobError(ptr, "'" + file.string() + "' is neither an ASCII nor a binary STL file");
+  while (s >> word) {
+    if (word != "vertex") continue;
+    double x, y, z;
+    if (!(s >> x >> y >> z)) throw JobError(ptr, "'" + file.string() + "': unreadable vertex");
+    add_vertex(x, y, z);
+  }
+  if (tri.size() % 3 != 0) throw JobError(ptr, "'" + file.string() + "': facets without three vertices");
+}
+
+}  // namespace
+
+RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
+  const SurfaceDef& s = def.surface;
+  if (s.type == "revolved") {
+    axis_ = sdk::normalized({s.axis_direction[0], s.axis_direction[1], s.axis_direction[2]});
+    const Vec3 trial = std::abs(axis_[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    perp_ = sdk::normalized(sdk::sub(trial, sdk::scale(axis_, sdk::dot(trial, axis_))));
+    double scale = 0;
+    for (const auto& g : s.profile) scale = std::max({scale, std::hypot(g.a[0], g.a[1]), std::hypot(g.b[0], g.b[1])});
+    const double tol = 1e-9 * std::max(scale, 1e-3);
+    end_normals_.resize(s.profile.size());
+    for (std::size_t i = 0; i < s.profile.size(); ++i) {
+      for (int end = 0; end < 2; ++end) {
+        const auto& q = end == 0 ? s.profile[i].a : s.profile[i].b;
+        std::array<double, 2> n = piece_normal(s.profile[i], q);
+        // Average with the pieces that share this end (corners of the profile).
+        for (std::size_t j = 0; j < s.profile.size(); ++j) {
+          if (j == i) continue;
+          for (const auto& o : {s.profile[j].a, s.profile[j].b})
+            if (std::hypot(o[0] - q[0], o[1] - q[1]) <= tol) {
+              const auto m = piece_normal(s.profile[j], o);
+              n[0] += m[0];
+              n[1] += m[1];
+            }
+        }
+        const double l = std::hypot(n[0], n[1]);
+        if (l > 0) n = {n[0] / l, n[1] / l};
+        end_normals_[i][2 * end] = n[0];
+        end_normals_[i][2 * end + 1] = n[1];
+      }
+    }
+  } else if (s.type == "mesh") {
+    std::vector<double> xyz;
+    std::vector<int> tri;
+    const std::string ptr = def.pointer + "/surface/file";
+    std::string ext = s.file.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    try {
+      if (ext == ".stl") {
+        read_stl(s.file, ptr, xyz, tri);
+      } else {
+        ShellMesh m = read_gmsh(s.file);
+        xyz = m.x;
+        tri = m.triangles;
+      }
+    } catch (const JobError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw JobError(ptr, "cannot read the tool mesh '" + s.file.string() + "': " + e.what());
+    }
+    if (tri.empty()) throw JobError(ptr, "the tool mesh '" + s.file.string() + "' has no triangles");
+    if (s.flip)
+      for (std::size_t e = 0; e < tri.size(); e += 3) std::swap(tri[e + 1], tri[e + 2]);
+    build_mesh(xyz, tri);
+  }
+}
+
+void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri) {
+  const std::size_t nt = tri.size() / 3;
+  mx_.resize(9 * nt);
+  mn_.resize(3 * nt);
+  Vec3 lo = {kInf, kInf, kInf}, hi = {-kInf, -kInf, -kInf};
+  double h = 0;
+  for (std::size_t e = 0; e < nt; ++e) {
+    Vec3 v[3];
+    for (int k = 0; k < 3; ++k) {
+      v[k] = sdk::load3(xyz.data(), tri[3 * e + k]);
+      for (int d = 0; d < 3; ++d) {
+        mx_[9 * e + 3 * k + d] = v[k][d];
+        lo[d] = std::min(lo[d], v[k][d]);
+        hi[d] = std::max(hi[d], v[k][d]);
+      }
+    }
+    for (int k = 0; k < 3; ++k) h = std::max(h, sdk::norm(sdk::sub(v[k], v[(k + 1) % 3])));
+    const Vec3 n = sdk::cross(sdk::sub(v[1], v[0]), sdk::sub(v[2], v[0]));
+    const double l = sdk::norm(n);
+    if (!(l > 0)) throw JobError(def_->pointer + "/surface/file", "the tool mesh has a degenerate triangle (" + std::to_string(e) + ")");
+    for (int d = 0; d < 3; ++d) mn_[3 * e + d] = n[d] / l;
+  }
+  cell_ = std::max(h, 1e-9);
+  for (int tries = 0; tries < 64; ++tries) {
+    long long cells = 1;
+    for (int d = 0; d < 3; ++d) {
+      gn_[d] = std::max(1, static_cast<int>(std::ceil((hi[d] - lo[d]) / cell_)) + 1);
+      cells *= gn_[d];
+    }
+    if (cells <= 4'000'000) break;
+    cell_ *= 1.5;
+  }
+  glo_ = lo;
+  const std::size_t ncell = static_cast<std::size_t>(gn_[0]) * gn_[1] * gn_[2];
+  std::vector<std::array<int, 6>> range(nt);
+  cell_start_.assign(ncell + 1, 0);
+  for (std::size_t e = 0; e < nt; ++e) {
+    for (int d = 0; d < 3; ++d) {
+      double a = kInf, b = -kInf;
+      for (int k = 0; k < 3; ++k) {
+        a = std::min(a, mx_[9 * e + 3 * k + d]);
+        b = std::max(b, mx_[9 * e + 3 * k + d]);
+      }
+      range[e][d] = std::clamp(static_cast<int>((a - glo_[d]) / cell_), 0, gn_[d] - 1);
+      range[e][3 + d] = std::clamp(static_cast<int>((b - glo_[d]) / cell_), 0, gn_[d] - 1);
+    }
+    for (int i = range[e][0]; i <= range[e][3]; ++i)
+      for (int j = range[e][1]; j <= range[e][4]; ++j)
+        for (int k = range[e][2]; k <= range[e][5]; ++k) ++cell_start_[(static_cast<std::size_t>(k) * gn_[1] + j) * gn_[0] + i + 1];
+  }
+  for (std::size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+  cell_tri_.assign(cell_start_[ncell], 0);
+  std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
+  for (std::size_t e = 0; e < nt; ++e)
+    for (int i = range[e][0]; i <= range[e][3]; ++i)
+      for (int j = range[e][1]; j <= range[e][4]; ++j)
+        for (int k = range[e][2]; k <= range[e][5]; ++k)
+          cell_tri_[fill[(static_cast<std::size_t>(k) * gn_[1] + j) * gn_[0] + i]++] = static_cast<int>(e);
+}
+
+void RigidTool::query(std::size_t n, const double* points, double cutoff, double* distance, double* normal) const {
+  const SurfaceDef& s = def_->surface;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double p[3] = {points[3 * i] - u_[0], points[3 * i + 1] - u_[1], points[3 * i + 2] - u_[2]};
+    double* nn = normal + 3 * i;
+    if (s.type == "plane") {
+      const Vec3 u = sdk::normalized({s.normal[0], s.normal[1], s.normal[2]});
+      distance[i] = (p[0] - s.point[0]) * u[0] + (p[1] - s.point[1]) * u[1] + (p[2] - s.point[2]) * u[2];
+      for (int d = 0; d < 3; ++d) nn[d] = u[d];
+    } else if (s.type == "sphere") {
+      const Vec3 r = {p[0] - s.centre[0], p[1] - s.centre[1], p[2] - s.centre[2]};
+      const double len = sdk::norm(r);
+      const Vec3 u = len > 0 ? sdk::scale(r, 1.0 / len) : Vec3{0, 0, 1};
+      distance[i] = len - s.radius;
+      for (int d = 0; d < 3; ++d) nn[d] = u[d];
+    } else if (s.type == "revolved") {
+      query_revolved(p, distance[i], nn);
+    } else {
+      query_mesh(p, cutoff, distance[i], nn);
+    }
+  }
+}
+
+void RigidTool::query_revolved(const double* p, double& dist, double* nout) const {
+  const SurfaceDef& s = def_->surface;
+  const Vec3 w = {p[0] - s.axis_origin[0], p[1] - s.axis_origin[1], p[2] - s.axis_origin[2]};
+  const double z = sdk::dot(w, axis_);
+  const Vec3 rho = sdk::sub(w, sdk::scale(axis_, z));
+  const double r = sdk::norm(rho);
+  const Vec3 er = r > 1e-300 ? sdk::scale(rho, 1.0 / r) : perp_;
+  double best = kInf;
+  std::array<double, 2> bc{0, 0}, bn{0, 0};
+  for (std::size_t k = 0; k < s.profile.size(); ++k) {
+    const ProfileSegment& g = s.profile[k];
+    std::array<double, 2> c, n;
+    int end = -1;  // 0: at a, 1: at b, -1: inside
+    if (!g.arc) {
+      const double dr = g.b[0] - g.a[0], dz = g.b[1] - g.a[1];
+      double t = ((r - g.a[0]) * dr + (z - g.a[1]) * dz) / (dr * dr + dz * dz);
+      if (t <= 0) {
+        t = 0;
+        end = 0;
+      } else if (t >= 1) {
+        t = 1;
+        end = 1;
+      }
+      c = {g.a[0] + t * dr, g.a[1] + t * dz};
+    } else {
+      const double ax = g.a[0] - g.centre[0], az = g.a[1] - g.centre[1];
+      const double bx = g.b[0] - g.centre[0], bz = g.b[1] - g.centre[1];
+      const double qx = r - g.centre[0], qz = z - g.centre[1];
+      const double ql = std::hypot(qx, qz), R = std::hypot(ax, az);
+      const double orient = cross2(ax, az, bx, bz) > 0 ? 1.0 : -1.0;
+      const bool inside = ql > 0 && orient * cross2(ax, az, qx, qz) >= 0 && orient * cross2(qx, qz, bx, bz) >= 0;
+      if (inside) {
+        c = {g.centre[0] + R * qx / ql, g.centre[1] + R * qz / ql};
+      } else {
+        const double da = std::hypot(r - g.a[0], z - g.a[1]), db = std::hypot(r - g.b[0], z - g.b[1]);
+        end = da <= db ? 0 : 1;
+        c = end == 0 ? g.a : g.b;
+      }
+    }
+    const double d2 = (r - c[0]) * (r - c[0]) + (z - c[1]) * (z - c[1]);
+    if (d2 < best) {
+      best = d2;
+      bc = c;
+      n = end < 0 ? piece_normal(g, c)
+                  : std::array<double, 2>{end_normals_[k][2 * end], end_normals_[k][2 * end + 1]};
+      bn = n;
+    }
+  }
+  const double dr = r - bc[0], dz = z - bc[1];
+  const double len = std::sqrt(best);
+  const double side = dr * bn[0] + dz * bn[1] >= 0 ? 1.0 : -1.0;
+  dist = side * len;
+  std::array<double, 2> n2 = bn;
+  if (len > 1e-12) n2 = {side * dr / len, side * dz / len};
+  for (int d = 0; d < 3; ++d) nout[d] = n2[0] * er[d] + n2[1] * axis_[d];
+}
+
+void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double* nout) const {
+  const Vec3 x = {p[0], p[1], p[2]};
+  const double reach = std::isfinite(cutoff) ? cutoff : cell_;
+  int c0[3], c1[3];
+  for (int d = 0; d < 3; ++d) {
+    const double lo = (x[d] - reach - glo_[d]) / cell_, hi = (x[d] + reach - glo_[d]) / cell_;
+    if (hi < 0 || lo > gn_[d]) {
+      dist = kInf;
+      nout[0] = nout[1] = 0;
+      nout[2] = 1;
+      return;
+    }
+    c0[d] = std::clamp(static_cast<int>(std::floor(lo)), 0, gn_[d] - 1);
+    c1[d] = std::clamp(static_cast<int>(std::floor(hi)), 0, gn_[d] - 1);
+  }
+  double best = reach * reach;
+  int best_e = -1;
+  Vec3 best_q{};
+  for (int k = c0[2]; k <= c1[2]; ++k)
+    for (int j = c0[1]; j <= c1[1]; ++j)
+      for (int i = c0[0]; i <= c1[0]; ++i) {
+        const std::size_t c = (static_cast<std::size_t>(k) * gn_[1] + j) * gn_[0] + i;
+        for (int q = cell_start_[c]; q < cell_start_[c + 1]; ++q) {
+          const int e = cell_tri_[q];
+          const double* v = &mx_[9 * static_cast<std::size_t>(e)];
+          const Vec3 cp = closest_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
+          const Vec3 dv = sdk::sub(x, cp);
+          const double d2 = sdk::dot(dv, dv);
+          if (d2 < best || (d2 == best && best_e >= 0 && e < best_e)) {
+            best = d2;
+            best_e = e;
+            best_q = cp;
+          }
+        }
+      }
+  if (best_e < 0) {
+    dist = kInf;
+    nout[0] = nout[1] = 0;
+    nout[2] = 1;
+    return;
+  }
+  const Vec3 fn = sdk::load3(mn_.data(), best_e);
+  const Vec3 dv = sdk::sub(x, best_q);
+  const double len = std::sqrt(best);
+  const double side = sdk::dot(dv, fn) >= 0 ? 1.0 : -1.0;
+  dist = side * len;
+  for (int d = 0; d < 3; ++d) nout[d] = fn[d];
+}
+
+std::array<double, 3> RigidTool::prescribed(double t) const {
+  const MotionDef& m = def_->motion;
+  if (m.kind == MotionDef::Kind::Velocity) return {m.velocity[0] * t, m.velocity[1] * t, m.velocity[2] * t};
+  if (m.kind == MotionDef::Kind::Displacement) {
+    const auto& tab = m.table;
+    if (t <= tab.front()[0]) return {tab.front()[1], tab.front()[2], tab.front()[3]};
+    if (t >= tab.back()[0]) return {tab.back()[1], tab.back()[2], tab.back()[3]};
+    const auto it = std::upper_bound(tab.begin(), tab.end(), t, [](double v, const auto& row) { return v < row[0]; });
+    const auto& b = *it;
+    const auto& a = *(it - 1);
+    const double s = (t - a[0]) / (b[0] - a[0]);
+    return {a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2]), a[3] + s * (b[3] - a[3])};
+  }
+  return u_;
+}
+
+void RigidTool::advance(double t, double dt, double dt_avg, const std::array<double, 3>& reaction) {
+  const MotionDef& m = def_->motion;
+  if (m.kind == MotionDef::Kind::Fixed) return;
+  if (m.kind == MotionDef::Kind::Force) {
+    // Translation along the force: M a = |F| + dir . R - c v.
+    const Vec3 dir = sdk::normalized({m.force[0], m.force[1], m.force[2]});
+    const double F = sdk::norm({m.force[0], m.force[1], m.force[2]});
+    double v = sdk::dot(v_, dir);
+    v += dt_avg * (F + sdk::dot(dir, {reaction[0], reaction[1], reaction[2]}) - m.damping * v) / m.mass;
+    for (int d = 0; d < 3; ++d) {
+      v_[d] = v * dir[d];
+      u_[d] += dt * v_[d];
+    }
+    return;
+  }
+  const auto a = prescribed(t), b = prescribed(t + dt);
+  for (int d = 0; d < 3; ++d) {
+    v_[d] = (b[d] - a[d]) / dt;
+    u_[d] = b[d];
+  }
+}
+
+}  // namespace ts

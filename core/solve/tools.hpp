@@ -1,0 +1,58 @@
+#pragma once
+// Rigid tools: exact signed distance and outward normal of analytic
+// surfaces (plane, sphere, profile of lines and arcs revolved about an axis)
+// and of triangle meshes (Gmsh or STL), and their rigid translation
+// (constant velocity, displacement table, or driven by a force).
+#include <array>
+#include <vector>
+
+#include "job/job.hpp"
+
+namespace ts {
+
+class RigidTool {
+ public:
+  // Throws JobError (at the surface's pointer) when a mesh cannot be read.
+  explicit RigidTool(const ToolDef& def);
+
+  const ToolDef& def() const { return *def_; }
+  // Signed distance (positive outside, where the outward normal points) and
+  // outward unit normal of n points, in the tool's current position. Points
+  // farther than `cutoff` from a mesh surface get +infinity.
+  void query(std::size_t n, const double* points, double cutoff, double* distance, double* normal) const;
+  static void query_fn(const void* self, std::size_t n, const double* points, double cutoff, double* distance,
+                       double* normal) {
+    static_cast<const RigidTool*>(self)->query(n, points, cutoff, distance, normal);
+  }
+
+  // Rigid translation from the initial position (m) and velocity (m/s).
+  const std::array<double, 3>& displacement() const { return u_; }
+  const std::array<double, 3>& velocity() const { return v_; }
+  bool force_controlled() const { return def_->motion.kind == MotionDef::Kind::Force; }
+  // Advances the tool from t to t + dt. `reaction` is the force the plies
+  // exert on the tool at t (used by force control); dt_avg is the central
+  // difference interval of the velocity update.
+  void advance(double t, double dt, double dt_avg, const std::array<double, 3>& reaction);
+  // Prescribed displacement at time t (velocity and table motions).
+  std::array<double, 3> prescribed(double t) const;
+
+ private:
+  void query_revolved(const double* p, double& d, double* n) const;
+  void query_mesh(const double* p, double cutoff, double& d, double* n) const;
+  void build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri);
+
+  const ToolDef* def_;
+  std::array<double, 3> u_{0, 0, 0}, v_{0, 0, 0};
+  // revolved: unit axis, a unit vector normal to it, per-segment normals at the ends
+  std::array<double, 3> axis_{0, 0, 1}, perp_{1, 0, 0};
+  std::vector<std::array<double, 4>> end_normals_;  // (nr, nz) at a, (nr, nz) at b: averaged at shared ends
+  // mesh: triangles in the initial position and a uniform bucket grid
+  std::vector<double> mx_;  // 9 per triangle
+  std::vector<double> mn_;  // 3 per triangle (unit normal)
+  std::array<double, 3> glo_{0, 0, 0};
+  double cell_ = 1;
+  std::array<int, 3> gn_{1, 1, 1};
+  std::vector<int> cell_start_, cell_tri_;
+};
+
+}  // namespace ts

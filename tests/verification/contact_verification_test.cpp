@@ -1,0 +1,250 @@
+// Verification of mechanical contact (penalty_node_surface with rigid tools
+// and ply/ply), each against a closed-form answer:
+// - a ply pressed between two planes (force-controlled upper plane),
+// - sliding and sticking under tilted gravity (Coulomb),
+// - a ply dropped on a plane (no energy created by contact),
+// - two plies pressed by a cold tool (heat through the interface),
+// - the faces that exchange heat when a ply is flipped or approaches from below.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_support.hpp"
+
+namespace ts::test {
+namespace {
+
+constexpr double kSide = 0.02, kH = 0.0005, kRho = 1294.0;
+
+json ply(const std::string& name, double z_mid, double temperature = 280.0) {
+  return {{"name", name},
+          {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, z_mid}}, {"size", {kSide, kSide}}, {"divisions", {4, 4}}}},
+          {"thickness", kH},
+          {"material", "ud"},
+          {"initial_temperature", temperature},
+          {"thickness_layers", 8}};
+}
+
+json plane(const std::string& name, double z, int up, double temperature = 260.0) {
+  return {{"name", name},
+          {"surface", {{"type", "plane"}, {"point", {0, 0, z}}, {"normal", {0, 0, up}}}},
+          {"temperature", temperature}};
+}
+
+json base_job(double t_end) {
+  return {{"format", "thermostamp-job/1"},
+          {"name", "contact"},
+          {"time", {{"end", t_end}}},
+          {"materials",
+           {{"ud",
+             {{"density", kRho},
+              {"specific_heat", 1775.0},
+              {"conductivity", {3.89, 0.31, 0.31}},
+              {"membrane", {{"law", "ud_hyperelastic"}, {"k_fibre", 5.0e4}, {"p_ct", 5.0e3}, {"k_sh", {2.0e3, 0.0, 0.0}}}}}}}},
+          {"parts", json::array()},
+          {"tools", json::array()},
+          {"interactions", json::array()},
+          {"constraints", json::array()},
+          {"solvers", {{"mechanics", {{"dt_safety", 0.8}}}, {"thermal", nullptr}}},
+          {"output", {{"interval", t_end / 4}, {"fields", {"displacement", "contact_status"}}}}};
+}
+
+double tool_value(const RunResult& r, int tool, int d, bool force) {
+  return force ? r.energy.tool_forces[3 * tool + d] : r.energy.tool_displacements[3 * tool + d];
+}
+
+}  // namespace
+
+// A ply between a fixed lower plane and an upper plane driven down by a
+// force F (mass M, viscous damper): at rest each plane carries F, and each
+// face penetrates by delta = F / (penalty * A). Required: penetration under
+// 1 % of the thickness at the default penalty for 0.4 MPa, both reactions
+// equal to F within 1 %, the penetration within 2 % of F / (penalty A).
+TEST(Contact, PlyPressedBetweenTwoPlanes) {
+  const double pressure = 0.4e6, area = kSide * kSide, F = pressure * area, penalty = 1.0e11;
+  json j = base_job(0.01);
+  j["parts"] = {ply("ply", 0.0)};
+  j["tools"] = {plane("die", -0.5 * kH, 1), plane("holder", 0.5 * kH, -1)};
+  j["tools"][1]["motion"] = {{"force", {0, 0, -F}}, {"mass", 0.1}, {"damping", 2000.0}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}},
+                       {{"type", "contact"}, {"between", {"holder", "ply"}}}};
+  j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+  j["solvers"]["mechanics"]["damping"] = 2000.0;
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const double die_fz = tool_value(r.result, 0, 2, true), holder_fz = tool_value(r.result, 1, 2, true);
+  const double delta = 0.5 * -tool_value(r.result, 1, 2, false);  // holder travel = both penetrations
+  const double expected = F / (penalty * area);
+  EXPECT_NEAR(-die_fz / F, 1.0, 0.01);
+  EXPECT_NEAR(holder_fz / F, 1.0, 0.01);
+  EXPECT_NEAR(delta / expected, 1.0, 0.02);
+  EXPECT_LT(delta / kH, 0.01);
+  std::printf("pressed ply: F %.4g N, die %.5g N, holder %.5g N, penetration %.4g m = %.3f %% of h "
+              "(F/(kA) = %.4g m), %lld steps\n",
+              F, -die_fz, holder_fz, delta, 100 * delta / kH, expected, r.result.mechanical_steps);
+}
+
+// A ply on a plane under gravity tilted by alpha (the plane stays z = 0):
+// with tan(alpha) > mu it slides with a = g (sin(alpha) - mu cos(alpha))
+// and the friction force is mu N; with tan(alpha) < mu it sticks.
+// Required: displacement within 2 %, friction / normal force = mu within 2 %,
+// sticking ply moves less than 1e-6 of the frictionless slide.
+TEST(Contact, CoulombSlideAndStickOnTiltedGravity) {
+  const double g = 9.81, mu = 0.3, t_end = 0.05;
+  for (const double alpha_deg : {30.0, 10.0}) {
+    const double a = alpha_deg * M_PI / 180;
+    json j = base_job(t_end);
+    j["parts"] = {ply("ply", 0.5 * kH)};
+    j["tools"] = {plane("die", 0.0, 1)};
+    j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"friction", mu}}};
+    j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};
+    j["output"]["probes"] = {{{"name", "c"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
+                              {"quantities", {"displacement_x"}}, {"interval", t_end / 10}}};
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    const double ux = r.sample(0, "displacement_x", t_end)->values[0];
+    const double fx = tool_value(r.result, 0, 0, true), fz = tool_value(r.result, 0, 2, true);
+    const double slide_free = 0.5 * g * std::sin(a) * t_end * t_end;
+    if (std::tan(a) > mu) {
+      const double expected = 0.5 * g * (std::sin(a) - mu * std::cos(a)) * t_end * t_end;
+      EXPECT_NEAR(ux / expected, 1.0, 0.02);
+      EXPECT_NEAR(std::abs(fx / fz), mu, 0.02 * mu);
+      std::printf("slide at %.0f deg: u %.5g m (analytic %.5g m), friction/normal %.5f (mu %.2f)\n", alpha_deg, ux,
+                  expected, std::abs(fx / fz), mu);
+    } else {
+      EXPECT_LT(std::abs(ux), 1e-6 * slide_free);
+      EXPECT_LT(std::abs(fx / fz), mu);
+      EXPECT_NEAR(std::abs(fx / fz), std::tan(a), 0.02 * std::tan(a));
+      std::printf("stick at %.0f deg: u %.3g m (frictionless %.4g m), friction/normal %.5f (tan %.5f)\n", alpha_deg,
+                  ux, slide_free, std::abs(fx / fz), std::tan(a));
+    }
+    if (std::tan(a) > mu) EXPECT_LT(r.result.energy.balance_error, 0.01);
+  }
+}
+
+// A ply dropped from 2 mm onto a plane (no friction). Contact must not
+// create energy: the rebound stays below the drop height, for any step.
+// A stiff penalty resolved by a few steps gains or loses energy at random
+// when contact starts or ends within a step (measured here with the normal
+// damping off: up to 9 % of m g h), so the default normal damping (0.1 of
+// critical) removes more than that: a linear spring-dashpot rebounds to
+// e^2 = exp(-2 zeta pi / sqrt(1 - zeta^2)) = 0.53 of the height.
+// Required, for dt_safety 0.8, 0.4 and 0.2: rebound height within 0.4 to
+// 0.65 of the drop (e^2 with the step's scatter), energy balance (contact
+// work included) within 1 %.
+TEST(Contact, DroppedPlyCreatesNoEnergy) {
+  const double g = 9.81, drop = 0.002, t_end = 0.045;
+  for (const double safety : {0.8, 0.4, 0.2}) {
+    json j = base_job(t_end);
+    j["parts"] = {ply("ply", 0.5 * kH + drop)};
+    j["tools"] = {plane("die", 0.0, 1)};
+    j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}}};
+    j["solvers"]["mechanics"]["gravity"] = {0.0, 0.0, -g};
+    j["solvers"]["mechanics"]["dt_safety"] = safety;
+    j["output"]["probes"] = {{{"name", "c"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
+                              {"quantities", {"displacement_z"}}, {"interval", 1e-4}}};
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    const double t_hit = std::sqrt(2 * drop / g);
+    double lowest = 0, apex = -1;
+    for (const auto& s : r.result.probes) {
+      lowest = std::min(lowest, s.values[0]);
+      if (s.time > 1.2 * t_hit) apex = std::max(apex, s.values[0]);
+    }
+    const double rebound = (apex + drop) / drop;
+    EXPECT_NEAR(lowest, -drop, 0.01 * drop);  // it did reach the plane
+    EXPECT_GT(rebound, 0.35);
+    EXPECT_LT(rebound, 0.65);
+    EXPECT_LT(r.result.energy.balance_error, 0.01);
+    std::printf("drop %.4g m, dt_safety %.1f: rebound %.3f of the height (spring-dashpot 0.532), balance error %.2e\n",
+                drop, safety, rebound, r.result.energy.balance_error);
+  }
+}
+
+// Two plies at 300 degC on a die (no heat exchange with it), pressed by a
+// holder at 260 degC (conductance 1000 W/m2/K to the upper ply and between
+// the plies), mechanics and ADI thermal together. Required: the heat the
+// lower ply lost equals what left through the interface, h_c A (T_upper -
+// T_lower) dt with the facing surface temperatures, to 1e-9; the upper ply's
+// change is the holder's heat plus the interface heat, to 1e-9; the total
+// balance to 1e-9; the lower ply cools (through the upper one), its upper
+// face more than its lower face.
+TEST(Contact, StackedPliesPressedByAColdTool) {
+  const double t_end = 0.2, F = 0.1e6 * kSide * kSide;
+  json j = base_job(t_end);
+  j["parts"] = {ply("low", 0.5 * kH, 300.0), ply("up", 1.5 * kH, 300.0)};
+  j["tools"] = {plane("die", 0.0, 1), plane("holder", 2 * kH, -1)};
+  j["tools"][1]["motion"] = {{"force", {0, 0, -F}}, {"mass", 0.05}, {"damping", 500.0}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "low"}}, {"conductance", 0.0}},
+                       {{"type", "contact"}, {"between", {"holder", "up"}}, {"conductance", 1000.0}},
+                       {{"type", "contact"}, {"between", {"up", "low"}}, {"conductance", 1000.0}}};
+  j["constraints"] = {{{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+  j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"damping", 500.0}, {"mass_scaling", {{"target_dt", 2e-5}}}};
+  j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", "implicit"}};
+  j["output"]["probes"] = {{{"name", "low"}, {"part", "low"}, {"at", {kSide / 2, kSide / 2, 0}},
+                            {"quantities", {"temperature_profile"}}, {"interval", t_end / 4}}};
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const auto& dq = r.result.part_heat_change;
+  const auto& link = r.result.part_link_heat;
+  const double tool = r.result.energy.tool_heat[1];
+  EXPECT_LT(dq[0], 0.0);
+  EXPECT_NEAR(dq[0], link[0], 1e-9 * std::abs(dq[0]));
+  EXPECT_NEAR(dq[1], tool + link[1], 1e-9 * std::abs(dq[1]));
+  EXPECT_NEAR(link[0], -link[1], 1e-12 * std::abs(link[0]));
+  EXPECT_LT(r.result.heat_balance_error, 1e-9);
+  EXPECT_EQ(r.result.energy.tool_heat[0], 0.0);
+  const auto& prof = r.sample(0, "temperature_profile", t_end)->values;
+  EXPECT_LT(prof.back(), 300.0 - 0.1);  // the lower ply's upper face cools
+  EXPECT_LT(prof.back(), prof.front());
+  std::printf("stack: lower ply %.6g J (interface %.6g J), upper ply %.6g J (holder %.6g J + interface %.6g J), "
+              "lower ply faces %.3f / %.3f degC, balance %.1e\n",
+              dq[0], link[0], dq[1], tool, link[1], prof.front(), prof.back(), r.result.heat_balance_error);
+}
+
+// Which faces exchange heat: a hot lower ply (300 degC) and a cooler upper
+// ply (260 degC), touching. Three set-ups: the upper ply flipped (its top
+// face looks down), the search run from the lower ply against the upper one,
+// and the lower ply pushed up from below into the held upper ply. In each,
+// the faces that meet are the lower ply's upper face and the upper ply's
+// lower face: those change most (required: each face that meets moved at
+// least 5x more than the opposite face of the same ply).
+TEST(Contact, FacingFacesWhenFlippedOrFromBelow) {
+  const double t_end = 0.05;
+  for (int setup = 0; setup < 3; ++setup) {
+    json j = base_job(t_end);
+    const double gap = setup == 2 ? 0.05e-3 : 0.0;
+    j["parts"] = {ply("low", 0.5 * kH - gap, 300.0), ply("up", 1.5 * kH, 260.0)};
+    if (setup == 0) j["parts"][1]["flip"] = true;
+    const json between = setup == 1 ? json{"low", "up"} : json{"up", "low"};
+    j["interactions"] = {{{"type", "contact"}, {"between", between}, {"conductance", 5000.0}}};
+    j["constraints"] = {{{"type", "fix"}, {"part", "up"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y", "z"}}},
+                        {{"type", "fix"}, {"part", "low"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+    if (setup == 2) {
+      j["constraints"].push_back({{"type", "velocity"}, {"part", "low"}, {"box", {{-1, -1, -1}, {1, 1, 1}}},
+                                  {"dofs", {"z"}}, {"velocity", {0.0, 0.0, 2 * gap / t_end * 4}}});
+      j["interactions"][0]["penalty"] = 1e9;  // the driven ply keeps pushing: a softer spring
+    } else {
+      j["constraints"].push_back(
+          {{"type", "fix"}, {"part", "low"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}});
+    }
+    j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", "implicit"}};
+    j["output"]["probes"] = {{{"name", "low"}, {"part", "low"}, {"at", {kSide / 2, kSide / 2, 0}},
+                              {"quantities", {"temperature_profile"}}, {"interval", t_end}},
+                             {{"name", "up"}, {"part", "up"}, {"at", {kSide / 2, kSide / 2, 0}},
+                              {"quantities", {"temperature_profile"}}, {"interval", t_end}}};
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    const auto& low = r.sample(0, "temperature_profile", t_end)->values;
+    const auto& up = r.sample(1, "temperature_profile", t_end)->values;
+    // The upper ply's face looking down: its bottom, or its top when flipped.
+    const double up_meet = setup == 0 ? up.back() : up.front(), up_away = setup == 0 ? up.front() : up.back();
+    EXPECT_GT(300.0 - low.back(), 5 * (300.0 - low.front())) << "setup " << setup;
+    EXPECT_GT(up_meet - 260.0, 5 * (up_away - 260.0)) << "setup " << setup;
+    EXPECT_GT(up_meet - 260.0, 0.5) << "setup " << setup;
+    std::printf("setup %d: lower ply bottom/top %.3f / %.3f, upper ply facing/away %.3f / %.3f degC\n", setup,
+                low.front(), low.back(), up_meet, up_away);
+  }
+}
+
+}  // namespace ts::test
