@@ -28,6 +28,7 @@ std::shared_ptr<spdlog::logger> logger(const std::string& module) {
   if (auto l = spdlog::get(module)) return l;
   auto l = std::make_shared<spdlog::logger>(module, dist());
   l->set_level(spdlog::level::debug);
+  l->flush_on(spdlog::level::info);  // a failed or killed run keeps its log
   spdlog::register_logger(l);
   return l;
 }

@@ -167,6 +167,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
   if (format != "thermostamp-job/1")
     throw JobError("/format", "unsupported format '" + format + "'; this version reads 'thermostamp-job/1'");
   job.name = top.text("name");
+  top.text("description", std::string());
   if (job.name.empty() || job.name.find_first_of("/\\") != std::string::npos)
     throw JobError("/name", "must be a non-empty name without '/' (it names the output folder)");
   {

@@ -157,6 +157,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
       {"properties",
        {{"format", {{"const", "thermostamp-job/1"}}},
         {"name", {{"type", "string"}}},
+        {"description", {{"type", "string"}}},
         {"time", {{"type", "object"}, {"properties", {{"end", {{"type", "number"}, {"exclusiveMinimum", 0}}}}}, {"required", {"end"}}, {"additionalProperties", false}}},
         {"plugin_paths", {{"type", "array"}, {"items", {{"type", "string"}}}}},
         {"materials", {{"type", "object"}, {"additionalProperties", material}}},

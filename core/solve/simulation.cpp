@@ -1078,6 +1078,10 @@ RunResult Simulation::run(const RunOptions& opt) {
       update_node_temperature();
       double stable = mechanics_stable_dt();
       compute_contact_forces(0.0, 0.0);
+      if (contact_energy_ > 0)
+        log->warn("contact springs hold {:.4g} J at t = 0 on {} node(s): a ply starts inside a tool or another ply "
+                  "(check the tools' positions and the side their profile faces)",
+                  contact_energy_, contact_active_);
       if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
       double next_sample = 0, audit_scale = 0;
       while (t < t_end - eps_t) {

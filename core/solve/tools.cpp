@@ -35,28 +35,6 @@ std::array<double, 2> piece_normal(const ProfileSegment& s, const std::array<dou
   return ccw > 0 ? std::array<double, 2>{-rx / l, -rz / l} : std::array<double, 2>{rx / l, rz / l};
 }
 
-// Closest point on triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5).
-Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 ab = sdk::sub(b, a), ac = sdk::sub(c, a), ap = sdk::sub(p, a);
-  const double d1 = sdk::dot(ab, ap), d2 = sdk::dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Vec3 bp = sdk::sub(p, b);
-  const double d3 = sdk::dot(ab, bp), d4 = sdk::dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return sdk::add(a, sdk::scale(ab, d1 / (d1 - d3)));
-  const Vec3 cp = sdk::sub(p, c);
-  const double d5 = sdk::dot(ab, cp), d6 = sdk::dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return sdk::add(a, sdk::scale(ac, d2 / (d2 - d6)));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return sdk::add(b, sdk::scale(sdk::sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
-  const double denom = 1.0 / (va + vb + vc);
-  return sdk::add(a, sdk::add(sdk::scale(ab, vb * denom), sdk::scale(ac, vc * denom)));
-}
-
 // Triangle soup from an STL file (ASCII or binary).
 void read_stl(const std::filesystem::path& file, const std::string& ptr, std::vector<double>& xyz, std::vector<int>& tri) {
   std::ifstream in(file, std::ios::binary);
@@ -317,7 +295,7 @@ void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double*
         for (int q = cell_start_[c]; q < cell_start_[c + 1]; ++q) {
           const int e = cell_tri_[q];
           const double* v = &mx_[9 * static_cast<std::size_t>(e)];
-          const Vec3 cp = closest_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
+          const Vec3 cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
           const Vec3 dv = sdk::sub(x, cp);
           const double d2 = sdk::dot(dv, dv);
           if (d2 < best || (d2 == best && best_e >= 0 && e < best_e)) {
@@ -338,7 +316,10 @@ void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double*
   const double len = std::sqrt(best);
   const double side = sdk::dot(dv, fn) >= 0 ? 1.0 : -1.0;
   dist = side * len;
-  for (int d = 0; d < 3; ++d) nout[d] = fn[d];
+  // Inside a triangle the direction is its normal; off an edge or a vertex
+  // the direction from the closest point (folds act as rounded).
+  const Vec3 n = len > 1e-12 * cell_ && std::abs(sdk::dot(dv, fn)) < (1 - 1e-12) * len ? sdk::scale(dv, side / len) : fn;
+  for (int d = 0; d < 3; ++d) nout[d] = n[d];
 }
 
 std::array<double, 3> RigidTool::prescribed(double t) const {

@@ -18,7 +18,8 @@ class RigidTool {
   const ToolDef& def() const { return *def_; }
   // Signed distance (positive outside, where the outward normal points) and
   // outward unit normal of n points, in the tool's current position. Points
-  // farther than `cutoff` from a mesh surface get +infinity.
+  // farther than `cutoff` from a mesh surface get +infinity. Edges and the
+  // free ends of a profile act as rounded (distance to the edge point).
   void query(std::size_t n, const double* points, double cutoff, double* distance, double* normal) const;
   static void query_fn(const void* self, std::size_t n, const double* points, double cutoff, double* distance,
                        double* normal) {

@@ -153,8 +153,9 @@ class Candidates {
 
 struct Projection {
   int element = -1;
-  double d = 0;  // signed distance of the node from the target's mid-surface, along n_e
-  double w[3] = {0, 0, 0};
+  double d = 0;            // signed distance of the node from the target's mid-surface (+ on the side of n_e)
+  Vec3 n = {0, 0, 1};      // unit direction of d, on the side of n_e
+  double w[3] = {0, 0, 0};  // weights of the target point on the element's nodes
 };
 
 class PenaltyNodeSurface final : public sdk::ContactHandler {
@@ -270,36 +271,35 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     if (cand_.needs_rebuild(a, b)) cand_.build(a, b, reach, std::max(0.5 * h, 2 * reach));
   }
 
-  // The target element of node i within `reach` of B's mid-surface: the
-  // element whose projection contains the node, nearest first.
+  // The target of node i within `reach` of B's mid-surface: the closest
+  // point on B's candidate triangles. Inside a triangle the distance is
+  // measured along its normal; on an edge or a vertex (a node over a convex
+  // fold finds no triangle under it) along the direction from that point,
+  // so the surface acts as if its folds were rounded.
   Projection project(const sdk::PartView& a, const sdk::PartView& b, int i, double reach) const {
     Projection best;
-    double best_abs = kInf;
+    double best_dist = reach;
     const Vec3 x = sdk::load3(a.x.data(), i);
     const auto [begin, end] = cand_.of(i);
     if (!begin) return best;
-    constexpr double eps = 1e-6;
     for (const int* it = begin; it != end; ++it) {
       const int e = *it;
       const int* t = &b.triangles[3 * e];
       if (a.index == b.index && (t[0] == i || t[1] == i || t[2] == i)) continue;  // self contact
       const Vec3 p0 = sdk::load3(b.x.data(), t[0]), p1 = sdk::load3(b.x.data(), t[1]), p2 = sdk::load3(b.x.data(), t[2]);
-      const Vec3 n = sdk::load3(en_b_.data(), e);
-      const double d = sdk::dot(sdk::sub(x, p0), n);
-      if (std::abs(d) > reach || std::abs(d) >= best_abs) continue;
-      const Vec3 xp = sdk::sub(x, sdk::scale(n, d));
-      const double two_a = sdk::dot(sdk::cross(sdk::sub(p1, p0), sdk::sub(p2, p0)), n);
-      const double w0 = sdk::dot(sdk::cross(sdk::sub(p1, xp), sdk::sub(p2, xp)), n) / two_a;
-      const double w1 = sdk::dot(sdk::cross(sdk::sub(p2, xp), sdk::sub(p0, xp)), n) / two_a;
-      const double w2 = 1.0 - w0 - w1;
-      if (w0 < -eps || w1 < -eps || w2 < -eps) continue;
+      double w[3];
+      const Vec3 cp = sdk::closest_point_on_triangle(x, p0, p1, p2, w);
+      const Vec3 r = sdk::sub(x, cp);
+      const double dist = sdk::norm(r);
+      if (dist > best_dist || (dist == best_dist && best.element >= 0)) continue;
+      const Vec3 ne = sdk::load3(en_b_.data(), e);
+      const double dn = sdk::dot(r, ne);
+      const bool inside = w[0] > 0 && w[1] > 0 && w[2] > 0;
       best.element = e;
-      best.d = d;
-      best_abs = std::abs(d);
-      const double c0 = std::max(0.0, w0), c1 = std::max(0.0, w1), c2 = std::max(0.0, w2), s = c0 + c1 + c2;
-      best.w[0] = c0 / s;
-      best.w[1] = c1 / s;
-      best.w[2] = c2 / s;
+      best_dist = dist;
+      best.d = inside ? dn : (dn >= 0 ? dist : -dist);
+      best.n = inside || dist <= 0 ? ne : sdk::scale(r, (dn >= 0 ? 1.0 : -1.0) / dist);
+      for (int j = 0; j < 3; ++j) best.w[j] = w[j];
     }
     return best;
   }
@@ -323,15 +323,15 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const double m2 = sdk::norm(old);
       if (m2 > 0) old = sdk::scale(old, mag / m2);
       const Vec3 vt = sdk::sub(vrel, sdk::scale(n, vn));
-      // Sticking: the spring plus the same fraction of critical damping;
-      // sliding: the Coulomb force, and the spring follows it.
+      // Elastic slip: a tangential spring, held at the Coulomb limit while
+      // sliding.
       Vec3 spring = sdk::sub(old, sdk::scale(vt, k * dt));
-      ft = sdk::sub(spring, sdk::scale(vt, damping_ * 2.0 * std::sqrt(k * m)));
-      const double lim = friction_ * fn, len = sdk::norm(ft);
-      if (len > lim) {
-        ft = sdk::scale(ft, lim / len);
-        spring = ft;
-      }
+      // The limit follows the penalty (elastic) pressure only: a limit that
+      // followed the damper would tie the tangential force to the normal
+      // velocity, a non-symmetric coupling that can feed vibrations.
+      const double lim = friction_ * k * pen, len = sdk::norm(spring);
+      if (len > lim) spring = sdk::scale(spring, lim / len);
+      ft = spring;
       energy += 0.5 * sdk::dot(spring, spring) / k;
       for (int d = 0; d < 3; ++d) ft_[3 * static_cast<std::size_t>(i) + d] = spring[d];
     }
@@ -399,15 +399,17 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         continue;
       }
       const int* t = &b.triangles[3 * pr.element];
-      const Vec3 ne = sdk::load3(en_b_.data(), pr.element);
+      const Vec3 ne = pr.n;
       Vec3 vt = {0, 0, 0};
       for (int j = 0; j < 3; ++j) vt = sdk::add(vt, sdk::scale(sdk::load3(vb.data(), t[j]), pr.w[j]));
       const Vec3 vrel = sdk::sub(sdk::load3(va.data(), i), vt);
       if (side_[i] == 0) {
-        if (std::abs(pr.d) >= hsum2) {
-          side_[i] = pr.d >= 0 ? 1 : -1;  // not touching yet: the side it is on
-        } else {                          // touched within one step: the approach velocity decides
-          const double g = sdk::dot(ne, vrel);
+        const double g = sdk::dot(ne, vrel);
+        if (std::abs(pr.d) >= hsum2 || std::abs(g) * in.dt < std::abs(pr.d)) {
+          // Not touching, or it cannot have crossed the target's mid-surface
+          // within the step: the side it is on.
+          side_[i] = pr.d >= 0 ? 1 : -1;
+        } else {  // may have crossed within one step: the approach velocity decides
           side_[i] = g < 0 ? 1 : g > 0 ? -1 : (pr.d >= 0 ? 1 : -1);
         }
       }

@@ -40,4 +40,45 @@ inline Vec3 normalized(const Vec3& a) {
 }
 inline Vec3 load3(const double* p, int i) { return {p[3 * i], p[3 * i + 1], p[3 * i + 2]}; }
 
+// Closest point to p on the triangle (a, b, c) and its barycentric weights
+// (Ericson, Real-Time Collision Detection, 5.1.5).
+inline Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
+                                      double* w = nullptr) {
+  auto out = [&](double u, double v, double t) {
+    if (w) {
+      w[0] = u;
+      w[1] = v;
+      w[2] = t;
+    }
+    return add(add(scale(a, u), scale(b, v)), scale(c, t));
+  };
+  const Vec3 ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return out(1, 0, 0);
+  const Vec3 bp = sub(p, b);
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return out(0, 1, 0);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return out(1 - v, v, 0);
+  }
+  const Vec3 cp = sub(p, c);
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return out(0, 0, 1);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double t = d2 / (d2 - d6);
+    return out(1 - t, 0, t);
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return out(0, 1 - t, t);
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, t = vc * denom;
+  return out(1 - v - t, v, t);
+}
+
 }  // namespace ts::sdk
