@@ -4,7 +4,13 @@
 Writes into DIR/figures/:
   profile_<probe>.png  through-thickness temperature at several times
   probes_mean.png      mean temperature of every probe against time
-  map_<part>.png       mean / top / bottom temperature of each ply, last frame
+  map_<part>.png       mean / top / bottom temperature of each ply on its
+                       deformed shape (top view), last frame; a quarter
+                       model is mirrored into the full part
+  shear_<part>.png     shear angle of each ply (degrees), last frame
+  tool_forces.png      force on each moving tool against its travel
+                       (punch force against stroke), and heat per tool
+  energy.png           energy audit against time
   study.png            error against wall time when DIR holds a study.csv
 """
 import csv
@@ -72,6 +78,20 @@ def plot_probes(folder, out):
     return made
 
 
+def mirrored(xy, tri, values, per_element):
+    """Mirror a quarter model (x >= 0, y >= 0 touching both axes) into four quadrants."""
+    if xy[:, 0].min() < -1e-9 or xy[:, 1].min() < -1e-9 or xy[:, 0].min() > 1e-6 or xy[:, 1].min() > 1e-6:
+        return [(xy, tri, values)]
+    out = []
+    for sx, sy in ((1, 1), (-1, 1), (1, -1), (-1, -1)):
+        m = xy.copy()
+        m[:, 0] *= sx
+        m[:, 1] *= sy
+        t = tri if sx * sy > 0 else tri[:, ::-1]
+        out.append((m, t, values))
+    return out
+
+
 def plot_maps(folder, out):
     try:
         import h5py
@@ -96,8 +116,9 @@ def plot_maps(folder, out):
             vmax = max(g[n][()].max() for n in fields)
             fig, axes = plt.subplots(1, len(fields), figsize=(4.2 * len(fields), 3.8), squeeze=False)
             for ax, n in zip(axes[0], fields):
-                pc = ax.tripcolor(xyz[:, 0] * 1e3, xyz[:, 1] * 1e3, tri, g[n][()], shading="gouraud",
-                                  vmin=vmin, vmax=vmax, cmap="inferno")
+                for mxy, mtri, vals in mirrored(xyz[:, :2], tri, g[n][()], False):
+                    pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, vals, shading="gouraud",
+                                      vmin=vmin, vmax=vmax, cmap="inferno")
                 ax.set_aspect("equal")
                 ax.set_title("%s\n%s, t = %.3g s" % (part, n.replace("temperature_", ""), time), fontsize=9)
                 ax.set_xlabel("x (mm)")
@@ -107,7 +128,90 @@ def plot_maps(folder, out):
             fig.savefig(name, dpi=110)
             plt.close(fig)
             made.append(name)
+        for part in f["parts"]:
+            g = last[part]
+            if "shear_angle" not in g:
+                continue
+            tri = f["parts"][part]["triangles"][()]
+            xyz = g["nodes"][()]
+            vals = g["shear_angle"][()]
+            lim = max(abs(vals.min()), abs(vals.max()), 1e-9)
+            fig, ax = plt.subplots(figsize=(5.2, 4.4))
+            for k, (mxy, mtri, v) in enumerate(mirrored(xyz[:, :2], tri, vals, True)):
+                # mirroring about one axis reverses the sign of the shear angle
+                sign = 1.0 if k in (0, 3) or len(mirrored(xyz[:, :2], tri, vals, True)) == 1 else -1.0
+                pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=sign * v, vmin=-lim, vmax=lim,
+                                  cmap="coolwarm")
+            ax.set_aspect("equal")
+            ax.set_title("%s: shear angle, t = %.3g s\nmin %.1f, max %.1f deg" % (part, time, vals.min(), vals.max()),
+                         fontsize=9)
+            ax.set_xlabel("x (mm)")
+            ax.set_ylabel("y (mm)")
+            fig.colorbar(pc, ax=ax, label="degrees", shrink=0.8)
+            name = os.path.join(out, "shear_%s.png" % part)
+            fig.savefig(name, dpi=110)
+            plt.close(fig)
+            made.append(name)
     return made
+
+
+def plot_tools(folder, out):
+    rows = list(csv.DictReader(open(os.path.join(folder, "tools.csv"))))
+    tools = sorted(set(r["tool"] for r in rows), key=[r["tool"] for r in rows].index)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    for name in tools:
+        rs = [r for r in rows if r["tool"] == name]
+        u = np.array([[float(r["ux"]), float(r["uy"]), float(r["uz"])] for r in rs])
+        f = np.array([[float(r["fx"]), float(r["fy"]), float(r["fz"])] for r in rs])
+        t = np.array([float(r["time"]) for r in rs])
+        travel = np.linalg.norm(u, axis=1)
+        if travel.max() > 0:
+            d = u[-1] / max(np.linalg.norm(u[-1]), 1e-300)
+            a1.plot(travel * 1e3, -(f @ d), label=name)  # force resisting the motion
+        a2.plot(t, [float(r["heat_J"]) for r in rs], label=name)
+    a1.set_xlabel("tool travel (mm)")
+    a1.set_ylabel("force resisting the tool's motion (N)")
+    a1.set_title("tool force against travel")
+    a2.set_xlabel("time (s)")
+    a2.set_ylabel("heat given to the plies (J)")
+    a2.set_title("heat exchanged with each tool")
+    for a in (a1, a2):
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8)
+    fig.tight_layout()
+    name = os.path.join(out, "tool_forces.png")
+    fig.savefig(name, dpi=120)
+    plt.close(fig)
+    return [name]
+
+
+def plot_energy(folder, out):
+    rows = list(csv.DictReader(open(os.path.join(folder, "energy.csv"))))
+    if not rows:
+        return []
+    t = [float(r["time"]) for r in rows]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    for key in ("kinetic", "internal", "external_work", "damping", "contact"):
+        if key in rows[0]:
+            a1.plot(t, [float(r[key]) for r in rows], label=key)
+    a1.set_xlabel("time (s)")
+    a1.set_ylabel("energy (J)")
+    a1.legend(fontsize=8)
+    a1.grid(alpha=0.3)
+    ke = np.array([float(r["kinetic"]) for r in rows])
+    ie = np.array([float(r["internal"]) for r in rows])
+    ratio = np.where(np.abs(ie) > 0, ke / np.where(ie == 0, 1, np.abs(ie)), np.nan)
+    a2.semilogy(t, np.abs(ratio), label="kinetic / internal")
+    a2.semilogy(t, [max(float(r["balance_error"]), 1e-16) for r in rows], label="balance error")
+    a2.axhline(0.05, color="grey", ls="--", lw=1)
+    a2.set_xlabel("time (s)")
+    a2.legend(fontsize=8)
+    a2.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    name = os.path.join(out, "energy.png")
+    fig.savefig(name, dpi=120)
+    plt.close(fig)
+    return [name]
 
 
 def plot_study(folder, out):
@@ -149,6 +253,10 @@ def main():
         made += plot_probes(folder, out)
     if os.path.exists(os.path.join(folder, "results.h5")):
         made += plot_maps(folder, out)
+    if os.path.exists(os.path.join(folder, "tools.csv")):
+        made += plot_tools(folder, out)
+    if os.path.exists(os.path.join(folder, "energy.csv")):
+        made += plot_energy(folder, out)
     if not made:
         sys.stderr.write("report: nothing to plot in %s\n" % folder)
         return 3

@@ -158,6 +158,15 @@ struct Projection {
   double w[3] = {0, 0, 0};  // weights of the target point on the element's nodes
 };
 
+// One direction of ply/ply search: nodes of `a` against the surface of `b`.
+struct Pass {
+  int a = 0, b = 0;
+  std::vector<signed char> side;  // per node of a: +1 above the target, -1 below, 0 not tracked
+  std::vector<double> ft;         // per node of a: tangential spring force (N)
+  std::vector<double> en_b, nn_b;
+  Candidates cand;
+};
+
 class PenaltyNodeSurface final : public sdk::ContactHandler {
  public:
   sdk::Status configure(const sdk::Params& params, const sdk::ContactPair& pair, std::span<const sdk::PartView> parts,
@@ -173,8 +182,17 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       double h = a.thickness;
       if (pair.second.type == sdk::BodyRef::Type::Part) h = std::min(h, parts[pair.second.index].thickness);
       if (gap_tol_ < 0) gap_tol_ = 0.01 * h;  // default: 1 % of the thinner ply
-      side_.assign(a.num_nodes, 0);
-      ft_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
+      pass_[0].a = a.index;
+      pass_[0].side.assign(a.num_nodes, 0);
+      pass_[0].ft.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
+      if (pair.second.type == sdk::BodyRef::Type::Part) {
+        const sdk::PartView& b = parts[pair.second.index];
+        pass_[0].b = b.index;
+        pass_[1].a = b.index;
+        pass_[1].b = a.index;
+        pass_[1].side.assign(b.num_nodes, 0);
+        pass_[1].ft.assign(3 * static_cast<std::size_t>(b.num_nodes), 0.0);
+      }
       return sdk::Status::success();
     });
   }
@@ -214,13 +232,14 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         return sdk::Status::success();
       }
       const sdk::PartView& b = parts[pair_.second.index];
-      normals(b, en_b_, nn_b_);
+      Pass& ps = pass_[0];
+      normals(b, ps.en_b, ps.nn_b);
       const double hsum2 = 0.5 * (a.thickness + b.thickness);
-      refresh_candidates(a, b, hsum2 + gap_tol_);
+      refresh_candidates(ps, a, b, 2 * hsum2 + gap_tol_);
       for (int i = 0; i < a.num_nodes; ++i) {
-        const Projection pr = project(a, b, i, hsum2 + gap_tol_);
+        const Projection pr = project(ps, a, b, i, hsum2 + gap_tol_);
         if (pr.element < 0) continue;
-        const int s = side_[i] != 0 ? side_[i] : (pr.d >= 0 ? 1 : -1);
+        const int s = ps.side[i] != 0 ? ps.side[i] : (pr.d >= 0 ? 1 : -1);
         const double gap = s * pr.d - hsum2;
         if (gap > gap_tol_) continue;
         sdk::HeatLink l;
@@ -231,7 +250,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
           l.nodes_b[j] = b.triangles[3 * pr.element + j];
           l.w_b[j] = pr.w[j];
         }
-        const double c = sdk::dot(sdk::load3(nn_a_.data(), i), sdk::load3(en_b_.data(), pr.element));
+        const double c = sdk::dot(sdk::load3(nn_a_.data(), i), sdk::load3(ps.en_b.data(), pr.element));
         if (s > 0) {  // node above the target: target's top face, the node's face looking down
           l.face_b = sdk::kTop;
           l.face_a = c > 0 ? sdk::kBottom : sdk::kTop;
@@ -262,13 +281,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     tool.query(tool.context, a.num_nodes, a.x.data(), a.thickness + gap_tol_, dist_.data(), tn_.data());
   }
 
-  void refresh_candidates(const sdk::PartView& a, const sdk::PartView& b, double reach) {
+  void refresh_candidates(Pass& ps, const sdk::PartView& a, const sdk::PartView& b, double reach) {
     double h = 0;
     for (int e = 0; e < b.num_elements; ++e)
       for (int k = 0; k < 3; ++k)
         h = std::max(h, sdk::norm(sdk::sub(sdk::load3(b.x.data(), b.triangles[3 * e + k]),
                                            sdk::load3(b.x.data(), b.triangles[3 * e + (k + 1) % 3]))));
-    if (cand_.needs_rebuild(a, b)) cand_.build(a, b, reach, std::max(0.5 * h, 2 * reach));
+    if (ps.cand.needs_rebuild(a, b)) ps.cand.build(a, b, reach, std::max(0.5 * h, 2 * reach));
   }
 
   // The target of node i within `reach` of B's mid-surface: the closest
@@ -276,11 +295,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // measured along its normal; on an edge or a vertex (a node over a convex
   // fold finds no triangle under it) along the direction from that point,
   // so the surface acts as if its folds were rounded.
-  Projection project(const sdk::PartView& a, const sdk::PartView& b, int i, double reach) const {
+  Projection project(const Pass& ps, const sdk::PartView& a, const sdk::PartView& b, int i, double reach) const {
     Projection best;
     double best_dist = reach;
     const Vec3 x = sdk::load3(a.x.data(), i);
-    const auto [begin, end] = cand_.of(i);
+    const auto [begin, end] = ps.cand.of(i);
     if (!begin) return best;
     for (const int* it = begin; it != end; ++it) {
       const int e = *it;
@@ -292,7 +311,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const Vec3 r = sdk::sub(x, cp);
       const double dist = sdk::norm(r);
       if (dist > best_dist || (dist == best_dist && best.element >= 0)) continue;
-      const Vec3 ne = sdk::load3(en_b_.data(), e);
+      const Vec3 ne = sdk::load3(ps.en_b.data(), e);
       const double dn = sdk::dot(r, ne);
       const bool inside = w[0] > 0 && w[1] > 0 && w[2] > 0;
       best.element = e;
@@ -308,8 +327,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // friction force on one node: n is the unit normal pushing the node out,
   // vrel the velocity relative to the target, m the effective mass. Updates
   // the node's tangential spring; returns the stored spring energy.
-  double node_force(int i, double pen, double area, double m, const Vec3& n, const Vec3& vrel, double dt, double* f) {
-    const double k = penalty_ * area;
+  double node_force(std::vector<double>& ftv, int i, double pen, double k, double m, const Vec3& n, const Vec3& vrel,
+                    double dt, double* f) {
     const double vn = sdk::dot(vrel, n);  // < 0 while approaching
     // Viscous normal damping, a fraction of the critical value of the node on
     // its penalty spring; the normal force never pulls.
@@ -317,7 +336,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     double energy = 0.5 * k * pen * pen;
     Vec3 ft = {0, 0, 0};
     if (friction_ > 0) {
-      Vec3 old = sdk::load3(ft_.data(), i);
+      Vec3 old = sdk::load3(ftv.data(), i);
       const double mag = sdk::norm(old);
       old = sdk::sub(old, sdk::scale(n, sdk::dot(old, n)));  // rotate into the current tangent plane
       const double m2 = sdk::norm(old);
@@ -333,7 +352,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       if (len > lim) spring = sdk::scale(spring, lim / len);
       ft = spring;
       energy += 0.5 * sdk::dot(spring, spring) / k;
-      for (int d = 0; d < 3; ++d) ft_[3 * static_cast<std::size_t>(i) + d] = spring[d];
+      for (int d = 0; d < 3; ++d) ftv[3 * static_cast<std::size_t>(i) + d] = spring[d];
     }
     for (int d = 0; d < 3; ++d) f[d] = fn * n[d] + ft[d];
     return energy;
@@ -353,12 +372,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     for (int i = 0; i < a.num_nodes; ++i) {
       const double pen = h2 - dist_[i];
       if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
-        for (int d = 0; d < 3; ++d) ft_[3 * static_cast<std::size_t>(i) + d] = 0.0;
+        for (int d = 0; d < 3; ++d) pass_[0].ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
         continue;
       }
       const Vec3 n = sdk::load3(tn_.data(), i);
       const Vec3 vrel = sdk::sub(sdk::load3(v.data(), i), vtool);
-      energy_[i] = node_force(i, pen, area[i], in.mass[a.index][i], n, vrel, in.dt, &scratch_[3 * static_cast<std::size_t>(i)]);
+      energy_[i] = node_force(pass_[0].ft, i, pen, penalty_ * area[i], in.mass[a.index][i], n, vrel, in.dt,
+                              &scratch_[3 * static_cast<std::size_t>(i)]);
     }
     // Fixed-order sums: the same results for any thread count.
     auto f = out.force[a.index];
@@ -375,13 +395,21 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     return sdk::Status::success();
   }
 
+  // Ply/ply: both directions (nodes of each ply against the other's
+  // surface), each with half the penalty, so that two faceted plies wrapped
+  // on a curved tool hold each other wherever they touch.
   sdk::Status ply_forces(const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
-    const sdk::PartView& a = parts_[pair_.first.index];
-    const sdk::PartView& b = parts_[pair_.second.index];
-    normals(b, en_b_, nn_b_);
+    for (Pass& ps : pass_) ply_pass(ps, 0.5, in, out);
+    return sdk::Status::success();
+  }
+
+  void ply_pass(Pass& ps, double scale, const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
+    const sdk::PartView& a = parts_[ps.a];
+    const sdk::PartView& b = parts_[ps.b];
+    normals(b, ps.en_b, ps.nn_b);
     const double hsum2 = 0.5 * (a.thickness + b.thickness);
     const double track = hsum2 + gap_tol_ + hsum2;  // keep the side while the node stays this close
-    refresh_candidates(a, b, track);
+    refresh_candidates(ps, a, b, track);
     const auto va = in.velocity[a.index];
     const auto vb = in.velocity[b.index];
     const auto area = in.node_area[a.index];
@@ -392,10 +420,10 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     for (int i = 0; i < a.num_nodes; ++i) {
       double* tg = &target_[4 * static_cast<std::size_t>(i)];
       tg[0] = -1;
-      const Projection pr = project(a, b, i, track);
+      const Projection pr = project(ps, a, b, i, track);
       if (pr.element < 0) {
-        side_[i] = 0;
-        for (int d = 0; d < 3; ++d) ft_[3 * static_cast<std::size_t>(i) + d] = 0.0;
+        ps.side[i] = 0;
+        for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
         continue;
       }
       const int* t = &b.triangles[3 * pr.element];
@@ -403,29 +431,29 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       Vec3 vt = {0, 0, 0};
       for (int j = 0; j < 3; ++j) vt = sdk::add(vt, sdk::scale(sdk::load3(vb.data(), t[j]), pr.w[j]));
       const Vec3 vrel = sdk::sub(sdk::load3(va.data(), i), vt);
-      if (side_[i] == 0) {
+      if (ps.side[i] == 0) {
         const double g = sdk::dot(ne, vrel);
         if (std::abs(pr.d) >= hsum2 || std::abs(g) * in.dt < std::abs(pr.d)) {
           // Not touching, or it cannot have crossed the target's mid-surface
           // within the step: the side it is on.
-          side_[i] = pr.d >= 0 ? 1 : -1;
+          ps.side[i] = pr.d >= 0 ? 1 : -1;
         } else {  // may have crossed within one step: the approach velocity decides
-          side_[i] = g < 0 ? 1 : g > 0 ? -1 : (pr.d >= 0 ? 1 : -1);
+          ps.side[i] = g < 0 ? 1 : g > 0 ? -1 : (pr.d >= 0 ? 1 : -1);
         }
       }
-      const double pen = hsum2 - side_[i] * pr.d;
+      const double pen = hsum2 - ps.side[i] * pr.d;
       if (!(pen > 0)) {
-        for (int d = 0; d < 3; ++d) ft_[3 * static_cast<std::size_t>(i) + d] = 0.0;
+        for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
         continue;
       }
       if (pen > 2 * hsum2) {  // went through the other ply: release
-        side_[i] = 0;
+        ps.side[i] = 0;
         continue;
       }
       double mb = 0;
       for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
       const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
-      energy_[i] = node_force(i, pen, area[i], m_eff, sdk::scale(ne, side_[i]), vrel, in.dt,
+      energy_[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, sdk::scale(ne, ps.side[i]), vrel, in.dt,
                               &scratch_[3 * static_cast<std::size_t>(i)]);
       tg[0] = pr.element;
       tg[1] = pr.w[0];
@@ -451,17 +479,14 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         for (int j = 0; j < 3; ++j) fb[3 * t[j] + d] -= tg[1 + j] * f;
       }
     }
-    return sdk::Status::success();
   }
 
   sdk::ContactPair pair_;
   double penalty_ = 0, friction_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
   std::span<const sdk::PartView> parts_;
   std::span<const sdk::ToolView> tools_;
-  std::vector<signed char> side_;  // per node of A: +1 above the target, -1 below, 0 not tracked
-  std::vector<double> ft_;         // per node of A: tangential spring force (N)
-  std::vector<double> en_a_, nn_a_, en_b_, nn_b_, dist_, tn_, scratch_, energy_, target_;
-  Candidates cand_;
+  Pass pass_[2];  // tool pairs use pass_[0].ft only
+  std::vector<double> en_a_, nn_a_, dist_, tn_, scratch_, energy_, target_;
 };
 
 sdk::ContactHandler* create() { return new PenaltyNodeSurface(); }
