@@ -50,6 +50,9 @@ struct PartState {
 };
 
 namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
 void compute_normals(const ShellMesh& m, const std::vector<double>& x, std::vector<double>& nn) {
   nn.assign(x.size(), 0.0);
   for (int e = 0; e < m.num_elements(); ++e) {
@@ -1088,18 +1091,25 @@ RunResult Simulation::run(const RunOptions& opt) {
         const double next_frame = std::min(t_end, frame_index * interval);
         double dt = std::min(md.dt_safety * stable, t_end - t);
         if (dt < 1e-14) throw RunError("the mechanical step fell below 1e-14 s at t = " + fmt_g(t) + " s");
+        auto tc = Clock::now();
         mechanics_step(dt, t, mech_steps, audit);
+        timing_[kTimeIntegrate] += seconds_since(tc);
         ++mech_steps;
         t += dt;
         mech_dt = dt;
         // Forces and stable step at the new positions (also for the next step).
+        tc = Clock::now();
         stable = mechanics_stable_dt();
+        timing_[kTimeElements] += seconds_since(tc);
+        tc = Clock::now();
         compute_contact_forces(t, dt);
+        timing_[kTimeContact] += seconds_since(tc);
         audit.contact_stored = contact_energy_;
         if (job_.thermal) {
           ++since_thermal;
           if (subcycle <= 0) subcycle = std::max(1, static_cast<int>(thermal_dt_ / (md.dt_safety * stable)));
           if (since_thermal >= subcycle || t >= t_end - eps_t) {
+            tc = Clock::now();
             update_element_fields();
             assemble_faces();
             in.dt = t - t_thermal;
@@ -1112,6 +1122,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             heat_in += rep.heat_in;
             limited_total += rep.limited;
             accumulate_tool_heat(in.dt);
+            timing_[kTimeThermal] += seconds_since(tc);
             ++steps;
             t_thermal = t;
             since_thermal = 0;
@@ -1148,14 +1159,18 @@ RunResult Simulation::run(const RunOptions& opt) {
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
           const double iv = job_.output.probes[q].interval > 0 ? job_.output.probes[q].interval : interval;
           if (t >= next_probe[q] - eps_t || next_probe[q] <= 0) {
+            tc = Clock::now();
             update_element_fields();
             sample_probes(t, q);
+            timing_[kTimeOutput] += seconds_since(tc);
             while (next_probe[q] <= t + eps_t) next_probe[q] += iv;
           }
         }
         if (t >= next_frame - eps_t) {
+          tc = Clock::now();
           update_element_fields();
           write_frame(t);
+          timing_[kTimeOutput] += seconds_since(tc);
           ++frame_index;
         }
         progress.update(t, mech_steps);
@@ -1261,6 +1276,12 @@ RunResult Simulation::run(const RunOptions& opt) {
                           {"inplane_substeps_max", substeps_max},
                           {"limited_node_steps", limited_total}};
     summary["plugins_loaded"] = registry_.loaded_names();
+    if (job_.mechanics)
+      summary["timing_s"] = {{"elements_and_laws", timing_[kTimeElements]},
+                             {"contact", timing_[kTimeContact]},
+                             {"thermal", timing_[kTimeThermal]},
+                             {"time_integration_and_audit", timing_[kTimeIntegrate]},
+                             {"output", timing_[kTimeOutput]}};
     summary["energy"] = {{"kinetic", audit.kinetic}, {"internal", audit.internal}, {"external_work", audit.external},
                          {"contact", audit.contact}, {"contact_stored", audit.contact_stored},
                          {"damping", audit.damping}, {"balance_error", audit.balance_error}};

@@ -108,6 +108,8 @@ class Simulation {
   std::vector<double> tool_force_;  // 3 per tool: force of the plies on the tool (N), current
   std::vector<double> tool_heat_;   // per tool: heat given to the plies (J), cumulative
   std::vector<double> link_heat_;   // per part: net heat received through ply/ply contact (J), cumulative
+  enum { kTimeElements, kTimeContact, kTimeThermal, kTimeIntegrate, kTimeOutput, kTimeCount };
+  double timing_[kTimeCount] = {0, 0, 0, 0, 0};  // wall time per phase of the mechanics loop (s)
   double contact_energy_ = 0;       // penalty energy stored, current
   double contact_dt_ = std::numeric_limits<double>::infinity();  // contact bound of the stable step
   double tool_dt_ = std::numeric_limits<double>::infinity();     // force-controlled tools' bound

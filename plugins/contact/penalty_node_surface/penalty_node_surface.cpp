@@ -123,21 +123,37 @@ class Candidates {
         for (int j = r[1]; j <= r[4]; ++j)
           for (int i = r[0]; i <= r[3]; ++i) elems_[fill[(static_cast<std::size_t>(k) * n[1] + j) * n[0] + i]++] = e;
     }
-    node_cell_.resize(a.num_nodes);
+    // Per node: the elements whose box, grown by reach + margin, holds it.
+    node_start_.assign(a.num_nodes + 1, 0);
+    node_elems_.clear();
     for (int i = 0; i < a.num_nodes; ++i) {
       const Vec3 x = sdk::load3(a.x.data(), i);
       bool outside = false;
       for (int d = 0; d < 3; ++d) outside = outside || x[d] < lo[d] || x[d] > hi[d];
-      node_cell_[i] = outside ? -1
-                              : static_cast<int>((static_cast<std::size_t>(cell_of(x[2], 2)) * n[1] + cell_of(x[1], 1)) * n[0] +
-                                                 cell_of(x[0], 0));
+      if (!outside) {
+        const std::size_t c = (static_cast<std::size_t>(cell_of(x[2], 2)) * n[1] + cell_of(x[1], 1)) * n[0] + cell_of(x[0], 0);
+        for (int q = start_[c]; q < start_[c + 1]; ++q) {
+          const int e = elems_[q];
+          bool near = true;
+          for (int d = 0; d < 3 && near; ++d) {
+            double mn = kInf, mx = -kInf;
+            for (int k = 0; k < 3; ++k) {
+              const double v = b.x[3 * b.triangles[3 * e + k] + d];
+              mn = std::min(mn, v);
+              mx = std::max(mx, v);
+            }
+            near = x[d] >= mn - inflate && x[d] <= mx + inflate;
+          }
+          if (near) node_elems_.push_back(e);
+        }
+      }
+      node_start_[i + 1] = static_cast<int>(node_elems_.size());
     }
   }
-  // Candidate elements of node i: [begin, end) into elements().
+  // Candidate elements of node i: [begin, end).
   std::pair<const int*, const int*> of(int i) const {
-    const int c = node_cell_[i];
-    if (c < 0) return {nullptr, nullptr};
-    return {elems_.data() + start_[c], elems_.data() + start_[c + 1]};
+    if (node_start_[i] == node_start_[i + 1]) return {nullptr, nullptr};
+    return {node_elems_.data() + node_start_[i], node_elems_.data() + node_start_[i + 1]};
   }
   long long builds() const { return builds_; }
 
@@ -146,7 +162,7 @@ class Candidates {
     return (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
   }
   std::vector<double> xa_, xb_;
-  std::vector<int> start_, elems_, node_cell_;
+  std::vector<int> start_, elems_, node_start_, node_elems_;
   double margin_ = 0;
   long long builds_ = 0;
 };
@@ -282,12 +298,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   }
 
   void refresh_candidates(Pass& ps, const sdk::PartView& a, const sdk::PartView& b, double reach) {
+    if (!ps.cand.needs_rebuild(a, b)) return;
     double h = 0;
     for (int e = 0; e < b.num_elements; ++e)
       for (int k = 0; k < 3; ++k)
         h = std::max(h, sdk::norm(sdk::sub(sdk::load3(b.x.data(), b.triangles[3 * e + k]),
                                            sdk::load3(b.x.data(), b.triangles[3 * e + (k + 1) % 3]))));
-    if (ps.cand.needs_rebuild(a, b)) ps.cand.build(a, b, reach, std::max(0.5 * h, 2 * reach));
+    ps.cand.build(a, b, reach, std::max(0.25 * h, 2 * reach));
   }
 
   // The target of node i within `reach` of B's mid-surface: the closest
