@@ -165,7 +165,7 @@ def plot_tools(folder, out):
         f = np.array([[float(r["fx"]), float(r["fy"]), float(r["fz"])] for r in rs])
         t = np.array([float(r["time"]) for r in rs])
         travel = np.linalg.norm(u, axis=1)
-        if travel.max() > 0:
+        if travel.max() > 1e-3:  # tools that travel (a force-controlled holder barely moves)
             d = u[-1] / max(np.linalg.norm(u[-1]), 1e-300)
             a1.plot(travel * 1e3, -(f @ d), label=name)  # force resisting the motion
         a2.plot(t, [float(r["heat_J"]) for r in rs], label=name)

@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""Contact benchmark: cost of penalty_node_surface per node per cycle, for a
+stack of two plies on a plane die (one tool pair, one ply/ply pair searched
+in both directions), 10k to 1M nodes per ply, 1 and 2 threads; and the
+time breakdown of the hemisphere scene.
+Usage: scripts/bench/contact.py [--quick] (after a Release build).
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+EXE = os.path.join(ROOT, "build", "bin", "thermostamp")
+H = 0.0005
+
+
+def job(n, cycles):
+    size = n * 0.002
+    dt = 2e-6
+    ply = lambda name, z: {"name": name, "thickness": H, "material": "ud", "fibre_direction": [1, 0, 0],
+                           "mesh": {"generator": "rectangle", "origin": [0, 0, z], "size": [size, size],
+                                    "divisions": [n - 1, n - 1]}, "initial_temperature": 280.0}
+    return {
+        "format": "thermostamp-job/1", "name": "bench_contact", "time": {"end": cycles * dt},
+        "materials": {"ud": {"density": 1294.0,
+                             "membrane": {"law": "ud_hyperelastic", "k_fibre": 1.0e5, "p_ct": 50.0, "k_sh": [18.5, 0, 0]}}},
+        "parts": [ply("low", 0.5 * H), ply("up", 1.5 * H)],
+        "tools": [{"name": "die", "surface": {"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 1]}}],
+        "interactions": [{"type": "contact", "between": ["die", "low"], "friction": 0.2},
+                         {"type": "contact", "between": ["up", "low"], "friction": 0.2}],
+        "solvers": {"mechanics": {"dt_safety": 0.8, "mass_scaling": {"target_dt": dt}, "gravity": [0, 0, -9.81]},
+                    "thermal": None},
+        "output": {"interval": cycles * dt, "fields": ["displacement"]},
+    }
+
+
+def run(path_or_job, threads, extra=()):
+    with tempfile.TemporaryDirectory() as d:
+        path = path_or_job
+        if isinstance(path_or_job, dict):
+            path = os.path.join(d, "job.json")
+            json.dump(path_or_job, open(path, "w"))
+        out = os.path.join(d, "out")
+        subprocess.run([EXE, "run", path, "--out", out, "--threads", str(threads), "--quiet", *extra], check=True)
+        return json.load(open(os.path.join(out, "summary.json")))
+
+
+def main():
+    quick = "--quick" in sys.argv
+    sizes = [100, 316] if quick else [100, 316, 1000]
+    print("### Contact (penalty_node_surface), two plies on a die, cost per ply node per cycle\n")
+    print("| nodes per ply | threads | cycles | contact (s) | contact ns per node-cycle | elements ns per element-cycle |")
+    print("|---|---|---|---|---|---|")
+    for n in sizes:
+        cycles = 40 if n < 1000 else 10
+        for th in (1, 2):
+            s = run(job(n, cycles), th)
+            cyc = s["steps"]["mechanics"]
+            nodes = 2 * n * n
+            elems = 2 * 2 * (n - 1) ** 2
+            t = s["timing_s"]
+            print("| %d | %d | %d | %.3f | %.1f | %.1f |" % (n * n, th, cyc, t["contact"], t["contact"] / (nodes * cyc) * 1e9,
+                                                             t["elements_and_laws"] / (elems * cyc) * 1e9))
+    print("\n### Hemisphere scene (share/jobs/hemisphere_ud_2ply.json), time breakdown\n")
+    print("| threads | wall time (s) | cycles | elements and laws | contact | thermal | integration and audit | output | ns per element-cycle (all) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    scene = os.path.join(ROOT, "share", "jobs", "hemisphere_ud_2ply.json")
+    for th in (1, 2):
+        extra = ("--set", "time.end=1.0") if quick else ()
+        s = run(scene, th, extra)
+        t = s["timing_s"]
+        cyc = s["steps"]["mechanics"]
+        elems = sum(p["elements"] for p in s["parts"])
+        print("| %d | %.1f | %d | %.1f s | %.1f s | %.1f s | %.1f s | %.2f s | %.0f |" % (
+            th, s["wall_time_s"], cyc, t["elements_and_laws"], t["contact"], t["thermal"],
+            t["time_integration_and_audit"], t["output"], s["wall_time_s"] / (elems * cyc) * 1e9))
+
+
+if __name__ == "__main__":
+    main()
