@@ -1319,6 +1319,11 @@ RunResult Simulation::run(const RunOptions& opt) {
                        {"values_per_node", st->nz},
                        {"temperature_min", *mn},
                        {"temperature_max", *mx}});
+      if (job_.mechanics && !st->shear_angle.empty()) {
+        const auto [smn, smx] = std::minmax_element(st->shear_angle.begin(), st->shear_angle.end());
+        plies.back()["shear_angle_min_deg"] = *smn;
+        plies.back()["shear_angle_max_deg"] = *smx;
+      }
     }
     summary["parts"] = plies;
     summary["frames"] = writer ? writer->frames() : 0;
@@ -1329,6 +1334,17 @@ RunResult Simulation::run(const RunOptions& opt) {
     log->info("the thermal splitter limited {} node-step(s) to keep temperatures inside their local range "
               "(steep through-thickness profiles next to strong in-plane conduction)",
               limited_total);
+  if (result.ok && job_.mechanics) {
+    log->info("mechanics: {} steps (last {:.3g} s), energy balance error {:.2e}, kinetic {:.4g} J, internal {:.4g} J, "
+              "contact {:.4g} J, damping {:.4g} J",
+              mech_steps, mech_dt, audit.balance_error, audit.kinetic, audit.internal, audit.contact, audit.damping);
+    for (const auto& st : parts_) {
+      const auto [mn, mx] = std::minmax_element(st->T.begin(), st->T.end());
+      const auto [smn, smx] = std::minmax_element(st->shear_angle.begin(), st->shear_angle.end());
+      log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg", st->def->name, *mn,
+                *mx, st->shear_angle.empty() ? 0.0 : *smn, st->shear_angle.empty() ? 0.0 : *smx);
+    }
+  }
   if (result.ok) {
     log->info("completed: {} thermal steps in {:.3g} s wall; heat into the plies {:.6g} J, stored change {:.6g} J "
               "(balance error {:.2e})",
