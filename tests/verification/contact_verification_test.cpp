@@ -121,7 +121,9 @@ TEST(Contact, CoulombSlideAndStickOnTiltedGravity) {
       std::printf("stick at %.0f deg: u %.3g m (frictionless %.4g m), friction/normal %.5f (tan %.5f)\n", alpha_deg,
                   ux, slide_free, std::abs(fx / fz), std::tan(a));
     }
-    if (std::tan(a) > mu) EXPECT_LT(r.result.energy.balance_error, 0.01);
+    if (std::tan(a) > mu) {
+      EXPECT_LT(r.result.energy.balance_error, 0.01);
+    }
   }
 }
 

@@ -304,7 +304,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       for (int k = 0; k < 3; ++k)
         h = std::max(h, sdk::norm(sdk::sub(sdk::load3(b.x.data(), b.triangles[3 * e + k]),
                                            sdk::load3(b.x.data(), b.triangles[3 * e + (k + 1) % 3]))));
-    ps.cand.build(a, b, reach, std::max(0.25 * h, 2 * reach));
+    ps.cand.build(a, b, reach, std::max(0.25 * h, 0.5 * reach));
   }
 
   // The target of node i within `reach` of B's mid-surface: the closest
@@ -323,6 +323,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const int* t = &b.triangles[3 * e];
       if (a.index == b.index && (t[0] == i || t[1] == i || t[2] == i)) continue;  // self contact
       const Vec3 p0 = sdk::load3(b.x.data(), t[0]), p1 = sdk::load3(b.x.data(), t[1]), p2 = sdk::load3(b.x.data(), t[2]);
+      // The distance to the triangle is at least the distance to its plane.
+      if (std::abs(sdk::dot(sdk::sub(x, p0), sdk::load3(ps.en_b.data(), e))) > best_dist) continue;
       double w[3];
       const Vec3 cp = sdk::closest_point_on_triangle(x, p0, p1, p2, w);
       const Vec3 r = sdk::sub(x, cp);
