@@ -304,7 +304,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       for (int k = 0; k < 3; ++k)
         h = std::max(h, sdk::norm(sdk::sub(sdk::load3(b.x.data(), b.triangles[3 * e + k]),
                                            sdk::load3(b.x.data(), b.triangles[3 * e + (k + 1) % 3]))));
-    ps.cand.build(a, b, reach, std::max(0.25 * h, 0.5 * reach));
+    ps.cand.build(a, b, reach, std::max(0.1 * h, 0.5 * reach));
   }
 
   // The target of node i within `reach` of B's mid-surface: the closest
