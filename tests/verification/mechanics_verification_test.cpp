@@ -361,3 +361,123 @@ TEST(Strip, OffAxisHomogeneousUniaxialStress) {
 }
 
 }  // namespace ts::test
+
+namespace ts::test {
+
+// Bias-extension test of a woven specimen, 230 x 115 mm, warp and weft at
+// +-45 degrees to the pull, ends clamped. The mesh follows the yarns (a
+// lattice of diamonds with edges along the warp and the weft, each split
+// by its horizontal diagonal): a constant-strain triangle whose edges cross
+// two stiff yarn families locks, one whose edges follow them shears freely.
+// Reference: the pin-jointed net, shear angle in the central zone
+// gamma = 90 deg - 2 acos((D + d) / (sqrt(2) D)), D = H - W (required within
+// 1 degree up to 30 degrees), and the force from the energy of the zones
+// (central zone A = W (H - 1.5 W) at gamma, zone B = W^2 at gamma / 2):
+// F = dE/dd with E = A_A w(gamma) + A_B w(gamma / 2), w the law's shear
+// energy (tolerance 5 %: yarn stretch and the discrete zone borders).
+TEST(Woven, BiasExtensionFollowsThePinJointedNet) {
+  const double H = 0.230, W = 0.115, D = H - W;
+  const int nx = 44, ny = 22;  // lattice steps: a = W / 22 = H / 44
+  const double a = W / ny;
+  const auto dir = temp_dir("bias_extension");
+  {
+    std::map<std::pair<int, int>, int> id;
+    std::vector<std::array<double, 2>> nodes;
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i)
+        if ((i + j) % 2 == 0) {
+          id[{i, j}] = static_cast<int>(nodes.size()) + 1;
+          nodes.push_back({i * a, j * a});
+        }
+    std::vector<std::array<int, 3>> tris;
+    auto add = [&](std::pair<int, int> p, std::pair<int, int> q, std::pair<int, int> r) {
+      std::array<int, 3> t = {id.at(p), id.at(q), id.at(r)};
+      const auto& A = nodes[t[0] - 1];
+      const auto& B = nodes[t[1] - 1];
+      const auto& C = nodes[t[2] - 1];
+      if ((B[0] - A[0]) * (C[1] - A[1]) - (B[1] - A[1]) * (C[0] - A[0]) < 0) std::swap(t[1], t[2]);
+      tris.push_back(t);
+    };
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) {
+        if ((i + j) % 2 == 0) continue;  // diamond centres
+        if (i == 0) {
+          add({0, j - 1}, {1, j}, {0, j + 1});
+        } else if (i == nx) {
+          add({nx, j - 1}, {nx, j + 1}, {nx - 1, j});
+        } else {
+          if (j < ny) add({i - 1, j}, {i + 1, j}, {i, j + 1});
+          if (j > 0) add({i - 1, j}, {i, j - 1}, {i + 1, j});
+        }
+      }
+    std::ofstream m(dir / "bias.msh");
+    m << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << nodes.size() << "\n";
+    for (std::size_t k = 0; k < nodes.size(); ++k) m << k + 1 << ' ' << nodes[k][0] << ' ' << nodes[k][1] << " 0\n";
+    m << "$EndNodes\n$Elements\n" << tris.size() << "\n";
+    for (std::size_t k = 0; k < tris.size(); ++k)
+      m << k + 1 << " 2 0 " << tris[k][0] << ' ' << tris[k][1] << ' ' << tris[k][2] << "\n";
+    m << "$EndElements\n";
+  }
+  const double k_sh[3] = {18.5, 46.4, -21.3}, d_end = 0.026, speed = 0.1, t_end = d_end / speed;
+  json j = {{"format", "thermostamp-job/1"},
+            {"name", "bias"},
+            {"time", {{"end", t_end}}},
+            {"materials",
+             {{"woven",
+               {{"density", 1500.0},
+                {"membrane", {{"law", "woven_hyperelastic"}, {"k_warp", 1.0e5}, {"k_weft", 1.0e5}, {"k_sh", {k_sh[0], k_sh[1], k_sh[2]}}}}}}}},
+            {"parts",
+             {{{"name", "specimen"},
+               {"mesh", {{"file", (dir / "bias.msh").string()}}},
+               {"thickness", 0.0005},
+               {"material", "woven"},
+               {"fibre_direction", {1.0, 1.0, 0.0}},
+               {"initial_temperature", 20.0}}}},
+            {"constraints",
+             {{{"type", "fix"}, {"part", "specimen"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "y", "z"}}},
+              {{"type", "velocity"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}},
+               {"dofs", {"x"}}, {"velocity", {speed, 0.0, 0.0}}},
+              {{"type", "fix"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}}, {"dofs", {"y"}}},
+              {{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}}}},
+            {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 10.0}}}, {"thermal", nullptr}}},
+            {"output",
+             {{"interval", t_end / 4},
+              {"fields", {"displacement", "shear_angle"}},
+              {"probes", {{{"name", "centre"}, {"part", "specimen"}, {"at", {H / 2, W / 2 - a, 0}},
+                           {"quantities", {"shear_angle", "displacement_x"}}, {"interval", t_end / 10}}}}}}};
+  const auto out = dir / "out";
+  const JobRun r = run_json(j, 0, out);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  auto w = [&](double g) {
+    const double s = std::sin(g);
+    return k_sh[0] * s * s + k_sh[1] * std::pow(s, 4) + k_sh[2] * std::pow(s, 6);
+  };
+  auto gamma = [&](double d) { return M_PI / 2 - 2 * std::acos((D + d) / (std::sqrt(2.0) * D)); };
+  auto energy = [&](double d) { return W * (H - 1.5 * W) * w(gamma(d)) + W * W * w(gamma(d) / 2); };
+  double worst = 0;
+  for (int k = 1; k <= 10; ++k) {
+    const double t = k * t_end / 10, d = speed * t;
+    const double g_fe = r.sample(0, "shear_angle", t)->values[0];
+    const double g_net = gamma(d) * 180 / M_PI;
+    worst = std::max(worst, std::abs(std::abs(g_fe) - g_net));
+    if (k % 2 == 0) std::printf("d = %.1f mm: shear angle %.2f deg, pin-jointed net %.2f deg\n", d * 1e3, std::abs(g_fe), g_net);
+  }
+  EXPECT_LT(worst, 1.0);
+  EXPECT_GT(gamma(d_end) * 180 / M_PI, 30.0);  // the test reaches 30 degrees
+  // End force: the x reaction of the pulled end against dE/dd.
+  const double F_fe = r.result.energy.reactions[3 * 1 + 0];
+  const double F_net = (energy(d_end + 1e-6) - energy(d_end - 1e-6)) / 2e-6;
+  // The yarns stretch a little (k_warp is finite), so the central zone
+  // shears slightly less than the net; the same net force evaluated at the
+  // measured central shear angle: F = dE/dgamma (gamma_fe) * dgamma/dd.
+  const double g_fe = std::abs(r.sample(0, "shear_angle", t_end)->values[0]) * M_PI / 180;
+  auto e_of_gamma = [&](double g) { return W * (H - 1.5 * W) * w(g) + W * W * w(g / 2); };
+  const double dgdd = (gamma(d_end + 1e-6) - gamma(d_end - 1e-6)) / 2e-6;
+  const double F_net_fe = (e_of_gamma(g_fe + 1e-7) - e_of_gamma(g_fe - 1e-7)) / 2e-7 * dgdd;
+  EXPECT_NEAR(F_fe / F_net_fe, 1.0, 0.05) << F_fe << " N vs " << F_net_fe << " N";
+  std::printf("bias extension at d = %.1f mm: worst shear-angle error %.3f deg; end force %.4g N, pin-jointed net %.4g N "
+              "(%.4g N at the measured shear angle)\n",
+              d_end * 1e3, worst, F_fe, F_net, F_net_fe);
+}
+
+}  // namespace ts::test
