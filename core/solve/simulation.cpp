@@ -556,7 +556,7 @@ double Simulation::mechanics_stable_dt() {
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
     const int ne = st.mesh.num_elements();
-    constexpr int kBlock = 512;
+    constexpr int kBlock = 256;
     const int blocks = (ne + kBlock - 1) / kBlock;
     std::vector<double> block_dt(blocks, std::numeric_limits<double>::infinity());
     std::vector<double> block_energy(blocks, 0.0);

@@ -387,7 +387,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const double h2 = 0.5 * a.thickness;
     scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
     energy_.assign(a.num_nodes, 0.0);
-#pragma omp parallel for schedule(static) if (a.num_nodes > 4096)
+#pragma omp parallel for schedule(static) if (a.num_nodes > 256)
     for (int i = 0; i < a.num_nodes; ++i) {
       const double pen = h2 - dist_[i];
       if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
@@ -435,7 +435,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
     energy_.assign(a.num_nodes, 0.0);
     target_.assign(4 * static_cast<std::size_t>(a.num_nodes), 0.0);
-#pragma omp parallel for schedule(static) if (a.num_nodes > 4096)
+#pragma omp parallel for schedule(static) if (a.num_nodes > 256)
     for (int i = 0; i < a.num_nodes; ++i) {
       double* tg = &target_[4 * static_cast<std::size_t>(i)];
       tg[0] = -1;
