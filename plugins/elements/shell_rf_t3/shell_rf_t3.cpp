@@ -270,6 +270,8 @@ class ShellRfT3 final : public ElementKernel {
   void setup_bending() {
     const int ne = part_->num_elements;
     opp_.assign(3 * ne, -1);
+    partner_k_.assign(3 * ne, -1);
+    hth_.assign(3 * ne, 0.0);
     clamped_.assign(3 * ne, 0);
     hgrad_.assign(36 * ne, 0.0);
     n0_.assign(3 * ne, 0.0);
@@ -312,6 +314,7 @@ class ShellRfT3 final : public ElementKernel {
         for (int j = 0; j < 3; ++j) {
           const int o = part_->triangles[3 * nb + j];
           if (o != p && o != q) opp_[3 * e + k] = o;
+          if (part_->neighbours[3 * nb + j] == e) partner_k_[3 * e + k] = j;
         }
         const int o = opp_[3 * e + k];
         const Vec3 C = X[k], O = load3(x0, o);
@@ -331,20 +334,46 @@ class ShellRfT3 final : public ElementKernel {
   double bending_forces(const ElementForceInput& in, int b, int end, ElementForceOutput& out, double* dt_min) {
     const double* x = part_->x.data();
     static_assert(sizeof(Vec3) == 3 * sizeof(double));
+    // Hinge angles and their gradients. An interior edge is one hinge seen
+    // from both of its elements (same angle, gradients permuted): when both
+    // elements are in this block it is evaluated once.
     for (int e = b; e < end; ++e) {
       const int* t = &part_->triangles[3 * e];
+      for (int k = 0; k < 3; ++k) {
+        const int o = opp_[3 * e + k];
+        Vec3* g = reinterpret_cast<Vec3*>(&hgrad_[36 * e + 12 * k]);  // gradients kept for the forces
+        if (o >= 0) {
+          const int nb = part_->neighbours[3 * e + k];
+          const bool shared = nb >= b && nb < end;
+          if (shared && nb < e) continue;  // done from the neighbour
+          const double th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, g);
+          hth_[3 * e + k] = th;
+          if (shared) {
+            const int kb = partner_k_[3 * e + k];
+            Vec3* h = reinterpret_cast<Vec3*>(&hgrad_[36 * nb + 12 * kb]);
+            h[0] = g[1];  // (c, o, p, q) of the neighbour are (o, c, q, p) here
+            h[1] = g[0];
+            h[2] = g[3];
+            h[3] = g[2];
+            hth_[3 * nb + kb] = th;
+          }
+        } else if (clamped_[3 * e + k] == 1) {
+          hth_[3 * e + k] = 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g);
+        } else if (clamped_[3 * e + k] >= 2) {
+          hth_[3 * e + k] =
+              ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, g);
+        }
+      }
+    }
+    for (int e = b; e < end; ++e) {
       const double* c = &ginv_[9 * e];
       double K[3] = {0, 0, 0};
       for (int k = 0; k < 3; ++k) {
-        const int o = opp_[3 * e + k];
         double th;
-        Vec3* g = reinterpret_cast<Vec3*>(&hgrad_[36 * e + 12 * k]);  // gradients kept for the forces
-        if (o >= 0) {
-          th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, g) - theta0_[3 * e + k];
-        } else if (clamped_[3 * e + k] == 1) {
-          th = 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g);
-        } else if (clamped_[3 * e + k] >= 2) {
-          th = ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, g);
+        if (opp_[3 * e + k] >= 0) {
+          th = hth_[3 * e + k] - theta0_[3 * e + k];
+        } else if (clamped_[3 * e + k]) {
+          th = hth_[3 * e + k];
         } else {
           continue;
         }
@@ -410,7 +439,8 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   const MaterialLaw* bending_ = nullptr;
-  std::vector<int> opp_, edge_condition_;
+  std::vector<int> opp_, partner_k_, edge_condition_;  // partner_k_: the same edge's index in the neighbour
+  std::vector<double> hth_;                            // per element and edge: current hinge angle
   std::vector<char> clamped_;
   std::vector<double> n0_;     // initial element normals (clamped elements)
   std::vector<double> hgrad_;  // per element and edge: d theta / dx on up to 4 nodes (36 per element)
