@@ -147,6 +147,36 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                                 {"ambient", {{"type", "number"}, {"description", "[degC]"}}},
                                 {"region", {{"type", "object"}}}}},
                               {"additionalProperties", false}};
+  const json point2 = {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 2}, {"maxItems", 2}};
+  const json piece = {
+      {"oneOf",
+       {{{"type", "object"}, {"required", {"line"}}, {"properties", {{"line", {{"type", "array"}, {"items", point2}, {"minItems", 2}, {"maxItems", 2}}}}}, {"additionalProperties", false}},
+        {{"type", "object"},
+         {"required", {"arc"}},
+         {"properties",
+          {{"arc", {{"type", "object"}, {"required", {"from", "to", "centre"}}, {"properties", {{"from", point2}, {"to", point2}, {"centre", point2}}}, {"additionalProperties", false}}}}},
+         {"additionalProperties", false}}}}};
+  const json surface = {
+      {"oneOf",
+       {{{"type", "object"}, {"required", {"type", "point", "normal"}}, {"properties", {{"type", {{"const", "plane"}}}, {"point", vec(3)}, {"normal", vec(3)}}}, {"additionalProperties", false}},
+        {{"type", "object"}, {"required", {"type", "centre", "radius"}}, {"properties", {{"type", {{"const", "sphere"}}}, {"centre", vec(3)}, {"radius", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[m]"}}}}}, {"additionalProperties", false}},
+        {{"type", "object"},
+         {"required", {"type", "profile"}},
+         {"properties",
+          {{"type", {{"const", "revolved"}}},
+           {"axis", {{"type", "object"}, {"properties", {{"origin", vec(3)}, {"direction", vec(3)}}}, {"additionalProperties", false}}},
+           {"profile", {{"type", "array"}, {"items", piece}, {"minItems", 1}, {"description", "(r, z) pieces; the tool's outside is on the left"}}}}},
+         {"additionalProperties", false}},
+        {{"type", "object"}, {"required", {"type", "file"}}, {"properties", {{"type", {{"const", "mesh"}}}, {"file", {{"type", "string"}, {"description", "STL or Gmsh, relative to the job file"}}}, {"flip", {{"type", "boolean"}}}}}, {"additionalProperties", false}}}}};
+  const json motion = {
+      {"oneOf",
+       {{{"type", "object"}, {"required", {"velocity"}}, {"properties", {{"velocity", vec(3)}}}, {"additionalProperties", false}},
+        {{"type", "object"}, {"required", {"displacement"}}, {"properties", {{"displacement", {{"type", "array"}, {"items", {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 4}, {"maxItems", 4}}}, {"description", "rows [t, dx, dy, dz]"}}}}}, {"additionalProperties", false}},
+        {{"type", "object"}, {"required", {"force", "mass"}}, {"properties", {{"force", vec(3)}, {"mass", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[kg]"}}}, {"damping", {{"type", "number"}, {"minimum", 0}, {"description", "[N s/m]"}}}}}, {"additionalProperties", false}}}}};
+  const json tool = {{"type", "object"},
+                     {"required", {"name", "surface"}},
+                     {"properties", {{"name", {{"type", "string"}}}, {"surface", surface}, {"motion", motion}, {"temperature", {{"type", "number"}, {"description", "[degC]"}}}}},
+                     {"additionalProperties", false}};
   json interaction_kinds = contact;
   interaction_kinds.push_back(heat_exchange);
   const json schema = {
@@ -162,7 +192,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
         {"plugin_paths", {{"type", "array"}, {"items", {{"type", "string"}}}}},
         {"materials", {{"type", "object"}, {"additionalProperties", material}}},
         {"parts", {{"type", "array"}, {"items", part}}},
-        {"tools", {{"type", "array"}, {"items", {{"type", "object"}}}}},
+        {"tools", {{"type", "array"}, {"items", tool}}},
         {"interactions", {{"type", "array"}, {"items", {{"anyOf", interaction_kinds}}}}},
         {"constraints", {{"type", "array"}, {"items", {{"type", "object"}}}}},
         {"solvers",
