@@ -459,7 +459,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       ConstraintDef d;
       d.pointer = pointer_append("/constraints", i);
       ObjectReader r((*c)[i], d.pointer);
-      const std::string type = r.choice("type", {"symmetry", "fix", "velocity"});
+      const std::string type = r.choice("type", {"symmetry", "fix", "velocity", "force"});
       const std::string part = r.text("part");
       if (part == "*") {
         for (std::size_t p = 0; p < job.parts.size(); ++p) d.parts.push_back(static_cast<int>(p));
@@ -488,6 +488,11 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
               throw JobError(pointer_append(r.at("dofs"), k), "unknown dof '" + dof + "'; valid: x, y, z");
             d.dofs[dof[0] - 'x'] = true;
           }
+        } else if (type == "force") {
+          d.type = ConstraintDef::Type::Force;
+          const auto f = r.reals("force", 3);
+          d.force = {f[0], f[1], f[2]};
+          d.ramp = r.real("ramp", 0.0, 0.0);
         } else {
           d.type = ConstraintDef::Type::Velocity;
           const auto v = r.reals("velocity", 3);

@@ -124,13 +124,15 @@ struct MechanicsDef {
 };
 
 struct ConstraintDef {
-  enum class Type { Symmetry, Fix, Velocity } type = Type::Fix;
+  enum class Type { Symmetry, Fix, Velocity, Force } type = Type::Fix;
   std::string pointer;
   std::vector<int> parts;
   int plane = 0;  // symmetry: 0 x, 1 y, 2 z
   std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
   std::array<bool, 3> dofs{false, false, false};
   std::array<double, 3> velocity{0, 0, 0};
+  std::array<double, 3> force{0, 0, 0};  // force: total over the nodes in the box (N)
+  double ramp = 0;                       // force: linear ramp time from zero (s)
 };
 
 struct OutputDef {

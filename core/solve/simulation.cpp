@@ -30,6 +30,7 @@ struct MechPart {
   std::unique_ptr<sdk::ElementKernel> element;
   std::vector<const sdk::MaterialLaw*> membrane;
   std::vector<double> curvature;
+  std::vector<double> load;  // applied nodal forces at full value (N), 3 per node
   std::vector<double> f_con, fc_prev, k_contact;  // contact forces (N) now and at the previous step; stiffness bound (N/m)
   std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, node_temperature, stress;
   std::vector<int> inc_start, inc;  // node -> 18 e + 3 a entries of element_force (6-node patches)
@@ -448,6 +449,7 @@ void Simulation::build_mechanics() {
         bool inside = true;
         for (int d = 0; d < 3; ++d) inside = inside && X[d] >= c.lo[d] && X[d] <= c.hi[d];
         if (!inside) continue;
+        if (c.type == ConstraintDef::Type::Force) continue;  // loads: below
         for (int d = 0; d < 3; ++d)
           if (c.dofs[d]) {
             m->fixed[3 * i + d] = 1;
@@ -456,7 +458,29 @@ void Simulation::build_mechanics() {
           }
       }
     }
+    // Loads: the total force of each `force` entry shared equally by the
+    // nodes in its box (over every part it names), ramped in time.
+    m->load.assign(3 * nn, 0.0);
     mech_.push_back(std::move(m));
+  }
+  for (std::size_t ci = 0; ci < job_.constraints.size(); ++ci) {
+    const ConstraintDef& c = job_.constraints[ci];
+    if (c.type != ConstraintDef::Type::Force) continue;
+    std::vector<std::pair<int, int>> nodes;
+    for (int p : c.parts) {
+      const PartState& st = *parts_[p];
+      for (int i = 0; i < st.mesh.num_nodes(); ++i) {
+        bool inside = true;
+        for (int d = 0; d < 3; ++d) inside = inside && st.x0[3 * i + d] >= c.lo[d] && st.x0[3 * i + d] <= c.hi[d];
+        if (inside) nodes.emplace_back(p, i);
+      }
+    }
+    if (nodes.empty()) throw JobError(c.pointer + "/box", "no node of the part(s) lies inside the box");
+    Load l;
+    l.ramp = c.ramp;
+    l.nodes = std::move(nodes);
+    for (int d = 0; d < 3; ++d) l.per_node[d] = c.force[d] / static_cast<double>(l.nodes.size());
+    loads_.push_back(std::move(l));
   }
   // Contact stiffness bounds per node (for the stable step and mass scaling)
   // and, for force-controlled tools, the total stiffness they can meet.
@@ -669,6 +693,15 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   const double dt_avg = step == 0 ? 0.5 * dt : 0.5 * (last_mech_dt_ + dt);
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0;
   audit.reactions.assign(3 * job_.constraints.size(), 0.0);
+  // Applied loads at t, each ramped from zero over its own time.
+  if (!loads_.empty()) {
+    for (auto& m : mech_) std::fill(m->load.begin(), m->load.end(), 0.0);
+    for (const Load& l : loads_) {
+      const double factor = l.ramp > 0 ? std::min(1.0, t / l.ramp) : 1.0;
+      for (const auto& [p, i] : l.nodes)
+        for (int d = 0; d < 3; ++d) mech_[p]->load[3 * i + d] += factor * l.per_node[d];
+    }
+  }
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
@@ -682,7 +715,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         w_int += 0.5 * (m.f_prev[k] + m.f_int[k]) * m.dx[k];
         w_con += 0.5 * (m.fc_prev[k] + m.f_con[k]) * m.dx[k];
         m.fc_prev[k] = m.f_con[k];
-        const double f_ext = md.gravity[d] * m.mass_node_physical[i];
+        const double f_ext = md.gravity[d] * m.mass_node_physical[i] + m.load[k];
         if (m.fixed[k]) {
           // A held or driven dof: the constraint supplies R = f_int - f_ext -
           // f_contact (its inertia is not part of the model); its work over the

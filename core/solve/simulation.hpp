@@ -2,6 +2,7 @@
 // A job turned into a runnable model: meshes, tools, plugins, state arrays,
 // and the time loop. Construction validates everything a run needs (throws
 // JobError); run() integrates and writes the output folder.
+#include <array>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -111,6 +112,12 @@ class Simulation {
   enum { kTimeElements, kTimeContact, kTimeThermal, kTimeIntegrate, kTimeOutput, kTimeCount };
   double timing_[kTimeCount] = {0, 0, 0, 0, 0};  // wall time per phase of the mechanics loop (s)
   double contact_energy_ = 0;       // penalty energy stored, current
+  struct Load {
+    double ramp = 0;                            // s
+    std::vector<std::pair<int, int>> nodes;     // (part, node) in the box
+    std::array<double, 3> per_node{0, 0, 0};    // N, at full value
+  };
+  std::vector<Load> loads_;                     // `force` entries of the constraints
   double contact_dt_ = std::numeric_limits<double>::infinity();  // contact bound of the stable step
   double tool_dt_ = std::numeric_limits<double>::infinity();     // force-controlled tools' bound
   long long contact_active_ = 0;

@@ -481,3 +481,35 @@ TEST(Woven, BiasExtensionFollowsThePinJointedNet) {
 }
 
 }  // namespace ts::test
+
+namespace ts::test {
+
+// A strip clamped at x = 0 under an end moment M: a force couple on the last
+// two rows of nodes (+F at x = L, -F at x = L - a; M = F a), ramped in
+// 0.5 s and held, damped to rest. Between the clamp and x = L - a the
+// moment is constant, the curvature M / (W R) and the deflection at
+// x = L - a is kappa (L - a)^2 / 2 (small rotation: kappa L = 0.05).
+// Required: within 2 %.
+TEST(Bending, StripUnderEndMoment) {
+  const double L = 0.1, W = 0.02, a = L / 20, R = 1.0e-3, kappa = 0.5;
+  const double F = kappa * R * W / a;
+  json j = strip_job(0.0, 0.0, 1.0);
+  j["parts"][0]["mesh"]["divisions"] = {20, 4};
+  j["materials"]["ud"]["membrane"] = {{"law", "ud_hyperelastic"}, {"k_fibre", 1.0e4}, {"p_ct", 1.0e3}, {"k_sh", {2.0e2, 0.0, 0.0}}};
+  j["materials"]["ud"]["bending"] = {{"law", "thermo_linear_bending"}, {"beta1_T", 0.0}, {"beta1_B", R}, {"beta2_T", 0.0}, {"beta2_B", 0.1 * R}};
+  j["constraints"] = {
+      {{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "y", "z"}}},
+      {{"type", "force"}, {"part", "strip"}, {"box", {{L - 1e-6, -1, -1}, {L + 1e-6, 1, 1}}}, {"force", {0.0, 0.0, F}}, {"ramp", 0.5}},
+      {{"type", "force"}, {"part", "strip"}, {"box", {{L - a - 1e-6, -1, -1}, {L - a + 1e-6, 1, 1}}}, {"force", {0.0, 0.0, -F}}, {"ramp", 0.5}}};
+  j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"damping", 30.0}};
+  j["output"]["probes"] = {{{"name", "row"}, {"part", "strip"}, {"at", {L - a, W / 2, 0}}, {"quantities", {"displacement_z"}}, {"interval", 0.25}}};
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const double w = r.sample(0, "displacement_z", 1.0)->values[0];
+  const double expected = kappa * (L - a) * (L - a) / 2;
+  EXPECT_NEAR(w / expected, 1.0, 0.02);
+  std::printf("end moment: deflection at x = L - a %.5g m, kappa (L - a)^2 / 2 = %.5g m (%+.2f %%), %lld steps\n", w,
+              expected, 100 * (w / expected - 1), r.result.mechanical_steps);
+}
+
+}  // namespace ts::test
