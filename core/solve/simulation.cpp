@@ -328,6 +328,7 @@ void Simulation::build_mechanics() {
         throw JobError(ptr + "/law", "'" + obj["law"].get<std::string>() + "' is not a membrane law");
       made[ptr] = law.get();
       m->membrane.push_back(law.get());
+      law_uses_.push_back({law.get(), ptr, obj["law"].get<std::string>()});
       laws_.push_back(std::move(law));
     }
     const sdk::MaterialLaw* bending = nullptr;
@@ -346,6 +347,7 @@ void Simulation::build_mechanics() {
           throw JobError(ptr + "/law", "'" + mat.bending["law"].get<std::string>() + "' is not a bending law");
         bending = law.get();
         made[ptr] = law.get();
+        law_uses_.push_back({law.get(), ptr, mat.bending["law"].get<std::string>()});
         laws_.push_back(std::move(law));
       }
     }
@@ -550,6 +552,27 @@ void Simulation::build_mechanics() {
   for (std::size_t t = 0; t < tools_.size(); ++t)
     if (tools_[t]->force_controlled() && tool_k[t] > 0)
       tool_dt_ = std::min(tool_dt_, 2.0 * std::sqrt(job_.tools[t].motion.mass / tool_k[t]));
+}
+
+// Warns once per law when a ply the law belongs to leaves the temperature
+// range its parameters are given for (the law holds them at the range end).
+void Simulation::check_law_ranges(double t) {
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    const MechPart& m = *mech_[p];
+    if (m.node_temperature.empty()) continue;
+    const auto [lo, hi] = std::minmax_element(m.node_temperature.begin(), m.node_temperature.end());
+    const MaterialDef& mat = job_.materials[parts_[p]->def->material];
+    for (auto& use : law_uses_) {
+      if (use.warned || use.pointer.rfind(mat.pointer + "/", 0) != 0) continue;
+      const auto [tmin, tmax] = use.law->temperature_range();
+      const double T = *lo < tmin ? *lo : *hi > tmax ? *hi : tmin;
+      if (*lo >= tmin && *hi <= tmax) continue;
+      logger("solve")->warn("{}: ply '{}' reaches {:.1f} degC at t = {:.4g} s, outside the range [{:g}, {:g}] degC of "
+                            "law '{}'; its temperature-dependent parameters are held at the range end",
+                            use.pointer, parts_[p]->def->name, T, t, tmin, tmax, use.name);
+      use.warned = true;
+    }
+  }
 }
 
 void Simulation::update_node_temperature() {
@@ -1112,6 +1135,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       long long since_thermal = 0;
       int subcycle = job_.thermal ? job_.thermal->subcycle : 0;
       update_node_temperature();
+      check_law_ranges(0.0);
       double stable = mechanics_stable_dt();
       compute_contact_forces(0.0, 0.0);
       if (contact_energy_ > 0)
@@ -1161,6 +1185,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             since_thermal = 0;
             check_field(t, steps);
             update_node_temperature();
+            check_law_ranges(t);
           }
         }
         // Energy audit: W_int + kinetic + damping = external work.

@@ -96,6 +96,13 @@ class Simulation {
   double mechanics_step(double dt, double t, long long step, EnergyAudit& audit);
   double mechanics_stable_dt();
   void update_node_temperature();
+  void check_law_ranges(double t);
+  struct LawUse {
+    const sdk::MaterialLaw* law = nullptr;
+    std::string pointer, name;
+    bool warned = false;
+  };
+  std::vector<LawUse> law_uses_;
   void update_element_fields();
   void assemble_faces();
   void check_field(double time, long long step);

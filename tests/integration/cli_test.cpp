@@ -304,3 +304,27 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
 
 }  // namespace
 }  // namespace ts::test
+
+namespace ts::test {
+
+// Temperatures outside a law's range (200-350 degC by default for the
+// viscoelastic shear and bending laws): the parameters are held at the
+// range end and the run says so once per law, naming the JSON pointer.
+TEST(Cli, LawTemperatureRangeWarnsOnce) {
+  const auto dir = temp_dir("law_range");
+  const auto job = source_dir() / "share" / "jobs" / "ud_strip_tension.json";
+  auto r = thermostamp("run '" + job.string() + "' --out '" + (dir / "hot").string() +
+                       "' --quiet --set time.end=0.002 --set solvers.thermal=null --set parts.0.initial_temperature=380");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string warn = "/materials/ud/membrane/1: ply 'strip' reaches 380.0 degC";
+  const auto first = r.err.find(warn);
+  EXPECT_NE(first, std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(warn, first + 1), std::string::npos) << "warned more than once";
+  EXPECT_NE(r.err.find("outside the range [200, 350] degC of law 'viscoelastic_shear'"), std::string::npos) << r.err;
+  r = thermostamp("run '" + job.string() + "' --out '" + (dir / "ok").string() +
+                  "' --quiet --set time.end=0.002 --set solvers.thermal=null --set parts.0.initial_temperature=300");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("outside the range"), std::string::npos) << r.err;
+}
+
+}  // namespace ts::test

@@ -21,11 +21,16 @@ class ThermoLinearBending final : public MaterialLaw {
       b2t_ = p.real("beta2_T");
       b2b_ = p.real("beta2_B");
       twist_ = p.real("twist_ratio");
+      t_min_ = p.real("t_min");
+      t_max_ = p.real("t_max");
+      if (!(t_max_ > t_min_)) return Status::failure("t_max must be above t_min");
       return Status::success();
     });
   }
   LawRole role() const override { return LawRole::Bending; }
+  std::pair<double, double> temperature_range() const override { return {t_min_, t_max_}; }
   void rigidities(double T, double* r1, double* r2, double* r12) const {
+    T = std::clamp(T, t_min_, t_max_);
     *r1 = std::max(0.0, b1t_ * T + b1b_);
     *r2 = std::max(0.0, b2t_ * T + b2b_);
     *r12 = twist_ * 0.5 * (*r1 + *r2);
@@ -50,7 +55,7 @@ class ThermoLinearBending final : public MaterialLaw {
   }
 
  private:
-  double b1t_ = 0, b1b_ = 0, b2t_ = 0, b2b_ = 0, twist_ = 0;
+  double b1t_ = 0, b1b_ = 0, b2t_ = 0, b2b_ = 0, twist_ = 0, t_min_ = -273.15, t_max_ = 1e4;
 };
 
 MaterialLaw* create() { return new ThermoLinearBending(); }
@@ -65,7 +70,9 @@ void register_all(Registrar& r) {
               real_param("beta1_B", "", "N m", "R_1 at 0 degC"),
               real_param("beta2_T", "0.0", "N m/degC", "slope of the rigidity across the fibres R_2(T)"),
               real_param("beta2_B", "", "N m", "R_2 at 0 degC"),
-              real_param("twist_ratio", "0.0", "-", "twist rigidity R_12 as a fraction of (R_1 + R_2)/2", 0.0, 1.0)};
+              real_param("twist_ratio", "0.0", "-", "twist rigidity R_12 as a fraction of (R_1 + R_2)/2", 0.0, 1.0),
+              real_param("t_min", "200.0", "degC", "lowest temperature the rigidities hold for; below it they are held at t_min (with a warning)"),
+              real_param("t_max", "350.0", "degC", "highest temperature the rigidities hold for; above it they are held at t_max (with a warning)")};
   d.example = R"({ "law": "thermo_linear_bending", "beta1_T": -2.0e-5, "beta1_B": 6.4e-3, "beta2_T": -2.0e-6, "beta2_B": 6.4e-4 })";
   r.add_material(d, &create);
 }

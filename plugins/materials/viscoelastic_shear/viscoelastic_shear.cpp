@@ -26,6 +26,9 @@ class ViscoelasticShear final : public MaterialLaw {
       const auto& ks = p.list("k_sh");
       for (int i = 0; i < 3; ++i) k_sh_[i] = ks[i];
       const double tb = p.real("t_break");
+      t_min_ = p.real("t_min");
+      t_max_ = p.real("t_max");
+      if (!(t_max_ > t_min_)) return Status::failure("t_max must be above t_min");
       omega_ = {tb, p.real("omega_at_break"), p.real("omega_slope_below"), p.real("omega_slope_above")};
       const auto& g = p.list("g");
       const auto& tau = p.list("tau");
@@ -59,10 +62,12 @@ class ViscoelasticShear final : public MaterialLaw {
     });
   }
   LawRole role() const override { return LawRole::Membrane; }
-  int state_size() const override { return 3 + 3 * n_; }  // S0 at the previous step, then H_i
+  int state_size() const override { return 3 + 3 * n_; }
+  std::pair<double, double> temperature_range() const override { return {t_min_, t_max_}; }  // S0 at the previous step, then H_i
 
   // Clamped parameters at temperature T.
   void at(double T, double* omega, double* g, double* tau) const {
+    T = std::clamp(T, t_min_, t_max_);
     *omega = std::max(0.0, omega_(T));
     double sum = 0;
     for (int i = 0; i < n_; ++i) {
@@ -112,6 +117,7 @@ class ViscoelasticShear final : public MaterialLaw {
   }
 
  private:
+  double t_min_ = 200, t_max_ = 350;
   double k_sh_[3] = {0, 0, 0};
   BrokenLine omega_;
   std::vector<BrokenLine> g_, tau_;
@@ -129,6 +135,8 @@ void register_all(Registrar& r) {
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
       real_param("t_break", "270.0", "degC", "temperature of the break of the piecewise-linear laws"),
+      real_param("t_min", "200.0", "degC", "lowest temperature the parameters hold for; below it they are held at t_min (with a warning)"),
+      real_param("t_max", "350.0", "degC", "highest temperature the parameters hold for; above it they are held at t_max (with a warning)"),
       real_param("omega_at_break", "1.0", "-", "shear scale omega at t_break"),
       real_param("omega_slope_below", "0.0", "1/degC", "d omega / dT below t_break"),
       real_param("omega_slope_above", "0.0", "1/degC", "d omega / dT above t_break"),

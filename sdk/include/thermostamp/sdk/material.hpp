@@ -2,7 +2,9 @@
 // Material laws: membrane (hyperelastic / viscoelastic, by invariants) and
 // bending. Called once per block of integration points.
 #include <cstddef>
+#include <limits>
 #include <span>
+#include <utility>
 
 #include "parameters.hpp"
 #include "status.hpp"
@@ -38,6 +40,12 @@ class MaterialLaw {
   // Largest tangent stiffness (N/m for membrane, N m for bending) at a
   // temperature, for the stable step estimate.
   virtual double max_stiffness(double temperature) const = 0;
+  // Temperatures (degC) the law's temperature-dependent parameters are given
+  // for. Outside it the law holds them at the range end; the kernel warns
+  // once when a ply's temperature leaves the range.
+  virtual std::pair<double, double> temperature_range() const {
+    return {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  }
 };
 
 }  // namespace ts::sdk
