@@ -383,6 +383,30 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
     throw JobError(ptr, unknown_name("part or tool", name, all));
   };
 
+  // "part": a name or "*" (every part).
+  auto select_parts = [&](ObjectReader& r) {
+    std::vector<int> parts;
+    const std::string part = r.text("part");
+    if (part == "*") {
+      for (std::size_t p = 0; p < job.parts.size(); ++p) parts.push_back(static_cast<int>(p));
+    } else {
+      const int p = find_index(part_names, part);
+      if (p < 0) throw JobError(r.at("part"), unknown_name("part", part, part_names));
+      parts.push_back(p);
+    }
+    return parts;
+  };
+  // "dofs": a list of x, y, z (default all).
+  auto read_dofs = [](ObjectReader& r, std::array<bool, 3>& dofs) {
+    const auto names = r.texts("dofs", std::vector<std::string>{"x", "y", "z"});
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      const auto& dof = names[k];
+      if (dof != "x" && dof != "y" && dof != "z")
+        throw JobError(pointer_append(r.at("dofs"), k), "unknown dof '" + dof + "'; valid: x, y, z");
+      dofs[dof[0] - 'x'] = true;
+    }
+  };
+
   // interactions
   if (const json* inter = top.optional_raw("interactions")) {
     if (!inter->is_array()) throw JobError("/interactions", "expected an array, found " + json_type_name(*inter));
@@ -412,14 +436,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       }
       HeatExchangeDef h;
       h.pointer = ptr;
-      const std::string part = r.text("part");
-      if (part == "*") {
-        for (std::size_t p = 0; p < job.parts.size(); ++p) h.parts.push_back(static_cast<int>(p));
-      } else {
-        const int p = find_index(part_names, part);
-        if (p < 0) throw JobError(r.at("part"), unknown_name("part", part, part_names));
-        h.parts.push_back(p);
-      }
+      h.parts = select_parts(r);
       const std::string face = r.choice("face", {"top", "bottom", "both"});
       h.top = face != "bottom";
       h.bottom = face != "top";
@@ -460,14 +477,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       d.pointer = pointer_append("/constraints", i);
       ObjectReader r((*c)[i], d.pointer);
       const std::string type = r.choice("type", {"symmetry", "fix", "velocity", "force"});
-      const std::string part = r.text("part");
-      if (part == "*") {
-        for (std::size_t p = 0; p < job.parts.size(); ++p) d.parts.push_back(static_cast<int>(p));
-      } else {
-        const int p = find_index(part_names, part);
-        if (p < 0) throw JobError(r.at("part"), unknown_name("part", part, part_names));
-        d.parts.push_back(p);
-      }
+      d.parts = select_parts(r);
       if (type == "symmetry") {
         d.type = ConstraintDef::Type::Symmetry;
         const std::string plane = r.choice("plane", {"x", "y", "z"});
@@ -481,13 +491,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
         d.hi = {hi[0], hi[1], hi[2]};
         if (type == "fix") {
           d.type = ConstraintDef::Type::Fix;
-          const auto dofs = r.texts("dofs", std::vector<std::string>{"x", "y", "z"});
-          for (std::size_t k = 0; k < dofs.size(); ++k) {
-            const auto& dof = dofs[k];
-            if (dof != "x" && dof != "y" && dof != "z")
-              throw JobError(pointer_append(r.at("dofs"), k), "unknown dof '" + dof + "'; valid: x, y, z");
-            d.dofs[dof[0] - 'x'] = true;
-          }
+          read_dofs(r, d.dofs);
         } else if (type == "force") {
           d.type = ConstraintDef::Type::Force;
           const auto f = r.reals("force", 3);
@@ -497,14 +501,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
           d.type = ConstraintDef::Type::Velocity;
           const auto v = r.reals("velocity", 3);
           d.velocity = {v[0], v[1], v[2]};
-          // Optional: only these components are prescribed (default all).
-          const auto dofs = r.texts("dofs", std::vector<std::string>{"x", "y", "z"});
-          for (std::size_t k = 0; k < dofs.size(); ++k) {
-            const auto& dof = dofs[k];
-            if (dof != "x" && dof != "y" && dof != "z")
-              throw JobError(pointer_append(r.at("dofs"), k), "unknown dof '" + dof + "'; valid: x, y, z");
-            d.dofs[dof[0] - 'x'] = true;
-          }
+          read_dofs(r, d.dofs);  // only these components are prescribed
         }
       }
       r.finish();

@@ -652,31 +652,31 @@ void Simulation::compute_contact_forces(double t, double dt) {
   contact_energy_ = 0;
   contact_active_ = 0;
   if (contacts_.empty()) return;
-  std::vector<std::span<const double>> vel, areas, mass;
-  std::vector<std::span<double>> force, status;
-  for (std::size_t p = 0; p < parts_.size(); ++p) {
-    vel.emplace_back(mech_[p]->v);
-    mass.emplace_back(mech_[p]->mass);
-    areas.emplace_back(parts_[p]->area);
-    force.emplace_back(mech_[p]->f_con);
-    if (!job_.thermal) {  // isothermal: the status field shows the mechanical contact
-      std::fill(parts_[p]->contact_status.begin(), parts_[p]->contact_status.end(), 0.0);
-      status.emplace_back(parts_[p]->contact_status);
+  ContactSpans& cs = contact_spans_;
+  if (cs.vel.empty()) {  // the arrays are stable for the run: views built once
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      cs.vel.emplace_back(mech_[p]->v);
+      cs.mass.emplace_back(mech_[p]->mass);
+      cs.areas.emplace_back(parts_[p]->area);
+      cs.force.emplace_back(mech_[p]->f_con);
+      if (!job_.thermal) cs.status.emplace_back(parts_[p]->contact_status);
     }
   }
+  if (!job_.thermal)  // isothermal: the status field shows the mechanical contact
+    for (auto& st : parts_) std::fill(st->contact_status.begin(), st->contact_status.end(), 0.0);
   sdk::ContactForceInput in;
   in.parts = part_views_;
   in.tools = tool_views_;
   in.time = t;
   in.dt = dt;
-  in.velocity = vel;
-  in.node_area = areas;
-  in.mass = mass;
+  in.velocity = cs.vel;
+  in.node_area = cs.areas;
+  in.mass = cs.mass;
   for (std::size_t c = 0; c < contacts_.size(); ++c) {
     sdk::ContactForceOutput out;
-    out.force = force;
+    out.force = cs.force;
     out.tool_force = tool_force_;
-    out.status = status;
+    out.status = cs.status;
     if (auto s = contacts_[c]->contact_forces(in, out); !s)
       throw RunError("contact handler of " + job_.contacts[c].pointer + " at t = " + fmt_g(t) + " s: " + s.message);
     contact_energy_ += out.energy;

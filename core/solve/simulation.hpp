@@ -129,6 +129,10 @@ class Simulation {
   double tool_dt_ = std::numeric_limits<double>::infinity();     // force-controlled tools' bound
   long long contact_active_ = 0;
   void compute_contact_forces(double t, double dt);
+  struct ContactSpans {  // per part views handed to the contact handlers every step
+    std::vector<std::span<const double>> vel, areas, mass;
+    std::vector<std::span<double>> force, status;
+  } contact_spans_;
   void accumulate_tool_heat(double dt);
   std::vector<sdk::PartView> part_views_;
   std::vector<sdk::ToolView> tool_views_;

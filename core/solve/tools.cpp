@@ -76,7 +76,9 @@ void read_stl(const std::filesystem::path& file, const std::string& ptr, std::ve
 
 RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
   const SurfaceDef& s = def.surface;
-  if (s.type == "revolved") {
+  kind_ = s.type == "plane" ? Kind::Plane : s.type == "sphere" ? Kind::Sphere : s.type == "revolved" ? Kind::Revolved : Kind::Mesh;
+  plane_normal_ = sdk::normalized({s.normal[0], s.normal[1], s.normal[2]});
+  if (kind_ == Kind::Revolved) {
     axis_ = sdk::normalized({s.axis_direction[0], s.axis_direction[1], s.axis_direction[2]});
     const Vec3 trial = std::abs(axis_[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
     perp_ = sdk::normalized(sdk::sub(trial, sdk::scale(axis_, sdk::dot(trial, axis_))));
@@ -104,7 +106,7 @@ RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
         end_normals_[i][2 * end + 1] = n[1];
       }
     }
-  } else if (s.type == "mesh") {
+  } else if (kind_ == Kind::Mesh) {
     std::vector<double> xyz;
     std::vector<int> tri;
     const std::string ptr = def.pointer + "/surface/file";
@@ -195,17 +197,17 @@ void RigidTool::query(std::size_t n, const double* points, double cutoff, double
   for (std::size_t i = 0; i < n; ++i) {
     const double p[3] = {points[3 * i] - u_[0], points[3 * i + 1] - u_[1], points[3 * i + 2] - u_[2]};
     double* nn = normal + 3 * i;
-    if (s.type == "plane") {
-      const Vec3 u = sdk::normalized({s.normal[0], s.normal[1], s.normal[2]});
+    if (kind_ == Kind::Plane) {
+      const Vec3& u = plane_normal_;
       distance[i] = (p[0] - s.point[0]) * u[0] + (p[1] - s.point[1]) * u[1] + (p[2] - s.point[2]) * u[2];
       for (int d = 0; d < 3; ++d) nn[d] = u[d];
-    } else if (s.type == "sphere") {
+    } else if (kind_ == Kind::Sphere) {
       const Vec3 r = {p[0] - s.centre[0], p[1] - s.centre[1], p[2] - s.centre[2]};
       const double len = sdk::norm(r);
       const Vec3 u = len > 0 ? sdk::scale(r, 1.0 / len) : Vec3{0, 0, 1};
       distance[i] = len - s.radius;
       for (int d = 0; d < 3; ++d) nn[d] = u[d];
-    } else if (s.type == "revolved") {
+    } else if (kind_ == Kind::Revolved) {
       query_revolved(p, distance[i], nn);
     } else {
       query_mesh(p, cutoff, distance[i], nn);

@@ -43,6 +43,8 @@ class RigidTool {
   void build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri);
 
   const ToolDef* def_;
+  enum class Kind { Plane, Sphere, Revolved, Mesh } kind_ = Kind::Plane;  // from def_->surface.type, once
+  std::array<double, 3> plane_normal_{0, 0, 1};                           // unit
   std::array<double, 3> u_{0, 0, 0}, v_{0, 0, 0};
   // revolved: unit axis, a unit vector normal to it, per-segment normals at the ends
   std::array<double, 3> axis_{0, 0, 1}, perp_{1, 0, 0};

@@ -137,9 +137,10 @@ def plot_maps(folder, out):
             vals = g["shear_angle"][()]
             lim = max(abs(vals.min()), abs(vals.max()), 1e-9)
             fig, ax = plt.subplots(figsize=(5.2, 4.4))
-            for k, (mxy, mtri, v) in enumerate(mirrored(xyz[:, :2], tri, vals, True)):
+            copies = mirrored(xyz[:, :2], tri, vals, True)
+            for k, (mxy, mtri, v) in enumerate(copies):
                 # mirroring about one axis reverses the sign of the shear angle
-                sign = 1.0 if k in (0, 3) or len(mirrored(xyz[:, :2], tri, vals, True)) == 1 else -1.0
+                sign = 1.0 if k in (0, 3) or len(copies) == 1 else -1.0
                 pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=sign * v, vmin=-lim, vmax=lim,
                                   cmap="coolwarm")
             ax.set_aspect("equal")
