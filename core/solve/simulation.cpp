@@ -52,6 +52,8 @@ struct PartState {
 
 namespace {
 using Clock = std::chrono::steady_clock;
+// The kinetic energy may not exceed this multiple of the energy supplied.
+constexpr double kKineticGrowthLimit = 10.0;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 void compute_normals(const ShellMesh& m, const std::vector<double>& x, std::vector<double>& nn) {
@@ -714,7 +716,7 @@ void Simulation::accumulate_tool_heat(double dt) {
 double Simulation::mechanics_step(double dt, double t, long long step, EnergyAudit& audit) {
   const MechanicsDef& md = job_.mechanics_settings;
   const double dt_avg = step == 0 ? 0.5 * dt : 0.5 * (last_mech_dt_ + dt);
-  double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0;
+  double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
   audit.reactions.assign(3 * job_.constraints.size(), 0.0);
   // Applied loads at t, each ramped from zero over its own time.
   if (!loads_.empty()) {
@@ -763,6 +765,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         // the energy that central differences conserve exactly for a linear
         // system, so that stiff short events (contact) do not upset the audit.
         kin += 0.5 * mi * m.v[k] * v_new;
+        kin_half += 0.5 * mi * v_new * v_new;
         m.fd_prev[k] = f_damp;
         m.v[k] = v_new;
         m.dx[k] = dt * v_new;
@@ -784,6 +787,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   audit.damping += w_damp;
   audit.contact -= w_con;
   audit.kinetic = kin;
+  audit.kinetic_half = kin_half;
   last_mech_dt_ = dt;
   return dt;
 }
@@ -1143,7 +1147,7 @@ RunResult Simulation::run(const RunOptions& opt) {
                   "(check the tools' positions and the side their profile faces)",
                   contact_energy_, contact_active_);
       if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
-      double next_sample = 0, audit_scale = 0;
+      double next_sample = 0, audit_scale = 0, supplied_max = 0;
       while (t < t_end - eps_t) {
         const double next_frame = std::min(t_end, frame_index * interval);
         double dt = std::min(md.dt_safety * stable, t_end - t);
@@ -1199,6 +1203,20 @@ RunResult Simulation::run(const RunOptions& opt) {
         if (audit.balance_error > md.energy_tolerance && scale > 1e-12 && mech_steps > 20)
           throw RunError("energy balance error " + fmt_g(audit.balance_error, 3) + " above energy_tolerance " +
                          fmt_g(md.energy_tolerance, 3) + " at t = " + fmt_g(t) + " s (mechanical step " +
+                         std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) +
+                         " s): the run is unstable (step too large?)");
+        // Kinetic energy growth: the plies start at rest and stress free, so
+        // their kinetic energy cannot exceed what loads, driven dofs and tools
+        // have supplied (external work, plus the tools' work: the contact
+        // work on the plies and the energy held in the penalty springs). An
+        // unstable step grows it exponentially even where the audit stays
+        // balanced (for a linear system central differences conserve the
+        // product form of the kinetic energy, which turns negative instead).
+        supplied_max = std::max(supplied_max, audit.external - audit.contact + audit.contact_stored);
+        if (mech_steps > 20 && audit.kinetic_half > kKineticGrowthLimit * supplied_max + 1e-15)
+          throw RunError("kinetic energy " + fmt_g(audit.kinetic_half, 3) + " J grew above " +
+                         fmt_g(kKineticGrowthLimit, 3) + " times the energy supplied by loads, driven dofs and tools (" +
+                         fmt_g(supplied_max, 3) + " J) at t = " + fmt_g(t) + " s (mechanical step " +
                          std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) +
                          " s): the run is unstable (step too large?)");
         if (t >= next_sample - eps_t) {

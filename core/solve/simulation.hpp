@@ -36,6 +36,7 @@ struct EnergyAudit {
   double kinetic = 0, internal = 0, external = 0, damping = 0, balance_error = 0;
   double contact = 0;         // energy taken from the plies by contact forces (penalty storage + friction - tool work)
   double contact_stored = 0;  // elastic energy in the penalty springs, current
+  double kinetic_half = 0;    // 1/2 m v^{n+1/2}^2 (never negative; the growth check uses it)
   std::vector<double> added_mass_percent;  // per part, from mass scaling
   std::vector<double> reactions;           // 3 per constraint: force the constraint applies to the plies (N), last step
   std::vector<double> tool_forces;         // 3 per tool: force of the plies on the tool (N), last step
