@@ -1316,6 +1316,12 @@ RunResult Simulation::run(const RunOptions& opt) {
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     result.part_heat_change.push_back(stored_heat(static_cast<int>(p)) - stored0_part[p]);
     result.part_link_heat.push_back(link_heat_.size() > p ? link_heat_[p] : 0.0);
+    const auto& sa = parts_[p]->shear_angle;
+    if (job_.mechanics && !sa.empty()) {
+      const auto [smn, smx] = std::minmax_element(sa.begin(), sa.end());
+      result.part_shear_min_deg.push_back(*smn);
+      result.part_shear_max_deg.push_back(*smx);
+    }
   }
   result.stored_change = stored_change;
   result.heat_balance_error = std::abs(stored_change - heat_in) / scale;

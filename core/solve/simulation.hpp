@@ -54,6 +54,7 @@ struct RunResult {
   double heat_in = 0, stored_change = 0, heat_balance_error = 0;
   std::vector<double> part_heat_change;  // per part: stored heat change (J)
   std::vector<double> part_link_heat;    // per part: heat received through ply/ply contact (J)
+  std::vector<double> part_shear_min_deg, part_shear_max_deg;  // per part, mechanics only: shear angle range at the end
   double temperature_min = 0, temperature_max = 0;  // over every value and every step
   long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
   std::vector<ProbeSample> probes;

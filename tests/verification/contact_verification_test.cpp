@@ -127,6 +127,43 @@ TEST(Contact, CoulombSlideAndStickOnTiltedGravity) {
   }
 }
 
+// Rate-regularised Coulomb friction (slip_velocity v0 > 0) on the same
+// tilted plane. Sliding (tan(alpha) > mu, slip speed >> v0): the Coulomb
+// answer, a = g (sin(alpha) - mu cos(alpha)). Below the friction angle the
+// ply creeps at the speed where mu N v / v0 balances the load N tan(alpha):
+// v = v0 tan(alpha) / mu (no stick state). Required: slide within 2 % of the
+// Coulomb displacement; creep speed over the second half of the run within
+// 2 % of v0 tan(alpha) / mu.
+TEST(Contact, RegularisedFrictionSlidesAndCreeps) {
+  const double g = 9.81, mu = 0.3, t_end = 0.05, v0 = 1e-3;
+  for (const double alpha_deg : {30.0, 10.0}) {
+    const double a = alpha_deg * M_PI / 180;
+    json j = base_job(t_end);
+    j["parts"] = {ply("ply", 0.5 * kH)};
+    j["tools"] = {plane("die", 0.0, 1)};
+    j["interactions"] = {
+        {{"type", "contact"}, {"between", {"die", "ply"}}, {"friction", mu}, {"slip_velocity", v0}}};
+    j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};
+    j["output"]["probes"] = {{{"name", "c"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
+                              {"quantities", {"displacement_x"}}, {"interval", t_end / 10}}};
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    const double ux = r.sample(0, "displacement_x", t_end)->values[0];
+    if (std::tan(a) > mu) {
+      const double expected = 0.5 * g * (std::sin(a) - mu * std::cos(a)) * t_end * t_end;
+      EXPECT_NEAR(ux / expected, 1.0, 0.02);
+      std::printf("regularised, slide at %.0f deg: u %.5g m (Coulomb %.5g m)\n", alpha_deg, ux, expected);
+    } else {
+      const double u_half = r.sample(0, "displacement_x", 0.5 * t_end)->values[0];
+      const double v = (ux - u_half) / (0.5 * t_end), expected = v0 * std::tan(a) / mu;
+      EXPECT_NEAR(v / expected, 1.0, 0.02);
+      std::printf("regularised, creep at %.0f deg: %.5g m/s (v0 tan(alpha) / mu = %.5g m/s)\n", alpha_deg, v,
+                  expected);
+    }
+    EXPECT_LT(r.result.energy.balance_error, 0.01);
+  }
+}
+
 // A ply dropped from 2 mm onto a plane (no friction). Contact must not
 // create energy: the rebound stays below the drop height, for any step.
 // A stiff penalty resolved by a few steps gains or loses energy at random

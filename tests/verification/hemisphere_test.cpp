@@ -3,7 +3,9 @@
 // step, end to end: what the results must show (physics.md section 5).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <vector>
 #include <map>
 
 #include "test_support.hpp"
@@ -59,6 +61,60 @@ TEST(Hemisphere, ThermalPrintsReachTheLowerPlyThroughTheUpperOne) {
               "lower %.2f / %.2f; energy balance %.2e, kinetic/internal at the end %.4f, %lld steps\n",
               pt.bottom, pt.top, pb.bottom, pb.top, rt.bottom, rt.top, rb.bottom, rb.top, r.result.energy.balance_error,
               r.result.energy.kinetic / r.result.energy.internal, r.result.mechanical_steps);
+}
+
+// Fibres perpendicular to the diagonal ([1,-1,0]) make the problem symmetric
+// about the diagonal x = y, with the shear angle changing sign in the mirror;
+// fibres along y do not. Shear angles at node pairs mirrored about the
+// diagonal (average of the elements around the node) and the extrema of
+// each ply at the end of the stroke.
+// Required for [1,-1,0]: + and - extrema within 5 % of each other (physics.md
+// section 5; measured 0.5 % and 0.2 %), and s(p) + s(mirror p) within 10 %
+// of the peak shear angle at every pair (measured 6 % and 8 %). The pairs
+// cannot be held tighter: the symmetric state is only neutrally stable in
+// the flange, where fibres with two free ends can slide along themselves
+// against friction alone, so round-off picks a side. The same mesh with its
+// nodes numbered in mirror order moves the nodal displacements by up to 6 %
+// of the largest one (and gives extrema 5.0 % and 1.3 % apart).
+// Fibres along y: the extrema differ by more than 30 % (measured about 80 %).
+TEST(Hemisphere, ShearSymmetricAboutTheDiagonalOnlyForDiagonalFibres) {
+  const std::vector<std::array<double, 2>> points = {{0.045, 0.015}, {0.06, 0.03},  {0.075, 0.015},
+                                                     {0.09, 0.045},  {0.105, 0.03}, {0.03, 0.015}};
+  for (const char* job : {"hemisphere_ud_2ply.json", "hemisphere_ud_2ply_fibres_y.json"}) {
+    json j = coarse_scene(job);
+    j["output"]["probes"] = json::array();
+    for (const char* ply : {"ply_bottom", "ply_top"})
+      for (const auto& p : points)
+        for (int m = 0; m < 2; ++m)
+          j["output"]["probes"].push_back({{"name", std::string(ply) + std::to_string(j["output"]["probes"].size())},
+                                           {"part", ply},
+                                           {"at", {p[m], p[1 - m], 0.0}},
+                                           {"quantities", {"shear_angle"}},
+                                           {"interval", 5.0}});
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << job << ": " << r.result.error;
+    ASSERT_EQ(r.result.part_shear_min_deg.size(), 2u);
+    for (int ply = 0; ply < 2; ++ply) {
+      const double mn = r.result.part_shear_min_deg[ply], mx = r.result.part_shear_max_deg[ply];
+      const double peak = std::max(-mn, mx), spread = std::abs(mx + mn) / peak;
+      double worst = 0;
+      for (std::size_t q = 0; q < points.size(); ++q) {
+        const int k = static_cast<int>(2 * (ply * points.size() + q));
+        const double a = r.sample(k, "shear_angle", 5.0)->values[0], b = r.sample(k + 1, "shear_angle", 5.0)->values[0];
+        worst = std::max(worst, std::abs(a + b) / peak);
+        std::printf("  (%.3f, %.3f): %.2f, mirrored %.2f\n", points[q][0], points[q][1], a, b);
+      }
+      std::printf("%s, ply %d: shear %.2f / %.2f deg (extrema %.1f %% apart), mirrored pairs within %.1f %% of the "
+                  "peak\n",
+                  job, ply, mn, mx, 100 * spread, 100 * worst);
+      if (std::string(job) == "hemisphere_ud_2ply.json") {
+        EXPECT_LT(spread, 0.05) << "ply " << ply;
+        EXPECT_LT(worst, 0.10) << "ply " << ply;
+      } else {
+        EXPECT_GT(spread, 0.3) << "ply " << ply;
+      }
+    }
+  }
 }
 
 // Two clocks: the thermal answer does not depend on the mass-scaling factor

@@ -6,8 +6,11 @@
 // face at +- h/2 of its mid-surface) gets the normal force
 //   f_n = penalty * A_i * penetration
 // (A_i: the node's tributary area), and a regularised Coulomb friction force:
-// an elastic tangential spring of the same stiffness, capped at mu * f_n
-// (stick below the cap, slip at it). The opposite force goes to the tool, or
+// either an elastic tangential spring of the same stiffness, capped at
+// mu * f_n (stick below the cap, slip at it), or, with slip_velocity v0 > 0,
+// mu * f_n * min(1, |v_t| / v0) against the slip velocity v_t (no stick
+// state, so a zone held by friction on both faces has a unique answer).
+// The opposite force goes to the tool, or
 // to the three nodes of the other ply's element through its shape functions,
 // so momentum is conserved.
 //
@@ -191,6 +194,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       pair_ = pair;
       penalty_ = params.real("penalty");
       friction_ = params.real("friction");
+      slip_velocity_ = params.real("slip_velocity");
       damping_ = params.real("damping");
       conductance_ = params.real("conductance");
       gap_tol_ = params.real("gap_tolerance");
@@ -335,8 +339,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const bool inside = w[0] > 0 && w[1] > 0 && w[2] > 0;
       best.element = e;
       best_dist = dist;
+      // The normal is the direction from the closest point (inside a
+      // triangle that is its normal; over an edge or a vertex it does not
+      // depend on which of the triangles sharing it was found first).
       best.d = inside ? dn : (dn >= 0 ? dist : -dist);
-      best.n = inside || dist <= 0 ? ne : sdk::scale(r, (dn >= 0 ? 1.0 : -1.0) / dist);
+      best.n = dist <= 0 ? ne : sdk::scale(r, (dn >= 0 ? 1.0 : -1.0) / dist);
       for (int j = 0; j < 3; ++j) best.w[j] = w[j];
     }
     return best;
@@ -361,15 +368,28 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const double m2 = sdk::norm(old);
       if (m2 > 0) old = sdk::scale(old, mag / m2);
       const Vec3 vt = sdk::sub(vrel, sdk::scale(n, vn));
-      // Elastic slip: a tangential spring, held at the Coulomb limit while
-      // sliding.
-      Vec3 spring = sdk::sub(old, sdk::scale(vt, k * dt));
       // The limit follows the penalty (elastic) pressure only: a limit that
       // followed the damper would tie the tangential force to the normal
       // velocity, a non-symmetric coupling that can feed vibrations.
-      const double lim = friction_ * k * pen, len = sdk::norm(spring);
-      if (len > lim) spring = sdk::scale(spring, lim / len);
-      ft = spring;
+      const double lim = friction_ * k * pen;
+      Vec3 spring = {0, 0, 0};
+      if (slip_velocity_ > 0) {
+        // Rate-regularised Coulomb: mu N min(1, |v_t| / v0) against the
+        // slip, and never more than the force that stops the slip within
+        // the step (m |v_t| / dt), so that the steep branch stays stable.
+        const double vm = sdk::norm(vt);
+        if (vm > 0) {
+          const double mag = std::min({lim, lim * vm / slip_velocity_, m * vm / dt});
+          ft = sdk::scale(vt, -mag / vm);
+        }
+      } else {
+        // Elastic slip: a tangential spring, held at the Coulomb limit while
+        // sliding.
+        spring = sdk::sub(old, sdk::scale(vt, k * dt));
+        const double len = sdk::norm(spring);
+        if (len > lim) spring = sdk::scale(spring, lim / len);
+        ft = spring;
+      }
       energy += 0.5 * sdk::dot(spring, spring) / k;
       for (int d = 0; d < 3; ++d) ftv[3 * static_cast<std::size_t>(i) + d] = spring[d];
     }
@@ -501,7 +521,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   }
 
   sdk::ContactPair pair_;
-  double penalty_ = 0, friction_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
+  double penalty_ = 0, friction_ = 0, slip_velocity_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
   std::span<const sdk::PartView> parts_;
   std::span<const sdk::ToolView> tools_;
   Pass pass_[2];  // tool pairs use pass_[0].ft only
@@ -514,7 +534,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.2.0";
+  d.version = "0.3.0";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces";
   d.params = {
@@ -523,8 +543,13 @@ void register_all(sdk::Registrar& r) {
                       "0.5 mm ply up to 0.5 MPa contact pressure",
                       0.0),
       sdk::real_param("friction", "0.0", "-",
-                      "Coulomb friction coefficient (elastic slip: a tangential spring of the penalty stiffness, "
-                      "capped at friction times the normal force)",
+                      "Coulomb friction coefficient, regularised as set by slip_velocity",
+                      0.0),
+      sdk::real_param("slip_velocity", "0.0", "m/s",
+                      "friction regularisation. 0: elastic slip (a tangential spring of the penalty stiffness, "
+                      "capped at friction times the normal force; parts can stick). > 0: rate-regularised Coulomb, "
+                      "friction times the normal force times min(1, slip speed / slip_velocity) (no sticking; the "
+                      "answer does not depend on the load history of a stuck zone)",
                       0.0),
       sdk::real_param("damping", "0.1", "-",
                       "normal contact damping as a fraction of the critical damping of a node on its penalty spring "
