@@ -46,7 +46,8 @@ def main():
     base = os.path.join(tmp, "patch_study")
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharey=True)
     for ax, probe in zip(axes, ("upper_centre", "upper_edge")):
-        for label, style in (("reference", "k-"), ("adi-8", "C0o-"), ("layered3d-8", "C1s--"), ("shell2d", "C2:")):
+        for label, style in (("reference", "k-"), ("adi-8", "C0o-"), ("adi-8-layers", "C3^-"), ("layered3d-8", "C1s--"),
+                             ("shell2d", "C2:")):
             d = profiles(os.path.join(base, label), probe)
             for t, alpha in ((0.5, 0.5), (2.0, 1.0)):
                 pts = sorted(closest(d, t))

@@ -26,7 +26,10 @@ class LinkedSolver {
   std::vector<double> last_values_;
   std::vector<int> last_outer_, last_inner_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
-  Eigen::VectorXd x_;
+  // The factors as flat arrays (P A P^-1 = L D L^T, L unit lower, stored
+  // without its diagonal, column by column) for an allocation-free solve.
+  std::vector<int> perm_, lp_, li_;
+  std::vector<double> lx_, d_, y_;
   bool factored_ = false;
   int refactor_count_ = 0;
 };

@@ -36,6 +36,7 @@ sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const s
   return sdk::guarded([&] {
     implicit_ = params.text("through_thickness") == "implicit";
     dt_safety_ = params.real("dt_safety");
+    inplane_layers_ = layered_ && params.text("in_plane") == "layers";
     plies_.resize(parts.size());
     int nz_max = 1;
     for (std::size_t p = 0; p < parts.size(); ++p) {
@@ -55,7 +56,7 @@ sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const s
     for (std::size_t p = 0; p < parts.size(); ++p) {
       const int n = parts[p].num_nodes;
       node_heat_[p].assign(n, 0.0);
-      scratch_[p].assign(n, 0.0);
+      scratch_[p].assign(static_cast<std::size_t>(n) * (inplane_layers_ ? plies_[p].nz : 1), 0.0);
       mean_[p].assign(n, 0.0);
       rod_lo_[p].assign(n, 0.0);
       mean_old_[p].assign(n, 0.0);
@@ -393,6 +394,12 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
       double* lo = rod_lo_[p].data();
       double* m_old = mean_old_[p].data();
       double* hi = rod_hi_[p].data();
+      if (inplane_layers_) {
+        // Every layer value by the in-plane operator: the lateral flow of the
+        // through-thickness deviation is kept (no recomposition needed).
+        substeps = std::max(substeps, advance_inplane(ply, in.dt, T[p], scratch_[p], nz));
+        continue;
+      }
 #pragma omp parallel for schedule(static) if (n > 1024)
       for (int i = 0; i < n; ++i) {
         const double* ti = t + static_cast<std::size_t>(nz) * i;

@@ -15,6 +15,9 @@
 //      to the values in proportion to their room below that range instead:
 //      heat is conserved and no value leaves the range. The step report
 //      counts these nodes; with ordinary profiles there are none.
+// With in_plane = "layers" (adi) steps 2-4 are replaced by the in-plane
+// problem for every layer value (rho c dT/dt = div(Ks grad T) per layer):
+// the lateral flow of the deviation is kept, only the time split remains.
 // With one value per node (shell2d) step 1 reduces to the face fluxes as
 // sources of a plain thermal shell and steps 2-4 to its in-plane conduction.
 #include <memory>
@@ -46,6 +49,7 @@ class SplitThermal : public sdk::ThermalSplitter {
 
   bool layered_;          // true: one rod of thickness_layers elements per node (adi)
   bool implicit_ = true;  // through-thickness scheme
+  bool inplane_layers_ = false;  // in-plane conduction of every layer instead of the mean (adi only)
   double dt_safety_ = 0.9;
   int nz_max_ = 1;
   std::vector<PlyThermal> plies_;

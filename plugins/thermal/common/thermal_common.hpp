@@ -54,11 +54,15 @@ double accurate_dt(std::span<const PlyThermal> plies, std::span<const sdk::FaceC
 // with the solution; c' is kept in `work` (size n).
 void solve_tridiagonal(int n, const double* a, const double* b, const double* c, double* d, double* work);
 
-// Advances the through-thickness-mean of every node of `ply` over dt by the
-// in-plane problem rho c h dT/dt = div(h Ks grad T) with forward Euler
-// sub-steps (at most 0.9 of the stable step). `mean` is updated in place;
-// `scratch` has num_nodes entries. Returns the number of sub-steps.
-int advance_inplane(const PlyThermal& ply, double dt, std::span<double> mean, std::span<double> scratch);
+// Advances values of every node of `ply` over dt by the in-plane problem
+// rho c dT/dt = div(Ks grad T) (the mean's rho c h d<T>/dt = div(h Ks
+// grad <T>) divided by h) with forward Euler sub-steps (at most 0.9 of the
+// stable step). `values` holds `stride` values per node (node-major; stride
+// 1: the mean, stride nz: every layer of the rods), each advanced by the
+// same operator, in place; `scratch` has as many entries. Returns the number
+// of sub-steps.
+int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, std::span<double> scratch,
+                    int stride = 1);
 
 // The parameters every thermal splitter declares (the job contract writes
 // them for any splitter): through_thickness and dt_safety.
