@@ -32,7 +32,10 @@ struct MechPart {
   std::vector<double> curvature;
   std::vector<double> load;  // applied nodal forces at full value (N), 3 per node
   std::vector<double> f_con, fc_prev, k_contact;  // contact forces (N) now and at the previous step; stiffness bound (N/m)
-  std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, node_temperature, stress;
+  std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, elem_sqrt_scale, node_temperature, stress;
+  // Per element block, reused every step.
+  std::vector<int> block_fail;
+  std::vector<std::string> block_error;
   std::vector<int> inc_start, inc;  // node -> 18 e + 3 a entries of element_force (6-node patches)
   std::vector<char> fixed;          // 3 per node
   std::vector<int> edge_condition;  // 3 per element (sdk::kEdgeFree / kEdgeClamped)
@@ -408,6 +411,7 @@ void Simulation::build_mechanics() {
     m->elem_force.assign(18 * ne, 0.0);
     m->elem_dt.assign(ne, 0.0);
     m->elem_scale.assign(ne, 1.0);
+    m->elem_sqrt_scale.assign(ne, 1.0);
     m->stress.assign(3 * ne, 0.0);
     m->curvature.assign(3 * ne, 0.0);
     m->node_temperature.assign(nn, def.initial_temperature);
@@ -523,6 +527,7 @@ void Simulation::build_mechanics() {
         if (dt_e < md.target_dt) scale = std::max(scale, (md.target_dt / dt_e) * (md.target_dt / dt_e));
       }
       m.elem_scale[e] = scale;
+      m.elem_sqrt_scale[e] = std::sqrt(scale);
       const int* t = &st.mesh.triangles[3 * e];
       const Vec3 a = sdk::load3(st.x0.data(), t[0]), b = sdk::load3(st.x0.data(), t[1]), c = sdk::load3(st.x0.data(), t[2]);
       const double me = rho_h * 0.5 * sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a)));
@@ -607,10 +612,10 @@ double Simulation::mechanics_stable_dt() {
     const int ne = st.mesh.num_elements();
     constexpr int kBlock = 256;
     const int blocks = (ne + kBlock - 1) / kBlock;
-    std::vector<double> block_dt(blocks, std::numeric_limits<double>::infinity());
-    std::vector<double> block_energy(blocks, 0.0);
-    std::vector<int> block_fail(blocks, -1);
-    std::vector<std::string> block_error(blocks);
+    m.block_fail.resize(blocks);
+    m.block_error.resize(blocks);
+    int* block_fail = m.block_fail.data();
+    std::string* block_error = m.block_error.data();
 #pragma omp parallel for schedule(static) if (blocks > 1)
     for (int b = 0; b < blocks; ++b) {
       sdk::ElementForceInput in;
@@ -620,9 +625,8 @@ double Simulation::mechanics_stable_dt() {
       sdk::ElementForceOutput out;
       out.element_force = m.elem_force;
       out.element_dt = m.elem_dt;
+      block_error[b].clear();
       if (auto s = m.element->internal_forces(in, out); !s) block_error[b] = s.message;
-      block_dt[b] = out.stable_dt;
-      block_energy[b] = out.energy;
       block_fail[b] = out.failed_element;
     }
     for (int b = 0; b < blocks; ++b) {
@@ -632,7 +636,7 @@ double Simulation::mechanics_stable_dt() {
         throw RunError("degenerate (collapsed or inverted) element " + std::to_string(block_fail[b]) + " in part '" +
                        st.def->name + "'");
     }
-    for (int e = 0; e < ne; ++e) dt = std::min(dt, m.elem_dt[e] * std::sqrt(m.elem_scale[e]));
+    for (int e = 0; e < ne; ++e) dt = std::min(dt, m.elem_dt[e] * m.elem_sqrt_scale[e]);
     // Gather: f_int at every node, in a fixed order.
     const int nn = st.mesh.num_nodes();
 #pragma omp parallel for schedule(static) if (nn > 2048)

@@ -158,10 +158,10 @@ class ShellRfT3 final : public ElementKernel {
         for (int q = 9; q < 18; ++q) out.element_force[18 * e + q] = 0.0;
         energy += A0 * energy_[e];
         // Stable step: smallest height over the largest wave speed of the tangent.
-        const double two_a = norm(cross(sub(xa[1], xa[0]), sub(xa[2], xa[0])));
-        double lmax = 0;
-        for (int a = 0; a < 3; ++a) lmax = std::max(lmax, norm(sub(xa[(a + 1) % 3], xa[a])));
-        const double h = two_a / lmax;
+        const Vec3 e01 = sub(xa[1], xa[0]), e02 = sub(xa[2], xa[0]), e12 = sub(xa[2], xa[1]);
+        const Vec3 n2 = cross(e01, e02);
+        const double l2max = std::max({dot(e01, e01), dot(e02, e02), dot(e12, e12)});
+        const double h = std::sqrt(dot(n2, n2) / l2max);  // 2 area / longest edge
         const double dte = kmax > 0 ? h * inv_c : std::numeric_limits<double>::infinity();
         dt_min = std::min(dt_min, dte);
         if (!out.element_dt.empty()) out.element_dt[e] = dte;
@@ -206,17 +206,19 @@ class ShellRfT3 final : public ElementKernel {
   double hinge_angle(const double* x, int c, int p, int q, int o, Vec3* grad) const {
     const Vec3 C = load3(x, c), P = load3(x, p), Q = load3(x, q), O = load3(x, o);
     const Vec3 edge = sub(Q, P);
-    const double len = norm(edge);
-    const Vec3 eh = scale(edge, 1.0 / len);
-    const Vec3 ne = normalized(cross(sub(Q, P), sub(C, P)));  // element e: (p, q, c) is counter-clockwise
-    const Vec3 nn = normalized(cross(sub(P, Q), sub(O, Q)));  // neighbour: (q, p, o) is counter-clockwise
-    const double theta = std::atan2(dot(cross(nn, ne), eh), dot(ne, nn));
+    const double l2 = dot(edge, edge), len = std::sqrt(l2);
+    const Vec3 cp = sub(C, P), op = sub(O, P);
+    // Unnormalised normals: element e (p, q, c) and the neighbour (q, p, o),
+    // both counter-clockwise; |N| = len * height of c (of o) over the edge.
+    const Vec3 Ne = cross(edge, cp);
+    const Vec3 Nn = cross(op, edge);
+    // atan2 is invariant to scaling both arguments by |Ne| |Nn| len.
+    const double theta = std::atan2(dot(cross(Nn, Ne), edge), len * dot(Ne, Nn));
     if (grad) {
-      const Vec3 cp = sub(C, P), op = sub(O, P);
-      const double sc = dot(cp, eh) / len, so = dot(op, eh) / len;
-      const double hc = norm(sub(cp, scale(eh, dot(cp, eh)))), ho = norm(sub(op, scale(eh, dot(op, eh))));
-      grad[0] = scale(ne, 1.0 / hc);
-      grad[1] = scale(nn, 1.0 / ho);
+      // d theta / d c = n_e / h_c = Ne len / |Ne|^2 (and likewise for o).
+      const double sc = dot(cp, edge) / l2, so = dot(op, edge) / l2;
+      grad[0] = scale(Ne, len / dot(Ne, Ne));
+      grad[1] = scale(Nn, len / dot(Nn, Nn));
       grad[2] = add(scale(grad[0], -(1 - sc)), scale(grad[1], -(1 - so)));
       grad[3] = add(scale(grad[0], -sc), scale(grad[1], -so));
     }
@@ -401,7 +403,6 @@ class ShellRfT3 final : public ElementKernel {
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
     double energy = 0;
     for (int e = b; e < end; ++e) {
-      const int* t = &part_->triangles[3 * e];
       const double A0 = area0_[e];
       const double* M = &moment_[3 * e];
       const double* gi = &ginv_[9 * e];
