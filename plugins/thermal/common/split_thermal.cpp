@@ -237,13 +237,15 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
   LinkedSolver& s = *linked_solver_;
   if (rebuild) {
     s.begin(linked_count_);
+    linked_sinv_.assign(4 * static_cast<std::size_t>(linked_count_), 0.0);
     for (std::size_t p = 0; p < plies_.size(); ++p)
       for (int i = 0; i < plies_[p].view->num_nodes; ++i) {
         const int o = offset[p][i];
         if (o < 0) continue;
-        double si[4];
+        double si[4] = {0, 0, 0, 0};
         s_inverse(static_cast<int>(p), i, si);
         const double A = plies_[p].area[i];
+        for (int q = 0; q < 4; ++q) linked_sinv_[4 * static_cast<std::size_t>(o) + q] = A * si[q];
         if (plies_[p].nz == 1) {
           s.add(o, o, A * si[0]);
         } else {
@@ -275,14 +277,12 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
       const int o = offset[p][i];
       if (o < 0) continue;
       const double* ti = T[p].data() + static_cast<std::size_t>(nz) * i;
-      double si[4];
-      s_inverse(static_cast<int>(p), i, si);
-      const double A = plies_[p].area[i];
+      const double* si = &linked_sinv_[4 * static_cast<std::size_t>(o)];  // A S^-1
       if (nz == 1) {
-        y[o] = A * si[0] * ti[0];
+        y[o] = si[0] * ti[0];
       } else {
-        y[o] = A * (si[0] * ti[0] + si[1] * ti[nz - 1]);
-        y[o + 1] = A * (si[2] * ti[0] + si[3] * ti[nz - 1]);
+        y[o] = si[0] * ti[0] + si[1] * ti[nz - 1];
+        y[o + 1] = si[2] * ti[0] + si[3] * ti[nz - 1];
       }
     }
   }

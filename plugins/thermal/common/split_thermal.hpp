@@ -70,6 +70,7 @@ class SplitThermal : public sdk::ThermalSplitter {
   std::vector<sdk::HeatLink> last_links_;
   std::vector<std::vector<int>> linked_offset_;  // per part, per node: first unknown or -1
   std::vector<double> linked_rhs_, linked_flux_;
+  std::vector<double> linked_sinv_;  // 4 per linked unknown: A S^-1 of its rod, set with the factorisation
   int linked_count_ = 0;
   bool linked_valid_ = false;
 };
