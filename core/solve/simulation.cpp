@@ -1169,7 +1169,14 @@ RunResult Simulation::run(const RunOptions& opt) {
       check_law_ranges(0.0);
       double stable = mechanics_stable_dt();
       compute_contact_forces(0.0, 0.0);
-      if (contact_energy_ > 0)
+      // Overlaps below 1e-6 of a ply's thickness (round-off where a ply
+      // starts exactly on a tool) are not worth a warning.
+      double k_max = 0, h_min = std::numeric_limits<double>::infinity();
+      for (std::size_t p = 0; p < parts_.size(); ++p) {
+        for (double k : mech_[p]->k_contact) k_max = std::max(k_max, k);
+        h_min = std::min(h_min, parts_[p]->def->thickness);
+      }
+      if (contact_energy_ > 0.5 * k_max * (1e-6 * h_min) * (1e-6 * h_min))
         log->warn("contact springs hold {:.4g} J at t = 0 on {} node(s): a ply starts inside a tool or another ply "
                   "(check the tools' positions and the side their profile faces)",
                   contact_energy_, contact_active_);
