@@ -56,7 +56,7 @@ sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const s
     for (std::size_t p = 0; p < parts.size(); ++p) {
       const int n = parts[p].num_nodes;
       node_heat_[p].assign(n, 0.0);
-      scratch_[p].assign(static_cast<std::size_t>(n) * (inplane_layers_ ? plies_[p].nz : 1), 0.0);
+      scratch_[p].assign(4 * static_cast<std::size_t>(n) * (inplane_layers_ ? plies_[p].nz : 1), 0.0);
       mean_[p].assign(n, 0.0);
       rod_lo_[p].assign(n, 0.0);
       mean_old_[p].assign(n, 0.0);

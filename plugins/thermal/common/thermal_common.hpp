@@ -35,6 +35,7 @@ struct PlyThermal {
   bool area_set = false;
   Csr k2d;                 // in-plane conduction of one unit thickness: K_ab = A grad Na . Ks grad Nb (W/(m K))
   double inplane_rate = 0; // Gershgorin bound of max eigenvalue of C^-1 K in plane, 1/s
+  bool inplane_positive_offdiag = false;  // K has K_ij > 0 (i != j): not an M-matrix, flux limiting needed
 };
 
 // Sets nz, weights, pattern and values for the current geometry of `part`.
@@ -60,7 +61,12 @@ void solve_tridiagonal(int n, const double* a, const double* b, const double* c,
 // stable step). `values` holds `stride` values per node (node-major; stride
 // 1: the mean, stride nz: every layer of the rods), each advanced by the
 // same operator, in place; `scratch` has as many entries. Returns the number
-// of sub-steps.
+// of sub-steps. Where K is not an M-matrix (anisotropic conductivity, obtuse
+// or distorted triangles give K_ij > 0), the pairs with K_ij > 0 carry
+// anti-diffusive fluxes; they are limited (Zalesak, algebraic flux
+// correction) so that no value leaves the range its stencil held before the
+// sub-step. The fluxes are pairwise, so heat is conserved exactly. `scratch`
+// then needs 4 x values.size() entries.
 int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, std::span<double> scratch,
                     int stride = 1);
 
