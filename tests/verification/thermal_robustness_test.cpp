@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <vector>
 
 #include "io/logging.hpp"
@@ -102,6 +103,28 @@ double max_diff(const JobRun& a, const JobRun& b) {
   return d;
 }
 
+// Runs a job in-process from an initial temperature T(x, y) (uniform
+// through the thickness), without files; heat_change: relative change of
+// the stored heat over the run, when given.
+RunResult run_from_field(const json& j, const std::function<double(double, double)>& field,
+                         double* heat_change = nullptr) {
+  log_to_terminal(true);
+  const Job job = parse_job(j, source_dir() / "tests" / "inline.json");
+  PluginRegistry reg;
+  Simulation sim(job, reg);
+  const auto x0 = sim.initial_coordinates(0);
+  std::vector<double> T0(x0.size() / 3);
+  for (std::size_t i = 0; i < T0.size(); ++i) T0[i] = field(x0[3 * i], x0[3 * i + 1]);
+  sim.set_initial_temperature(0, T0);
+  const double heat0 = sim.stored_heat();
+  RunOptions opt;
+  opt.write_files = false;
+  opt.quiet = true;
+  RunResult r = sim.run(opt);
+  if (heat_change) *heat_change = (sim.stored_heat() - heat0) / heat0;
+  return r;
+}
+
 // adi against layered3d: an in-plane cosine of wavelength 2L cooled from the
 // top. The split drops the in-plane conduction of the through-thickness
 // deviation, an error of order (k11/k33)(pi h/L)^2 of the deviation: going
@@ -119,19 +142,8 @@ double cosine_split_error(double L, const std::string& in_plane, long long* limi
     if (splitter == "adi") j["solvers"]["thermal"]["in_plane"] = in_plane;
     j["interactions"] = {{{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", 1000.0}, {"ambient", 260.0}}};
     j["output"]["probes"] = {{{"name", "edge"}, {"part", "ply"}, {"at", {0, 0, 0}}, {"quantities", {"temperature_profile"}}, {"interval", 0.05}}};
-    log_to_terminal(true);
-    const Job job = parse_job(j, source_dir() / "tests" / "inline.json");
-    PluginRegistry reg;
-    Simulation sim(job, reg);
-    const auto x0 = sim.initial_coordinates(0);
-    std::vector<double> T0(x0.size() / 3);
-    for (std::size_t i = 0; i < T0.size(); ++i) T0[i] = 300.0 + 20.0 * std::cos(M_PI * x0[3 * i] / L);
-    sim.set_initial_temperature(0, T0);
-    RunOptions opt;
-    opt.write_files = false;
-    opt.quiet = true;
     JobRun r;
-    r.result = sim.run(opt);
+    r.result = run_from_field(j, [L](double x, double) { return 300.0 + 20.0 * std::cos(M_PI * x / L); });
     EXPECT_TRUE(r.result.ok) << r.result.error;
     *limited += r.result.limited_node_steps;
     runs.push_back(std::move(r));
@@ -164,26 +176,15 @@ TEST(Stiff, AnisotropicInPlaneConductionStaysBounded) {
     j["parts"][0]["mesh"] = {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {0.02, 0.02}}, {"divisions", {20, 20}}};
     if (mode != "shell2d") j["solvers"]["thermal"]["in_plane"] = mode;
     j["solvers"]["thermal"]["dt"] = 0.01;
-    log_to_terminal(true);
-    const Job job = parse_job(j, source_dir() / "tests" / "inline.json");
-    PluginRegistry reg;
-    Simulation sim(job, reg);
-    const auto x0 = sim.initial_coordinates(0);
-    std::vector<double> T0(x0.size() / 3);
-    for (std::size_t i = 0; i < T0.size(); ++i)
-      T0[i] = std::hypot(x0[3 * i] - 0.01, x0[3 * i + 1] - 0.01) < 0.003 ? 300.0 : 260.0;
-    sim.set_initial_temperature(0, T0);
-    const double heat0 = sim.stored_heat();
-    RunOptions opt;
-    opt.write_files = false;
-    opt.quiet = true;
-    const RunResult r = sim.run(opt);
+    double change = 0;
+    const RunResult r = run_from_field(
+        j, [](double x, double y) { return std::hypot(x - 0.01, y - 0.01) < 0.003 ? 300.0 : 260.0; }, &change);
     ASSERT_TRUE(r.ok) << r.error;
     EXPECT_LE(r.temperature_max, 300.0 + 1e-9) << mode;
     EXPECT_GE(r.temperature_min, 260.0 - 1e-9) << mode;
-    EXPECT_LT(std::abs(sim.stored_heat() - heat0) / heat0, 1e-9) << mode;
+    EXPECT_LT(std::abs(change), 1e-9) << mode;
     std::printf("%s: T in [%.6f, %.6f] degC, heat change %.2e\n", mode.c_str(), r.temperature_min, r.temperature_max,
-                (sim.stored_heat() - heat0) / heat0);
+                change);
   }
 }
 
