@@ -4,6 +4,7 @@
 
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include <thermostamp/sdk/plugin.hpp>
 
@@ -69,6 +70,42 @@ TEST(Cli, RunWritesTheOutputFolder) {
   xdmf << std::ifstream(out / "results.xdmf").rdbuf();
   EXPECT_NE(xdmf.str().find("TopologyType=\"Wedge\""), std::string::npos);
   EXPECT_NE(xdmf.str().find("<Time Value=\"1\" />"), std::string::npos);
+}
+
+// A study against the analytic slab solution: one table row per variant,
+// the error of the rod below the single-value shell's, the shortest of
+// "repeat" runs kept; a bad study key is refused like a bad job key.
+TEST(Cli, StudyWritesItsTable) {
+  const auto dir = temp_dir("study");
+  json st = {{"format", "thermostamp-study/1"},
+             {"job", (source_dir() / "share" / "verification" / "slab_robin.json").string()},
+             {"reference", {{"analytic", "slab_robin"}}},
+             {"repeat", 2},
+             {"variants",
+              {{{"label", "adi-8"}, {"set", {{"parts.*.thickness_layers", 8}}}},
+               {{"label", "shell2d"}, {"set", {{"solvers.thermal.splitter", "shell2d"}}}}}}};
+  std::ofstream(dir / "study.json") << st.dump(2);
+  const auto r = thermostamp("study " + q(dir / "study.json") + " --out " + q(dir / "out") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream csv(dir / "out" / "study.csv");
+  std::string line;
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    rows.push_back(cells);
+  }
+  ASSERT_EQ(rows.size(), 4u);  // header, reference, two variants
+  EXPECT_EQ(rows[2][0], "adi-8");
+  EXPECT_EQ(rows[3][0], "shell2d");
+  EXPECT_LT(std::stod(rows[2][2]), 0.1 * std::stod(rows[3][2]));  // error_K
+  EXPECT_GT(std::stod(rows[2][1]), 0.0);                           // wall_time_s
+  st["repeat"] = 0;
+  std::ofstream(dir / "bad.json") << st.dump(2);
+  const auto bad = thermostamp("study " + q(dir / "bad.json") + " --out " + q(dir / "bad") + " --quiet");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("/repeat"), std::string::npos) << bad.err;
 }
 
 TEST(Cli, SetOverridesAValue) {
