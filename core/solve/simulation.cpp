@@ -861,32 +861,10 @@ std::span<const double> Simulation::temperature(int part) const { return parts_.
 int Simulation::values_per_node(int part) const { return parts_.at(part)->nz; }
 
 void Simulation::check_field(double time, long long step) {
-  for (const auto& st : parts_) {
-    // One pass in four lanes: range, and v * 0 summed (NaN unless all finite).
-    const double* T = st->T.data();
-    const std::size_t count = st->T.size();
-    double mn[4] = {seen_min_, seen_min_, seen_min_, seen_min_}, mx[4] = {seen_max_, seen_max_, seen_max_, seen_max_};
-    double bad = 0.0, lane_bad[4] = {0, 0, 0, 0};
-    std::size_t k = 0;
-    for (; k + 4 <= count; k += 4)
-      for (int l = 0; l < 4; ++l) {
-        const double v = T[k + l];
-        mn[l] = v < mn[l] ? v : mn[l];
-        mx[l] = v > mx[l] ? v : mx[l];
-        lane_bad[l] += v * 0.0;
-      }
-    for (; k < count; ++k) {
-      mn[0] = T[k] < mn[0] ? T[k] : mn[0];
-      mx[0] = T[k] > mx[0] ? T[k] : mx[0];
-      bad += T[k] * 0.0;
-    }
-    for (int l = 0; l < 4; ++l) {
-      seen_min_ = std::min(seen_min_, mn[l]);
-      seen_max_ = std::max(seen_max_, mx[l]);
-      bad += lane_bad[l];
-    }
-    if (bad == 0.0) continue;
-    for (std::size_t k = 0; k < count; ++k) {
+  for (const auto& st : parts_)
+    for (std::size_t k = 0; k < st->T.size(); ++k) {
+      seen_min_ = std::min(seen_min_, st->T[k]);
+      seen_max_ = std::max(seen_max_, st->T[k]);
       if (!std::isfinite(st->T[k])) {
         const int i = static_cast<int>(k / st->nz);
         throw RunError("non-finite temperature in part '" + st->def->name + "' at node " + std::to_string(i) + " (" +
@@ -895,7 +873,6 @@ void Simulation::check_field(double time, long long step) {
                        fmt_g(time) + " s (thermal step " + std::to_string(step) + ")");
       }
     }
-  }
 }
 
 namespace {

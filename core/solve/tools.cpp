@@ -154,16 +154,7 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
     if (!(l > 0)) throw JobError(def_->pointer + "/surface/file", "the tool mesh has a degenerate triangle (" + std::to_string(e) + ")");
     for (int d = 0; d < 3; ++d) mn_[3 * e + d] = n[d] / l;
   }
-  cell_ = std::max(h, 1e-9);
-  for (int tries = 0; tries < 64; ++tries) {
-    long long cells = 1;
-    for (int d = 0; d < 3; ++d) {
-      gn_[d] = std::max(1, static_cast<int>(std::ceil((hi[d] - lo[d]) / cell_)) + 1);
-      cells *= gn_[d];
-    }
-    if (cells <= 4'000'000) break;
-    cell_ *= 1.5;
-  }
+  cell_ = sdk::bucket_grid(lo, hi, std::max(h, 1e-9), gn_.data());
   glo_ = lo;
   const std::size_t ncell = static_cast<std::size_t>(gn_[0]) * gn_[1] * gn_[2];
   std::vector<std::array<int, 6>> range(nt);

@@ -27,6 +27,16 @@ except ImportError as e:  # pragma: no cover
     sys.exit(3)
 
 
+
+def save(fig, out, filename, dpi=120, tight=True):
+    """Writes fig as out/filename, closes it and returns the path."""
+    if tight:
+        fig.tight_layout()
+    name = os.path.join(out, filename)
+    fig.savefig(name, dpi=dpi)
+    plt.close(fig)
+    return name
+
 def read_probes(path):
     data = {}
     with open(path) as f:
@@ -56,11 +66,7 @@ def plot_probes(folder, out):
         ax.set_title("through-thickness profile, probe %s" % probe)
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-        fig.tight_layout()
-        name = os.path.join(out, "profile_%s.png" % probe)
-        fig.savefig(name, dpi=120)
-        plt.close(fig)
-        made.append(name)
+        made.append(save(fig, out, "profile_%s.png" % probe))
     means = [(p, rows) for (p, q), rows in sorted(data.items()) if q == "temperature_mean"]
     if means:
         fig, ax = plt.subplots(figsize=(6, 4))
@@ -70,11 +76,7 @@ def plot_probes(folder, out):
         ax.set_ylabel("mean temperature (degC)")
         ax.legend(fontsize=8)
         ax.grid(alpha=0.3)
-        fig.tight_layout()
-        name = os.path.join(out, "probes_mean.png")
-        fig.savefig(name, dpi=120)
-        plt.close(fig)
-        made.append(name)
+        made.append(save(fig, out, "probes_mean.png"))
     return made
 
 
@@ -124,10 +126,7 @@ def plot_maps(folder, out):
                 ax.set_xlabel("x (mm)")
                 ax.set_ylabel("y (mm)")
             fig.colorbar(pc, ax=axes[0].tolist(), label="degC", shrink=0.8)
-            name = os.path.join(out, "map_%s.png" % part)
-            fig.savefig(name, dpi=110)
-            plt.close(fig)
-            made.append(name)
+            made.append(save(fig, out, "map_%s.png" % part, dpi=110, tight=False))
         for part in f["parts"]:
             g = last[part]
             if "shear_angle" not in g:
@@ -149,10 +148,7 @@ def plot_maps(folder, out):
             ax.set_xlabel("x (mm)")
             ax.set_ylabel("y (mm)")
             fig.colorbar(pc, ax=ax, label="degrees", shrink=0.8)
-            name = os.path.join(out, "shear_%s.png" % part)
-            fig.savefig(name, dpi=110)
-            plt.close(fig)
-            made.append(name)
+            made.append(save(fig, out, "shear_%s.png" % part, dpi=110, tight=False))
     return made
 
 
@@ -179,11 +175,7 @@ def plot_tools(folder, out):
     for a in (a1, a2):
         a.grid(alpha=0.3)
         a.legend(fontsize=8)
-    fig.tight_layout()
-    name = os.path.join(out, "tool_forces.png")
-    fig.savefig(name, dpi=120)
-    plt.close(fig)
-    return [name]
+    return [save(fig, out, "tool_forces.png")]
 
 
 def plot_energy(folder, out):
@@ -208,11 +200,7 @@ def plot_energy(folder, out):
     a2.set_xlabel("time (s)")
     a2.legend(fontsize=8)
     a2.grid(alpha=0.3, which="both")
-    fig.tight_layout()
-    name = os.path.join(out, "energy.png")
-    fig.savefig(name, dpi=120)
-    plt.close(fig)
-    return [name]
+    return [save(fig, out, "energy.png")]
 
 
 def plot_study(folder, out):
@@ -232,12 +220,9 @@ def plot_study(folder, out):
     ax.set_ylabel("error against reference (K, %s norm)" % (var[0]["norm"] if var else "max"))
     ax.grid(alpha=0.3, which="both")
     fig.tight_layout()
-    name = os.path.join(out, "study.png")
-    fig.savefig(name, dpi=120)
     # study.png also lands next to study.csv, as the contract says
     fig.savefig(os.path.join(folder, "study.png"), dpi=120)
-    plt.close(fig)
-    return [name]
+    return [save(fig, out, "study.png", tight=False)]
 
 
 def main():

@@ -162,8 +162,9 @@ TEST(ShellRfT3, PatchTestHomogeneousDeformation) {
   for (double v : f) fmax = std::max(fmax, std::abs(v));
   for (int i = 0; i < p.mesh.num_nodes(); ++i) {
     const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
-    if (X > 1e-9 && X < 0.02 - 1e-9 && Y > 1e-9 && Y < 0.01 - 1e-9)
+    if (X > 1e-9 && X < 0.02 - 1e-9 && Y > 1e-9 && Y < 0.01 - 1e-9) {
       for (int d = 0; d < 3; ++d) EXPECT_NEAR(f[3 * i + d], 0.0, 1e-9 * fmax) << "interior node " << i;
+    }
   }
 }
 

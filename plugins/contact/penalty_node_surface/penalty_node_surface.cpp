@@ -86,17 +86,8 @@ class Candidates {
           hi[d] = std::max(hi[d], p[d] + inflate);
         }
       }
-    double cell = std::max(h + 2 * inflate, 1e-12);
     int n[3];
-    for (;;) {
-      long long cells = 1;
-      for (int d = 0; d < 3; ++d) {
-        n[d] = std::max(1, static_cast<int>(std::ceil((hi[d] - lo[d]) / cell)) + 1);
-        cells *= n[d];
-      }
-      if (cells <= 4'000'000) break;
-      cell *= 1.5;
-    }
+    const double cell = sdk::bucket_grid(lo, hi, std::max(h + 2 * inflate, 1e-12), n);
     auto cell_of = [&](double v, int d) { return std::clamp(static_cast<int>((v - lo[d]) / cell), 0, n[d] - 1); };
     const std::size_t ncell = static_cast<std::size_t>(n[0]) * n[1] * n[2];
     start_.assign(ncell + 1, 0);

@@ -16,6 +16,7 @@
 //  * 2x2 matrices that are not symmetric (F): row-major {F00, F01, F10, F11}.
 //  * Temperatures in degrees Celsius, everything else SI.
 #include <array>
+#include <algorithm>
 #include <cmath>
 
 namespace ts::sdk {
@@ -39,6 +40,22 @@ inline Vec3 normalized(const Vec3& a) {
   return n > 0 ? scale(a, 1.0 / n) : a;
 }
 inline Vec3 load3(const double* p, int i) { return {p[3 * i], p[3 * i + 1], p[3 * i + 2]}; }
+
+// Cubic cells of a bucket grid over the box [lo, hi]: starts from `cell`
+// and grows it by half until the grid has at most max_cells cells; writes
+// the cells per axis to n and returns the cell size.
+inline double bucket_grid(const Vec3& lo, const Vec3& hi, double cell, int n[3], long long max_cells = 4'000'000) {
+  for (;;) {
+    long long cells = 1;
+    for (int d = 0; d < 3; ++d) {
+      const double span = std::max(0.0, hi[d] - lo[d]);
+      n[d] = 1 + static_cast<int>(std::min(std::ceil(span / cell), 1e9));
+      cells *= n[d];
+    }
+    if (cells <= max_cells) return cell;
+    cell *= 1.5;
+  }
+}
 
 // Closest point to p on the triangle (a, b, c) and its barycentric weights
 // (Ericson, Real-Time Collision Detection, 5.1.5).
