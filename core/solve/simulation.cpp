@@ -861,10 +861,25 @@ std::span<const double> Simulation::temperature(int part) const { return parts_.
 int Simulation::values_per_node(int part) const { return parts_.at(part)->nz; }
 
 void Simulation::check_field(double time, long long step) {
-  for (const auto& st : parts_)
-    for (std::size_t k = 0; k < st->T.size(); ++k) {
-      seen_min_ = std::min(seen_min_, st->T[k]);
-      seen_max_ = std::max(seen_max_, st->T[k]);
+  for (const auto& st : parts_) {
+    // Branch-free pass (vectorised): range, and whether every value is
+    // finite; the slow search for the culprit runs only then.
+    const double* T = st->T.data();
+    const std::size_t n = st->T.size();
+    // v - v is 0 for a finite value, NaN otherwise (in any summation order).
+    double lo = seen_min_, hi = seen_max_, z = 0;
+#pragma omp simd reduction(min : lo) reduction(max : hi) reduction(+ : z)
+    for (std::size_t k = 0; k < n; ++k) {
+      const double v = T[k];
+      lo = v < lo ? v : lo;
+      hi = v > hi ? v : hi;
+      z += v - v;
+    }
+    const bool bad = !(z == 0.0);
+    seen_min_ = lo;
+    seen_max_ = hi;
+    if (!bad) continue;
+    for (std::size_t k = 0; k < n; ++k) {
       if (!std::isfinite(st->T[k])) {
         const int i = static_cast<int>(k / st->nz);
         throw RunError("non-finite temperature in part '" + st->def->name + "' at node " + std::to_string(i) + " (" +
@@ -873,6 +888,7 @@ void Simulation::check_field(double time, long long step) {
                        fmt_g(time) + " s (thermal step " + std::to_string(step) + ")");
       }
     }
+  }
 }
 
 namespace {

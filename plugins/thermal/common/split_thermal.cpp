@@ -27,6 +27,54 @@ int max_threads() {
   return 1;
 #endif
 }
+// One implicit step of R rods at once: forward and back substitution with
+// the shared factors of each rod's face pair. The R recurrences are
+// independent, so their latencies overlap; each rod's arithmetic is the same
+// as when it is solved alone.
+struct RodGroupData {
+  int nz;
+  double g;
+  const double* cap;
+  const double* inv_den;
+  const double* g_inv_den;
+  const int* id;
+  const double *hb, *ht, *tb, *tt;
+  double* t;
+};
+
+constexpr int kRodGroup = 4;
+
+template <int R>
+void solve_rods(const RodGroupData& d, int i0) {
+  const int nz = d.nz;
+  double* ti[R];
+  const double* inv[R];
+  const double* gi[R];
+  double prev[R];
+  for (int r = 0; r < R; ++r) {
+    const int i = i0 + r;
+    ti[r] = d.t + static_cast<std::size_t>(nz) * i;
+    inv[r] = d.inv_den + static_cast<std::size_t>(nz) * d.id[i];
+    gi[r] = d.g_inv_den + static_cast<std::size_t>(nz) * d.id[i];
+    // Forward substitution (a_k = -g), in place.
+    prev[r] = (d.cap[0] * ti[r][0] + d.hb[i] * d.tb[i] + (nz == 1 ? d.ht[i] * d.tt[i] : 0.0)) * inv[r][0];
+    ti[r][0] = prev[r];
+  }
+  for (int k = 1; k < nz; ++k)
+    for (int r = 0; r < R; ++r) {
+      double rr = d.cap[k] * ti[r][k];
+      if (k == nz - 1) rr += d.ht[i0 + r] * d.tt[i0 + r];
+      prev[r] = (rr + d.g * prev[r]) * inv[r][k];
+      ti[r][k] = prev[r];
+    }
+  // Back substitution: T_k = d_k - c'_k T_{k+1}, c'_k = -g / den_k.
+  for (int k = nz - 2; k >= 0; --k)
+    for (int r = 0; r < R; ++r) {
+      prev[r] = ti[r][k] + gi[r][k] * prev[r];
+      ti[r][k] = prev[r];
+    }
+}
+
 }  // namespace
 
 SplitThermal::SplitThermal(bool layered) : layered_(layered), linked_solver_(std::make_unique<LinkedSolver>()) {}
@@ -166,36 +214,35 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
     const char* linked = linked_[p].data();
-#pragma omp parallel for schedule(static) if (n > 1024)
-    for (int i = 0; i < n; ++i) {
-      double* ti = t + static_cast<std::size_t>(nz) * i;
-      const double hb = f.h_bottom[i], ht = f.h_top[i];
-      const double* inv = rf.inv_den.data() + static_cast<std::size_t>(nz) * rf.id[i];
-      const double* gi = rf.g_inv_den.data() + static_cast<std::size_t>(nz) * rf.id[i];
-      // Forward substitution (a_k = -g), in place.
-      double prev = (cap[0] * ti[0] + hb * f.t_bottom[i] + (nz == 1 ? ht * f.t_top[i] : 0.0)) * inv[0];
-      ti[0] = prev;
-      for (int k = 1; k < nz; ++k) {
-        double r = cap[k] * ti[k];
-        if (k == nz - 1) r += ht * f.t_top[i];
-        prev = (r + g * prev) * inv[k];
-        ti[k] = prev;
+    const RodGroupData d{nz, g, cap, rf.inv_den.data(), rf.g_inv_den.data(), rf.id.data(), f.h_bottom.data(),
+                         f.h_top.data(), f.t_bottom.data(), f.t_top.data(), t};
+    const int groups = (n + kRodGroup - 1) / kRodGroup;
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * nz > kParallelValues)
+    for (int gidx = 0; gidx < groups; ++gidx) {
+      const int i0 = gidx * kRodGroup;
+      if (i0 + kRodGroup <= n) {
+        solve_rods<kRodGroup>(d, i0);
+      } else {
+        for (int i = i0; i < n; ++i) solve_rods<1>(d, i);
       }
-      // Back substitution: T_k = d_k - c'_k T_{k+1}, c'_k = -g / den_k.
-      for (int k = nz - 2; k >= 0; --k) ti[k] += gi[k] * ti[k + 1];
-      if (linked[i]) continue;  // corrected below for the link fluxes
-      heat[i] = dt * ply.area[i] * (hb * (f.t_bottom[i] - ti[0]) + ht * (f.t_top[i] - ti[nz - 1]));
+      for (int i = i0; i < std::min(n, i0 + kRodGroup); ++i) {
+        if (linked[i]) continue;  // corrected below for the link fluxes
+        const double* ti = t + static_cast<std::size_t>(nz) * i;
+        heat[i] = dt * ply.area[i] *
+                  (f.h_bottom[i] * (f.t_bottom[i] - ti[0]) + f.h_top[i] * (f.t_top[i] - ti[nz - 1]));
+      }
     }
   }
   if (in.links.empty()) return 0.0;
 
   // Rods joined by links. Each rod was solved above without its link
-  // fluxes (u = M^-1 b); its face values respond to face fluxes f through
-  // S = E M^-1 E^T. The face values y of all linked rods solve the small
-  // interface system (S^-1 + L) y = S^-1 E u, L the link conductances, and
-  // the rods are corrected by x = u - M^-1 E^T (L y). Exact, conservative,
-  // and only two unknowns per linked node enter the sparse factorisation,
-  // which is redone only when the step, links, geometry or faces change.
+  // fluxes (u = M^-1 b); its linked face values respond to their face
+  // fluxes f through S = E M^-1 E^T (E picks the linked faces: one or two
+  // per rod). The linked face values y solve the small interface system
+  // (S^-1 + L) y = S^-1 E u, L the link conductances, and the rods are
+  // corrected by x = u - M^-1 E^T (L y). Exact and conservative; only the
+  // linked faces are unknowns of the sparse factorisation, which is redone
+  // only when the step, links, geometry or faces change.
   const bool links_changed = in.links_changed && !same_links(in.links, last_links_);
   if (links_changed) last_links_.assign(in.links.begin(), in.links.end());
   const bool rebuild = !linked_valid_ || links_changed || factors_changed;
@@ -203,58 +250,63 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
     linked_offset_.resize(plies_.size());
     linked_count_ = 0;
     for (std::size_t p = 0; p < plies_.size(); ++p) {
-      linked_offset_[p].assign(plies_[p].view->num_nodes, -1);
-      const int ne = plies_[p].nz > 1 ? 2 : 1;
-      for (int i = 0; i < plies_[p].view->num_nodes; ++i)
-        if (linked_[p][i]) {
-          linked_offset_[p][i] = linked_count_;
-          linked_count_ += ne;
+      const int n = plies_[p].view->num_nodes;
+      linked_offset_[p].assign(2 * static_cast<std::size_t>(n), -1);
+      for (int i = 0; i < n; ++i) {
+        const int mask = linked_[p][i];
+        if (!mask) continue;
+        if (plies_[p].nz == 1) {  // one value: both faces are the same unknown
+          linked_offset_[p][2 * i] = linked_offset_[p][2 * i + 1] = linked_count_++;
+          continue;
         }
+        for (int face = 0; face < 2; ++face)
+          if (mask & (1 << face)) linked_offset_[p][2 * i + face] = linked_count_++;
+      }
     }
     linked_rhs_.assign(linked_count_, 0.0);
     linked_flux_.assign(linked_count_, 0.0);
   }
   const auto& offset = linked_offset_;
-  auto end_index = [&](int part, int node, int face) {
-    return offset[part][node] + (plies_[part].nz > 1 && face == sdk::kTop ? 1 : 0);
-  };
-  // S^-1 per unit area for a rod (2x2, or 1x1 for one value per node).
-  auto s_inverse = [&](int p, int i, double out[4]) {
-    const RodFactors& rf = factors_[p];
-    const int nz = plies_[p].nz;
-    const std::size_t o = static_cast<std::size_t>(nz) * rf.id[i];
-    if (nz == 1) {
-      out[0] = 1.0 / rf.v_bottom[o];
-      return;
-    }
-    const double s00 = rf.v_bottom[o], s01 = rf.v_top[o], s10 = rf.v_bottom[o + nz - 1], s11 = rf.v_top[o + nz - 1];
-    const double det = s00 * s11 - s01 * s10;
-    out[0] = s11 / det;
-    out[1] = -s01 / det;
-    out[2] = -s10 / det;
-    out[3] = s00 / det;
-  };
+  auto end_index = [&](int part, int node, int face) { return offset[part][2 * node + face]; };
   LinkedSolver& s = *linked_solver_;
   if (rebuild) {
     s.begin(linked_count_);
+    // A S^-1 per linked node (2x2 when both faces are linked, else 1x1),
+    // kept in four slots per unknown of its first face for the right-hand side.
     linked_sinv_.assign(4 * static_cast<std::size_t>(linked_count_), 0.0);
-    for (std::size_t p = 0; p < plies_.size(); ++p)
+    for (std::size_t p = 0; p < plies_.size(); ++p) {
+      const RodFactors& rf = factors_[p];
+      const int nz = plies_[p].nz;
       for (int i = 0; i < plies_[p].view->num_nodes; ++i) {
-        const int o = offset[p][i];
-        if (o < 0) continue;
-        double si[4] = {0, 0, 0, 0};
-        s_inverse(static_cast<int>(p), i, si);
+        const int ob = offset[p][2 * i], ot = offset[p][2 * i + 1];
+        if (ob < 0 && ot < 0) continue;
         const double A = plies_[p].area[i];
-        for (int q = 0; q < 4; ++q) linked_sinv_[4 * static_cast<std::size_t>(o) + q] = A * si[q];
-        if (plies_[p].nz == 1) {
-          s.add(o, o, A * si[0]);
+        const std::size_t o = static_cast<std::size_t>(nz) * rf.id[i];
+        double* si = &linked_sinv_[4 * static_cast<std::size_t>(ob >= 0 ? ob : ot)];
+        if (nz == 1) {
+          si[0] = A / rf.v_bottom[o];
+          s.add(ob, ob, si[0]);
+        } else if (ob >= 0 && ot >= 0) {
+          const double s00 = rf.v_bottom[o], s01 = rf.v_top[o], s10 = rf.v_bottom[o + nz - 1],
+                       s11 = rf.v_top[o + nz - 1];
+          const double det = s00 * s11 - s01 * s10;
+          si[0] = A * s11 / det;
+          si[1] = -A * s01 / det;
+          si[2] = -A * s10 / det;
+          si[3] = A * s00 / det;
+          s.add(ob, ob, si[0]);
+          s.add(ob, ot, si[1]);
+          s.add(ot, ob, si[2]);
+          s.add(ot, ot, si[3]);
+        } else if (ob >= 0) {
+          si[0] = A / rf.v_bottom[o];
+          s.add(ob, ob, si[0]);
         } else {
-          s.add(o, o, A * si[0]);
-          s.add(o, o + 1, A * si[1]);
-          s.add(o + 1, o, A * si[2]);
-          s.add(o + 1, o + 1, A * si[3]);
+          si[0] = A / rf.v_top[o + nz - 1];
+          s.add(ot, ot, si[0]);
         }
       }
+    }
     for (const auto& l : in.links) {
       const int ia = end_index(l.part_a, l.node_a, l.face_a);
       for (int j = 0; j < 3; ++j) {
@@ -273,16 +325,22 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
   std::vector<double>& y = linked_rhs_;
   for (std::size_t p = 0; p < plies_.size(); ++p) {
     const int nz = plies_[p].nz;
+    const int* off = offset[p].data();
+    const double* t = T[p].data();
     for (int i = 0; i < plies_[p].view->num_nodes; ++i) {
-      const int o = offset[p][i];
-      if (o < 0) continue;
-      const double* ti = T[p].data() + static_cast<std::size_t>(nz) * i;
-      const double* si = &linked_sinv_[4 * static_cast<std::size_t>(o)];  // A S^-1
+      const int ob = off[2 * i], ot = off[2 * i + 1];
+      if (ob < 0 && ot < 0) continue;
+      const double* ti = t + static_cast<std::size_t>(nz) * i;
+      const double* si = &linked_sinv_[4 * static_cast<std::size_t>(ob >= 0 ? ob : ot)];  // A S^-1
       if (nz == 1) {
-        y[o] = si[0] * ti[0];
+        y[ob] = si[0] * ti[0];
+      } else if (ob >= 0 && ot >= 0) {
+        y[ob] = si[0] * ti[0] + si[1] * ti[nz - 1];
+        y[ot] = si[2] * ti[0] + si[3] * ti[nz - 1];
+      } else if (ob >= 0) {
+        y[ob] = si[0] * ti[0];
       } else {
-        y[o] = si[0] * ti[0] + si[1] * ti[nz - 1];
-        y[o + 1] = si[2] * ti[0] + si[3] * ti[nz - 1];
+        y[ot] = si[0] * ti[nz - 1];
       }
     }
   }
@@ -304,17 +362,37 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
   for (std::size_t p = 0; p < plies_.size(); ++p) {
     const PlyThermal& ply = plies_[p];
     const int nz = ply.nz;
+    const int n = ply.view->num_nodes;
     const RodFactors& rf = factors_[p];
     const auto& f = in.faces[p];
-    for (int i = 0; i < ply.view->num_nodes; ++i) {
-      const int o = offset[p][i];
-      if (o < 0) continue;
-      double* ti = T[p].data() + static_cast<std::size_t>(nz) * i;
-      const std::size_t v = static_cast<std::size_t>(nz) * rf.id[i];
-      const double fb = fl[o] / ply.area[i], ft = nz > 1 ? fl[o + 1] / ply.area[i] : 0.0;
-      for (int k = 0; k < nz; ++k) ti[k] -= fb * rf.v_bottom[v + k] + ft * rf.v_top[v + k];
-      node_heat_[p][i] = dt * ply.area[i] *
-                         (f.h_bottom[i] * (f.t_bottom[i] - ti[0]) + f.h_top[i] * (f.t_top[i] - ti[nz - 1]));
+    const int* off = offset[p].data();
+    const int* id = rf.id.data();
+    const double* area = ply.area.data();
+    const double* vb = rf.v_bottom.data();
+    const double* vt = rf.v_top.data();
+    const double *hb = f.h_bottom.data(), *ht = f.h_top.data(), *tb = f.t_bottom.data(), *tt = f.t_top.data();
+    const double* flux = fl.data();
+    double* t = T[p].data();
+    double* heat = node_heat_[p].data();
+    for (int i = 0; i < n; ++i) {
+      const int ob = off[2 * i], ot = off[2 * i + 1];
+      if (ob < 0 && ot < 0) continue;
+      double* ti = t + static_cast<std::size_t>(nz) * i;
+      const double* vbi = vb + static_cast<std::size_t>(nz) * id[i];
+      const double* vti = vt + static_cast<std::size_t>(nz) * id[i];
+      if (nz == 1) {
+        ti[0] -= flux[ob] / area[i] * vbi[0];
+      } else if (ob >= 0 && ot >= 0) {
+        const double fb = flux[ob] / area[i], ft = flux[ot] / area[i];
+        for (int k = 0; k < nz; ++k) ti[k] -= fb * vbi[k] + ft * vti[k];
+      } else if (ob >= 0) {
+        const double fb = flux[ob] / area[i];
+        for (int k = 0; k < nz; ++k) ti[k] -= fb * vbi[k];
+      } else {
+        const double ft = flux[ot] / area[i];
+        for (int k = 0; k < nz; ++k) ti[k] -= ft * vti[k];
+      }
+      heat[i] = dt * area[i] * (hb[i] * (tb[i] - ti[0]) + ht[i] * (tt[i] - ti[nz - 1]));
     }
   }
   return 0.0;
@@ -332,7 +410,7 @@ double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<co
     const auto& f = in.faces[p];
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
-#pragma omp parallel for schedule(static) if (n > 1024)
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * nz > kParallelValues)
     for (int i = 0; i < n; ++i) {
       double* ti = t + static_cast<std::size_t>(nz) * i;
       double* old = thread_work_[thread_id()].data();
@@ -376,8 +454,8 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
     for (auto& l : linked_) std::fill(l.begin(), l.end(), 0);
     if (implicit_) {
       for (const auto& l : in.links) {
-        linked_[l.part_a][l.node_a] = 1;
-        for (int j = 0; j < 3; ++j) linked_[l.part_b][l.nodes_b[j]] = 1;
+        linked_[l.part_a][l.node_a] |= static_cast<char>(1 << l.face_a);
+        for (int j = 0; j < 3; ++j) linked_[l.part_b][l.nodes_b[j]] |= static_cast<char>(1 << l.face_b);
       }
       rods_implicit(in, T);
     } else {

@@ -65,12 +65,12 @@ class SplitThermal : public sdk::ThermalSplitter {
   std::vector<RodFactors> factors_;  // per part  // per part: range of each rod before the in-plane step
   std::vector<std::vector<double>> t_old_;       // per part (explicit links)
   std::vector<std::vector<double>> thread_work_; // per thread, 4 * nz
-  std::vector<std::vector<char>> linked_;        // per part, per node
+  std::vector<std::vector<char>> linked_;        // per part, per node: bit 1 << face for each linked face
   std::unique_ptr<LinkedSolver> linked_solver_;
   std::vector<sdk::HeatLink> last_links_;
-  std::vector<std::vector<int>> linked_offset_;  // per part, per node: first unknown or -1
+  std::vector<std::vector<int>> linked_offset_;  // per part, 2 per node (bottom, top): unknown or -1
   std::vector<double> linked_rhs_, linked_flux_;
-  std::vector<double> linked_sinv_;  // 4 per linked unknown: A S^-1 of its rod, set with the factorisation
+  std::vector<double> linked_sinv_;  // 4 per linked unknown, at the first linked face of each rod: A S^-1
   int linked_count_ = 0;
   bool linked_valid_ = false;
 };

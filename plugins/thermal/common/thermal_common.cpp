@@ -1,6 +1,8 @@
 #include "thermal_common.hpp"
 
 #include <algorithm>
+#include <array>
+#include <utility>
 #include <cmath>
 #include <limits>
 
@@ -184,6 +186,37 @@ void solve_tridiagonal(int n, const double* a, const double* b, const double* c,
   for (int i = n - 2; i >= 0; --i) d[i] -= cp[i] * d[i + 1];
 }
 
+namespace {
+
+// r = K m for W values per node (the layer values of a rod, contiguous): one
+// pass over each row with the W sums held in registers.
+template <std::size_t W>
+void row_kernel(int n, const int* rs, const int* col, const double* val, const double* m, double* r) {
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * W > kParallelValues)
+  for (int i = 0; i < n; ++i) {
+    double acc[W > 0 ? W : 1] = {};
+    for (int p = rs[i]; p < rs[i + 1]; ++p) {
+      const double v = val[p];
+      const double* mj = m + W * static_cast<std::size_t>(col[p]);
+      for (std::size_t k = 0; k < W; ++k) acc[k] += v * mj[k];
+    }
+    double* ri = r + W * static_cast<std::size_t>(i);
+    for (std::size_t k = 0; k < W; ++k) ri[k] = acc[k];
+  }
+}
+
+using RowKernel = void (*)(int, const int*, const int*, const double*, const double*, double*);
+
+template <std::size_t... W>
+constexpr std::array<RowKernel, sizeof...(W)> make_row_kernels(std::index_sequence<W...>) {
+  return {&row_kernel<W>...};
+}
+
+// Widths 0..33 (up to 32 layers); wider rods take the generic loop.
+constexpr auto kRowKernels = make_row_kernels(std::make_index_sequence<34>{});
+
+}  // namespace
+
 int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, std::span<double> scratch,
                     int stride) {
   if (ply.inplane_rate <= 0) return 0;
@@ -211,7 +244,7 @@ int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, 
     double* out = rm + nw;           // new values
     const double c0 = ds * inv_rc;
     for (int s = 0; s < steps; ++s) {
-#pragma omp parallel for schedule(static) if (n > 1024)
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * w > kParallelValues)
       for (int i = 0; i < n; ++i) {
         for (std::size_t k = 0; k < w; ++k) {
           const double ti = m[w * i + k];
@@ -238,7 +271,7 @@ int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, 
           rm[w * i + k] = pm < 0 ? std::clamp(qm / pm, 0.0, 1.0) : 1.0;
         }
       }
-#pragma omp parallel for schedule(static) if (n > 1024)
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * w > kParallelValues)
       for (int i = 0; i < n; ++i) {
         for (std::size_t k = 0; k < w; ++k) {
           const double ti = m[w * i + k];
@@ -266,29 +299,21 @@ int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, 
         for (int p = rs[i]; p < rs[i + 1]; ++p) acc += val[p] * m[col[p]];
         r[i] = acc;
       }
+    } else if (w < kRowKernels.size()) {
+      kRowKernels[w](n, rs, col, val, m, r);
     } else {
-#pragma omp parallel for schedule(static) if (n > 1024)
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * w > kParallelValues)
       for (int i = 0; i < n; ++i) {
         double* ri = r + w * i;
-        std::size_t k0 = 0;
-        // Fixed-width chunks of 4 layers (vectorised), then the remainder.
-        for (; k0 + 4 <= w; k0 += 4) {
-          double acc[4] = {0, 0, 0, 0};
-          for (int p = rs[i]; p < rs[i + 1]; ++p) {
-            const double v = val[p];
-            const double* mj = m + w * col[p] + k0;
-            for (int k = 0; k < 4; ++k) acc[k] += v * mj[k];
-          }
-          for (int k = 0; k < 4; ++k) ri[k0 + k] = acc[k];
-        }
-        for (std::size_t k = k0; k < w; ++k) {
-          double acc = 0;
-          for (int p = rs[i]; p < rs[i + 1]; ++p) acc += val[p] * m[w * col[p] + k];
-          ri[k] = acc;
+        for (std::size_t k = 0; k < w; ++k) ri[k] = 0.0;
+        for (int p = rs[i]; p < rs[i + 1]; ++p) {
+          const double v = val[p];
+          const double* mj = m + w * col[p];
+          for (std::size_t k = 0; k < w; ++k) ri[k] += v * mj[k];
         }
       }
     }
-#pragma omp parallel for schedule(static) if (n > 1024)
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * w > kParallelValues)
     for (int i = 0; i < n; ++i) {
       const double f = ds * inv_rc / area[i];
       for (std::size_t k = 0; k < w; ++k) m[w * i + k] -= f * r[w * i + k];

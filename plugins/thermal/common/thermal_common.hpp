@@ -13,6 +13,10 @@
 
 namespace ts::thermal {
 
+// Loops over the layer values of a ply run on several threads above this
+// many values (below it, starting the threads costs more than they save).
+inline constexpr long long kParallelValues = 8192;
+
 // Compressed sparse rows, node-node, symmetric pattern with the diagonal.
 struct Csr {
   std::vector<int> row_start;  // n + 1
