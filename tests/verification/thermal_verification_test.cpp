@@ -88,17 +88,19 @@ TEST(EigenSeries, FirstOrderInTime) {
   EXPECT_GT(order2, 0.9);
 }
 
-// Independent reference for two plies: lumped linear elements, 400 per ply,
-// backward Euler with dt = 1e-4 s, interface conductance between the two
-// facing end nodes. Bottom face Robin (h, 260), top face adiabatic.
+// Independent reference for a stack of plies: lumped linear elements, 400
+// per ply, backward Euler with dt = 1e-4 s, interface conductance between
+// the facing end nodes of neighbouring plies. Bottom face Robin (h, 260),
+// top face adiabatic.
 struct TwoPlyReference {
   int n = 400;
-  std::vector<double> T;  // 2 (n+1) values: lower ply then upper ply
+  int plies = 2;
+  std::vector<double> T;  // plies (n+1) values, from the lowest ply up
   void run(double t_end, double h, double hc) {
     const int m = n + 1;
-    T.assign(2 * m, 300.0);
+    T.assign(plies * m, 300.0);
     const double e = kH / n, dt = 1e-4, g = 0.31 / e;
-    const int N = 2 * m;
+    const int N = plies * m;
     std::vector<double> a(N), b(N), c(N), d(N), cp(N);
     for (int step = 0; step < static_cast<int>(std::round(t_end / dt)); ++step) {
       for (int i = 0; i < N; ++i) {
@@ -119,11 +121,14 @@ struct TwoPlyReference {
       }
       b[0] += h;
       d[0] += h * 260.0;
-      // interface link between node n (top of lower ply) and node m (bottom of upper)
-      b[n] += hc;
-      c[n] = -hc;
-      b[m] += hc;
-      a[m] = -hc;
+      // interface links: top of ply q (index q m + n) and bottom of ply q+1 ((q+1) m)
+      for (int q = 0; q + 1 < plies; ++q) {
+        const int lo = q * m + n, up = (q + 1) * m;
+        b[lo] += hc;
+        c[lo] = -hc;
+        b[up] += hc;
+        a[up] = -hc;
+      }
       // Thomas
       cp[0] = c[0] / b[0];
       d[0] /= b[0];
@@ -193,6 +198,52 @@ TEST(TwoPlies, InterfaceJumpAgainstFine1D) {
         std::printf("%s hc=%g t=%g: max error %.4f K, jump %.4f K (reference %.4f K)\n", splitter.c_str(), hc, t, err,
                     jump, ref_jump);
       }
+    }
+  }
+}
+
+// Three plies: the middle one is linked on both faces (its rods couple two
+// interface unknowns each). Same reference and tolerances as above.
+TEST(ThreePlies, MiddlePlyLinkedOnBothFaces) {
+  const double hc = 1000.0;
+  for (const std::string splitter : {"adi", "layered3d"}) {
+    json j = two_ply_job(splitter, 16, hc);
+    json top = j["parts"][1];
+    top["name"] = "top";
+    top["mesh"]["origin"] = {0, 0, 0.00125};
+    j["parts"].push_back(top);
+    j["interactions"].push_back(
+        {{"type", "contact"}, {"handler", "penalty_node_surface"}, {"between", {"top", "upper"}}, {"conductance", hc}});
+    j["output"]["probes"].push_back({{"name", "top"},
+                                     {"part", "top"},
+                                     {"at", {0.005, 0.005, 0.00125}},
+                                     {"quantities", {"temperature_profile"}},
+                                     {"interval", 0.5}});
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    EXPECT_LT(r.result.heat_balance_error, 1e-9);
+    for (double t : {1.0, 2.0}) {
+      TwoPlyReference ref;
+      ref.plies = 3;
+      ref.run(t, 1000.0, hc);
+      double err = 0;
+      std::vector<const ProbeSample*> s;
+      for (int q = 0; q < 3; ++q) {
+        s.push_back(r.sample(q, "temperature_profile", t));
+        ASSERT_NE(s.back(), nullptr);
+        for (std::size_t k = 0; k < s[q]->z.size(); ++k)
+          err = std::max(err, std::abs(s[q]->values[k] - ref.at(q, s[q]->z[k])));
+      }
+      EXPECT_LT(err, 0.4) << splitter << " t " << t;
+      for (int q = 0; q < 2; ++q) {
+        const double jump = s[q + 1]->values.front() - s[q]->values.back();
+        const double ref_jump = ref.at(q + 1, -0.5 * kH) - ref.at(q, 0.5 * kH);
+        EXPECT_GT(ref_jump, 0.1);  // the case must have a visible jump
+        EXPECT_NEAR(jump, ref_jump, 0.02 * std::abs(ref_jump) + 0.02) << splitter << " interface " << q << " t " << t;
+        std::printf("%s three plies t=%g interface %d: jump %.4f K (reference %.4f K)\n", splitter.c_str(), t, q, jump,
+                    ref_jump);
+      }
+      std::printf("%s three plies t=%g: max error %.4f K\n", splitter.c_str(), t, err);
     }
   }
 }
