@@ -315,4 +315,36 @@ TEST(Contact, PartialHolderOnTwoPliesStaysAtRest) {
               -tool_value(r.result, 0, 2, true), F, r.result.energy.kinetic, r.result.energy.balance_error);
 }
 
+// The same stack held by rate-regularised friction on every pair: the
+// stack must come to rest, not vibrate. Each contact's friction force is
+// capped so that it cannot reverse the slip within a step; at the full
+// stopping force the two ply/ply passes together reversed it every step (a
+// vibration at the step's frequency limit, where the half-step kinetic
+// energy stays positive while the product form turns negative). Required:
+// both forms of the kinetic energy under 1e-6 of the work scale F * h.
+TEST(Contact, RegularisedFrictionStackComesToRest) {
+  const double F = 40.0, t_end = 0.02;
+  json j = base_job(t_end);
+  j["parts"] = {ply("low", 0.5 * kH), ply("up", 1.5 * kH)};
+  j["tools"] = {plane("die", 0.0, 1),
+                {{"name", "disk"},
+                 {"surface", {{"type", "revolved"}, {"axis", {{"origin", {kSide / 2, kSide / 2, 2 * kH}}}},
+                              {"profile", {{{"line", {{0.006, 0.0}, {0.0, 0.0}}}}}}}},
+                 {"motion", {{"force", {0, 0, -F}}, {"mass", 0.05}, {"damping", 500.0}}}}};
+  const json fr = {{"friction", 0.2}, {"slip_velocity", 1e-4}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "low"}}},
+                       {{"type", "contact"}, {"between", {"disk", "up"}}},
+                       {{"type", "contact"}, {"between", {"up", "low"}}}};
+  for (auto& c : j["interactions"]) c.update(fr);
+  j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"mass_scaling", {{"target_dt", 2e-5}}}};
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  EXPECT_NEAR(-tool_value(r.result, 0, 2, true) / F, 1.0, 0.01);
+  EXPECT_LT(r.result.energy.kinetic_half, 1e-6 * F * kH);
+  EXPECT_GT(r.result.energy.kinetic, -1e-6 * F * kH);
+  std::printf("regularised friction stack: die %.5g N, kinetic %.3g J (product form %.3g J), balance %.2e\n",
+              -tool_value(r.result, 0, 2, true), r.result.energy.kinetic_half, r.result.energy.kinetic,
+              r.result.energy.balance_error);
+}
+
 }  // namespace ts::test

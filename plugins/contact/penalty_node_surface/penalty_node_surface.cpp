@@ -342,10 +342,12 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
 
   // Normal penalty force with its damper and the elastic-slip Coulomb
   // friction force on one node: n is the unit normal pushing the node out,
-  // vrel the velocity relative to the target, m the effective mass. Updates
-  // the node's tangential spring; returns the stored spring energy.
-  double node_force(std::vector<double>& ftv, int i, double pen, double k, double m, const Vec3& n, const Vec3& vrel,
-                    double dt, double* f) {
+  // vrel the velocity relative to the target, m the effective mass, share
+  // this pair's share of the node's friction (0.5 for each of the two
+  // ply/ply passes). Updates the node's tangential spring; returns the
+  // stored spring energy.
+  double node_force(std::vector<double>& ftv, int i, double pen, double k, double m, double share, const Vec3& n,
+                    const Vec3& vrel, double dt, double* f) {
     const double vn = sdk::dot(vrel, n);  // < 0 while approaching
     // Viscous normal damping, a fraction of the critical value of the node on
     // its penalty spring; the normal force never pulls.
@@ -366,11 +368,15 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       Vec3 spring = {0, 0, 0};
       if (slip_velocity_ > 0) {
         // Rate-regularised Coulomb: mu N min(1, |v_t| / v0) against the
-        // slip, and never more than the force that stops the slip within
-        // the step (m |v_t| / dt), so that the steep branch stays stable.
+        // slip, and never more than half the force that stops the slip
+        // within the step (share m |v_t| / 2 dt): on the steep branch the
+        // slip then decays without changing sign, also where several
+        // contacts (a tool and the other ply, both ply/ply passes) hold the
+        // same node. At the full stopping force, two such contacts reverse
+        // the slip every step: a vibration at the step's frequency limit.
         const double vm = sdk::norm(vt);
         if (vm > 0) {
-          const double mag = std::min({lim, lim * vm / slip_velocity_, m * vm / dt});
+          const double mag = std::min({lim, lim * vm / slip_velocity_, 0.5 * share * m * vm / dt});
           ft = sdk::scale(vt, -mag / vm);
         }
       } else {
@@ -407,7 +413,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       }
       const Vec3 n = sdk::load3(tn_.data(), i);
       const Vec3 vrel = sdk::sub(sdk::load3(v.data(), i), vtool);
-      energy_[i] = node_force(pass_[0].ft, i, pen, penalty_ * area[i], in.mass[a.index][i], n, vrel, in.dt,
+      energy_[i] = node_force(pass_[0].ft, i, pen, penalty_ * area[i], in.mass[a.index][i], 1.0, n, vrel, in.dt,
                               &scratch_[3 * static_cast<std::size_t>(i)]);
     }
     // Fixed-order sums: the same results for any thread count.
@@ -483,7 +489,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       double mb = 0;
       for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
       const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
-      energy_[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, sdk::scale(ne, ps.side[i]), vrel, in.dt,
+      energy_[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, sdk::scale(ne, ps.side[i]), vrel,
+                              in.dt,
                               &scratch_[3 * static_cast<std::size_t>(i)]);
       tg[0] = pr.element;
       tg[1] = pr.w[0];
@@ -525,7 +532,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.3.0";
+  d.version = "0.3.1";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces";
   d.params = {
