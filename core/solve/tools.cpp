@@ -85,6 +85,18 @@ RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
     double scale = 0;
     for (const auto& g : s.profile) scale = std::max({scale, std::hypot(g.a[0], g.a[1]), std::hypot(g.b[0], g.b[1])});
     const double tol = 1e-9 * std::max(scale, 1e-3);
+    pieces_.resize(s.profile.size());
+    for (std::size_t i = 0; i < s.profile.size(); ++i) {
+      const ProfileSegment& g = s.profile[i];
+      if (!g.arc) {
+        const double dr = g.b[0] - g.a[0], dz = g.b[1] - g.a[1];
+        pieces_[i].inv = 1.0 / (dr * dr + dz * dz);
+      } else {
+        const double ax = g.a[0] - g.centre[0], az = g.a[1] - g.centre[1];
+        pieces_[i].inv = std::sqrt(ax * ax + az * az);
+        pieces_[i].orient = cross2(ax, az, g.b[0] - g.centre[0], g.b[1] - g.centre[1]) > 0 ? 1.0 : -1.0;
+      }
+    }
     end_normals_.resize(s.profile.size());
     for (std::size_t i = 0; i < s.profile.size(); ++i) {
       for (int end = 0; end < 2; ++end) {
@@ -211,17 +223,19 @@ void RigidTool::query_revolved(const double* p, double& dist, double* nout) cons
   const Vec3 w = {p[0] - s.axis_origin[0], p[1] - s.axis_origin[1], p[2] - s.axis_origin[2]};
   const double z = sdk::dot(w, axis_);
   const Vec3 rho = sdk::sub(w, sdk::scale(axis_, z));
-  const double r = sdk::norm(rho);
+  const double r = std::sqrt(sdk::dot(rho, rho));
   const Vec3 er = r > 1e-300 ? sdk::scale(rho, 1.0 / r) : perp_;
   double best = kInf;
-  std::array<double, 2> bc{0, 0}, bn{0, 0};
+  std::array<double, 2> bc{0, 0};
+  int best_k = -1, best_end = -1;
   for (std::size_t k = 0; k < s.profile.size(); ++k) {
     const ProfileSegment& g = s.profile[k];
-    std::array<double, 2> c, n;
+    const PieceConstants& pc = pieces_[k];
+    std::array<double, 2> c;
     int end = -1;  // 0: at a, 1: at b, -1: inside
     if (!g.arc) {
       const double dr = g.b[0] - g.a[0], dz = g.b[1] - g.a[1];
-      double t = ((r - g.a[0]) * dr + (z - g.a[1]) * dz) / (dr * dr + dz * dz);
+      double t = ((r - g.a[0]) * dr + (z - g.a[1]) * dz) * pc.inv;
       if (t <= 0) {
         t = 0;
         end = 0;
@@ -234,14 +248,15 @@ void RigidTool::query_revolved(const double* p, double& dist, double* nout) cons
       const double ax = g.a[0] - g.centre[0], az = g.a[1] - g.centre[1];
       const double bx = g.b[0] - g.centre[0], bz = g.b[1] - g.centre[1];
       const double qx = r - g.centre[0], qz = z - g.centre[1];
-      const double ql = std::hypot(qx, qz), R = std::hypot(ax, az);
-      const double orient = cross2(ax, az, bx, bz) > 0 ? 1.0 : -1.0;
-      const bool inside = ql > 0 && orient * cross2(ax, az, qx, qz) >= 0 && orient * cross2(qx, qz, bx, bz) >= 0;
+      const double ql2 = qx * qx + qz * qz;
+      const bool inside = ql2 > 0 && pc.orient * cross2(ax, az, qx, qz) >= 0 && pc.orient * cross2(qx, qz, bx, bz) >= 0;
       if (inside) {
-        c = {g.centre[0] + R * qx / ql, g.centre[1] + R * qz / ql};
+        const double f = pc.inv / std::sqrt(ql2);  // R / |q|
+        c = {g.centre[0] + f * qx, g.centre[1] + f * qz};
       } else {
-        const double da = std::hypot(r - g.a[0], z - g.a[1]), db = std::hypot(r - g.b[0], z - g.b[1]);
-        end = da <= db ? 0 : 1;
+        const double da2 = (r - g.a[0]) * (r - g.a[0]) + (z - g.a[1]) * (z - g.a[1]);
+        const double db2 = (r - g.b[0]) * (r - g.b[0]) + (z - g.b[1]) * (z - g.b[1]);
+        end = da2 <= db2 ? 0 : 1;
         c = end == 0 ? g.a : g.b;
       }
     }
@@ -249,11 +264,13 @@ void RigidTool::query_revolved(const double* p, double& dist, double* nout) cons
     if (d2 < best) {
       best = d2;
       bc = c;
-      n = end < 0 ? piece_normal(g, c)
-                  : std::array<double, 2>{end_normals_[k][2 * end], end_normals_[k][2 * end + 1]};
-      bn = n;
+      best_k = static_cast<int>(k);
+      best_end = end;
     }
   }
+  const std::array<double, 2> bn =
+      best_end < 0 ? piece_normal(s.profile[best_k], bc)
+                   : std::array<double, 2>{end_normals_[best_k][2 * best_end], end_normals_[best_k][2 * best_end + 1]};
   const double dr = r - bc[0], dz = z - bc[1];
   const double len = std::sqrt(best);
   const double side = dr * bn[0] + dz * bn[1] >= 0 ? 1.0 : -1.0;
