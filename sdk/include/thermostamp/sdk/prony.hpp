@@ -13,11 +13,21 @@ namespace ts::sdk {
 // Per-branch factors of the update for a step dt: decay = exp(-dt/tau),
 // ramp = (1 - decay) / (dt/tau) (1 for dt = 0). Compute once per
 // temperature and step, reuse for every point that shares them.
+// For x = dt / tau < 1e-2 (explicit steps are far shorter than the
+// relaxation times) both factors come from their Taylor series to x^6: the
+// first omitted term is below 2e-18, under the rounding of a double, and
+// no exponential is evaluated.
 inline void prony_factors(int branches, const double* tau, double dt, double* decay, double* ramp) {
   for (int i = 0; i < branches; ++i) {
     const double x = dt / tau[i];
-    decay[i] = std::exp(-x);
-    ramp[i] = x > 1e-8 ? (1.0 - decay[i]) / x : 1.0 - 0.5 * x;
+    if (x < 1e-2) {
+      // exp(-x) = sum (-x)^k / k!,  (1 - exp(-x)) / x = sum (-x)^k / (k + 1)!
+      decay[i] = 1 - x * (1 - x * (1.0 / 2 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x * (1.0 / 720))))));
+      ramp[i] = 1 - x * (1.0 / 2 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x * (1.0 / 720 - x * (1.0 / 5040))))));
+    } else {
+      decay[i] = std::exp(-x);
+      ramp[i] = -std::expm1(-x) / x;
+    }
   }
 }
 
