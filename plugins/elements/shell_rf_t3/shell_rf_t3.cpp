@@ -246,7 +246,26 @@ class ShellRfT3 final : public ElementKernel {
     const Vec3 g = ghost(n, false);
     const double y = dot(cross(g, n), eh), z = dot(n, g);
     const double theta = std::atan2(y, z);
-    if (grad) {
+    if (grad && mirror_axis >= 0) {
+      // Mirror ghost (edge in the symmetry plane, e_a its normal): with
+      // m = n x e, theta = 2 atan2(-n_a, m_a), d theta = 2 (-m_a dn_a +
+      // n_a dm_a). For a flat triangle dn = -sum_k (n . dx_k) grad N_k, and
+      // dm = dn x e + n x de, de = (I - e e^T)(dQ - dP) / |Q - P|.
+      const int a = mirror_axis;
+      const Vec3 m = cross(n, eh);
+      Vec3 ea{0, 0, 0};
+      ea[a] = 1.0;
+      const Vec3 exa = cross(eh, ea);
+      Vec3 w = cross(ea, n);
+      w = sub(w, scale(eh, dot(w, eh)));
+      const Vec3 xs[3] = {C, P, Q};
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 gk = scale(cross(n, sub(xs[(k + 2) % 3], xs[(k + 1) % 3])), 1.0 / nlen);  // grad N_k
+        grad[k] = scale(n, 2 * (m[a] * gk[a] - n[a] * dot(gk, exa)));
+      }
+      grad[2] = add(grad[2], scale(w, 2 * n[a] / len));
+      grad[1] = sub(grad[1], scale(w, 2 * n[a] / len));
+    } else if (grad) {
       // Chain rule through N = (Q - P) x (C - P) and e = (Q - P) / |Q - P|.
       const double r2 = y * y + z * z;
       for (int v = 0; v < 3; ++v) grad[v] = {0, 0, 0};
