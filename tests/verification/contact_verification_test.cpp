@@ -294,8 +294,8 @@ TEST(Contact, FacingFacesWhenFlippedOrFromBelow) {
 // triangle under it and must still be held (closest point, rounded fold).
 // Required: the die carries the disk force within 1 % at rest and the
 // kinetic energy stays under 1e-6 of the work scale F * h.
-TEST(Contact, PartialHolderOnTwoPliesStaysAtRest) {
-  const double F = 40.0, t_end = 0.02;
+// Two plies on a die under a force-controlled disk of radius 6 mm.
+json disk_on_two_plies(double F, double t_end) {
   json j = base_job(t_end);
   j["parts"] = {ply("low", 0.5 * kH), ply("up", 1.5 * kH)};
   j["tools"] = {plane("die", 0.0, 1),
@@ -307,7 +307,12 @@ TEST(Contact, PartialHolderOnTwoPliesStaysAtRest) {
                        {{"type", "contact"}, {"between", {"disk", "up"}}},
                        {{"type", "contact"}, {"between", {"up", "low"}}}};
   j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"mass_scaling", {{"target_dt", 2e-5}}}};
-  const JobRun r = run_json(j);
+  return j;
+}
+
+TEST(Contact, PartialHolderOnTwoPliesStaysAtRest) {
+  const double F = 40.0, t_end = 0.02;
+  const JobRun r = run_json(disk_on_two_plies(F, t_end));
   ASSERT_TRUE(r.result.ok) << r.result.error;
   EXPECT_NEAR(-tool_value(r.result, 0, 2, true) / F, 1.0, 0.01);
   EXPECT_LT(r.result.energy.kinetic, 1e-6 * F * kH);
@@ -324,19 +329,8 @@ TEST(Contact, PartialHolderOnTwoPliesStaysAtRest) {
 // both forms of the kinetic energy under 1e-6 of the work scale F * h.
 TEST(Contact, RegularisedFrictionStackComesToRest) {
   const double F = 40.0, t_end = 0.02;
-  json j = base_job(t_end);
-  j["parts"] = {ply("low", 0.5 * kH), ply("up", 1.5 * kH)};
-  j["tools"] = {plane("die", 0.0, 1),
-                {{"name", "disk"},
-                 {"surface", {{"type", "revolved"}, {"axis", {{"origin", {kSide / 2, kSide / 2, 2 * kH}}}},
-                              {"profile", {{{"line", {{0.006, 0.0}, {0.0, 0.0}}}}}}}},
-                 {"motion", {{"force", {0, 0, -F}}, {"mass", 0.05}, {"damping", 500.0}}}}};
-  const json fr = {{"friction", 0.2}, {"slip_velocity", 1e-4}};
-  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "low"}}},
-                       {{"type", "contact"}, {"between", {"disk", "up"}}},
-                       {{"type", "contact"}, {"between", {"up", "low"}}}};
-  for (auto& c : j["interactions"]) c.update(fr);
-  j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"mass_scaling", {{"target_dt", 2e-5}}}};
+  json j = disk_on_two_plies(F, t_end);
+  for (auto& c : j["interactions"]) c.update(json{{"friction", 0.2}, {"slip_velocity", 1e-4}});
   const JobRun r = run_json(j);
   ASSERT_TRUE(r.result.ok) << r.result.error;
   EXPECT_NEAR(-tool_value(r.result, 0, 2, true) / F, 1.0, 0.01);
