@@ -26,11 +26,11 @@ double cross2(double ax, double ay, double bx, double by) { return ax * by - ay 
 // Outward normal (left of the direction of travel) of a profile piece at a point c on it.
 std::array<double, 2> piece_normal(const ProfileSegment& s, const std::array<double, 2>& c) {
   if (!s.arc) {
-    const double dr = s.b[0] - s.a[0], dz = s.b[1] - s.a[1], l = std::hypot(dr, dz);
+    const double dr = s.b[0] - s.a[0], dz = s.b[1] - s.a[1], l = std::sqrt(dr * dr + dz * dz);
     return {-dz / l, dr / l};
   }
   const double ccw = cross2(s.a[0] - s.centre[0], s.a[1] - s.centre[1], s.b[0] - s.centre[0], s.b[1] - s.centre[1]);
-  const double rx = c[0] - s.centre[0], rz = c[1] - s.centre[1], l = std::hypot(rx, rz);
+  const double rx = c[0] - s.centre[0], rz = c[1] - s.centre[1], l = std::sqrt(rx * rx + rz * rz);
   // Walking counter-clockwise the left side is the centre's side.
   return ccw > 0 ? std::array<double, 2>{-rx / l, -rz / l} : std::array<double, 2>{rx / l, rz / l};
 }

@@ -35,19 +35,23 @@ namespace {
 using sdk::Vec3;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Unit normals of the elements and (area-weighted) of the nodes.
-void normals(const sdk::PartView& p, std::vector<double>& en, std::vector<double>& nn) {
-  en.assign(3 * p.num_elements, 0.0);
-  nn.assign(3 * p.num_nodes, 0.0);
+// Unit normals of the elements and, when nn_out is given, (area-weighted)
+// of the nodes.
+void normals(const sdk::PartView& p, std::vector<double>& en, std::vector<double>* nn_out = nullptr) {
+  en.resize(3 * static_cast<std::size_t>(p.num_elements));
+  if (nn_out) nn_out->assign(3 * static_cast<std::size_t>(p.num_nodes), 0.0);
   for (int e = 0; e < p.num_elements; ++e) {
     const int* t = &p.triangles[3 * e];
     const Vec3 a = sdk::load3(p.x.data(), t[0]), b = sdk::load3(p.x.data(), t[1]), c = sdk::load3(p.x.data(), t[2]);
     const Vec3 n = sdk::cross(sdk::sub(b, a), sdk::sub(c, a));
     const Vec3 u = sdk::normalized(n);
     for (int d = 0; d < 3; ++d) en[3 * e + d] = u[d];
-    for (int k = 0; k < 3; ++k)
-      for (int d = 0; d < 3; ++d) nn[3 * t[k] + d] += n[d];
+    if (nn_out)
+      for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 3; ++d) (*nn_out)[3 * t[k] + d] += n[d];
   }
+  if (!nn_out) return;
+  std::vector<double>& nn = *nn_out;
   for (int i = 0; i < p.num_nodes; ++i) {
     const Vec3 u = sdk::normalized(sdk::load3(nn.data(), i));
     for (int d = 0; d < 3; ++d) nn[3 * i + d] = u[d];
@@ -173,7 +177,7 @@ struct Pass {
   int a = 0, b = 0;
   std::vector<signed char> side;  // per node of a: +1 above the target, -1 below, 0 not tracked
   std::vector<double> ft;         // per node of a: tangential spring force (N)
-  std::vector<double> en_b, nn_b;
+  std::vector<double> en_b;
   Candidates cand;
 };
 
@@ -229,7 +233,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     return sdk::guarded([&] {
       const sdk::PartView& a = parts[pair_.first.index];
       if (conductance_ <= 0) return sdk::Status::success();
-      normals(a, en_a_, nn_a_);
+      normals(a, en_a_, &nn_a_);
       if (pair_.second.type == sdk::BodyRef::Type::Tool) {
         const sdk::ToolView& tool = tools[pair_.second.index];
         query_tool(a, tool);
@@ -244,7 +248,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       }
       const sdk::PartView& b = parts[pair_.second.index];
       Pass& ps = pass_[0];
-      normals(b, ps.en_b, ps.nn_b);
+      normals(b, ps.en_b);
       const double hsum2 = 0.5 * (a.thickness + b.thickness);
       refresh_candidates(ps, a, b, 2 * hsum2 + gap_tol_);
       for (int i = 0; i < a.num_nodes; ++i) {
@@ -309,7 +313,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // so the surface acts as if its folds were rounded.
   Projection project(const Pass& ps, const sdk::PartView& a, const sdk::PartView& b, int i, double reach) const {
     Projection best;
-    double best_dist = reach;
+    double best_dist = reach, best_d2 = reach * reach;  // squared: no square root per candidate
     const Vec3 x = sdk::load3(a.x.data(), i);
     const auto [begin, end] = ps.cand.of(i);
     if (!begin) return best;
@@ -323,13 +327,15 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       double w[3];
       const Vec3 cp = sdk::closest_point_on_triangle(x, p0, p1, p2, w);
       const Vec3 r = sdk::sub(x, cp);
-      const double dist = sdk::norm(r);
-      if (dist > best_dist || (dist == best_dist && best.element >= 0)) continue;
+      const double d2 = sdk::dot(r, r);
+      if (d2 > best_d2 || (d2 == best_d2 && best.element >= 0)) continue;
+      const double dist = std::sqrt(d2);
       const Vec3 ne = sdk::load3(ps.en_b.data(), e);
       const double dn = sdk::dot(r, ne);
       const bool inside = w[0] > 0 && w[1] > 0 && w[2] > 0;
       best.element = e;
       best_dist = dist;
+      best_d2 = d2;
       // The normal is the direction from the closest point (inside a
       // triangle that is its normal; over an edge or a vertex it does not
       // depend on which of the triangles sharing it was found first).
@@ -442,7 +448,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   void ply_pass(Pass& ps, double scale, const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
     const sdk::PartView& a = parts_[ps.a];
     const sdk::PartView& b = parts_[ps.b];
-    normals(b, ps.en_b, ps.nn_b);
+    normals(b, ps.en_b);  // element normals of the target only
     const double hsum2 = 0.5 * (a.thickness + b.thickness);
     const double track = hsum2 + gap_tol_ + hsum2;  // keep the side while the node stays this close
     refresh_candidates(ps, a, b, track);

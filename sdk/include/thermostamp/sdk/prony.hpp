@@ -14,16 +14,23 @@ namespace ts::sdk {
 // ramp = (1 - decay) / (dt/tau) (1 for dt = 0). Compute once per
 // temperature and step, reuse for every point that shares them.
 // For x = dt / tau < 1e-2 (explicit steps are far shorter than the
-// relaxation times) both factors come from their Taylor series to x^6: the
-// first omitted term is below 2e-18, under the rounding of a double, and
-// no exponential is evaluated.
+// relaxation times) both factors come from their Taylor series, to x^4
+// below x = 1e-3 and to x^6 above: the first omitted term is below 1e-17,
+// under the rounding of a double, and no exponential is evaluated. The
+// powers are formed first so that the terms do not wait on each other.
 inline void prony_factors(int branches, const double* tau, double dt, double* decay, double* ramp) {
   for (int i = 0; i < branches; ++i) {
     const double x = dt / tau[i];
-    if (x < 1e-2) {
-      // exp(-x) = sum (-x)^k / k!,  (1 - exp(-x)) / x = sum (-x)^k / (k + 1)!
-      decay[i] = 1 - x * (1 - x * (1.0 / 2 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x * (1.0 / 720))))));
-      ramp[i] = 1 - x * (1.0 / 2 - x * (1.0 / 6 - x * (1.0 / 24 - x * (1.0 / 120 - x * (1.0 / 720 - x * (1.0 / 5040))))));
+    // exp(-x) = sum (-x)^k / k!,  (1 - exp(-x)) / x = sum (-x)^k / (k + 1)!
+    if (x < 1e-3) {
+      const double x2 = x * x, x4 = x2 * x2;
+      decay[i] = (1 - x) + x2 * (1.0 / 2 - x * (1.0 / 6)) + x4 * (1.0 / 24);
+      ramp[i] = (1 - x * (1.0 / 2)) + x2 * (1.0 / 6 - x * (1.0 / 24)) + x4 * (1.0 / 120);
+    } else if (x < 1e-2) {
+      const double x2 = x * x, x4 = x2 * x2;
+      decay[i] = (1 - x) + x2 * (1.0 / 2 - x * (1.0 / 6)) + x4 * ((1.0 / 24 - x * (1.0 / 120)) + x2 * (1.0 / 720));
+      ramp[i] = (1 - x * (1.0 / 2)) + x2 * (1.0 / 6 - x * (1.0 / 24)) +
+                x4 * ((1.0 / 120 - x * (1.0 / 720)) + x2 * (1.0 / 5040));
     } else {
       decay[i] = std::exp(-x);
       ramp[i] = -std::expm1(-x) / x;
