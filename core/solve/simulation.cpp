@@ -1398,7 +1398,29 @@ RunResult Simulation::run(const RunOptions& opt) {
                              {"output", timing_[kTimeOutput]}};
     summary["energy"] = {{"kinetic", audit.kinetic}, {"internal", audit.internal}, {"external_work", audit.external},
                          {"contact", audit.contact}, {"contact_stored", audit.contact_stored},
-                         {"damping", audit.damping}, {"balance_error", audit.balance_error}};
+                         {"damping", audit.damping}, {"balance_error", audit.balance_error},
+                         {"kinetic_half_step", audit.kinetic_half}};
+    if (job_.mechanics && !energy_rows.empty()) {
+      // Quasi-static check over the sampled history: kinetic (half-step) /
+      // internal energy at the end, and the time from which it stays
+      // under 5 %.
+      const std::size_t w = energy_cols.size();
+      double ratio = 0, below_from = 0;
+      bool below = false;
+      for (std::size_t r = 0; r + w <= energy_rows.size(); r += w) {
+        const double t_r = energy_rows[r], ie = energy_rows[r + 2], ke = energy_rows[r + w - 1];
+        if (!(ie > 0)) continue;
+        ratio = ke / ie;
+        if (ratio < 0.05) {
+          if (!below) below_from = t_r;
+          below = true;
+        } else {
+          below = false;
+        }
+      }
+      summary["energy"]["kinetic_to_internal"] = {{"at_end", ratio},
+                                                  {"under_5_percent_from_s", below ? json(below_from) : json(nullptr)}};
+    }
     json tools = json::array();
     for (std::size_t q = 0; q < tools_.size(); ++q) {
       const auto& u = tools_[q]->displacement();
