@@ -70,12 +70,13 @@ TEST(Hemisphere, ThermalPrintsReachTheLowerPlyThroughTheUpperOne) {
 // about the diagonal (average of the elements around the node) and the
 // extrema of each ply at the end of the stroke.
 // Required for [1,-1,0]: + and - extrema within 5 % of each other (physics.md
-// section 5; measured 2.8 % and 3.5 %), and s(p) + s(mirror p) within 5 % of
-// the peak shear angle at every pair (measured 1.2 % and 3.1 %). What is
-// left is round-off amplified in the flange, where fibres with two free
-// ends can slide along themselves against friction alone: the same mesh
-// with its nodes numbered in mirror order gives extrema 2.2 % and 4.6 %
-// apart. Fibres along y: extrema more than 30 % apart (measured 76 %).
+// section 5), and s(p) + s(mirror p) within 5 % of the peak shear angle at
+// every pair. Measured: 0.001 % (extrema) and 0.007 % / 0.003 % (pairs).
+// The check is kept tighter, at
+// 0.5 %: the field is symmetric to round-off, and each asymmetry found so
+// far (sticking friction, a snag on the holder rim, the friction vibration
+// at the step's frequency limit) showed as 2-30 %. Fibres along y: extrema
+// more than 30 % apart (measured 75 %).
 TEST(Hemisphere, ShearSymmetricAboutTheDiagonalOnlyForDiagonalFibres) {
   const std::vector<std::array<double, 2>> points = {{0.045, 0.015}, {0.06, 0.03},  {0.075, 0.015},
                                                      {0.09, 0.045},  {0.105, 0.03}, {0.03, 0.015}};
@@ -103,12 +104,12 @@ TEST(Hemisphere, ShearSymmetricAboutTheDiagonalOnlyForDiagonalFibres) {
         const double a = r.sample(k, "shear_angle", 5.0)->values[0], b = r.sample(k + 1, "shear_angle", 5.0)->values[0];
         worst = std::max(worst, std::abs(a + b) / peak);
       }
-      std::printf("%s, ply %d: shear %.2f / %.2f deg (extrema %.1f %% apart), mirrored pairs within %.1f %% of the "
+      std::printf("%s, ply %d: shear %.3f / %.3f deg (extrema %.3f %% apart), mirrored pairs within %.3f %% of the "
                   "peak\n",
                   job, ply, mn, mx, 100 * spread, 100 * worst);
       if (std::string(job) == "hemisphere_ud_2ply.json") {
-        EXPECT_LT(spread, 0.05) << "ply " << ply;
-        EXPECT_LT(worst, 0.05) << "ply " << ply;
+        EXPECT_LT(spread, 0.005) << "ply " << ply;
+        EXPECT_LT(worst, 0.005) << "ply " << ply;
       } else {
         EXPECT_GT(spread, 0.3) << "ply " << ply;
       }
