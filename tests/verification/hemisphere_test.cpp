@@ -72,10 +72,10 @@ TEST(Hemisphere, ThermalPrintsReachTheLowerPlyThroughTheUpperOne) {
 // Required for [1,-1,0]: + and - extrema within 5 % of each other (physics.md
 // section 5), and s(p) + s(mirror p) within 5 % of the peak shear angle at
 // every pair. Measured: 0.001 % (extrema) and 0.007 % / 0.003 % (pairs).
-// The check is kept tighter, at
-// 0.5 %: the field is symmetric to round-off, and each asymmetry found so
-// far (sticking friction, a snag on the holder rim, the friction vibration
-// at the step's frequency limit) showed as 2-30 %. Fibres along y: extrema
+// The check is kept tighter, at 0.5 %: the field is symmetric to
+// round-off, and each asymmetry found so far (sticking friction, a snag on
+// the holder rim, the friction vibration at the step's frequency limit)
+// showed as 2-30 %. Fibres along y: extrema
 // more than 30 % apart (measured 75 %).
 TEST(Hemisphere, ShearSymmetricAboutTheDiagonalOnlyForDiagonalFibres) {
   const std::vector<std::array<double, 2>> points = {{0.045, 0.015}, {0.06, 0.03},  {0.075, 0.015},
