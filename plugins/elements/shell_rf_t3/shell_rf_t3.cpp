@@ -32,6 +32,29 @@ namespace {
 
 using namespace ts::sdk;
 
+// Per-thread buffers for the values of one block of elements (indexed from
+// the block's first element); they grow to the largest block once.
+struct BlockScratch {
+  std::vector<double> temp, ff, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy;
+};
+
+BlockScratch& block_scratch(int n) {
+  thread_local BlockScratch s;
+  const std::size_t m = static_cast<std::size_t>(n);
+  if (s.temp.size() < m) {
+    s.temp.resize(m);
+    s.ff.resize(6 * m);
+    s.law_stress.resize(3 * m);
+    s.energy_tmp.resize(m);
+    s.energy.resize(m);
+    s.hgrad.resize(36 * m);
+    s.hth.resize(3 * m);
+    s.moment.resize(3 * m);
+    s.benergy.resize(m);
+  }
+  return s;
+}
+
 class ShellRfT3 final : public ElementKernel {
  public:
   Status configure(const Params&, const ElementSetup& s) override {
@@ -76,12 +99,7 @@ class ShellRfT3 final : public ElementKernel {
         strain_old_[3 * e] = 1.0;
         strain_old_[3 * e + 1] = 1.0;
       }
-      temp_.assign(ne, 0.0);
       stress_.assign(3 * ne, 0.0);
-      law_stress_.assign(3 * ne, 0.0);
-      energy_.assign(ne, 0.0);
-      energy_tmp_.assign(ne, 0.0);
-      ff_.assign(6 * ne, 0.0);
       states_.clear();
       for (const auto* l : laws_) states_.emplace_back(static_cast<std::size_t>(l->state_size()) * ne, 0.0);
       return Status::success();
@@ -92,6 +110,12 @@ class ShellRfT3 final : public ElementKernel {
     return guarded([&]() -> Status {
       const int b = in.range.begin, n = in.range.end - in.range.begin;
       const double* x = part_->x.data();
+      // Values needed only while this block is evaluated live in a buffer of
+      // the calling thread (indexed from the block's first element), so that
+      // they stay in cache instead of streaming through per-element arrays.
+      BlockScratch& sc = block_scratch(n);
+      double* temp = sc.temp.data();
+      double* ff = sc.ff.data();
       // 1. Strains and temperatures of the block.
       for (int e = b; e < in.range.end; ++e) {
         const int* t = &part_->triangles[3 * e];
@@ -104,41 +128,42 @@ class ShellRfT3 final : public ElementKernel {
           T += in.node_temperature[t[a]] / 3.0;
         }
         for (int d = 0; d < 3; ++d) {
-          ff_[6 * e + d] = f1[d];
-          ff_[6 * e + 3 + d] = f2[d];
+          ff[6 * (e - b) + d] = f1[d];
+          ff[6 * (e - b) + 3 + d] = f2[d];
         }
         strain_[3 * e] = dot(f1, f1);
         strain_[3 * e + 1] = dot(f2, f2);
         strain_[3 * e + 2] = dot(f1, f2);
-        temp_[e] = T;
+        temp[e - b] = T;
         const double det = strain_[3 * e] * strain_[3 * e + 1] - strain_[3 * e + 2] * strain_[3 * e + 2];
         if (!(det > 1e-12) && out.failed_element < 0) out.failed_element = e;
       }
       if (out.failed_element >= 0) return Status::success();
       // 2. The laws, one call per law for the whole block; stresses add.
       std::fill(stress_.begin() + 3 * b, stress_.begin() + 3 * (b + n), 0.0);
-      std::fill(energy_.begin() + b, energy_.begin() + b + n, 0.0);
+      double* energy_e = sc.energy.data();
+      std::fill(energy_e, energy_e + n, 0.0);
       for (std::size_t k = 0; k < laws_.size(); ++k) {
         const int ns = laws_[k]->state_size();
         MaterialBlock blk;
         blk.n = n;
         blk.strain = std::span<const double>(strain_.data() + 3 * b, 3 * n);
         blk.strain_old = std::span<const double>(strain_old_.data() + 3 * b, 3 * n);
-        blk.temperature = std::span<const double>(temp_.data() + b, n);
+        blk.temperature = std::span<const double>(temp, n);
         blk.dt = in.dt;
         blk.state = std::span<double>(states_[k].data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
-        blk.stress = std::span<double>(law_stress_.data() + 3 * b, 3 * n);
-        blk.energy = std::span<double>(energy_tmp_.data() + b, n);
+        blk.stress = std::span<double>(sc.law_stress.data(), 3 * n);
+        blk.energy = std::span<double>(sc.energy_tmp.data(), n);
         if (auto s = laws_[k]->evaluate(blk); !s) return s;
-        for (int q = 0; q < 3 * n; ++q) stress_[3 * b + q] += law_stress_[3 * b + q];
-        for (int q = 0; q < n; ++q) energy_[b + q] += energy_tmp_[b + q];
+        for (int q = 0; q < 3 * n; ++q) stress_[3 * b + q] += sc.law_stress[q];
+        for (int q = 0; q < n; ++q) energy_e[q] += sc.energy_tmp[q];
       }
       // 3. Nodal forces, energy, stable step. The largest tangent stiffness
       // is taken over the block's temperature range (one call per law).
-      double t_lo = temp_[b], t_hi = temp_[b];
-      for (int e = b; e < in.range.end; ++e) {
-        t_lo = std::min(t_lo, temp_[e]);
-        t_hi = std::max(t_hi, temp_[e]);
+      double t_lo = temp[0], t_hi = temp[0];
+      for (int q = 0; q < n; ++q) {
+        t_lo = std::min(t_lo, temp[q]);
+        t_hi = std::max(t_hi, temp[q]);
       }
       double kmax = 0;
       for (const auto* l : laws_) kmax += std::max(l->max_stiffness(t_lo), l->max_stiffness(t_hi));
@@ -146,7 +171,7 @@ class ShellRfT3 final : public ElementKernel {
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
       for (int e = b; e < in.range.end; ++e) {
         const int* t = &part_->triangles[3 * e];
-        const Vec3 f1 = load3(ff_.data(), 2 * e), f2 = load3(ff_.data(), 2 * e + 1);
+        const Vec3 f1 = load3(ff, 2 * (e - b)), f2 = load3(ff, 2 * (e - b) + 1);
         const Vec3 xa[3] = {load3(x, t[0]), load3(x, t[1]), load3(x, t[2])};
         const double S11 = stress_[3 * e], S22 = stress_[3 * e + 1], S12 = stress_[3 * e + 2];
         const double A0 = area0_[e];
@@ -156,7 +181,7 @@ class ShellRfT3 final : public ElementKernel {
           for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * a + d] = c1 * f1[d] + c2 * f2[d];
         }
         for (int q = 9; q < 18; ++q) out.element_force[18 * e + q] = 0.0;
-        energy += A0 * energy_[e];
+        energy += A0 * energy_e[e - b];
         // Stable step: smallest height over the largest wave speed of the tangent.
         const Vec3 e01 = sub(xa[1], xa[0]), e02 = sub(xa[2], xa[0]), e12 = sub(xa[2], xa[1]);
         const Vec3 n2 = cross(e01, e02);
@@ -167,7 +192,7 @@ class ShellRfT3 final : public ElementKernel {
         if (!out.element_dt.empty()) out.element_dt[e] = dte;
       }
       if (bending_) {
-        const double eb = bending_forces(in, b, in.range.end, out, &dt_min);
+        const double eb = bending_forces(in, b, in.range.end, sc, out, &dt_min);
         energy += eb;
       }
       if (in.commit) std::copy(strain_.begin() + 3 * b, strain_.begin() + 3 * (b + n), strain_old_.begin() + 3 * b);
@@ -292,17 +317,13 @@ class ShellRfT3 final : public ElementKernel {
     const int ne = part_->num_elements;
     opp_.assign(3 * ne, -1);
     partner_k_.assign(3 * ne, -1);
-    hth_.assign(3 * ne, 0.0);
     clamped_.assign(3 * ne, 0);
-    hgrad_.assign(36 * ne, 0.0);
     n0_.assign(3 * ne, 0.0);
     d_.assign(3 * ne, 1.0);
     theta0_.assign(3 * ne, 0.0);
     ginv_.assign(9 * ne, 0.0);
     curv_.assign(3 * ne, 0.0);
     curv_old_.assign(3 * ne, 0.0);
-    moment_.assign(3 * ne, 0.0);
-    benergy_.assign(ne, 0.0);
     bstate_.assign(static_cast<std::size_t>(bending_->state_size()) * ne, 0.0);
     const double* x0 = part_->x0.data();
     for (int e = 0; e < ne; ++e) {
@@ -352,7 +373,11 @@ class ShellRfT3 final : public ElementKernel {
 
   // Bending curvatures, moments and forces of elements [b, end); returns the
   // bending energy and lowers *dt_min with the bending stable step.
-  double bending_forces(const ElementForceInput& in, int b, int end, ElementForceOutput& out, double* dt_min) {
+  double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, ElementForceOutput& out,
+                        double* dt_min) {
+    double* hgrad = sc.hgrad.data();  // per element and edge of the block: d theta / dx on up to 4 nodes
+    double* hth = sc.hth.data();      // per element and edge of the block: current hinge angle
+    const double* temp = sc.temp.data();
     const double* x = part_->x.data();
     static_assert(sizeof(Vec3) == 3 * sizeof(double));
     // Hinge angles and their gradients. An interior edge is one hinge seen
@@ -362,26 +387,26 @@ class ShellRfT3 final : public ElementKernel {
       const int* t = &part_->triangles[3 * e];
       for (int k = 0; k < 3; ++k) {
         const int o = opp_[3 * e + k];
-        Vec3* g = reinterpret_cast<Vec3*>(&hgrad_[36 * e + 12 * k]);  // gradients kept for the forces
+        Vec3* g = reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]);  // gradients kept for the forces
         if (o >= 0) {
           const int nb = part_->neighbours[3 * e + k];
           const bool shared = nb >= b && nb < end;
           if (shared && nb < e) continue;  // done from the neighbour
           const double th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, g);
-          hth_[3 * e + k] = th;
+          hth[3 * (e - b) + k] = th;
           if (shared) {
             const int kb = partner_k_[3 * e + k];
-            Vec3* h = reinterpret_cast<Vec3*>(&hgrad_[36 * nb + 12 * kb]);
+            Vec3* h = reinterpret_cast<Vec3*>(&hgrad[36 * (nb - b) + 12 * kb]);
             h[0] = g[1];  // (c, o, p, q) of the neighbour are (o, c, q, p) here
             h[1] = g[0];
             h[2] = g[3];
             h[3] = g[2];
-            hth_[3 * nb + kb] = th;
+            hth[3 * (nb - b) + kb] = th;
           }
         } else if (clamped_[3 * e + k] == 1) {
-          hth_[3 * e + k] = 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g);
+          hth[3 * (e - b) + k] = 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g);
         } else if (clamped_[3 * e + k] >= 2) {
-          hth_[3 * e + k] =
+          hth[3 * (e - b) + k] =
               ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, g);
         }
       }
@@ -392,9 +417,9 @@ class ShellRfT3 final : public ElementKernel {
       for (int k = 0; k < 3; ++k) {
         double th;
         if (opp_[3 * e + k] >= 0) {
-          th = hth_[3 * e + k] - theta0_[3 * e + k];
+          th = hth[3 * (e - b) + k] - theta0_[3 * e + k];
         } else if (clamped_[3 * e + k]) {
-          th = hth_[3 * e + k];
+          th = hth[3 * (e - b) + k];
         } else {
           continue;
         }
@@ -407,32 +432,32 @@ class ShellRfT3 final : public ElementKernel {
     blk.n = n;
     blk.strain = std::span<const double>(curv_.data() + 3 * b, 3 * n);
     blk.strain_old = std::span<const double>(curv_old_.data() + 3 * b, 3 * n);
-    blk.temperature = std::span<const double>(temp_.data() + b, n);
+    blk.temperature = std::span<const double>(temp, n);
     blk.dt = in.dt;
     const int ns = bending_->state_size();
     blk.state = std::span<double>(bstate_.data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
-    blk.stress = std::span<double>(moment_.data() + 3 * b, 3 * n);
-    blk.energy = std::span<double>(benergy_.data() + b, n);
+    blk.stress = std::span<double>(sc.moment.data(), 3 * n);
+    blk.energy = std::span<double>(sc.benergy.data(), n);
     bending_->evaluate(blk);
-    double t_lo = temp_[b], t_hi = temp_[b];
-    for (int e = b; e < end; ++e) {
-      t_lo = std::min(t_lo, temp_[e]);
-      t_hi = std::max(t_hi, temp_[e]);
+    double t_lo = temp[0], t_hi = temp[0];
+    for (int q = 0; q < n; ++q) {
+      t_lo = std::min(t_lo, temp[q]);
+      t_hi = std::max(t_hi, temp[q]);
     }
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
     double energy = 0;
     for (int e = b; e < end; ++e) {
       const double A0 = area0_[e];
-      const double* M = &moment_[3 * e];
+      const double* M = &sc.moment[3 * (e - b)];
       const double* gi = &ginv_[9 * e];
-      energy += A0 * benergy_[e];
+      energy += A0 * sc.benergy[e - b];
       double hmin = std::numeric_limits<double>::infinity();
       for (int k = 0; k < 3; ++k) {
         const int o = opp_[3 * e + k];
         if (o < 0 && clamped_[3 * e + k]) {
           const double factor = clamped_[3 * e + k] == 1 ? 2.0 : 1.0;  // theta = 2 x clamp rotation
           const double m = factor * A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
-          const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad_[36 * e + 12 * k]);
+          const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
           const int slot[3] = {k, (k + 1) % 3, (k + 2) % 3};
           for (int j = 0; j < 3; ++j)
             for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * slot[j] + d] += m * g[j][d];
@@ -442,7 +467,7 @@ class ShellRfT3 final : public ElementKernel {
         hmin = std::min(hmin, d_[3 * e + k]);
         // dW/dtheta_k = A0 M : dK/dtheta_k = A0 (M11 c11 + M22 c22 + 2 M12 c12).
         const double m = A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
-        const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad_[36 * e + 12 * k]);
+        const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
         const int slot[4] = {k, 3 + k, (k + 1) % 3, (k + 2) % 3};  // c, o, p, q in the patch
         for (int j = 0; j < 4; ++j)
           for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * slot[j] + d] += m * g[j][d];
@@ -460,16 +485,13 @@ class ShellRfT3 final : public ElementKernel {
 
   const MaterialLaw* bending_ = nullptr;
   std::vector<int> opp_, partner_k_, edge_condition_;  // partner_k_: the same edge's index in the neighbour
-  std::vector<double> hth_;                            // per element and edge: current hinge angle
   std::vector<char> clamped_;
-  std::vector<double> n0_;     // initial element normals (clamped elements)
-  std::vector<double> hgrad_;  // per element and edge: d theta / dx on up to 4 nodes (36 per element)
-  std::vector<double> d_, theta0_, ginv_, curv_, curv_old_, moment_, benergy_, bstate_;
+  std::vector<double> n0_;  // initial element normals (clamped elements)
+  std::vector<double> d_, theta0_, ginv_, curv_, curv_old_, bstate_;
   const PartView* part_ = nullptr;
   std::vector<const MaterialLaw*> laws_;
   double areal_mass_ = 0;
-  std::vector<double> g1_, g2_, area0_, e1_, e2_, strain_, strain_old_, temp_, stress_, law_stress_, energy_,
-      energy_tmp_, ff_;  // ff_: F e1 and F e2 of each element (6 per element)
+  std::vector<double> g1_, g2_, area0_, e1_, e2_, strain_, strain_old_, stress_;
   std::vector<std::vector<double>> states_;
 };
 
