@@ -445,6 +445,7 @@ class ShellRfT3 final : public ElementKernel {
       t_hi = std::max(t_hi, temp[q]);
     }
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
+    const double dtb_scale = rmax > 0 ? 0.5 * std::sqrt(areal_mass_ / rmax) : 0.0;  // once per block
     double energy = 0;
     for (int e = b; e < end; ++e) {
       const double A0 = area0_[e];
@@ -474,7 +475,7 @@ class ShellRfT3 final : public ElementKernel {
       }
       // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative).
       if (rmax > 0 && std::isfinite(hmin)) {
-        const double dtb = 0.5 * hmin * hmin * std::sqrt(areal_mass_ / rmax);
+        const double dtb = hmin * hmin * dtb_scale;
         *dt_min = std::min(*dt_min, dtb);
         if (!out.element_dt.empty()) out.element_dt[e] = std::min(out.element_dt[e], dtb);
       }
