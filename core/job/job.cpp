@@ -135,6 +135,7 @@ MeshDef parse_mesh(const json& j, const std::string& ptr, const std::filesystem:
         throw JobError(pointer_append(r.at("divisions"), d), "expected an integer >= 1, found " + json_type_name(dv[d]));
       m.divisions[d] = dv[d].get<int>();
     }
+    m.crossed = r.choice("pattern", {"alternating", "crossed"}, std::string("alternating")) == "crossed";
     m.origin = {o[0], o[1], o[2]};
     m.size = {s[0], s[1]};
   }

@@ -24,6 +24,7 @@ struct MeshDef {
   std::array<double, 3> origin{0, 0, 0};
   std::array<double, 2> size{0, 0};
   std::array<int, 2> divisions{1, 1};
+  bool crossed = false;  // rectangle: four triangles per cell around a centre node
   std::filesystem::path file;
 };
 

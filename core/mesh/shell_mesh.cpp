@@ -15,10 +15,11 @@ namespace ts {
 using sdk::Vec3;
 
 ShellMesh rectangle_mesh(const std::array<double, 3>& o, const std::array<double, 2>& s,
-                         const std::array<int, 2>& div) {
+                         const std::array<int, 2>& div, bool crossed) {
   ShellMesh m;
   const int nx = div[0], ny = div[1];
-  m.x.reserve(3 * (nx + 1) * (ny + 1));
+  const int corners = (nx + 1) * (ny + 1);
+  m.x.reserve(3 * (corners + (crossed ? nx * ny : 0)));
   for (int j = 0; j <= ny; ++j)
     for (int i = 0; i <= nx; ++i) {
       m.x.push_back(o[0] + s[0] * i / nx);
@@ -26,6 +27,25 @@ ShellMesh rectangle_mesh(const std::array<double, 3>& o, const std::array<double
       m.x.push_back(o[2]);
     }
   auto id = [nx](int i, int j) { return j * (nx + 1) + i; };
+  if (crossed) {
+    // Four triangles per cell around its centre: edges along x, y and both
+    // diagonals, so that fibres along either diagonal follow element edges.
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        m.x.push_back(o[0] + s[0] * (i + 0.5) / nx);
+        m.x.push_back(o[1] + s[1] * (j + 0.5) / ny);
+        m.x.push_back(o[2]);
+      }
+    m.triangles.reserve(12 * nx * ny);
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const int a = id(i, j), b = id(i + 1, j), c = id(i + 1, j + 1), d = id(i, j + 1);
+        const int e = corners + j * nx + i;
+        m.triangles.insert(m.triangles.end(), {a, b, e, b, c, e, c, d, e, d, a, e});
+      }
+    finalize_mesh(m);
+    return m;
+  }
   m.triangles.reserve(6 * nx * ny);
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {

@@ -18,7 +18,7 @@ struct ShellMesh {
 // Rectangle [ox, ox+sx] x [oy, oy+sy] at height oz, nx x ny cells, two
 // triangles per cell with alternating diagonals (no preferred direction).
 ShellMesh rectangle_mesh(const std::array<double, 3>& origin, const std::array<double, 2>& size,
-                         const std::array<int, 2>& divisions);
+                         const std::array<int, 2>& divisions, bool crossed = false);
 
 // Gmsh ASCII 2.2 or 4.1, triangles only (other elements are ignored).
 // Throws std::runtime_error with the line number on malformed files.

@@ -112,7 +112,7 @@ void Simulation::build_parts() {
     try {
       st->mesh = def.mesh.kind == MeshDef::Kind::File
                      ? read_gmsh(def.mesh.file)
-                     : rectangle_mesh(def.mesh.origin, def.mesh.size, def.mesh.divisions);
+                     : rectangle_mesh(def.mesh.origin, def.mesh.size, def.mesh.divisions, def.mesh.crossed);
     } catch (const std::exception& e) {
       throw JobError(def.pointer + "/mesh", e.what());
     }

@@ -39,6 +39,31 @@ TEST(Rectangle, AreaNeighboursOrientation) {
   EXPECT_EQ(boundary_edges, 2 * (6 + 4));
 }
 
+// The crossed pattern: four triangles per cell around a centre node, edges
+// along x, y and both diagonals.
+TEST(Rectangle, CrossedPattern) {
+  const ShellMesh m = rectangle_mesh({0, 0, 0.001}, {0.3, 0.2}, {6, 4}, true);
+  EXPECT_EQ(m.num_nodes(), 35 + 24);
+  EXPECT_EQ(m.num_elements(), 96);
+  const auto a = node_areas(m);
+  EXPECT_NEAR(std::accumulate(a.begin(), a.end(), 0.0), 0.06, 1e-15);
+  expect_valid(m);
+  int boundary_edges = 0;
+  for (int n : m.neighbours) boundary_edges += n < 0;
+  EXPECT_EQ(boundary_edges, 2 * (6 + 4));
+  // Every triangle has its two inner edges along the diagonals of its cell.
+  for (int e = 0; e < m.num_elements(); ++e) {
+    const int c = m.triangles[3 * e + 2];  // the centre node
+    EXPECT_GE(c, 35);
+    for (int k = 0; k < 2; ++k) {
+      const int v = m.triangles[3 * e + k];
+      const double dx = m.x[3 * v] - m.x[3 * c], dy = m.x[3 * v + 1] - m.x[3 * c + 1];
+      EXPECT_NEAR(std::abs(dx), 0.025, 1e-15);
+      EXPECT_NEAR(std::abs(dy), 0.025, 1e-15);
+    }
+  }
+}
+
 TEST(Gmsh, ReadsVersions22And41Alike) {
   const auto dir = test::temp_dir("gmsh");
   {
