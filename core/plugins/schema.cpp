@@ -120,6 +120,8 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                        {"origin", vec(3)},
                        {"size", vec(2)},
                        {"divisions", {{"type", "array"}, {"items", {{"type", "integer"}, {"minimum", 1}}}, {"minItems", 2}, {"maxItems", 2}}},
+                       {"pattern", {{"enum", {"alternating", "crossed"}},
+                                    {"description", "two triangles per cell (alternating diagonals) or four around a centre node"}}},
                        {"file", {{"type", "string"}, {"description", "Gmsh ASCII 2.2 or 4.1, relative to the job file"}}}}},
                      {"additionalProperties", false}};
   json element_prop = {{"type", "string"}};
