@@ -78,12 +78,14 @@ TEST(Hemisphere, ThermalPrintsReachTheLowerPlyThroughTheUpperOne) {
 // showed as 2-30 %. Fibres along y: extrema
 // more than 30 % apart (measured 75 %).
 TEST(Hemisphere, ShearSymmetricAboutTheDiagonalOnlyForDiagonalFibres) {
-  // Nodes of the default mesh (10 mm cells: corners and cell centres).
+  // Nodes of the [1,-1,0] scene's mesh (10 mm cells: corners and centres).
   const std::vector<std::array<double, 2>> points = {{0.045, 0.015}, {0.06, 0.03},  {0.075, 0.015},
                                                      {0.09, 0.04},   {0.105, 0.035}, {0.03, 0.01}};
   for (const char* job : {"hemisphere_ud_2ply.json", "hemisphere_ud_2ply_fibres_y.json"}) {
     json j = coarse_scene(job);
-    for (auto& p : j["parts"]) p["mesh"]["divisions"] = {15, 15};  // the default mesh (10 mm cells, crossed)
+    // Each job's own mesh (coarse_scene() sets a coarser one).
+    const json own = read_job_document(source_dir() / "share" / "jobs" / job);
+    for (std::size_t q = 0; q < 2; ++q) j["parts"][q]["mesh"]["divisions"] = own["parts"][q]["mesh"]["divisions"];
     j["output"]["probes"] = json::array();
     for (const char* ply : {"ply_bottom", "ply_top"})
       for (const auto& p : points)
