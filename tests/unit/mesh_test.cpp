@@ -27,10 +27,11 @@ void expect_valid(const ShellMesh& m) {
   }
 }
 
-TEST(Rectangle, AreaNeighboursOrientation) {
-  const ShellMesh m = rectangle_mesh({0, 0, 0.001}, {0.3, 0.2}, {6, 4});
-  EXPECT_EQ(m.num_nodes(), 35);
-  EXPECT_EQ(m.num_elements(), 48);
+// A 0.3 x 0.2 rectangle of 6 x 4 cells: counts, total area, orientation,
+// mutual neighbours and the 20 boundary edges.
+void expect_rectangle(const ShellMesh& m, int nodes, int elements) {
+  EXPECT_EQ(m.num_nodes(), nodes);
+  EXPECT_EQ(m.num_elements(), elements);
   const auto a = node_areas(m);
   EXPECT_NEAR(std::accumulate(a.begin(), a.end(), 0.0), 0.06, 1e-15);
   expect_valid(m);
@@ -39,18 +40,15 @@ TEST(Rectangle, AreaNeighboursOrientation) {
   EXPECT_EQ(boundary_edges, 2 * (6 + 4));
 }
 
+TEST(Rectangle, AreaNeighboursOrientation) {
+  expect_rectangle(rectangle_mesh({0, 0, 0.001}, {0.3, 0.2}, {6, 4}), 35, 48);
+}
+
 // The crossed pattern: four triangles per cell around a centre node, edges
 // along x, y and both diagonals.
 TEST(Rectangle, CrossedPattern) {
   const ShellMesh m = rectangle_mesh({0, 0, 0.001}, {0.3, 0.2}, {6, 4}, true);
-  EXPECT_EQ(m.num_nodes(), 35 + 24);
-  EXPECT_EQ(m.num_elements(), 96);
-  const auto a = node_areas(m);
-  EXPECT_NEAR(std::accumulate(a.begin(), a.end(), 0.0), 0.06, 1e-15);
-  expect_valid(m);
-  int boundary_edges = 0;
-  for (int n : m.neighbours) boundary_edges += n < 0;
-  EXPECT_EQ(boundary_edges, 2 * (6 + 4));
+  expect_rectangle(m, 35 + 24, 96);
   // Every triangle has its two inner edges along the diagonals of its cell.
   for (int e = 0; e < m.num_elements(); ++e) {
     const int c = m.triangles[3 * e + 2];  // the centre node
