@@ -6,7 +6,7 @@ hemisphere_ud_2ply_fibres_y.json on 10, 20, 30 and 40 cells per ply edge,
 one thread each, two runs at a time, and prints a Markdown table: cycles,
 wall time, ns per element-cycle, shear extrema per ply, energy balance and
 the lower ply's mean temperature under the punch pole at t = 1..5 s.
-Takes about 10 minutes on two cores.
+Takes about 15 minutes on two cores.
 Usage: scripts/bench/refinement.py [--cells 10,20,30] [--out DIR]
 (THERMOSTAMP_EXE selects another build of the executable.)
 """
@@ -40,7 +40,7 @@ def pole_history(folder):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--cells", default="10,20,30,40")
+    ap.add_argument("--cells", default="10,15,20,30")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
     cells = [int(c) for c in a.cells.split(",")]
