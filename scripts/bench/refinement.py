@@ -4,9 +4,9 @@
 Runs share/jobs/hemisphere_ud_2ply.json (fibres [1,-1,0]) and
 hemisphere_ud_2ply_fibres_y.json, each on its own mesh pattern, on 10, 15,
 20 and 30 cells per ply edge, one thread each, two runs at a time, and
-prints a Markdown table: cycles,
-wall time, ns per element-cycle, shear extrema per ply, energy balance and
-the lower ply's mean temperature under the punch pole at t = 1..5 s.
+prints a Markdown table: cycles, wall time, ns per element-cycle, shear
+extrema per ply, energy balance and the lower ply's mean temperature under
+the punch pole at t = 1..5 s.
 Takes about 15 minutes on two cores.
 Usage: scripts/bench/refinement.py [--cells 10,20,30] [--out DIR]
 (THERMOSTAMP_EXE selects another build of the executable.)
