@@ -288,6 +288,14 @@ TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
   std::string header;
   std::getline(csv, header);
   EXPECT_EQ(header.rfind("time,kinetic,internal,external_work,damping,contact,contact_stored,balance_error,reaction0_x", 0), 0u) << header;
+  EXPECT_EQ(header.substr(header.rfind(',') + 1), "kinetic_half_step") << header;
+  // The quasi-static check: kinetic (half-step) / internal energy at the end
+  // equals the ratio of the summary's own values.
+  const json& ki = s["energy"]["kinetic_to_internal"];
+  ASSERT_TRUE(ki.contains("at_end") && ki.contains("under_5_percent_from_s")) << ki.dump();
+  const double ke = s["energy"]["kinetic_half_step"].get<double>(), ie = s["energy"]["internal"].get<double>();
+  EXPECT_GE(ke, 0.0);
+  EXPECT_NEAR(ki["at_end"].get<double>(), ke / ie, 1e-6 * ke / ie + 1e-12);
   const auto plugins = s["plugins_loaded"].get<std::vector<std::string>>();
   for (const char* p : {"material/ud_hyperelastic", "material/viscoelastic_shear", "element/shell_rf_t3", "thermal/adi"})
     EXPECT_NE(std::find(plugins.begin(), plugins.end(), p), plugins.end()) << p;
