@@ -91,6 +91,9 @@ RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
       if (!g.arc) {
         const double dr = g.b[0] - g.a[0], dz = g.b[1] - g.a[1];
         pieces_[i].inv = 1.0 / (dr * dr + dz * dz);
+        const auto n = piece_normal(g, g.a);
+        pieces_[i].nr = n[0];
+        pieces_[i].nz = n[1];
       } else {
         const double ax = g.a[0] - g.centre[0], az = g.a[1] - g.centre[1];
         pieces_[i].inv = std::sqrt(ax * ax + az * az);
@@ -268,9 +271,18 @@ void RigidTool::query_revolved(const double* p, double& dist, double* nout) cons
       best_end = end;
     }
   }
-  const std::array<double, 2> bn =
-      best_end < 0 ? piece_normal(s.profile[best_k], bc)
-                   : std::array<double, 2>{end_normals_[best_k][2 * best_end], end_normals_[best_k][2 * best_end + 1]};
+  std::array<double, 2> bn;
+  if (best_end >= 0) {
+    bn = {end_normals_[best_k][2 * best_end], end_normals_[best_k][2 * best_end + 1]};
+  } else if (!s.profile[best_k].arc) {
+    bn = {pieces_[best_k].nr, pieces_[best_k].nz};  // constant along a line
+  } else {
+    // On an arc: along the radius, towards the centre when the arc turns
+    // counter-clockwise (the left side is the centre's side).
+    const ProfileSegment& g = s.profile[best_k];
+    const double f = -pieces_[best_k].orient / pieces_[best_k].inv;  // -+1 / R
+    bn = {f * (bc[0] - g.centre[0]), f * (bc[1] - g.centre[1])};
+  }
   const double dr = r - bc[0], dz = z - bc[1];
   const double len = std::sqrt(best);
   const double side = dr * bn[0] + dz * bn[1] >= 0 ? 1.0 : -1.0;
