@@ -23,16 +23,30 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double cross2(double ax, double ay, double bx, double by) { return ax * by - ay * bx; }
 
+// Outward normal on an arc at a point c at distance `radius` from its
+// centre: along the radius, towards the centre when the arc turns
+// counter-clockwise (orient +1; walking counter-clockwise the left side is
+// the centre's side), away from it otherwise.
+std::array<double, 2> arc_normal(const ProfileSegment& s, const std::array<double, 2>& c, double orient,
+                                 double radius) {
+  const double f = -orient / radius;
+  return {f * (c[0] - s.centre[0]), f * (c[1] - s.centre[1])};
+}
+
+// Turning sense of an arc: +1 counter-clockwise, -1 clockwise.
+double arc_orient(const ProfileSegment& s) {
+  return cross2(s.a[0] - s.centre[0], s.a[1] - s.centre[1], s.b[0] - s.centre[0], s.b[1] - s.centre[1]) > 0 ? 1.0
+                                                                                                             : -1.0;
+}
+
 // Outward normal (left of the direction of travel) of a profile piece at a point c on it.
 std::array<double, 2> piece_normal(const ProfileSegment& s, const std::array<double, 2>& c) {
   if (!s.arc) {
     const double dr = s.b[0] - s.a[0], dz = s.b[1] - s.a[1], l = std::sqrt(dr * dr + dz * dz);
     return {-dz / l, dr / l};
   }
-  const double ccw = cross2(s.a[0] - s.centre[0], s.a[1] - s.centre[1], s.b[0] - s.centre[0], s.b[1] - s.centre[1]);
-  const double rx = c[0] - s.centre[0], rz = c[1] - s.centre[1], l = std::sqrt(rx * rx + rz * rz);
-  // Walking counter-clockwise the left side is the centre's side.
-  return ccw > 0 ? std::array<double, 2>{-rx / l, -rz / l} : std::array<double, 2>{rx / l, rz / l};
+  const double rx = c[0] - s.centre[0], rz = c[1] - s.centre[1];
+  return arc_normal(s, c, arc_orient(s), std::sqrt(rx * rx + rz * rz));
 }
 
 // Triangle soup from an STL file (ASCII or binary).
@@ -90,14 +104,12 @@ RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
       const ProfileSegment& g = s.profile[i];
       if (!g.arc) {
         const double dr = g.b[0] - g.a[0], dz = g.b[1] - g.a[1];
-        pieces_[i].inv = 1.0 / (dr * dr + dz * dz);
-        const auto n = piece_normal(g, g.a);
-        pieces_[i].nr = n[0];
-        pieces_[i].nz = n[1];
+        pieces_[i].inv_len2 = 1.0 / (dr * dr + dz * dz);
+        pieces_[i].normal = piece_normal(g, g.a);
       } else {
         const double ax = g.a[0] - g.centre[0], az = g.a[1] - g.centre[1];
-        pieces_[i].inv = std::sqrt(ax * ax + az * az);
-        pieces_[i].orient = cross2(ax, az, g.b[0] - g.centre[0], g.b[1] - g.centre[1]) > 0 ? 1.0 : -1.0;
+        pieces_[i].radius = std::sqrt(ax * ax + az * az);
+        pieces_[i].orient = arc_orient(g);
       }
     }
     end_normals_.resize(s.profile.size());
@@ -238,7 +250,7 @@ void RigidTool::query_revolved(const double* p, double& dist, double* nout) cons
     int end = -1;  // 0: at a, 1: at b, -1: inside
     if (!g.arc) {
       const double dr = g.b[0] - g.a[0], dz = g.b[1] - g.a[1];
-      double t = ((r - g.a[0]) * dr + (z - g.a[1]) * dz) * pc.inv;
+      double t = ((r - g.a[0]) * dr + (z - g.a[1]) * dz) * pc.inv_len2;
       if (t <= 0) {
         t = 0;
         end = 0;
@@ -254,7 +266,7 @@ void RigidTool::query_revolved(const double* p, double& dist, double* nout) cons
       const double ql2 = qx * qx + qz * qz;
       const bool inside = ql2 > 0 && pc.orient * cross2(ax, az, qx, qz) >= 0 && pc.orient * cross2(qx, qz, bx, bz) >= 0;
       if (inside) {
-        const double f = pc.inv / std::sqrt(ql2);  // R / |q|
+        const double f = pc.radius / std::sqrt(ql2);
         c = {g.centre[0] + f * qx, g.centre[1] + f * qz};
       } else {
         const double da2 = (r - g.a[0]) * (r - g.a[0]) + (z - g.a[1]) * (z - g.a[1]);
@@ -271,18 +283,11 @@ void RigidTool::query_revolved(const double* p, double& dist, double* nout) cons
       best_end = end;
     }
   }
-  std::array<double, 2> bn;
-  if (best_end >= 0) {
-    bn = {end_normals_[best_k][2 * best_end], end_normals_[best_k][2 * best_end + 1]};
-  } else if (!s.profile[best_k].arc) {
-    bn = {pieces_[best_k].nr, pieces_[best_k].nz};  // constant along a line
-  } else {
-    // On an arc: along the radius, towards the centre when the arc turns
-    // counter-clockwise (the left side is the centre's side).
-    const ProfileSegment& g = s.profile[best_k];
-    const double f = -pieces_[best_k].orient / pieces_[best_k].inv;  // -+1 / R
-    bn = {f * (bc[0] - g.centre[0]), f * (bc[1] - g.centre[1])};
-  }
+  const PieceConstants& pb = pieces_[best_k];
+  const std::array<double, 2> bn =
+      best_end >= 0             ? std::array<double, 2>{end_normals_[best_k][2 * best_end], end_normals_[best_k][2 * best_end + 1]}
+      : s.profile[best_k].arc ? arc_normal(s.profile[best_k], bc, pb.orient, pb.radius)
+                              : pb.normal;
   const double dr = r - bc[0], dz = z - bc[1];
   const double len = std::sqrt(best);
   const double side = dr * bn[0] + dz * bn[1] >= 0 ? 1.0 : -1.0;

@@ -48,10 +48,11 @@ class RigidTool {
   std::array<double, 3> u_{0, 0, 0}, v_{0, 0, 0};
   // revolved: unit axis, a unit vector normal to it, per-segment normals at the ends
   std::array<double, 3> axis_{0, 0, 1}, perp_{1, 0, 0};
-  // Per profile piece: 1 / length^2 (line) or the radius (arc), the arc's
-  // turning sense, and the line's outward normal (nr, nz).
+  // Per profile piece: a line's 1 / length^2 and outward normal, an arc's
+  // radius and turning sense (+1 counter-clockwise).
   struct PieceConstants {
-    double inv = 0, orient = 1, nr = 0, nz = 0;
+    double inv_len2 = 0, radius = 0, orient = 1;
+    std::array<double, 2> normal{0, 0};
   };
   std::vector<PieceConstants> pieces_;
   std::vector<std::array<double, 4>> end_normals_;  // (nr, nz) at a, (nr, nz) at b: averaged at shared ends

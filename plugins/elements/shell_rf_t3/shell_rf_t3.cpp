@@ -192,7 +192,7 @@ class ShellRfT3 final : public ElementKernel {
         if (!out.element_dt.empty()) out.element_dt[e] = dte;
       }
       if (bending_) {
-        const double eb = bending_forces(in, b, in.range.end, sc, out, &dt_min);
+        const double eb = bending_forces(in, b, in.range.end, sc, t_lo, t_hi, out, &dt_min);
         energy += eb;
       }
       if (in.commit) std::copy(strain_.begin() + 3 * b, strain_.begin() + 3 * (b + n), strain_old_.begin() + 3 * b);
@@ -372,9 +372,10 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   // Bending curvatures, moments and forces of elements [b, end); returns the
-  // bending energy and lowers *dt_min with the bending stable step.
-  double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, ElementForceOutput& out,
-                        double* dt_min) {
+  // bending energy and lowers *dt_min with the bending stable step; [t_lo,
+  // t_hi] is the block's temperature range.
+  double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
+                        ElementForceOutput& out, double* dt_min) {
     double* hgrad = sc.hgrad.data();  // per element and edge of the block: d theta / dx on up to 4 nodes
     double* hth = sc.hth.data();      // per element and edge of the block: current hinge angle
     const double* temp = sc.temp.data();
@@ -439,11 +440,6 @@ class ShellRfT3 final : public ElementKernel {
     blk.stress = std::span<double>(sc.moment.data(), 3 * n);
     blk.energy = std::span<double>(sc.benergy.data(), n);
     bending_->evaluate(blk);
-    double t_lo = temp[0], t_hi = temp[0];
-    for (int q = 0; q < n; ++q) {
-      t_lo = std::min(t_lo, temp[q]);
-      t_hi = std::max(t_hi, temp[q]);
-    }
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
     const double dtb_scale = rmax > 0 ? 0.5 * std::sqrt(areal_mass_ / rmax) : 0.0;  // once per block
     double energy = 0;

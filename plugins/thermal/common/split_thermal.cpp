@@ -271,8 +271,10 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
   LinkedSolver& s = *linked_solver_;
   if (rebuild) {
     s.begin(linked_count_);
-    // A S^-1 per linked node (2x2 when both faces are linked, else 1x1),
-    // kept in four slots per unknown of its first face for the right-hand side.
+    // A S^-1 per linked node as a 2x2 block (bottom, top) in four slots at
+    // the unknown of its first linked face; the rows and columns of a face
+    // that is not linked stay zero. With one value per node both faces are
+    // the same unknown (1x1).
     linked_sinv_.assign(4 * static_cast<std::size_t>(linked_count_), 0.0);
     for (std::size_t p = 0; p < plies_.size(); ++p) {
       const RodFactors& rf = factors_[p];
@@ -283,10 +285,8 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
         const double A = plies_[p].area[i];
         const std::size_t o = static_cast<std::size_t>(nz) * rf.id[i];
         double* si = &linked_sinv_[4 * static_cast<std::size_t>(ob >= 0 ? ob : ot)];
-        if (nz == 1) {
-          si[0] = A / rf.v_bottom[o];
-          s.add(ob, ob, si[0]);
-        } else if (ob >= 0 && ot >= 0) {
+        const bool two = ob >= 0 && ot >= 0 && ot != ob;
+        if (two) {
           const double s00 = rf.v_bottom[o], s01 = rf.v_top[o], s10 = rf.v_bottom[o + nz - 1],
                        s11 = rf.v_top[o + nz - 1];
           const double det = s00 * s11 - s01 * s10;
@@ -294,17 +294,15 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
           si[1] = -A * s01 / det;
           si[2] = -A * s10 / det;
           si[3] = A * s00 / det;
-          s.add(ob, ob, si[0]);
           s.add(ob, ot, si[1]);
           s.add(ot, ob, si[2]);
-          s.add(ot, ot, si[3]);
         } else if (ob >= 0) {
           si[0] = A / rf.v_bottom[o];
-          s.add(ob, ob, si[0]);
         } else {
-          si[0] = A / rf.v_top[o + nz - 1];
-          s.add(ot, ot, si[0]);
+          si[3] = A / rf.v_top[o + nz - 1];
         }
+        if (ob >= 0) s.add(ob, ob, si[0]);
+        if (ot >= 0 && ot != ob) s.add(ot, ot, si[3]);
       }
     }
     for (const auto& l : in.links) {
@@ -332,16 +330,8 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
       if (ob < 0 && ot < 0) continue;
       const double* ti = t + static_cast<std::size_t>(nz) * i;
       const double* si = &linked_sinv_[4 * static_cast<std::size_t>(ob >= 0 ? ob : ot)];  // A S^-1
-      if (nz == 1) {
-        y[ob] = si[0] * ti[0];
-      } else if (ob >= 0 && ot >= 0) {
-        y[ob] = si[0] * ti[0] + si[1] * ti[nz - 1];
-        y[ot] = si[2] * ti[0] + si[3] * ti[nz - 1];
-      } else if (ob >= 0) {
-        y[ob] = si[0] * ti[0];
-      } else {
-        y[ot] = si[0] * ti[nz - 1];
-      }
+      if (ob >= 0) y[ob] = si[0] * ti[0] + si[1] * ti[nz - 1];
+      if (ot >= 0 && ot != ob) y[ot] = si[2] * ti[0] + si[3] * ti[nz - 1];
     }
   }
   s.solve(y);
@@ -380,18 +370,10 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
       double* ti = t + static_cast<std::size_t>(nz) * i;
       const double* vbi = vb + static_cast<std::size_t>(nz) * id[i];
       const double* vti = vt + static_cast<std::size_t>(nz) * id[i];
-      if (nz == 1) {
-        ti[0] -= flux[ob] / area[i] * vbi[0];
-      } else if (ob >= 0 && ot >= 0) {
-        const double fb = flux[ob] / area[i], ft = flux[ot] / area[i];
-        for (int k = 0; k < nz; ++k) ti[k] -= fb * vbi[k] + ft * vti[k];
-      } else if (ob >= 0) {
-        const double fb = flux[ob] / area[i];
-        for (int k = 0; k < nz; ++k) ti[k] -= fb * vbi[k];
-      } else {
-        const double ft = flux[ot] / area[i];
-        for (int k = 0; k < nz; ++k) ti[k] -= ft * vti[k];
-      }
+      // Flux through each linked face (one unknown for both with one value).
+      const double fb = ob >= 0 ? flux[ob] / area[i] : 0.0;
+      const double ft = ot >= 0 && ot != ob ? flux[ot] / area[i] : 0.0;
+      for (int k = 0; k < nz; ++k) ti[k] -= fb * vbi[k] + ft * vti[k];
       heat[i] = dt * area[i] * (hb[i] * (tb[i] - ti[0]) + ht[i] * (tt[i] - ti[nz - 1]));
     }
   }
