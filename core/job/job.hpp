@@ -169,7 +169,7 @@ Job load_job(const std::filesystem::path& file, const std::vector<std::string>& 
 
 inline const std::vector<std::string>& known_fields() {
   static const std::vector<std::string> f = {"temperature", "temperature_mean", "temperature_top",
-                                             "temperature_bottom", "displacement", "shear_angle",
+                                             "temperature_bottom", "displacement", "velocity", "shear_angle",
                                              "fibre_direction", "contact_status", "membrane_stress",
                                              "curvature"};
   return f;

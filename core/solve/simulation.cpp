@@ -1016,6 +1016,9 @@ RunResult Simulation::run(const RunOptions& opt) {
           fields[p].push_back({"temperature_bottom", st.bottom.data()});
         } else if (f == "displacement") {
           fields[p].push_back({"displacement", st.displacement.data(), 3});
+        } else if (f == "velocity" && p < mech_.size()) {
+          // Half-step velocity v^{n-1/2} of the step that ended at the frame.
+          fields[p].push_back({"velocity", mech_[p]->v.data(), 3});
         } else if (f == "shear_angle") {
           fields[p].push_back({"shear_angle", st.shear_angle.data(), 1, true});
         } else if (f == "fibre_direction") {

@@ -2,6 +2,9 @@
 // JSON pointers, output files, plugin discovery and ABI checks.
 #include <gtest/gtest.h>
 
+#include <hdf5.h>
+
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -272,6 +275,7 @@ TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
   json j = read_job_document(source_dir() / "share" / "jobs" / "ud_strip_tension.json");
   j["time"]["end"] = 0.02;
   j["output"]["interval"] = 0.01;
+  j["output"]["fields"] = {"displacement", "velocity", "shear_angle"};
   std::ofstream(dir / "job.json") << j.dump(2);
   const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out") + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -299,6 +303,39 @@ TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
   const auto plugins = s["plugins_loaded"].get<std::vector<std::string>>();
   for (const char* p : {"material/ud_hyperelastic", "material/viscoelastic_shear", "element/shell_rf_t3", "thermal/adi"})
     EXPECT_NE(std::find(plugins.begin(), plugins.end(), p), plugins.end()) << p;
+  // The velocity field of the last frame: the pulled end (initially at
+  // x = 0.1 m) moves at the prescribed 0.05 m/s, the held end (x = 0) not
+  // at all.
+  const hid_t file = H5Fopen((dir / "out" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  auto read = [&](const std::string& name) {
+    const hid_t set = H5Dopen2(file, ("frames/000002/strip/" + name).c_str(), H5P_DEFAULT);
+    const hid_t space = H5Dget_space(set);
+    hsize_t dims[2] = {0, 0};
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    std::vector<double> v(dims[0] * dims[1]);
+    if (dims[1] == 3) H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+    H5Sclose(space);
+    H5Dclose(set);
+    return v;
+  };
+  const auto v = read("velocity"), x = read("nodes"), u = read("displacement");
+  H5Fclose(file);
+  ASSERT_EQ(v.size(), x.size());
+  ASSERT_EQ(u.size(), x.size());
+  int pulled = 0, held = 0;
+  for (std::size_t i = 0; i < x.size(); i += 3) {
+    const double x0 = x[i] - u[i];
+    if (x0 > 0.099999) {
+      EXPECT_DOUBLE_EQ(v[i], 0.05);
+      ++pulled;
+    } else if (x0 < 1e-9) {
+      EXPECT_EQ(v[i], 0.0);
+      ++held;
+    }
+  }
+  EXPECT_GT(pulled, 0);
+  EXPECT_GT(held, 0);
 }
 
 TEST(Cli, MechanicsBadMaterialParameter) {
