@@ -185,6 +185,7 @@ void Simulation::build_tools() {
     v.context = tools_[t].get();
     v.query = &RigidTool::query_fn;
     v.velocity = tools_[t]->velocity().data();
+    v.displacement = tools_[t]->displacement().data();
     tool_views_.push_back(v);
   }
 }

@@ -84,6 +84,34 @@ TEST(Contact, PlyPressedBetweenTwoPlanes) {
               F, -die_fz, holder_fz, delta, 100 * delta / kH, expected, r.result.mechanical_steps);
 }
 
+// A plane punch driven down at constant speed v from 3 mm above a ply that
+// lies on a die. Nodes farther from a tool than the contact cutoff are not
+// queried again until the tool's travel and their own motion could have
+// brought them within reach: the punch must still be found on the step it
+// arrives. After it touches at t_hit = gap / v the ply is squeezed between
+// two equal penalty springs, each face taking half of v (t - t_hit):
+// F = penalty A v (t - t_hit) / 2 on both tools. Required: within 1 % (the
+// ply's vibration on the springs is 0.4 % of the squeeze).
+TEST(Contact, ApproachingToolIsFoundOnTime) {
+  const double v = 0.05, gap = 0.003, squeeze_time = 5e-4, penalty = 1.0e11, area = kSide * kSide;
+  const double t_hit = gap / v, t_end = t_hit + squeeze_time;
+  json j = base_job(t_end);
+  j["parts"] = {ply("ply", 0.0)};
+  j["tools"] = {plane("die", -0.5 * kH, 1), plane("punch", 0.5 * kH + gap, -1)};
+  j["tools"][1]["motion"] = {{"velocity", {0, 0, -v}}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"penalty", penalty}},
+                       {{"type", "contact"}, {"between", {"punch", "ply"}}, {"penalty", penalty}}};
+  j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const double expected = penalty * area * v * squeeze_time / 2;
+  const double punch_fz = tool_value(r.result, 1, 2, true), die_fz = tool_value(r.result, 0, 2, true);
+  EXPECT_NEAR(punch_fz / expected, 1.0, 0.01);
+  EXPECT_NEAR(-die_fz / expected, 1.0, 0.01);
+  std::printf("approaching punch: F %.5g N (punch) / %.5g N (die) for %.5g N, %lld steps\n", punch_fz, -die_fz,
+              expected, r.result.mechanical_steps);
+}
+
 // A ply on a plane under gravity tilted by alpha (the plane stays z = 0):
 // with tan(alpha) > mu it slides with a = g (sin(alpha) - mu cos(alpha))
 // and the friction force is mu N; with tan(alpha) < mu it sticks.

@@ -290,10 +290,63 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   }
 
  private:
+  // Distances and normals of a's nodes to the tool, for the nodes that can
+  // be within `cutoff` (ply thickness + gap tolerance: every force and heat
+  // decision looks closer than that). A node last found at distance d > 0
+  // from the tool, at position x_q and with the tool since moved along a
+  // path of length s - s_q, is now at least d - |x - x_q| - (s - s_q) away:
+  // while that exceeds the cutoff it is not asked again and keeps its old
+  // distance (beyond the cutoff, so every decision is the one an exact
+  // answer gives; its normal is not used). Nodes inside or behind the tool
+  // are asked every time, and so are nodes beyond twice the cutoff of a
+  // tool that answers them with +infinity (a mesh tool): their distance
+  // bounds nothing.
   void query_tool(const sdk::PartView& a, const sdk::ToolView& tool) {
-    dist_.resize(a.num_nodes);
-    tn_.resize(3 * static_cast<std::size_t>(a.num_nodes));
-    tool.query(tool.context, a.num_nodes, a.x.data(), a.thickness + gap_tol_, dist_.data(), tn_.data());
+    const std::size_t n = static_cast<std::size_t>(a.num_nodes);
+    const double cutoff = a.thickness + gap_tol_;
+    const Vec3 u = tool.displacement ? Vec3{tool.displacement[0], tool.displacement[1], tool.displacement[2]}
+                                     : Vec3{0, 0, 0};
+    if (dist_.size() != n) {
+      dist_.assign(n, 0.0);
+      tn_.assign(3 * n, 0.0);
+      xq_.assign(3 * n, 0.0);
+      sq_.assign(n, 0.0);
+      first_.assign(n, 1);
+      tool_path_ = 0;
+      tool_u_ = u;
+    }
+    // Path length of the tool (an upper bound of its displacement between
+    // any two queries); a relative margin covers the round-off of the sums.
+    tool_path_ += sdk::norm(sdk::sub(u, tool_u_));
+    tool_u_ = u;
+    ask_.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      const double slack = dist_[i] - cutoff - (tool_path_ - sq_[i]) * (1 + 1e-9) - 1e-9 * cutoff;
+      if (!first_[i] && slack > 0 && std::isfinite(dist_[i])) {
+        const double* x = &a.x[3 * i];
+        const double* q = &xq_[3 * i];
+        const double dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
+        if (dx * dx + dy * dy + dz * dz < slack * slack) continue;
+      }
+      ask_.push_back(static_cast<int>(i));
+    }
+    const std::size_t m = ask_.size();
+    pts_.resize(3 * m);
+    qd_.resize(m);
+    qn_.resize(3 * m);
+    for (std::size_t j = 0; j < m; ++j)
+      for (int d = 0; d < 3; ++d) pts_[3 * j + d] = a.x[3 * static_cast<std::size_t>(ask_[j]) + d];
+    if (m > 0) tool.query(tool.context, m, pts_.data(), 2 * cutoff, qd_.data(), qn_.data());
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t i = static_cast<std::size_t>(ask_[j]);
+      dist_[i] = qd_[j];
+      first_[i] = 0;
+      sq_[i] = tool_path_;
+      for (int d = 0; d < 3; ++d) {
+        tn_[3 * i + d] = qn_[3 * j + d];
+        xq_[3 * i + d] = pts_[3 * j + d];
+      }
+    }
   }
 
   void refresh_candidates(Pass& ps, const sdk::PartView& a, const sdk::PartView& b, double reach) {
@@ -530,6 +583,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   std::span<const sdk::ToolView> tools_;
   Pass pass_[2];  // tool pairs use pass_[0].ft only
   std::vector<double> en_a_, nn_a_, dist_, tn_, scratch_, energy_, target_;
+  // Tool queries: where each node was last asked (xq_, and the tool's path
+  // length then, sq_), the nodes asked this time and their answers.
+  std::vector<double> xq_, sq_, pts_, qd_, qn_;
+  std::vector<int> ask_;
+  std::vector<char> first_;
+  double tool_path_ = 0;
+  Vec3 tool_u_ = {0, 0, 0};
 };
 
 sdk::ContactHandler* create() { return new PenaltyNodeSurface(); }
@@ -538,7 +598,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.3.1";
+  d.version = "0.3.2";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces";
   d.params = {

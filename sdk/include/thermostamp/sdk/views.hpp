@@ -41,7 +41,10 @@ struct PartView {
 // normal at the closest surface point, in the tool's current position. One
 // call per batch, not per node. Points farther than `cutoff` from the
 // surface may be answered with distance +infinity (mesh tools do so).
-// `velocity` is the tool's current rigid velocity (m/s, 3 values).
+// `velocity` is the tool's current rigid velocity (m/s, 3 values);
+// `displacement` its rigid translation from the initial position (m, 3
+// values): a handler can bound how far the surface has moved since it last
+// asked, and skip points that cannot have come within reach.
 struct ToolView {
   int index = 0;
   std::string_view name;
@@ -49,7 +52,8 @@ struct ToolView {
   const void* context = nullptr;
   void (*query)(const void* context, std::size_t n, const double* points, double cutoff, double* distance,
                 double* normal) = nullptr;
-  const double* velocity = nullptr;  // 3 values, kernel-owned, updated every step
+  const double* velocity = nullptr;      // 3 values, kernel-owned, updated every step
+  const double* displacement = nullptr;  // 3 values, kernel-owned, updated every step
 };
 
 }  // namespace ts::sdk
