@@ -300,7 +300,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // answer gives; its normal is not used). Nodes inside or behind the tool
   // are asked every time, and so are nodes beyond twice the cutoff of a
   // tool that answers them with +infinity (a mesh tool): their distance
-  // bounds nothing.
+  // bounds nothing. Without the tool's displacement (a host that does not
+  // give it) every node is asked.
   void query_tool(const sdk::PartView& a, const sdk::ToolView& tool) {
     const std::size_t n = static_cast<std::size_t>(a.num_nodes);
     const double cutoff = a.thickness + gap_tol_;
@@ -322,7 +323,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     ask_.clear();
     for (std::size_t i = 0; i < n; ++i) {
       const double slack = dist_[i] - cutoff - (tool_path_ - sq_[i]) * (1 + 1e-9) - 1e-9 * cutoff;
-      if (!first_[i] && slack > 0 && std::isfinite(dist_[i])) {
+      if (tool.displacement && !first_[i] && slack > 0 && std::isfinite(dist_[i])) {
         const double* x = &a.x[3 * i];
         const double* q = &xq_[3 * i];
         const double dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
