@@ -180,7 +180,8 @@ class ShellRfT3 final : public ElementKernel {
           const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
           for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * a + d] = c1 * f1[d] + c2 * f2[d];
         }
-        for (int q = 9; q < 18; ++q) out.element_force[18 * e + q] = 0.0;
+        if (!bending_)  // with bending, bending_forces writes these slots
+          for (int q = 9; q < 18; ++q) out.element_force[18 * e + q] = 0.0;
         energy += A0 * energy_e[e - b];
         // Stable step: smallest height over the largest wave speed of the tangent.
         const Vec3 e01 = sub(xa[1], xa[0]), e02 = sub(xa[2], xa[0]), e12 = sub(xa[2], xa[1]);
@@ -449,26 +450,44 @@ class ShellRfT3 final : public ElementKernel {
       const double* gi = &ginv_[9 * e];
       energy += A0 * sc.benergy[e - b];
       double hmin = std::numeric_limits<double>::infinity();
-      for (int k = 0; k < 3; ++k) {
+      // Forces on the patch: the element's own nodes (slots 0-2, after the
+      // membrane forces) summed in registers, the opposite node of hinge k
+      // (slot 3 + k) written once. The hinges are unrolled so that every
+      // slot index is a constant.
+      double* fe = &out.element_force[18 * static_cast<std::size_t>(e)];
+      double own[9];
+      for (int q = 0; q < 9; ++q) own[q] = fe[q];
+      auto hinge = [&]<int k>() {
+        constexpr int p = (k + 1) % 3, q = (k + 2) % 3;
         const int o = opp_[3 * e + k];
-        if (o < 0 && clamped_[3 * e + k]) {
-          const double factor = clamped_[3 * e + k] == 1 ? 2.0 : 1.0;  // theta = 2 x clamp rotation
-          const double m = factor * A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
-          const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
-          const int slot[3] = {k, (k + 1) % 3, (k + 2) % 3};
-          for (int j = 0; j < 3; ++j)
-            for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * slot[j] + d] += m * g[j][d];
-          continue;
-        }
-        if (o < 0) continue;
-        hmin = std::min(hmin, d_[3 * e + k]);
-        // dW/dtheta_k = A0 M : dK/dtheta_k = A0 (M11 c11 + M22 c22 + 2 M12 c12).
-        const double m = A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
+        const char cl = clamped_[3 * e + k];
         const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
-        const int slot[4] = {k, 3 + k, (k + 1) % 3, (k + 2) % 3};  // c, o, p, q in the patch
-        for (int j = 0; j < 4; ++j)
-          for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * slot[j] + d] += m * g[j][d];
-      }
+        // dW/dtheta_k = A0 M : dK/dtheta_k = A0 (M11 c11 + M22 c22 + 2 M12 c12).
+        const double mk = A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
+        if (o >= 0) {
+          hmin = std::min(hmin, d_[3 * e + k]);
+          for (int d = 0; d < 3; ++d) {
+            own[3 * k + d] += mk * g[0][d];
+            fe[9 + 3 * k + d] = mk * g[1][d];
+            own[3 * p + d] += mk * g[2][d];
+            own[3 * q + d] += mk * g[3][d];
+          }
+        } else {
+          for (int d = 0; d < 3; ++d) fe[9 + 3 * k + d] = 0.0;
+          if (cl) {  // ghost neighbour: gradient on (c, p, q)
+            const double m = (cl == 1 ? 2.0 : 1.0) * mk;  // clamp: theta = 2 x the rotation
+            for (int d = 0; d < 3; ++d) {
+              own[3 * k + d] += m * g[0][d];
+              own[3 * p + d] += m * g[1][d];
+              own[3 * q + d] += m * g[2][d];
+            }
+          }
+        }
+      };
+      hinge.template operator()<0>();
+      hinge.template operator()<1>();
+      hinge.template operator()<2>();
+      for (int q = 0; q < 9; ++q) fe[q] = own[q];
       // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative).
       if (rmax > 0 && std::isfinite(hmin)) {
         const double dtb = hmin * hmin * dtb_scale;
