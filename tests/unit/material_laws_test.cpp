@@ -194,6 +194,23 @@ TEST(MaterialLaws, PronyFactorsAreExactToRounding) {
   EXPECT_LT(worst_ramp, 4.5e-16);
 }
 
+// The logarithm of the invariants near 1 (series of ln(1 + x) below
+// |x| = 1e-2) against the library's log, x from 1e-14 to 0.5 on both sides
+// of 1 across the switch: within 2 units in the last place of ln y (the
+// library's own error included).
+TEST(MaterialLaws, LogNearOneIsExactToRounding) {
+  double worst = 0;
+  for (double x = 1e-14; x < 0.5; x *= 1.001)
+    for (const double y : {1.0 + x, 1.0 - x}) {
+      const double ref = std::log(y);
+      worst = std::max(worst, std::abs(sdk::log_near_one(y) - ref) / std::abs(ref));
+    }
+  EXPECT_LT(worst, 4.5e-16);
+  EXPECT_EQ(sdk::log_near_one(1.0), 0.0);
+  EXPECT_TRUE(std::isnan(sdk::log_near_one(std::nan(""))));
+  std::printf("log_near_one: largest relative difference from std::log %.3g\n", worst);
+}
+
 TEST(MaterialLaws, BadParametersAreRefused) {
   EXPECT_THROW(Law("ud_hyperelastic", {{"k_fibre", -1.0}, {"p_ct", 50.0}}), JobError);
   Law sum("viscoelastic_shear", {{"k_sh", {1, 0, 0}}, {"g", {0.7, 0.5}}, {"tau", {0.2, 2.0}}});

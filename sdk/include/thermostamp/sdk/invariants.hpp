@@ -21,6 +21,17 @@ inline constexpr double kStressFactor = 2.0;  // S = 2 dw/dC
 
 using Sym2 = std::array<double, 3>;  // Voigt [11, 22, 12]
 
+// ln y. Near y = 1 (the small elongations of nearly inextensible fibres)
+// by the series of ln(1 + x), x = y - 1 (exact for y in [0.5, 2]), to x^8:
+// for |x| < 1e-2 the first omitted term is below 2e-17 of the value,
+// under the rounding of a double, and no library call is made.
+inline double log_near_one(double y) {
+  const double x = y - 1.0;
+  if (std::abs(x) < 1e-2)
+    return x * (1 - x * (1.0 / 2 - x * (1.0 / 3 - x * (1.0 / 4 - x * (1.0 / 5 - x * (1.0 / 6 - x * (1.0 / 7 - x * (1.0 / 8))))))));
+  return std::log(y);
+}
+
 // Double contraction A : B of two symmetric tensors in Voigt storage.
 inline double ddot(const Sym2& a, const Sym2& b) { return a[0] * b[0] + a[1] * b[1] + 2 * a[2] * b[2]; }
 
@@ -49,11 +60,11 @@ inline Invariants invariants(const Sym2& C, const FibreFrame& f = {}, unsigned w
   v.i412 = ddot(C, l12);
   v.i3 = C[0] * C[1] - C[2] * C[2];
   if (which & kE1) {
-    v.e1 = 0.5 * std::log(v.i41);
+    v.e1 = 0.5 * log_near_one(v.i41);
     for (int k = 0; k < 3; ++k) v.de1[k] = l11[k] / (2 * v.i41);
   }
   if (which & kE2) {
-    v.e2 = 0.5 * std::log(v.i42);
+    v.e2 = 0.5 * log_near_one(v.i42);
     for (int k = 0; k < 3; ++k) v.de2[k] = l22[k] / (2 * v.i42);
   }
   if (which & kSh) {
@@ -62,7 +73,7 @@ inline Invariants invariants(const Sym2& C, const FibreFrame& f = {}, unsigned w
     for (int k = 0; k < 3; ++k) v.dsh[k] = l12[k] / r - 0.5 * v.sh * (l11[k] / v.i41 + l22[k] / v.i42);
   }
   if (which & kLt) {
-    v.lt = 0.5 * std::log(v.i3 / v.i41);
+    v.lt = 0.5 * log_near_one(v.i3 / v.i41);
     const Sym2 cinv = {C[1] / v.i3, C[0] / v.i3, -C[2] / v.i3};  // C^-1 in Voigt storage
     for (int k = 0; k < 3; ++k) v.dlt[k] = 0.5 * (cinv[k] - l11[k] / v.i41);
   }
