@@ -176,6 +176,36 @@ TEST(MaterialLaws, ViscoelasticShearAgainstPronyClosedForm) {
   }
 }
 
+// viscoelastic_shear keeps each point's parameters for its last
+// temperature in its state. A shear ramp with the temperature switching
+// every 7 steps between 250, 260, 270 and 280 degC (omega, g_i and tau_i
+// all temperature-dependent): the stresses must equal, bit for bit, those
+// of the same history with the kept parameters discarded before every
+// step; and they must differ from the history at a constant 250 degC.
+TEST(MaterialLaws, ViscoelasticShearFollowsTemperatureChanges) {
+  json params = kVisco;
+  params["g_slope_below"] = {0.004, 0.002};
+  params["tau_slope_below"] = {-0.004, -0.05};
+  Law visco("viscoelastic_shear", params);
+  ASSERT_TRUE(visco.status) << visco.status.message;
+  const int kept = 3 + 3 * 2;  // S0 and two branches come first
+  ShearHistory a(*visco.law, 250.0), b(*visco.law, 250.0), c(*visco.law, 250.0);
+  const double dt = 0.01;
+  double sa = 0, sc = 0;
+  for (int k = 0; k <= 200; ++k) {
+    const double T = 250.0 + 10.0 * ((k / 7) % 4), gamma = 0.5 * k * dt;
+    a.T = T;
+    b.T = T;
+    std::fill(b.state.begin() + kept, b.state.end(), 0.0);
+    sa = a.step(gamma, k ? dt : 0.0);
+    const double sb = b.step(gamma, k ? dt : 0.0);
+    sc = c.step(gamma, k ? dt : 0.0);
+    ASSERT_EQ(sa, sb) << "step " << k << ", T " << T;
+  }
+  EXPECT_GT(std::abs(sa - sc), 0.01 * std::abs(sc)) << sa << " vs " << sc;
+  std::printf("temperature changes: S12 %.6g N/m at the end (%.6g at a constant 250 degC)\n", sa, sc);
+}
+
 // The Prony step factors exp(-x) and (1 - exp(-x)) / x, x = dt / tau: the
 // series used for small x must agree with the library functions to 2 units
 // in the last place over the whole range of explicit steps (x from 1e-12 to

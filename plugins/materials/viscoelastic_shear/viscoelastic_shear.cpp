@@ -62,8 +62,12 @@ class ViscoelasticShear final : public MaterialLaw {
     });
   }
   LawRole role() const override { return LawRole::Membrane; }
-  int state_size() const override { return 3 + 3 * n_; }
-  std::pair<double, double> temperature_range() const override { return {t_min_, t_max_}; }  // S0 at the previous step, then H_i
+  // Per point: S0 at the previous step (3), the branch states H_i (3 per
+  // branch), then the parameters at the point's last temperature (a flag,
+  // T, omega, g_i, 1 / tau_i): the temperature changes only when the
+  // thermal solver advances, so they are evaluated once per thermal step.
+  int state_size() const override { return 3 + 3 * n_ + 3 + 2 * n_; }
+  std::pair<double, double> temperature_range() const override { return {t_min_, t_max_}; }
 
   // Clamped parameters at temperature T.
   void at(double T, double* omega, double* g, double* tau) const {
@@ -81,7 +85,8 @@ class ViscoelasticShear final : public MaterialLaw {
 
   Status evaluate(const MaterialBlock& b) const override {
     const FibreFrame f;
-    double g[16], tau[16], decay[16], ramp[16], omega = 0, T_last = 0;
+    double g[16], inv_tau[16], decay[16], ramp[16], omega = 0, T_last = 0;
+    const int ns = state_size(), cache = 3 + 3 * n_;
     for (std::size_t q = 0; q < b.n; ++q) {
       const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
       FibreFrame fr = f;
@@ -90,16 +95,35 @@ class ViscoelasticShear final : public MaterialLaw {
         fr.s = b.dir2[2 * q + 1];
       }
       const Invariants v = invariants(C, fr, kSh);
-      if (q == 0 || b.temperature[q] != T_last) {  // parameters change with temperature only
-        at(b.temperature[q], &omega, g, tau);
-        prony_factors(n_, tau, b.dt, decay, ramp);
-        T_last = b.temperature[q];
+      double* st = b.state.data() + static_cast<std::size_t>(ns) * q;
+      const double T = b.temperature[q];
+      if (q == 0 || T != T_last) {  // parameters change with temperature only
+        double* c = st + cache;
+        if (c[0] == 1.0 && c[1] == T) {  // as at this point's previous step
+          omega = c[2];
+          for (int i = 0; i < n_; ++i) {
+            g[i] = c[3 + i];
+            inv_tau[i] = c[3 + n_ + i];
+          }
+        } else {
+          double tau[16];
+          at(T, &omega, g, tau);
+          for (int i = 0; i < n_; ++i) inv_tau[i] = 1.0 / tau[i];
+          c[0] = 1.0;
+          c[1] = T;
+          c[2] = omega;
+          for (int i = 0; i < n_; ++i) {
+            c[3 + i] = g[i];
+            c[3 + n_ + i] = inv_tau[i];
+          }
+        }
+        prony_factors_inv(n_, inv_tau, b.dt, decay, ramp);
+        T_last = T;
       }
       double wsh, dwsh;
       even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
       Sym2 s0{0, 0, 0};
       add_stress(s0, omega * dwsh, v.dsh);
-      double* st = b.state.data() + static_cast<std::size_t>(state_size()) * q;
       double s[3];
       prony_step(n_, g, decay, ramp, st, s0.data(), st + 3, s);
       for (int k = 0; k < 3; ++k) {
@@ -130,7 +154,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.0.0";
+  d.version = "1.0.1";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),

@@ -11,16 +11,17 @@
 namespace ts::sdk {
 
 // Per-branch factors of the update for a step dt: decay = exp(-dt/tau),
-// ramp = (1 - decay) / (dt/tau) (1 for dt = 0). Compute once per
-// temperature and step, reuse for every point that shares them.
+// ramp = (1 - decay) / (dt/tau) (1 for dt = 0), from 1 / tau_i (at most
+// 16 branches). Compute once per temperature and step, reuse for every
+// point that shares them.
 // For x = dt / tau < 1e-2 (explicit steps are far shorter than the
 // relaxation times) both factors come from their Taylor series, to x^4
 // below x = 1e-3 and to x^6 above: the first omitted term is below 1e-17,
 // under the rounding of a double, and no exponential is evaluated. The
 // powers are formed first so that the terms do not wait on each other.
-inline void prony_factors(int branches, const double* tau, double dt, double* decay, double* ramp) {
+inline void prony_factors_inv(int branches, const double* inv_tau, double dt, double* decay, double* ramp) {
   for (int i = 0; i < branches; ++i) {
-    const double x = dt / tau[i];
+    const double x = dt * inv_tau[i];
     // exp(-x) = sum (-x)^k / k!,  (1 - exp(-x)) / x = sum (-x)^k / (k + 1)!
     if (x < 1e-3) {
       const double x2 = x * x, x4 = x2 * x2;
@@ -37,7 +38,12 @@ inline void prony_factors(int branches, const double* tau, double dt, double* de
     }
   }
 }
-
+// The same from the relaxation times.
+inline void prony_factors(int branches, const double* tau, double dt, double* decay, double* ramp) {
+  double inv_tau[16];
+  for (int i = 0; i < branches; ++i) inv_tau[i] = 1.0 / tau[i];
+  prony_factors_inv(branches, inv_tau, dt, decay, ramp);
+}
 // Advances the branch states h (3 per branch, Voigt) for the change s0_new -
 // s0_old and returns the relaxed stress in s.
 inline void prony_step(int branches, const double* g, const double* decay, const double* ramp,
