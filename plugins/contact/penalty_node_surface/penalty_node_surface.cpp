@@ -367,36 +367,42 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // so the surface acts as if its folds were rounded.
   Projection project(const Pass& ps, const sdk::PartView& a, const sdk::PartView& b, int i, double reach) const {
     Projection best;
-    double best_dist = reach, best_d2 = reach * reach;  // squared: no square root per candidate
+    double best_d2 = reach * reach;  // squared: no square root per candidate
     const Vec3 x = sdk::load3(a.x.data(), i);
     const auto [begin, end] = ps.cand.of(i);
     if (!begin) return best;
+    Vec3 best_r{0, 0, 0};
+    double best_dn = 0;
+    bool best_inside = false;
     for (const int* it = begin; it != end; ++it) {
       const int e = *it;
       const int* t = &b.triangles[3 * e];
       if (a.index == b.index && (t[0] == i || t[1] == i || t[2] == i)) continue;  // self contact
       const Vec3 p0 = sdk::load3(b.x.data(), t[0]), p1 = sdk::load3(b.x.data(), t[1]), p2 = sdk::load3(b.x.data(), t[2]);
+      const Vec3 ne = sdk::load3(ps.en_b.data(), e);
       // The distance to the triangle is at least the distance to its plane.
-      if (std::abs(sdk::dot(sdk::sub(x, p0), sdk::load3(ps.en_b.data(), e))) > best_dist) continue;
+      const double plane = sdk::dot(sdk::sub(x, p0), ne);
+      if (plane * plane > best_d2) continue;
       double w[3];
       const Vec3 cp = sdk::closest_point_on_triangle(x, p0, p1, p2, w);
       const Vec3 r = sdk::sub(x, cp);
       const double d2 = sdk::dot(r, r);
       if (d2 > best_d2 || (d2 == best_d2 && best.element >= 0)) continue;
-      const double dist = std::sqrt(d2);
-      const Vec3 ne = sdk::load3(ps.en_b.data(), e);
-      const double dn = sdk::dot(r, ne);
-      const bool inside = w[0] > 0 && w[1] > 0 && w[2] > 0;
       best.element = e;
-      best_dist = dist;
       best_d2 = d2;
-      // The normal is the direction from the closest point (inside a
-      // triangle that is its normal; over an edge or a vertex it does not
-      // depend on which of the triangles sharing it was found first).
-      best.d = inside ? dn : (dn >= 0 ? dist : -dist);
-      best.n = dist <= 0 ? ne : sdk::scale(r, (dn >= 0 ? 1.0 : -1.0) / dist);
+      best_r = r;
+      best_dn = sdk::dot(r, ne);
+      best_inside = w[0] > 0 && w[1] > 0 && w[2] > 0;
+      best.n = ne;
       for (int j = 0; j < 3; ++j) best.w[j] = w[j];
     }
+    if (best.element < 0) return best;
+    // The normal is the direction from the closest point (inside a triangle
+    // that is its normal; over an edge or a vertex it does not depend on
+    // which of the triangles sharing it was found first).
+    const double dist = std::sqrt(best_d2);
+    best.d = best_inside ? best_dn : (best_dn >= 0 ? dist : -dist);
+    if (dist > 0) best.n = sdk::scale(best_r, (best_dn >= 0 ? 1.0 : -1.0) / dist);
     return best;
   }
 
