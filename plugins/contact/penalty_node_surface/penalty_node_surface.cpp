@@ -320,33 +320,33 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // any two queries); a relative margin covers the round-off of the sums.
     tool_path_ += sdk::norm(sdk::sub(u, tool_u_));
     tool_u_ = u;
-    ask_.clear();
-    for (std::size_t i = 0; i < n; ++i) {
+    // Runs of consecutive nodes to ask are queried in place (one call per
+    // run, no copies); where and when a node was asked is kept only for
+    // nodes beyond the cutoff, the only ones that can be skipped next time.
+    auto skip = [&](std::size_t i) {
       const double slack = dist_[i] - cutoff - (tool_path_ - sq_[i]) * (1 + 1e-9) - 1e-9 * cutoff;
-      if (tool.displacement && !first_[i] && slack > 0 && std::isfinite(dist_[i])) {
-        const double* x = &a.x[3 * i];
-        const double* q = &xq_[3 * i];
-        const double dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
-        if (dx * dx + dy * dy + dz * dz < slack * slack) continue;
+      if (!tool.displacement || first_[i] || !(slack > 0) || !std::isfinite(dist_[i])) return false;
+      const double* x = &a.x[3 * i];
+      const double* q = &xq_[3 * i];
+      const double dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
+      return dx * dx + dy * dy + dz * dz < slack * slack;
+    };
+    for (std::size_t i = 0; i < n;) {
+      if (skip(i)) {
+        ++i;
+        continue;
       }
-      ask_.push_back(static_cast<int>(i));
-    }
-    const std::size_t m = ask_.size();
-    pts_.resize(3 * m);
-    qd_.resize(m);
-    qn_.resize(3 * m);
-    for (std::size_t j = 0; j < m; ++j)
-      for (int d = 0; d < 3; ++d) pts_[3 * j + d] = a.x[3 * static_cast<std::size_t>(ask_[j]) + d];
-    if (m > 0) tool.query(tool.context, m, pts_.data(), 2 * cutoff, qd_.data(), qn_.data());
-    for (std::size_t j = 0; j < m; ++j) {
-      const std::size_t i = static_cast<std::size_t>(ask_[j]);
-      dist_[i] = qd_[j];
-      first_[i] = 0;
-      sq_[i] = tool_path_;
-      for (int d = 0; d < 3; ++d) {
-        tn_[3 * i + d] = qn_[3 * j + d];
-        xq_[3 * i + d] = pts_[3 * j + d];
+      std::size_t j = i + 1;
+      while (j < n && !skip(j)) ++j;
+      tool.query(tool.context, j - i, &a.x[3 * i], 2 * cutoff, &dist_[i], &tn_[3 * i]);
+      for (std::size_t k = i; k < j; ++k) {
+        first_[k] = 0;
+        if (dist_[k] > cutoff) {
+          sq_[k] = tool_path_;
+          for (int d = 0; d < 3; ++d) xq_[3 * k + d] = a.x[3 * k + d];
+        }
       }
+      i = j;
     }
   }
 
@@ -590,10 +590,9 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   std::span<const sdk::ToolView> tools_;
   Pass pass_[2];  // tool pairs use pass_[0].ft only
   std::vector<double> en_a_, nn_a_, dist_, tn_, scratch_, energy_, target_;
-  // Tool queries: where each node was last asked (xq_, and the tool's path
-  // length then, sq_), the nodes asked this time and their answers.
-  std::vector<double> xq_, sq_, pts_, qd_, qn_;
-  std::vector<int> ask_;
+  // Tool queries: where each node beyond the cutoff was last asked (xq_,
+  // and the tool's path length then, sq_).
+  std::vector<double> xq_, sq_;
   std::vector<char> first_;
   double tool_path_ = 0;
   Vec3 tool_u_ = {0, 0, 0};
