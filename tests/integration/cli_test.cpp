@@ -300,6 +300,9 @@ TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
   const double ke = s["energy"]["kinetic_half_step"].get<double>(), ie = s["energy"]["internal"].get<double>();
   EXPECT_GE(ke, 0.0);
   EXPECT_NEAR(ki["at_end"].get<double>(), ke / ie, 1e-6 * ke / ie + 1e-12);
+  std::stringstream log;
+  log << std::ifstream(dir / "out" / "log.txt").rdbuf();
+  EXPECT_NE(log.str().find("kinetic/internal energy"), std::string::npos) << "the log states the quasi-static check";
   const auto plugins = s["plugins_loaded"].get<std::vector<std::string>>();
   for (const char* p : {"material/ud_hyperelastic", "material/viscoelastic_shear", "element/shell_rf_t3", "thermal/adi"})
     EXPECT_NE(std::find(plugins.begin(), plugins.end(), p), plugins.end()) << p;
