@@ -9,7 +9,8 @@ which kinetic / internal energy stays under 5 %, the ratio at 0.5 / 1 /
 shear extrema and the mean temperature under the punch pole at 1 / 2.5 / 5 s.
 The answers that matter (temperatures, shear) should not depend on the
 mass added; the table shows by how much they do.
-Takes about 5 minutes on two cores with the default targets.
+Takes about 3 minutes on two cores with the default targets and damping
+(about 6 with --damping 20,5).
 Usage: scripts/bench/mass_scaling.py [--targets 5e-5,2.5e-5,1.9e-5] [--damping 20] [--out DIR]
 (THERMOSTAMP_EXE selects another build of the executable.)
 """
