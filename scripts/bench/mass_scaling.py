@@ -2,7 +2,8 @@
 """Mass-scaling study of the hemisphere scene (after a Release build).
 
 Runs share/jobs/hemisphere_ud_2ply.json with several mass-scaling target
-steps (and optionally damping values), one thread each, one run at a time,
+steps (and optionally damping values), two threads each (--threads), one
+run at a time,
 and prints a Markdown table: added mass, cycles, wall time, the time from
 which kinetic / internal energy stays under 5 %, the ratio at 0.5 / 1 /
 1.5 s of the stroke, damping work against internal energy at the end,
@@ -11,7 +12,7 @@ The answers that matter (temperatures, shear) should not depend on the
 mass added; the table shows by how much they do.
 Takes about 3 minutes on two cores with the default targets and damping
 (about 6 with --damping 20,5).
-Usage: scripts/bench/mass_scaling.py [--targets 5e-5,2.5e-5,1.9e-5] [--damping 20] [--out DIR]
+Usage: scripts/bench/mass_scaling.py [--targets 5e-5,2.5e-5,1.9e-5] [--damping 20] [--threads 2] [--out DIR]
 (THERMOSTAMP_EXE selects another build of the executable.)
 """
 import argparse
