@@ -4,9 +4,8 @@
 Runs share/jobs/hemisphere_ud_2ply.json with several mass-scaling target
 steps (and optionally damping values), two threads each (--threads), one
 run at a time, and prints a Markdown table: added mass, cycles, wall time,
-the time from
-which kinetic / internal energy stays under 5 %, the ratio at 0.5 / 1 /
-1.5 s of the stroke, damping work against internal energy at the end,
+the time from which kinetic / internal energy stays under 5 %, the ratio
+at 0.5 / 1 / 1.5 s of the stroke, damping work against internal energy at the end,
 shear extrema and the mean temperature under the punch pole at 1 / 2.5 / 5 s.
 The answers that matter (temperatures, shear) should not depend on the
 mass added; the table shows by how much they do.
