@@ -307,12 +307,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const double cutoff = a.thickness + gap_tol_;
     const Vec3 u = tool.displacement ? Vec3{tool.displacement[0], tool.displacement[1], tool.displacement[2]}
                                      : Vec3{0, 0, 0};
-    if (dist_.size() != n) {
+    if (dist_.size() != n) {  // a distance of 0 is never skipped: every node is asked first
       dist_.assign(n, 0.0);
       tn_.assign(3 * n, 0.0);
       xq_.assign(3 * n, 0.0);
       sq_.assign(n, 0.0);
-      first_.assign(n, 1);
       tool_path_ = 0;
       tool_u_ = u;
     }
@@ -325,7 +324,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // nodes beyond the cutoff, the only ones that can be skipped next time.
     auto skip = [&](std::size_t i) {
       const double slack = dist_[i] - cutoff - (tool_path_ - sq_[i]) * (1 + 1e-9) - 1e-9 * cutoff;
-      if (!tool.displacement || first_[i] || !(slack > 0) || !std::isfinite(dist_[i])) return false;
+      if (!tool.displacement || !(slack > 0) || !std::isfinite(dist_[i])) return false;
       const double* x = &a.x[3 * i];
       const double* q = &xq_[3 * i];
       const double dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
@@ -340,13 +339,12 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       while (j < n && !skip(j)) ++j;
       tool.query(tool.context, j - i, &a.x[3 * i], 2 * cutoff, &dist_[i], &tn_[3 * i]);
       for (std::size_t k = i; k < j; ++k) {
-        first_[k] = 0;
         if (dist_[k] > cutoff) {
           sq_[k] = tool_path_;
           for (int d = 0; d < 3; ++d) xq_[3 * k + d] = a.x[3 * k + d];
         }
       }
-      i = j;
+      i = j + 1;  // node j (if any) is skipped
     }
   }
 
@@ -593,7 +591,6 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // Tool queries: where each node beyond the cutoff was last asked (xq_,
   // and the tool's path length then, sq_).
   std::vector<double> xq_, sq_;
-  std::vector<char> first_;
   double tool_path_ = 0;
   Vec3 tool_u_ = {0, 0, 0};
 };
