@@ -32,11 +32,24 @@ struct MechPart {
   std::vector<double> curvature;
   std::vector<double> load;  // applied nodal forces at full value (N), 3 per node
   std::vector<double> f_con, fc_prev, k_contact;  // contact forces (N) now and at the previous step; stiffness bound (N/m)
-  std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_force, elem_dt, elem_scale, elem_sqrt_scale, node_temperature, stress;
+  std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_dt, elem_scale, elem_sqrt_scale, node_temperature, stress;
   // Per element block, reused every step.
   std::vector<int> block_fail;
   std::vector<std::string> block_error;
-  std::vector<int> inc_start, inc;  // node -> 18 e + 3 a entries of element_force (6-node patches)
+  // Element blocks: the partition follows the element count only, never the
+  // thread count, so the results are the same for any number of threads.
+  int block_size = 0, blocks = 0;
+  std::vector<double> block_dt;
+  // Node forces of each block, summed in the block (elements in order, then
+  // the 6 patch slots): local nodes of block b are node_start[b] ..
+  // node_start[b + 1] of block_node (ascending global ids); slot_local holds
+  // each element slot's local index (-1: no node). A node of one block only
+  // is written to f_int by that block; a node shared by several blocks is
+  // summed after them, in block order (shared_start / shared_src: offsets in
+  // block_force).
+  std::vector<int> block_node_start, block_node, slot_local, shared_node, shared_start, shared_src;
+  std::vector<char> block_node_shared;
+  std::vector<double> block_force;
   std::vector<char> fixed;          // 3 per node
   std::vector<int> edge_condition;  // 3 per element (sdk::kEdgeFree / kEdgeClamped)
   std::vector<int> constraint_of;   // 3 per node: index of the constraint holding the dof, -1 if none
@@ -58,6 +71,13 @@ using Clock = std::chrono::steady_clock;
 // The kinetic energy may not exceed this multiple of the energy supplied.
 constexpr double kKineticGrowthLimit = 10.0;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+// Element forces of one block (18 per element), a buffer per thread that
+// stays in cache; it grows to the largest block once.
+std::vector<double>& element_force_buffer(int n) {
+  thread_local std::vector<double> buf;
+  if (buf.size() < static_cast<std::size_t>(n)) buf.resize(static_cast<std::size_t>(n));
+  return buf;
+}
 
 void compute_normals(const ShellMesh& m, const std::vector<double>& x, std::vector<double>& nn) {
   nn.assign(x.size(), 0.0);
@@ -409,16 +429,14 @@ void Simulation::build_mechanics() {
     m->fc_prev.assign(3 * nn, 0.0);
     m->k_contact.assign(nn, 0.0);
     m->dx.assign(3 * nn, 0.0);
-    m->elem_force.assign(18 * ne, 0.0);
     m->elem_dt.assign(ne, 0.0);
     m->elem_scale.assign(ne, 1.0);
     m->elem_sqrt_scale.assign(ne, 1.0);
     m->stress.assign(3 * ne, 0.0);
     m->curvature.assign(3 * ne, 0.0);
     m->node_temperature.assign(nn, def.initial_temperature);
-    // Node -> element force entries of the 6-node patches, in a fixed order
-    // (same sums for any thread count): own nodes, then the node opposite
-    // each edge in the neighbour.
+    // The 6-node patches: own nodes, then the node opposite each edge in
+    // the neighbour (-1 at a boundary edge).
     std::vector<int> patch(6 * ne, -1);
     for (int e = 0; e < ne; ++e)
       for (int k = 0; k < 3; ++k) {
@@ -431,14 +449,52 @@ void Simulation::build_mechanics() {
           if (o != p0 && o != p1) patch[6 * e + 3 + k] = o;
         }
       }
-    m->inc_start.assign(nn + 1, 0);
-    for (int q = 0; q < 6 * ne; ++q)
-      if (patch[q] >= 0) ++m->inc_start[patch[q] + 1];
-    for (int i = 0; i < nn; ++i) m->inc_start[i + 1] += m->inc_start[i];
-    m->inc.assign(m->inc_start[nn], 0);
-    std::vector<int> fill(m->inc_start.begin(), m->inc_start.end() - 1);
-    for (int q = 0; q < 6 * ne; ++q)
-      if (patch[q] >= 0) m->inc[fill[patch[q]]++] = 18 * (q / 6) + 3 * (q % 6);
+    // Blocks of 256 to 2048 elements, at least 16 blocks where the part
+    // allows: larger blocks evaluate fewer hinges twice at their borders.
+    m->block_size = 256;
+    while (m->block_size < 2048 && 16 * m->block_size < ne) m->block_size *= 2;
+    m->blocks = (ne + m->block_size - 1) / m->block_size;
+    m->block_dt.assign(m->blocks, 0.0);
+    m->block_fail.resize(m->blocks);
+    m->block_error.resize(m->blocks);
+    m->slot_local.assign(6 * ne, -1);
+    m->block_node_start.assign(m->blocks + 1, 0);
+    m->block_node.clear();
+    std::vector<int> blocks_of_node(nn, 0), local(nn, -1);
+    for (int b = 0; b < m->blocks; ++b) {
+      const int e0 = b * m->block_size, e1 = std::min(ne, e0 + m->block_size);
+      std::vector<int> nodes;
+      for (int q = 6 * e0; q < 6 * e1; ++q)
+        if (patch[q] >= 0) nodes.push_back(patch[q]);
+      std::sort(nodes.begin(), nodes.end());
+      nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+      for (std::size_t l = 0; l < nodes.size(); ++l) {
+        local[nodes[l]] = static_cast<int>(l);
+        ++blocks_of_node[nodes[l]];
+      }
+      for (int q = 6 * e0; q < 6 * e1; ++q)
+        if (patch[q] >= 0) m->slot_local[q] = local[patch[q]];
+      m->block_node.insert(m->block_node.end(), nodes.begin(), nodes.end());
+      m->block_node_start[b + 1] = static_cast<int>(m->block_node.size());
+    }
+    m->block_force.assign(3 * m->block_node.size(), 0.0);
+    m->block_node_shared.assign(m->block_node.size(), 0);
+    m->shared_node.clear();
+    for (int i = 0; i < nn; ++i)
+      if (blocks_of_node[i] > 1) m->shared_node.push_back(i);
+    std::vector<int> shared_index(nn, -1);
+    for (std::size_t s = 0; s < m->shared_node.size(); ++s) shared_index[m->shared_node[s]] = static_cast<int>(s);
+    m->shared_start.assign(m->shared_node.size() + 1, 0);
+    for (std::size_t l = 0; l < m->block_node.size(); ++l)
+      if (shared_index[m->block_node[l]] >= 0) ++m->shared_start[shared_index[m->block_node[l]] + 1];
+    for (std::size_t s = 0; s < m->shared_node.size(); ++s) m->shared_start[s + 1] += m->shared_start[s];
+    m->shared_src.assign(m->shared_start.back(), 0);
+    std::vector<int> fill(m->shared_start.begin(), m->shared_start.end() - 1);
+    for (std::size_t l = 0; l < m->block_node.size(); ++l)  // blocks in order
+      if (const int s = shared_index[m->block_node[l]]; s >= 0) {
+        m->block_node_shared[l] = 1;
+        m->shared_src[fill[s]++] = static_cast<int>(3 * l);
+      }
     // Constraints.
     m->fixed.assign(3 * nn, 0);
     m->constraint_of.assign(3 * nn, -1);
@@ -611,29 +667,43 @@ double Simulation::mechanics_stable_dt() {
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
     const int ne = st.mesh.num_elements();
-    // Blocks of 256 to 2048 elements, at least 16 blocks where the part
-    // allows: larger blocks evaluate fewer hinges twice at their borders.
-    // The partition follows the element count only, never the thread
-    // count, so the results are the same for any number of threads.
-    int kBlock = 256;
-    while (kBlock < 2048 && 16 * kBlock < ne) kBlock *= 2;
-    const int blocks = (ne + kBlock - 1) / kBlock;
-    m.block_fail.resize(blocks);
-    m.block_error.resize(blocks);
+    const int blocks = m.blocks, bs = m.block_size;
     int* block_fail = m.block_fail.data();
     std::string* block_error = m.block_error.data();
-#pragma omp parallel for schedule(static) if (blocks > 1)
-    for (int b = 0; b < blocks; ++b) {
-      sdk::ElementForceInput in;
-      in.range = {b * kBlock, std::min(ne, (b + 1) * kBlock)};
-      in.dt = last_mech_dt_;
-      in.node_temperature = m.node_temperature;
-      sdk::ElementForceOutput out;
-      out.element_force = m.elem_force;
-      out.element_dt = m.elem_dt;
-      block_error[b].clear();
-      if (auto s = m.element->internal_forces(in, out); !s) block_error[b] = s.message;
-      block_fail[b] = out.failed_element;
+#pragma omp parallel if (blocks > 1)
+    {
+      std::vector<double>& ef = element_force_buffer(18 * bs);
+#pragma omp for schedule(static)
+      for (int b = 0; b < blocks; ++b) {
+        sdk::ElementForceInput in;
+        in.range = {b * bs, std::min(ne, (b + 1) * bs)};
+        in.dt = last_mech_dt_;
+        in.node_temperature = m.node_temperature;
+        sdk::ElementForceOutput out;
+        out.element_force = std::span<double>(ef.data(), 18 * static_cast<std::size_t>(in.range.end - in.range.begin));
+        out.element_dt = m.elem_dt;
+        block_error[b].clear();
+        if (auto s = m.element->internal_forces(in, out); !s) block_error[b] = s.message;
+        block_fail[b] = out.failed_element;
+        if (!block_error[b].empty() || block_fail[b] >= 0) continue;
+        // Node forces of the block: elements in order, then patch slots.
+        const int l0 = m.block_node_start[b], l1 = m.block_node_start[b + 1];
+        double* bf = m.block_force.data() + 3 * static_cast<std::size_t>(l0);
+        std::fill(bf, bf + 3 * (l1 - l0), 0.0);
+        const int* sl = m.slot_local.data();
+        double dtb = std::numeric_limits<double>::infinity();
+        for (int e = in.range.begin; e < in.range.end; ++e) {
+          const double* fe = &ef[18 * static_cast<std::size_t>(e - in.range.begin)];
+          for (int q = 0; q < 6; ++q)
+            if (const int l = sl[6 * e + q]; l >= 0)
+              for (int d = 0; d < 3; ++d) bf[3 * l + d] += fe[3 * q + d];
+          dtb = std::min(dtb, m.elem_dt[e] * m.elem_sqrt_scale[e]);
+        }
+        m.block_dt[b] = dtb;
+        for (int l = l0; l < l1; ++l)
+          if (!m.block_node_shared[l])
+            for (int d = 0; d < 3; ++d) m.f_int[3 * m.block_node[l] + d] = m.block_force[3 * l + d];
+      }
     }
     for (int b = 0; b < blocks; ++b) {
       if (!block_error[b].empty())
@@ -641,16 +711,16 @@ double Simulation::mechanics_stable_dt() {
       if (block_fail[b] >= 0)
         throw RunError("degenerate (collapsed or inverted) element " + std::to_string(block_fail[b]) + " in part '" +
                        st.def->name + "'");
+      dt = std::min(dt, m.block_dt[b]);
     }
-    for (int e = 0; e < ne; ++e) dt = std::min(dt, m.elem_dt[e] * m.elem_sqrt_scale[e]);
-    // Gather: f_int at every node, in a fixed order.
-    const int nn = st.mesh.num_nodes();
-#pragma omp parallel for schedule(static) if (nn > 2048)
-    for (int i = 0; i < nn; ++i) {
+    // Nodes of several blocks: their blocks' sums, in block order.
+    const int ns = static_cast<int>(m.shared_node.size());
+#pragma omp parallel for schedule(static) if (ns > 2048)
+    for (int s = 0; s < ns; ++s) {
       double f[3] = {0, 0, 0};
-      for (int q = m.inc_start[i]; q < m.inc_start[i + 1]; ++q)
-        for (int d = 0; d < 3; ++d) f[d] += m.elem_force[m.inc[q] + d];
-      for (int d = 0; d < 3; ++d) m.f_int[3 * i + d] = f[d];
+      for (int q = m.shared_start[s]; q < m.shared_start[s + 1]; ++q)
+        for (int d = 0; d < 3; ++d) f[d] += m.block_force[m.shared_src[q] + d];
+      for (int d = 0; d < 3; ++d) m.f_int[3 * m.shared_node[s] + d] = f[d];
     }
   }
   // Element and contact springs act on the same nodes: 1/dt^2 adds up.

@@ -178,10 +178,10 @@ class ShellRfT3 final : public ElementKernel {
         for (int a = 0; a < 3; ++a) {
           const double ga = g1_[3 * e + a], gb = g2_[3 * e + a];
           const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
-          for (int d = 0; d < 3; ++d) out.element_force[18 * e + 3 * a + d] = c1 * f1[d] + c2 * f2[d];
+          for (int d = 0; d < 3; ++d) out.element_force[18 * (e - b) + 3 * a + d] = c1 * f1[d] + c2 * f2[d];
         }
         if (!bending_)  // with bending, bending_forces writes these slots
-          for (int q = 9; q < 18; ++q) out.element_force[18 * e + q] = 0.0;
+          for (int q = 9; q < 18; ++q) out.element_force[18 * (e - b) + q] = 0.0;
         energy += A0 * energy_e[e - b];
         // Stable step: smallest height over the largest wave speed of the tangent.
         const Vec3 e01 = sub(xa[1], xa[0]), e02 = sub(xa[2], xa[0]), e12 = sub(xa[2], xa[1]);
@@ -454,7 +454,7 @@ class ShellRfT3 final : public ElementKernel {
       // membrane forces) summed in registers, the opposite node of hinge k
       // (slot 3 + k) written once. The hinges are unrolled so that every
       // slot index is a constant.
-      double* fe = &out.element_force[18 * static_cast<std::size_t>(e)];
+      double* fe = &out.element_force[18 * static_cast<std::size_t>(e - b)];
       double own[9];
       for (int q = 0; q < 9; ++q) own[q] = fe[q];
       auto hinge = [&]<int k>() {
@@ -517,7 +517,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.1.0";
+  d.version = "0.2.0";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -525,4 +525,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.1.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.2.0", register_all)

@@ -40,10 +40,11 @@ struct ElementForceInput {
 };
 
 struct ElementForceOutput {
-  // 18 per element (6 nodes x xyz), entries of the range overwritten: the
-  // element's 3 nodes, then for k = 0..2 the node of the neighbour across
-  // edge k that is not on that edge (the 6-node patch of rotation-free
-  // bending; zero when edge k has no neighbour).
+  // 18 per element of the range (6 nodes x xyz), indexed from the range's
+  // first element (entry 18 (e - range.begin) + 3 a + d), all overwritten:
+  // the element's 3 nodes, then for k = 0..2 the node of the neighbour
+  // across edge k that is not on that edge (the 6-node patch of
+  // rotation-free bending; zero when edge k has no neighbour).
   std::span<double> element_force;
   double energy = 0.0;              // J, hyperelastic energy of the range (accumulated)
   double stable_dt = 0.0;           // s, minimum over the range (set by the call)
