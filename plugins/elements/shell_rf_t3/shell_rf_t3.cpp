@@ -239,7 +239,7 @@ class ShellRfT3 final : public ElementKernel {
     const Vec3 Ne = cross(edge, cp);
     const Vec3 Nn = cross(op, edge);
     // atan2 is invariant to scaling both arguments by |Ne| |Nn| len.
-    const double theta = std::atan2(dot(cross(Nn, Ne), edge), len * dot(Ne, Nn));
+    const double theta = atan2_small(dot(cross(Nn, Ne), edge), len * dot(Ne, Nn));
     if (grad) {
       // d theta / d c = n_e / h_c = Ne len / |Ne|^2 (and likewise for o).
       const double sc = dot(cp, edge) / l2, so = dot(op, edge) / l2;
@@ -271,7 +271,7 @@ class ShellRfT3 final : public ElementKernel {
     };
     const Vec3 g = ghost(n, false);
     const double y = dot(cross(g, n), eh), z = dot(n, g);
-    const double theta = std::atan2(y, z);
+    const double theta = atan2_small(y, z);
     if (grad && mirror_axis >= 0) {
       // Mirror ghost (edge in the symmetry plane, e_a its normal): with
       // m = n x e, theta = 2 atan2(-n_a, m_a), d theta = 2 (-m_a dn_a +
