@@ -3,12 +3,64 @@
 // in-plane shear (Bigot et al. 2022). L2 = n x L1. Energy per unit initial
 // area (J/m^2), stiffnesses in N/m. A temperature-dependent, viscoelastic
 // shear is added by listing `viscoelastic_shear` next to this law.
+#include <cmath>
+#include <vector>
+
 #include <thermostamp/sdk/invariants.hpp>
 #include <thermostamp/sdk/plugin.hpp>
+#include <thermostamp/sdk/simd.hpp>
 
 namespace {
 
 using namespace ts::sdk;
+
+// Per-thread buffers of a block: points to evaluate again, energies when
+// the caller wants none.
+struct Scratch {
+  std::vector<unsigned char> redo;
+  std::vector<double> energy;
+};
+Scratch& scratch(std::size_t n) {
+  thread_local Scratch s;
+  if (s.redo.size() < n) {
+    s.redo.resize(n);
+    s.energy.resize(n);
+  }
+  return s;
+}
+
+// ln(1 + x) by its series to x^8, exact to rounding for |x| < 1e-2 (as
+// log_near_one, without the branch).
+inline double log1p_series(double x) {
+  return x * (1 - x * (1.0 / 2 - x * (1.0 / 3 - x * (1.0 / 4 - x * (1.0 / 5 - x * (1.0 / 6 - x * (1.0 / 7 - x * (1.0 / 8))))))));
+}
+
+// The law over n points, L1 = (1, 0), L2 = (0, 1): I_e1 = 1/2 ln C11,
+// I_lt = 1/2 ln(det C / C11), I_sh = C12 / sqrt(C11 C22),
+//   S = 2 [2 k_f I_e1 dI_e1/dC + 2 p_ct I_lt dI_lt/dC + w_sh' dI_sh/dC],
+//   dI_e1/dC = (1 / 2 C11, 0, 0), dI_lt/dC = 1/2 (C22 / I3 - 1 / C11, C11 / I3, -C12 / I3),
+//   dI_sh/dC = (-I_sh / 2 C11, -I_sh / 2 C22, 1 / 2 sqrt(C11 C22)).
+// redo[q] = 1 where C11 - 1 or det C / C11 - 1 is beyond the series' range.
+TS_VECTOR_CLONES
+void ud_block(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh, double* __restrict S,
+              double* __restrict W, unsigned char* __restrict redo) {
+  const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
+#pragma omp simd
+  for (std::size_t q = 0; q < n; ++q) {
+    const double a = C[3 * q], b = C[3 * q + 1], c = C[3 * q + 2];
+    const double inv_a = 1.0 / a, i3 = a * b - c * c, inv_3 = 1.0 / i3;
+    const double xa = a - 1.0, xt = i3 / a - 1.0;  // as the SDK forms I3 / I41
+    redo[q] = !(std::abs(xa) < 1e-2) | !(std::abs(xt) < 1e-2);
+    const double e1 = 0.5 * log1p_series(xa), lt = 0.5 * log1p_series(xt);
+    const double inv_r = 1.0 / std::sqrt(a * b), sh = c * inv_r, x2 = sh * sh;
+    const double wsh = x2 * (k1 + x2 * (k2 + x2 * k3)), dwsh = sh * (2 * k1 + x2 * (4 * k2 + x2 * 6 * k3));
+    const double fe = 2 * (2 * kf * e1), fl = 2 * (2 * pct * lt), fs = 2 * dwsh;
+    S[3 * q] = fe * (0.5 * inv_a) + fl * (0.5 * (b * inv_3 - inv_a)) + fs * (-0.5 * sh * inv_a);
+    S[3 * q + 1] = fl * (0.5 * (a * inv_3)) + fs * (-0.5 * sh * (a * inv_r * inv_r));
+    S[3 * q + 2] = fl * (0.5 * (-c * inv_3)) + fs * (0.5 * inv_r);
+    W[q] = kf * e1 * e1 + pct * lt * lt + wsh;
+  }
+}
 
 class UdHyperelastic final : public MaterialLaw {
  public:
@@ -24,20 +76,29 @@ class UdHyperelastic final : public MaterialLaw {
   }
   LawRole role() const override { return LawRole::Membrane; }
   Status evaluate(const MaterialBlock& b) const override {
-    const FibreFrame f;  // L2 = n x L1 = (0, 1) in the material frame
-    for (std::size_t q = 0; q < b.n; ++q) {
-      const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
-      const Invariants v = invariants(C, f, has_shear_ ? kE1 | kLt | kSh : kE1 | kLt);
-      double wsh, dwsh;
-      even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
-      Sym2 S{0, 0, 0};
-      add_stress(S, 2 * k_fibre_ * v.e1, v.de1);
-      add_stress(S, 2 * p_ct_ * v.lt, v.dlt);
-      add_stress(S, dwsh, v.dsh);
-      for (int k = 0; k < 3; ++k) b.stress[3 * q + k] = S[k];
-      if (!b.energy.empty()) b.energy[q] = k_fibre_ * v.e1 * v.e1 + p_ct_ * v.lt * v.lt + wsh;
-    }
+    // Vector pass over the block; the points whose logarithms fall outside
+    // the series' range are evaluated again one by one.
+    Scratch& sc = scratch(b.n);
+    unsigned char* redo = sc.redo.data();
+    ud_block(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), b.energy.empty() ? sc.energy.data() : b.energy.data(),
+             redo);
+    for (std::size_t q = 0; q < b.n; ++q)
+      if (redo[q]) point(b, q);
     return Status::success();
+  }
+  // One point with the SDK's invariants (any elongation).
+  void point(const MaterialBlock& b, std::size_t q) const {
+    const FibreFrame f;  // L2 = n x L1 = (0, 1) in the material frame
+    const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
+    const Invariants v = invariants(C, f, has_shear_ ? kE1 | kLt | kSh : kE1 | kLt);
+    double wsh, dwsh;
+    even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
+    Sym2 S{0, 0, 0};
+    add_stress(S, 2 * k_fibre_ * v.e1, v.de1);
+    add_stress(S, 2 * p_ct_ * v.lt, v.dlt);
+    add_stress(S, dwsh, v.dsh);
+    for (int k = 0; k < 3; ++k) b.stress[3 * q + k] = S[k];
+    if (!b.energy.empty()) b.energy[q] = k_fibre_ * v.e1 * v.e1 + p_ct_ * v.lt * v.lt + wsh;
   }
   double max_stiffness(double) const override { return 2 * std::max(k_fibre_, p_ct_); }
 
