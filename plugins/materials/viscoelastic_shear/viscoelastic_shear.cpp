@@ -14,10 +14,131 @@
 #include <thermostamp/sdk/invariants.hpp>
 #include <thermostamp/sdk/plugin.hpp>
 #include <thermostamp/sdk/prony.hpp>
+#include <thermostamp/sdk/simd.hpp>
 
 namespace {
 
 using namespace ts::sdk;
+
+// Branches handled by the vector pass (more: point by point).
+constexpr int kVectorBranches = 4;
+
+// Per-thread buffers of a block.
+struct Scratch {
+  std::vector<unsigned char> redo;
+  std::vector<double> dir2, energy, next;
+};
+Scratch& scratch(std::size_t n, int keep) {
+  thread_local Scratch s;
+  if (s.redo.size() < n || s.next.size() < n * keep) {
+    s.redo.resize(n);
+    s.dir2.resize(2 * n);
+    s.energy.resize(n);
+    s.next.resize(n * keep);
+  }
+  return s;
+}
+
+// The law over n points with NB <= kVectorBranches branches, each step of
+// the scalar path (invariants(), even_polynomial(), add_stress(),
+// prony_factors_inv(), prony_step()) written out in the same order so that
+// the results are the same bits. State per point (stride ns): S0 (3), H_i
+// (3 NB), then the cache (flag, T, omega, g_i, 1 / tau_i) at offset
+// `cache`. The new S0 and H_i go to next (stride cache); redo[q] = 1 where
+// the cache does not hold T or dt / tau_i >= 1e-2 (nothing is written to
+// the state). Inlined into each vector clone below.
+template <int NB>
+[[gnu::always_inline]] inline void visco_body(std::size_t n, int cache, int ns, const double* __restrict C, const double* __restrict dir2,
+                 const double* __restrict temp, double dt, const double* ksh, const double* __restrict state,
+                 double* __restrict S, double* __restrict W, double* __restrict next, unsigned char* __restrict redo) {
+  const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
+#pragma omp simd
+  for (std::size_t q = 0; q < n; ++q) {
+    const double* st = state + static_cast<std::size_t>(ns) * q;
+    const double* ca = st + cache;
+    const double c = dir2[2 * q], s = dir2[2 * q + 1];
+    const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
+    // invariants(C, {c, s}, kSh)
+    const double l22_0 = c * c, l22_1 = s * s, l22_2 = c * s;
+    const double l12_0 = c, l12_1 = 0.0, l12_2 = 0.5 * s;
+    const double i41 = C0 * 1.0 + C1 * 0.0 + 2 * C2 * 0.0;
+    const double i42 = C0 * l22_0 + C1 * l22_1 + 2 * C2 * l22_2;
+    const double i412 = C0 * l12_0 + C1 * l12_1 + 2 * C2 * l12_2;
+    const double r = std::sqrt(i41 * i42), sh = i412 / r;
+    const double dsh0 = l12_0 / r - 0.5 * sh * (1.0 / i41 + l22_0 / i42);
+    const double dsh1 = l12_1 / r - 0.5 * sh * (0.0 / i41 + l22_1 / i42);
+    const double dsh2 = l12_2 / r - 0.5 * sh * (0.0 / i41 + l22_2 / i42);
+    // even_polynomial(k_sh, 3, sh)
+    const double x2 = sh * sh;
+    double v = 0, d = 0, p = 1;
+    d += 2 * 1 * k1 * p * sh;
+    p *= x2;
+    v += k1 * p;
+    d += 2 * 2 * k2 * p * sh;
+    p *= x2;
+    v += k2 * p;
+    d += 2 * 3 * k3 * p * sh;
+    p *= x2;
+    v += k3 * p;
+    // The cached parameters.
+    const double omega = ca[2];
+    bool ok = (ca[0] == 1.0) & (ca[1] == temp[q]);
+    // add_stress(s0, omega * dwsh, dsh)
+    const double dw = kStressFactor * (omega * d);
+    const double s00 = 0.0 + dw * dsh0, s01 = 0.0 + dw * dsh1, s02 = 0.0 + dw * dsh2;
+    // prony_step(nb, g, decay, ramp, S0_old, s0, H, s)
+    double g_sum = 0;
+    for (int i = 0; i < NB; ++i) g_sum += ca[3 + i];
+    const double g_inf = 1.0 - g_sum;
+    double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
+    double* nx = next + static_cast<std::size_t>(cache) * q;
+    nx[0] = s00;
+    nx[1] = s01;
+    nx[2] = s02;
+    for (int i = 0; i < NB; ++i) {
+      const double g = ca[3 + i], x = dt * ca[3 + NB + i];
+      // prony_factors_inv: the series (x < 1e-3 and x < 1e-2 forms)
+      const double xx2 = x * x, x4 = xx2 * xx2;
+      const double decay_a = (1 - x) + xx2 * (1.0 / 2 - x * (1.0 / 6)) + x4 * (1.0 / 24);
+      const double ramp_a = (1 - x * (1.0 / 2)) + xx2 * (1.0 / 6 - x * (1.0 / 24)) + x4 * (1.0 / 120);
+      const double decay_b =
+          (1 - x) + xx2 * (1.0 / 2 - x * (1.0 / 6)) + x4 * ((1.0 / 24 - x * (1.0 / 120)) + xx2 * (1.0 / 720));
+      const double ramp_b = (1 - x * (1.0 / 2)) + xx2 * (1.0 / 6 - x * (1.0 / 24)) +
+                            x4 * ((1.0 / 120 - x * (1.0 / 720)) + xx2 * (1.0 / 5040));
+      const double decay = x < 1e-3 ? decay_a : decay_b, ramp = x < 1e-3 ? ramp_a : ramp_b;
+      ok = ok & (x < 1e-2);
+      const double h0 = decay * st[3 + 3 * i] + g * ramp * (s00 - st[0]);
+      const double h1 = decay * st[3 + 3 * i + 1] + g * ramp * (s01 - st[1]);
+      const double h2 = decay * st[3 + 3 * i + 2] + g * ramp * (s02 - st[2]);
+      nx[3 + 3 * i] = h0;
+      nx[3 + 3 * i + 1] = h1;
+      nx[3 + 3 * i + 2] = h2;
+      o0 += h0;
+      o1 += h1;
+      o2 += h2;
+    }
+    redo[q] = !ok;
+    S[3 * q] = o0;
+    S[3 * q + 1] = o1;
+    S[3 * q + 2] = o2;
+    W[q] = omega * v;
+  }
+}
+
+#define TS_VISCO_BLOCK(NB)                                                                                          \
+  TS_VECTOR_CLONES void visco_block##NB(std::size_t n, int cache, int ns, const double* C, const double* dir2,      \
+                                        const double* temp, double dt, const double* ksh, const double* state,       \
+                                        double* S, double* W, double* next, unsigned char* redo) {                   \
+    visco_body<NB>(n, cache, ns, C, dir2, temp, dt, ksh, state, S, W, next, redo);                                  \
+  }
+TS_VISCO_BLOCK(1)
+TS_VISCO_BLOCK(2)
+TS_VISCO_BLOCK(3)
+TS_VISCO_BLOCK(4)
+#undef TS_VISCO_BLOCK
+using ViscoBlock = void (*)(std::size_t, int, int, const double*, const double*, const double*, double, const double*,
+                            const double*, double*, double*, double*, unsigned char*);
+constexpr ViscoBlock kViscoBlock[kVectorBranches + 1] = {nullptr, visco_block1, visco_block2, visco_block3, visco_block4};
 
 class ViscoelasticShear final : public MaterialLaw {
  public:
@@ -84,55 +205,86 @@ class ViscoelasticShear final : public MaterialLaw {
   }
 
   Status evaluate(const MaterialBlock& b) const override {
-    const FibreFrame f;
-    double g[16], inv_tau[16], decay[16], ramp[16], omega = 0, T_last = 0;
-    const int ns = state_size(), cache = 3 + 3 * n_;
+    if (n_ < 1 || n_ > kVectorBranches) {
+      for (std::size_t q = 0; q < b.n; ++q) point(b, q);
+      return Status::success();
+    }
+    // One vector pass over the block for the points whose parameters are
+    // cached at their current temperature (all of them between two thermal
+    // steps) and whose dt / tau_i are in the factors' series range; it
+    // computes the new state aside. The other points are evaluated one by
+    // one, which also refreshes their cache. Both give the same bits.
+    Scratch& sc = scratch(b.n, 3 + 3 * n_);
+    const double* dir2 = b.dir2.data();
+    if (b.dir2.empty()) {
+      for (std::size_t q = 0; q < b.n; ++q) {
+        sc.dir2[2 * q] = 0.0;
+        sc.dir2[2 * q + 1] = 1.0;
+      }
+      dir2 = sc.dir2.data();
+    }
+    double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
+    kViscoBlock[n_](b.n, 3 + 3 * n_, state_size(), b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_,
+                b.state.data(), b.stress.data(), W, sc.next.data(), sc.redo.data());
+    const int keep = 3 + 3 * n_, ns = state_size();
     for (std::size_t q = 0; q < b.n; ++q) {
-      const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
-      FibreFrame fr = f;
-      if (!b.dir2.empty()) {
-        fr.c = b.dir2[2 * q];
-        fr.s = b.dir2[2 * q + 1];
+      if (sc.redo[q]) {
+        point(b, q);
+      } else {
+        double* st = b.state.data() + static_cast<std::size_t>(ns) * q;
+        const double* nx = sc.next.data() + static_cast<std::size_t>(keep) * q;
+        for (int k = 0; k < keep; ++k) st[k] = nx[k];
       }
-      const Invariants v = invariants(C, fr, kSh);
-      double* st = b.state.data() + static_cast<std::size_t>(ns) * q;
-      const double T = b.temperature[q];
-      if (q == 0 || T != T_last) {  // parameters change with temperature only
-        double* c = st + cache;
-        if (c[0] == 1.0 && c[1] == T) {  // as at this point's previous step
-          omega = c[2];
-          for (int i = 0; i < n_; ++i) {
-            g[i] = c[3 + i];
-            inv_tau[i] = c[3 + n_ + i];
-          }
-        } else {
-          double tau[16];
-          at(T, &omega, g, tau);
-          for (int i = 0; i < n_; ++i) inv_tau[i] = 1.0 / tau[i];
-          c[0] = 1.0;
-          c[1] = T;
-          c[2] = omega;
-          for (int i = 0; i < n_; ++i) {
-            c[3 + i] = g[i];
-            c[3 + n_ + i] = inv_tau[i];
-          }
-        }
-        prony_factors_inv(n_, inv_tau, b.dt, decay, ramp);
-        T_last = T;
-      }
-      double wsh, dwsh;
-      even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
-      Sym2 s0{0, 0, 0};
-      add_stress(s0, omega * dwsh, v.dsh);
-      double s[3];
-      prony_step(n_, g, decay, ramp, st, s0.data(), st + 3, s);
-      for (int k = 0; k < 3; ++k) {
-        st[k] = s0[k];
-        b.stress[3 * q + k] = s[k];
-      }
-      if (!b.energy.empty()) b.energy[q] = omega * wsh;  // elastic (unrelaxed) energy
     }
     return Status::success();
+  }
+
+  // One point: parameters at its temperature (from its cache when the
+  // temperature is the cached one), Prony step.
+  void point(const MaterialBlock& b, std::size_t q) const {
+    const FibreFrame f;
+    double g[16], inv_tau[16], decay[16], ramp[16], omega = 0;
+    const int ns = state_size(), cache = 3 + 3 * n_;
+    const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
+    FibreFrame fr = f;
+    if (!b.dir2.empty()) {
+      fr.c = b.dir2[2 * q];
+      fr.s = b.dir2[2 * q + 1];
+    }
+    const Invariants v = invariants(C, fr, kSh);
+    double* st = b.state.data() + static_cast<std::size_t>(ns) * q;
+    const double T = b.temperature[q];
+    double* c = st + cache;
+    if (c[0] == 1.0 && c[1] == T) {  // as at this point's previous step
+      omega = c[2];
+      for (int i = 0; i < n_; ++i) {
+        g[i] = c[3 + i];
+        inv_tau[i] = c[3 + n_ + i];
+      }
+    } else {
+      double tau[16];
+      at(T, &omega, g, tau);
+      for (int i = 0; i < n_; ++i) inv_tau[i] = 1.0 / tau[i];
+      c[0] = 1.0;
+      c[1] = T;
+      c[2] = omega;
+      for (int i = 0; i < n_; ++i) {
+        c[3 + i] = g[i];
+        c[3 + n_ + i] = inv_tau[i];
+      }
+    }
+    prony_factors_inv(n_, inv_tau, b.dt, decay, ramp);
+    double wsh, dwsh;
+    even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
+    Sym2 s0{0, 0, 0};
+    add_stress(s0, omega * dwsh, v.dsh);
+    double s[3];
+    prony_step(n_, g, decay, ramp, st, s0.data(), st + 3, s);
+    for (int k = 0; k < 3; ++k) {
+      st[k] = s0[k];
+      b.stress[3 * q + k] = s[k];
+    }
+    if (!b.energy.empty()) b.energy[q] = omega * wsh;  // elastic (unrelaxed) energy
   }
   double max_stiffness(double T) const override {
     double omega, g[16], tau[16];
