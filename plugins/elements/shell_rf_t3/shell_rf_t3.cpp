@@ -27,6 +27,7 @@
 #include <thermostamp/sdk/invariants.hpp>
 #include <thermostamp/sdk/math.hpp>
 #include <thermostamp/sdk/plugin.hpp>
+#include <thermostamp/sdk/simd.hpp>
 
 namespace {
 
@@ -36,6 +37,11 @@ using namespace ts::sdk;
 // the block's first element); they grow to the largest block once.
 struct BlockScratch {
   std::vector<double> temp, ff, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy;
+  // Interior hinges of the block in structure-of-arrays form (capacity 3
+  // per element): node positions (c, p, q, o) x xyz, angle, gradients.
+  std::vector<double> hx, hg, ht;
+  std::vector<int> hdest;
+  std::vector<double> hredo;
 };
 
 BlockScratch& block_scratch(int n) {
@@ -51,8 +57,54 @@ BlockScratch& block_scratch(int n) {
     s.hth.resize(3 * m);
     s.moment.resize(3 * m);
     s.benergy.resize(m);
+    s.hx.resize(36 * m);
+    s.hg.resize(36 * m);
+    s.ht.resize(3 * m);
+    s.hdest.resize(6 * m);
+    s.hredo.resize(3 * m);
   }
   return s;
+}
+
+// Bending angles and their gradients of h hinges (as
+// ShellRfT3::hinge_angle, the same operations in the same order, so the
+// same bits): X holds the positions of the nodes (c, p, q, o), component
+// 3 i + d of node i at X[(3 i + d) cap + j]; the gradients on (c, o, p, q)
+// go to G likewise. redo[j] = 1 (0 otherwise) where the angle is beyond atan2_small's
+// range (the caller evaluates it with the library).
+TS_VECTOR_CLONES
+void hinge_block(int h, int cap, const double* __restrict X, double* __restrict theta, double* __restrict G,
+                 double* __restrict redo) {
+#pragma omp simd
+  for (int j = 0; j < h; ++j) {
+    // Written out component by component (sub, dot, cross, scale, add of
+    // math.hpp, in their order), so that the compiler sees plain scalars.
+    const double C0 = X[0 * cap + j], C1 = X[1 * cap + j], C2 = X[2 * cap + j];
+    const double P0 = X[3 * cap + j], P1 = X[4 * cap + j], P2 = X[5 * cap + j];
+    const double Q0 = X[6 * cap + j], Q1 = X[7 * cap + j], Q2 = X[8 * cap + j];
+    const double O0 = X[9 * cap + j], O1 = X[10 * cap + j], O2 = X[11 * cap + j];
+    const double e0 = Q0 - P0, e1 = Q1 - P1, e2 = Q2 - P2;
+    const double l2 = e0 * e0 + e1 * e1 + e2 * e2, len = std::sqrt(l2);
+    const double c0 = C0 - P0, c1 = C1 - P1, c2 = C2 - P2;
+    const double o0 = O0 - P0, o1 = O1 - P1, o2 = O2 - P2;
+    const double ne0 = e1 * c2 - e2 * c1, ne1 = e2 * c0 - e0 * c2, ne2 = e0 * c1 - e1 * c0;  // edge x cp
+    const double nn0 = o1 * e2 - o2 * e1, nn1 = o2 * e0 - o0 * e2, nn2 = o0 * e1 - o1 * e0;  // op x edge
+    const double m0 = nn1 * ne2 - nn2 * ne1, m1 = nn2 * ne0 - nn0 * ne2, m2 = nn0 * ne1 - nn1 * ne0;  // Nn x Ne
+    const double y = m0 * e0 + m1 * e1 + m2 * e2, x = len * (ne0 * nn0 + ne1 * nn1 + ne2 * nn2);
+    redo[j] = (x > 0) & (std::abs(y) <= 0.66 * x) ? 0.0 : 1.0;
+    theta[j] = atan2_small_approx(y, x);
+    const double sc = (c0 * e0 + c1 * e1 + c2 * e2) / l2, so = (o0 * e0 + o1 * e1 + o2 * e2) / l2;
+    const double se = len / (ne0 * ne0 + ne1 * ne1 + ne2 * ne2), sn = len / (nn0 * nn0 + nn1 * nn1 + nn2 * nn2);
+    const double g0[3] = {ne0 * se, ne1 * se, ne2 * se};
+    const double g1[3] = {nn0 * sn, nn1 * sn, nn2 * sn};
+    const double a2 = -(1 - sc), b2 = -(1 - so), a3 = -sc, b3 = -so;
+    for (int d = 0; d < 3; ++d) {
+      G[(0 + d) * cap + j] = g0[d];
+      G[(3 + d) * cap + j] = g1[d];
+      G[(6 + d) * cap + j] = g0[d] * a2 + g1[d] * b2;
+      G[(9 + d) * cap + j] = g0[d] * a3 + g1[d] * b3;
+    }
+  }
 }
 
 class ShellRfT3 final : public ElementKernel {
@@ -384,32 +436,58 @@ class ShellRfT3 final : public ElementKernel {
     static_assert(sizeof(Vec3) == 3 * sizeof(double));
     // Hinge angles and their gradients. An interior edge is one hinge seen
     // from both of its elements (same angle, gradients permuted): when both
-    // elements are in this block it is evaluated once.
+    // elements are in this block it is evaluated once. Interior hinges are
+    // gathered into structure-of-arrays form, evaluated in one vector pass
+    // and handed to their elements; ghost hinges (clamped and symmetry
+    // edges) one by one.
+    const int cap = 3 * (end - b);
+    double* X = sc.hx.data();
+    int* dest = sc.hdest.data();
+    int h = 0;
     for (int e = b; e < end; ++e) {
       const int* t = &part_->triangles[3 * e];
       for (int k = 0; k < 3; ++k) {
         const int o = opp_[3 * e + k];
-        Vec3* g = reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]);  // gradients kept for the forces
         if (o >= 0) {
           const int nb = part_->neighbours[3 * e + k];
           const bool shared = nb >= b && nb < end;
           if (shared && nb < e) continue;  // done from the neighbour
-          const double th = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], o, g);
-          hth[3 * (e - b) + k] = th;
-          if (shared) {
-            const int kb = partner_k_[3 * e + k];
-            Vec3* h = reinterpret_cast<Vec3*>(&hgrad[36 * (nb - b) + 12 * kb]);
-            h[0] = g[1];  // (c, o, p, q) of the neighbour are (o, c, q, p) here
-            h[1] = g[0];
-            h[2] = g[3];
-            h[3] = g[2];
-            hth[3 * (nb - b) + kb] = th;
-          }
-        } else if (clamped_[3 * e + k] == 1) {
-          hth[3 * (e - b) + k] = 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g);
-        } else if (clamped_[3 * e + k] >= 2) {
+          const int nodes[4] = {t[k], t[(k + 1) % 3], t[(k + 2) % 3], o};
+          for (int i = 0; i < 4; ++i)
+            for (int d = 0; d < 3; ++d) X[(3 * i + d) * cap + h] = x[3 * nodes[i] + d];
+          dest[2 * h] = 3 * (e - b) + k;
+          dest[2 * h + 1] = shared ? 3 * (nb - b) + partner_k_[3 * e + k] : -1;
+          ++h;
+        } else if (clamped_[3 * e + k]) {
+          Vec3* g = reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
           hth[3 * (e - b) + k] =
-              ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, g);
+              clamped_[3 * e + k] == 1
+                  ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g)
+                  : ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, g);
+        }
+      }
+    }
+    double* G = sc.hg.data();
+    double* th = sc.ht.data();
+    hinge_block(h, cap, X, th, G, sc.hredo.data());
+    for (int j = 0; j < h; ++j) {
+      const int slot = dest[2 * j];
+      if (sc.hredo[j] != 0) {  // beyond the approximation's range: the library's atan2
+        const int e = b + slot / 3, k = slot % 3;
+        const int* t = &part_->triangles[3 * e];
+        th[j] = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], opp_[3 * e + k], nullptr);
+      }
+      hth[slot] = th[j];
+      double* g = &hgrad[12 * slot];  // (c, o, p, q)
+      for (int c = 0; c < 12; ++c) g[c] = G[c * cap + j];
+      if (const int ps = dest[2 * j + 1]; ps >= 0) {  // the neighour's (c, o, p, q) are (o, c, q, p) here
+        hth[ps] = th[j];
+        double* gp = &hgrad[12 * ps];
+        for (int d = 0; d < 3; ++d) {
+          gp[d] = G[(3 + d) * cap + j];
+          gp[3 + d] = G[(0 + d) * cap + j];
+          gp[6 + d] = G[(9 + d) * cap + j];
+          gp[9 + d] = G[(6 + d) * cap + j];
         }
       }
     }

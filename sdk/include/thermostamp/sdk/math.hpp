@@ -57,25 +57,29 @@ inline double bucket_grid(const Vec3& lo, const Vec3& hi, double cell, int n[3],
   }
 }
 
-// Closest point to p on the triangle (a, b, c) and its barycentric weights
-// (Ericson, Real-Time Collision Detection, 5.1.5).
 // atan2(y, x). For x > 0 and |y| <= 0.66 x (|angle| < 33.4 degrees: the
 // small angles between neighbouring elements of a shell) by the rational
 // approximation of atan(r), r = y / x, of the Cephes library,
 // atan r = r + r^3 P(r^2) / Q(r^2) (relative error below 2e-16 on that
 // range); elsewhere by std::atan2.
+// atan2_small_range(y, x) says whether (y, x) is on that range;
+// atan2_small_approx(y, x) is the approximation alone (no branch, for
+// vector loops; meaningless off the range).
+inline bool atan2_small_range(double y, double x) { return x > 0 && std::abs(y) <= 0.66 * x; }
+inline double atan2_small_approx(double y, double x) {
+  const double r = y / x, z = r * r;
+  const double p = (((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z - 7.500855792314704667340e1) * z -
+                    1.228866684490136173410e2) * z - 6.485021904942025371773e1;
+  const double q = ((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z + 4.328810604912902668951e2) * z +
+                    4.853903996359136964868e2) * z + 1.945506571482613964425e2;
+  return r + r * (z * p / q);
+}
 inline double atan2_small(double y, double x) {
-  if (x > 0 && std::abs(y) <= 0.66 * x) {
-    const double r = y / x, z = r * r;
-    const double p = (((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z - 7.500855792314704667340e1) * z -
-                      1.228866684490136173410e2) * z - 6.485021904942025371773e1;
-    const double q = ((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z + 4.328810604912902668951e2) * z +
-                      4.853903996359136964868e2) * z + 1.945506571482613964425e2;
-    return r + r * (z * p / q);
-  }
-  return std::atan2(y, x);
+  return atan2_small_range(y, x) ? atan2_small_approx(y, x) : std::atan2(y, x);
 }
 
+// Closest point to p on the triangle (a, b, c) and its barycentric weights
+// (Ericson, Real-Time Collision Detection, 5.1.5).
 inline Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
                                       double* w = nullptr) {
   auto out = [&](double u, double v, double t) {
