@@ -258,7 +258,8 @@ TEST(MaterialLaws, ViscoelasticShearFollowsTemperatureChanges) {
 // strains, temperatures that change for some points, and steps in both
 // series forms of the Prony factors and beyond them, a block must give the
 // same bits as each point evaluated alone with its cache cleared (the
-// pointwise path), for UD (no weft direction) and woven (sheared weft).
+// pointwise path), for UD (no weft direction) and woven (sheared weft),
+// and for a block at one temperature (parameters shared along the block).
 // Steps of 1e-4 and 1e-3 s take the vector pass for the points whose
 // temperature stayed; 2e-3 and 1e-2 s (dt / tau = 1e-2 and 5e-2) do not.
 TEST(MaterialLaws, ViscoelasticBlockMatchesPointwise) {
@@ -267,20 +268,21 @@ TEST(MaterialLaws, ViscoelasticBlockMatchesPointwise) {
   const int n = 37, ns = visco.law->state_size(), kept = 3 + 3 * 2;
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (const bool woven : {false, true}) {
+  for (const int variant : {0, 1, 2, 3}) {
+    const bool woven = variant & 1, uniform = variant & 2;  // uniform: one temperature (the pointwise path)
     std::vector<double> sa(n * ns, 0.0), sb(n * ns, 0.0), C(3 * n), T(n), S(3 * n), W(n), dir2(2 * n);
     for (int q = 0; q < n; ++q) {
       const double a = 1.3 + 0.3 * u(rng);
       dir2[2 * q] = std::cos(a);
       dir2[2 * q + 1] = std::sin(a);
-      T[q] = 260.0 + 5.0 * (q % 4);
+      T[q] = uniform ? 265.0 : 260.0 + 5.0 * (q % 4);
     }
     for (int k = 0; k < 60; ++k) {
       const double dt = k % 3 == 0 ? 1e-4 : k % 3 == 1 ? 1e-3 : (k % 20 == 2 ? 0.01 : 2e-3);
       for (int q = 0; q < n; ++q) {
         const sdk::Sym2 c = cauchy_green(1 + 0.05 * u(rng), 0.2 * u(rng), 0.2 * u(rng), 1 + 0.05 * u(rng));
         for (int j = 0; j < 3; ++j) C[3 * q + j] = c[j];
-        if (k % 7 == 6 && q % 3 == 0) T[q] += 1.5;  // a thermal step for some points
+        if (k % 7 == 6 && (uniform || q % 3 == 0)) T[q] += 1.5;  // a thermal step (for some points)
       }
       sdk::MaterialBlock b;
       b.n = n;

@@ -35,13 +35,15 @@ using namespace ts::sdk;
 
 // Per-thread buffers for the values of one block of elements (indexed from
 // the block's first element); they grow to the largest block once.
+constexpr int kHingeChunk = 128;
+
 struct BlockScratch {
   std::vector<double> temp, ff, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy;
-  // Interior hinges of the block in structure-of-arrays form (capacity 3
-  // per element): node positions (c, p, q, o) x xyz, angle, gradients.
-  std::vector<double> hx, hg, ht;
-  std::vector<int> hdest;
-  std::vector<double> hredo;
+  // A chunk of interior hinges in structure-of-arrays form: node
+  // positions (c, p, q, o) x xyz, angle, gradients.
+  std::vector<double> hx = std::vector<double>(12 * kHingeChunk), hg = std::vector<double>(12 * kHingeChunk),
+                      ht = std::vector<double>(kHingeChunk), hredo = std::vector<double>(kHingeChunk);
+  std::vector<int> hdest = std::vector<int>(2 * kHingeChunk);
 };
 
 BlockScratch& block_scratch(int n) {
@@ -57,11 +59,6 @@ BlockScratch& block_scratch(int n) {
     s.hth.resize(3 * m);
     s.moment.resize(3 * m);
     s.benergy.resize(m);
-    s.hx.resize(36 * m);
-    s.hg.resize(36 * m);
-    s.ht.resize(3 * m);
-    s.hdest.resize(6 * m);
-    s.hredo.resize(3 * m);
   }
   return s;
 }
@@ -440,10 +437,39 @@ class ShellRfT3 final : public ElementKernel {
     // gathered into structure-of-arrays form, evaluated in one vector pass
     // and handed to their elements; ghost hinges (clamped and symmetry
     // edges) one by one.
-    const int cap = 3 * (end - b);
+    // Hinges go through the vector pass in chunks of kHingeChunk, so that
+    // their arrays stay in the first-level cache.
+    constexpr int cap = kHingeChunk;
     double* X = sc.hx.data();
+    double* G = sc.hg.data();
+    double* th = sc.ht.data();
     int* dest = sc.hdest.data();
     int h = 0;
+    auto flush = [&]() {
+      hinge_block(h, cap, X, th, G, sc.hredo.data());
+      for (int j = 0; j < h; ++j) {
+        const int slot = dest[2 * j];
+        if (sc.hredo[j] != 0) {  // beyond the approximation's range: the library's atan2
+          const int e = b + slot / 3, k = slot % 3;
+          const int* t = &part_->triangles[3 * e];
+          th[j] = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], opp_[3 * e + k], nullptr);
+        }
+        hth[slot] = th[j];
+        double* g = &hgrad[12 * slot];  // (c, o, p, q)
+        for (int c = 0; c < 12; ++c) g[c] = G[c * cap + j];
+        if (const int ps = dest[2 * j + 1]; ps >= 0) {  // the neighour's (c, o, p, q) are (o, c, q, p) here
+          hth[ps] = th[j];
+          double* gp = &hgrad[12 * ps];
+          for (int d = 0; d < 3; ++d) {
+            gp[d] = G[(3 + d) * cap + j];
+            gp[3 + d] = G[(0 + d) * cap + j];
+            gp[6 + d] = G[(9 + d) * cap + j];
+            gp[9 + d] = G[(6 + d) * cap + j];
+          }
+        }
+      }
+      h = 0;
+    };
     for (int e = b; e < end; ++e) {
       const int* t = &part_->triangles[3 * e];
       for (int k = 0; k < 3; ++k) {
@@ -457,7 +483,7 @@ class ShellRfT3 final : public ElementKernel {
             for (int d = 0; d < 3; ++d) X[(3 * i + d) * cap + h] = x[3 * nodes[i] + d];
           dest[2 * h] = 3 * (e - b) + k;
           dest[2 * h + 1] = shared ? 3 * (nb - b) + partner_k_[3 * e + k] : -1;
-          ++h;
+          if (++h == cap) flush();
         } else if (clamped_[3 * e + k]) {
           Vec3* g = reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
           hth[3 * (e - b) + k] =
@@ -467,30 +493,7 @@ class ShellRfT3 final : public ElementKernel {
         }
       }
     }
-    double* G = sc.hg.data();
-    double* th = sc.ht.data();
-    hinge_block(h, cap, X, th, G, sc.hredo.data());
-    for (int j = 0; j < h; ++j) {
-      const int slot = dest[2 * j];
-      if (sc.hredo[j] != 0) {  // beyond the approximation's range: the library's atan2
-        const int e = b + slot / 3, k = slot % 3;
-        const int* t = &part_->triangles[3 * e];
-        th[j] = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], opp_[3 * e + k], nullptr);
-      }
-      hth[slot] = th[j];
-      double* g = &hgrad[12 * slot];  // (c, o, p, q)
-      for (int c = 0; c < 12; ++c) g[c] = G[c * cap + j];
-      if (const int ps = dest[2 * j + 1]; ps >= 0) {  // the neighour's (c, o, p, q) are (o, c, q, p) here
-        hth[ps] = th[j];
-        double* gp = &hgrad[12 * ps];
-        for (int d = 0; d < 3; ++d) {
-          gp[d] = G[(3 + d) * cap + j];
-          gp[3 + d] = G[(0 + d) * cap + j];
-          gp[6 + d] = G[(9 + d) * cap + j];
-          gp[9 + d] = G[(6 + d) * cap + j];
-        }
-      }
-    }
+    if (h > 0) flush();
     for (int e = b; e < end; ++e) {
       const double* c = &ginv_[9 * e];
       double K[3] = {0, 0, 0};

@@ -205,8 +205,19 @@ class ViscoelasticShear final : public MaterialLaw {
   }
 
   Status evaluate(const MaterialBlock& b) const override {
-    if (n_ < 1 || n_ > kVectorBranches) {
-      for (std::size_t q = 0; q < b.n; ++q) point(b, q);
+    // One temperature for the whole block (an isothermal run): the point
+    // by point path evaluates the parameters and factors once and is the
+    // faster one.
+    bool uniform = true;
+    for (std::size_t q = 1; q < b.n && uniform; ++q) uniform = b.temperature[q] == b.temperature[0];
+    if (n_ < 1 || n_ > kVectorBranches || uniform) {
+      double g[16], decay[16], ramp[16], omega = 0;
+      for (std::size_t q = 0; q < b.n; ++q) {
+        if (uniform && q > 0)
+          shared_point(b, q, 0, omega, g, decay, ramp);
+        else
+          point(b, q, &omega, g, decay, ramp);
+      }
       return Status::success();
     }
     // One vector pass over the block for the points whose parameters are
@@ -241,7 +252,10 @@ class ViscoelasticShear final : public MaterialLaw {
 
   // One point: parameters at its temperature (from its cache when the
   // temperature is the cached one), Prony step.
-  void point(const MaterialBlock& b, std::size_t q) const {
+  // The parameters and factors used are returned when asked for (omega_out,
+  // g_out, decay_out, ramp_out: 16 each).
+  void point(const MaterialBlock& b, std::size_t q, double* omega_out = nullptr, double* g_out = nullptr,
+             double* decay_out = nullptr, double* ramp_out = nullptr) const {
     const FibreFrame f;
     double g[16], inv_tau[16], decay[16], ramp[16], omega = 0;
     const int ns = state_size(), cache = 3 + 3 * n_;
@@ -274,6 +288,39 @@ class ViscoelasticShear final : public MaterialLaw {
       }
     }
     prony_factors_inv(n_, inv_tau, b.dt, decay, ramp);
+    if (omega_out) {
+      *omega_out = omega;
+      for (int i = 0; i < n_; ++i) {
+        g_out[i] = g[i];
+        decay_out[i] = decay[i];
+        ramp_out[i] = ramp[i];
+      }
+    }
+    finish(b, q, v, omega, g, decay, ramp);
+  }
+
+  // One point at the temperature of point q0 (its parameters and factors
+  // given); the point's cache is brought up to date from q0's.
+  void shared_point(const MaterialBlock& b, std::size_t q, std::size_t q0, double omega, const double* g,
+                    const double* decay, const double* ramp) const {
+    FibreFrame fr;
+    if (!b.dir2.empty()) {
+      fr.c = b.dir2[2 * q];
+      fr.s = b.dir2[2 * q + 1];
+    }
+    const Invariants v = invariants({b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]}, fr, kSh);
+    const int ns = state_size(), cache = 3 + 3 * n_;
+    double* c = b.state.data() + static_cast<std::size_t>(ns) * q + cache;
+    const double* c0 = b.state.data() + static_cast<std::size_t>(ns) * q0 + cache;
+    if (!(c[0] == 1.0 && c[1] == b.temperature[q]))
+      for (int k = 0; k < 3 + 2 * n_; ++k) c[k] = c0[k];
+    finish(b, q, v, omega, g, decay, ramp);
+  }
+
+  // Prony step of one point from its invariants and factors.
+  void finish(const MaterialBlock& b, std::size_t q, const Invariants& v, double omega, const double* g,
+              const double* decay, const double* ramp) const {
+    double* st = b.state.data() + static_cast<std::size_t>(state_size()) * q;
     double wsh, dwsh;
     even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
     Sym2 s0{0, 0, 0};
