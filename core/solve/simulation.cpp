@@ -811,6 +811,8 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
     const int nn = st.mesh.num_nodes();
+    const bool contact = !contacts_.empty();  // otherwise f_con stays zero
+    double nonfinite = 0;                     // x * 0: zero unless a position is not finite
     for (int i = 0; i < nn; ++i) {
       const double mi = m.mass[i];
       for (int d = 0; d < 3; ++d) {
@@ -818,8 +820,10 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         // Internal and contact work of the previous step (trapezoid with the
         // forces at both ends).
         w_int += 0.5 * (m.f_prev[k] + m.f_int[k]) * m.dx[k];
-        w_con += 0.5 * (m.fc_prev[k] + m.f_con[k]) * m.dx[k];
-        m.fc_prev[k] = m.f_con[k];
+        if (contact) {
+          w_con += 0.5 * (m.fc_prev[k] + m.f_con[k]) * m.dx[k];
+          m.fc_prev[k] = m.f_con[k];
+        }
         const double f_ext = md.gravity[d] * m.mass_node_physical[i] + m.load[k];
         if (m.fixed[k]) {
           // A held or driven dof: the constraint supplies R = f_int - f_ext -
@@ -832,6 +836,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
           m.v[k] = m.prescribed[k];
           m.dx[k] = dt * m.v[k];
           st.x[k] += m.dx[k];
+          nonfinite += st.x[k] * 0.0;
           m.f_prev[k] = m.f_int[k];
           continue;
         }
@@ -850,14 +855,15 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         m.v[k] = v_new;
         m.dx[k] = dt * v_new;
         st.x[k] += m.dx[k];
+        nonfinite += st.x[k] * 0.0;
         m.f_prev[k] = m.f_int[k];
       }
     }
-    for (int i = 0; i < 3 * nn; ++i) st.displacement[i] = st.x[i] - st.x0[i];
-    for (int k = 0; k < 3 * nn; ++k)
-      if (!std::isfinite(st.x[k]))
-        throw RunError("non-finite position in part '" + st.def->name + "' at node " + std::to_string(k / 3) +
-                       ", t = " + fmt_g(t + dt) + " s (mechanical step " + std::to_string(step + 1) + ")");
+    if (nonfinite != 0)  // also when NaN
+      for (int k = 0; k < 3 * nn; ++k)
+        if (!std::isfinite(st.x[k]))
+          throw RunError("non-finite position in part '" + st.def->name + "' at node " + std::to_string(k / 3) +
+                         ", t = " + fmt_g(t + dt) + " s (mechanical step " + std::to_string(step + 1) + ")");
   }
   // Tools move to t + dt (force control with the plies' force at t).
   for (std::size_t q = 0; q < tools_.size(); ++q)
@@ -1065,6 +1071,8 @@ RunResult Simulation::run(const RunOptions& opt) {
   };
 
   auto write_frame = [&](double t) {
+    for (auto& st : parts_)
+      for (std::size_t k = 0; k < st->x.size(); ++k) st->displacement[k] = st->x[k] - st->x0[k];
     if (!writer) return;
     update_derived();
     std::vector<const double*> xs, ns;
