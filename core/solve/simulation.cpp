@@ -1204,8 +1204,9 @@ RunResult Simulation::run(const RunOptions& opt) {
   // / internal energy at the end, and the time from which it stays under
   // 5 % (-1: not at the end).
   auto quasi_static = [&]() -> std::pair<double, double> {
+    // ratio NaN: no internal energy was ever stored (the check does not apply).
     const std::size_t w = energy_cols.size();
-    double ratio = 0, below_from = -1;
+    double ratio = std::numeric_limits<double>::quiet_NaN(), below_from = -1;
     for (std::size_t r = 0; r + w <= energy_rows.size(); r += w) {
       const double t_r = energy_rows[r], ie = energy_rows[r + 2], ke = energy_rows[r + w - 1];
       if (!(ie > 0)) continue;
@@ -1507,7 +1508,8 @@ RunResult Simulation::run(const RunOptions& opt) {
     if (job_.mechanics && !energy_rows.empty()) {
       const auto [ratio, below_from] = quasi_static();
       summary["energy"]["kinetic_to_internal"] = {
-          {"at_end", ratio}, {"under_5_percent_from_s", below_from >= 0 ? json(below_from) : json(nullptr)}};
+          {"at_end", std::isnan(ratio) ? json(nullptr) : json(ratio)},
+          {"under_5_percent_from_s", below_from >= 0 ? json(below_from) : json(nullptr)}};
     }
     json tools = json::array();
     for (std::size_t q = 0; q < tools_.size(); ++q) {
@@ -1567,7 +1569,9 @@ RunResult Simulation::run(const RunOptions& opt) {
       const std::string hint =
           ": the mass scaling makes part of the run dynamic; compare the results with a smaller "
           "solvers.mechanics.mass_scaling.target_dt";
-      if (below_from >= 0 && below_from <= 0.1 * t_end)
+      if (std::isnan(ratio))
+        log->info("kinetic/internal energy: no internal energy was stored, the ratio does not apply");
+      else if (below_from >= 0 && below_from <= 0.1 * t_end)
         log->info("kinetic/internal energy {:.2g} % at the end, under 5 % from t = {:.3g} s", 100 * ratio, below_from);
       else if (below_from >= 0)
         log->info("kinetic/internal energy {:.2g} % at the end, under 5 % only from t = {:.3g} s ({:.0f} % of the run){}",
