@@ -140,6 +140,89 @@ using ViscoBlock = void (*)(std::size_t, int, int, const double*, const double*,
                             const double*, double*, double*, double*, unsigned char*);
 constexpr ViscoBlock kViscoBlock[kVectorBranches + 1] = {nullptr, visco_block1, visco_block2, visco_block3, visco_block4};
 
+// The same for n points at one temperature: omega, g_i and the factors
+// decay_i, ramp_i given (computed once for the block); the new S0 and H_i
+// are written to the state in place (no point needs evaluating again).
+template <int NB>
+[[gnu::always_inline]] inline void visco_uniform_body(std::size_t n, int ns, const double* __restrict C,
+                                                      const double* __restrict dir2, double omega, const double* g,
+                                                      const double* decay, const double* ramp, const double* ksh,
+                                                      double* __restrict state, double* __restrict S,
+                                                      double* __restrict W) {
+  const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
+  double gs[NB], ds[NB], rs[NB], g_sum = 0;
+  for (int i = 0; i < NB; ++i) {
+    gs[i] = g[i];
+    ds[i] = decay[i];
+    rs[i] = ramp[i];
+    g_sum += g[i];
+  }
+  const double g_inf = 1.0 - g_sum;
+#pragma omp simd
+  for (std::size_t q = 0; q < n; ++q) {
+    double* st = state + static_cast<std::size_t>(ns) * q;
+    const double c = dir2[2 * q], s = dir2[2 * q + 1];
+    const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
+    const double l22_0 = c * c, l22_1 = s * s, l22_2 = c * s;
+    const double l12_0 = c, l12_1 = 0.0, l12_2 = 0.5 * s;
+    const double i41 = C0 * 1.0 + C1 * 0.0 + 2 * C2 * 0.0;
+    const double i42 = C0 * l22_0 + C1 * l22_1 + 2 * C2 * l22_2;
+    const double i412 = C0 * l12_0 + C1 * l12_1 + 2 * C2 * l12_2;
+    const double r = std::sqrt(i41 * i42), sh = i412 / r;
+    const double dsh0 = l12_0 / r - 0.5 * sh * (1.0 / i41 + l22_0 / i42);
+    const double dsh1 = l12_1 / r - 0.5 * sh * (0.0 / i41 + l22_1 / i42);
+    const double dsh2 = l12_2 / r - 0.5 * sh * (0.0 / i41 + l22_2 / i42);
+    const double x2 = sh * sh;
+    double v = 0, d = 0, p = 1;
+    d += 2 * 1 * k1 * p * sh;
+    p *= x2;
+    v += k1 * p;
+    d += 2 * 2 * k2 * p * sh;
+    p *= x2;
+    v += k2 * p;
+    d += 2 * 3 * k3 * p * sh;
+    p *= x2;
+    v += k3 * p;
+    const double dw = kStressFactor * (omega * d);
+    const double s00 = 0.0 + dw * dsh0, s01 = 0.0 + dw * dsh1, s02 = 0.0 + dw * dsh2;
+    const double o00 = st[0], o01 = st[1], o02 = st[2];
+    double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
+    for (int i = 0; i < NB; ++i) {
+      const double h0 = ds[i] * st[3 + 3 * i] + gs[i] * rs[i] * (s00 - o00);
+      const double h1 = ds[i] * st[3 + 3 * i + 1] + gs[i] * rs[i] * (s01 - o01);
+      const double h2 = ds[i] * st[3 + 3 * i + 2] + gs[i] * rs[i] * (s02 - o02);
+      st[3 + 3 * i] = h0;
+      st[3 + 3 * i + 1] = h1;
+      st[3 + 3 * i + 2] = h2;
+      o0 += h0;
+      o1 += h1;
+      o2 += h2;
+    }
+    st[0] = s00;
+    st[1] = s01;
+    st[2] = s02;
+    S[3 * q] = o0;
+    S[3 * q + 1] = o1;
+    S[3 * q + 2] = o2;
+    W[q] = omega * v;
+  }
+}
+#define TS_VISCO_UNIFORM(NB)                                                                                       \
+  TS_VECTOR_CLONES void visco_uniform##NB(std::size_t n, int ns, const double* C, const double* dir2, double omega, \
+                                          const double* g, const double* decay, const double* ramp,                \
+                                          const double* ksh, double* state, double* S, double* W) {                \
+    visco_uniform_body<NB>(n, ns, C, dir2, omega, g, decay, ramp, ksh, state, S, W);                               \
+  }
+TS_VISCO_UNIFORM(1)
+TS_VISCO_UNIFORM(2)
+TS_VISCO_UNIFORM(3)
+TS_VISCO_UNIFORM(4)
+#undef TS_VISCO_UNIFORM
+using ViscoUniform = void (*)(std::size_t, int, const double*, const double*, double, const double*, const double*,
+                              const double*, const double*, double*, double*, double*);
+constexpr ViscoUniform kViscoUniform[kVectorBranches + 1] = {nullptr, visco_uniform1, visco_uniform2, visco_uniform3,
+                                                             visco_uniform4};
+
 class ViscoelasticShear final : public MaterialLaw {
  public:
   Status configure(const Params& p) override {
@@ -205,12 +288,9 @@ class ViscoelasticShear final : public MaterialLaw {
   }
 
   Status evaluate(const MaterialBlock& b) const override {
-    // One temperature for the whole block (an isothermal run): the point
-    // by point path evaluates the parameters and factors once and is the
-    // faster one.
-    bool uniform = true;
+    bool uniform = true;  // one temperature for the whole block (an isothermal run)
     for (std::size_t q = 1; q < b.n && uniform; ++q) uniform = b.temperature[q] == b.temperature[0];
-    if (n_ < 1 || n_ > kVectorBranches || uniform) {
+    if (n_ < 1 || n_ > kVectorBranches) {
       double g[16], decay[16], ramp[16], omega = 0;
       for (std::size_t q = 0; q < b.n; ++q) {
         if (uniform && q > 0)
@@ -235,6 +315,17 @@ class ViscoelasticShear final : public MaterialLaw {
       dir2 = sc.dir2.data();
     }
     double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
+    if (uniform) {
+      // The first point as one, its parameters and factors for the others
+      // in one vector pass (their kept parameters are left as they are:
+      // they are only used where they match the temperature).
+      double g[16], decay[16], ramp[16], omega = 0;
+      point(b, 0, &omega, g, decay, ramp);
+      if (b.n > 1)
+        kViscoUniform[n_](b.n - 1, state_size(), b.strain.data() + 3, dir2 + 2, omega, g, decay, ramp, k_sh_,
+                          b.state.data() + state_size(), b.stress.data() + 3, W + 1);
+      return Status::success();
+    }
     kViscoBlock[n_](b.n, 3 + 3 * n_, state_size(), b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_,
                 b.state.data(), b.stress.data(), W, sc.next.data(), sc.redo.data());
     const int keep = 3 + 3 * n_, ns = state_size();
