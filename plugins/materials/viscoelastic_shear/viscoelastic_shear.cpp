@@ -39,6 +39,40 @@ Scratch& scratch(std::size_t n, int keep) {
   return s;
 }
 
+// Unrelaxed shear stress S0 = 2 omega w_sh'(I_sh) dI_sh/dC and energy
+// omega w_sh of one point (C, weft direction (c, s)), written out as
+// invariants(C, {c, s}, kSh), even_polynomial() and add_stress() compute
+// them (same operations, same order, so the same bits); inlined into the
+// vector passes below.
+struct ShearStress {
+  double s0, s1, s2, w;
+};
+[[gnu::always_inline]] inline ShearStress shear_stress(double C0, double C1, double C2, double c, double s, double k1,
+                                                       double k2, double k3, double omega) {
+  const double l22_0 = c * c, l22_1 = s * s, l22_2 = c * s;
+  const double l12_0 = c, l12_1 = 0.0, l12_2 = 0.5 * s;
+  const double i41 = C0 * 1.0 + C1 * 0.0 + 2 * C2 * 0.0;
+  const double i42 = C0 * l22_0 + C1 * l22_1 + 2 * C2 * l22_2;
+  const double i412 = C0 * l12_0 + C1 * l12_1 + 2 * C2 * l12_2;
+  const double r = std::sqrt(i41 * i42), sh = i412 / r;
+  const double dsh0 = l12_0 / r - 0.5 * sh * (1.0 / i41 + l22_0 / i42);
+  const double dsh1 = l12_1 / r - 0.5 * sh * (0.0 / i41 + l22_1 / i42);
+  const double dsh2 = l12_2 / r - 0.5 * sh * (0.0 / i41 + l22_2 / i42);
+  const double x2 = sh * sh;
+  double v = 0, d = 0, p = 1;
+  d += 2 * 1 * k1 * p * sh;
+  p *= x2;
+  v += k1 * p;
+  d += 2 * 2 * k2 * p * sh;
+  p *= x2;
+  v += k2 * p;
+  d += 2 * 3 * k3 * p * sh;
+  p *= x2;
+  v += k3 * p;
+  const double dw = kStressFactor * (omega * d);
+  return {0.0 + dw * dsh0, 0.0 + dw * dsh1, 0.0 + dw * dsh2, omega * v};
+}
+
 // The law over n points with NB <= kVectorBranches branches, each step of
 // the scalar path (invariants(), even_polynomial(), add_stress(),
 // prony_factors_inv(), prony_step()) written out in the same order so that
@@ -58,34 +92,11 @@ template <int NB>
     const double* ca = st + cache;
     const double c = dir2[2 * q], s = dir2[2 * q + 1];
     const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
-    // invariants(C, {c, s}, kSh)
-    const double l22_0 = c * c, l22_1 = s * s, l22_2 = c * s;
-    const double l12_0 = c, l12_1 = 0.0, l12_2 = 0.5 * s;
-    const double i41 = C0 * 1.0 + C1 * 0.0 + 2 * C2 * 0.0;
-    const double i42 = C0 * l22_0 + C1 * l22_1 + 2 * C2 * l22_2;
-    const double i412 = C0 * l12_0 + C1 * l12_1 + 2 * C2 * l12_2;
-    const double r = std::sqrt(i41 * i42), sh = i412 / r;
-    const double dsh0 = l12_0 / r - 0.5 * sh * (1.0 / i41 + l22_0 / i42);
-    const double dsh1 = l12_1 / r - 0.5 * sh * (0.0 / i41 + l22_1 / i42);
-    const double dsh2 = l12_2 / r - 0.5 * sh * (0.0 / i41 + l22_2 / i42);
-    // even_polynomial(k_sh, 3, sh)
-    const double x2 = sh * sh;
-    double v = 0, d = 0, p = 1;
-    d += 2 * 1 * k1 * p * sh;
-    p *= x2;
-    v += k1 * p;
-    d += 2 * 2 * k2 * p * sh;
-    p *= x2;
-    v += k2 * p;
-    d += 2 * 3 * k3 * p * sh;
-    p *= x2;
-    v += k3 * p;
     // The cached parameters.
     const double omega = ca[2];
     bool ok = (ca[0] == 1.0) & (ca[1] == temp[q]);
-    // add_stress(s0, omega * dwsh, dsh)
-    const double dw = kStressFactor * (omega * d);
-    const double s00 = 0.0 + dw * dsh0, s01 = 0.0 + dw * dsh1, s02 = 0.0 + dw * dsh2;
+    const ShearStress ss = shear_stress(C0, C1, C2, c, s, k1, k2, k3, omega);
+    const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
     // prony_step(nb, g, decay, ramp, S0_old, s0, H, s)
     double g_sum = 0;
     for (int i = 0; i < NB; ++i) g_sum += ca[3 + i];
@@ -121,7 +132,7 @@ template <int NB>
     S[3 * q] = o0;
     S[3 * q + 1] = o1;
     S[3 * q + 2] = o2;
-    W[q] = omega * v;
+    W[q] = ss.w;
   }
 }
 
@@ -163,28 +174,8 @@ template <int NB>
     double* st = state + static_cast<std::size_t>(ns) * q;
     const double c = dir2[2 * q], s = dir2[2 * q + 1];
     const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
-    const double l22_0 = c * c, l22_1 = s * s, l22_2 = c * s;
-    const double l12_0 = c, l12_1 = 0.0, l12_2 = 0.5 * s;
-    const double i41 = C0 * 1.0 + C1 * 0.0 + 2 * C2 * 0.0;
-    const double i42 = C0 * l22_0 + C1 * l22_1 + 2 * C2 * l22_2;
-    const double i412 = C0 * l12_0 + C1 * l12_1 + 2 * C2 * l12_2;
-    const double r = std::sqrt(i41 * i42), sh = i412 / r;
-    const double dsh0 = l12_0 / r - 0.5 * sh * (1.0 / i41 + l22_0 / i42);
-    const double dsh1 = l12_1 / r - 0.5 * sh * (0.0 / i41 + l22_1 / i42);
-    const double dsh2 = l12_2 / r - 0.5 * sh * (0.0 / i41 + l22_2 / i42);
-    const double x2 = sh * sh;
-    double v = 0, d = 0, p = 1;
-    d += 2 * 1 * k1 * p * sh;
-    p *= x2;
-    v += k1 * p;
-    d += 2 * 2 * k2 * p * sh;
-    p *= x2;
-    v += k2 * p;
-    d += 2 * 3 * k3 * p * sh;
-    p *= x2;
-    v += k3 * p;
-    const double dw = kStressFactor * (omega * d);
-    const double s00 = 0.0 + dw * dsh0, s01 = 0.0 + dw * dsh1, s02 = 0.0 + dw * dsh2;
+    const ShearStress ss = shear_stress(C0, C1, C2, c, s, k1, k2, k3, omega);
+    const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
     const double o00 = st[0], o01 = st[1], o02 = st[2];
     double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
     for (int i = 0; i < NB; ++i) {
@@ -204,7 +195,7 @@ template <int NB>
     S[3 * q] = o0;
     S[3 * q + 1] = o1;
     S[3 * q + 2] = o2;
-    W[q] = omega * v;
+    W[q] = ss.w;
   }
 }
 #define TS_VISCO_UNIFORM(NB)                                                                                       \
