@@ -113,7 +113,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "ud_hyperelastic";
-  d.version = "1.0.0";
+  d.version = "1.0.1";
   d.summary = "UD membrane: fibre elongation, transverse elongation I_lt = 1/2 ln(I3/I41), optional elastic shear";
   const ParamSpec ksh = list_param("k_sh", "[0, 0, 0]", "N/m",
                                    "elastic shear coefficients of w_sh = sum k_sh^i I_sh^(2i) (zero when viscoelastic_shear carries the shear)", 3);
@@ -125,4 +125,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.0.0", register_all)
+THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.0.1", register_all)
