@@ -41,12 +41,12 @@ struct MechPart {
   int block_size = 0, blocks = 0;
   std::vector<double> block_dt;
   // Node forces of each block, summed in the block (elements in order, then
-  // the 6 patch slots): local nodes of block b are node_start[b] ..
-  // node_start[b + 1] of block_node (ascending global ids); slot_local holds
-  // each element slot's local index (-1: no node). A node of one block only
-  // is written to f_int by that block; a node shared by several blocks is
-  // summed after them, in block order (shared_start / shared_src: offsets in
-  // block_force).
+  // the 6 patch slots): the local nodes of block b are entries
+  // block_node_start[b] .. block_node_start[b + 1] of block_node (ascending
+  // global ids); slot_local holds each element slot's local index (-1: no
+  // node). A node of one block only is written to f_int by that block; a
+  // node shared by several blocks is summed after them, in block order
+  // (shared_start / shared_src: offsets in block_force).
   std::vector<int> block_node_start, block_node, slot_local, shared_node, shared_start, shared_src;
   std::vector<char> block_node_shared;
   std::vector<double> block_force;
