@@ -796,7 +796,6 @@ void Simulation::accumulate_tool_heat(double dt) {
 double Simulation::mechanics_step(double dt, double t, long long step, EnergyAudit& audit) {
   const MechanicsDef& md = job_.mechanics_settings;
   const double dt_avg = step == 0 ? 0.5 * dt : 0.5 * (last_mech_dt_ + dt);
-  double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
   audit.reactions.assign(3 * job_.constraints.size(), 0.0);
   // Applied loads at t, each ramped from zero over its own time.
   if (!loads_.empty()) {
@@ -807,7 +806,19 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         for (int d = 0; d < 3; ++d) mech_[p]->load[3 * i + d] += factor * l.per_node[d];
     }
   }
-  for (std::size_t p = 0; p < parts_.size(); ++p) {
+  // Parts are independent here: with several, one thread each. Each part
+  // sums its own works and reactions; the parts' sums are then added in
+  // part order (the same for any thread count).
+  const int np = static_cast<int>(parts_.size());
+  const std::size_t nr = 3 * job_.constraints.size();
+  part_sums_.assign(np * (6 + nr), 0.0);
+  std::vector<std::string> part_error(np);
+  std::size_t nodes_all = 0;
+  for (const auto& st : parts_) nodes_all += st->x.size() / 3;
+#pragma omp parallel for schedule(static) if (np > 1 && nodes_all > 512)
+  for (int p = 0; p < np; ++p) {
+    double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
+    double* reactions = &part_sums_[p * (6 + nr) + 6];
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
     const int nn = st.mesh.num_nodes();
@@ -831,7 +842,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
           // previous step by the same trapezoid as the internal work.
           const double reaction = m.f_int[k] - f_ext - m.f_con[k];
           w_ext += (0.5 * (m.r_prev[k] + reaction) + f_ext) * m.dx[k];
-          audit.reactions[3 * m.constraint_of[k] + d] += reaction;
+          reactions[3 * m.constraint_of[k] + d] += reaction;
           m.r_prev[k] = reaction;
           m.v[k] = m.prescribed[k];
           m.dx[k] = dt * m.v[k];
@@ -861,9 +872,30 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     }
     if (nonfinite != 0)  // also when NaN
       for (int k = 0; k < 3 * nn; ++k)
-        if (!std::isfinite(st.x[k]))
-          throw RunError("non-finite position in part '" + st.def->name + "' at node " + std::to_string(k / 3) +
-                         ", t = " + fmt_g(t + dt) + " s (mechanical step " + std::to_string(step + 1) + ")");
+        if (!std::isfinite(st.x[k])) {
+          part_error[p] = "non-finite position in part '" + st.def->name + "' at node " + std::to_string(k / 3) +
+                          ", t = " + fmt_g(t + dt) + " s (mechanical step " + std::to_string(step + 1) + ")";
+          break;
+        }
+    double* sums = &part_sums_[p * (6 + nr)];
+    sums[0] = w_int;
+    sums[1] = w_ext;
+    sums[2] = w_damp;
+    sums[3] = w_con;
+    sums[4] = kin;
+    sums[5] = kin_half;
+  }
+  double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
+  for (int p = 0; p < np; ++p) {
+    if (!part_error[p].empty()) throw RunError(part_error[p]);
+    const double* sums = &part_sums_[p * (6 + nr)];
+    w_int += sums[0];
+    w_ext += sums[1];
+    w_damp += sums[2];
+    w_con += sums[3];
+    kin += sums[4];
+    kin_half += sums[5];
+    for (std::size_t r = 0; r < nr; ++r) audit.reactions[r] += sums[6 + r];
   }
   // Tools move to t + dt (force control with the plies' force at t).
   for (std::size_t q = 0; q < tools_.size(); ++q)

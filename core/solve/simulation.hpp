@@ -110,6 +110,7 @@ class Simulation {
   void check_field(double time, long long step);
   double seen_min_ = 0, seen_max_ = 0;
   double last_mech_dt_ = 0;
+  std::vector<double> part_sums_;  // per part: works, kinetic energies, reactions of the step (mechanics_step)
 
   const Job& job_;
   PluginRegistry& registry_;
