@@ -104,6 +104,45 @@ void hinge_block(int h, int cap, const double* __restrict X, double* __restrict 
   }
 }
 
+// Membrane forces of n elements, f_a = A0 (c1 F e1 + c2 F e2) with c1 =
+// S11 g1_a + S12 g2_a, c2 = S12 g1_a + S22 g2_a (slots 0-8 of each
+// element's 18), and each element's stable step: smallest height (2 area /
+// longest edge) times inv_c (infinite when has_stiffness is false). One
+// vector pass; the operations of the scalar form in its order, so the
+// same bits.
+TS_VECTOR_CLONES
+void membrane_block(int n, const int* __restrict tri, const double* __restrict x, const double* __restrict ff,
+                    const double* __restrict S, const double* __restrict area, const double* __restrict g1,
+                    const double* __restrict g2, double inv_c, bool has_stiffness, double* __restrict ef,
+                    double* __restrict dte) {
+  const double inf = std::numeric_limits<double>::infinity();
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const double f10 = ff[6 * q], f11 = ff[6 * q + 1], f12 = ff[6 * q + 2];
+    const double f20 = ff[6 * q + 3], f21 = ff[6 * q + 4], f22 = ff[6 * q + 5];
+    const double S11 = S[3 * q], S22 = S[3 * q + 1], S12 = S[3 * q + 2], A0 = area[q];
+    for (int a = 0; a < 3; ++a) {
+      const double ga = g1[3 * q + a], gb = g2[3 * q + a];
+      const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
+      ef[18 * q + 3 * a] = c1 * f10 + c2 * f20;
+      ef[18 * q + 3 * a + 1] = c1 * f11 + c2 * f21;
+      ef[18 * q + 3 * a + 2] = c1 * f12 + c2 * f22;
+    }
+    const int i0 = 3 * tri[3 * q], i1 = 3 * tri[3 * q + 1], i2 = 3 * tri[3 * q + 2];
+    const double a0 = x[i0], a1 = x[i0 + 1], a2 = x[i0 + 2];
+    const double u0 = x[i1] - a0, u1 = x[i1 + 1] - a1, u2 = x[i1 + 2] - a2;  // e01
+    const double v0 = x[i2] - a0, v1 = x[i2 + 1] - a1, v2 = x[i2 + 2] - a2;  // e02
+    const double w0 = x[i2] - x[i1], w1 = x[i2 + 1] - x[i1 + 1], w2 = x[i2 + 2] - x[i1 + 2];  // e12
+    const double n0 = u1 * v2 - u2 * v1, n1 = u2 * v0 - u0 * v2, n2 = u0 * v1 - u1 * v0;
+    const double l01 = u0 * u0 + u1 * u1 + u2 * u2, l02 = v0 * v0 + v1 * v1 + v2 * v2, l12 = w0 * w0 + w1 * w1 + w2 * w2;
+    double l2max = l01;
+    l2max = l2max < l02 ? l02 : l2max;
+    l2max = l2max < l12 ? l12 : l2max;
+    const double h = std::sqrt((n0 * n0 + n1 * n1 + n2 * n2) / l2max);
+    dte[q] = has_stiffness ? h * inv_c : inf;
+  }
+}
+
 class ShellRfT3 final : public ElementKernel {
  public:
   Status configure(const Params&, const ElementSetup& s) override {
@@ -218,28 +257,15 @@ class ShellRfT3 final : public ElementKernel {
       for (const auto* l : laws_) kmax += std::max(l->max_stiffness(t_lo), l->max_stiffness(t_hi));
       const double inv_c = kmax > 0 ? 1.0 / std::sqrt(kmax / areal_mass_) : 0.0;
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
+      double* dte = sc.energy_tmp.data();  // free again after the laws
+      membrane_block(n, &part_->triangles[3 * b], x, ff, stress_.data() + 3 * b, area0_.data() + b, g1_.data() + 3 * b,
+                     g2_.data() + 3 * b, inv_c, kmax > 0, out.element_force.data(), dte);
       for (int e = b; e < in.range.end; ++e) {
-        const int* t = &part_->triangles[3 * e];
-        const Vec3 f1 = load3(ff, 2 * (e - b)), f2 = load3(ff, 2 * (e - b) + 1);
-        const Vec3 xa[3] = {load3(x, t[0]), load3(x, t[1]), load3(x, t[2])};
-        const double S11 = stress_[3 * e], S22 = stress_[3 * e + 1], S12 = stress_[3 * e + 2];
-        const double A0 = area0_[e];
-        for (int a = 0; a < 3; ++a) {
-          const double ga = g1_[3 * e + a], gb = g2_[3 * e + a];
-          const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
-          for (int d = 0; d < 3; ++d) out.element_force[18 * (e - b) + 3 * a + d] = c1 * f1[d] + c2 * f2[d];
-        }
         if (!bending_)  // with bending, bending_forces writes these slots
           for (int q = 9; q < 18; ++q) out.element_force[18 * (e - b) + q] = 0.0;
-        energy += A0 * energy_e[e - b];
-        // Stable step: smallest height over the largest wave speed of the tangent.
-        const Vec3 e01 = sub(xa[1], xa[0]), e02 = sub(xa[2], xa[0]), e12 = sub(xa[2], xa[1]);
-        const Vec3 n2 = cross(e01, e02);
-        const double l2max = std::max({dot(e01, e01), dot(e02, e02), dot(e12, e12)});
-        const double h = std::sqrt(dot(n2, n2) / l2max);  // 2 area / longest edge
-        const double dte = kmax > 0 ? h * inv_c : std::numeric_limits<double>::infinity();
-        dt_min = std::min(dt_min, dte);
-        if (!out.element_dt.empty()) out.element_dt[e] = dte;
+        energy += area0_[e] * energy_e[e - b];
+        dt_min = std::min(dt_min, dte[e - b]);
+        if (!out.element_dt.empty()) out.element_dt[e] = dte[e - b];
       }
       if (bending_) {
         const double eb = bending_forces(in, b, in.range.end, sc, t_lo, t_hi, out, &dt_min);
