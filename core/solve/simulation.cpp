@@ -812,7 +812,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   const int np = static_cast<int>(parts_.size());
   const std::size_t nr = 3 * job_.constraints.size();
   part_sums_.assign(np * (6 + nr), 0.0);
-  std::vector<std::string> part_error(np);
+  part_bad_.assign(np, -1);  // per part: first non-finite coordinate
   std::size_t nodes_all = 0;
   for (const auto& st : parts_) nodes_all += st->x.size() / 3;
 #pragma omp parallel for schedule(static) if (np > 1 && nodes_all > 512)
@@ -873,8 +873,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     if (nonfinite != 0)  // also when NaN
       for (int k = 0; k < 3 * nn; ++k)
         if (!std::isfinite(st.x[k])) {
-          part_error[p] = "non-finite position in part '" + st.def->name + "' at node " + std::to_string(k / 3) +
-                          ", t = " + fmt_g(t + dt) + " s (mechanical step " + std::to_string(step + 1) + ")";
+          part_bad_[p] = k;
           break;
         }
     double* sums = &part_sums_[p * (6 + nr)];
@@ -887,7 +886,10 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   }
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
   for (int p = 0; p < np; ++p) {
-    if (!part_error[p].empty()) throw RunError(part_error[p]);
+    if (part_bad_[p] >= 0)
+      throw RunError("non-finite position in part '" + parts_[p]->def->name + "' at node " +
+                     std::to_string(part_bad_[p] / 3) + ", t = " + fmt_g(t + dt) + " s (mechanical step " +
+                     std::to_string(step + 1) + ")");
     const double* sums = &part_sums_[p * (6 + nr)];
     w_int += sums[0];
     w_ext += sums[1];

@@ -111,6 +111,7 @@ class Simulation {
   double seen_min_ = 0, seen_max_ = 0;
   double last_mech_dt_ = 0;
   std::vector<double> part_sums_;  // per part: works, kinetic energies, reactions of the step (mechanics_step)
+  std::vector<int> part_bad_;      // per part: first non-finite coordinate of the step, -1 if none
 
   const Job& job_;
   PluginRegistry& registry_;

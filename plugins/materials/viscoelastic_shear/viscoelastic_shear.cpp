@@ -73,6 +73,17 @@ struct ShearStress {
   return {0.0 + dw * dsh0, 0.0 + dw * dsh1, 0.0 + dw * dsh2, omega * v};
 }
 
+// One Maxwell branch over a step (prony_step()'s update, same order):
+// H <- decay H + g ramp (S0_new - S0_old), h the branch's 3 values, ds the
+// change of S0.
+struct Branch {
+  double h0, h1, h2;
+};
+[[gnu::always_inline]] inline Branch maxwell_branch(double decay, double g, double ramp, const double* h, double ds0,
+                                                    double ds1, double ds2) {
+  return {decay * h[0] + g * ramp * ds0, decay * h[1] + g * ramp * ds1, decay * h[2] + g * ramp * ds2};
+}
+
 // The law over n points with NB <= kVectorBranches branches, each step of
 // the scalar path (invariants(), even_polynomial(), add_stress(),
 // prony_factors_inv(), prony_step()) written out in the same order so that
@@ -118,15 +129,13 @@ template <int NB>
                             x4 * ((1.0 / 120 - x * (1.0 / 720)) + xx2 * (1.0 / 5040));
       const double decay = x < 1e-3 ? decay_a : decay_b, ramp = x < 1e-3 ? ramp_a : ramp_b;
       ok = ok & (x < 1e-2);
-      const double h0 = decay * st[3 + 3 * i] + g * ramp * (s00 - st[0]);
-      const double h1 = decay * st[3 + 3 * i + 1] + g * ramp * (s01 - st[1]);
-      const double h2 = decay * st[3 + 3 * i + 2] + g * ramp * (s02 - st[2]);
-      nx[3 + 3 * i] = h0;
-      nx[3 + 3 * i + 1] = h1;
-      nx[3 + 3 * i + 2] = h2;
-      o0 += h0;
-      o1 += h1;
-      o2 += h2;
+      const Branch h = maxwell_branch(decay, g, ramp, st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]);
+      nx[3 + 3 * i] = h.h0;
+      nx[3 + 3 * i + 1] = h.h1;
+      nx[3 + 3 * i + 2] = h.h2;
+      o0 += h.h0;
+      o1 += h.h1;
+      o2 += h.h2;
     }
     redo[q] = !ok;
     S[3 * q] = o0;
@@ -179,15 +188,13 @@ template <int NB>
     const double o00 = st[0], o01 = st[1], o02 = st[2];
     double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
     for (int i = 0; i < NB; ++i) {
-      const double h0 = ds[i] * st[3 + 3 * i] + gs[i] * rs[i] * (s00 - o00);
-      const double h1 = ds[i] * st[3 + 3 * i + 1] + gs[i] * rs[i] * (s01 - o01);
-      const double h2 = ds[i] * st[3 + 3 * i + 2] + gs[i] * rs[i] * (s02 - o02);
-      st[3 + 3 * i] = h0;
-      st[3 + 3 * i + 1] = h1;
-      st[3 + 3 * i + 2] = h2;
-      o0 += h0;
-      o1 += h1;
-      o2 += h2;
+      const Branch h = maxwell_branch(ds[i], gs[i], rs[i], st + 3 + 3 * i, s00 - o00, s01 - o01, s02 - o02);
+      st[3 + 3 * i] = h.h0;
+      st[3 + 3 * i + 1] = h.h1;
+      st[3 + 3 * i + 2] = h.h2;
+      o0 += h.h0;
+      o1 += h.h1;
+      o2 += h.h2;
     }
     st[0] = s00;
     st[1] = s01;
@@ -279,6 +286,7 @@ class ViscoelasticShear final : public MaterialLaw {
   }
 
   Status evaluate(const MaterialBlock& b) const override {
+    if (b.n == 0) return Status::success();
     bool uniform = true;  // one temperature for the whole block (an isothermal run)
     for (std::size_t q = 1; q < b.n && uniform; ++q) uniform = b.temperature[q] == b.temperature[0];
     if (n_ < 1 || n_ > kVectorBranches) {
@@ -291,11 +299,6 @@ class ViscoelasticShear final : public MaterialLaw {
       }
       return Status::success();
     }
-    // One vector pass over the block for the points whose parameters are
-    // cached at their current temperature (all of them between two thermal
-    // steps) and whose dt / tau_i are in the factors' series range; it
-    // computes the new state aside. The other points are evaluated one by
-    // one, which also refreshes their cache. Both give the same bits.
     Scratch& sc = scratch(b.n, 3 + 3 * n_);
     const double* dir2 = b.dir2.data();
     if (b.dir2.empty()) {
@@ -317,6 +320,12 @@ class ViscoelasticShear final : public MaterialLaw {
                           b.state.data() + state_size(), b.stress.data() + 3, W + 1);
       return Status::success();
     }
+    // Otherwise one vector pass over the block for the points whose
+    // parameters are cached at their current temperature (all of them
+    // between two thermal steps) and whose dt / tau_i are in the factors'
+    // series range; it computes the new state aside. The other points are
+    // evaluated one by one, which also refreshes their cache. Both give the
+    // same bits.
     kViscoBlock[n_](b.n, 3 + 3 * n_, state_size(), b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_,
                 b.state.data(), b.stress.data(), W, sc.next.data(), sc.redo.data());
     const int keep = 3 + 3 * n_, ns = state_size();
