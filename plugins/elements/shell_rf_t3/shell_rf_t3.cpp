@@ -34,16 +34,17 @@ namespace {
 using namespace ts::sdk;
 
 // Per-thread buffers for the values of one block of elements (indexed from
-// the block's first element); they grow to the largest block once.
-constexpr int kHingeChunk = 128;
-
+// the block's first element, or from its first hinge); they grow to the
+// largest block once.
 struct BlockScratch {
-  std::vector<double> temp, ff, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy;
-  // A chunk of interior hinges in structure-of-arrays form: node
-  // positions (c, p, q, o) x xyz, angle, gradients.
-  std::vector<double> hx = std::vector<double>(12 * kHingeChunk), hg = std::vector<double>(12 * kHingeChunk),
-                      ht = std::vector<double>(kHingeChunk), hredo = std::vector<double>(kHingeChunk);
-  std::vector<int> hdest = std::vector<int>(2 * kHingeChunk);
+  std::vector<double> temp, ff, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy, mk;
+  // The block's interior hinges (structure of arrays, capacity hcap):
+  // angle minus initial angle, gradients on (c, o, p, q) x xyz, and the
+  // node offsets (3 x node) and initial angles of the hinges owned by an
+  // element of an earlier block.
+  std::vector<double> hdth, hg, hredo, ftheta0;
+  std::vector<int> hloc, fnode, fhinge;
+  int hcap = 0;
 };
 
 BlockScratch& block_scratch(int n) {
@@ -59,37 +60,50 @@ BlockScratch& block_scratch(int n) {
     s.hth.resize(3 * m);
     s.moment.resize(3 * m);
     s.benergy.resize(m);
+    s.mk.resize(3 * m);
+    s.hloc.resize(3 * m);
   }
   return s;
 }
 
-// Bending angles and their gradients of h hinges (as
-// ShellRfT3::hinge_angle, the same operations in the same order, so the
-// same bits): X holds the positions of the nodes (c, p, q, o), component
-// 3 i + d of node i at X[(3 i + d) cap + j]; the gradients on (c, o, p, q)
-// go to G likewise. redo[j] = 1 (0 otherwise) where the angle is beyond atan2_small's
+void reserve_hinges(BlockScratch& s, int h) {
+  if (s.hcap >= h) return;
+  s.hcap = h;
+  const std::size_t m = static_cast<std::size_t>(h);
+  s.hdth.resize(m);
+  s.hg.resize(12 * m);
+  s.hredo.resize(m);
+  s.ftheta0.resize(m);
+  s.fnode.resize(4 * m);
+  s.fhinge.resize(m);
+}
+
+// Bending angles (minus their initial values theta0) and their gradients of
+// h hinges, as ShellRfT3::hinge_angle with the same operations in the same
+// order. Hinge j has its nodes (c, p, q, o) at x[ic[j]], x[ip[j]], ...
+// (offsets 3 x node); its gradients on (c, o, p, q) go to G[(3 i + d) cap +
+// j]. redo[j] = 1 (0 otherwise) where the angle is beyond atan2_small's
 // range (the caller evaluates it with the library).
 TS_VECTOR_CLONES
-void hinge_block(int h, int cap, const double* __restrict X, double* __restrict theta, double* __restrict G,
-                 double* __restrict redo) {
+void hinge_block(int h, int cap, const int* __restrict ic, const int* __restrict ip, const int* __restrict iq,
+                 const int* __restrict io, const double* __restrict x, const double* __restrict theta0,
+                 double* __restrict dtheta, double* __restrict G, double* __restrict redo) {
 #pragma omp simd
   for (int j = 0; j < h; ++j) {
     // Written out component by component (sub, dot, cross, scale, add of
     // math.hpp, in their order), so that the compiler sees plain scalars.
-    const double C0 = X[0 * cap + j], C1 = X[1 * cap + j], C2 = X[2 * cap + j];
-    const double P0 = X[3 * cap + j], P1 = X[4 * cap + j], P2 = X[5 * cap + j];
-    const double Q0 = X[6 * cap + j], Q1 = X[7 * cap + j], Q2 = X[8 * cap + j];
-    const double O0 = X[9 * cap + j], O1 = X[10 * cap + j], O2 = X[11 * cap + j];
-    const double e0 = Q0 - P0, e1 = Q1 - P1, e2 = Q2 - P2;
+    const int c = ic[j], p = ip[j], q = iq[j], o = io[j];
+    const double P0 = x[p], P1 = x[p + 1], P2 = x[p + 2];
+    const double e0 = x[q] - P0, e1 = x[q + 1] - P1, e2 = x[q + 2] - P2;
     const double l2 = e0 * e0 + e1 * e1 + e2 * e2, len = std::sqrt(l2);
-    const double c0 = C0 - P0, c1 = C1 - P1, c2 = C2 - P2;
-    const double o0 = O0 - P0, o1 = O1 - P1, o2 = O2 - P2;
+    const double c0 = x[c] - P0, c1 = x[c + 1] - P1, c2 = x[c + 2] - P2;
+    const double o0 = x[o] - P0, o1 = x[o + 1] - P1, o2 = x[o + 2] - P2;
     const double ne0 = e1 * c2 - e2 * c1, ne1 = e2 * c0 - e0 * c2, ne2 = e0 * c1 - e1 * c0;  // edge x cp
     const double nn0 = o1 * e2 - o2 * e1, nn1 = o2 * e0 - o0 * e2, nn2 = o0 * e1 - o1 * e0;  // op x edge
     const double m0 = nn1 * ne2 - nn2 * ne1, m1 = nn2 * ne0 - nn0 * ne2, m2 = nn0 * ne1 - nn1 * ne0;  // Nn x Ne
-    const double y = m0 * e0 + m1 * e1 + m2 * e2, x = len * (ne0 * nn0 + ne1 * nn1 + ne2 * nn2);
-    redo[j] = (x > 0) & (std::abs(y) <= 0.66 * x) ? 0.0 : 1.0;
-    theta[j] = atan2_small_approx(y, x);
+    const double y = m0 * e0 + m1 * e1 + m2 * e2, xx = len * (ne0 * nn0 + ne1 * nn1 + ne2 * nn2);
+    redo[j] = (xx > 0) & (std::abs(y) <= 0.66 * xx) ? 0.0 : 1.0;
+    dtheta[j] = atan2_small_approx(y, xx) - theta0[j];
     const double sc = (c0 * e0 + c1 * e1 + c2 * e2) / l2, so = (o0 * e0 + o1 * e1 + o2 * e2) / l2;
     const double se = len / (ne0 * ne0 + ne1 * ne1 + ne2 * ne2), sn = len / (nn0 * nn0 + nn1 * nn1 + nn2 * nn2);
     const double g0[3] = {ne0 * se, ne1 * se, ne2 * se};
@@ -104,7 +118,8 @@ void hinge_block(int h, int cap, const double* __restrict X, double* __restrict 
   }
 }
 
-// Membrane forces of n elements, f_a = A0 (c1 F e1 + c2 F e2) with c1 =
+// Membrane forces of n elements (F e1, F e2 of element q at ff[d n + q],
+// ff[(3 + d) n + q]), f_a = A0 (c1 F e1 + c2 F e2) with c1 =
 // S11 g1_a + S12 g2_a, c2 = S12 g1_a + S22 g2_a (slots 0-8 of each
 // element's 18), and each element's stable step: smallest height (2 area /
 // longest edge) times inv_c (infinite when has_stiffness is false). One
@@ -118,8 +133,8 @@ void membrane_block(int n, const int* __restrict tri, const double* __restrict x
   const double inf = std::numeric_limits<double>::infinity();
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
-    const double f10 = ff[6 * q], f11 = ff[6 * q + 1], f12 = ff[6 * q + 2];
-    const double f20 = ff[6 * q + 3], f21 = ff[6 * q + 4], f22 = ff[6 * q + 5];
+    const double f10 = ff[q], f11 = ff[n + q], f12 = ff[2 * n + q];
+    const double f20 = ff[3 * n + q], f21 = ff[4 * n + q], f22 = ff[5 * n + q];
     const double S11 = S[3 * q], S22 = S[3 * q + 1], S12 = S[3 * q + 2], A0 = area[q];
     for (int a = 0; a < 3; ++a) {
       const double ga = g1[3 * q + a], gb = g2[3 * q + a];
@@ -140,6 +155,41 @@ void membrane_block(int n, const int* __restrict tri, const double* __restrict x
     l2max = l2max < l12 ? l12 : l2max;
     const double h = std::sqrt((n0 * n0 + n1 * n1 + n2 * n2) / l2max);
     dte[q] = has_stiffness ? h * inv_c : inf;
+  }
+}
+
+// Curvatures of n elements: K = sum_k c_k dtheta_k, c_k = dK/dtheta_k
+// (value r of edge k of element q at c[(3 k + r) ld + q]), the angle change
+// of edge k at dth[loc[3 q + k]].
+TS_VECTOR_CLONES
+void curvature_block(int n, int ld, const double* __restrict c, const int* __restrict loc, const double* __restrict dth,
+                     double* __restrict K) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const double t0 = dth[loc[3 * q]], t1 = dth[loc[3 * q + 1]], t2 = dth[loc[3 * q + 2]];
+    const double* cq = c + q;
+    K[3 * q] = cq[0] * t0 + cq[3 * ld] * t1 + cq[6 * ld] * t2;
+    K[3 * q + 1] = cq[ld] * t0 + cq[4 * ld] * t1 + cq[7 * ld] * t2;
+    K[3 * q + 2] = cq[2 * ld] * t0 + cq[5 * ld] * t1 + cq[8 * ld] * t2;
+  }
+}
+
+// Hinge moments of n elements, dW/dtheta_k = A0 M : dK/dtheta_k = A0 (M11
+// c11 + M22 c22 + 2 M12 c12), per element and edge (c laid out as for
+// curvature_block), and the elements' bending stable steps dmin2 *
+// dtb_scale, lowering dte.
+TS_VECTOR_CLONES
+void moment_block(int n, int ld, const double* __restrict area, const double* __restrict c, const double* __restrict M,
+                  const double* __restrict dmin2, double dtb_scale, double* __restrict mk, double* __restrict dte) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const double A0 = area[q], M0 = M[3 * q], M1 = M[3 * q + 1], M2 = 2 * M[3 * q + 2];
+    const double* cq = c + q;
+    mk[3 * q] = A0 * (M0 * cq[0] + M1 * cq[ld] + M2 * cq[2 * ld]);
+    mk[3 * q + 1] = A0 * (M0 * cq[3 * ld] + M1 * cq[4 * ld] + M2 * cq[5 * ld]);
+    mk[3 * q + 2] = A0 * (M0 * cq[6 * ld] + M1 * cq[7 * ld] + M2 * cq[8 * ld]);
+    const double dtb = dmin2[q] * dtb_scale, d = dte[q];
+    dte[q] = d < dtb ? d : dtb;
   }
 }
 
@@ -216,8 +266,8 @@ class ShellRfT3 final : public ElementKernel {
           T += in.node_temperature[t[a]] / 3.0;
         }
         for (int d = 0; d < 3; ++d) {
-          ff[6 * (e - b) + d] = f1[d];
-          ff[6 * (e - b) + 3 + d] = f2[d];
+          ff[d * n + (e - b)] = f1[d];
+          ff[(3 + d) * n + (e - b)] = f2[d];
         }
         strain_[3 * e] = dot(f1, f1);
         strain_[3 * e + 1] = dot(f2, f2);
@@ -260,17 +310,17 @@ class ShellRfT3 final : public ElementKernel {
       double* dte = sc.energy_tmp.data();  // free again after the laws
       membrane_block(n, &part_->triangles[3 * b], x, ff, stress_.data() + 3 * b, area0_.data() + b, g1_.data() + 3 * b,
                      g2_.data() + 3 * b, inv_c, kmax > 0, out.element_force.data(), dte);
+      if (bending_) {
+        energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, out);
+      } else {
+        for (int q = 0; q < n; ++q)
+          for (int s = 9; s < 18; ++s) out.element_force[18 * q + s] = 0.0;
+      }
       for (int e = b; e < in.range.end; ++e) {
-        if (!bending_)  // with bending, bending_forces writes these slots
-          for (int q = 9; q < 18; ++q) out.element_force[18 * (e - b) + q] = 0.0;
         energy += area0_[e] * energy_e[e - b];
         dt_min = std::min(dt_min, dte[e - b]);
-        if (!out.element_dt.empty()) out.element_dt[e] = dte[e - b];
       }
-      if (bending_) {
-        const double eb = bending_forces(in, b, in.range.end, sc, t_lo, t_hi, out, &dt_min);
-        energy += eb;
-      }
+      if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
       if (in.commit) std::copy(strain_.begin() + 3 * b, strain_.begin() + 3 * (b + n), strain_old_.begin() + 3 * b);
       out.energy += energy;
       out.stable_dt = dt_min;
@@ -415,9 +465,9 @@ class ShellRfT3 final : public ElementKernel {
         const Vec3 nu = normalized(cross(sub(Q, P), n));  // outward in-plane normal of edge k
         const double a = dot(nu, f), bb = dot(nu, m);
         // dK/dtheta_k = l_k / (2 A0) nu (x) nu, Voigt in the material frame.
-        ginv_[9 * e + 3 * k] = len / (2 * A0) * a * a;
-        ginv_[9 * e + 3 * k + 1] = len / (2 * A0) * bb * bb;
-        ginv_[9 * e + 3 * k + 2] = len / (2 * A0) * a * bb;
+        ginv_[(3 * k) * ne + e] = len / (2 * A0) * a * a;
+        ginv_[(3 * k + 1) * ne + e] = len / (2 * A0) * bb * bb;
+        ginv_[(3 * k + 2) * ne + e] = len / (2 * A0) * a * bb;
         const int nb = part_->neighbours[3 * e + k];
         if (nb < 0) {
           const int ec = edge_condition_.empty() ? kEdgeFree : edge_condition_[3 * e + k];
@@ -445,98 +495,115 @@ class ShellRfT3 final : public ElementKernel {
         theta0_[3 * e + k] = hinge_angle(x0, t[k], p, q, o, nullptr);
       }
     }
+    // Interior hinges, each once, owned by the lower-numbered of its two
+    // elements and numbered by owner: the hinges owned by the elements of
+    // [b, end) are [hstart_[b], hstart_[end]).
+    hstart_.assign(ne + 1, 0);
+    hid_.assign(3 * ne, -1);
+    hc_.clear(), hp_.clear(), hq_.clear(), ho_.clear(), htheta0_.clear();
+    howner_.clear(), hnb_.clear(), hk_.clear(), hkp_.clear();
+    dmin2_.assign(ne, std::numeric_limits<double>::infinity());
+    for (int e = 0; e < ne; ++e) {
+      hstart_[e] = static_cast<int>(hc_.size());
+      const int* t = &part_->triangles[3 * e];
+      for (int k = 0; k < 3; ++k) {
+        const int nb = part_->neighbours[3 * e + k];
+        if (nb < 0) continue;
+        dmin2_[e] = std::min(dmin2_[e], d_[3 * e + k] * d_[3 * e + k]);
+        if (nb < e) continue;
+        const int h = static_cast<int>(hc_.size());
+        hid_[3 * e + k] = h;
+        hid_[3 * nb + partner_k_[3 * e + k]] = h;
+        hc_.push_back(3 * t[k]);
+        hp_.push_back(3 * t[(k + 1) % 3]);
+        hq_.push_back(3 * t[(k + 2) % 3]);
+        ho_.push_back(3 * opp_[3 * e + k]);
+        htheta0_.push_back(theta0_[3 * e + k]);
+        howner_.push_back(e);
+        hnb_.push_back(nb);
+        hk_.push_back(static_cast<char>(k));
+        hkp_.push_back(static_cast<char>(partner_k_[3 * e + k]));
+      }
+    }
+    hstart_[ne] = static_cast<int>(hc_.size());
   }
 
   // Bending curvatures, moments and forces of elements [b, end); returns the
-  // bending energy and lowers *dt_min with the bending stable step; [t_lo,
-  // t_hi] is the block's temperature range.
+  // bending energy and lowers the elements' stable steps (sc.energy_tmp)
+  // with the bending ones; [t_lo, t_hi] is the block's temperature range.
   double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
-                        ElementForceOutput& out, double* dt_min) {
-    double* hgrad = sc.hgrad.data();  // per element and edge of the block: d theta / dx on up to 4 nodes
-    double* hth = sc.hth.data();      // per element and edge of the block: current hinge angle
+                        ElementForceOutput& out) {
+    const int n = end - b;
     const double* temp = sc.temp.data();
     const double* x = part_->x.data();
+    const int* nbr = part_->neighbours.data();
     static_assert(sizeof(Vec3) == 3 * sizeof(double));
-    // Hinge angles and their gradients. An interior edge is one hinge seen
-    // from both of its elements (same angle, gradients permuted): when both
-    // elements are in this block it is evaluated once. Interior hinges are
-    // gathered into structure-of-arrays form, evaluated in one vector pass
-    // and handed to their elements; ghost hinges (clamped and symmetry
-    // edges) one by one.
-    // Hinges go through the vector pass in chunks of kHingeChunk, so that
-    // their arrays stay in the first-level cache.
-    constexpr int cap = kHingeChunk;
-    double* X = sc.hx.data();
-    double* G = sc.hg.data();
-    double* th = sc.ht.data();
-    int* dest = sc.hdest.data();
-    int h = 0;
-    auto flush = [&]() {
-      hinge_block(h, cap, X, th, G, sc.hredo.data());
-      for (int j = 0; j < h; ++j) {
-        const int slot = dest[2 * j];
-        if (sc.hredo[j] != 0) {  // beyond the approximation's range: the library's atan2
-          const int e = b + slot / 3, k = slot % 3;
-          const int* t = &part_->triangles[3 * e];
-          th[j] = hinge_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], opp_[3 * e + k], nullptr);
-        }
-        hth[slot] = th[j];
-        double* g = &hgrad[12 * slot];  // (c, o, p, q)
-        for (int c = 0; c < 12; ++c) g[c] = G[c * cap + j];
-        if (const int ps = dest[2 * j + 1]; ps >= 0) {  // the neighour's (c, o, p, q) are (o, c, q, p) here
-          hth[ps] = th[j];
-          double* gp = &hgrad[12 * ps];
-          for (int d = 0; d < 3; ++d) {
-            gp[d] = G[(3 + d) * cap + j];
-            gp[3 + d] = G[(0 + d) * cap + j];
-            gp[6 + d] = G[(9 + d) * cap + j];
-            gp[9 + d] = G[(6 + d) * cap + j];
+    // The block's interior hinges: those owned by its elements (contiguous),
+    // then those owned by an element of an earlier block. An interior hinge
+    // is evaluated once for the block, in its owner's orientation; its
+    // neighbour sees the same angle with the gradients permuted.
+    const int h0 = hstart_[b], nown = hstart_[end] - h0;
+    int nforeign = 0;
+    for (int e = b; e < end; ++e)
+      for (int k = 0; k < 3; ++k) nforeign += (nbr[3 * e + k] >= 0) & (nbr[3 * e + k] < b);
+    const int nh = nown + nforeign;
+    // Angle changes: the block's interior hinges at [0, nh), then one entry
+    // per element and edge without a neighbour at nh + 3 (e - b) + k (the
+    // ghost hinge's angle, zero at a free edge).
+    reserve_hinges(sc, nh + 3 * n);
+    const int cap = sc.hcap;
+    int* loc = sc.hloc.data();  // per element and edge of the block: its entry in dth
+    int* fnode = sc.fnode.data();
+    int* fh = sc.fhinge.data();
+    double* ft0 = sc.ftheta0.data();
+    {
+      int f = 0;
+      for (int e = b; e < end; ++e)
+        for (int k = 0; k < 3; ++k) {
+          const int h = hid_[3 * e + k], nb = nbr[3 * e + k];
+          if (h < 0) {
+            loc[3 * (e - b) + k] = nh + 3 * (e - b) + k;
+          } else if (nb >= b) {
+            loc[3 * (e - b) + k] = h - h0;
+          } else {
+            loc[3 * (e - b) + k] = nown + f;
+            fnode[f] = hc_[h];
+            fnode[cap + f] = hp_[h];
+            fnode[2 * cap + f] = hq_[h];
+            fnode[3 * cap + f] = ho_[h];
+            ft0[f] = htheta0_[h];
+            fh[f] = h;
+            ++f;
           }
         }
+    }
+    double* dth = sc.hdth.data();
+    double* G = sc.hg.data();
+    double* redo = sc.hredo.data();
+    hinge_block(nown, cap, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, htheta0_.data() + h0,
+                dth, G, redo);
+    hinge_block(nforeign, cap, fnode, fnode + cap, fnode + 2 * cap, fnode + 3 * cap, x, ft0, dth + nown, G + nown,
+                redo + nown);
+    for (int j = 0; j < nh; ++j)
+      if (redo[j] != 0) {  // beyond the approximation's range: the library's atan2
+        const int h = j < nown ? h0 + j : fh[j - nown];
+        dth[j] = hinge_angle(x, hc_[h] / 3, hp_[h] / 3, hq_[h] / 3, ho_[h] / 3, nullptr) - htheta0_[h];
       }
-      h = 0;
-    };
+    // Ghost hinges (clamped and symmetry edges), one by one.
+    double* hgrad = sc.hgrad.data();  // per element and edge of the block: d theta / dx on (c, p, q)
+    std::fill(dth + nh, dth + nh + 3 * n, 0.0);
     for (int e = b; e < end; ++e) {
       const int* t = &part_->triangles[3 * e];
       for (int k = 0; k < 3; ++k) {
-        const int o = opp_[3 * e + k];
-        if (o >= 0) {
-          const int nb = part_->neighbours[3 * e + k];
-          const bool shared = nb >= b && nb < end;
-          if (shared && nb < e) continue;  // done from the neighbour
-          const int nodes[4] = {t[k], t[(k + 1) % 3], t[(k + 2) % 3], o};
-          for (int i = 0; i < 4; ++i)
-            for (int d = 0; d < 3; ++d) X[(3 * i + d) * cap + h] = x[3 * nodes[i] + d];
-          dest[2 * h] = 3 * (e - b) + k;
-          dest[2 * h + 1] = shared ? 3 * (nb - b) + partner_k_[3 * e + k] : -1;
-          if (++h == cap) flush();
-        } else if (clamped_[3 * e + k]) {
-          Vec3* g = reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
-          hth[3 * (e - b) + k] =
-              clamped_[3 * e + k] == 1
-                  ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g)
-                  : ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, g);
-        }
+        if (!clamped_[3 * e + k]) continue;
+        Vec3* g = reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
+        dth[nh + 3 * (e - b) + k] =
+            clamped_[3 * e + k] == 1
+                ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g)
+                : ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, g);
       }
     }
-    if (h > 0) flush();
-    for (int e = b; e < end; ++e) {
-      const double* c = &ginv_[9 * e];
-      double K[3] = {0, 0, 0};
-      for (int k = 0; k < 3; ++k) {
-        double th;
-        if (opp_[3 * e + k] >= 0) {
-          th = hth[3 * (e - b) + k] - theta0_[3 * e + k];
-        } else if (clamped_[3 * e + k]) {
-          th = hth[3 * (e - b) + k];
-        } else {
-          continue;
-        }
-        for (int r = 0; r < 3; ++r) K[r] += c[3 * k + r] * th;
-      }
-      for (int r = 0; r < 3; ++r) curv_[3 * e + r] = K[r];
-    }
-    const int n = end - b;
+    curvature_block(n, part_->num_elements, ginv_.data() + b, loc, dth, curv_.data() + 3 * b);
     MaterialBlock blk;
     blk.n = n;
     blk.strain = std::span<const double>(curv_.data() + 3 * b, 3 * n);
@@ -551,57 +618,55 @@ class ShellRfT3 final : public ElementKernel {
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
     const double dtb_scale = rmax > 0 ? 0.5 * std::sqrt(areal_mass_ / rmax) : 0.0;  // once per block
     double energy = 0;
-    for (int e = b; e < end; ++e) {
-      const double A0 = area0_[e];
-      const double* M = &sc.moment[3 * (e - b)];
-      const double* gi = &ginv_[9 * e];
-      energy += A0 * sc.benergy[e - b];
-      double hmin = std::numeric_limits<double>::infinity();
-      // Forces on the patch: the element's own nodes (slots 0-2, after the
-      // membrane forces) summed in registers, the opposite node of hinge k
-      // (slot 3 + k) written once. The hinges are unrolled so that every
-      // slot index is a constant.
-      double* fe = &out.element_force[18 * static_cast<std::size_t>(e - b)];
-      double own[9];
-      for (int q = 0; q < 9; ++q) own[q] = fe[q];
-      auto hinge = [&]<int k>() {
-        constexpr int p = (k + 1) % 3, q = (k + 2) % 3;
-        const int o = opp_[3 * e + k];
-        const char cl = clamped_[3 * e + k];
-        const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
-        // dW/dtheta_k = A0 M : dK/dtheta_k = A0 (M11 c11 + M22 c22 + 2 M12 c12).
-        const double mk = A0 * (M[0] * gi[3 * k] + M[1] * gi[3 * k + 1] + 2 * M[2] * gi[3 * k + 2]);
-        if (o >= 0) {
-          hmin = std::min(hmin, d_[3 * e + k]);
-          for (int d = 0; d < 3; ++d) {
-            own[3 * k + d] += mk * g[0][d];
-            fe[9 + 3 * k + d] = mk * g[1][d];
-            own[3 * p + d] += mk * g[2][d];
-            own[3 * q + d] += mk * g[3][d];
-          }
-        } else {
-          for (int d = 0; d < 3; ++d) fe[9 + 3 * k + d] = 0.0;
-          if (cl) {  // ghost neighbour: gradient on (c, p, q)
-            const double m = (cl == 1 ? 2.0 : 1.0) * mk;  // clamp: theta = 2 x the rotation
-            for (int d = 0; d < 3; ++d) {
-              own[3 * k + d] += m * g[0][d];
-              own[3 * p + d] += m * g[1][d];
-              own[3 * q + d] += m * g[2][d];
-            }
-          }
-        }
-      };
-      hinge.template operator()<0>();
-      hinge.template operator()<1>();
-      hinge.template operator()<2>();
-      for (int q = 0; q < 9; ++q) fe[q] = own[q];
-      // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative).
-      if (rmax > 0 && std::isfinite(hmin)) {
-        const double dtb = hmin * hmin * dtb_scale;
-        *dt_min = std::min(*dt_min, dtb);
-        if (!out.element_dt.empty()) out.element_dt[e] = std::min(out.element_dt[e], dtb);
+    for (int e = b; e < end; ++e) energy += area0_[e] * sc.benergy[e - b];
+    double* mk = sc.mk.data();
+    double* dte = sc.energy_tmp.data();  // the membrane's stable steps of the block's elements
+    // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative), d the
+    // smallest initial height over the element's interior edges.
+    moment_block(n, part_->num_elements, area0_.data() + b, ginv_.data() + b, sc.moment.data(), dmin2_.data() + b,
+                 rmax > 0 ? dtb_scale : std::numeric_limits<double>::infinity(), mk, dte);
+    // Forces. Slots 9-17 (the opposite nodes) start at zero. A hinge whose
+    // two elements are both in the block carries both moments and goes to
+    // its owner's slots; a hinge shared with another block carries the
+    // moment of this block's element, in that element's slots.
+    double* ef = out.element_force.data();
+    for (int q = 0; q < n; ++q)
+      for (int s = 9; s < 18; ++s) ef[18 * q + s] = 0.0;
+    // Own-node slots of corner c (= k), p, q and the opposite node's slot.
+    auto add_hinge = [&](double* fe, int k, double m, int j, int gc, int go, int gp, int gq) {
+      const int sp = 3 * ((k + 1) % 3), sq = 3 * ((k + 2) % 3);
+      for (int d = 0; d < 3; ++d) {
+        fe[3 * k + d] += m * G[(gc + d) * cap + j];
+        fe[9 + 3 * k + d] += m * G[(go + d) * cap + j];
+        fe[sp + d] += m * G[(gp + d) * cap + j];
+        fe[sq + d] += m * G[(gq + d) * cap + j];
       }
+    };
+    for (int j = 0; j < nown; ++j) {
+      const int h = h0 + j, e = howner_[h], nb = hnb_[h], k = hk_[h];
+      double m = mk[3 * (e - b) + k];
+      if (nb < end) m += mk[3 * (nb - b) + hkp_[h]];
+      add_hinge(ef + 18 * (e - b), k, m, j, 0, 3, 6, 9);
     }
+    for (int j = nown; j < nh; ++j) {  // seen from the neighbour: (c, o, p, q) are (o, c, q, p)
+      const int h = fh[j - nown], e = hnb_[h], k = hkp_[h];
+      add_hinge(ef + 18 * (e - b), k, mk[3 * (e - b) + k], j, 3, 0, 9, 6);
+    }
+    for (int e = b; e < end; ++e)
+      for (int k = 0; k < 3; ++k) {
+        const char cl = clamped_[3 * e + k];
+        if (!cl) continue;
+        // Ghost neighbour: gradient on (c, p, q); a clamp's theta is 2 x the rotation.
+        const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
+        const double m = (cl == 1 ? 2.0 : 1.0) * mk[3 * (e - b) + k];
+        double* fe = ef + 18 * (e - b);
+        const int p = (k + 1) % 3, q = (k + 2) % 3;
+        for (int d = 0; d < 3; ++d) {
+          fe[3 * k + d] += m * g[0][d];
+          fe[3 * p + d] += m * g[1][d];
+          fe[3 * q + d] += m * g[2][d];
+        }
+      }
     if (in.commit) std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
     return energy;
   }
@@ -610,7 +675,15 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<int> opp_, partner_k_, edge_condition_;  // partner_k_: the same edge's index in the neighbour
   std::vector<char> clamped_;
   std::vector<double> n0_;  // initial element normals (clamped elements)
+  // ginv_: dK/dtheta_k, value r of edge k of element e at (3 k + r) ne + e.
   std::vector<double> d_, theta0_, ginv_, curv_, curv_old_, bstate_;
+  // Interior hinges: node offsets (3 x node) of (c, p, q, o) in the owner's
+  // orientation, initial angle, owner and its edge k, neighbour and its
+  // edge; hid_ per element and edge; dmin2_ the squared smallest initial
+  // height over an element's interior edges.
+  std::vector<int> hstart_, hid_, hc_, hp_, hq_, ho_, howner_, hnb_;
+  std::vector<char> hk_, hkp_;
+  std::vector<double> htheta0_, dmin2_;
   const PartView* part_ = nullptr;
   std::vector<const MaterialLaw*> laws_;
   double areal_mass_ = 0;
