@@ -40,8 +40,8 @@ struct MechPart {
   // thread count, so the results are the same for any number of threads.
   int block_size = 0, blocks = 0;
   std::vector<double> block_dt;
-  // Node forces of each block, summed in the block (elements in order, then
-  // the 6 patch slots): the local nodes of block b are entries
+  // Node forces of each block, added by the element into the block's own
+  // slots (ElementForceInput::patch_slot): the local nodes of block b are entries
   // block_node_start[b] .. block_node_start[b + 1] of block_node (ascending
   // global ids); slot_local holds each element slot's local index (-1: no
   // node). A node of one block only is written to f_int by that block; a
@@ -73,12 +73,6 @@ constexpr double kKineticGrowthLimit = 10.0;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 // Element forces of one block (18 per element), a buffer per thread that
 // stays in cache; it grows to the largest block once.
-std::vector<double>& element_force_buffer(int n) {
-  thread_local std::vector<double> buf;
-  if (buf.size() < static_cast<std::size_t>(n)) buf.resize(static_cast<std::size_t>(n));
-  return buf;
-}
-
 void compute_normals(const ShellMesh& m, const std::vector<double>& x, std::vector<double>& nn) {
   nn.assign(x.size(), 0.0);
   for (int e = 0; e < m.num_elements(); ++e) {
@@ -670,40 +664,31 @@ double Simulation::mechanics_stable_dt() {
     const int blocks = m.blocks, bs = m.block_size;
     int* block_fail = m.block_fail.data();
     std::string* block_error = m.block_error.data();
-#pragma omp parallel if (blocks > 1)
-    {
-      std::vector<double>& ef = element_force_buffer(18 * bs);
-#pragma omp for schedule(static)
-      for (int b = 0; b < blocks; ++b) {
-        sdk::ElementForceInput in;
-        in.range = {b * bs, std::min(ne, (b + 1) * bs)};
-        in.dt = last_mech_dt_;
-        in.node_temperature = m.node_temperature;
-        sdk::ElementForceOutput out;
-        out.element_force = std::span<double>(ef.data(), 18 * static_cast<std::size_t>(in.range.end - in.range.begin));
-        out.element_dt = m.elem_dt;
-        block_error[b].clear();
-        if (auto s = m.element->internal_forces(in, out); !s) block_error[b] = s.message;
-        block_fail[b] = out.failed_element;
-        if (!block_error[b].empty() || block_fail[b] >= 0) continue;
-        // Node forces of the block: elements in order, then patch slots.
-        const int l0 = m.block_node_start[b], l1 = m.block_node_start[b + 1];
-        double* bf = m.block_force.data() + 3 * static_cast<std::size_t>(l0);
-        std::fill(bf, bf + 3 * (l1 - l0), 0.0);
-        const int* sl = m.slot_local.data();
-        double dtb = std::numeric_limits<double>::infinity();
-        for (int e = in.range.begin; e < in.range.end; ++e) {
-          const double* fe = &ef[18 * static_cast<std::size_t>(e - in.range.begin)];
-          for (int q = 0; q < 6; ++q)
-            if (const int l = sl[6 * e + q]; l >= 0)
-              for (int d = 0; d < 3; ++d) bf[3 * l + d] += fe[3 * q + d];
-          dtb = std::min(dtb, m.elem_dt[e] * m.elem_sqrt_scale[e]);
-        }
-        m.block_dt[b] = dtb;
-        for (int l = l0; l < l1; ++l)
-          if (!m.block_node_shared[l])
-            for (int d = 0; d < 3; ++d) m.f_int[3 * m.block_node[l] + d] = m.block_force[3 * l + d];
-      }
+#pragma omp parallel for schedule(static) if (blocks > 1)
+    for (int b = 0; b < blocks; ++b) {
+      // The block adds its elements' forces into its own node slots.
+      const int l0 = m.block_node_start[b], l1 = m.block_node_start[b + 1];
+      double* bf = m.block_force.data() + 3 * static_cast<std::size_t>(l0);
+      std::fill(bf, bf + 3 * (l1 - l0), 0.0);
+      sdk::ElementForceInput in;
+      in.range = {b * bs, std::min(ne, (b + 1) * bs)};
+      in.dt = last_mech_dt_;
+      in.node_temperature = m.node_temperature;
+      in.patch_slot = std::span<const int>(m.slot_local.data() + 6 * static_cast<std::size_t>(in.range.begin),
+                                           6 * static_cast<std::size_t>(in.range.end - in.range.begin));
+      sdk::ElementForceOutput out;
+      out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
+      out.element_dt = m.elem_dt;
+      block_error[b].clear();
+      if (auto s = m.element->internal_forces(in, out); !s) block_error[b] = s.message;
+      block_fail[b] = out.failed_element;
+      if (!block_error[b].empty() || block_fail[b] >= 0) continue;
+      double dtb = std::numeric_limits<double>::infinity();
+      for (int e = in.range.begin; e < in.range.end; ++e) dtb = std::min(dtb, m.elem_dt[e] * m.elem_sqrt_scale[e]);
+      m.block_dt[b] = dtb;
+      for (int l = l0; l < l1; ++l)
+        if (!m.block_node_shared[l])
+          for (int d = 0; d < 3; ++d) m.f_int[3 * m.block_node[l] + d] = m.block_force[3 * l + d];
     }
     for (int b = 0; b < blocks; ++b) {
       if (!block_error[b].empty())

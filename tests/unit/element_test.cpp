@@ -82,29 +82,13 @@ struct Patch {
     }
     EXPECT_TRUE(element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
   }
-  double energy() {
-    std::vector<double> ef(18 * mesh.num_elements(), 0.0);
-    sdk::ElementForceInput in;
-    in.range = {0, mesh.num_elements()};
-    in.node_temperature = temperature;
-    in.commit = false;
-    sdk::ElementForceOutput out;
-    out.element_force = ef;
-    element->internal_forces(in, out);
-    return out.energy;
-  }
-  std::vector<double> forces(std::vector<double>* stress = nullptr, std::vector<double>* curvature = nullptr) {
-    std::vector<double> ef(18 * mesh.num_elements(), 0.0), nf(3 * mesh.num_nodes(), 0.0);
-    sdk::ElementForceInput in;
-    in.range = {0, mesh.num_elements()};
-    in.node_temperature = temperature;
-    in.commit = false;
-    sdk::ElementForceOutput out;
-    out.element_force = ef;
-    EXPECT_TRUE(element->internal_forces(in, out).ok);
-    EXPECT_EQ(out.failed_element, -1);
+  // The 6-node patch of every element (its nodes, then the node across each
+  // edge, -1 if none), as global node ids: forces go straight to the nodes.
+  std::vector<int> patch() const {
+    std::vector<int> slots(6 * mesh.num_elements(), -1);
     for (int e = 0; e < mesh.num_elements(); ++e) {
-      int nodes[6] = {mesh.triangles[3 * e], mesh.triangles[3 * e + 1], mesh.triangles[3 * e + 2], -1, -1, -1};
+      int* nodes = &slots[6 * e];
+      for (int a = 0; a < 3; ++a) nodes[a] = mesh.triangles[3 * e + a];
       for (int k = 0; k < 3; ++k) {
         const int nb = mesh.neighbours[3 * e + k];
         if (nb < 0) continue;
@@ -113,10 +97,34 @@ struct Patch {
           if (o != nodes[(k + 1) % 3] && o != nodes[(k + 2) % 3]) nodes[3 + k] = o;
         }
       }
-      for (int a = 0; a < 6; ++a)
-        if (nodes[a] >= 0)
-          for (int d = 0; d < 3; ++d) nf[3 * nodes[a] + d] += ef[18 * e + 3 * a + d];
     }
+    return slots;
+  }
+  double energy() {
+    std::vector<double> nf(3 * mesh.num_nodes(), 0.0);
+    const std::vector<int> slots = patch();
+    sdk::ElementForceInput in;
+    in.range = {0, mesh.num_elements()};
+    in.node_temperature = temperature;
+    in.commit = false;
+    in.patch_slot = slots;
+    sdk::ElementForceOutput out;
+    out.node_force = nf;
+    element->internal_forces(in, out);
+    return out.energy;
+  }
+  std::vector<double> forces(std::vector<double>* stress = nullptr, std::vector<double>* curvature = nullptr) {
+    std::vector<double> nf(3 * mesh.num_nodes(), 0.0);
+    const std::vector<int> slots = patch();
+    sdk::ElementForceInput in;
+    in.range = {0, mesh.num_elements()};
+    in.node_temperature = temperature;
+    in.commit = false;
+    in.patch_slot = slots;
+    sdk::ElementForceOutput out;
+    out.node_force = nf;
+    EXPECT_TRUE(element->internal_forces(in, out).ok);
+    EXPECT_EQ(out.failed_element, -1);
     if (stress || curvature) {
       std::vector<double> dummy;
       if (stress) stress->assign(3 * mesh.num_elements(), 0.0);

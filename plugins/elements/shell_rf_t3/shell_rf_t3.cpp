@@ -37,7 +37,7 @@ using namespace ts::sdk;
 // the block's first element, or from its first hinge); they grow to the
 // largest block once.
 struct BlockScratch {
-  std::vector<double> temp, ff, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy, mk;
+  std::vector<double> temp, ff, mf, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy, mk;
   // The block's interior hinges (structure of arrays, capacity hcap):
   // angle minus initial angle, gradients on (c, o, p, q) x xyz, and the
   // node offsets (3 x node) and initial angles of the hinges owned by an
@@ -53,6 +53,7 @@ BlockScratch& block_scratch(int n) {
   if (s.temp.size() < m) {
     s.temp.resize(m);
     s.ff.resize(6 * m);
+    s.mf.resize(9 * m);
     s.law_stress.resize(3 * m);
     s.energy_tmp.resize(m);
     s.energy.resize(m);
@@ -120,15 +121,15 @@ void hinge_block(int h, int cap, const int* __restrict ic, const int* __restrict
 
 // Membrane forces of n elements (F e1, F e2 of element q at ff[d n + q],
 // ff[(3 + d) n + q]), f_a = A0 (c1 F e1 + c2 F e2) with c1 =
-// S11 g1_a + S12 g2_a, c2 = S12 g1_a + S22 g2_a (slots 0-8 of each
-// element's 18), and each element's stable step: smallest height (2 area /
+// S11 g1_a + S12 g2_a, c2 = S12 g1_a + S22 g2_a (component d of node a of
+// element q at mf[(3 a + d) n + q]), and each element's stable step: smallest height (2 area /
 // longest edge) times inv_c (infinite when has_stiffness is false). One
 // vector pass; the operations of the scalar form in its order, so the
 // same bits.
 TS_VECTOR_CLONES
 void membrane_block(int n, const int* __restrict tri, const double* __restrict x, const double* __restrict ff,
                     const double* __restrict S, const double* __restrict area, const double* __restrict g1,
-                    const double* __restrict g2, double inv_c, bool has_stiffness, double* __restrict ef,
+                    const double* __restrict g2, double inv_c, bool has_stiffness, double* __restrict mf,
                     double* __restrict dte) {
   const double inf = std::numeric_limits<double>::infinity();
 #pragma omp simd
@@ -139,9 +140,9 @@ void membrane_block(int n, const int* __restrict tri, const double* __restrict x
     for (int a = 0; a < 3; ++a) {
       const double ga = g1[3 * q + a], gb = g2[3 * q + a];
       const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
-      ef[18 * q + 3 * a] = c1 * f10 + c2 * f20;
-      ef[18 * q + 3 * a + 1] = c1 * f11 + c2 * f21;
-      ef[18 * q + 3 * a + 2] = c1 * f12 + c2 * f22;
+      mf[(3 * a) * n + q] = c1 * f10 + c2 * f20;
+      mf[(3 * a + 1) * n + q] = c1 * f11 + c2 * f21;
+      mf[(3 * a + 2) * n + q] = c1 * f12 + c2 * f22;
     }
     const int i0 = 3 * tri[3 * q], i1 = 3 * tri[3 * q + 1], i2 = 3 * tri[3 * q + 2];
     const double a0 = x[i0], a1 = x[i0 + 1], a2 = x[i0 + 2];
@@ -308,14 +309,17 @@ class ShellRfT3 final : public ElementKernel {
       const double inv_c = kmax > 0 ? 1.0 / std::sqrt(kmax / areal_mass_) : 0.0;
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
       double* dte = sc.energy_tmp.data();  // free again after the laws
+      double* mf = sc.mf.data();
       membrane_block(n, &part_->triangles[3 * b], x, ff, stress_.data() + 3 * b, area0_.data() + b, g1_.data() + 3 * b,
-                     g2_.data() + 3 * b, inv_c, kmax > 0, out.element_force.data(), dte);
-      if (bending_) {
-        energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, out);
-      } else {
-        for (int q = 0; q < n; ++q)
-          for (int s = 9; s < 18; ++s) out.element_force[18 * q + s] = 0.0;
-      }
+                     g2_.data() + 3 * b, inv_c, kmax > 0, mf, dte);
+      double* nf = out.node_force.data();
+      const int* slot = in.patch_slot.data();
+      for (int q = 0; q < n; ++q)
+        for (int a = 0; a < 3; ++a) {
+          double* f = nf + 3 * slot[6 * q + a];
+          for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * n + q];
+        }
+      if (bending_) energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, out);
       for (int e = b; e < in.range.end; ++e) {
         energy += area0_[e] * energy_e[e - b];
         dt_min = std::min(dt_min, dte[e - b]);
@@ -625,32 +629,35 @@ class ShellRfT3 final : public ElementKernel {
     // smallest initial height over the element's interior edges.
     moment_block(n, part_->num_elements, area0_.data() + b, ginv_.data() + b, sc.moment.data(), dmin2_.data() + b,
                  rmax > 0 ? dtb_scale : std::numeric_limits<double>::infinity(), mk, dte);
-    // Forces. Slots 9-17 (the opposite nodes) start at zero. A hinge whose
-    // two elements are both in the block carries both moments and goes to
-    // its owner's slots; a hinge shared with another block carries the
-    // moment of this block's element, in that element's slots.
-    double* ef = out.element_force.data();
-    for (int q = 0; q < n; ++q)
-      for (int s = 9; s < 18; ++s) ef[18 * q + s] = 0.0;
-    // Own-node slots of corner c (= k), p, q and the opposite node's slot.
-    auto add_hinge = [&](double* fe, int k, double m, int j, int gc, int go, int gp, int gq) {
-      const int sp = 3 * ((k + 1) % 3), sq = 3 * ((k + 2) % 3);
+    // Forces. A hinge whose two elements are both in the block carries both
+    // moments and goes to its owner's patch; a hinge shared with another
+    // block carries the moment of this block's element, in that element's
+    // patch.
+    double* nf = out.node_force.data();
+    const int* slot = in.patch_slot.data();
+    // Patch slots of corner c (= k), p, q and the node o across edge k.
+    auto add_hinge = [&](int q, int k, double m, int j, int gc, int go, int gp, int gq) {
+      const int* sl = slot + 6 * q;
+      double* fc = nf + 3 * sl[k];
+      double* fo = nf + 3 * sl[3 + k];
+      double* fp = nf + 3 * sl[(k + 1) % 3];
+      double* fq = nf + 3 * sl[(k + 2) % 3];
       for (int d = 0; d < 3; ++d) {
-        fe[3 * k + d] += m * G[(gc + d) * cap + j];
-        fe[9 + 3 * k + d] += m * G[(go + d) * cap + j];
-        fe[sp + d] += m * G[(gp + d) * cap + j];
-        fe[sq + d] += m * G[(gq + d) * cap + j];
+        fc[d] += m * G[(gc + d) * cap + j];
+        fo[d] += m * G[(go + d) * cap + j];
+        fp[d] += m * G[(gp + d) * cap + j];
+        fq[d] += m * G[(gq + d) * cap + j];
       }
     };
     for (int j = 0; j < nown; ++j) {
       const int h = h0 + j, e = howner_[h], nb = hnb_[h], k = hk_[h];
       double m = mk[3 * (e - b) + k];
       if (nb < end) m += mk[3 * (nb - b) + hkp_[h]];
-      add_hinge(ef + 18 * (e - b), k, m, j, 0, 3, 6, 9);
+      add_hinge(e - b, k, m, j, 0, 3, 6, 9);
     }
     for (int j = nown; j < nh; ++j) {  // seen from the neighbour: (c, o, p, q) are (o, c, q, p)
       const int h = fh[j - nown], e = hnb_[h], k = hkp_[h];
-      add_hinge(ef + 18 * (e - b), k, mk[3 * (e - b) + k], j, 3, 0, 9, 6);
+      add_hinge(e - b, k, mk[3 * (e - b) + k], j, 3, 0, 9, 6);
     }
     for (int e = b; e < end; ++e)
       for (int k = 0; k < 3; ++k) {
@@ -659,12 +666,14 @@ class ShellRfT3 final : public ElementKernel {
         // Ghost neighbour: gradient on (c, p, q); a clamp's theta is 2 x the rotation.
         const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
         const double m = (cl == 1 ? 2.0 : 1.0) * mk[3 * (e - b) + k];
-        double* fe = ef + 18 * (e - b);
-        const int p = (k + 1) % 3, q = (k + 2) % 3;
+        const int* sl = slot + 6 * (e - b);
+        double* fc = nf + 3 * sl[k];
+        double* fp = nf + 3 * sl[(k + 1) % 3];
+        double* fq = nf + 3 * sl[(k + 2) % 3];
         for (int d = 0; d < 3; ++d) {
-          fe[3 * k + d] += m * g[0][d];
-          fe[3 * p + d] += m * g[1][d];
-          fe[3 * q + d] += m * g[2][d];
+          fc[d] += m * g[0][d];
+          fp[d] += m * g[1][d];
+          fq[d] += m * g[2][d];
         }
       }
     if (in.commit) std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
@@ -697,7 +706,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.2.0";
+  d.version = "0.3.0";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -705,4 +714,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.2.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.3.0", register_all)

@@ -37,15 +37,21 @@ struct ElementForceInput {
   double dt = 0.0;                          // s, step of the laws' history (viscoelasticity)
   std::span<const double> node_temperature; // per node (mean through the thickness), degC
   bool commit = true;                       // update the laws' history (false: trial evaluation)
+  // Where the forces of each element's 6-node patch go: 6 per element of
+  // the range, indexed from the range's first element (entry 6 (e -
+  // range.begin) + a): the element's 3 nodes, then for k = 0..2 the node of
+  // the neighbour across edge k that is not on that edge (-1 when edge k
+  // has no neighbour), each as its index i in ElementForceOutput::node_force
+  // (values 3 i .. 3 i + 2).
+  std::span<const int> patch_slot;
 };
 
 struct ElementForceOutput {
-  // 18 per element of the range (6 nodes x xyz), indexed from the range's
-  // first element (entry 18 (e - range.begin) + 3 a + d), all overwritten:
-  // the element's 3 nodes, then for k = 0..2 the node of the neighbour
-  // across edge k that is not on that edge (the 6-node patch of
-  // rotation-free bending; zero when edge k has no neighbour).
-  std::span<double> element_force;
+  // Internal nodal forces (N), added to (the caller zeroes them first):
+  // xyz of slot i at 3 i .. 3 i + 2, slots as ElementForceInput::patch_slot
+  // numbers them. The kernel gives each block its own slots, so that a call
+  // adds into a small array that stays in cache.
+  std::span<double> node_force;
   double energy = 0.0;              // J, hyperelastic energy of the range (accumulated)
   double stable_dt = 0.0;           // s, minimum over the range (set by the call)
   std::span<double> element_dt;     // optional: stable step of each element (entries of the range)
