@@ -530,6 +530,16 @@ class ShellRfT3 final : public ElementKernel {
       }
     }
     hstart_[ne] = static_cast<int>(hc_.size());
+    // Ghost hinges (clamped and symmetry edges) by element: those of the
+    // elements of [b, end) are gedge_[gstart_[b] .. gstart_[end]) (3 e + k).
+    gstart_.assign(ne + 1, 0);
+    gedge_.clear();
+    for (int e = 0; e < ne; ++e) {
+      gstart_[e] = static_cast<int>(gedge_.size());
+      for (int k = 0; k < 3; ++k)
+        if (clamped_[3 * e + k]) gedge_.push_back(3 * e + k);
+    }
+    gstart_[ne] = static_cast<int>(gedge_.size());
   }
 
   // Bending curvatures, moments and forces of elements [b, end); returns the
@@ -596,16 +606,14 @@ class ShellRfT3 final : public ElementKernel {
     // Ghost hinges (clamped and symmetry edges), one by one.
     double* hgrad = sc.hgrad.data();  // per element and edge of the block: d theta / dx on (c, p, q)
     std::fill(dth + nh, dth + nh + 3 * n, 0.0);
-    for (int e = b; e < end; ++e) {
+    for (int g = gstart_[b]; g < gstart_[end]; ++g) {
+      const int e = gedge_[g] / 3, k = gedge_[g] % 3;
       const int* t = &part_->triangles[3 * e];
-      for (int k = 0; k < 3; ++k) {
-        if (!clamped_[3 * e + k]) continue;
-        Vec3* g = reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
-        dth[nh + 3 * (e - b) + k] =
-            clamped_[3 * e + k] == 1
-                ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, g)
-                : ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, g);
-      }
+      Vec3* gr = reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
+      dth[nh + 3 * (e - b) + k] =
+          clamped_[3 * e + k] == 1
+              ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, gr)
+              : ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, gr);
     }
     curvature_block(n, part_->num_elements, ginv_.data() + b, loc, dth, curv_.data() + 3 * b);
     MaterialBlock blk;
@@ -659,23 +667,21 @@ class ShellRfT3 final : public ElementKernel {
       const int h = fh[j - nown], e = hnb_[h], k = hkp_[h];
       add_hinge(e - b, k, mk[3 * (e - b) + k], j, 3, 0, 9, 6);
     }
-    for (int e = b; e < end; ++e)
-      for (int k = 0; k < 3; ++k) {
-        const char cl = clamped_[3 * e + k];
-        if (!cl) continue;
-        // Ghost neighbour: gradient on (c, p, q); a clamp's theta is 2 x the rotation.
-        const Vec3* g = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
-        const double m = (cl == 1 ? 2.0 : 1.0) * mk[3 * (e - b) + k];
-        const int* sl = slot + 6 * (e - b);
-        double* fc = nf + 3 * sl[k];
-        double* fp = nf + 3 * sl[(k + 1) % 3];
-        double* fq = nf + 3 * sl[(k + 2) % 3];
-        for (int d = 0; d < 3; ++d) {
-          fc[d] += m * g[0][d];
-          fp[d] += m * g[1][d];
-          fq[d] += m * g[2][d];
-        }
+    for (int g = gstart_[b]; g < gstart_[end]; ++g) {
+      const int e = gedge_[g] / 3, k = gedge_[g] % 3;
+      // Ghost neighbour: gradient on (c, p, q); a clamp's theta is 2 x the rotation.
+      const Vec3* gr = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
+      const double m = (clamped_[3 * e + k] == 1 ? 2.0 : 1.0) * mk[3 * (e - b) + k];
+      const int* sl = slot + 6 * (e - b);
+      double* fc = nf + 3 * sl[k];
+      double* fp = nf + 3 * sl[(k + 1) % 3];
+      double* fq = nf + 3 * sl[(k + 2) % 3];
+      for (int d = 0; d < 3; ++d) {
+        fc[d] += m * gr[0][d];
+        fp[d] += m * gr[1][d];
+        fq[d] += m * gr[2][d];
       }
+    }
     if (in.commit) std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
     return energy;
   }
@@ -690,7 +696,7 @@ class ShellRfT3 final : public ElementKernel {
   // orientation, initial angle, owner and its edge k, neighbour and its
   // edge; hid_ per element and edge; dmin2_ the squared smallest initial
   // height over an element's interior edges.
-  std::vector<int> hstart_, hid_, hc_, hp_, hq_, ho_, howner_, hnb_;
+  std::vector<int> hstart_, hid_, hc_, hp_, hq_, ho_, howner_, hnb_, gstart_, gedge_;
   std::vector<char> hk_, hkp_;
   std::vector<double> htheta0_, dmin2_;
   const PartView* part_ = nullptr;
