@@ -378,5 +378,46 @@ TEST(MaterialLaws, ExtremeTemperaturesAreClamped) {
   EXPECT_EQ(bend.law->max_stiffness(400.0), 0.0);  // R_1 = -2e-5 * 400 + 6.4e-3 < 0 -> 0
 }
 
+// The bending law over a block of points at different temperatures (some
+// outside 200-350 degC, held at the bounds; R_1 = -2e-5 T + 6.4e-3 is
+// negative above 320 degC, held at 0) against the closed form:
+// M11 = R_1 chi11, M22 = R_2 chi22, M12 = R_12 chi12, R_12 = 0.1 (R_1 +
+// R_2) / 2, w = (R_1 chi11^2 + R_2 chi22^2 + 2 R_12 chi12^2) / 2. The
+// operations are those of the closed form, so the tolerance is a few ulps.
+TEST(MaterialLaws, BendingMomentsAreTheClosedForm) {
+  Law bend("thermo_linear_bending", kBending);
+  ASSERT_TRUE(bend.status.ok) << bend.status.message;
+  const std::vector<double> T = {150.0, 200.0, 260.0, 300.0, 330.0, 349.0, 400.0};
+  const std::size_t n = T.size();
+  std::vector<double> chi(3 * n), M(3 * n), W(n), state;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-20.0, 20.0);
+  for (double& c : chi) c = u(rng);
+  for (int with_energy = 0; with_energy < 2; ++with_energy) {
+    sdk::MaterialBlock blk;
+    blk.n = n;
+    blk.strain = chi;
+    blk.strain_old = chi;
+    blk.temperature = T;
+    blk.state = state;
+    blk.stress = M;
+    if (with_energy) blk.energy = W;
+    ASSERT_TRUE(bend.law->evaluate(blk).ok);
+    for (std::size_t q = 0; q < n; ++q) {
+      const double t = std::clamp(T[q], 200.0, 350.0);
+      const double r1 = std::max(0.0, -2.0e-5 * t + 6.4e-3), r2 = std::max(0.0, -2.0e-6 * t + 6.4e-4);
+      const double r12 = 0.1 * 0.5 * (r1 + r2);
+      const double* c = &chi[3 * q];
+      const double ref[3] = {r1 * c[0], r2 * c[1], r12 * c[2]};
+      for (int k = 0; k < 3; ++k) EXPECT_NEAR(M[3 * q + k], ref[k], 4e-16 * std::abs(ref[k]) + 1e-300) << q << " " << k;
+      if (with_energy) {
+        const double w = 0.5 * (r1 * c[0] * c[0] + r2 * c[1] * c[1] + 2 * r12 * c[2] * c[2]);
+        EXPECT_NEAR(W[q], w, 4e-16 * w) << q;
+      }
+    }
+    EXPECT_EQ(M[3 * 6], 0.0);  // 400 degC: held at 350, R_1 < 0 -> 0
+  }
+}
+
 }  // namespace
 }  // namespace ts

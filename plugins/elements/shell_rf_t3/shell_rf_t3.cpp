@@ -278,10 +278,9 @@ class ShellRfT3 final : public ElementKernel {
         if (!(det > 1e-12) && out.failed_element < 0) out.failed_element = e;
       }
       if (out.failed_element >= 0) return Status::success();
-      // 2. The laws, one call per law for the whole block; stresses add.
-      std::fill(stress_.begin() + 3 * b, stress_.begin() + 3 * (b + n), 0.0);
+      // 2. The laws, one call per law for the whole block; stresses add (the
+      // first law writes straight into the element stresses and energies).
       double* energy_e = sc.energy.data();
-      std::fill(energy_e, energy_e + n, 0.0);
       for (std::size_t k = 0; k < laws_.size(); ++k) {
         const int ns = laws_[k]->state_size();
         MaterialBlock blk;
@@ -291,11 +290,16 @@ class ShellRfT3 final : public ElementKernel {
         blk.temperature = std::span<const double>(temp, n);
         blk.dt = in.dt;
         blk.state = std::span<double>(states_[k].data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
-        blk.stress = std::span<double>(sc.law_stress.data(), 3 * n);
-        blk.energy = std::span<double>(sc.energy_tmp.data(), n);
+        blk.stress = std::span<double>(k == 0 ? stress_.data() + 3 * b : sc.law_stress.data(), 3 * n);
+        blk.energy = std::span<double>(k == 0 ? energy_e : sc.energy_tmp.data(), n);
         if (auto s = laws_[k]->evaluate(blk); !s) return s;
+        if (k == 0) continue;
         for (int q = 0; q < 3 * n; ++q) stress_[3 * b + q] += sc.law_stress[q];
         for (int q = 0; q < n; ++q) energy_e[q] += sc.energy_tmp[q];
+      }
+      if (laws_.empty()) {
+        std::fill(stress_.begin() + 3 * b, stress_.begin() + 3 * (b + n), 0.0);
+        std::fill(energy_e, energy_e + n, 0.0);
       }
       // 3. Nodal forces, energy, stable step. The largest tangent stiffness
       // is taken over the block's temperature range (one call per law).

@@ -7,10 +7,37 @@
 #include <algorithm>
 
 #include <thermostamp/sdk/plugin.hpp>
+#include <thermostamp/sdk/simd.hpp>
 
 namespace {
 
 using namespace ts::sdk;
+
+struct Rigidity {
+  double b1t, b1b, b2t, b2b, twist, t_min, t_max;
+};
+
+// The law over n points in one vector pass (ThermoLinearBending::rigidities
+// written out, same operations, same bits); W may be null.
+TS_VECTOR_CLONES
+void bending_block(std::size_t n, Rigidity r, const double* __restrict T, const double* __restrict chi,
+                   double* __restrict M, double* __restrict W) {
+#pragma omp simd
+  for (std::size_t q = 0; q < n; ++q) {
+    double t = T[q];
+    t = t < r.t_min ? r.t_min : t;
+    t = r.t_max < t ? r.t_max : t;
+    double r1 = r.b1t * t + r.b1b, r2 = r.b2t * t + r.b2b;
+    r1 = 0.0 < r1 ? r1 : 0.0;
+    r2 = 0.0 < r2 ? r2 : 0.0;
+    const double r12 = r.twist * 0.5 * (r1 + r2);
+    const double c0 = chi[3 * q], c1 = chi[3 * q + 1], c2 = chi[3 * q + 2];
+    M[3 * q] = r1 * c0;
+    M[3 * q + 1] = r2 * c1;
+    M[3 * q + 2] = r12 * c2;
+    if (W) W[q] = 0.5 * (r1 * c0 * c0 + r2 * c1 * c1 + 2 * r12 * c2 * c2);
+  }
+}
 
 class ThermoLinearBending final : public MaterialLaw {
  public:
@@ -36,16 +63,8 @@ class ThermoLinearBending final : public MaterialLaw {
     *r12 = twist_ * 0.5 * (*r1 + *r2);
   }
   Status evaluate(const MaterialBlock& b) const override {
-    for (std::size_t q = 0; q < b.n; ++q) {
-      double r1, r2, r12;
-      rigidities(b.temperature[q], &r1, &r2, &r12);
-      const double* chi = &b.strain[3 * q];
-      b.stress[3 * q] = r1 * chi[0];
-      b.stress[3 * q + 1] = r2 * chi[1];
-      b.stress[3 * q + 2] = r12 * chi[2];
-      if (!b.energy.empty())
-        b.energy[q] = 0.5 * (r1 * chi[0] * chi[0] + r2 * chi[1] * chi[1] + 2 * r12 * chi[2] * chi[2]);
-    }
+    bending_block(b.n, {b1t_, b1b_, b2t_, b2b_, twist_, t_min_, t_max_}, b.temperature.data(), b.strain.data(),
+                  b.stress.data(), b.energy.empty() ? nullptr : b.energy.data());
     return Status::success();
   }
   double max_stiffness(double T) const override {
@@ -64,7 +83,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "thermo_linear_bending";
-  d.version = "1.0.0";
+  d.version = "1.0.1";
   d.summary = "Bending: moments linear in curvature, rigidities linear in temperature, fibre frame";
   d.params = {real_param("beta1_T", "0.0", "N m/degC", "slope of the rigidity along the fibres R_1(T)"),
               real_param("beta1_B", "", "N m", "R_1 at 0 degC"),
@@ -79,4 +98,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_thermo_linear_bending", "1.0.0", register_all)
+THERMOSTAMP_PLUGIN("material_thermo_linear_bending", "1.0.1", register_all)
