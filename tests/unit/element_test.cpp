@@ -103,6 +103,7 @@ struct Patch {
   // The elements are evaluated in `blocks` consecutive ranges, as the
   // kernel calls them (hinges across a range border are seen from both).
   int blocks = 1;
+  bool commit = false;  // update the laws' history
   // Node forces and energy of all elements.
   double evaluate(std::vector<double>& nf) {
     nf.assign(3 * mesh.num_nodes(), 0.0);
@@ -113,7 +114,7 @@ struct Patch {
       sdk::ElementForceInput in;
       in.range = {k * ne / blocks, (k + 1) * ne / blocks};
       in.node_temperature = temperature;
-      in.commit = false;
+      in.commit = commit;
       in.patch_slot = std::span<const int>(slots).subspan(6 * in.range.begin, 6 * (in.range.end - in.range.begin));
       sdk::ElementForceOutput out;
       out.node_force = nf;
@@ -222,6 +223,57 @@ TEST(ShellRfT3, BendingForcesAreTheDerivativeOfTheEnergy) {
       err = std::max(err, std::abs((ep - em) / (2 * h) - f[k]));
     }
     EXPECT_LT(err, 1e-5 * fmax) << "max force " << fmax << ", " << blocks << " ranges";
+  }
+}
+
+// A membrane law that returns no stress and records the strains it is given.
+struct RecordingLaw final : sdk::MaterialLaw {
+  explicit RecordingLaw(bool reads) : reads(reads) {}
+  bool reads;
+  mutable std::vector<double> strain, strain_old;
+  sdk::Status configure(const sdk::Params&) override { return sdk::Status::success(); }
+  sdk::LawRole role() const override { return sdk::LawRole::Membrane; }
+  sdk::Status evaluate(const sdk::MaterialBlock& b) const override {
+    strain.assign(b.strain.begin(), b.strain.end());
+    strain_old.assign(b.strain_old.begin(), b.strain_old.end());
+    std::fill(b.stress.begin(), b.stress.end(), 0.0);
+    std::fill(b.energy.begin(), b.energy.end(), 0.0);
+    return sdk::Status::success();
+  }
+  double max_stiffness(double) const override { return 0.0; }
+  bool uses_strain_old() const override { return reads; }
+};
+
+// The element hands a law the strains of the previous committed step when
+// the law says it reads them (C = I before the first step), and none when
+// no law does.
+TEST(ShellRfT3, PreviousStrainsOnlyForLawsThatReadThem) {
+  for (const bool reads : {true, false}) {
+    Patch p(0.3);
+    RecordingLaw rec(reads);
+    const std::vector<const sdk::MaterialLaw*> laws = {p.law.get(), &rec};
+    const auto& er = p.registry.require(sdk::PluginKind::Element, "shell_rf_t3", "/element");
+    sdk::ElementSetup setup;
+    setup.part = &p.view;
+    setup.membrane = laws;
+    setup.density = 1294.0;
+    ASSERT_TRUE(p.element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
+    p.commit = true;
+    std::vector<double> before;
+    for (int step = 0; step < 3; ++step) {
+      for (int i = 0; i < p.mesh.num_nodes(); ++i) p.x[3 * i] = (1.0 + 0.01 * step) * p.mesh.x[3 * i];
+      p.forces();
+      const std::size_t m = 3 * static_cast<std::size_t>(p.mesh.num_elements());
+      ASSERT_EQ(rec.strain.size(), m);
+      if (!reads) {
+        EXPECT_TRUE(rec.strain_old.empty());
+        continue;
+      }
+      ASSERT_EQ(rec.strain_old.size(), m);
+      for (std::size_t k = 0; k < m; ++k)
+        EXPECT_EQ(rec.strain_old[k], step == 0 ? (k % 3 == 2 ? 0.0 : 1.0) : before[k]) << "step " << step << ", " << k;
+      before = rec.strain;
+    }
   }
 }
 

@@ -233,8 +233,10 @@ class ShellRfT3 final : public ElementKernel {
       }
       if (bending_) setup_bending();
       strain_.assign(3 * ne, 0.0);
-      strain_old_.assign(3 * ne, 0.0);
-      for (int e = 0; e < ne; ++e) {
+      // The previous strains are kept only for laws that read them.
+      keep_old_ = std::any_of(laws_.begin(), laws_.end(), [](const MaterialLaw* l) { return l->uses_strain_old(); });
+      strain_old_.assign(keep_old_ ? 3 * ne : 0, 0.0);
+      for (std::size_t e = 0; 3 * e < strain_old_.size(); ++e) {
         strain_old_[3 * e] = 1.0;
         strain_old_[3 * e + 1] = 1.0;
       }
@@ -286,7 +288,7 @@ class ShellRfT3 final : public ElementKernel {
         MaterialBlock blk;
         blk.n = n;
         blk.strain = std::span<const double>(strain_.data() + 3 * b, 3 * n);
-        blk.strain_old = std::span<const double>(strain_old_.data() + 3 * b, 3 * n);
+        if (keep_old_) blk.strain_old = std::span<const double>(strain_old_.data() + 3 * b, 3 * n);
         blk.temperature = std::span<const double>(temp, n);
         blk.dt = in.dt;
         blk.state = std::span<double>(states_[k].data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
@@ -329,7 +331,8 @@ class ShellRfT3 final : public ElementKernel {
         dt_min = std::min(dt_min, dte[e - b]);
       }
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
-      if (in.commit) std::copy(strain_.begin() + 3 * b, strain_.begin() + 3 * (b + n), strain_old_.begin() + 3 * b);
+      if (in.commit && keep_old_)
+        std::copy(strain_.begin() + 3 * b, strain_.begin() + 3 * (b + n), strain_old_.begin() + 3 * b);
       out.energy += energy;
       out.stable_dt = dt_min;
       return Status::success();
@@ -457,7 +460,7 @@ class ShellRfT3 final : public ElementKernel {
     theta0_.assign(3 * ne, 0.0);
     ginv_.assign(9 * ne, 0.0);
     curv_.assign(3 * ne, 0.0);
-    curv_old_.assign(3 * ne, 0.0);
+    curv_old_.assign(bending_->uses_strain_old() ? 3 * ne : 0, 0.0);
     bstate_.assign(static_cast<std::size_t>(bending_->state_size()) * ne, 0.0);
     const double* x0 = part_->x0.data();
     for (int e = 0; e < ne; ++e) {
@@ -623,7 +626,7 @@ class ShellRfT3 final : public ElementKernel {
     MaterialBlock blk;
     blk.n = n;
     blk.strain = std::span<const double>(curv_.data() + 3 * b, 3 * n);
-    blk.strain_old = std::span<const double>(curv_old_.data() + 3 * b, 3 * n);
+    if (!curv_old_.empty()) blk.strain_old = std::span<const double>(curv_old_.data() + 3 * b, 3 * n);
     blk.temperature = std::span<const double>(temp, n);
     blk.dt = in.dt;
     const int ns = bending_->state_size();
@@ -686,7 +689,8 @@ class ShellRfT3 final : public ElementKernel {
         fq[d] += m * gr[2][d];
       }
     }
-    if (in.commit) std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
+    if (in.commit && !curv_old_.empty())
+      std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
     return energy;
   }
 
@@ -706,6 +710,7 @@ class ShellRfT3 final : public ElementKernel {
   const PartView* part_ = nullptr;
   std::vector<const MaterialLaw*> laws_;
   double areal_mass_ = 0;
+  bool keep_old_ = true;
   std::vector<double> g1_, g2_, area0_, e1_, e2_, strain_, strain_old_, stress_;
   std::vector<std::vector<double>> states_;
 };

@@ -55,6 +55,7 @@ class ThermoLinearBending final : public MaterialLaw {
     });
   }
   LawRole role() const override { return LawRole::Bending; }
+  bool uses_strain_old() const override { return false; }
   std::pair<double, double> temperature_range() const override { return {t_min_, t_max_}; }
   void rigidities(double T, double* r1, double* r2, double* r12) const {
     T = std::clamp(T, t_min_, t_max_);

@@ -75,6 +75,7 @@ class UdHyperelastic final : public MaterialLaw {
     });
   }
   LawRole role() const override { return LawRole::Membrane; }
+  bool uses_strain_old() const override { return false; }
   Status evaluate(const MaterialBlock& b) const override {
     // Vector pass over the block; the points whose logarithms fall outside
     // the series' range are evaluated again one by one.
@@ -113,7 +114,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "ud_hyperelastic";
-  d.version = "1.0.1";
+  d.version = "1.0.2";
   d.summary = "UD membrane: fibre elongation, transverse elongation I_lt = 1/2 ln(I3/I41), optional elastic shear";
   const ParamSpec ksh = list_param("k_sh", "[0, 0, 0]", "N/m",
                                    "elastic shear coefficients of w_sh = sum k_sh^i I_sh^(2i) (zero when viscoelastic_shear carries the shear)", 3);
@@ -125,4 +126,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.0.1", register_all)
+THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.0.2", register_all)

@@ -264,6 +264,7 @@ class ViscoelasticShear final : public MaterialLaw {
     });
   }
   LawRole role() const override { return LawRole::Membrane; }
+  bool uses_strain_old() const override { return false; }
   // Per point: S0 at the previous step (3), the branch states H_i (3 per
   // branch), then the parameters at the point's last temperature (a flag,
   // T, omega, g_i, 1 / tau_i): the temperature changes only when the
@@ -444,7 +445,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.0.2";
+  d.version = "1.0.3";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
@@ -467,4 +468,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.0.2", register_all)
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.0.3", register_all)

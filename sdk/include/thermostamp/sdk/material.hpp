@@ -20,7 +20,7 @@ enum class LawRole { Membrane, Bending };
 struct MaterialBlock {
   std::size_t n = 0;
   std::span<const double> strain;       // 3n: C (membrane) or curvature chi (bending, 1/m)
-  std::span<const double> strain_old;   // 3n: value at the previous step
+  std::span<const double> strain_old;   // 3n: value at the previous step (empty when uses_strain_old() is false)
   std::span<const double> dir2;         // 2n, may be empty for UD laws
   std::span<const double> temperature;  // n, degC
   double dt = 0.0;                      // s
@@ -46,6 +46,10 @@ class MaterialLaw {
   virtual std::pair<double, double> temperature_range() const {
     return {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
   }
+  // Whether evaluate() reads MaterialBlock::strain_old. A law that keeps
+  // what it needs of the past in its state returns false: the element then
+  // neither keeps the previous strains nor passes them (strain_old empty).
+  virtual bool uses_strain_old() const { return true; }
 };
 
 }  // namespace ts::sdk
