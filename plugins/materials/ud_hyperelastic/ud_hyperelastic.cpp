@@ -17,7 +17,7 @@ using namespace ts::sdk;
 // Per-thread buffers of a block: points to evaluate again, energies when
 // the caller wants none.
 struct Scratch {
-  std::vector<unsigned char> redo;
+  std::vector<double> redo;  // 0 or 1 (a double: a narrower type would widen the vector loops)
   std::vector<double> energy;
 };
 Scratch& scratch(std::size_t n) {
@@ -43,14 +43,14 @@ inline double log1p_series(double x) {
 // redo[q] = 1 where C11 - 1 or det C / C11 - 1 is beyond the series' range.
 TS_VECTOR_CLONES
 void ud_block(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh, double* __restrict S,
-              double* __restrict W, unsigned char* __restrict redo) {
+              double* __restrict W, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
     const double a = C[3 * q], b = C[3 * q + 1], c = C[3 * q + 2];
     const double inv_a = 1.0 / a, i3 = a * b - c * c, inv_3 = 1.0 / i3;
     const double xa = a - 1.0, xt = i3 / a - 1.0;  // as the SDK forms I3 / I41
-    redo[q] = !(std::abs(xa) < 1e-2) | !(std::abs(xt) < 1e-2);
+    redo[q] = (std::abs(xa) < 1e-2) & (std::abs(xt) < 1e-2) ? 0.0 : 1.0;
     const double e1 = 0.5 * log1p_series(xa), lt = 0.5 * log1p_series(xt);
     const double inv_r = 1.0 / std::sqrt(a * b), sh = c * inv_r, x2 = sh * sh;
     const double wsh = x2 * (k1 + x2 * (k2 + x2 * k3)), dwsh = sh * (2 * k1 + x2 * (4 * k2 + x2 * 6 * k3));
@@ -80,11 +80,11 @@ class UdHyperelastic final : public MaterialLaw {
     // Vector pass over the block; the points whose logarithms fall outside
     // the series' range are evaluated again one by one.
     Scratch& sc = scratch(b.n);
-    unsigned char* redo = sc.redo.data();
+    double* redo = sc.redo.data();
     ud_block(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), b.energy.empty() ? sc.energy.data() : b.energy.data(),
              redo);
     for (std::size_t q = 0; q < b.n; ++q)
-      if (redo[q]) point(b, q);
+      if (redo[q] != 0) point(b, q);
     return Status::success();
   }
   // One point with the SDK's invariants (any elongation).

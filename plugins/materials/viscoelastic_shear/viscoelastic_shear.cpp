@@ -25,7 +25,7 @@ constexpr int kVectorBranches = 4;
 
 // Per-thread buffers of a block.
 struct Scratch {
-  std::vector<unsigned char> redo;
+  std::vector<double> redo;  // 0 or 1 (a double: a narrower type would widen the vector loops)
   std::vector<double> dir2, energy, next;
 };
 Scratch& scratch(std::size_t n, int keep) {
@@ -95,7 +95,7 @@ struct Branch {
 template <int NB>
 [[gnu::always_inline]] inline void visco_body(std::size_t n, int cache, int ns, const double* __restrict C, const double* __restrict dir2,
                  const double* __restrict temp, double dt, const double* ksh, const double* __restrict state,
-                 double* __restrict S, double* __restrict W, double* __restrict next, unsigned char* __restrict redo) {
+                 double* __restrict S, double* __restrict W, double* __restrict next, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
@@ -137,7 +137,7 @@ template <int NB>
       o1 += h.h1;
       o2 += h.h2;
     }
-    redo[q] = !ok;
+    redo[q] = ok ? 0.0 : 1.0;
     S[3 * q] = o0;
     S[3 * q + 1] = o1;
     S[3 * q + 2] = o2;
@@ -148,7 +148,7 @@ template <int NB>
 #define TS_VISCO_BLOCK(NB)                                                                                          \
   TS_VECTOR_CLONES void visco_block##NB(std::size_t n, int cache, int ns, const double* C, const double* dir2,      \
                                         const double* temp, double dt, const double* ksh, const double* state,       \
-                                        double* S, double* W, double* next, unsigned char* redo) {                   \
+                                        double* S, double* W, double* next, double* redo) {                   \
     visco_body<NB>(n, cache, ns, C, dir2, temp, dt, ksh, state, S, W, next, redo);                                  \
   }
 TS_VISCO_BLOCK(1)
@@ -157,7 +157,7 @@ TS_VISCO_BLOCK(3)
 TS_VISCO_BLOCK(4)
 #undef TS_VISCO_BLOCK
 using ViscoBlock = void (*)(std::size_t, int, int, const double*, const double*, const double*, double, const double*,
-                            const double*, double*, double*, double*, unsigned char*);
+                            const double*, double*, double*, double*, double*);
 constexpr ViscoBlock kViscoBlock[kVectorBranches + 1] = {nullptr, visco_block1, visco_block2, visco_block3, visco_block4};
 
 // The same for n points at one temperature: omega, g_i and the factors
@@ -331,7 +331,7 @@ class ViscoelasticShear final : public MaterialLaw {
                 b.state.data(), b.stress.data(), W, sc.next.data(), sc.redo.data());
     const int keep = 3 + 3 * n_, ns = state_size();
     for (std::size_t q = 0; q < b.n; ++q) {
-      if (sc.redo[q]) {
+      if (sc.redo[q] != 0) {
         point(b, q);
       } else {
         double* st = b.state.data() + static_cast<std::size_t>(ns) * q;
