@@ -120,12 +120,12 @@ void hinge_block(int h, int cap, const int* __restrict ic, const int* __restrict
 }
 
 // Membrane forces of n elements (F e1, F e2 of element q at ff[d n + q],
-// ff[(3 + d) n + q]), f_a = A0 (c1 F e1 + c2 F e2) with c1 =
-// S11 g1_a + S12 g2_a, c2 = S12 g1_a + S22 g2_a (component d of node a of
-// element q at mf[(3 a + d) n + q]), and each element's stable step: smallest height (2 area /
-// longest edge) times inv_c (infinite when has_stiffness is false). One
-// vector pass; the operations of the scalar form in its order, so the
-// same bits.
+// ff[(3 + d) n + q]), f_a = A0 (c1 F e1 + c2 F e2) with c1 = S11 g1_a +
+// S12 g2_a, c2 = S12 g1_a + S22 g2_a (component d of node a of element q
+// at mf[(3 a + d) n + q]), and each element's stable step: smallest height
+// (2 area / longest edge) times inv_c (infinite when has_stiffness is
+// false). One vector pass; the operations of the scalar form in its order,
+// so the same bits.
 TS_VECTOR_CLONES
 void membrane_block(int n, const int* __restrict tri, const double* __restrict x, const double* __restrict ff,
                     const double* __restrict S, const double* __restrict area, const double* __restrict g1,
