@@ -71,8 +71,6 @@ using Clock = std::chrono::steady_clock;
 // The kinetic energy may not exceed this multiple of the energy supplied.
 constexpr double kKineticGrowthLimit = 10.0;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-// Element forces of one block (18 per element), a buffer per thread that
-// stays in cache; it grows to the largest block once.
 void compute_normals(const ShellMesh& m, const std::vector<double>& x, std::vector<double>& nn) {
   nn.assign(x.size(), 0.0);
   for (int e = 0; e < m.num_elements(); ++e) {

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <memory>
 #include <random>
+#include <span>
 #include <vector>
 
 #include <thermostamp/sdk/fd_check.hpp>
@@ -42,6 +43,23 @@ const json kBending = {{"beta1_T", -2.0e-5}, {"beta1_B", 6.4e-3}, {"beta2_T", -2
 
 sdk::Sym2 cauchy_green(double f00, double f01, double f10, double f11) {
   return {f00 * f00 + f10 * f10, f01 * f01 + f11 * f11, f00 * f01 + f10 * f11};
+}
+
+// A block of T.size() points: strains C (also given as the previous
+// strains), temperatures T, step dt, state, and the outputs S and W (W may
+// be empty).
+sdk::MaterialBlock block_of(std::span<const double> C, std::span<const double> T, std::span<double> S,
+                            std::span<double> W = {}, std::span<double> state = {}, double dt = 0.0) {
+  sdk::MaterialBlock b;
+  b.n = T.size();
+  b.strain = C;
+  b.strain_old = C;
+  b.temperature = T;
+  b.dt = dt;
+  b.state = state;
+  b.stress = S;
+  b.energy = W;
+  return b;
 }
 
 // S = 2 dw/dC to 1e-6 relative at random deformations (central differences
@@ -114,14 +132,7 @@ TEST(MaterialLaws, UdBlockMatchesPointwiseInvariants) {
     const sdk::Sym2 c = cauchy_green(1 + s * u(rng), s * u(rng), s * u(rng), 1 + s * u(rng));
     for (int k = 0; k < 3; ++k) C[3 * q + k] = c[k];
   }
-  sdk::MaterialBlock b;
-  b.n = n;
-  b.strain = C;
-  b.strain_old = C;
-  b.temperature = T;
-  b.stress = S;
-  b.energy = W;
-  ASSERT_TRUE(l.law->evaluate(b).ok);
+  ASSERT_TRUE(l.law->evaluate(block_of(C, T, S, W)).ok);
   double worst = 0;
   for (int q = 0; q < n; ++q) {
     const auto v = sdk::invariants({C[3 * q], C[3 * q + 1], C[3 * q + 2]}, {}, sdk::kE1 | sdk::kLt | sdk::kSh);
@@ -150,15 +161,8 @@ struct ShearHistory {
   double step(double gamma, double dt) {
     const sdk::Sym2 C = cauchy_green(1.0, gamma, 0.0, 1.0);
     double stress[3], t[1] = {T};
-    sdk::MaterialBlock b;
-    b.n = 1;
-    b.strain = std::span<const double>(C.data(), 3);
-    b.strain_old = b.strain;
-    b.temperature = std::span<const double>(t, 1);
-    b.dt = dt;
-    b.state = state;
-    b.stress = std::span<double>(stress, 3);
-    law.evaluate(b);
+    law.evaluate(block_of(std::span<const double>(C.data(), 3), std::span<const double>(t, 1), std::span<double>(stress, 3),
+                          {}, state, dt));
     return stress[2];
   }
 };
@@ -284,30 +288,16 @@ TEST(MaterialLaws, ViscoelasticBlockMatchesPointwise) {
         for (int j = 0; j < 3; ++j) C[3 * q + j] = c[j];
         if (k % 7 == 6 && (uniform || q % 3 == 0)) T[q] += 1.5;  // a thermal step (for some points)
       }
-      sdk::MaterialBlock b;
-      b.n = n;
-      b.strain = C;
-      b.strain_old = C;
-      b.temperature = T;
-      b.dt = dt;
+      sdk::MaterialBlock b = block_of(C, T, S, W, sa, dt);
       if (woven) b.dir2 = dir2;
-      b.state = sa;
-      b.stress = S;
-      b.energy = W;
       ASSERT_TRUE(visco.law->evaluate(b).ok);
       for (int q = 0; q < n; ++q) {
         std::fill(sb.begin() + ns * q + kept, sb.begin() + ns * (q + 1), 0.0);  // clear the cache
         double s1[3], w1;
-        sdk::MaterialBlock p;
-        p.n = 1;
-        p.strain = std::span<const double>(&C[3 * q], 3);
-        p.strain_old = p.strain;
-        p.temperature = std::span<const double>(&T[q], 1);
-        p.dt = dt;
+        sdk::MaterialBlock p = block_of(std::span<const double>(&C[3 * q], 3), std::span<const double>(&T[q], 1),
+                                        std::span<double>(s1, 3), std::span<double>(&w1, 1),
+                                        std::span<double>(&sb[ns * q], ns), dt);
         if (woven) p.dir2 = std::span<const double>(&dir2[2 * q], 2);
-        p.state = std::span<double>(&sb[ns * q], ns);
-        p.stress = std::span<double>(s1, 3);
-        p.energy = std::span<double>(&w1, 1);
         ASSERT_TRUE(visco.law->evaluate(p).ok);
         for (int j = 0; j < 3; ++j) ASSERT_EQ(S[3 * q + j], s1[j]) << "step " << k << " point " << q << " woven " << woven;
         ASSERT_EQ(W[q], w1) << "step " << k << " point " << q;
@@ -394,15 +384,7 @@ TEST(MaterialLaws, BendingMomentsAreTheClosedForm) {
   std::uniform_real_distribution<double> u(-20.0, 20.0);
   for (double& c : chi) c = u(rng);
   for (int with_energy = 0; with_energy < 2; ++with_energy) {
-    sdk::MaterialBlock blk;
-    blk.n = n;
-    blk.strain = chi;
-    blk.strain_old = chi;
-    blk.temperature = T;
-    blk.state = state;
-    blk.stress = M;
-    if (with_energy) blk.energy = W;
-    ASSERT_TRUE(bend.law->evaluate(blk).ok);
+    ASSERT_TRUE(bend.law->evaluate(block_of(chi, T, M, with_energy ? std::span<double>(W) : std::span<double>())).ok);
     for (std::size_t q = 0; q < n; ++q) {
       const double t = std::clamp(T[q], 200.0, 350.0);
       const double r1 = std::max(0.0, -2.0e-5 * t + 6.4e-3), r2 = std::max(0.0, -2.0e-6 * t + 6.4e-4);

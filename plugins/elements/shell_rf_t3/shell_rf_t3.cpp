@@ -80,8 +80,8 @@ void reserve_hinges(BlockScratch& s, int h) {
 }
 
 // Bending angles (minus their initial values theta0) and their gradients of
-// h hinges, as ShellRfT3::hinge_angle with the same operations in the same
-// order. Hinge j has its nodes (c, p, q, o) at x[ic[j]], x[ip[j]], ...
+// h hinges; the angle as ShellRfT3::hinge_angle with the same operations in
+// the same order. Hinge j has its nodes (c, p, q, o) at x[ic[j]], x[ip[j]], ...
 // (offsets 3 x node); its gradients on (c, o, p, q) go to G[(3 i + d) cap +
 // j]. redo[j] = 1 (0 otherwise) where the angle is beyond atan2_small's
 // range (the caller evaluates it with the library).
@@ -105,6 +105,8 @@ void hinge_block(int h, int cap, const int* __restrict ic, const int* __restrict
     const double y = m0 * e0 + m1 * e1 + m2 * e2, xx = len * (ne0 * nn0 + ne1 * nn1 + ne2 * nn2);
     redo[j] = (xx > 0) & (std::abs(y) <= 0.66 * xx) ? 0.0 : 1.0;
     dtheta[j] = atan2_small_approx(y, xx) - theta0[j];
+    // Gradient: d theta / d c = n_e / h_c = Ne len / |Ne|^2 (likewise for o
+    // with Nn); p and q take what keeps rigid motions force-free.
     const double sc = (c0 * e0 + c1 * e1 + c2 * e2) / l2, so = (o0 * e0 + o1 * e1 + o2 * e2) / l2;
     const double se = len / (ne0 * ne0 + ne1 * ne1 + ne2 * ne2), sn = len / (nn0 * nn0 + nn1 * nn1 + nn2 * nn2);
     const double g0[3] = {ne0 * se, ne1 * se, ne2 * se};
@@ -364,27 +366,18 @@ class ShellRfT3 final : public ElementKernel {
  private:
   // Bending angle of hinge k of element e at positions x (edge nodes p, q in
   // the element's counter-clockwise order, c opposite in e, o in the
-  // neighbour), with its gradient on (c, o, p, q) when grad is given.
-  double hinge_angle(const double* x, int c, int p, int q, int o, Vec3* grad) const {
+  // neighbour); hinge_block evaluates it with its gradient for many hinges.
+  double hinge_angle(const double* x, int c, int p, int q, int o) const {
     const Vec3 C = load3(x, c), P = load3(x, p), Q = load3(x, q), O = load3(x, o);
     const Vec3 edge = sub(Q, P);
-    const double l2 = dot(edge, edge), len = std::sqrt(l2);
+    const double len = std::sqrt(dot(edge, edge));
     const Vec3 cp = sub(C, P), op = sub(O, P);
     // Unnormalised normals: element e (p, q, c) and the neighbour (q, p, o),
     // both counter-clockwise; |N| = len * height of c (of o) over the edge.
     const Vec3 Ne = cross(edge, cp);
     const Vec3 Nn = cross(op, edge);
     // atan2 is invariant to scaling both arguments by |Ne| |Nn| len.
-    const double theta = atan2_small(dot(cross(Nn, Ne), edge), len * dot(Ne, Nn));
-    if (grad) {
-      // d theta / d c = n_e / h_c = Ne len / |Ne|^2 (and likewise for o).
-      const double sc = dot(cp, edge) / l2, so = dot(op, edge) / l2;
-      grad[0] = scale(Ne, len / dot(Ne, Ne));
-      grad[1] = scale(Nn, len / dot(Nn, Nn));
-      grad[2] = add(scale(grad[0], -(1 - sc)), scale(grad[1], -(1 - so)));
-      grad[3] = add(scale(grad[0], -sc), scale(grad[1], -so));
-    }
-    return theta;
+    return atan2_small(dot(cross(Nn, Ne), edge), len * dot(Ne, Nn));
   }
 
   // Hinge angle between element (c, p, q) and a ghost neighbour across its
@@ -503,7 +496,7 @@ class ShellRfT3 final : public ElementKernel {
           return norm(sub(v, scale(eh, dot(v, eh))));
         };
         d_[3 * e + k] = std::min(height(C), height(O));
-        theta0_[3 * e + k] = hinge_angle(x0, t[k], p, q, o, nullptr);
+        theta0_[3 * e + k] = hinge_angle(x0, t[k], p, q, o);
       }
     }
     // Interior hinges, each once, owned by the lower-numbered of its two
@@ -608,7 +601,7 @@ class ShellRfT3 final : public ElementKernel {
     for (int j = 0; j < nh; ++j)
       if (redo[j] != 0) {  // beyond the approximation's range: the library's atan2
         const int h = j < nown ? h0 + j : fh[j - nown];
-        dth[j] = hinge_angle(x, hc_[h] / 3, hp_[h] / 3, hq_[h] / 3, ho_[h] / 3, nullptr) - htheta0_[h];
+        dth[j] = hinge_angle(x, hc_[h] / 3, hp_[h] / 3, hq_[h] / 3, ho_[h] / 3) - htheta0_[h];
       }
     // Ghost hinges (clamped and symmetry edges), one by one.
     double* hgrad = sc.hgrad.data();  // per element and edge of the block: d theta / dx on (c, p, q)
