@@ -28,6 +28,7 @@
 
 #include <thermostamp/sdk/math.hpp>
 #include <thermostamp/sdk/plugin.hpp>
+#include <thermostamp/sdk/simd.hpp>
 
 namespace ts::contact {
 namespace {
@@ -56,6 +57,48 @@ void normals(const sdk::PartView& p, std::vector<double>& en, std::vector<double
     const Vec3 u = sdk::normalized(sdk::load3(nn.data(), i));
     for (int d = 0; d < 3; ++d) nn[3 * i + d] = u[d];
   }
+}
+
+// What the ply/ply search needs of each triangle of the target surface,
+// kGeo values per element: its unit normal n and the in-plane gradients g1,
+// g2 of its barycentric coordinates w1, w2 (w_k = (x - p0) . g_k for the
+// projection of a point x on the triangle's plane, w0 = 1 - w1 - w2; the
+// gradient of w0 is g0 = -(g1 + g2)). A degenerate (zero-area) triangle gets
+// n = 0 and NaN gradients: its weights compare false, so it is never taken
+// for a face and always gets the full closest-point search. One vector pass
+// over n triangles, written out component by component.
+constexpr int kGeo = 9;
+
+TS_VECTOR_CLONES
+void geometry_block(int n, const int* __restrict tri, const double* __restrict x, double* __restrict geo) {
+#pragma omp simd
+  for (int e = 0; e < n; ++e) {
+    const int i0 = 3 * tri[3 * e], i1 = 3 * tri[3 * e + 1], i2 = 3 * tri[3 * e + 2];
+    const double a0 = x[i0], a1 = x[i0 + 1], a2 = x[i0 + 2];
+    const double e10 = x[i1] - a0, e11 = x[i1 + 1] - a1, e12 = x[i1 + 2] - a2;  // p1 - p0
+    const double e20 = x[i2] - a0, e21 = x[i2 + 1] - a1, e22 = x[i2 + 2] - a2;  // p2 - p0
+    const double n0 = e11 * e22 - e12 * e21, n1 = e12 * e20 - e10 * e22, n2 = e10 * e21 - e11 * e20;
+    const double area2 = std::sqrt(n0 * n0 + n1 * n1 + n2 * n2);  // twice the area
+    const bool ok = area2 > 0;
+    const double inv = 1.0 / area2;
+    const double ginv = ok ? inv : std::numeric_limits<double>::quiet_NaN();
+    const double u0 = ok ? n0 * inv : 0.0, u1 = ok ? n1 * inv : 0.0, u2 = ok ? n2 * inv : 0.0;
+    double* g = geo + kGeo * e;
+    g[0] = u0;
+    g[1] = u1;
+    g[2] = u2;
+    g[3] = (e21 * u2 - e22 * u1) * ginv;  // g1 = (p2 - p0) x n / 2A
+    g[4] = (e22 * u0 - e20 * u2) * ginv;
+    g[5] = (e20 * u1 - e21 * u0) * ginv;
+    g[6] = (u1 * e12 - u2 * e11) * ginv;  // g2 = n x (p1 - p0) / 2A
+    g[7] = (u2 * e10 - u0 * e12) * ginv;
+    g[8] = (u0 * e11 - u1 * e10) * ginv;
+  }
+}
+
+void surface_geometry(const sdk::PartView& p, std::vector<double>& geo) {
+  geo.resize(kGeo * static_cast<std::size_t>(p.num_elements));
+  geometry_block(p.num_elements, p.triangles.data(), p.x.data(), geo.data());
 }
 
 // Candidate target elements of every node of body A: a uniform bucket grid
@@ -177,7 +220,7 @@ struct Pass {
   int a = 0, b = 0;
   std::vector<signed char> side;  // per node of a: +1 above the target, -1 below, 0 not tracked
   std::vector<double> ft;         // per node of a: tangential spring force (N)
-  std::vector<double> en_b;
+  std::vector<double> geo_b;  // surface_geometry of b, kGeo per element
   Candidates cand;
 };
 
@@ -248,7 +291,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       }
       const sdk::PartView& b = parts[pair_.second.index];
       Pass& ps = pass_[0];
-      normals(b, ps.en_b);
+      surface_geometry(b, ps.geo_b);
       const double hsum2 = 0.5 * (a.thickness + b.thickness);
       refresh_candidates(ps, a, b, 2 * hsum2 + gap_tol_);
       for (int i = 0; i < a.num_nodes; ++i) {
@@ -265,7 +308,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
           l.nodes_b[j] = b.triangles[3 * pr.element + j];
           l.w_b[j] = pr.w[j];
         }
-        const double c = sdk::dot(sdk::load3(nn_a_.data(), i), sdk::load3(ps.en_b.data(), pr.element));
+        const double c = sdk::dot(sdk::load3(nn_a_.data(), i), sdk::load3(&ps.geo_b[kGeo * pr.element], 0));
         if (s > 0) {  // node above the target: target's top face, the node's face looking down
           l.face_b = sdk::kTop;
           l.face_a = c > 0 ? sdk::kBottom : sdk::kTop;
@@ -330,21 +373,29 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const double dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
       return dx * dx + dy * dy + dz * dz < slack * slack;
     };
-    for (std::size_t i = 0; i < n;) {
-      if (skip(i)) {
-        ++i;
-        continue;
-      }
-      std::size_t j = i + 1;
-      while (j < n && !skip(j)) ++j;
-      tool.query(tool.context, j - i, &a.x[3 * i], 2 * cutoff, &dist_[i], &tn_[3 * i]);
-      for (std::size_t k = i; k < j; ++k) {
-        if (dist_[k] > cutoff) {
-          sq_[k] = tool_path_;
-          for (int d = 0; d < 3; ++d) xq_[3 * k + d] = a.x[3 * k + d];
+    // Interleaved chunks of nodes on the threads (each node's answer is its
+    // own: the same for any chunking).
+    constexpr std::size_t kChunk = 32;
+    const long long chunks = static_cast<long long>((n + kChunk - 1) / kChunk);
+#pragma omp parallel for schedule(static, 1) if (n > 256)
+    for (long long ch = 0; ch < chunks; ++ch) {
+      const std::size_t end = std::min(n, static_cast<std::size_t>(ch + 1) * kChunk);
+      for (std::size_t i = static_cast<std::size_t>(ch) * kChunk; i < end;) {
+        if (skip(i)) {
+          ++i;
+          continue;
         }
+        std::size_t j = i + 1;
+        while (j < end && !skip(j)) ++j;
+        tool.query(tool.context, j - i, &a.x[3 * i], 2 * cutoff, &dist_[i], &tn_[3 * i]);
+        for (std::size_t k = i; k < j; ++k) {
+          if (dist_[k] > cutoff) {
+            sq_[k] = tool_path_;
+            for (int d = 0; d < 3; ++d) xq_[3 * k + d] = a.x[3 * k + d];
+          }
+        }
+        i = j + 1;  // node j (if any) is skipped
       }
-      i = j + 1;  // node j (if any) is skipped
     }
   }
 
@@ -363,43 +414,102 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // measured along its normal; on an edge or a vertex (a node over a convex
   // fold finds no triangle under it) along the direction from that point,
   // so the surface acts as if its folds were rounded.
+  //
+  // Two sweeps: first the triangles the node projects into (closed; the
+  // projection is then the closest point, at the plane distance), then the
+  // others, skipped where a lower bound of their distance is already
+  // farther than the best: the projection is beyond the line of edge k
+  // (w_k < 0) by -w_k / |g_k| in the plane, so the distance is at least
+  // sqrt(plane^2 + w_k^2 / |g_k|^2). Only the rest get the full
+  // closest-point search. Of equally close triangles the first found is kept.
   Projection project(const Pass& ps, const sdk::PartView& a, const sdk::PartView& b, int i, double reach) const {
     Projection best;
     double best_d2 = reach * reach;  // squared: no square root per candidate
     const Vec3 x = sdk::load3(a.x.data(), i);
     const auto [begin, end] = ps.cand.of(i);
     if (!begin) return best;
+    const bool self = a.index == b.index;
+    // Plane distance and projection weights of x on candidate e.
+    auto locate = [&](int e, const int* t, double* w, double& plane) {
+      const double* g = &ps.geo_b[kGeo * static_cast<std::size_t>(e)];
+      const double* p0 = &b.x[3 * static_cast<std::size_t>(t[0])];
+      const double rx = x[0] - p0[0], ry = x[1] - p0[1], rz = x[2] - p0[2];
+      plane = rx * g[0] + ry * g[1] + rz * g[2];
+      w[1] = rx * g[3] + ry * g[4] + rz * g[5];
+      w[2] = rx * g[6] + ry * g[7] + rz * g[8];
+      w[0] = 1.0 - w[1] - w[2];
+      return w[0] >= 0 && w[1] >= 0 && w[2] >= 0;  // false for a degenerate triangle (NaN)
+    };
+    bool face = false;
     Vec3 best_r{0, 0, 0};
     double best_dn = 0;
-    bool best_inside = false;
+    auto take = [&](int e, const double* w, double d2) {
+      best.element = e;
+      best_d2 = d2;
+      for (int j = 0; j < 3; ++j) best.w[j] = w[j];
+    };
+    auto closer = [&](double d2) { return !(d2 > best_d2 || (d2 == best_d2 && best.element >= 0)); };
+    // A candidate the node does not project into: bound, then full search.
+    auto edge_or_vertex = [&](int e, const int* t, double* w, double plane) {
+      const double room = best_d2 - plane * plane;  // what the in-plane distance may add, squared
+      if (room < 0) return;
+      const double* g = &ps.geo_b[kGeo * static_cast<std::size_t>(e)];
+      const double gk[3][3] = {{-g[3] - g[6], -g[4] - g[7], -g[5] - g[8]}, {g[3], g[4], g[5]}, {g[6], g[7], g[8]}};
+      for (int k = 0; k < 3; ++k)
+        if (w[k] < 0 && w[k] * w[k] > room * (gk[k][0] * gk[k][0] + gk[k][1] * gk[k][1] + gk[k][2] * gk[k][2]))
+          return;
+      const Vec3 cp = sdk::closest_point_on_triangle(x, sdk::load3(b.x.data(), t[0]), sdk::load3(b.x.data(), t[1]),
+                                                     sdk::load3(b.x.data(), t[2]), w);
+      const Vec3 r = sdk::sub(x, cp);
+      const double d2 = sdk::dot(r, r);
+      if (!closer(d2)) return;
+      take(e, w, d2);
+      best_r = r;
+      best_dn = sdk::dot(r, sdk::load3(g, 0));
+      face = false;
+    };
+    // The first sweep keeps what it found of the other candidates (up to
+    // kKeep of them; beyond that the second sweep computes it again).
+    constexpr int kKeep = 32;
+    struct Kept {
+      int e;
+      double plane, w[3];
+    } kept[kKeep];
+    int nkept = 0;
+    const bool keep = end - begin <= kKeep;
     for (const int* it = begin; it != end; ++it) {
       const int e = *it;
       const int* t = &b.triangles[3 * e];
-      if (a.index == b.index && (t[0] == i || t[1] == i || t[2] == i)) continue;  // self contact
-      const Vec3 p0 = sdk::load3(b.x.data(), t[0]), p1 = sdk::load3(b.x.data(), t[1]), p2 = sdk::load3(b.x.data(), t[2]);
-      const Vec3 ne = sdk::load3(ps.en_b.data(), e);
-      // The distance to the triangle is at least the distance to its plane.
-      const double plane = sdk::dot(sdk::sub(x, p0), ne);
-      if (plane * plane > best_d2) continue;
-      double w[3];
-      const Vec3 cp = sdk::closest_point_on_triangle(x, p0, p1, p2, w);
-      const Vec3 r = sdk::sub(x, cp);
-      const double d2 = sdk::dot(r, r);
-      if (d2 > best_d2 || (d2 == best_d2 && best.element >= 0)) continue;
-      best.element = e;
-      best_d2 = d2;
-      best_r = r;
-      best_dn = sdk::dot(r, ne);
-      best_inside = w[0] > 0 && w[1] > 0 && w[2] > 0;
-      best.n = ne;
-      for (int j = 0; j < 3; ++j) best.w[j] = w[j];
+      if (self && (t[0] == i || t[1] == i || t[2] == i)) continue;  // self contact
+      double w[3], plane;
+      if (!locate(e, t, w, plane)) {
+        if (keep) kept[nkept++] = {e, plane, {w[0], w[1], w[2]}};
+        continue;
+      }
+      if (!closer(plane * plane)) continue;
+      take(e, w, plane * plane);
+      best.d = plane;
+      face = true;
+    }
+    if (keep) {
+      for (int k = 0; k < nkept; ++k) edge_or_vertex(kept[k].e, &b.triangles[3 * kept[k].e], kept[k].w, kept[k].plane);
+    } else {
+      for (const int* it = begin; it != end; ++it) {
+        const int e = *it;
+        const int* t = &b.triangles[3 * e];
+        if (self && (t[0] == i || t[1] == i || t[2] == i)) continue;
+        double w[3], plane;
+        if (!locate(e, t, w, plane)) edge_or_vertex(e, t, w, plane);
+      }
     }
     if (best.element < 0) return best;
-    // The normal is the direction from the closest point (inside a triangle
-    // that is its normal; over an edge or a vertex it does not depend on
-    // which of the triangles sharing it was found first).
+    best.n = sdk::load3(&ps.geo_b[kGeo * static_cast<std::size_t>(best.element)], 0);
+    if (face) return best;  // d: the plane distance, n: the triangle's normal
+    // Over an edge or a vertex the normal is the direction from the closest
+    // point: it does not depend on which of the triangles sharing it was
+    // found first.
     const double dist = std::sqrt(best_d2);
-    best.d = best_inside ? best_dn : (best_dn >= 0 ? dist : -dist);
+    best.d = best_dn >= 0 ? dist : -dist;
     if (dist > 0) best.n = sdk::scale(best_r, (best_dn >= 0 ? 1.0 : -1.0) / dist);
     return best;
   }
@@ -468,7 +578,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const double h2 = 0.5 * a.thickness;
     scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
     energy_.assign(a.num_nodes, 0.0);
-#pragma omp parallel for schedule(static) if (a.num_nodes > 256)
+#pragma omp parallel for schedule(static, 32) if (a.num_nodes > 256)
     for (int i = 0; i < a.num_nodes; ++i) {
       const double pen = h2 - dist_[i];
       if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
@@ -506,7 +616,6 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   void ply_pass(Pass& ps, double scale, const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
     const sdk::PartView& a = parts_[ps.a];
     const sdk::PartView& b = parts_[ps.b];
-    normals(b, ps.en_b);  // element normals of the target only
     const double hsum2 = 0.5 * (a.thickness + b.thickness);
     const double track = hsum2 + gap_tol_ + hsum2;  // keep the side while the node stays this close
     refresh_candidates(ps, a, b, track);
@@ -516,7 +625,20 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
     energy_.assign(a.num_nodes, 0.0);
     target_.assign(4 * static_cast<std::size_t>(a.num_nodes), 0.0);
-#pragma omp parallel for schedule(static) if (a.num_nodes > 256)
+    // The geometry of b's triangles, then the nodes of a, both dealt to the
+    // threads in small interleaved chunks: the cost of a node differs with
+    // where it lies (corner or centre of a cell, in contact or not), and a
+    // mesh numbers such nodes in runs.
+    ps.geo_b.resize(kGeo * static_cast<std::size_t>(b.num_elements));
+    constexpr int kChunk = 64;
+    const int chunks = (b.num_elements + kChunk - 1) / kChunk;
+#pragma omp parallel if (a.num_nodes > 256)
+    {
+#pragma omp for schedule(static, 1)
+    for (int c = 0; c < chunks; ++c)
+      geometry_block(std::min(kChunk, b.num_elements - c * kChunk), &b.triangles[3 * c * kChunk], b.x.data(),
+                     &ps.geo_b[kGeo * static_cast<std::size_t>(c) * kChunk]);
+#pragma omp for schedule(static, 32)
     for (int i = 0; i < a.num_nodes; ++i) {
       double* tg = &target_[4 * static_cast<std::size_t>(i)];
       tg[0] = -1;
@@ -561,6 +683,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       tg[2] = pr.w[1];
       tg[3] = pr.w[2];
     }
+    }
     auto fa = out.force[a.index];
     auto fb = out.force[b.index];
     for (int i = 0; i < a.num_nodes; ++i) {
@@ -601,7 +724,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.3.2";
+  d.version = "0.4.0";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces";
   d.params = {

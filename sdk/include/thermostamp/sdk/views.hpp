@@ -40,7 +40,9 @@ struct PartView {
 // outward normal points to, i.e. outside the tool) and that outward unit
 // normal at the closest surface point, in the tool's current position. One
 // call per batch, not per node. Points farther than `cutoff` from the
-// surface may be answered with distance +infinity (mesh tools do so).
+// surface may be answered with distance +infinity (mesh tools do so). Each
+// point's answer depends on that point only (not on the batch), and `query`
+// may be called from several threads at once.
 // `velocity` is the tool's current rigid velocity (m/s, 3 values);
 // `displacement` its rigid translation from the initial position (m, 3
 // values): a handler can bound how far the surface has moved since it last
