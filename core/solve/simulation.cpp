@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <iomanip>
 #include <limits>
@@ -441,11 +442,15 @@ void Simulation::build_mechanics() {
           if (o != p0 && o != p1) patch[6 * e + 3 + k] = o;
         }
       }
-    // Blocks of 256 to 2048 elements, at least 16 blocks where the part
-    // allows: larger blocks evaluate fewer hinges twice at their borders.
-    m->block_size = 256;
-    while (m->block_size < 2048 && 16 * m->block_size < ne) m->block_size *= 2;
-    m->blocks = (ne + m->block_size - 1) / m->block_size;
+    // Blocks of about 256 to 2048 elements, at least 16 blocks where the
+    // part allows (larger blocks evaluate fewer hinges twice at their
+    // borders), all of one size (the last one a little smaller), so that the
+    // threads share a small part evenly. The partition depends on the part
+    // only, never on the thread count.
+    int size = 256;
+    while (size < 2048 && 16 * size < ne) size *= 2;
+    m->blocks = std::max(1, (ne + size - 1) / size);
+    m->block_size = std::max(1, (ne + m->blocks - 1) / m->blocks);
     m->block_dt.assign(m->blocks, 0.0);
     m->block_fail.resize(m->blocks);
     m->block_error.resize(m->blocks);
@@ -651,52 +656,54 @@ void Simulation::update_node_temperature() {
   }
 }
 
-// Internal forces of every part at the current positions; returns the
-// smallest stable step of the elements (mass scaling included).
-double Simulation::mechanics_stable_dt() {
+// Internal forces of element block b of part p at the current positions:
+// the block adds its elements' forces into its own node slots, and nodes of
+// this block alone get their force at once.
+void Simulation::element_block(std::size_t p, int b) {
+  PartState& st = *parts_[p];
+  MechPart& m = *mech_[p];
+  const int ne = st.mesh.num_elements();
+  const int l0 = m.block_node_start[b], l1 = m.block_node_start[b + 1];
+  double* bf = m.block_force.data() + 3 * static_cast<std::size_t>(l0);
+  std::fill(bf, bf + 3 * (l1 - l0), 0.0);
+  sdk::ElementForceInput in;
+  in.range = {b * m.block_size, std::min(ne, (b + 1) * m.block_size)};
+  in.dt = last_mech_dt_;
+  in.node_temperature = m.node_temperature;
+  in.patch_slot = std::span<const int>(m.slot_local.data() + 6 * static_cast<std::size_t>(in.range.begin),
+                                       6 * static_cast<std::size_t>(in.range.end - in.range.begin));
+  sdk::ElementForceOutput out;
+  out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
+  out.element_dt = m.elem_dt;
+  m.block_error[b].clear();
+  if (auto s = m.element->internal_forces(in, out); !s) m.block_error[b] = s.message;
+  m.block_fail[b] = out.failed_element;
+  if (!m.block_error[b].empty() || m.block_fail[b] >= 0) return;
+  double dtb = std::numeric_limits<double>::infinity();
+  for (int e = in.range.begin; e < in.range.end; ++e) dtb = std::min(dtb, m.elem_dt[e] * m.elem_sqrt_scale[e]);
+  m.block_dt[b] = dtb;
+  for (int l = l0; l < l1; ++l)
+    if (!m.block_node_shared[l])
+      for (int d = 0; d < 3; ++d) m.f_int[3 * m.block_node[l] + d] = m.block_force[3 * l + d];
+}
+
+// After every block of every part: errors in block order, the forces of
+// nodes of several blocks (their blocks' sums, in block order) and the
+// smallest stable step of the elements (mass scaling included) with the
+// contact springs.
+double Simulation::finish_elements() {
   double dt = std::numeric_limits<double>::infinity();
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
-    const int ne = st.mesh.num_elements();
-    const int blocks = m.blocks, bs = m.block_size;
-    int* block_fail = m.block_fail.data();
-    std::string* block_error = m.block_error.data();
-#pragma omp parallel for schedule(static) if (blocks > 1)
-    for (int b = 0; b < blocks; ++b) {
-      // The block adds its elements' forces into its own node slots.
-      const int l0 = m.block_node_start[b], l1 = m.block_node_start[b + 1];
-      double* bf = m.block_force.data() + 3 * static_cast<std::size_t>(l0);
-      std::fill(bf, bf + 3 * (l1 - l0), 0.0);
-      sdk::ElementForceInput in;
-      in.range = {b * bs, std::min(ne, (b + 1) * bs)};
-      in.dt = last_mech_dt_;
-      in.node_temperature = m.node_temperature;
-      in.patch_slot = std::span<const int>(m.slot_local.data() + 6 * static_cast<std::size_t>(in.range.begin),
-                                           6 * static_cast<std::size_t>(in.range.end - in.range.begin));
-      sdk::ElementForceOutput out;
-      out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
-      out.element_dt = m.elem_dt;
-      block_error[b].clear();
-      if (auto s = m.element->internal_forces(in, out); !s) block_error[b] = s.message;
-      block_fail[b] = out.failed_element;
-      if (!block_error[b].empty() || block_fail[b] >= 0) continue;
-      double dtb = std::numeric_limits<double>::infinity();
-      for (int e = in.range.begin; e < in.range.end; ++e) dtb = std::min(dtb, m.elem_dt[e] * m.elem_sqrt_scale[e]);
-      m.block_dt[b] = dtb;
-      for (int l = l0; l < l1; ++l)
-        if (!m.block_node_shared[l])
-          for (int d = 0; d < 3; ++d) m.f_int[3 * m.block_node[l] + d] = m.block_force[3 * l + d];
-    }
-    for (int b = 0; b < blocks; ++b) {
-      if (!block_error[b].empty())
-        throw RunError("element '" + st.def->element + "' of part '" + st.def->name + "': " + block_error[b]);
-      if (block_fail[b] >= 0)
-        throw RunError("degenerate (collapsed or inverted) element " + std::to_string(block_fail[b]) + " in part '" +
+    for (int b = 0; b < m.blocks; ++b) {
+      if (!m.block_error[b].empty())
+        throw RunError("element '" + st.def->element + "' of part '" + st.def->name + "': " + m.block_error[b]);
+      if (m.block_fail[b] >= 0)
+        throw RunError("degenerate (collapsed or inverted) element " + std::to_string(m.block_fail[b]) + " in part '" +
                        st.def->name + "'");
       dt = std::min(dt, m.block_dt[b]);
     }
-    // Nodes of several blocks: their blocks' sums, in block order.
     const int ns = static_cast<int>(m.shared_node.size());
 #pragma omp parallel for schedule(static) if (ns > 2048)
     for (int s = 0; s < ns; ++s) {
@@ -709,6 +716,71 @@ double Simulation::mechanics_stable_dt() {
   // Element and contact springs act on the same nodes: 1/dt^2 adds up.
   if (std::isfinite(contact_dt_)) dt = 1.0 / std::sqrt(1.0 / (dt * dt) + 1.0 / (contact_dt_ * contact_dt_));
   return std::min(dt, tool_dt_);
+}
+
+// Internal forces of every part at the current positions; returns the
+// smallest stable step.
+double Simulation::mechanics_stable_dt() {
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    const int blocks = mech_[p]->blocks;
+#pragma omp parallel for schedule(static, 1) if (blocks > 1)
+    for (int b = 0; b < blocks; ++b) element_block(p, b);
+  }
+  return finish_elements();
+}
+
+// Element forces and contact forces at the current positions (they write
+// separate arrays); returns the smallest stable step. With two or three
+// threads the contact pairs run as one task beside the element blocks (the
+// handlers' own loops then run on that task's thread): the two phases cost
+// about the same, and one meeting point per step replaces one per loop.
+// With more threads, or one, the phases follow each other, each shared
+// out in its own loops. Every force is computed the same way in both modes:
+// the results do not depend on the thread count.
+double Simulation::forces_and_stable_dt(double t, double dt) {
+#ifdef _OPENMP
+  const int threads = omp_get_max_threads();
+#else
+  const int threads = 1;
+#endif
+  if (threads < 2 || threads > 3 || contacts_.empty()) {
+    auto tc = Clock::now();
+    const double stable = mechanics_stable_dt();
+    timing_[kTimeElements] += seconds_since(tc);
+    tc = Clock::now();
+    compute_contact_forces(t, dt);
+    timing_[kTimeContact] += seconds_since(tc);
+    return stable;
+  }
+  const auto t0 = Clock::now();
+  double contact_time = 0;
+  std::exception_ptr contact_error;
+#pragma omp parallel
+#pragma omp single
+  {
+#pragma omp task shared(contact_time, contact_error)
+    {
+      const auto tc = Clock::now();
+      try {
+        compute_contact_forces(t, dt);
+      } catch (...) {
+        contact_error = std::current_exception();
+      }
+      contact_time = seconds_since(tc);
+    }
+    for (std::size_t p = 0; p < parts_.size(); ++p)
+      for (int b = 0; b < mech_[p]->blocks; ++b) {
+#pragma omp task firstprivate(p, b)
+        element_block(p, b);
+      }
+  }
+  if (contact_error) std::rethrow_exception(contact_error);
+  const double stable = finish_elements();
+  // The contact ran within the elements' wall time: elements_and_laws is
+  // the wall time of both, contact its own share.
+  timing_[kTimeElements] += seconds_since(t0) - contact_time;
+  timing_[kTimeContact] += contact_time;
+  return stable;
 }
 
 void Simulation::compute_contact_forces(double t, double dt) {
@@ -1033,6 +1105,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   const auto wall0 = std::chrono::steady_clock::now();
 #ifdef _OPENMP
   if (opt.threads > 0) omp_set_num_threads(opt.threads);
+  omp_set_max_active_levels(1);  // loops inside a task run on its thread
   const int threads = omp_get_max_threads();
 #else
   const int threads = 1;
@@ -1312,12 +1385,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         t += dt;
         mech_dt = dt;
         // Forces and stable step at the new positions (also for the next step).
-        tc = Clock::now();
-        stable = mechanics_stable_dt();
-        timing_[kTimeElements] += seconds_since(tc);
-        tc = Clock::now();
-        compute_contact_forces(t, dt);
-        timing_[kTimeContact] += seconds_since(tc);
+        stable = forces_and_stable_dt(t, dt);
         audit.contact_stored = contact_energy_;
         if (job_.thermal) {
           ++since_thermal;
