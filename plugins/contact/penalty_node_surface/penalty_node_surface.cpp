@@ -373,29 +373,21 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const double dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
       return dx * dx + dy * dy + dz * dz < slack * slack;
     };
-    // Interleaved chunks of nodes on the threads (each node's answer is its
-    // own: the same for any chunking).
-    constexpr std::size_t kChunk = 32;
-    const long long chunks = static_cast<long long>((n + kChunk - 1) / kChunk);
-#pragma omp parallel for schedule(static, 1) if (n > 256)
-    for (long long ch = 0; ch < chunks; ++ch) {
-      const std::size_t end = std::min(n, static_cast<std::size_t>(ch + 1) * kChunk);
-      for (std::size_t i = static_cast<std::size_t>(ch) * kChunk; i < end;) {
-        if (skip(i)) {
-          ++i;
-          continue;
-        }
-        std::size_t j = i + 1;
-        while (j < end && !skip(j)) ++j;
-        tool.query(tool.context, j - i, &a.x[3 * i], 2 * cutoff, &dist_[i], &tn_[3 * i]);
-        for (std::size_t k = i; k < j; ++k) {
-          if (dist_[k] > cutoff) {
-            sq_[k] = tool_path_;
-            for (int d = 0; d < 3; ++d) xq_[3 * k + d] = a.x[3 * k + d];
-          }
-        }
-        i = j + 1;  // node j (if any) is skipped
+    for (std::size_t i = 0; i < n;) {
+      if (skip(i)) {
+        ++i;
+        continue;
       }
+      std::size_t j = i + 1;
+      while (j < n && !skip(j)) ++j;
+      tool.query(tool.context, j - i, &a.x[3 * i], 2 * cutoff, &dist_[i], &tn_[3 * i]);
+      for (std::size_t k = i; k < j; ++k) {
+        if (dist_[k] > cutoff) {
+          sq_[k] = tool_path_;
+          for (int d = 0; d < 3; ++d) xq_[3 * k + d] = a.x[3 * k + d];
+        }
+      }
+      i = j + 1;  // node j (if any) is skipped
     }
   }
 
