@@ -231,6 +231,34 @@ TEST(Plugins, FoundThroughEnvironmentAndFailureKeepsFrames) {
   EXPECT_NE(xdmf.str().find("<Time Value=\"0.5\" />"), std::string::npos);
 }
 
+// A contact handler that fails mid-run: exit 3 with the interaction's JSON
+// path and the time, the frames before it kept, on one thread and on two
+// (where the contact runs as a task beside the element blocks).
+TEST(Plugins, ContactFailureStopsTheRunOnAnyThreadCount) {
+  for (const int threads : {1, 2}) {
+    const auto dir = temp_dir("contact_fail_" + std::to_string(threads));
+    json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+    j["time"]["end"] = 0.5;
+    j["output"]["interval"] = 0.1;
+    j["output"]["probes"] = json::array();
+    for (auto& p : j["parts"]) p["mesh"]["divisions"] = {6, 6};
+    j["solvers"]["mechanics"]["mass_scaling"]["target_dt"] = 1e-4;
+    j["interactions"][3] = {{"type", "contact"}, {"handler", "fail_after"}, {"between", {"ply_top", "ply_bottom"}},
+                            {"fail_time", 0.25}};
+    j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR};
+    std::ofstream(dir / "job.json") << j.dump(2);
+    const auto out = dir / "out";
+    const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet --threads " +
+                               std::to_string(threads));
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    EXPECT_NE(r.err.find("contact handler of /interactions/3 at t = 0.25"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("failed on purpose"), std::string::npos) << r.err;
+    const json s = json::parse(std::ifstream(out / "summary.json"));
+    EXPECT_EQ(s["status"], "failed");
+    EXPECT_EQ(s["frames"], 3);  // 0, 0.1, 0.2
+  }
+}
+
 }  // namespace
 }  // namespace ts::test
 
