@@ -627,54 +627,53 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
 #pragma omp parallel if (a.num_nodes > 256)
     {
 #pragma omp for schedule(static, 1)
-    for (int c = 0; c < chunks; ++c)
-      geometry_block(std::min(kChunk, b.num_elements - c * kChunk), &b.triangles[3 * c * kChunk], b.x.data(),
-                     &ps.geo_b[kGeo * static_cast<std::size_t>(c) * kChunk]);
+      for (int c = 0; c < chunks; ++c)
+        geometry_block(std::min(kChunk, b.num_elements - c * kChunk), &b.triangles[3 * c * kChunk], b.x.data(),
+                       &ps.geo_b[kGeo * static_cast<std::size_t>(c) * kChunk]);
 #pragma omp for schedule(static, 32)
-    for (int i = 0; i < a.num_nodes; ++i) {
-      double* tg = &target_[4 * static_cast<std::size_t>(i)];
-      tg[0] = -1;
-      const Projection pr = project(ps, a, b, i, track);
-      if (pr.element < 0) {
-        ps.side[i] = 0;
-        for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
-        continue;
-      }
-      const int* t = &b.triangles[3 * pr.element];
-      const Vec3 ne = pr.n;
-      Vec3 vt = {0, 0, 0};
-      for (int j = 0; j < 3; ++j) vt = sdk::add(vt, sdk::scale(sdk::load3(vb.data(), t[j]), pr.w[j]));
-      const Vec3 vrel = sdk::sub(sdk::load3(va.data(), i), vt);
-      if (ps.side[i] == 0) {
-        const double g = sdk::dot(ne, vrel);
-        if (std::abs(pr.d) >= hsum2 || std::abs(g) * in.dt < std::abs(pr.d)) {
-          // Not touching, or it cannot have crossed the target's mid-surface
-          // within the step: the side it is on.
-          ps.side[i] = pr.d >= 0 ? 1 : -1;
-        } else {  // may have crossed within one step: the approach velocity decides
-          ps.side[i] = g < 0 ? 1 : g > 0 ? -1 : (pr.d >= 0 ? 1 : -1);
+      for (int i = 0; i < a.num_nodes; ++i) {
+        double* tg = &target_[4 * static_cast<std::size_t>(i)];
+        tg[0] = -1;
+        const Projection pr = project(ps, a, b, i, track);
+        if (pr.element < 0) {
+          ps.side[i] = 0;
+          for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
+          continue;
         }
+        const int* t = &b.triangles[3 * pr.element];
+        const Vec3 ne = pr.n;
+        Vec3 vt = {0, 0, 0};
+        for (int j = 0; j < 3; ++j) vt = sdk::add(vt, sdk::scale(sdk::load3(vb.data(), t[j]), pr.w[j]));
+        const Vec3 vrel = sdk::sub(sdk::load3(va.data(), i), vt);
+        if (ps.side[i] == 0) {
+          const double g = sdk::dot(ne, vrel);
+          if (std::abs(pr.d) >= hsum2 || std::abs(g) * in.dt < std::abs(pr.d)) {
+            // Not touching, or it cannot have crossed the target's mid-surface
+            // within the step: the side it is on.
+            ps.side[i] = pr.d >= 0 ? 1 : -1;
+          } else {  // may have crossed within one step: the approach velocity decides
+            ps.side[i] = g < 0 ? 1 : g > 0 ? -1 : (pr.d >= 0 ? 1 : -1);
+          }
+        }
+        const double pen = hsum2 - ps.side[i] * pr.d;
+        if (!(pen > 0)) {
+          for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
+          continue;
+        }
+        if (pen > 2 * hsum2) {  // went through the other ply: release
+          ps.side[i] = 0;
+          continue;
+        }
+        double mb = 0;
+        for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
+        const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
+        energy_[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, sdk::scale(ne, ps.side[i]),
+                                vrel, in.dt, &scratch_[3 * static_cast<std::size_t>(i)]);
+        tg[0] = pr.element;
+        tg[1] = pr.w[0];
+        tg[2] = pr.w[1];
+        tg[3] = pr.w[2];
       }
-      const double pen = hsum2 - ps.side[i] * pr.d;
-      if (!(pen > 0)) {
-        for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
-        continue;
-      }
-      if (pen > 2 * hsum2) {  // went through the other ply: release
-        ps.side[i] = 0;
-        continue;
-      }
-      double mb = 0;
-      for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
-      const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
-      energy_[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, sdk::scale(ne, ps.side[i]), vrel,
-                              in.dt,
-                              &scratch_[3 * static_cast<std::size_t>(i)]);
-      tg[0] = pr.element;
-      tg[1] = pr.w[0];
-      tg[2] = pr.w[1];
-      tg[3] = pr.w[2];
-    }
     }
     auto fa = out.force[a.index];
     auto fb = out.force[b.index];
