@@ -528,6 +528,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       const auto g = mr.reals("gravity", 3, std::vector<double>{0, 0, 0});
       md.gravity = {g[0], g[1], g[2]};
       md.energy_tolerance = mr.real("energy_tolerance", 0.05, 0.0, true);
+      md.contact_schedule = mr.choice("contact_schedule", {"auto", "beside", "in_turn"}, std::string("auto"));
       mr.finish();
     }
     if (const json* t = r.optional_raw("thermal")) {

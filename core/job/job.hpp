@@ -122,6 +122,9 @@ struct MechanicsDef {
   double damping = 0;        // mass-proportional damping coefficient, 1/s
   std::array<double, 3> gravity{0, 0, 0};
   double energy_tolerance = 0.05;  // relative energy balance error that stops the run
+  // How elements and contact share the threads: "auto" (timed), "beside"
+  // (contact as one task beside the element blocks) or "in_turn".
+  std::string contact_schedule = "auto";
 };
 
 struct ConstraintDef {

@@ -730,56 +730,89 @@ double Simulation::mechanics_stable_dt() {
 }
 
 // Element forces and contact forces at the current positions (they write
-// separate arrays); returns the smallest stable step. With two or three
-// threads the contact pairs run as one task beside the element blocks (the
-// handlers' own loops then run on that task's thread): the two phases cost
-// about the same, and one meeting point per step replaces one per loop.
-// With more threads, or one, the phases follow each other, each shared
-// out in its own loops. Every force is computed the same way in both modes:
-// the results do not depend on the thread count.
+// separate arrays); returns the smallest stable step. Two ways of sharing
+// them out over the threads, with the same results (every force is computed
+// the same way in both):
+// - in turn: the element blocks, then the contact pairs, each shared out
+//   in its own loops;
+// - beside: the contact pairs as one task on one thread (their handlers'
+//   loops then run on that thread) while the other threads take the element
+//   blocks; one meeting point per step instead of one per loop, best where
+//   contact costs about as much as the elements.
+// Which one is faster depends on the scene and the machine: with
+// "contact_schedule": "auto" the run times both over its first calls
+// (kTrial each), keeps the faster, and times both again every kRecheck
+// calls; "beside" and "in_turn" fix the way.
 double Simulation::forces_and_stable_dt(double t, double dt) {
 #ifdef _OPENMP
   const int threads = omp_get_max_threads();
 #else
   const int threads = 1;
 #endif
-  if (threads < 2 || threads > 3 || contacts_.empty()) {
+  constexpr int kTrial = 64;
+  constexpr long long kRecheck = 20000;
+  ForceSchedule& fs = schedule_;
+  const std::string& way = job_.mechanics_settings.contact_schedule;
+  const bool choice = threads > 1 && !contacts_.empty() && way == "auto";
+  bool beside = threads > 1 && !contacts_.empty() && way == "beside";
+  if (choice) {
+    if (fs.trial_left == 0 && fs.calls >= fs.next_trial) {  // a trial: kTrial calls beside, then kTrial in turn
+      fs.trial_left = 2 * kTrial;
+      fs.time[0] = fs.time[1] = 0;
+      fs.count[0] = fs.count[1] = 0;
+    }
+    beside = fs.trial_left > 0 ? fs.trial_left > kTrial : fs.beside;
+  }
+  const auto t0 = Clock::now();
+  double stable;
+  if (!beside) {
     auto tc = Clock::now();
-    const double stable = mechanics_stable_dt();
+    stable = mechanics_stable_dt();
     timing_[kTimeElements] += seconds_since(tc);
     tc = Clock::now();
     compute_contact_forces(t, dt);
     timing_[kTimeContact] += seconds_since(tc);
-    return stable;
-  }
-  const auto t0 = Clock::now();
-  double contact_time = 0;
-  std::exception_ptr contact_error;
+  } else {
+    double contact_time = 0;
+    std::exception_ptr contact_error;
 #pragma omp parallel
 #pragma omp single
-  {
-#pragma omp task shared(contact_time, contact_error)
     {
-      const auto tc = Clock::now();
-      try {
-        compute_contact_forces(t, dt);
-      } catch (...) {
-        contact_error = std::current_exception();
+#pragma omp task shared(contact_time, contact_error)
+      {
+        const auto tc = Clock::now();
+        try {
+          compute_contact_forces(t, dt);
+        } catch (...) {
+          contact_error = std::current_exception();
+        }
+        contact_time = seconds_since(tc);
       }
-      contact_time = seconds_since(tc);
-    }
-    for (std::size_t p = 0; p < parts_.size(); ++p)
-      for (int b = 0; b < mech_[p]->blocks; ++b) {
+      for (std::size_t p = 0; p < parts_.size(); ++p)
+        for (int b = 0; b < mech_[p]->blocks; ++b) {
 #pragma omp task firstprivate(p, b)
-        element_block(p, b);
-      }
+          element_block(p, b);
+        }
+    }
+    if (contact_error) std::rethrow_exception(contact_error);
+    stable = finish_elements();
+    // The contact ran within the elements' wall time: elements_and_laws is
+    // the wall time of both, contact its own share.
+    timing_[kTimeElements] += seconds_since(t0) - contact_time;
+    timing_[kTimeContact] += contact_time;
   }
-  if (contact_error) std::rethrow_exception(contact_error);
-  const double stable = finish_elements();
-  // The contact ran within the elements' wall time: elements_and_laws is
-  // the wall time of both, contact its own share.
-  timing_[kTimeElements] += seconds_since(t0) - contact_time;
-  timing_[kTimeContact] += contact_time;
+  ++fs.calls;
+  fs.beside_calls += beside;
+  if (choice) {
+    if (fs.trial_left > 0) {
+      fs.time[beside] += seconds_since(t0);
+      ++fs.count[beside];
+      if (--fs.trial_left == 0) {
+        fs.beside = fs.time[1] / fs.count[1] < fs.time[0] / fs.count[0];
+        fs.next_trial = fs.calls + kRecheck;
+      }
+    }
+  }
   return stable;
 }
 
@@ -1593,6 +1626,9 @@ RunResult Simulation::run(const RunOptions& opt) {
                              {"thermal", timing_[kTimeThermal]},
                              {"time_integration_and_audit", timing_[kTimeIntegrate]},
                              {"output", timing_[kTimeOutput]}};
+    if (job_.mechanics)  // share of the steps whose contact ran beside the element blocks
+      summary["contact_beside_elements"] =
+          schedule_.calls > 0 ? static_cast<double>(schedule_.beside_calls) / static_cast<double>(schedule_.calls) : 0.0;
     summary["energy"] = {{"kinetic", audit.kinetic}, {"internal", audit.internal}, {"external_work", audit.external},
                          {"contact", audit.contact}, {"contact_stored", audit.contact_stored},
                          {"damping", audit.damping}, {"balance_error", audit.balance_error},

@@ -125,6 +125,17 @@ class Simulation {
   std::vector<double> link_heat_;   // per part: net heat received through ply/ply contact (J), cumulative
   enum { kTimeElements, kTimeContact, kTimeThermal, kTimeIntegrate, kTimeOutput, kTimeCount };
   double timing_[kTimeCount] = {0, 0, 0, 0, 0};  // wall time per phase of the mechanics loop (s)
+  // How forces_and_stable_dt shares out elements and contact (see there):
+  // the way chosen (beside or in turn), the calls left in the current
+  // trial of both ways, the calls so far and at the next trial, and each
+  // way's time and calls in the trial (index 1: beside).
+  struct ForceSchedule {
+    bool beside = false;
+    int trial_left = 0;
+    long long calls = 0, next_trial = 0, beside_calls = 0;
+    double time[2] = {0, 0};
+    long long count[2] = {0, 0};
+  } schedule_;
   double contact_energy_ = 0;       // penalty energy stored, current
   struct Load {
     double ramp = 0;                            // s
