@@ -570,7 +570,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const double h2 = 0.5 * a.thickness;
     scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
     energy_.assign(a.num_nodes, 0.0);
-#pragma omp parallel for schedule(static, 32) if (a.num_nodes > 256)
+#pragma omp parallel for schedule(static, 128) if (a.num_nodes > 256)
     for (int i = 0; i < a.num_nodes; ++i) {
       const double pen = h2 - dist_[i];
       if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
@@ -618,7 +618,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     energy_.assign(a.num_nodes, 0.0);
     target_.assign(4 * static_cast<std::size_t>(a.num_nodes), 0.0);
     // The geometry of b's triangles, then the nodes of a, both dealt to the
-    // threads in small interleaved chunks: the cost of a node differs with
+    // threads in interleaved chunks: the cost of a node differs with
     // where it lies (corner or centre of a cell, in contact or not), and a
     // mesh numbers such nodes in runs.
     ps.geo_b.resize(kGeo * static_cast<std::size_t>(b.num_elements));
@@ -630,7 +630,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       for (int c = 0; c < chunks; ++c)
         geometry_block(std::min(kChunk, b.num_elements - c * kChunk), &b.triangles[3 * c * kChunk], b.x.data(),
                        &ps.geo_b[kGeo * static_cast<std::size_t>(c) * kChunk]);
-#pragma omp for schedule(static, 32)
+#pragma omp for schedule(static, 128)
       for (int i = 0; i < a.num_nodes; ++i) {
         double* tg = &target_[4 * static_cast<std::size_t>(i)];
         tg[0] = -1;
