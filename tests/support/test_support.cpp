@@ -12,6 +12,19 @@
 
 namespace ts::test {
 
+sdk::PartView part_view(const ShellMesh& mesh, int index, double thickness) {
+  sdk::PartView v;
+  v.index = index;
+  v.num_nodes = mesh.num_nodes();
+  v.num_elements = mesh.num_elements();
+  v.x0 = mesh.x;
+  v.x = mesh.x;
+  v.triangles = mesh.triangles;
+  v.neighbours = mesh.neighbours;
+  v.thickness = thickness;
+  return v;
+}
+
 json ply_job(const std::string& splitter, int layers, double t_end, double interval) {
   json j = {
       {"format", "thermostamp-job/1"},

@@ -5,10 +5,18 @@
 #include <string>
 #include <vector>
 
+#include <thermostamp/sdk/views.hpp>
+
 #include "job/job.hpp"
+#include "mesh/shell_mesh.hpp"
 #include "solve/simulation.hpp"
 
 namespace ts::test {
+
+// A view of a mesh as part `index`, at its mesh coordinates (x0 = x); the
+// view refers to the mesh, which must outlive it. Callers set fibres,
+// thermal data and other positions.
+sdk::PartView part_view(const ShellMesh& mesh, int index = 0, double thickness = 0.0005);
 
 // A thermal-only job for one or more flat plies; callers edit the JSON.
 json ply_job(const std::string& splitter, int layers, double t_end, double interval);

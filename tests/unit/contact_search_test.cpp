@@ -10,6 +10,7 @@
 
 #include "mesh/shell_mesh.hpp"
 #include "plugins/registry.hpp"
+#include "test_support.hpp"
 
 namespace ts {
 namespace {
@@ -33,19 +34,6 @@ ShellMesh ply_mesh(const std::array<double, 3>& origin, const std::array<double,
   return m;
 }
 
-sdk::PartView view_of(const ShellMesh& m, int index) {
-  sdk::PartView v;
-  v.index = index;
-  v.num_nodes = m.num_nodes();
-  v.num_elements = m.num_elements();
-  v.x0 = m.x;
-  v.x = m.x;
-  v.triangles = m.triangles;
-  v.neighbours = m.neighbours;
-  v.thickness = 0.0005;
-  return v;
-}
-
 // Every node of ply a within reach of ply b (mid-surface distance at most
 // h + gap_tolerance) gets a heat link, and the link's target point on b is
 // a closest point of b: its distance equals the brute-force minimum over all
@@ -66,7 +54,7 @@ TEST(PlyPlySearch, TargetsAreTheClosestPointsOfTheOtherPly) {
     std::unique_ptr<sdk::ContactHandler> handler(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
     const ShellMesh a = same_cells ? ply_mesh({0, 0, 0}, {0.06, 0.06}, {6, 6}, true, 0.005)
                                    : ply_mesh({0.004, 0.007, 0}, {0.05, 0.05}, {7, 5}, false, 0.005);
-    const std::vector<sdk::PartView> parts = {view_of(a, 0), view_of(b, 1)};
+    const std::vector<sdk::PartView> parts = {test::part_view(a, 0), test::part_view(b, 1)};
     ASSERT_TRUE(handler
                     ->configure(validate_params(json{{"conductance", 1000.0}, {"gap_tolerance", gap_tolerance}},
                                                 "/c", r.descriptor),

@@ -14,6 +14,7 @@
 
 #include "mesh/shell_mesh.hpp"
 #include "plugins/registry.hpp"
+#include "test_support.hpp"
 
 namespace ts {
 namespace {
@@ -44,14 +45,9 @@ struct Patch {
     for (int e = 0; e < mesh.num_elements(); ++e)
       fibre.insert(fibre.end(), {std::cos(fibre_angle), std::sin(fibre_angle), 0.0});
     temperature.assign(mesh.num_nodes(), 280.0);
-    view.num_nodes = mesh.num_nodes();
-    view.num_elements = mesh.num_elements();
-    view.x0 = mesh.x;
+    view = test::part_view(mesh);
     view.x = x;
-    view.triangles = mesh.triangles;
-    view.neighbours = mesh.neighbours;
     view.fibre = fibre;
-    view.thickness = 0.0005;
     const auto& lr = registry.require(sdk::PluginKind::Material, "ud_hyperelastic", "/law");
     law.reset(reinterpret_cast<sdk::MaterialLaw* (*)()>(lr.create)());
     law->configure(validate_params(json{{"k_fibre", 5e4}, {"p_ct", 5e3}, {"k_sh", {100.0, 50.0, 0.0}}}, "/m",

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "mesh/shell_mesh.hpp"
+#include "test_support.hpp"
 #include "thermal_common.hpp"
 
 namespace ts {
@@ -34,14 +35,8 @@ struct PlyFixture {
     mesh = rectangle_mesh({0, 0, 0}, {0.01, 0.008}, {5, 4});
     fibre.clear();
     for (int e = 0; e < mesh.num_elements(); ++e) fibre.insert(fibre.end(), {std::cos(angle), std::sin(angle), 0.0});
-    view.num_nodes = mesh.num_nodes();
-    view.num_elements = mesh.num_elements();
-    view.x0 = mesh.x;
-    view.x = mesh.x;
-    view.triangles = mesh.triangles;
-    view.neighbours = mesh.neighbours;
+    view = test::part_view(mesh);
     view.fibre = fibre;
-    view.thickness = 0.0005;
     view.thickness_layers = 4;
     view.thermal = {1000, 1000, 5.0, 1.0, 1.0};
     thermal::setup_ply(ply, view, 5);

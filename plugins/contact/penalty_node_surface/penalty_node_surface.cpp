@@ -36,23 +36,16 @@ namespace {
 using sdk::Vec3;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Unit normals of the elements and, when nn_out is given, (area-weighted)
-// of the nodes.
-void normals(const sdk::PartView& p, std::vector<double>& en, std::vector<double>* nn_out = nullptr) {
-  en.resize(3 * static_cast<std::size_t>(p.num_elements));
-  if (nn_out) nn_out->assign(3 * static_cast<std::size_t>(p.num_nodes), 0.0);
+// Unit normals of the nodes (area-weighted over their elements).
+void node_normals(const sdk::PartView& p, std::vector<double>& nn) {
+  nn.assign(3 * static_cast<std::size_t>(p.num_nodes), 0.0);
   for (int e = 0; e < p.num_elements; ++e) {
     const int* t = &p.triangles[3 * e];
     const Vec3 a = sdk::load3(p.x.data(), t[0]), b = sdk::load3(p.x.data(), t[1]), c = sdk::load3(p.x.data(), t[2]);
     const Vec3 n = sdk::cross(sdk::sub(b, a), sdk::sub(c, a));
-    const Vec3 u = sdk::normalized(n);
-    for (int d = 0; d < 3; ++d) en[3 * e + d] = u[d];
-    if (nn_out)
-      for (int k = 0; k < 3; ++k)
-        for (int d = 0; d < 3; ++d) (*nn_out)[3 * t[k] + d] += n[d];
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) nn[3 * t[k] + d] += n[d];
   }
-  if (!nn_out) return;
-  std::vector<double>& nn = *nn_out;
   for (int i = 0; i < p.num_nodes; ++i) {
     const Vec3 u = sdk::normalized(sdk::load3(nn.data(), i));
     for (int d = 0; d < 3; ++d) nn[3 * i + d] = u[d];
@@ -96,9 +89,16 @@ void geometry_block(int n, const int* __restrict tri, const double* __restrict x
   }
 }
 
+// The geometry of all of p's triangles, in chunks shared out over the
+// threads where the part is large.
 void surface_geometry(const sdk::PartView& p, std::vector<double>& geo) {
   geo.resize(kGeo * static_cast<std::size_t>(p.num_elements));
-  geometry_block(p.num_elements, p.triangles.data(), p.x.data(), geo.data());
+  constexpr int kChunk = 512;
+  const int chunks = (p.num_elements + kChunk - 1) / kChunk;
+#pragma omp parallel for schedule(static) if (chunks > 4)
+  for (int c = 0; c < chunks; ++c)
+    geometry_block(std::min(kChunk, p.num_elements - c * kChunk), &p.triangles[3 * c * kChunk], p.x.data(),
+                   &geo[kGeo * static_cast<std::size_t>(c) * kChunk]);
 }
 
 // Candidate target elements of every node of body A: a uniform bucket grid
@@ -276,7 +276,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     return sdk::guarded([&] {
       const sdk::PartView& a = parts[pair_.first.index];
       if (conductance_ <= 0) return sdk::Status::success();
-      normals(a, en_a_, &nn_a_);
+      node_normals(a, nn_a_);
       if (pair_.second.type == sdk::BodyRef::Type::Tool) {
         const sdk::ToolView& tool = tools[pair_.second.index];
         query_tool(a, tool);
@@ -617,63 +617,53 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
     energy_.assign(a.num_nodes, 0.0);
     target_.assign(4 * static_cast<std::size_t>(a.num_nodes), 0.0);
-    // The geometry of b's triangles, then the nodes of a, both dealt to the
-    // threads in interleaved chunks: the cost of a node differs with
-    // where it lies (corner or centre of a cell, in contact or not), and a
-    // mesh numbers such nodes in runs.
-    ps.geo_b.resize(kGeo * static_cast<std::size_t>(b.num_elements));
-    constexpr int kChunk = 64;
-    const int chunks = (b.num_elements + kChunk - 1) / kChunk;
-#pragma omp parallel if (a.num_nodes > 256)
-    {
-#pragma omp for schedule(static, 1)
-      for (int c = 0; c < chunks; ++c)
-        geometry_block(std::min(kChunk, b.num_elements - c * kChunk), &b.triangles[3 * c * kChunk], b.x.data(),
-                       &ps.geo_b[kGeo * static_cast<std::size_t>(c) * kChunk]);
-#pragma omp for schedule(static, 128)
-      for (int i = 0; i < a.num_nodes; ++i) {
-        double* tg = &target_[4 * static_cast<std::size_t>(i)];
-        tg[0] = -1;
-        const Projection pr = project(ps, a, b, i, track);
-        if (pr.element < 0) {
-          ps.side[i] = 0;
-          for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
-          continue;
-        }
-        const int* t = &b.triangles[3 * pr.element];
-        const Vec3 ne = pr.n;
-        Vec3 vt = {0, 0, 0};
-        for (int j = 0; j < 3; ++j) vt = sdk::add(vt, sdk::scale(sdk::load3(vb.data(), t[j]), pr.w[j]));
-        const Vec3 vrel = sdk::sub(sdk::load3(va.data(), i), vt);
-        if (ps.side[i] == 0) {
-          const double g = sdk::dot(ne, vrel);
-          if (std::abs(pr.d) >= hsum2 || std::abs(g) * in.dt < std::abs(pr.d)) {
-            // Not touching, or it cannot have crossed the target's mid-surface
-            // within the step: the side it is on.
-            ps.side[i] = pr.d >= 0 ? 1 : -1;
-          } else {  // may have crossed within one step: the approach velocity decides
-            ps.side[i] = g < 0 ? 1 : g > 0 ? -1 : (pr.d >= 0 ? 1 : -1);
-          }
-        }
-        const double pen = hsum2 - ps.side[i] * pr.d;
-        if (!(pen > 0)) {
-          for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
-          continue;
-        }
-        if (pen > 2 * hsum2) {  // went through the other ply: release
-          ps.side[i] = 0;
-          continue;
-        }
-        double mb = 0;
-        for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
-        const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
-        energy_[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, sdk::scale(ne, ps.side[i]),
-                                vrel, in.dt, &scratch_[3 * static_cast<std::size_t>(i)]);
-        tg[0] = pr.element;
-        tg[1] = pr.w[0];
-        tg[2] = pr.w[1];
-        tg[3] = pr.w[2];
+    surface_geometry(b, ps.geo_b);
+    // The nodes of a, dealt to the threads in interleaved chunks: the cost
+    // of a node differs with where it lies (corner or centre of a cell, in
+    // contact or not), and a mesh numbers such nodes in runs.
+#pragma omp parallel for schedule(static, 128) if (a.num_nodes > 256)
+    for (int i = 0; i < a.num_nodes; ++i) {
+      double* tg = &target_[4 * static_cast<std::size_t>(i)];
+      tg[0] = -1;
+      const Projection pr = project(ps, a, b, i, track);
+      if (pr.element < 0) {
+        ps.side[i] = 0;
+        for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
+        continue;
       }
+      const int* t = &b.triangles[3 * pr.element];
+      const Vec3 ne = pr.n;
+      Vec3 vt = {0, 0, 0};
+      for (int j = 0; j < 3; ++j) vt = sdk::add(vt, sdk::scale(sdk::load3(vb.data(), t[j]), pr.w[j]));
+      const Vec3 vrel = sdk::sub(sdk::load3(va.data(), i), vt);
+      if (ps.side[i] == 0) {
+        const double g = sdk::dot(ne, vrel);
+        if (std::abs(pr.d) >= hsum2 || std::abs(g) * in.dt < std::abs(pr.d)) {
+          // Not touching, or it cannot have crossed the target's mid-surface
+          // within the step: the side it is on.
+          ps.side[i] = pr.d >= 0 ? 1 : -1;
+        } else {  // may have crossed within one step: the approach velocity decides
+          ps.side[i] = g < 0 ? 1 : g > 0 ? -1 : (pr.d >= 0 ? 1 : -1);
+        }
+      }
+      const double pen = hsum2 - ps.side[i] * pr.d;
+      if (!(pen > 0)) {
+        for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
+        continue;
+      }
+      if (pen > 2 * hsum2) {  // went through the other ply: release
+        ps.side[i] = 0;
+        continue;
+      }
+      double mb = 0;
+      for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
+      const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
+      energy_[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, sdk::scale(ne, ps.side[i]),
+                              vrel, in.dt, &scratch_[3 * static_cast<std::size_t>(i)]);
+      tg[0] = pr.element;
+      tg[1] = pr.w[0];
+      tg[2] = pr.w[1];
+      tg[3] = pr.w[2];
     }
     auto fa = out.force[a.index];
     auto fb = out.force[b.index];
@@ -701,7 +691,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   std::span<const sdk::PartView> parts_;
   std::span<const sdk::ToolView> tools_;
   Pass pass_[2];  // tool pairs use pass_[0].ft only
-  std::vector<double> en_a_, nn_a_, dist_, tn_, scratch_, energy_, target_;
+  std::vector<double> nn_a_, dist_, tn_, scratch_, energy_, target_;
   // Tool queries: where each node beyond the cutoff was last asked (xq_,
   // and the tool's path length then, sq_).
   std::vector<double> xq_, sq_;
