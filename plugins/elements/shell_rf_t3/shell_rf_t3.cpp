@@ -33,6 +33,16 @@ namespace {
 
 using namespace ts::sdk;
 
+// Leading dimension of a structure of arrays with n entries per array: a
+// whole number of cache lines with an odd line count, so that the arrays
+// of one entry fall in different cache sets (n a multiple of 512 would put
+// all of them in one set, and their loads behind each other's stores).
+inline int padded_ld(int n) {
+  int ld = (n + 7) / 8 * 8;
+  if ((ld / 8) % 2 == 0) ld += 8;
+  return ld;
+}
+
 // Per-thread buffers for the values of one block of elements (indexed from
 // the block's first element, or from its first hinge); they grow to the
 // largest block once.
@@ -49,11 +59,11 @@ struct BlockScratch {
 
 BlockScratch& block_scratch(int n) {
   thread_local BlockScratch s;
-  const std::size_t m = static_cast<std::size_t>(n);
-  if (s.temp.size() < m) {
+  const std::size_t m = static_cast<std::size_t>(n), ld = static_cast<std::size_t>(padded_ld(n));
+  if (s.temp.size() < m || s.ff.size() < 6 * ld) {
     s.temp.resize(m);
-    s.ff.resize(6 * m);
-    s.mf.resize(9 * m);
+    s.ff.resize(6 * ld);
+    s.mf.resize(9 * ld);
     s.law_stress.resize(3 * m);
     s.energy_tmp.resize(m);
     s.energy.resize(m);
@@ -121,30 +131,43 @@ void hinge_block(int h, int cap, const int* __restrict ic, const int* __restrict
   }
 }
 
-// Membrane forces of n elements (F e1, F e2 of element q at ff[d n + q],
-// ff[(3 + d) n + q]), f_a = A0 (c1 F e1 + c2 F e2) with c1 = S11 g1_a +
+// Lowers lo and raises hi to the smallest and largest of v[0, n).
+TS_VECTOR_CLONES
+void value_range(int n, const double* __restrict v, double& lo, double& hi) {
+  double a = lo, b = hi;
+#pragma omp simd reduction(min : a) reduction(max : b)
+  for (int q = 0; q < n; ++q) {
+    a = v[q] < a ? v[q] : a;
+    b = v[q] > b ? v[q] : b;
+  }
+  lo = a;
+  hi = b;
+}
+
+// Membrane forces of n elements (F e1, F e2 of element q at ff[d ld + q],
+// ff[(3 + d) ld + q]), f_a = A0 (c1 F e1 + c2 F e2) with c1 = S11 g1_a +
 // S12 g2_a, c2 = S12 g1_a + S22 g2_a (component d of node a of element q
-// at mf[(3 a + d) n + q]), and each element's stable step: smallest height
+// at mf[(3 a + d) ld + q]), and each element's stable step: smallest height
 // (2 area / longest edge) times inv_c (infinite when has_stiffness is
 // false). One vector pass; the operations of the scalar form in its order,
 // so the same bits.
 TS_VECTOR_CLONES
-void membrane_block(int n, const int* __restrict tri, const double* __restrict x, const double* __restrict ff,
+void membrane_block(int n, int ld, const int* __restrict tri, const double* __restrict x, const double* __restrict ff,
                     const double* __restrict S, const double* __restrict area, const double* __restrict g1,
                     const double* __restrict g2, double inv_c, bool has_stiffness, double* __restrict mf,
                     double* __restrict dte) {
   const double inf = std::numeric_limits<double>::infinity();
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
-    const double f10 = ff[q], f11 = ff[n + q], f12 = ff[2 * n + q];
-    const double f20 = ff[3 * n + q], f21 = ff[4 * n + q], f22 = ff[5 * n + q];
+    const double f10 = ff[q], f11 = ff[ld + q], f12 = ff[2 * ld + q];
+    const double f20 = ff[3 * ld + q], f21 = ff[4 * ld + q], f22 = ff[5 * ld + q];
     const double S11 = S[3 * q], S22 = S[3 * q + 1], S12 = S[3 * q + 2], A0 = area[q];
     for (int a = 0; a < 3; ++a) {
       const double ga = g1[3 * q + a], gb = g2[3 * q + a];
       const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
-      mf[(3 * a) * n + q] = c1 * f10 + c2 * f20;
-      mf[(3 * a + 1) * n + q] = c1 * f11 + c2 * f21;
-      mf[(3 * a + 2) * n + q] = c1 * f12 + c2 * f22;
+      mf[(3 * a) * ld + q] = c1 * f10 + c2 * f20;
+      mf[(3 * a + 1) * ld + q] = c1 * f11 + c2 * f21;
+      mf[(3 * a + 2) * ld + q] = c1 * f12 + c2 * f22;
     }
     const int i0 = 3 * tri[3 * q], i1 = 3 * tri[3 * q + 1], i2 = 3 * tri[3 * q + 2];
     const double a0 = x[i0], a1 = x[i0 + 1], a2 = x[i0 + 2];
@@ -257,6 +280,7 @@ class ShellRfT3 final : public ElementKernel {
       // the calling thread (indexed from the block's first element), so that
       // they stay in cache instead of streaming through per-element arrays.
       BlockScratch& sc = block_scratch(n);
+      const int ld = padded_ld(n);  // of ff and mf
       double* temp = sc.temp.data();
       double* ff = sc.ff.data();
       // 1. Strains and temperatures of the block.
@@ -271,8 +295,8 @@ class ShellRfT3 final : public ElementKernel {
           T += in.node_temperature[t[a]] / 3.0;
         }
         for (int d = 0; d < 3; ++d) {
-          ff[d * n + (e - b)] = f1[d];
-          ff[(3 + d) * n + (e - b)] = f2[d];
+          ff[d * ld + (e - b)] = f1[d];
+          ff[(3 + d) * ld + (e - b)] = f2[d];
         }
         strain_[3 * e] = dot(f1, f1);
         strain_[3 * e + 1] = dot(f2, f2);
@@ -308,26 +332,26 @@ class ShellRfT3 final : public ElementKernel {
       // 3. Nodal forces, energy, stable step. The largest tangent stiffness
       // is taken over the block's temperature range (one call per law).
       double t_lo = temp[0], t_hi = temp[0];
-      for (int q = 0; q < n; ++q) {
-        t_lo = std::min(t_lo, temp[q]);
-        t_hi = std::max(t_hi, temp[q]);
-      }
+      value_range(n, temp, t_lo, t_hi);
       double kmax = 0;
       for (const auto* l : laws_) kmax += std::max(l->max_stiffness(t_lo), l->max_stiffness(t_hi));
       const double inv_c = kmax > 0 ? 1.0 / std::sqrt(kmax / areal_mass_) : 0.0;
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
       double* dte = sc.energy_tmp.data();  // free again after the laws
       double* mf = sc.mf.data();
-      membrane_block(n, &part_->triangles[3 * b], x, ff, stress_.data() + 3 * b, area0_.data() + b, g1_.data() + 3 * b,
+      membrane_block(n, ld, &part_->triangles[3 * b], x, ff, stress_.data() + 3 * b, area0_.data() + b, g1_.data() + 3 * b,
                      g2_.data() + 3 * b, inv_c, kmax > 0, mf, dte);
-      double* nf = out.node_force.data();
-      const int* slot = in.patch_slot.data();
-      for (int q = 0; q < n; ++q)
-        for (int a = 0; a < 3; ++a) {
-          double* f = nf + 3 * slot[6 * q + a];
-          for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * n + q];
-        }
-      if (bending_) energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, out);
+      if (bending_) {  // adds the membrane forces with the bending ones
+        energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out);
+      } else {
+        double* nf = out.node_force.data();
+        const int* slot = in.patch_slot.data();
+        for (int q = 0; q < n; ++q)
+          for (int a = 0; a < 3; ++a) {
+            double* f = nf + 3 * slot[6 * q + a];
+            for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * ld + q];
+          }
+      }
       for (int e = b; e < in.range.end; ++e) {
         energy += area0_[e] * energy_e[e - b];
         dt_min = std::min(dt_min, dte[e - b]);
@@ -451,7 +475,8 @@ class ShellRfT3 final : public ElementKernel {
     n0_.assign(3 * ne, 0.0);
     d_.assign(3 * ne, 1.0);
     theta0_.assign(3 * ne, 0.0);
-    ginv_.assign(9 * ne, 0.0);
+    gld_ = padded_ld(ne);
+    ginv_.assign(9 * static_cast<std::size_t>(gld_), 0.0);
     curv_.assign(3 * ne, 0.0);
     curv_old_.assign(bending_->uses_strain_old() ? 3 * ne : 0, 0.0);
     bstate_.assign(static_cast<std::size_t>(bending_->state_size()) * ne, 0.0);
@@ -469,9 +494,9 @@ class ShellRfT3 final : public ElementKernel {
         const Vec3 nu = normalized(cross(sub(Q, P), n));  // outward in-plane normal of edge k
         const double a = dot(nu, f), bb = dot(nu, m);
         // dK/dtheta_k = l_k / (2 A0) nu (x) nu, Voigt in the material frame.
-        ginv_[(3 * k) * ne + e] = len / (2 * A0) * a * a;
-        ginv_[(3 * k + 1) * ne + e] = len / (2 * A0) * bb * bb;
-        ginv_[(3 * k + 2) * ne + e] = len / (2 * A0) * a * bb;
+        ginv_[(3 * k) * gld_ + e] = len / (2 * A0) * a * a;
+        ginv_[(3 * k + 1) * gld_ + e] = len / (2 * A0) * bb * bb;
+        ginv_[(3 * k + 2) * gld_ + e] = len / (2 * A0) * a * bb;
         const int nb = part_->neighbours[3 * e + k];
         if (nb < 0) {
           const int ec = edge_condition_.empty() ? kEdgeFree : edge_condition_[3 * e + k];
@@ -542,11 +567,13 @@ class ShellRfT3 final : public ElementKernel {
     gstart_[ne] = static_cast<int>(gedge_.size());
   }
 
-  // Bending curvatures, moments and forces of elements [b, end); returns the
-  // bending energy and lowers the elements' stable steps (sc.energy_tmp)
-  // with the bending ones; [t_lo, t_hi] is the block's temperature range.
+  // Bending curvatures, moments and forces of elements [b, end), added to
+  // the node forces with the membrane forces mf (laid out as membrane_block
+  // writes them, leading dimension ld); returns the bending energy and
+  // lowers the elements' stable steps (sc.energy_tmp) with the bending
+  // ones; [t_lo, t_hi] is the block's temperature range.
   double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
-                        ElementForceOutput& out) {
+                        const double* mf, int ld, ElementForceOutput& out) {
     const int n = end - b;
     const double* temp = sc.temp.data();
     const double* x = part_->x.data();
@@ -615,7 +642,7 @@ class ShellRfT3 final : public ElementKernel {
               ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, gr)
               : ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, gr);
     }
-    curvature_block(n, part_->num_elements, ginv_.data() + b, loc, dth, curv_.data() + 3 * b);
+    curvature_block(n, gld_, ginv_.data() + b, loc, dth, curv_.data() + 3 * b);
     MaterialBlock blk;
     blk.n = n;
     blk.strain = std::span<const double>(curv_.data() + 3 * b, 3 * n);
@@ -635,37 +662,50 @@ class ShellRfT3 final : public ElementKernel {
     double* dte = sc.energy_tmp.data();  // the membrane's stable steps of the block's elements
     // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative), d the
     // smallest initial height over the element's interior edges.
-    moment_block(n, part_->num_elements, area0_.data() + b, ginv_.data() + b, sc.moment.data(), dmin2_.data() + b,
+    moment_block(n, gld_, area0_.data() + b, ginv_.data() + b, sc.moment.data(), dmin2_.data() + b,
                  rmax > 0 ? dtb_scale : std::numeric_limits<double>::infinity(), mk, dte);
-    // Forces. A hinge whose two elements are both in the block carries both
-    // moments and goes to its owner's patch; a hinge shared with another
-    // block carries the moment of this block's element, in that element's
-    // patch.
+    // Forces, element by element: the membrane forces on its corners, and
+    // the interior hinges it brings. An interior hinge is brought by its
+    // owner, or, when the owner is in an earlier block, by its neighbour in
+    // this block; a hinge whose two elements are both in the block carries
+    // both moments, one shared with another block the moment of this
+    // block's element. A hinge adds its gradients on the bringing element's
+    // corners (summed in registers with the membrane forces, one addition
+    // per corner node) and on the node across the edge.
     double* nf = out.node_force.data();
     const int* slot = in.patch_slot.data();
-    // Patch slots of corner c (= k), p, q and the node o across edge k.
-    auto add_hinge = [&](int q, int k, double m, int j, int gc, int go, int gp, int gq) {
-      const int* sl = slot + 6 * q;
-      double* fc = nf + 3 * sl[k];
-      double* fo = nf + 3 * sl[3 + k];
-      double* fp = nf + 3 * sl[(k + 1) % 3];
-      double* fq = nf + 3 * sl[(k + 2) % 3];
-      for (int d = 0; d < 3; ++d) {
-        fc[d] += m * G[(gc + d) * cap + j];
-        fo[d] += m * G[(go + d) * cap + j];
-        fp[d] += m * G[(gp + d) * cap + j];
-        fq[d] += m * G[(gq + d) * cap + j];
+    for (int e = b; e < end; ++e) {
+      const int q = e - b;
+      double fc[3][3];
+      for (int a = 0; a < 3; ++a)
+        for (int d = 0; d < 3; ++d) fc[a][d] = mf[(3 * a + d) * ld + q];
+#pragma GCC unroll 3
+      for (int k = 0; k < 3; ++k) {
+        const int nb = nbr[3 * e + k];
+        if (hid_[3 * e + k] < 0 || (nb >= b && nb < e)) continue;  // no hinge, or brought by its owner nb
+        const int j = loc[3 * q + k];
+        const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+        // Gradient rows of (corner k, the node across, corner k + 1, corner
+        // k + 2): (c, o, p, q) from the owner, (o, c, q, p) from the neighbour.
+        int rk = 0, ro = 3, r1 = 6, r2 = 9;
+        double m = mk[3 * q + k];
+        if (nb > e) {
+          if (nb < end) m += mk[3 * (nb - b) + partner_k_[3 * e + k]];
+        } else {
+          rk = 3, ro = 0, r1 = 9, r2 = 6;
+        }
+        double* fo = nf + 3 * slot[6 * q + 3 + k];
+        for (int d = 0; d < 3; ++d) {
+          fc[k][d] += m * G[(rk + d) * cap + j];
+          fc[k1][d] += m * G[(r1 + d) * cap + j];
+          fc[k2][d] += m * G[(r2 + d) * cap + j];
+          fo[d] += m * G[(ro + d) * cap + j];
+        }
       }
-    };
-    for (int j = 0; j < nown; ++j) {
-      const int h = h0 + j, e = howner_[h], nb = hnb_[h], k = hk_[h];
-      double m = mk[3 * (e - b) + k];
-      if (nb < end) m += mk[3 * (nb - b) + hkp_[h]];
-      add_hinge(e - b, k, m, j, 0, 3, 6, 9);
-    }
-    for (int j = nown; j < nh; ++j) {  // seen from the neighbour: (c, o, p, q) are (o, c, q, p)
-      const int h = fh[j - nown], e = hnb_[h], k = hkp_[h];
-      add_hinge(e - b, k, mk[3 * (e - b) + k], j, 3, 0, 9, 6);
+      for (int a = 0; a < 3; ++a) {
+        double* f = nf + 3 * slot[6 * q + a];
+        for (int d = 0; d < 3; ++d) f[d] += fc[a][d];
+      }
     }
     for (int g = gstart_[b]; g < gstart_[end]; ++g) {
       const int e = gedge_[g] / 3, k = gedge_[g] % 3;
@@ -688,10 +728,11 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   const MaterialLaw* bending_ = nullptr;
+  int gld_ = 0;
   std::vector<int> opp_, partner_k_, edge_condition_;  // partner_k_: the same edge's index in the neighbour
   std::vector<char> clamped_;
   std::vector<double> n0_;  // initial element normals (clamped elements)
-  // ginv_: dK/dtheta_k, value r of edge k of element e at (3 k + r) ne + e.
+  // ginv_: dK/dtheta_k, value r of edge k of element e at (3 k + r) gld_ + e.
   std::vector<double> d_, theta0_, ginv_, curv_, curv_old_, bstate_;
   // Interior hinges: node offsets (3 x node) of (c, p, q, o) in the owner's
   // orientation, initial angle, owner and its edge k, neighbour and its
@@ -714,7 +755,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.3.0";
+  d.version = "0.3.1";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -722,4 +763,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.3.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.3.1", register_all)
