@@ -23,18 +23,22 @@ using namespace ts::sdk;
 // Branches handled by the vector pass (more: point by point).
 constexpr int kVectorBranches = 4;
 
-// Per-thread buffers of a block.
+// Per-thread buffers of a block; dir2 holds the weft direction (0, 1) of
+// every point (for laws given no directions).
 struct Scratch {
   std::vector<double> redo;  // 0 or 1 (a double: a narrower type would widen the vector loops)
-  std::vector<double> dir2, energy, next;
+  std::vector<double> dir2, energy;
 };
-Scratch& scratch(std::size_t n, int keep) {
+Scratch& scratch(std::size_t n) {
   thread_local Scratch s;
-  if (s.redo.size() < n || s.next.size() < n * keep) {
+  if (s.redo.size() < n) {
     s.redo.resize(n);
     s.dir2.resize(2 * n);
+    for (std::size_t q = 0; q < n; ++q) {
+      s.dir2[2 * q] = 0.0;
+      s.dir2[2 * q + 1] = 1.0;
+    }
     s.energy.resize(n);
-    s.next.resize(n * keep);
   }
   return s;
 }
@@ -89,17 +93,17 @@ struct Branch {
 // prony_factors_inv(), prony_step()) written out in the same order so that
 // the results are the same bits. State per point (stride ns): S0 (3), H_i
 // (3 NB), then the cache (flag, T, omega, g_i, 1 / tau_i) at offset
-// `cache`. The new S0 and H_i go to next (stride cache); redo[q] = 1 where
-// the cache does not hold T or dt / tau_i >= 1e-2 (nothing is written to
-// the state). Inlined into each vector clone below.
+// `cache`. The new S0 and H_i replace the old ones in the state, except
+// where redo[q] = 1: the cache does not hold T or dt / tau_i >= 1e-2 (the
+// state is left as it was). Inlined into each vector clone below.
 template <int NB>
 [[gnu::always_inline]] inline void visco_body(std::size_t n, int cache, int ns, const double* __restrict C, const double* __restrict dir2,
-                 const double* __restrict temp, double dt, const double* ksh, const double* __restrict state,
-                 double* __restrict S, double* __restrict W, double* __restrict next, double* __restrict redo) {
+                 const double* __restrict temp, double dt, const double* ksh, double* __restrict state,
+                 double* __restrict S, double* __restrict W, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
-    const double* st = state + static_cast<std::size_t>(ns) * q;
+    double* st = state + static_cast<std::size_t>(ns) * q;
     const double* ca = st + cache;
     const double c = dir2[2 * q], s = dir2[2 * q + 1];
     const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
@@ -113,7 +117,7 @@ template <int NB>
     for (int i = 0; i < NB; ++i) g_sum += ca[3 + i];
     const double g_inf = 1.0 - g_sum;
     double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
-    double* nx = next + static_cast<std::size_t>(cache) * q;
+    double nx[3 + 3 * NB];
     nx[0] = s00;
     nx[1] = s01;
     nx[2] = s02;
@@ -137,7 +141,13 @@ template <int NB>
       o1 += h.h1;
       o2 += h.h2;
     }
-    redo[q] = ok ? 0.0 : 1.0;
+    const double rq = ok ? 0.0 : 1.0;
+    redo[q] = rq;
+    // A store in every case (strided stores cannot be masked): the old
+    // values where the point is evaluated again.
+    double keep[3 + 3 * NB];
+    for (int k = 0; k < 3 + 3 * NB; ++k) keep[k] = rq == 0.0 ? nx[k] : st[k];
+    for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = keep[k];
     S[3 * q] = o0;
     S[3 * q + 1] = o1;
     S[3 * q + 2] = o2;
@@ -147,9 +157,9 @@ template <int NB>
 
 #define TS_VISCO_BLOCK(NB)                                                                                          \
   TS_VECTOR_CLONES void visco_block##NB(std::size_t n, int cache, int ns, const double* C, const double* dir2,      \
-                                        const double* temp, double dt, const double* ksh, const double* state,       \
-                                        double* S, double* W, double* next, double* redo) {                   \
-    visco_body<NB>(n, cache, ns, C, dir2, temp, dt, ksh, state, S, W, next, redo);                                  \
+                                        const double* temp, double dt, const double* ksh, double* state,             \
+                                        double* S, double* W, double* redo) {                                 \
+    visco_body<NB>(n, cache, ns, C, dir2, temp, dt, ksh, state, S, W, redo);                                        \
   }
 TS_VISCO_BLOCK(1)
 TS_VISCO_BLOCK(2)
@@ -157,7 +167,7 @@ TS_VISCO_BLOCK(3)
 TS_VISCO_BLOCK(4)
 #undef TS_VISCO_BLOCK
 using ViscoBlock = void (*)(std::size_t, int, int, const double*, const double*, const double*, double, const double*,
-                            const double*, double*, double*, double*, double*);
+                            double*, double*, double*, double*);
 constexpr ViscoBlock kViscoBlock[kVectorBranches + 1] = {nullptr, visco_block1, visco_block2, visco_block3, visco_block4};
 
 // The same for n points at one temperature: omega, g_i and the factors
@@ -300,15 +310,8 @@ class ViscoelasticShear final : public MaterialLaw {
       }
       return Status::success();
     }
-    Scratch& sc = scratch(b.n, 3 + 3 * n_);
-    const double* dir2 = b.dir2.data();
-    if (b.dir2.empty()) {
-      for (std::size_t q = 0; q < b.n; ++q) {
-        sc.dir2[2 * q] = 0.0;
-        sc.dir2[2 * q + 1] = 1.0;
-      }
-      dir2 = sc.dir2.data();
-    }
+    Scratch& sc = scratch(b.n);
+    const double* dir2 = b.dir2.empty() ? sc.dir2.data() : b.dir2.data();
     double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
     if (uniform) {
       // The first point as one, its parameters and factors for the others
@@ -328,17 +331,9 @@ class ViscoelasticShear final : public MaterialLaw {
     // evaluated one by one, which also refreshes their cache. Both give the
     // same bits.
     kViscoBlock[n_](b.n, 3 + 3 * n_, state_size(), b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_,
-                b.state.data(), b.stress.data(), W, sc.next.data(), sc.redo.data());
-    const int keep = 3 + 3 * n_, ns = state_size();
-    for (std::size_t q = 0; q < b.n; ++q) {
-      if (sc.redo[q] != 0) {
-        point(b, q);
-      } else {
-        double* st = b.state.data() + static_cast<std::size_t>(ns) * q;
-        const double* nx = sc.next.data() + static_cast<std::size_t>(keep) * q;
-        for (int k = 0; k < keep; ++k) st[k] = nx[k];
-      }
-    }
+                    b.state.data(), b.stress.data(), W, sc.redo.data());
+    for (std::size_t q = 0; q < b.n; ++q)
+      if (sc.redo[q] != 0) point(b, q);
     return Status::success();
   }
 
@@ -445,7 +440,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.0.3";
+  d.version = "1.0.4";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
@@ -468,4 +463,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.0.3", register_all)
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.0.4", register_all)
