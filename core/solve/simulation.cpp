@@ -681,7 +681,13 @@ void Simulation::element_block(std::size_t p, int b) {
   m.block_fail[b] = out.failed_element;
   if (!m.block_error[b].empty() || m.block_fail[b] >= 0) return;
   double dtb = std::numeric_limits<double>::infinity();
-  for (int e = in.range.begin; e < in.range.end; ++e) dtb = std::min(dtb, m.elem_dt[e] * m.elem_sqrt_scale[e]);
+  const double* edt = m.elem_dt.data();
+  const double* esc = m.elem_sqrt_scale.data();
+#pragma omp simd reduction(min : dtb)
+  for (int e = in.range.begin; e < in.range.end; ++e) {
+    const double d = edt[e] * esc[e];
+    dtb = d < dtb ? d : dtb;
+  }
   m.block_dt[b] = dtb;
   for (int l = l0; l < l1; ++l)
     if (!m.block_node_shared[l])
