@@ -32,8 +32,8 @@ struct MechPart {
   std::vector<const sdk::MaterialLaw*> membrane;
   std::vector<double> curvature;
   std::vector<double> load;  // applied nodal forces at full value (N), 3 per node
-  std::vector<double> f_con, k_contact;  // contact forces (N); stiffness bound (N/m)
-  std::vector<double> mass, mass_node_physical, v, r_prev, f_int, dx, elem_dt, elem_scale, elem_sqrt_scale, node_temperature, stress;
+  std::vector<double> f_con, fc_prev, k_contact;  // contact forces (N) now and at the previous step; stiffness bound (N/m)
+  std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_dt, elem_scale, elem_sqrt_scale, node_temperature, stress;
   // Per element block, reused every step.
   std::vector<int> block_fail;
   std::vector<std::string> block_error;
@@ -56,10 +56,6 @@ struct MechPart {
   std::vector<int> constraint_of;   // 3 per node: index of the constraint holding the dof, -1 if none
   std::vector<double> prescribed;   // 3 per node: velocity where fixed (0 for fix / symmetry)
   double mass_physical = 0, mass_added = 0;
-  // The works over the step just taken are trapezoids, 0.5 (f^n + f^{n+1})
-  // . dx: the halves with the forces at its start (internal, damping,
-  // contact), summed when dx was formed, so that no force is kept per node.
-  double half_int = 0, half_damp = 0, half_con = 0;
 };
 
 struct PartState {
@@ -419,8 +415,11 @@ void Simulation::build_mechanics() {
     const int nn = st.mesh.num_nodes(), ne = st.mesh.num_elements();
     m->v.assign(3 * nn, 0.0);
     m->r_prev.assign(3 * nn, 0.0);
+    m->fd_prev.assign(3 * nn, 0.0);
     m->f_int.assign(3 * nn, 0.0);
+    m->f_prev.assign(3 * nn, 0.0);
     m->f_con.assign(3 * nn, 0.0);
+    m->fc_prev.assign(3 * nn, 0.0);
     m->k_contact.assign(nn, 0.0);
     m->dx.assign(3 * nn, 0.0);
     m->elem_dt.assign(ne, 0.0);
@@ -919,19 +918,17 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     const int nn = st.mesh.num_nodes();
     const bool contact = !contacts_.empty();  // otherwise f_con stays zero
     double nonfinite = 0;                     // x * 0: zero unless a position is not finite
-    // Works over the previous step: the halves with the forces at its start
-    // (summed then), plus the halves with the forces now; the halves of the
-    // step taken here are summed as it is taken (next_*).
-    w_int = m.half_int;
-    w_damp = m.half_damp;
-    w_con = m.half_con;
-    double next_int = 0, next_damp = 0, next_con = 0;
     for (int i = 0; i < nn; ++i) {
       const double mi = m.mass[i];
       for (int d = 0; d < 3; ++d) {
         const int k = 3 * i + d;
-        w_int += 0.5 * m.f_int[k] * m.dx[k];
-        if (contact) w_con += 0.5 * m.f_con[k] * m.dx[k];
+        // Internal and contact work of the previous step (trapezoid with the
+        // forces at both ends).
+        w_int += 0.5 * (m.f_prev[k] + m.f_int[k]) * m.dx[k];
+        if (contact) {
+          w_con += 0.5 * (m.fc_prev[k] + m.f_con[k]) * m.dx[k];
+          m.fc_prev[k] = m.f_con[k];
+        }
         const double f_ext = md.gravity[d] * m.mass_node_physical[i] + m.load[k];
         if (m.fixed[k]) {
           // A held or driven dof: the constraint supplies R = f_int - f_ext -
@@ -945,8 +942,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
           m.dx[k] = dt * m.v[k];
           st.x[k] += m.dx[k];
           nonfinite += st.x[k] * 0.0;
-          next_int += 0.5 * m.f_int[k] * m.dx[k];
-          if (contact) next_con += 0.5 * m.f_con[k] * m.dx[k];
+          m.f_prev[k] = m.f_int[k];
           continue;
         }
         // The audit is taken at x^n: works over the previous step by the
@@ -954,24 +950,20 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         const double f_damp = md.damping * mi * m.v[k];
         const double v_new = m.v[k] + dt_avg * (f_ext + m.f_con[k] - m.f_int[k] - f_damp) / mi;
         w_ext += f_ext * m.dx[k];
-        w_damp += 0.5 * f_damp * m.dx[k];
+        w_damp += 0.5 * (m.fd_prev[k] + f_damp) * m.dx[k];
         // Kinetic energy at t^n as the product of the half-step velocities:
         // the energy that central differences conserve exactly for a linear
         // system, so that stiff short events (contact) do not upset the audit.
         kin += 0.5 * mi * m.v[k] * v_new;
         kin_half += 0.5 * mi * v_new * v_new;
+        m.fd_prev[k] = f_damp;
         m.v[k] = v_new;
         m.dx[k] = dt * v_new;
         st.x[k] += m.dx[k];
         nonfinite += st.x[k] * 0.0;
-        next_int += 0.5 * m.f_int[k] * m.dx[k];
-        next_damp += 0.5 * f_damp * m.dx[k];
-        if (contact) next_con += 0.5 * m.f_con[k] * m.dx[k];
+        m.f_prev[k] = m.f_int[k];
       }
     }
-    m.half_int = next_int;
-    m.half_damp = next_damp;
-    m.half_con = next_con;
     if (nonfinite != 0)  // also when NaN
       for (int k = 0; k < 3 * nn; ++k)
         if (!std::isfinite(st.x[k])) {
