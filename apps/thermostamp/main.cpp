@@ -12,6 +12,7 @@
 #include "plugins/describe.hpp"
 #include "plugins/registry.hpp"
 #include "plugins/schema.hpp"
+#include "solve/interrupt.hpp"
 #include "solve/simulation.hpp"
 #include "version.hpp"
 
@@ -26,7 +27,9 @@ constexpr const char* kUsage = R"(usage:
   thermostamp report DIR
   thermostamp --version
 
-exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed
+exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
+130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
+last frame and summary.json; a second signal ends it at once)
 )";
 
 struct UsageError : std::runtime_error {
@@ -103,8 +106,13 @@ int cmd_run(const Args& a, bool validate_only) {
   ts::log_to_file(opt.out_dir / "log.txt");
   ts::logger("job")->info("thermostamp {} running {} -> {}", ts::kVersion, job.file.string(), opt.out_dir.string());
   for (const auto& s : a.sets) ts::logger("job")->info("override: {}", s);
+  ts::install_stop_handlers();
   const ts::RunResult r = sim.run(opt);
   ts::log_close_file();
+  if (r.interrupted) {
+    std::cerr << r.error << ": " << opt.out_dir.string() << "\n";
+    return 128 + r.interrupted;
+  }
   if (!r.ok) {
     std::cerr << "error: run failed: " << r.error << "\n(frames and probes up to the failure are in "
               << opt.out_dir.string() << ")\n";

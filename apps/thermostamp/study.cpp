@@ -12,6 +12,7 @@
 #include "io/logging.hpp"
 #include "job/job.hpp"
 #include "plugins/registry.hpp"
+#include "solve/interrupt.hpp"
 #include "solve/simulation.hpp"
 
 namespace ts::cli {
@@ -109,6 +110,7 @@ std::string key_of(const ProbeSample& s) {
 }  // namespace
 
 int run_study(const std::filesystem::path& study_file, const std::filesystem::path& out_arg, int threads, bool quiet) {
+  install_stop_handlers();
   const json doc = read_job_document(study_file);
   ObjectReader top(doc, "");
   if (top.text("format") != "thermostamp-study/1")
@@ -208,6 +210,10 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       const RunResult r = again.run(opt);  // the same files again: output time counts alike
       log_close_file();
       if (r.ok) results.back().wall_time_s = std::min(results.back().wall_time_s, r.wall_time_s);
+    }
+    if (results.back().interrupted) {
+      std::cerr << "study variant '" << all[i].label << "' " << results.back().error << "\n";
+      return 128 + results.back().interrupted;
     }
     if (!results.back().ok) {
       std::cerr << "error: run failed: study variant '" << all[i].label << "': " << results.back().error << "\n";

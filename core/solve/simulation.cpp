@@ -20,6 +20,7 @@
 
 #include "io/logging.hpp"
 #include "io/results_writer.hpp"
+#include "solve/interrupt.hpp"
 #include "solve/tools.hpp"
 #include "version.hpp"
 
@@ -1382,6 +1383,8 @@ RunResult Simulation::run(const RunOptions& opt) {
     if (tools_csv.is_open()) tools_csv.flush();
   };
   std::string failure;
+  int stop_signal = 0;  // the signal of a stop request, once the loop has seen it
+  double frame_t = 0;   // time of the last frame written
   seen_min_ = std::numeric_limits<double>::infinity();
   seen_max_ = -seen_min_;
   try {
@@ -1516,8 +1519,10 @@ RunResult Simulation::run(const RunOptions& opt) {
           write_frame(t);
           timing_[kTimeOutput] += seconds_since(tc);
           ++frame_index;
+          frame_t = t;
         }
         progress.update(t, mech_steps);
+        if ((stop_signal = stop_requested()) != 0) break;
       }
     } else {
     while (t < t_end - eps_t) {
@@ -1556,12 +1561,26 @@ RunResult Simulation::run(const RunOptions& opt) {
           write_frame(t);
           if (!tools_.empty()) sample_tools(t);
           ++frame_index;
+          frame_t = t;
         }
         progress.update(t, steps);
+        if ((stop_signal = stop_requested()) != 0) break;
       }
     }
-    if (!progress.tty) progress.last_decile = 10;  // the last line was printed at 100 %
-    progress.update(t, steps, progress.tty);
+    if (stop_signal != 0 && t > frame_t) {  // interrupted: the state reached, as a last frame
+      const auto tc = Clock::now();
+      if (job_.mechanics) update_element_fields();
+      write_frame(t);
+      if (!tools_.empty()) sample_tools(t);
+      for (std::size_t q = 0; q < next_probe.size(); ++q) {  // the probes not sampled at t yet
+        const double pi = job_.output.probes[q].interval;
+        const double iv = pi > 0 ? pi : job_.mechanics ? interval : 0.0;
+        if (iv > 0 && next_probe[q] - iv < t - eps_t) sample_probes(t, q);
+      }
+      timing_[kTimeOutput] += seconds_since(tc);
+    }
+    if (!progress.tty && stop_signal == 0) progress.last_decile = 10;  // the last line was printed at 100 %
+    progress.update(t, steps, progress.tty || stop_signal != 0);
   } catch (const RunError& e) {
     failure = e.what();
   } catch (const std::exception& e) {
@@ -1574,6 +1593,13 @@ RunResult Simulation::run(const RunOptions& opt) {
     writer->write_series("tools", tool_cols, tool_rows);
   const double stored_change = stored_heat() - stored0;
   const double scale = std::max({std::abs(stored_change), std::abs(heat_in), 1e-300});
+  if (failure.empty() && stop_signal != 0) {
+    failure = std::string("interrupted by ") + signal_name(stop_signal) + " at t = " + fmt_g(t) + " s of " +
+              fmt_g(t_end) + " s (" + (job_.mechanics ? "mechanical step " + std::to_string(mech_steps)
+                                                       : "thermal step " + std::to_string(steps)) +
+              "); the output folder holds the frames up to that time";
+    result.interrupted = stop_signal;
+  }
   result.ok = failure.empty();
   result.error = failure;
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -1611,7 +1637,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     update_derived();
     json summary;
     summary["job"] = job_.name;
-    summary["status"] = result.ok ? "completed" : "failed";
+    summary["status"] = result.ok ? "completed" : result.interrupted ? "interrupted" : "failed";
     summary["version"] = kVersion;
     summary["threads"] = threads;
     summary["wall_time_s"] = result.wall_time_s;
@@ -1724,6 +1750,8 @@ RunResult Simulation::run(const RunOptions& opt) {
     log->info("completed: {} thermal steps in {:.3g} s wall; heat into the plies {:.6g} J, stored change {:.6g} J "
               "(balance error {:.2e})",
               steps, result.wall_time_s, heat_in, stored_change, result.heat_balance_error);
+  } else if (result.interrupted) {
+    log->warn("{}", failure);
   } else {
     log->error("run failed: {}", failure);
   }

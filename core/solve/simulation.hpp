@@ -45,7 +45,8 @@ struct EnergyAudit {
 };
 
 struct RunResult {
-  bool ok = true;
+  bool ok = true;     // false: the run failed (error says why) or was interrupted
+  int interrupted = 0;  // the signal that stopped the run early (see solve/interrupt.hpp), 0 if none
   std::string error;
   double wall_time_s = 0;
   double simulated_time_s = 0;

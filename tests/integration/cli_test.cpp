@@ -11,7 +11,10 @@
 
 #include <thermostamp/sdk/plugin.hpp>
 
+#include <csignal>
+
 #include "job/job.hpp"
+#include "solve/interrupt.hpp"
 #include "test_support.hpp"
 
 namespace ts::test {
@@ -229,6 +232,73 @@ TEST(Plugins, FoundThroughEnvironmentAndFailureKeepsFrames) {
   std::stringstream xdmf;
   xdmf << std::ifstream(out / "results.xdmf").rdbuf();
   EXPECT_NE(xdmf.str().find("<Time Value=\"0.5\" />"), std::string::npos);
+}
+
+// A stop request (what SIGINT and SIGTERM make) ends a run at the end of
+// its current step: a last frame at that time, the time series and
+// summary.json with status "interrupted", for thermal-only and mechanical
+// runs alike. Here the request is pending before the run starts, so both
+// stop after their first step.
+TEST(Interrupt, StopRequestEndsTheRunWithALastFrame) {
+  const auto thermal = small_job("interrupt_thermal");
+  json mech = read_job_document(source_dir() / "share" / "jobs" / "ud_strip_tension.json");
+  for (const auto& [label, doc] : {std::pair{"thermal", read_job_document(thermal)}, std::pair{"mechanics", mech}}) {
+    const auto out = temp_dir(std::string("interrupt_") + label + "_out");
+    request_stop(SIGTERM);
+    const JobRun run = run_json(doc, 1, out);
+    clear_stop();
+    EXPECT_FALSE(run.result.ok) << label;
+    EXPECT_EQ(run.result.interrupted, SIGTERM) << label;
+    EXPECT_NE(run.result.error.find("interrupted by SIGTERM at t = "), std::string::npos) << run.result.error;
+    const json s = json::parse(std::ifstream(out / "summary.json"));
+    EXPECT_EQ(s["status"], "interrupted") << label;
+    EXPECT_EQ(s["frames"], 2) << label << ": the initial frame and the one at the stop";
+    const double t = s["simulated_time_s"].get<double>();
+    EXPECT_GT(t, 0.0) << label;
+    EXPECT_LT(t, doc["time"]["end"].get<double>()) << label;
+    std::stringstream xdmf;
+    xdmf << std::ifstream(out / "results.xdmf").rdbuf();
+    EXPECT_NE(xdmf.str().find("<Time Value=\"0\" />"), std::string::npos) << label;
+  }
+  // Without a request the same in-process run completes.
+  EXPECT_TRUE(run_json(read_job_document(thermal), 1).result.ok);
+}
+
+// The command line under SIGINT (Ctrl-C): exit status 130, summary.json
+// "interrupted", the frames and the energy history up to the stop readable.
+TEST(Interrupt, SigintStopsTheCommandLineRun) {
+  const auto dir = temp_dir("interrupt_cli");
+  const auto out = dir / "out";
+  // The default scene on one thread takes over a minute; the signal comes
+  // after two seconds.
+  const std::string cmd = "timeout --preserve-status -s INT 2 " + (binary_dir() / "bin" / "thermostamp").string() +
+                          " run " + q(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json") + " --out " +
+                          q(out) + " --threads 1 --quiet 2>" + q(dir / "err.txt");
+  const int rc = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(rc));
+  EXPECT_EQ(WEXITSTATUS(rc), 130);
+  std::stringstream err;
+  err << std::ifstream(dir / "err.txt").rdbuf();
+  EXPECT_NE(err.str().find("interrupted by SIGINT at t = "), std::string::npos) << err.str();
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["status"], "interrupted");
+  EXPECT_GT(s["simulated_time_s"].get<double>(), 0.0);
+  EXPECT_GE(s["frames"].get<int>(), 2);
+  EXPECT_GT(s["steps"]["mechanics"].get<int>(), 0);
+  std::ifstream csv(out / "energy.csv");
+  std::string line;
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_GE(rows, 2) << "header and at least one sample";
+  const hid_t file = H5Fopen((out / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  hsize_t n = 0;
+  const hid_t frames = H5Gopen2(file, "frames", H5P_DEFAULT);
+  ASSERT_GE(frames, 0);
+  H5Gget_num_objs(frames, &n);
+  EXPECT_EQ(static_cast<int>(n), s["frames"].get<int>());
+  H5Gclose(frames);
+  H5Fclose(file);
 }
 
 // A contact handler that fails mid-run: exit 3 with the interaction's JSON
