@@ -1126,8 +1126,11 @@ struct Progress {
       const int decile = static_cast<int>(10 * frac);
       if (decile == last_decile && !force) return;
       last_decile = decile;
-      logger("solve")->info("t = {:.4g} / {:.4g} s ({:.0f} %), {:.0f} steps/s, ETA {:.0f} s", t, t_end, 100 * frac,
-                            rate, eta);
+      if (frac < 0.01 && !force)  // the first steps (setup, caches) say nothing of the rate yet
+        logger("solve")->info("t = {:.4g} / {:.4g} s ({:.0f} %)", t, t_end, 100 * frac);
+      else
+        logger("solve")->info("t = {:.4g} / {:.4g} s ({:.0f} %), {:.0f} steps/s, ETA {:.0f} s", t, t_end, 100 * frac,
+                              rate, eta);
     }
   }
 };
