@@ -88,6 +88,9 @@ Args parse(int argc, char** argv) {
 
 int cmd_run(const Args& a, bool validate_only) {
   if (a.positional.size() != 1) throw UsageError("expected one job file");
+  // From here a signal asks for a stop: during the setup (which can take a
+  // while for a large mesh) the run then stops after its first step.
+  if (!validate_only) ts::install_stop_handlers();
   ts::log_to_terminal(a.quiet);
   const ts::Job job = ts::load_job(a.positional[0], a.sets);
   ts::PluginRegistry registry;
@@ -106,7 +109,6 @@ int cmd_run(const Args& a, bool validate_only) {
   ts::log_to_file(opt.out_dir / "log.txt");
   ts::logger("job")->info("thermostamp {} running {} -> {}", ts::kVersion, job.file.string(), opt.out_dir.string());
   for (const auto& s : a.sets) ts::logger("job")->info("override: {}", s);
-  ts::install_stop_handlers();
   const ts::RunResult r = sim.run(opt);
   ts::log_close_file();
   if (r.interrupted) {

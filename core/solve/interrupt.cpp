@@ -1,5 +1,7 @@
 #include "solve/interrupt.hpp"
 
+#include <time.h>
+
 #include <atomic>
 #include <csignal>
 
@@ -7,14 +9,28 @@ namespace ts {
 namespace {
 
 std::atomic<int> g_stop{0};
-static_assert(std::atomic<int>::is_always_lock_free, "the stop flag is set from a signal handler");
+std::atomic<long long> g_stop_ns{0};  // when the first signal came (monotonic clock)
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<long long>::is_always_lock_free,
+              "the stop flag is set from a signal handler");
+
+long long now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);  // async-signal-safe
+  return static_cast<long long>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
 
 extern "C" void on_stop_signal(int sig) {
-  if (g_stop.load(std::memory_order_relaxed) != 0) {  // second signal: default action, now
+  const long long now = now_ns();
+  if (g_stop.load(std::memory_order_relaxed) != 0) {
+    // A second signal ends the process at once, unless it comes within
+    // half a second of the first: tools such as timeout send a signal to
+    // the process and to its process group, so one request can arrive twice.
+    if (now - g_stop_ns.load(std::memory_order_relaxed) < 500000000LL) return;
     std::signal(sig, SIG_DFL);
     std::raise(sig);
     return;
   }
+  g_stop_ns.store(now, std::memory_order_relaxed);
   g_stop.store(sig, std::memory_order_relaxed);
 }
 

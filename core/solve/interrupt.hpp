@@ -3,7 +3,8 @@
 // time limit): the first signal asks the running simulation to stop at the
 // end of its current step; it then writes a last frame at that time, its
 // time series and summary.json (status "interrupted"), and returns. A
-// second signal ends the process at once.
+// second signal ends the process at once (one within half a second of the
+// first counts as the same request).
 
 namespace ts {
 
