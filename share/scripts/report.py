@@ -172,9 +172,12 @@ def plot_tools(folder, out):
     a2.set_xlabel("time (s)")
     a2.set_ylabel("heat given to the plies (J)")
     a2.set_title("heat exchanged with each tool")
+    if not a1.lines:  # e.g. a run interrupted early
+        a1.text(0.5, 0.5, "no tool has travelled 1 mm yet", ha="center", va="center", transform=a1.transAxes)
     for a in (a1, a2):
         a.grid(alpha=0.3)
-        a.legend(fontsize=8)
+        if a.lines:
+            a.legend(fontsize=8)
     return [save(fig, out, "tool_forces.png")]
 
 
