@@ -1583,7 +1583,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       timing_[kTimeOutput] += seconds_since(tc);
     }
     if (!progress.tty && stop_signal == 0) progress.last_decile = 10;  // the last line was printed at 100 %
-    progress.update(t, steps, progress.tty || stop_signal != 0);
+    progress.update(t, job_.mechanics ? mech_steps : steps, progress.tty || stop_signal != 0);
   } catch (const RunError& e) {
     failure = e.what();
   } catch (const std::exception& e) {
