@@ -1,4 +1,5 @@
 // thermostamp: the command line. See docs/user-guide.md.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -99,6 +100,22 @@ int cmd_run(const Args& a, bool validate_only) {
     std::cout << "job '" << job.name << "' is valid: " << job.parts.size() << " part(s), " << job.tools.size()
               << " tool(s), " << job.contacts.size() + job.heat_exchanges.size() << " interaction(s); plugins: "
               << ts::join(sim.plugins_loaded()) << "\n";
+    // What the run will take, from its first steps (the mechanical step
+    // changes as the plies deform and touch).
+    auto rounded = [](double n) {  // three significant digits
+      const double r = n >= 100 ? std::pow(10.0, std::floor(std::log10(n)) - 2) : 1.0;
+      return std::round(n / r) * r;
+    };
+    char line[200];
+    if (const double dm = sim.initial_mechanical_step(); dm > 0) {
+      std::snprintf(line, sizeof line, "mechanical step %.4g s at the start: about %.0f steps to t = %.4g s\n", dm,
+                    rounded(job.t_end / dm), job.t_end);
+      std::cout << line;
+    }
+    if (const double dt = sim.thermal_step(); dt > 0) {
+      std::snprintf(line, sizeof line, "thermal step %.4g s: about %.0f steps\n", dt, rounded(job.t_end / dt));
+      std::cout << line;
+    }
     return 0;
   }
   ts::RunOptions opt;

@@ -725,6 +725,12 @@ double Simulation::finish_elements() {
   return std::min(dt, tool_dt_);
 }
 
+double Simulation::initial_mechanical_step() {
+  if (!job_.mechanics) return 0.0;
+  const double stable = mechanics_stable_dt();
+  return std::isfinite(stable) ? job_.mechanics_settings.dt_safety * stable : 0.0;
+}
+
 // Internal forces of every part at the current positions; returns the
 // smallest stable step.
 double Simulation::mechanics_stable_dt() {

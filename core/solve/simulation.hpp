@@ -76,6 +76,11 @@ class Simulation {
   ~Simulation();
   RunResult run(const RunOptions& options);
   std::vector<std::string> plugins_loaded() const { return registry_.loaded_names(); }
+  // The steps a run starts with (s): the mechanical one (dt_safety times the
+  // stable step of the initial configuration, mass scaling included; 0
+  // without mechanics) and the thermal one (0 without thermal). Before run().
+  double initial_mechanical_step();
+  double thermal_step() const { return thermal_dt_; }
   // Heat stored in the plies, J (sum of capacity x temperature, relative to 0 degC).
   double stored_heat() const;
   double stored_heat(int part) const;

@@ -191,10 +191,26 @@ TEST(Cli, NotJsonAndTruncatedFiles) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+// validate also gives the steps the run starts with: the thermal demo's
+// thermal step, and for the hemisphere the mechanical step with mass
+// scaling (the target_dt of 1.5e-5 s, less at most the 12 % that the
+// contact springs' bound may take) and the steps it implies for the stroke.
 TEST(Cli, ValidateRunsNothing) {
   const auto r = thermostamp("validate " + q(demo_job()));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("is valid"), std::string::npos);
+  EXPECT_NE(r.out.find("thermal step 0.01136 s: about 880 steps"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("mechanical step"), std::string::npos) << r.out;
+  const auto h = thermostamp("validate " + q(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json"));
+  ASSERT_EQ(h.exit_code, 0) << h.err;
+  const auto at = h.out.find("mechanical step ");
+  ASSERT_NE(at, std::string::npos) << h.out;
+  const double dm = std::stod(h.out.substr(at + 16));
+  const json job = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  const double target = job["solvers"]["mechanics"]["mass_scaling"]["target_dt"].get<double>();
+  EXPECT_GT(dm, 0.88 * target) << h.out;
+  EXPECT_LE(dm, target * (1 + 1e-9)) << h.out;
+  EXPECT_NE(h.out.find("steps to t = 5 s"), std::string::npos) << h.out;
 }
 
 TEST(Plugins, AnotherAbiIsRefusedNamingBothVersions) {
