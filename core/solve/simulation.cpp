@@ -17,6 +17,7 @@
 #endif
 
 #include <thermostamp/sdk/math.hpp>
+#include <thermostamp/sdk/simd.hpp>
 
 #include "io/logging.hpp"
 #include "io/results_writer.hpp"
@@ -56,6 +57,10 @@ struct MechPart {
   std::vector<int> edge_condition;  // 3 per element (sdk::kEdgeFree / kEdgeClamped)
   std::vector<int> constraint_of;   // 3 per node: index of the constraint holding the dof, -1 if none
   std::vector<double> prescribed;   // 3 per node: velocity where fixed (0 for fix / symmetry)
+  // Per dof, for the integration's vector pass: mass, gravity force, 1 where
+  // free (0 where held or driven); the held or driven dofs in ascending order.
+  std::vector<double> mass3, gravity3, free3;
+  std::vector<int> fixed_dofs;
   double mass_physical = 0, mass_added = 0;
 };
 
@@ -70,6 +75,68 @@ struct PartState {
 
 namespace {
 using Clock = std::chrono::steady_clock;
+
+// One explicit step of n dofs (central differences, lumped mass): the new
+// half-step velocities, displacement increments and positions, and the
+// works of the previous step by the trapezoid rule (internal, external,
+// damping, contact) with the kinetic energies at t^n, summed into sums[0..6]
+// (w_int, w_ext, w_damp, w_con, kinetic, kinetic at the half step, and x * 0,
+// which is zero unless a position is not finite). A held or driven dof
+// (free3 = 0) takes its prescribed velocity; the constraint supplies
+// R = f_int - f_ext - f_con there, and its work enters w_ext. Elementwise,
+// so the trajectory does not depend on the vector width; the sums are
+// taken lane by lane (a fixed order, but not the one of a scalar loop).
+TS_VECTOR_CLONES
+void integrate_dofs(std::size_t n, double dt, double dt_avg, double damping, bool contact,
+                    const double* __restrict mass3, const double* __restrict gravity3,
+                    const double* __restrict free3, const double* __restrict load, const double* __restrict f_int,
+                    const double* __restrict f_con, const double* __restrict prescribed, double* __restrict v,
+                    double* __restrict dx, double* __restrict x, double* __restrict f_prev,
+                    double* __restrict fc_prev, double* __restrict fd_prev, double* __restrict r_prev,
+                    double* __restrict sums) {
+  double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0, nonfinite = 0;
+  if (contact) {
+#pragma omp simd reduction(+ : w_con)
+    for (std::size_t k = 0; k < n; ++k) {
+      w_con += 0.5 * (fc_prev[k] + f_con[k]) * dx[k];
+      fc_prev[k] = f_con[k];
+    }
+  }
+#pragma omp simd reduction(+ : w_int, w_ext, w_damp, kin, kin_half, nonfinite)
+  for (std::size_t k = 0; k < n; ++k) {
+    const double mi = mass3[k], vo = v[k], dxo = dx[k];
+    const bool is_free = free3[k] != 0.0;
+    w_int += 0.5 * (f_prev[k] + f_int[k]) * dxo;
+    const double f_ext = gravity3[k] + load[k];
+    const double f_damp = damping * mi * vo;
+    const double reaction = f_int[k] - f_ext - f_con[k];
+    const double v_free = vo + dt_avg * (f_ext + f_con[k] - f_int[k] - f_damp) / mi;
+    const double v_new = is_free ? v_free : prescribed[k];
+    w_ext += is_free ? f_ext * dxo : (0.5 * (r_prev[k] + reaction) + f_ext) * dxo;
+    w_damp += is_free ? 0.5 * (fd_prev[k] + f_damp) * dxo : 0.0;
+    // Kinetic energy at t^n as the product of the half-step velocities: the
+    // energy that central differences conserve exactly for a linear system.
+    kin += is_free ? 0.5 * mi * vo * v_new : 0.0;
+    kin_half += is_free ? 0.5 * mi * v_new * v_new : 0.0;
+    fd_prev[k] = is_free ? f_damp : fd_prev[k];
+    r_prev[k] = is_free ? r_prev[k] : reaction;
+    v[k] = v_new;
+    const double dxn = dt * v_new;
+    dx[k] = dxn;
+    const double xn = x[k] + dxn;
+    x[k] = xn;
+    nonfinite += xn * 0.0;
+    f_prev[k] = f_int[k];
+  }
+  sums[0] = w_int;
+  sums[1] = w_ext;
+  sums[2] = w_damp;
+  sums[3] = w_con;
+  sums[4] = kin;
+  sums[5] = kin_half;
+  sums[6] = nonfinite;
+}
+
 // The kinetic energy may not exceed this multiple of the energy supplied.
 constexpr double kKineticGrowthLimit = 10.0;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -608,6 +675,20 @@ void Simulation::build_mechanics() {
       total += m.mass[i];
     }
     m.mass_added = total - m.mass_physical;
+    m.mass3.assign(3 * static_cast<std::size_t>(nn), 0.0);
+    m.gravity3.assign(3 * static_cast<std::size_t>(nn), 0.0);
+    m.free3.assign(3 * static_cast<std::size_t>(nn), 1.0);
+    m.fixed_dofs.clear();
+    for (int i = 0; i < nn; ++i)
+      for (int d = 0; d < 3; ++d) {
+        const int k = 3 * i + d;
+        m.mass3[k] = m.mass[i];
+        m.gravity3[k] = md.gravity[d] * m.mass_node_physical[i];
+        if (m.fixed[k]) {
+          m.free3[k] = 0.0;
+          m.fixed_dofs.push_back(k);
+        }
+      }
     for (int i = 0; i < nn; ++i)
       if (m.k_contact[i] > 0) contact_dt_ = std::min(contact_dt_, 2.0 * std::sqrt(m.mass[i] / m.k_contact[i]));
   }
@@ -918,59 +999,19 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   for (const auto& st : parts_) nodes_all += st->x.size() / 3;
 #pragma omp parallel for schedule(static) if (np > 1 && nodes_all > 512)
   for (int p = 0; p < np; ++p) {
-    double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
     double* reactions = &part_sums_[p * (6 + nr) + 6];
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
+    const std::size_t n = 3 * static_cast<std::size_t>(st.mesh.num_nodes());
+    // The constraints' reactions at t^n, in dof order.
+    for (const int k : m.fixed_dofs)
+      reactions[3 * m.constraint_of[k] + k % 3] += m.f_int[k] - (m.gravity3[k] + m.load[k]) - m.f_con[k];
+    double sums_p[7];
+    integrate_dofs(n, dt, dt_avg, md.damping, !contacts_.empty(), m.mass3.data(), m.gravity3.data(), m.free3.data(),
+                   m.load.data(), m.f_int.data(), m.f_con.data(), m.prescribed.data(), m.v.data(), m.dx.data(),
+                   st.x.data(), m.f_prev.data(), m.fc_prev.data(), m.fd_prev.data(), m.r_prev.data(), sums_p);
+    const double nonfinite = sums_p[6];
     const int nn = st.mesh.num_nodes();
-    const bool contact = !contacts_.empty();  // otherwise f_con stays zero
-    double nonfinite = 0;                     // x * 0: zero unless a position is not finite
-    for (int i = 0; i < nn; ++i) {
-      const double mi = m.mass[i];
-      for (int d = 0; d < 3; ++d) {
-        const int k = 3 * i + d;
-        // Internal and contact work of the previous step (trapezoid with the
-        // forces at both ends).
-        w_int += 0.5 * (m.f_prev[k] + m.f_int[k]) * m.dx[k];
-        if (contact) {
-          w_con += 0.5 * (m.fc_prev[k] + m.f_con[k]) * m.dx[k];
-          m.fc_prev[k] = m.f_con[k];
-        }
-        const double f_ext = md.gravity[d] * m.mass_node_physical[i] + m.load[k];
-        if (m.fixed[k]) {
-          // A held or driven dof: the constraint supplies R = f_int - f_ext -
-          // f_contact (its inertia is not part of the model); its work over the
-          // previous step by the same trapezoid as the internal work.
-          const double reaction = m.f_int[k] - f_ext - m.f_con[k];
-          w_ext += (0.5 * (m.r_prev[k] + reaction) + f_ext) * m.dx[k];
-          reactions[3 * m.constraint_of[k] + d] += reaction;
-          m.r_prev[k] = reaction;
-          m.v[k] = m.prescribed[k];
-          m.dx[k] = dt * m.v[k];
-          st.x[k] += m.dx[k];
-          nonfinite += st.x[k] * 0.0;
-          m.f_prev[k] = m.f_int[k];
-          continue;
-        }
-        // The audit is taken at x^n: works over the previous step by the
-        // trapezoid rule, kinetic energy from v^n = (v^{n-1/2} + v^{n+1/2}) / 2.
-        const double f_damp = md.damping * mi * m.v[k];
-        const double v_new = m.v[k] + dt_avg * (f_ext + m.f_con[k] - m.f_int[k] - f_damp) / mi;
-        w_ext += f_ext * m.dx[k];
-        w_damp += 0.5 * (m.fd_prev[k] + f_damp) * m.dx[k];
-        // Kinetic energy at t^n as the product of the half-step velocities:
-        // the energy that central differences conserve exactly for a linear
-        // system, so that stiff short events (contact) do not upset the audit.
-        kin += 0.5 * mi * m.v[k] * v_new;
-        kin_half += 0.5 * mi * v_new * v_new;
-        m.fd_prev[k] = f_damp;
-        m.v[k] = v_new;
-        m.dx[k] = dt * v_new;
-        st.x[k] += m.dx[k];
-        nonfinite += st.x[k] * 0.0;
-        m.f_prev[k] = m.f_int[k];
-      }
-    }
     if (nonfinite != 0)  // also when NaN
       for (int k = 0; k < 3 * nn; ++k)
         if (!std::isfinite(st.x[k])) {
@@ -978,12 +1019,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
           break;
         }
     double* sums = &part_sums_[p * (6 + nr)];
-    sums[0] = w_int;
-    sums[1] = w_ext;
-    sums[2] = w_damp;
-    sums[3] = w_con;
-    sums[4] = kin;
-    sums[5] = kin_half;
+    for (int j = 0; j < 6; ++j) sums[j] = sums_p[j];
   }
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
   for (int p = 0; p < np; ++p) {
