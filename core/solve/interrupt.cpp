@@ -20,18 +20,16 @@ long long now_ns() {
 }
 
 extern "C" void on_stop_signal(int sig) {
-  const long long now = now_ns();
-  if (g_stop.load(std::memory_order_relaxed) != 0) {
-    // A second signal ends the process at once, unless it comes within
-    // half a second of the first: tools such as timeout send a signal to
-    // the process and to its process group, so one request can arrive twice.
-    if (now - g_stop_ns.load(std::memory_order_relaxed) < 500000000LL) return;
-    std::signal(sig, SIG_DFL);
-    std::raise(sig);
+  if (g_stop.load(std::memory_order_relaxed) == 0) {
+    request_stop(sig);
     return;
   }
-  g_stop_ns.store(now, std::memory_order_relaxed);
-  g_stop.store(sig, std::memory_order_relaxed);
+  // A second signal ends the process at once, unless it comes within half
+  // a second of the first: tools such as timeout send a signal to the
+  // process and to its process group, so one request can arrive twice.
+  if (now_ns() - g_stop_ns.load(std::memory_order_relaxed) < 500000000LL) return;
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
 }
 
 }  // namespace
@@ -41,7 +39,10 @@ void install_stop_handlers() {
   std::signal(SIGTERM, on_stop_signal);
 }
 
-void request_stop(int signal) noexcept { g_stop.store(signal, std::memory_order_relaxed); }
+void request_stop(int signal) noexcept {
+  g_stop_ns.store(now_ns(), std::memory_order_relaxed);
+  g_stop.store(signal, std::memory_order_relaxed);
+}
 
 int stop_requested() noexcept { return g_stop.load(std::memory_order_relaxed); }
 

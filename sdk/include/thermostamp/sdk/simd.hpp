@@ -7,9 +7,10 @@
 // processor runs (an ifunc), so one build runs everywhere and uses the
 // widest vectors it can. The project builds in ISO C++ mode, where GCC
 // does not contract a * b + c into an FMA, and elementwise vector
-// arithmetic rounds as the scalar one: all versions give the same bits. Write such loops without calls and without branches
-// the compiler cannot turn into selects, and mark them `#pragma omp simd`
-// (the SDK's CMake target adds -fopenmp-simd).
+// arithmetic rounds as the scalar one: all versions give the same bits.
+// Write such loops without calls and without branches the compiler cannot
+// turn into selects, and mark them `#pragma omp simd` (the SDK's CMake
+// target adds -fopenmp-simd).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
 #define TS_VECTOR_CLONES __attribute__((target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")))
 #else
