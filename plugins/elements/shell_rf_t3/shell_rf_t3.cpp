@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include <thermostamp/sdk/invariants.hpp>
@@ -49,11 +50,9 @@ inline int padded_ld(int n) {
 struct BlockScratch {
   std::vector<double> temp, ff, mf, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy, mk;
   // The block's interior hinges (structure of arrays, capacity hcap):
-  // angle minus initial angle, gradients on (c, o, p, q) x xyz, and the
-  // node offsets (3 x node) and initial angles of the hinges owned by an
-  // element of an earlier block.
-  std::vector<double> hdth, hg, hredo, ftheta0;
-  std::vector<int> hloc, fnode, fhinge;
+  // angle minus initial angle, gradients on (c, o, p, q) x xyz, and 1 where
+  // the angle is evaluated again with the library.
+  std::vector<double> hdth, hg, hredo;
   int hcap = 0;
 };
 
@@ -72,7 +71,6 @@ BlockScratch& block_scratch(int n) {
     s.moment.resize(3 * m);
     s.benergy.resize(m);
     s.mk.resize(3 * m);
-    s.hloc.resize(3 * m);
   }
   return s;
 }
@@ -84,9 +82,6 @@ void reserve_hinges(BlockScratch& s, int h) {
   s.hdth.resize(m);
   s.hg.resize(12 * m);
   s.hredo.resize(m);
-  s.ftheta0.resize(m);
-  s.fnode.resize(4 * m);
-  s.fhinge.resize(m);
 }
 
 // Bending angles (minus their initial values theta0) and their gradients of
@@ -558,6 +553,8 @@ class ShellRfT3 final : public ElementKernel {
     // Ghost hinges (clamped and symmetry edges) by element: those of the
     // elements of [b, end) are gedge_[gstart_[b] .. gstart_[end]) (3 e + k).
     gstart_.assign(ne + 1, 0);
+    block_hinges_.clear();
+    block_hinges_.resize(ne + 1);
     gedge_.clear();
     for (int e = 0; e < ne; ++e) {
       gstart_[e] = static_cast<int>(gedge_.size());
@@ -565,6 +562,66 @@ class ShellRfT3 final : public ElementKernel {
         if (clamped_[3 * e + k]) gedge_.push_back(3 * e + k);
     }
     gstart_[ne] = static_cast<int>(gedge_.size());
+  }
+
+  // What bending_forces needs of the hinges of a block [b, end) that depends
+  // only on the mesh and the block's bounds; built at the block's first
+  // evaluation and kept (the kernel's blocks do not change during a run).
+  struct BlockHinges {
+    int end = -1, nforeign = 0;
+    // Per element and edge of the block: the edge's entry in the angle
+    // changes (see bending_forces).
+    std::vector<int> loc;
+    // The hinges owned by an element of an earlier block: node offsets c,
+    // p, q, o (nforeign each), initial angles and hinge numbers.
+    std::vector<int> fnode, fhinge;
+    std::vector<double> ftheta0;
+    // Per element and edge: 2 j + (1 if the element is the hinge's
+    // neighbour, its gradient rows permuted) for a hinge j whose forces the
+    // element brings, -1 for none; and the entry in mk of the moment of the
+    // hinge's other element when that element is in the block, -1 if not.
+    std::vector<int> force_hinge, force_partner;
+  };
+  const BlockHinges& block_hinges(int b, int end) {
+    std::unique_ptr<BlockHinges>& slot = block_hinges_[b];
+    if (slot && slot->end == end) return *slot;
+    auto bh = std::make_unique<BlockHinges>();
+    const int* nbr = part_->neighbours.data();
+    const int n = end - b, h0 = hstart_[b], nown = hstart_[end] - h0;
+    bh->end = end;
+    bh->loc.assign(3 * n, 0);
+    bh->force_hinge.assign(3 * n, -1);
+    bh->force_partner.assign(3 * n, -1);
+    std::vector<int> fc, fp, fq, fo;
+    for (int e = b; e < end; ++e)
+      for (int k = 0; k < 3; ++k) {
+        const int h = hid_[3 * e + k], nb = nbr[3 * e + k], i = 3 * (e - b) + k;
+        if (h < 0) continue;  // a ghost entry, numbered below (after the foreign hinges)
+        if (nb >= b) {
+          bh->loc[i] = h - h0;
+        } else {
+          bh->loc[i] = nown + bh->nforeign++;
+          fc.push_back(hc_[h]);
+          fp.push_back(hp_[h]);
+          fq.push_back(hq_[h]);
+          fo.push_back(ho_[h]);
+          bh->ftheta0.push_back(htheta0_[h]);
+          bh->fhinge.push_back(h);
+        }
+        if (nb >= b && nb < e) continue;  // brought by its owner nb
+        bh->force_hinge[i] = 2 * bh->loc[i] + (nb > e ? 0 : 1);
+        if (nb > e && nb < end) bh->force_partner[i] = 3 * (nb - b) + partner_k_[3 * e + k];
+      }
+    const int nh = nown + bh->nforeign;
+    for (int e = b; e < end; ++e)
+      for (int k = 0; k < 3; ++k)
+        if (hid_[3 * e + k] < 0) bh->loc[3 * (e - b) + k] = nh + 3 * (e - b) + k;
+    bh->fnode = fc;
+    bh->fnode.insert(bh->fnode.end(), fp.begin(), fp.end());
+    bh->fnode.insert(bh->fnode.end(), fq.begin(), fq.end());
+    bh->fnode.insert(bh->fnode.end(), fo.begin(), fo.end());
+    slot = std::move(bh);
+    return *slot;
   }
 
   // Bending curvatures, moments and forces of elements [b, end), added to
@@ -577,57 +634,32 @@ class ShellRfT3 final : public ElementKernel {
     const int n = end - b;
     const double* temp = sc.temp.data();
     const double* x = part_->x.data();
-    const int* nbr = part_->neighbours.data();
     static_assert(sizeof(Vec3) == 3 * sizeof(double));
     // The block's interior hinges: those owned by its elements (contiguous),
     // then those owned by an element of an earlier block. An interior hinge
     // is evaluated once for the block, in its owner's orientation; its
     // neighbour sees the same angle with the gradients permuted.
     const int h0 = hstart_[b], nown = hstart_[end] - h0;
-    int nforeign = 0;
-    for (int e = b; e < end; ++e)
-      for (int k = 0; k < 3; ++k) nforeign += (nbr[3 * e + k] >= 0) & (nbr[3 * e + k] < b);
+    const BlockHinges& bh = block_hinges(b, end);
+    const int nforeign = bh.nforeign;
     const int nh = nown + nforeign;
     // Angle changes: the block's interior hinges at [0, nh), then one entry
     // per element and edge without a neighbour at nh + 3 (e - b) + k (the
     // ghost hinge's angle, zero at a free edge).
     reserve_hinges(sc, nh + 3 * n);
     const int cap = sc.hcap;
-    int* loc = sc.hloc.data();  // per element and edge of the block: its entry in dth
-    int* fnode = sc.fnode.data();
-    int* fh = sc.fhinge.data();
-    double* ft0 = sc.ftheta0.data();
-    {
-      int f = 0;
-      for (int e = b; e < end; ++e)
-        for (int k = 0; k < 3; ++k) {
-          const int h = hid_[3 * e + k], nb = nbr[3 * e + k];
-          if (h < 0) {
-            loc[3 * (e - b) + k] = nh + 3 * (e - b) + k;
-          } else if (nb >= b) {
-            loc[3 * (e - b) + k] = h - h0;
-          } else {
-            loc[3 * (e - b) + k] = nown + f;
-            fnode[f] = hc_[h];
-            fnode[cap + f] = hp_[h];
-            fnode[2 * cap + f] = hq_[h];
-            fnode[3 * cap + f] = ho_[h];
-            ft0[f] = htheta0_[h];
-            fh[f] = h;
-            ++f;
-          }
-        }
-    }
+    const int* loc = bh.loc.data();  // per element and edge of the block: its entry in dth
+    const int* fnode = bh.fnode.data();
     double* dth = sc.hdth.data();
     double* G = sc.hg.data();
     double* redo = sc.hredo.data();
     hinge_block(nown, cap, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, htheta0_.data() + h0,
                 dth, G, redo);
-    hinge_block(nforeign, cap, fnode, fnode + cap, fnode + 2 * cap, fnode + 3 * cap, x, ft0, dth + nown, G + nown,
-                redo + nown);
+    hinge_block(nforeign, cap, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x, bh.ftheta0.data(),
+                dth + nown, G + nown, redo + nown);
     for (int j = 0; j < nh; ++j)
       if (redo[j] != 0) {  // beyond the approximation's range: the library's atan2
-        const int h = j < nown ? h0 + j : fh[j - nown];
+        const int h = j < nown ? h0 + j : bh.fhinge[j - nown];
         dth[j] = hinge_angle(x, hc_[h] / 3, hp_[h] / 3, hq_[h] / 3, ho_[h] / 3) - htheta0_[h];
       }
     // Ghost hinges (clamped and symmetry edges), one by one.
@@ -674,6 +706,8 @@ class ShellRfT3 final : public ElementKernel {
     // per corner node) and on the node across the edge.
     double* nf = out.node_force.data();
     const int* slot = in.patch_slot.data();
+    const int* fj = bh.force_hinge.data();
+    const int* fm = bh.force_partner.data();
     for (int e = b; e < end; ++e) {
       const int q = e - b;
       double fc[3][3];
@@ -681,19 +715,16 @@ class ShellRfT3 final : public ElementKernel {
         for (int d = 0; d < 3; ++d) fc[a][d] = mf[(3 * a + d) * ld + q];
 #pragma GCC unroll 3
       for (int k = 0; k < 3; ++k) {
-        const int nb = nbr[3 * e + k];
-        if (hid_[3 * e + k] < 0 || (nb >= b && nb < e)) continue;  // no hinge, or brought by its owner nb
-        const int j = loc[3 * q + k];
+        const int code = fj[3 * q + k];
+        if (code < 0) continue;  // no hinge, or brought by its owner in this block
+        const int j = code >> 1;
         const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
         // Gradient rows of (corner k, the node across, corner k + 1, corner
         // k + 2): (c, o, p, q) from the owner, (o, c, q, p) from the neighbour.
         int rk = 0, ro = 3, r1 = 6, r2 = 9;
         double m = mk[3 * q + k];
-        if (nb > e) {
-          if (nb < end) m += mk[3 * (nb - b) + partner_k_[3 * e + k]];
-        } else {
-          rk = 3, ro = 0, r1 = 9, r2 = 6;
-        }
+        if (fm[3 * q + k] >= 0) m += mk[fm[3 * q + k]];
+        if (code & 1) rk = 3, ro = 0, r1 = 9, r2 = 6;
         double* fo = nf + 3 * slot[6 * q + 3 + k];
         for (int d = 0; d < 3; ++d) {
           fc[k][d] += m * G[(rk + d) * cap + j];
@@ -741,6 +772,7 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<int> hstart_, hid_, hc_, hp_, hq_, ho_, howner_, hnb_, gstart_, gedge_;
   std::vector<char> hk_, hkp_;
   std::vector<double> htheta0_, dmin2_;
+  std::vector<std::unique_ptr<BlockHinges>> block_hinges_;  // by the block's first element
   const PartView* part_ = nullptr;
   std::vector<const MaterialLaw*> laws_;
   double areal_mass_ = 0;
@@ -755,7 +787,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.3.1";
+  d.version = "0.3.2";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -763,4 +795,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.3.1", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.3.2", register_all)

@@ -32,4 +32,4 @@ void register_all(ts::sdk::Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("thermal_adi", "1.0.0", register_all)
+THERMOSTAMP_PLUGIN("thermal_adi", "1.1.0", register_all)
