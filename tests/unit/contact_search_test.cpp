@@ -100,7 +100,9 @@ TEST(PlyPlySearch, TargetsAreTheClosestPointsOfTheOtherPly) {
     std::printf("%s, reach %g m: %d nodes within reach, %d beyond; largest distance error %.2e m\n",
                 same_cells ? "nodes over nodes" : "other mesh", reach, within, beyond, worst);
     EXPECT_GT(within, a.num_nodes() / 4);
-    if (gap_tolerance < 0.01) EXPECT_GT(beyond, a.num_nodes() / 10);
+    if (gap_tolerance < 0.01) {
+      EXPECT_GT(beyond, a.num_nodes() / 10);
+    }
   }
 }
 
