@@ -48,7 +48,7 @@ inline int padded_ld(int n) {
 // the block's first element, or from its first hinge); they grow to the
 // largest block once.
 struct BlockScratch {
-  std::vector<double> temp, ff, mf, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy, mk;
+  std::vector<double> temp, strain, ff, mf, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy, mk;
   // The block's interior hinges (structure of arrays, capacity hcap):
   // angle minus initial angle, gradients on (c, o, p, q) x xyz, and 1 where
   // the angle is evaluated again with the library.
@@ -61,6 +61,7 @@ BlockScratch& block_scratch(int n) {
   const std::size_t m = static_cast<std::size_t>(n), ld = static_cast<std::size_t>(padded_ld(n));
   if (s.temp.size() < m || s.ff.size() < 6 * ld) {
     s.temp.resize(m);
+    s.strain.resize(3 * m);
     s.ff.resize(6 * ld);
     s.mf.resize(9 * ld);
     s.law_stress.resize(3 * m);
@@ -252,7 +253,6 @@ class ShellRfT3 final : public ElementKernel {
         }
       }
       if (bending_) setup_bending();
-      strain_.assign(3 * ne, 0.0);
       // The previous strains are kept only for laws that read them.
       keep_old_ = std::any_of(laws_.begin(), laws_.end(), [](const MaterialLaw* l) { return l->uses_strain_old(); });
       strain_old_.assign(keep_old_ ? 3 * ne : 0, 0.0);
@@ -277,6 +277,7 @@ class ShellRfT3 final : public ElementKernel {
       BlockScratch& sc = block_scratch(n);
       const int ld = padded_ld(n);  // of ff and mf
       double* temp = sc.temp.data();
+      double* C = sc.strain.data();  // C of the block's elements (the fields compute it again from x)
       double* ff = sc.ff.data();
       // 1. Strains and temperatures of the block.
       for (int e = b; e < in.range.end; ++e) {
@@ -293,11 +294,12 @@ class ShellRfT3 final : public ElementKernel {
           ff[d * ld + (e - b)] = f1[d];
           ff[(3 + d) * ld + (e - b)] = f2[d];
         }
-        strain_[3 * e] = dot(f1, f1);
-        strain_[3 * e + 1] = dot(f2, f2);
-        strain_[3 * e + 2] = dot(f1, f2);
+        double* c = C + 3 * (e - b);
+        c[0] = dot(f1, f1);
+        c[1] = dot(f2, f2);
+        c[2] = dot(f1, f2);
         temp[e - b] = T;
-        const double det = strain_[3 * e] * strain_[3 * e + 1] - strain_[3 * e + 2] * strain_[3 * e + 2];
+        const double det = c[0] * c[1] - c[2] * c[2];
         if (!(det > 1e-12) && out.failed_element < 0) out.failed_element = e;
       }
       if (out.failed_element >= 0) return Status::success();
@@ -308,7 +310,7 @@ class ShellRfT3 final : public ElementKernel {
         const int ns = laws_[k]->state_size();
         MaterialBlock blk;
         blk.n = n;
-        blk.strain = std::span<const double>(strain_.data() + 3 * b, 3 * n);
+        blk.strain = std::span<const double>(C, 3 * n);
         if (keep_old_) blk.strain_old = std::span<const double>(strain_old_.data() + 3 * b, 3 * n);
         blk.temperature = std::span<const double>(temp, n);
         blk.dt = in.dt;
@@ -353,7 +355,7 @@ class ShellRfT3 final : public ElementKernel {
       }
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
       if (in.commit && keep_old_)
-        std::copy(strain_.begin() + 3 * b, strain_.begin() + 3 * (b + n), strain_old_.begin() + 3 * b);
+        std::copy(C, C + 3 * n, strain_old_.begin() + 3 * b);
       out.energy += energy;
       out.stable_dt = dt_min;
       return Status::success();
@@ -363,8 +365,15 @@ class ShellRfT3 final : public ElementKernel {
   Status fields(ElementFields& out) const override {
     const int ne = part_->num_elements;
     for (int e = 0; e < ne; ++e) {
-      if (!out.shear_angle.empty()) {  // gamma = asin(I_sh), I_sh = C12 / sqrt(C11 C22)
-        const double ish = strain_[3 * e + 2] / std::sqrt(strain_[3 * e] * strain_[3 * e + 1]);
+      if (!out.shear_angle.empty()) {  // gamma = asin(I_sh), I_sh = C12 / sqrt(C11 C22), C as internal_forces forms it
+        const int* t = &part_->triangles[3 * e];
+        Vec3 f1{0, 0, 0}, f2{0, 0, 0};
+        for (int a = 0; a < 3; ++a) {
+          const Vec3 xa = load3(part_->x.data(), t[a]);
+          f1 = add(f1, scale(xa, g1_[3 * e + a]));
+          f2 = add(f2, scale(xa, g2_[3 * e + a]));
+        }
+        const double ish = dot(f1, f2) / std::sqrt(dot(f1, f1) * dot(f2, f2));
         out.shear_angle[e] = std::asin(std::clamp(ish, -1.0, 1.0)) * 180.0 / M_PI;
       }
       if (!out.stress.empty())
@@ -777,7 +786,7 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<const MaterialLaw*> laws_;
   double areal_mass_ = 0;
   bool keep_old_ = true;
-  std::vector<double> g1_, g2_, area0_, e1_, e2_, strain_, strain_old_, stress_;
+  std::vector<double> g1_, g2_, area0_, e1_, e2_, strain_old_, stress_;
   std::vector<std::vector<double>> states_;
 };
 
@@ -787,7 +796,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.3.2";
+  d.version = "0.3.3";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -795,4 +804,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.3.2", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.3.3", register_all)
