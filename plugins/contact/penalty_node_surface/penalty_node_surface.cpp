@@ -521,11 +521,6 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     double energy = 0.5 * k * pen * pen;
     Vec3 ft = {0, 0, 0};
     if (friction_ > 0) {
-      Vec3 old = sdk::load3(ftv.data(), i);
-      const double mag = sdk::norm(old);
-      old = sdk::sub(old, sdk::scale(n, sdk::dot(old, n)));  // rotate into the current tangent plane
-      const double m2 = sdk::norm(old);
-      if (m2 > 0) old = sdk::scale(old, mag / m2);
       const Vec3 vt = sdk::sub(vrel, sdk::scale(n, vn));
       // The limit follows the penalty (elastic) pressure only: a limit that
       // followed the damper would tie the tangential force to the normal
@@ -547,13 +542,18 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         }
       } else {
         // Elastic slip: a tangential spring, held at the Coulomb limit while
-        // sliding.
+        // sliding; last step's spring rotated into the current tangent plane.
+        Vec3 old = sdk::load3(ftv.data(), i);
+        const double mag = sdk::norm(old);
+        old = sdk::sub(old, sdk::scale(n, sdk::dot(old, n)));
+        const double m2 = sdk::norm(old);
+        if (m2 > 0) old = sdk::scale(old, mag / m2);
         spring = sdk::sub(old, sdk::scale(vt, k * dt));
         const double len = sdk::norm(spring);
         if (len > lim) spring = sdk::scale(spring, lim / len);
         ft = spring;
+        energy += 0.5 * sdk::dot(spring, spring) / k;
       }
-      energy += 0.5 * sdk::dot(spring, spring) / k;
       for (int d = 0; d < 3; ++d) ftv[3 * static_cast<std::size_t>(i) + d] = spring[d];
     }
     for (int d = 0; d < 3; ++d) f[d] = fn * n[d] + ft[d];
@@ -705,7 +705,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.4.0";
+  d.version = "0.4.1";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces";
   d.params = {
@@ -741,4 +741,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.4.0", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.4.1", ts::contact::register_all)
