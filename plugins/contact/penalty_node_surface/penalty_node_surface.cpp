@@ -568,13 +568,15 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const auto area = in.node_area[a.index];
     const Vec3 vtool = tool.velocity ? Vec3{tool.velocity[0], tool.velocity[1], tool.velocity[2]} : Vec3{0, 0, 0};
     const double h2 = 0.5 * a.thickness;
-    scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
-    energy_.assign(a.num_nodes, 0.0);
+    // Written below for every node (energy) or every node in contact (forces).
+    scratch_.resize(3 * static_cast<std::size_t>(a.num_nodes));
+    energy_.resize(a.num_nodes);
 #pragma omp parallel for schedule(static, 128) if (a.num_nodes > 256)
     for (int i = 0; i < a.num_nodes; ++i) {
       const double pen = h2 - dist_[i];
       if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
         for (int d = 0; d < 3; ++d) pass_[0].ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
+        energy_[i] = 0.0;
         continue;
       }
       const Vec3 n = sdk::load3(tn_.data(), i);
@@ -614,9 +616,10 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const auto va = in.velocity[a.index];
     const auto vb = in.velocity[b.index];
     const auto area = in.node_area[a.index];
-    scratch_.assign(3 * static_cast<std::size_t>(a.num_nodes), 0.0);
-    energy_.assign(a.num_nodes, 0.0);
-    target_.assign(4 * static_cast<std::size_t>(a.num_nodes), 0.0);
+    // Read below only for the nodes whose target is set (tg[0] >= 0).
+    scratch_.resize(3 * static_cast<std::size_t>(a.num_nodes));
+    energy_.resize(a.num_nodes);
+    target_.resize(4 * static_cast<std::size_t>(a.num_nodes));
     surface_geometry(b, ps.geo_b);
     // The nodes of a, dealt to the threads in interleaved chunks: the cost
     // of a node differs with where it lies (corner or centre of a cell, in
