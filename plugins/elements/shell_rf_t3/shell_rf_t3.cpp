@@ -576,6 +576,8 @@ class ShellRfT3 final : public ElementKernel {
   // What bending_forces needs of the hinges of a block [b, end) that depends
   // only on the mesh and the block's bounds; built at the block's first
   // evaluation and kept (the kernel's blocks do not change during a run).
+  // Slot b belongs to the block starting at element b: blocks evaluated at
+  // the same time never share it, and a range with other bounds rebuilds it.
   struct BlockHinges {
     int end = -1, nforeign = 0;
     // Per element and edge of the block: the edge's entry in the angle
