@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include <thermostamp/sdk/math.hpp>
+#include <thermostamp/sdk/simd.hpp>
 
 #include "job/errors.hpp"
 #include "mesh/shell_mesh.hpp"
@@ -48,6 +49,121 @@ std::array<double, 2> piece_normal(const ProfileSegment& s, const std::array<dou
   const double rx = c[0] - s.centre[0], rz = c[1] - s.centre[1];
   return arc_normal(s, c, arc_orient(s), std::sqrt(rx * rx + rz * rz));
 }
+
+// Revolved-tool queries as vector passes over a run of points, in
+// structure-of-arrays buffers; the same operations in the same order as
+// RigidTool::query_revolved (branches as selects), so the same bits.
+// 1. The point in the axis frame: z along the axis, r from it, er the unit
+//    radial direction (perp where r is zero). best = +inf, no piece yet.
+TS_VECTOR_CLONES
+void revolved_frame(std::size_t n, const double* __restrict x, const double* u, const double* o, const double* ax,
+                    const double* perp, double* __restrict r, double* __restrict z, double* __restrict er,
+                    double* __restrict best, double* __restrict c0, double* __restrict c1, double* __restrict piece,
+                    double* __restrict end, std::size_t ld) {
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i) {
+    const double w0 = (x[3 * i] - u[0]) - o[0], w1 = (x[3 * i + 1] - u[1]) - o[1], w2 = (x[3 * i + 2] - u[2]) - o[2];
+    const double zz = w0 * ax[0] + w1 * ax[1] + w2 * ax[2];
+    const double h0 = w0 - ax[0] * zz, h1 = w1 - ax[1] * zz, h2 = w2 - ax[2] * zz;
+    const double rr = std::sqrt(h0 * h0 + h1 * h1 + h2 * h2), inv = 1.0 / rr;
+    const bool off = rr > 1e-300;
+    r[i] = rr;
+    z[i] = zz;
+    er[i] = off ? h0 * inv : perp[0];
+    er[ld + i] = off ? h1 * inv : perp[1];
+    er[2 * ld + i] = off ? h2 * inv : perp[2];
+    best[i] = kInf;
+    c0[i] = 0;
+    c1[i] = 0;
+    piece[i] = -1;
+    end[i] = -1;
+  }
+}
+
+// 2. One line piece (a, b) for every point: the closest point c on it,
+//    taken where it is closer than the best so far.
+TS_VECTOR_CLONES
+void revolved_line(std::size_t n, const double* __restrict r, const double* __restrict z, double a0, double a1,
+                   double b0, double b1, double inv_len2, double k, double* __restrict best, double* __restrict c0,
+                   double* __restrict c1, double* __restrict piece, double* __restrict end) {
+  const double dr = b0 - a0, dz = b1 - a1;
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = ((r[i] - a0) * dr + (z[i] - a1) * dz) * inv_len2;
+    const bool lo = t <= 0, hi = !lo && t >= 1;
+    const double tt = lo ? 0.0 : hi ? 1.0 : t;
+    const double cx = a0 + tt * dr, cz = a1 + tt * dz;
+    const double d2 = (r[i] - cx) * (r[i] - cx) + (z[i] - cz) * (z[i] - cz);
+    const bool take = d2 < best[i];
+    best[i] = take ? d2 : best[i];
+    c0[i] = take ? cx : c0[i];
+    c1[i] = take ? cz : c1[i];
+    piece[i] = take ? k : piece[i];
+    end[i] = take ? (lo ? 0.0 : hi ? 1.0 : -1.0) : end[i];
+  }
+}
+
+// 2'. One arc piece (a to b about centre m, radius and turning sense).
+TS_VECTOR_CLONES
+void revolved_arc(std::size_t n, const double* __restrict r, const double* __restrict z, double a0, double a1,
+                  double b0, double b1, double m0, double m1, double radius, double orient, double k,
+                  double* __restrict best, double* __restrict c0, double* __restrict c1, double* __restrict piece,
+                  double* __restrict end) {
+  const double ax = a0 - m0, az = a1 - m1, bx = b0 - m0, bz = b1 - m1;
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i) {
+    const double qx = r[i] - m0, qz = z[i] - m1;
+    const double ql2 = qx * qx + qz * qz;
+    const bool inside = (ql2 > 0) & (orient * (ax * qz - az * qx) >= 0) & (orient * (qx * bz - qz * bx) >= 0);
+    const double f = radius / std::sqrt(ql2);
+    const double da2 = (r[i] - a0) * (r[i] - a0) + (z[i] - a1) * (z[i] - a1);
+    const double db2 = (r[i] - b0) * (r[i] - b0) + (z[i] - b1) * (z[i] - b1);
+    const bool at_a = da2 <= db2;
+    const double cx = inside ? m0 + f * qx : at_a ? a0 : b0;
+    const double cz = inside ? m1 + f * qz : at_a ? a1 : b1;
+    const double d2 = (r[i] - cx) * (r[i] - cx) + (z[i] - cz) * (z[i] - cz);
+    const bool take = d2 < best[i];
+    best[i] = take ? d2 : best[i];
+    c0[i] = take ? cx : c0[i];
+    c1[i] = take ? cz : c1[i];
+    piece[i] = take ? k : piece[i];
+    end[i] = take ? (inside ? -1.0 : at_a ? 0.0 : 1.0) : end[i];
+  }
+}
+
+// 3. Signed distance and outward normal from the closest point: the normal
+//    of the profile there (the averaged one at a piece's end, the radial
+//    one on an arc, the line's own), or the direction from the closest
+//    point when the point is off the surface. Per piece k, tab holds
+//    [is_arc, m0, m1, -orient / radius, n0, n1, end normals (4)].
+TS_VECTOR_CLONES
+void revolved_result(std::size_t n, const double* __restrict r, const double* __restrict z,
+                     const double* __restrict er, std::size_t ld, const double* __restrict best,
+                     const double* __restrict c0, const double* __restrict c1, const double* __restrict piece,
+                     const double* __restrict end, const double* __restrict tab, const double* ax,
+                     double* __restrict dist, double* __restrict nout) {
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i) {
+    const int k = piece[i] >= 0 ? static_cast<int>(piece[i]) : 0;
+    const int e = end[i] >= 0 ? static_cast<int>(end[i]) : 0;
+    const double* t = tab + 10 * k;
+    const double arc0 = t[3] * (c0[i] - t[1]), arc1 = t[3] * (c1[i] - t[2]);
+    const bool at_end = end[i] >= 0, arc = t[0] != 0;
+    const double bn0 = at_end ? t[6 + 2 * e] : arc ? arc0 : t[4];
+    const double bn1 = at_end ? t[7 + 2 * e] : arc ? arc1 : t[5];
+    const double dr = r[i] - c0[i], dz = z[i] - c1[i];
+    const double len = std::sqrt(best[i]);
+    const double side = dr * bn0 + dz * bn1 >= 0 ? 1.0 : -1.0;
+    dist[i] = side * len;
+    const bool off = len > 1e-12;
+    const double n0 = off ? side * dr / len : bn0, n1 = off ? side * dz / len : bn1;
+    for (int d = 0; d < 3; ++d) nout[3 * i + d] = n0 * er[d * ld + i] + n1 * ax[d];
+  }
+}
+
+struct RevolvedScratch {
+  std::vector<double> r, z, er, best, c0, c1, piece, end;
+};
 
 // Triangle soup from an STL file (ASCII or binary).
 void read_stl(const std::filesystem::path& file, const std::string& ptr, std::vector<double>& xyz, std::vector<int>& tri) {
@@ -133,6 +249,17 @@ RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
         end_normals_[i][2 * end + 1] = n[1];
       }
     }
+    piece_table_.assign(10 * s.profile.size(), 0.0);
+    for (std::size_t i = 0; i < s.profile.size(); ++i) {
+      double* t = &piece_table_[10 * i];
+      t[0] = s.profile[i].arc ? 1.0 : 0.0;
+      t[1] = s.profile[i].centre[0];
+      t[2] = s.profile[i].centre[1];
+      t[3] = s.profile[i].arc ? -pieces_[i].orient / pieces_[i].radius : 0.0;
+      t[4] = pieces_[i].normal[0];
+      t[5] = pieces_[i].normal[1];
+      for (int k = 0; k < 4; ++k) t[6 + k] = end_normals_[i][k];
+    }
   } else if (kind_ == Kind::Mesh) {
     std::vector<double> xyz;
     std::vector<int> tri;
@@ -211,6 +338,10 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
 }
 
 void RigidTool::query(std::size_t n, const double* points, double cutoff, double* distance, double* normal) const {
+  if (kind_ == Kind::Revolved) {
+    query_revolved_run(n, points, distance, normal);
+    return;
+  }
   const SurfaceDef& s = def_->surface;
   for (std::size_t i = 0; i < n; ++i) {
     const double p[3] = {points[3 * i] - u_[0], points[3 * i + 1] - u_[1], points[3 * i + 2] - u_[2]};
@@ -225,11 +356,38 @@ void RigidTool::query(std::size_t n, const double* points, double cutoff, double
       const Vec3 u = len > 0 ? sdk::scale(r, 1.0 / len) : Vec3{0, 0, 1};
       distance[i] = len - s.radius;
       for (int d = 0; d < 3; ++d) nn[d] = u[d];
-    } else if (kind_ == Kind::Revolved) {
-      query_revolved(p, distance[i], nn);
     } else {
       query_mesh(p, cutoff, distance[i], nn);
     }
+  }
+}
+
+void RigidTool::query_revolved_run(std::size_t n, const double* points, double* distance, double* normal) const {
+  const SurfaceDef& s = def_->surface;
+  constexpr std::size_t kChunk = 256;
+  thread_local RevolvedScratch sc;
+  if (sc.r.size() < kChunk) {
+    for (auto* v : {&sc.r, &sc.z, &sc.best, &sc.c0, &sc.c1, &sc.piece, &sc.end}) v->resize(kChunk);
+    sc.er.resize(3 * kChunk);
+  }
+  const double o[3] = {s.axis_origin[0], s.axis_origin[1], s.axis_origin[2]};
+  for (std::size_t b = 0; b < n; b += kChunk) {
+    const std::size_t m = std::min(kChunk, n - b);
+    revolved_frame(m, points + 3 * b, u_.data(), o, axis_.data(), perp_.data(), sc.r.data(), sc.z.data(), sc.er.data(),
+                   sc.best.data(), sc.c0.data(), sc.c1.data(), sc.piece.data(), sc.end.data(), kChunk);
+    for (std::size_t k = 0; k < s.profile.size(); ++k) {
+      const ProfileSegment& g = s.profile[k];
+      if (!g.arc)
+        revolved_line(m, sc.r.data(), sc.z.data(), g.a[0], g.a[1], g.b[0], g.b[1], pieces_[k].inv_len2,
+                      static_cast<double>(k), sc.best.data(), sc.c0.data(), sc.c1.data(), sc.piece.data(),
+                      sc.end.data());
+      else
+        revolved_arc(m, sc.r.data(), sc.z.data(), g.a[0], g.a[1], g.b[0], g.b[1], g.centre[0], g.centre[1],
+                     pieces_[k].radius, pieces_[k].orient, static_cast<double>(k), sc.best.data(), sc.c0.data(),
+                     sc.c1.data(), sc.piece.data(), sc.end.data());
+    }
+    revolved_result(m, sc.r.data(), sc.z.data(), sc.er.data(), kChunk, sc.best.data(), sc.c0.data(), sc.c1.data(),
+                    sc.piece.data(), sc.end.data(), piece_table_.data(), axis_.data(), distance + b, normal + 3 * b);
   }
 }
 

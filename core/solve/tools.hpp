@@ -26,6 +26,11 @@ class RigidTool {
     static_cast<const RigidTool*>(self)->query(n, points, cutoff, distance, normal);
   }
 
+  // A revolved tool's query of one point p (already moved back by the
+  // tool's displacement), point by point; query() gives the same bits with
+  // vector passes over the points.
+  void query_revolved(const double* p, double& d, double* n) const;
+
   // Rigid translation from the initial position (m) and velocity (m/s).
   const std::array<double, 3>& displacement() const { return u_; }
   const std::array<double, 3>& velocity() const { return v_; }
@@ -38,7 +43,7 @@ class RigidTool {
   std::array<double, 3> prescribed(double t) const;
 
  private:
-  void query_revolved(const double* p, double& d, double* n) const;
+  void query_revolved_run(std::size_t n, const double* points, double* distance, double* normal) const;
   void query_mesh(const double* p, double cutoff, double& d, double* n) const;
   void build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri);
 
@@ -56,6 +61,9 @@ class RigidTool {
   };
   std::vector<PieceConstants> pieces_;
   std::vector<std::array<double, 4>> end_normals_;  // (nr, nz) at a, (nr, nz) at b: averaged at shared ends
+  // Per piece, for the vector passes: is_arc, centre (2), -orient / radius,
+  // line normal (2), end normals (4).
+  std::vector<double> piece_table_;
   // mesh: triangles in the initial position and a uniform bucket grid
   std::vector<double> mx_;  // 9 per triangle
   std::vector<double> mn_;  // 3 per triangle (unit normal)

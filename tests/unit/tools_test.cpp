@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <random>
 
@@ -103,6 +104,74 @@ TEST(Tools, RevolvedDieWithFillet) {
 
 // A tool mesh (ASCII and binary STL of a square, Gmsh of the same) answers
 // like the plane it is, and +infinity beyond the cutoff.
+// query() answers a revolved tool in vector passes over the points; they
+// must give the bits of the point-by-point query_revolved: profiles with
+// lines and arcs turning both ways (the hemisphere scene's punch, die with
+// its fillet, and holder ring with its edge radii), a moved tool, points on
+// the axis, on piece ends and corners, inside and outside the arcs, and
+// runs of every length from 1 to 300 (over the 256-point chunks).
+TEST(Tools, RevolvedVectorPassesMatchPointByPoint) {
+  auto seg = [](bool arc, std::array<double, 2> a, std::array<double, 2> b, std::array<double, 2> c = {0, 0}) {
+    ProfileSegment g;
+    g.arc = arc;
+    g.a = a;
+    g.b = b;
+    g.centre = c;
+    return g;
+  };
+  std::vector<ToolDef> defs(3);
+  for (auto& d : defs) {
+    d.name = "tool";
+    d.pointer = "/tools/0";
+    d.surface.type = "revolved";
+  }
+  defs[0].surface.profile = {seg(false, {0.075, 0.1}, {0.075, 0}), seg(true, {0.075, 0}, {0, -0.075}, {0, 0})};
+  defs[0].surface.axis_origin = {0, 0, 0.076};
+  defs[1].surface.profile = {seg(false, {0.08, -0.1}, {0.08, -0.0075}),
+                             seg(true, {0.08, -0.0075}, {0.0875, 0}, {0.0875, -0.0075}),
+                             seg(false, {0.0875, 0}, {0.3, 0})};
+  defs[2].surface.profile = {seg(true, {0.155, 0.005}, {0.15, 0}, {0.15, 0.005}), seg(false, {0.15, 0}, {0.09, 0}),
+                             seg(true, {0.09, 0}, {0.085, 0.005}, {0.09, 0.005})};
+  defs[2].surface.axis_origin = {0, 0, 0.001};
+  defs[2].surface.axis_direction = {0.1, -0.2, 1.0};  // a tilted axis
+  defs[1].motion.kind = MotionDef::Kind::Velocity;
+  defs[1].motion.velocity = {0.0, 0.0, 0.05};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.2, 0.2);
+  int compared = 0;
+  for (const ToolDef& def : defs) {
+    RigidTool t(def);
+    t.advance(0.0, 0.1, 0.1, {0, 0, 0});  // moved: the queries subtract the displacement
+    std::vector<double> pts;
+    for (int k = 0; k < 2000; ++k) pts.insert(pts.end(), {u(rng), u(rng), 0.5 * u(rng)});
+    for (const auto& g : def.surface.profile)  // piece ends and arc centres, on the axis plane y = 0
+      for (const auto& q : {g.a, g.b, g.centre}) {
+        const auto& o = def.surface.axis_origin;
+        pts.insert(pts.end(), {o[0] + q[0] + t.displacement()[0], o[1] + t.displacement()[1],
+                               o[2] + q[1] + t.displacement()[2]});
+      }
+    const auto& o = def.surface.axis_origin;  // a point on the axis (if it is z)
+    pts.insert(pts.end(), {o[0] + t.displacement()[0], o[1] + t.displacement()[1], 0.03 + t.displacement()[2]});
+    const std::size_t n = pts.size() / 3;
+    for (const std::size_t len : {std::size_t{1}, std::size_t{3}, std::size_t{7}, std::size_t{300}, n}) {
+      for (std::size_t b = 0; b + len <= n; b += len) {
+        std::vector<double> d(len), nn(3 * len);
+        t.query(len, &pts[3 * b], 1.0, d.data(), nn.data());
+        for (std::size_t i = 0; i < len; ++i) {
+          const double* x = &pts[3 * (b + i)];
+          const double p[3] = {x[0] - t.displacement()[0], x[1] - t.displacement()[1], x[2] - t.displacement()[2]};
+          double d1, n1[3];
+          t.query_revolved(p, d1, n1);
+          ASSERT_EQ(std::memcmp(&d1, &d[i], sizeof d1), 0) << "point " << b + i << ": " << d1 << " vs " << d[i];
+          ASSERT_EQ(std::memcmp(n1, &nn[3 * i], sizeof n1), 0) << "point " << b + i;
+          ++compared;
+        }
+      }
+    }
+  }
+  EXPECT_GT(compared, 29000);
+}
+
 TEST(Tools, MeshToolsAnswerLikeTheirPlane) {
   const auto dir = temp_dir("tool_mesh");
   {
