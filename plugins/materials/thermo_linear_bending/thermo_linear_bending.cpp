@@ -84,13 +84,17 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "thermo_linear_bending";
-  d.version = "1.0.1";
+  d.version = "1.0.2";
   d.summary = "Bending: moments linear in curvature, rigidities linear in temperature, fibre frame";
   d.params = {real_param("beta1_T", "0.0", "N m/degC", "slope of the rigidity along the fibres R_1(T)"),
               real_param("beta1_B", "", "N m", "R_1 at 0 degC"),
               real_param("beta2_T", "0.0", "N m/degC", "slope of the rigidity across the fibres R_2(T)"),
               real_param("beta2_B", "", "N m", "R_2 at 0 degC"),
-              real_param("twist_ratio", "0.0", "-", "twist rigidity R_12 as a fraction of (R_1 + R_2)/2", 0.0, 1.0),
+              real_param("twist_ratio", "0.0", "-",
+                         "twist rigidity R_12 as a fraction of (R_1 + R_2)/2; 0 gives the ply no twist rigidity (what "
+                         "resists twist is then the element's discretisation: see docs/verification.md, bending in two "
+                         "dimensions)",
+                         0.0, 1.0),
               real_param("t_min", "200.0", "degC", "lowest temperature the rigidities hold for; below it they are held at t_min (with a warning)"),
               real_param("t_max", "350.0", "degC", "highest temperature the rigidities hold for; above it they are held at t_max (with a warning)")};
   d.example = R"({ "law": "thermo_linear_bending", "beta1_T": -2.0e-5, "beta1_B": 6.4e-3, "beta2_T": -2.0e-6, "beta2_B": 6.4e-4 })";
@@ -99,4 +103,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_thermo_linear_bending", "1.0.1", register_all)
+THERMOSTAMP_PLUGIN("material_thermo_linear_bending", "1.0.2", register_all)
