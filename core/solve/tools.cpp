@@ -80,6 +80,20 @@ void revolved_frame(std::size_t n, const double* __restrict x, const double* u, 
   }
 }
 
+// Point i's closest point so far becomes (cx, cz) on piece k (at its end
+// `at`: 0, 1, or -1 inside) where d2 is below the best squared distance.
+[[gnu::always_inline]] inline void keep_closer(std::size_t i, double d2, double cx, double cz, double k, double at,
+                                               double* __restrict best, double* __restrict c0,
+                                               double* __restrict c1, double* __restrict piece,
+                                               double* __restrict end) {
+  const bool take = d2 < best[i];
+  best[i] = take ? d2 : best[i];
+  c0[i] = take ? cx : c0[i];
+  c1[i] = take ? cz : c1[i];
+  piece[i] = take ? k : piece[i];
+  end[i] = take ? at : end[i];
+}
+
 // 2. One line piece (a, b) for every point: the closest point c on it,
 //    taken where it is closer than the best so far.
 TS_VECTOR_CLONES
@@ -94,12 +108,7 @@ void revolved_line(std::size_t n, const double* __restrict r, const double* __re
     const double tt = lo ? 0.0 : hi ? 1.0 : t;
     const double cx = a0 + tt * dr, cz = a1 + tt * dz;
     const double d2 = (r[i] - cx) * (r[i] - cx) + (z[i] - cz) * (z[i] - cz);
-    const bool take = d2 < best[i];
-    best[i] = take ? d2 : best[i];
-    c0[i] = take ? cx : c0[i];
-    c1[i] = take ? cz : c1[i];
-    piece[i] = take ? k : piece[i];
-    end[i] = take ? (lo ? 0.0 : hi ? 1.0 : -1.0) : end[i];
+    keep_closer(i, d2, cx, cz, k, lo ? 0.0 : hi ? 1.0 : -1.0, best, c0, c1, piece, end);
   }
 }
 
@@ -122,12 +131,7 @@ void revolved_arc(std::size_t n, const double* __restrict r, const double* __res
     const double cx = inside ? m0 + f * qx : at_a ? a0 : b0;
     const double cz = inside ? m1 + f * qz : at_a ? a1 : b1;
     const double d2 = (r[i] - cx) * (r[i] - cx) + (z[i] - cz) * (z[i] - cz);
-    const bool take = d2 < best[i];
-    best[i] = take ? d2 : best[i];
-    c0[i] = take ? cx : c0[i];
-    c1[i] = take ? cz : c1[i];
-    piece[i] = take ? k : piece[i];
-    end[i] = take ? (inside ? -1.0 : at_a ? 0.0 : 1.0) : end[i];
+    keep_closer(i, d2, cx, cz, k, inside ? -1.0 : at_a ? 0.0 : 1.0, best, c0, c1, piece, end);
   }
 }
 
