@@ -380,6 +380,40 @@ TEST(Strip, OffAxisHomogeneousUniaxialStress) {
 }  // namespace ts::test
 
 namespace ts::test {
+namespace {
+
+// The bias-extension specimen (230 x 115 mm, yarns at +-45 degrees, woven
+// law), its left end held, its right end pulled along x at `speed` (y
+// held), z held everywhere; `mesh` is the part's mesh entry. Callers add
+// the output.
+constexpr double kBiasKsh[3] = {18.5, 46.4, -21.3};  // the woven law's shear coefficients (N/m)
+json bias_job(const json& mesh, double speed, double t_end) {
+  const double H = 0.230;
+  return {{"format", "thermostamp-job/1"},
+          {"name", "bias"},
+          {"time", {{"end", t_end}}},
+          {"materials",
+           {{"woven",
+             {{"density", 1500.0},
+              {"membrane",
+               {{"law", "woven_hyperelastic"}, {"k_warp", 1.0e5}, {"k_weft", 1.0e5}, {"k_sh", {kBiasKsh[0], kBiasKsh[1], kBiasKsh[2]}}}}}}}},
+          {"parts",
+           {{{"name", "specimen"},
+             {"mesh", mesh},
+             {"thickness", 0.0005},
+             {"material", "woven"},
+             {"fibre_direction", {1.0, 1.0, 0.0}},
+             {"initial_temperature", 20.0}}}},
+          {"constraints",
+           {{{"type", "fix"}, {"part", "specimen"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "y", "z"}}},
+            {{"type", "velocity"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}},
+             {"dofs", {"x"}}, {"velocity", {speed, 0.0, 0.0}}},
+            {{"type", "fix"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}}, {"dofs", {"y"}}},
+            {{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}}}},
+          {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 10.0}}}, {"thermal", nullptr}}}};
+}
+
+}  // namespace
 
 // Bias-extension test of a woven specimen, 230 x 115 mm, warp and weft at
 // +-45 degrees to the pull, ends clamped. The mesh follows the yarns (a
@@ -435,33 +469,13 @@ TEST(Woven, BiasExtensionFollowsThePinJointedNet) {
       m << k + 1 << " 2 0 " << tris[k][0] << ' ' << tris[k][1] << ' ' << tris[k][2] << "\n";
     m << "$EndElements\n";
   }
-  const double k_sh[3] = {18.5, 46.4, -21.3}, d_end = 0.026, speed = 0.1, t_end = d_end / speed;
-  json j = {{"format", "thermostamp-job/1"},
-            {"name", "bias"},
-            {"time", {{"end", t_end}}},
-            {"materials",
-             {{"woven",
-               {{"density", 1500.0},
-                {"membrane", {{"law", "woven_hyperelastic"}, {"k_warp", 1.0e5}, {"k_weft", 1.0e5}, {"k_sh", {k_sh[0], k_sh[1], k_sh[2]}}}}}}}},
-            {"parts",
-             {{{"name", "specimen"},
-               {"mesh", {{"file", (dir / "bias.msh").string()}}},
-               {"thickness", 0.0005},
-               {"material", "woven"},
-               {"fibre_direction", {1.0, 1.0, 0.0}},
-               {"initial_temperature", 20.0}}}},
-            {"constraints",
-             {{{"type", "fix"}, {"part", "specimen"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "y", "z"}}},
-              {{"type", "velocity"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}},
-               {"dofs", {"x"}}, {"velocity", {speed, 0.0, 0.0}}},
-              {{"type", "fix"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}}, {"dofs", {"y"}}},
-              {{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}}}},
-            {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 10.0}}}, {"thermal", nullptr}}},
-            {"output",
-             {{"interval", t_end / 4},
-              {"fields", {"displacement", "shear_angle"}},
-              {"probes", {{{"name", "centre"}, {"part", "specimen"}, {"at", {H / 2, W / 2 - a, 0}},
-                           {"quantities", {"shear_angle", "displacement_x"}}, {"interval", t_end / 10}}}}}}};
+  const double* k_sh = kBiasKsh;
+  const double d_end = 0.026, speed = 0.1, t_end = d_end / speed;
+  json j = bias_job({{"file", (dir / "bias.msh").string()}}, speed, t_end);
+  j["output"] = {{"interval", t_end / 4},
+                 {"fields", {"displacement", "shear_angle"}},
+                 {"probes", {{{"name", "centre"}, {"part", "specimen"}, {"at", {H / 2, W / 2 - a, 0}},
+                              {"quantities", {"shear_angle", "displacement_x"}}, {"interval", t_end / 10}}}}};
   const auto out = dir / "out";
   const JobRun r = run_json(j, 0, out);
   ASSERT_TRUE(r.result.ok) << r.result.error;
@@ -512,36 +526,13 @@ TEST(Woven, BiasExtensionAcrossTheYarnsConverges) {
   double err[2] = {0, 0};
   for (int m = 0; m < 2; ++m) {
     const int nx = 20 << m, ny = 12 << m;
-    const json j = {
-        {"format", "thermostamp-job/1"},
-        {"name", "bias_crossed"},
-        {"time", {{"end", t_end}}},
-        {"materials",
-         {{"woven",
-           {{"density", 1500.0},
-            {"membrane",
-             {{"law", "woven_hyperelastic"}, {"k_warp", 1.0e5}, {"k_weft", 1.0e5}, {"k_sh", {18.5, 46.4, -21.3}}}}}}}},
-        {"parts",
-         {{{"name", "specimen"},
-           {"mesh",
-            {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {H, W}}, {"divisions", {nx, ny}},
-             {"pattern", "crossed"}}},
-           {"thickness", 0.0005},
-           {"material", "woven"},
-           {"fibre_direction", {1.0, 1.0, 0.0}},
-           {"initial_temperature", 20.0}}}},
-        {"constraints",
-         {{{"type", "fix"}, {"part", "specimen"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "y", "z"}}},
-          {{"type", "velocity"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}},
-           {"dofs", {"x"}}, {"velocity", {speed, 0.0, 0.0}}},
-          {{"type", "fix"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}}, {"dofs", {"y"}}},
-          {{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}}}},
-        {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 10.0}}}, {"thermal", nullptr}}},
-        {"output",
-         {{"interval", t_end},
-          {"fields", {"displacement"}},
-          {"probes", {{{"name", "centre"}, {"part", "specimen"}, {"at", {H / 2, W / 2, 0}},
-                       {"quantities", {"shear_angle"}}, {"interval", t_end / 10}}}}}}};
+    json j = bias_job({{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {H, W}}, {"divisions", {nx, ny}},
+                       {"pattern", "crossed"}},
+                      speed, t_end);
+    j["output"] = {{"interval", t_end},
+                   {"fields", {"displacement"}},
+                   {"probes", {{{"name", "centre"}, {"part", "specimen"}, {"at", {H / 2, W / 2, 0}},
+                                {"quantities", {"shear_angle"}}, {"interval", t_end / 10}}}}};
     const JobRun r = run_json(j);
     ASSERT_TRUE(r.result.ok) << r.result.error;
     for (int k = 1; k <= 10; ++k) {
