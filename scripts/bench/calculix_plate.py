@@ -15,10 +15,11 @@ after a Release build; needs ccx, Debian package calculix-ccx).
 import csv
 import json
 import os
-import re
 import subprocess
 import sys
 import tempfile
+
+from calculix_grid import node_values, quad8_grid
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 EXE = os.environ.get("THERMOSTAMP_EXE", os.path.join(ROOT, "build", "bin", "thermostamp"))
@@ -31,22 +32,7 @@ POINTS = {"loaded corner": (1.0, 1.0), "free corner": (1.0, 0.0), "tip middle": 
 
 
 def calculix(n, work):
-    gx = 2 * n + 1
-    nid = lambda i, j: j * gx + i + 1
-    out = ["*NODE"]
-    for j in range(2 * n + 1):
-        for i in range(2 * n + 1):
-            if i % 2 == 0 or j % 2 == 0:
-                out.append("%d, %.15g, %.15g, 0" % (nid(i, j), L * i / (2 * n), W * j / (2 * n)))
-    out.append("*ELEMENT, TYPE=S8R, ELSET=EALL")
-    e = 1
-    for j in range(n):
-        for i in range(n):
-            I, J = 2 * i, 2 * j
-            c = [nid(I, J), nid(I + 2, J), nid(I + 2, J + 2), nid(I, J + 2),
-                 nid(I + 1, J), nid(I + 2, J + 1), nid(I + 1, J + 2), nid(I, J + 1)]
-            out.append("%d, %s" % (e, ", ".join(map(str, c))))
-            e += 1
+    out, nid = quad8_grid(n, n, L, W, "S8R")
     ids = {k: nid(round(fx * 2 * n), round(fy * 2 * n)) for k, (fx, fy) in POINTS.items()}
     out += ["*NSET, NSET=CLAMP"] + [str(nid(0, j)) for j in range(2 * n + 1)]
     out += ["*NSET, NSET=PROBES"] + [str(v) for v in ids.values()]
@@ -57,13 +43,8 @@ def calculix(n, work):
     with open(os.path.join(work, "plate.inp"), "w") as f:
         f.write("\n".join(out) + "\n")
     subprocess.run(["ccx", "-i", "plate"], cwd=work, check=True, stdout=subprocess.DEVNULL)
-    w = {}
-    with open(os.path.join(work, "plate.dat")) as f:
-        for line in f:
-            m = re.match(r"^\s+(\d+)\s+(\S+)\s+(\S+)\s+(\S+)\s*$", line)
-            if m:
-                w[int(m.group(1))] = float(m.group(4))
-    return {k: w[v] for k, v in ids.items()}
+    w = node_values(os.path.join(work, "plate.dat"))
+    return {k: w[v][2] for k, v in ids.items()}
 
 
 def thermostamp(n, pattern, work):

@@ -11,10 +11,10 @@ import csv
 import json
 import math
 import os
-import re
 import subprocess
 import tempfile
 
+from calculix_grid import node_values, quad8_grid
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -32,22 +32,7 @@ LINES = (0.0, 0.5, 1.0)               # y / W of the plotted lines
 def calculix(deg, nx, ny, work):
     """CPS8 plane stress, E1 = 2 k_fibre / h, E2 = 2 p_ct / h, G12 = 2 k_sh / h."""
     a = math.radians(deg)
-    gx = 2 * nx + 1
-    nid = lambda i, j: j * gx + i + 1
-    out = ["*NODE"]
-    for j in range(2 * ny + 1):
-        for i in range(2 * nx + 1):
-            if i % 2 == 0 or j % 2 == 0:
-                out.append("%d, %.15g, %.15g, 0" % (nid(i, j), L * i / (2 * nx), W * j / (2 * ny)))
-    out.append("*ELEMENT, TYPE=CPS8, ELSET=EALL")
-    e = 1
-    for j in range(ny):
-        for i in range(nx):
-            I, J = 2 * i, 2 * j
-            c = [nid(I, J), nid(I + 2, J), nid(I + 2, J + 2), nid(I, J + 2),
-                 nid(I + 1, J), nid(I + 2, J + 1), nid(I + 1, J + 2), nid(I, J + 1)]
-            out.append("%d, %s" % (e, ", ".join(map(str, c))))
-            e += 1
+    out, nid = quad8_grid(nx, ny, L, W, "CPS8")
     out += ["*NSET, NSET=LEFT"] + [str(nid(0, j)) for j in range(2 * ny + 1)]
     out += ["*NSET, NSET=RIGHT"] + [str(nid(2 * nx, j)) for j in range(2 * ny + 1)]
     lines = {}
@@ -66,13 +51,8 @@ def calculix(deg, nx, ny, work):
     with open(os.path.join(work, "strip.inp"), "w") as f:
         f.write("\n".join(out) + "\n")
     subprocess.run(["ccx", "-i", "strip"], cwd=work, check=True, stdout=subprocess.DEVNULL)
-    disp = {}
-    with open(os.path.join(work, "strip.dat")) as f:
-        for line in f:
-            m = re.match(r"^\s+(\d+)\s+(\S+)\s+(\S+)\s+(\S+)\s*$", line)
-            if m:
-                disp[int(m.group(1))] = (float(m.group(2)), float(m.group(3)))
-    return {f: [(x, disp[n]) for x, n in v] for f, v in lines.items()}
+    disp = node_values(os.path.join(work, "strip.dat"))
+    return {f: [(x, disp[n][:2]) for x, n in v] for f, v in lines.items()}
 
 
 def thermostamp(deg, nx, ny, work):
