@@ -12,36 +12,15 @@ eigenvalues of the bending stiffness with the boundary nodes held.
 
 Usage: scripts/bench/bending_operator.py NX NY [c]   (needs numpy)
 """
-import numpy as np, sys
+import sys
+
+import numpy as np
+
+from triangle_patch import flat_mesh
 nx, ny = int(sys.argv[1]), int(sys.argv[2]); crossed = len(sys.argv) > 3 and sys.argv[3] == 'c'
 Lx, Ly = 1.0, 1.0
-# nodes and triangles (alternating diagonals or crossed with centre node)
-nodes = []; idx = {}
-for j in range(ny+1):
-    for i in range(nx+1):
-        idx[(i,j)] = len(nodes); nodes.append((i*Lx/nx, j*Ly/ny))
-tris = []
-for j in range(ny):
-    for i in range(nx):
-        a, b, c, d = idx[(i,j)], idx[(i+1,j)], idx[(i+1,j+1)], idx[(i,j+1)]
-        if crossed:
-            m = len(nodes); nodes.append(((i+.5)*Lx/nx, (j+.5)*Ly/ny))
-            tris += [(a,b,m),(b,c,m),(c,d,m),(d,a,m)]
-        elif (i + j) % 2 == 0: tris += [(a,b,c),(a,c,d)]
-        else: tris += [(a,b,d),(b,c,d)]
-X = np.array(nodes); T = np.array(tris); N = len(X); E = len(T)
-# edges -> neighbour
-emap = {}
-for e, t in enumerate(T):
-    for k in range(3):
-        p, q = t[(k+1)%3], t[(k+2)%3]
-        emap.setdefault(frozenset((p,q)), []).append((e,k))
-def grad_op(t):  # gradient of linear interpolant: 2x3 matrix on the 3 node values
-    P = X[list(t)]; M = np.array([[1,P[0,0],P[0,1]],[1,P[1,0],P[1,1]],[1,P[2,0],P[2,1]]]); Mi = np.linalg.inv(M)
-    return Mi[1:,:], 0.5*abs(np.linalg.det(M))
-G = []; A = []
-for t in T:
-    g, a = grad_op(t); G.append(g); A.append(a)
+X, T, idx, emap, G, A = flat_mesh(nx, ny, Lx, Ly, crossed)
+N = len(X); E = len(T)
 # hinge angle rows: theta_k(e) = (g_nb - g_e) . nu_k  (nu outward of e)
 def theta_row(e, k):
     t = T[e]; p, q = t[(k+1)%3], t[(k+2)%3]

@@ -10,34 +10,17 @@ Prints the deflections against CalculiX S8R (40 x 40, converged).
 
 Usage: scripts/bench/bending_plate_linear.py N alternating|crossed MODE [twist_ratio]  (needs numpy)
 """
-import numpy as np, sys
+import sys
+
+import numpy as np
+
+from triangle_patch import flat_mesh
 # Linear small-deflection plate with the rotation-free triangle's curvature operators.
 # Square L x L clamped at x = 0, corner force at (L, L); D = 1, nu = 0, twist as given.
 n = int(sys.argv[1]); pattern = sys.argv[2]; mode = sys.argv[3]; twist = float(sys.argv[4]) if len(sys.argv) > 4 else 1.0
 L = 0.1; F = 0.01
-nodes = []; idx = {}
-for j in range(n+1):
-    for i in range(n+1):
-        idx[(i,j)] = len(nodes); nodes.append((i*L/n, j*L/n))
-tris = []
-for j in range(n):
-    for i in range(n):
-        a, b, c, d = idx[(i,j)], idx[(i+1,j)], idx[(i+1,j+1)], idx[(i,j+1)]
-        if pattern == 'crossed':
-            m = len(nodes); nodes.append(((i+.5)*L/n, (j+.5)*L/n)); tris += [(a,b,m),(b,c,m),(c,d,m),(d,a,m)]
-        elif (i + j) % 2 == 0: tris += [(a,b,c),(a,c,d)]
-        else: tris += [(a,b,d),(b,c,d)]
-X = np.array(nodes); T = np.array(tris); N = len(X); E = len(T)
-emap = {}
-for e, t in enumerate(T):
-    for k in range(3):
-        emap.setdefault(frozenset((t[(k+1)%3], t[(k+2)%3])), []).append((e, k))
-def grad_op(t):
-    P = X[list(t)]; M = np.array([[1,P[0,0],P[0,1]],[1,P[1,0],P[1,1]],[1,P[2,0],P[2,1]]])
-    return np.linalg.inv(M)[1:, :], 0.5*abs(np.linalg.det(M))
-G = []; A = []
-for t in T:
-    g, a = grad_op(t); G.append(g); A.append(a)
+X, T, idx, emap, G, A = flat_mesh(n, n, L, L, pattern == 'crossed')
+N = len(X); E = len(T)
 def edge_info(e, k):
     t = T[e]; p, q = t[(k+1)%3], t[(k+2)%3]
     d = X[q] - X[p]; nu = np.array([d[1], -d[0]]) / np.linalg.norm(d)
