@@ -365,14 +365,15 @@ class ShellRfT3 final : public ElementKernel {
   Status fields(ElementFields& out) const override {
     const int ne = part_->num_elements;
     for (int e = 0; e < ne; ++e) {
-      if (!out.shear_angle.empty()) {  // gamma = asin(I_sh), I_sh = C12 / sqrt(C11 C22), C as internal_forces forms it
-        const int* t = &part_->triangles[3 * e];
-        Vec3 f1{0, 0, 0}, f2{0, 0, 0};
-        for (int a = 0; a < 3; ++a) {
-          const Vec3 xa = load3(part_->x.data(), t[a]);
-          f1 = add(f1, scale(xa, g1_[3 * e + a]));
-          f2 = add(f2, scale(xa, g2_[3 * e + a]));
-        }
+      // F e1 and F e2, as internal_forces forms them (shear angle, fibre).
+      const int* t = &part_->triangles[3 * e];
+      Vec3 f1{0, 0, 0}, f2{0, 0, 0};
+      for (int a = 0; a < 3; ++a) {
+        const Vec3 xa = load3(part_->x.data(), t[a]);
+        f1 = add(f1, scale(xa, g1_[3 * e + a]));
+        f2 = add(f2, scale(xa, g2_[3 * e + a]));
+      }
+      if (!out.shear_angle.empty()) {  // gamma = asin(I_sh), I_sh = C12 / sqrt(C11 C22)
         const double ish = dot(f1, f2) / std::sqrt(dot(f1, f1) * dot(f2, f2));
         out.shear_angle[e] = std::asin(std::clamp(ish, -1.0, 1.0)) * 180.0 / M_PI;
       }
@@ -381,9 +382,6 @@ class ShellRfT3 final : public ElementKernel {
       if (!out.curvature.empty() && bending_)
         for (int k = 0; k < 3; ++k) out.curvature[3 * e + k] = curv_[3 * e + k];
       if (!out.fibre.empty()) {
-        const int* t = &part_->triangles[3 * e];
-        Vec3 f1{0, 0, 0};
-        for (int a = 0; a < 3; ++a) f1 = add(f1, scale(load3(part_->x.data(), t[a]), g1_[3 * e + a]));
         const Vec3 u = normalized(f1);
         for (int d = 0; d < 3; ++d) out.fibre[3 * e + d] = u[d];
       }
