@@ -42,6 +42,7 @@ struct MechPart {
   // Element blocks: the partition follows the element count only, never the
   // thread count, so the results are the same for any number of threads.
   int block_size = 0, blocks = 0;
+  int passes = 1;  // the element's passes over the blocks per force evaluation
   std::vector<double> block_dt;
   // Node forces of each block, added by the element into the block's own
   // slots (ElementForceInput::patch_slot): the local nodes of block b are entries
@@ -477,9 +478,11 @@ void Simulation::build_mechanics() {
     setup.membrane = m->membrane;
     setup.bending = bending;
     setup.density = mat.density;
+    setup.temperature = def.initial_temperature;
     if (!(mat.density > 0)) throw JobError(mat.pointer + "/density", "a density > 0 is needed by the mechanics solver");
     if (auto s = m->element->configure(eparams, setup); !s)
       throw JobError(def.pointer + "/element", "element '" + def.element + "': " + s.message);
+    m->passes = std::max(1, m->element->passes());
     const int nn = st.mesh.num_nodes(), ne = st.mesh.num_elements();
     m->v.assign(3 * nn, 0.0);
     m->r_prev.assign(3 * nn, 0.0);
@@ -738,27 +741,32 @@ void Simulation::update_node_temperature() {
   }
 }
 
-// Internal forces of element block b of part p at the current positions:
-// the block adds its elements' forces into its own node slots, and nodes of
-// this block alone get their force at once.
-void Simulation::element_block(std::size_t p, int b) {
+// Pass `pass` of the internal forces of element block b of part p at the
+// current positions. In the last pass the block adds its elements' forces
+// into its own node slots, and nodes of this block alone get their force
+// at once; earlier passes only prepare (ElementForceInput::pass).
+void Simulation::element_block(std::size_t p, int b, int pass) {
   PartState& st = *parts_[p];
   MechPart& m = *mech_[p];
   const int ne = st.mesh.num_elements();
   const int l0 = m.block_node_start[b], l1 = m.block_node_start[b + 1];
+  if (pass == 0) m.block_error[b].clear();
+  if (!m.block_error[b].empty()) return;  // an earlier pass failed
   double* bf = m.block_force.data() + 3 * static_cast<std::size_t>(l0);
-  std::fill(bf, bf + 3 * (l1 - l0), 0.0);
+  const bool last = pass == m.passes - 1;
+  if (last) std::fill(bf, bf + 3 * (l1 - l0), 0.0);
   sdk::ElementForceInput in;
   in.range = {b * m.block_size, std::min(ne, (b + 1) * m.block_size)};
   in.dt = last_mech_dt_;
   in.node_temperature = m.node_temperature;
   in.patch_slot = std::span<const int>(m.slot_local.data() + 6 * static_cast<std::size_t>(in.range.begin),
                                        6 * static_cast<std::size_t>(in.range.end - in.range.begin));
+  in.pass = pass;
   sdk::ElementForceOutput out;
   out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
   out.element_dt = m.elem_dt;
-  m.block_error[b].clear();
   if (auto s = m.element->internal_forces(in, out); !s) m.block_error[b] = s.message;
+  if (!last) return;
   m.block_fail[b] = out.failed_element;
   if (!m.block_error[b].empty() || m.block_fail[b] >= 0) return;
   double dtb = std::numeric_limits<double>::infinity();
@@ -817,8 +825,10 @@ double Simulation::initial_mechanical_step() {
 double Simulation::mechanics_stable_dt() {
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     const int blocks = mech_[p]->blocks;
+    for (int pass = 0; pass < mech_[p]->passes; ++pass) {
 #pragma omp parallel for schedule(static, 1) if (blocks > 1)
-    for (int b = 0; b < blocks; ++b) element_block(p, b);
+      for (int b = 0; b < blocks; ++b) element_block(p, b, pass);
+    }
   }
   return finish_elements();
 }
@@ -882,11 +892,21 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
         }
         contact_time = seconds_since(tc);
       }
-      for (std::size_t p = 0; p < parts_.size(); ++p)
-        for (int b = 0; b < mech_[p]->blocks; ++b) {
-#pragma omp task firstprivate(p, b)
-          element_block(p, b);
+      // The passes of an element one after the other (a task group waits
+      // for its own tasks only, not for the contact task).
+      int passes = 0;
+      for (const auto& m : mech_) passes = std::max(passes, m->passes);
+      for (int pass = 0; pass < passes; ++pass) {
+#pragma omp taskgroup
+        {
+          for (std::size_t p = 0; p < parts_.size(); ++p)
+            if (pass < mech_[p]->passes)
+              for (int b = 0; b < mech_[p]->blocks; ++b) {
+#pragma omp task firstprivate(p, b, pass)
+                element_block(p, b, pass);
+              }
         }
+      }
     }
     if (contact_error) std::rethrow_exception(contact_error);
     stable = finish_elements();

@@ -39,7 +39,7 @@ std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.5.0 (plugin SDK 0.5.0, ABI 5)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.6.0 (plugin SDK 0.6.0, ABI 6)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {

@@ -557,12 +557,13 @@ namespace ts::test {
 // 0.5 s and held, damped to rest. Between the clamp and x = L - a the
 // moment is constant, the curvature M / (W R) and the deflection at
 // x = L - a is kappa (L - a)^2 / 2 (small rotation: kappa L = 0.05).
-// Required: within 2 %.
+// Required: within 2 %. On 40 x 8 cells (the couple spans two cells;
+// -0.55 %); on 20 x 4, where it acts within one cell, -2.0 %.
 TEST(Bending, StripUnderEndMoment) {
   const double L = 0.1, W = 0.02, a = L / 20, R = 1.0e-3, kappa = 0.5;
   const double F = kappa * R * W / a;
   json j = strip_job(0.0, 0.0, 1.0);
-  j["parts"][0]["mesh"]["divisions"] = {20, 4};
+  j["parts"][0]["mesh"]["divisions"] = {40, 8};
   j["materials"]["ud"]["membrane"] = {{"law", "ud_hyperelastic"}, {"k_fibre", 1.0e4}, {"p_ct", 1.0e3}, {"k_sh", {2.0e2, 0.0, 0.0}}};
   j["materials"]["ud"]["bending"] = {{"law", "thermo_linear_bending"}, {"beta1_T", 0.0}, {"beta1_B", R}, {"beta2_T", 0.0}, {"beta2_B", 0.1 * R}};
   j["constraints"] = {

@@ -5,20 +5,38 @@
 // N x axis 1) to the current configuration, C = F^T F, the laws return S
 // (N/m) and the nodal forces are f_a = A0 F S grad0 N_a (f = A0 B^T S).
 //
-// Bending, rotation-free (S3/BST family, 6-node patch): the curvature of an
-// element is the boundary integral of the slope jumps at its edges,
-//   K = (1 / 2 A0) sum_i l_i (theta_i - theta0_i) nu_i (x) nu_i,
-// theta_i the bending angle between the element and its neighbour across
-// edge i (positive when the surface turns towards the element's normal),
-// l_i and nu_i the length and in-plane outward normal of the edge in the
-// initial configuration, K in the element's material frame. The law
-// returns the moments M (N m/m) and the energy; the forces are the
-// derivatives of sum A0 w through d theta_i / dx on the four nodes of each
-// hinge. A free edge carries no slope jump (zero normal moment for edges
-// along the material axes). At a clamped edge the slope jump is the
-// rotation of the element about the edge from its initial orientation
-// (the hinge angle to a mirrored ghost is twice that). At a symmetry edge
-// the ghost is the element mirrored in the symmetry plane.
+// Bending, rotation-free (S3/BST family, 6-node patch), with the curvature
+// of Morley's constant-curvature triangle: the mean curvature of an element
+// is the boundary integral of the slopes at its mid-edges,
+//   K = (1 / A0) sum_k l_k s_k nu_k (x) nu_k,
+// s_k the outward normal slope at the middle of edge k relative to the
+// element's plane, l_k and nu_k the length and in-plane outward normal of
+// the edge in the initial configuration, K in the element's material
+// frame. The slopes come from the bending angles theta (between the element
+// and its neighbour across an edge, minus their initial values; positive
+// when the surface turns towards the element's normal):
+// - each element with three neighbours (or held edges) has the quadratic
+//   through the six nodes of its patch; its slopes at the element's own
+//   mid-edges are r = L theta_e, L a 3 x 3 map fixed at set-up (in the
+//   initial configuration, the neighbours unfolded into the element's plane);
+// - the slope of an interior edge is shared by its two elements:
+//   s = omega r + (1 - omega) (theta - r'), r' the neighbour's slope of the
+//   same edge, omega = 1/2, or 1 / 0 where only one of them has a quadratic
+//   (1/2 with r = r' = 0 where neither has one: s = theta / 2). So the two
+//   slopes add up to the angle between the elements, as in Morley's element
+//   (the shared mid-edge slope makes the element converge), and a field of
+//   constant curvature is exact on any mesh;
+// - at a clamped edge the slope is the rotation of the element about the
+//   edge from its initial orientation (the angle to a mirrored ghost is
+//   twice that), at a symmetry edge half the angle to the element mirrored
+//   in the symmetry plane; at a free edge the slope that makes the normal
+//   moment zero (with the law's rigidities at the part's initial
+//   temperature), folded into the coefficients of the other edges.
+// The law returns the moments M (N m/m) and the energy w; the forces are
+// the derivatives of sum A0 w through d theta / dx on the four nodes of each
+// hinge. An element's curvature reads its neighbours' angles, so a step
+// takes three passes over the blocks: angles and own slopes; slopes,
+// curvatures, moments and dW/ds; forces (which read the neighbours' dW/ds).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -180,40 +198,10 @@ void membrane_block(int n, int ld, const int* __restrict tri, const double* __re
   }
 }
 
-// Curvatures of n elements: K = sum_k c_k dtheta_k, c_k = dK/dtheta_k
-// (value r of edge k of element q at c[(3 k + r) ld + q]), the angle change
-// of edge k at dth[loc[3 q + k]].
-TS_VECTOR_CLONES
-void curvature_block(int n, int ld, const double* __restrict c, const int* __restrict loc, const double* __restrict dth,
-                     double* __restrict K) {
-#pragma omp simd
-  for (int q = 0; q < n; ++q) {
-    const double t0 = dth[loc[3 * q]], t1 = dth[loc[3 * q + 1]], t2 = dth[loc[3 * q + 2]];
-    const double* cq = c + q;
-    K[3 * q] = cq[0] * t0 + cq[3 * ld] * t1 + cq[6 * ld] * t2;
-    K[3 * q + 1] = cq[ld] * t0 + cq[4 * ld] * t1 + cq[7 * ld] * t2;
-    K[3 * q + 2] = cq[2 * ld] * t0 + cq[5 * ld] * t1 + cq[8 * ld] * t2;
-  }
-}
-
-// Hinge moments of n elements, dW/dtheta_k = A0 M : dK/dtheta_k = A0 (M11
-// c11 + M22 c22 + 2 M12 c12), per element and edge (c laid out as for
-// curvature_block), and the elements' bending stable steps dmin2 *
-// dtb_scale, lowering dte.
-TS_VECTOR_CLONES
-void moment_block(int n, int ld, const double* __restrict area, const double* __restrict c, const double* __restrict M,
-                  const double* __restrict dmin2, double dtb_scale, double* __restrict mk, double* __restrict dte) {
-#pragma omp simd
-  for (int q = 0; q < n; ++q) {
-    const double A0 = area[q], M0 = M[3 * q], M1 = M[3 * q + 1], M2 = 2 * M[3 * q + 2];
-    const double* cq = c + q;
-    mk[3 * q] = A0 * (M0 * cq[0] + M1 * cq[ld] + M2 * cq[2 * ld]);
-    mk[3 * q + 1] = A0 * (M0 * cq[3 * ld] + M1 * cq[4 * ld] + M2 * cq[5 * ld]);
-    mk[3 * q + 2] = A0 * (M0 * cq[6 * ld] + M1 * cq[7 * ld] + M2 * cq[8 * ld]);
-    const double dtb = dmin2[q] * dtb_scale, d = dte[q];
-    dte[q] = d < dtb ? d : dtb;
-  }
-}
+// Largest entry of an element's map L from angle changes to the slopes of
+// its own quadratic; a patch whose map is larger (nearly on a conic) uses
+// its neighbours' quadratics instead.
+constexpr double kMaxSlopeMap = 4.0;
 
 class ShellRfT3 final : public ElementKernel {
  public:
@@ -252,7 +240,10 @@ class ShellRfT3 final : public ElementKernel {
           g2_[3 * e + a] = dot(g, m);
         }
       }
-      if (bending_) setup_bending();
+      if (bending_) {
+        setup_bending();
+        if (auto st = setup_slopes(s.temperature); !st) return st;
+      }
       // The previous strains are kept only for laws that read them.
       keep_old_ = std::any_of(laws_.begin(), laws_.end(), [](const MaterialLaw* l) { return l->uses_strain_old(); });
       strain_old_.assign(keep_old_ ? 3 * ne : 0, 0.0);
@@ -267,8 +258,18 @@ class ShellRfT3 final : public ElementKernel {
     });
   }
 
+  // With bending, three passes: the angle changes and the slopes of the
+  // elements' own quadratics; the mid-edge slopes, curvatures and moments;
+  // the forces (which read the moments of the neighbours).
+  int passes() const override { return bending_ ? 3 : 1; }
+
   Status internal_forces(const ElementForceInput& in, ElementForceOutput& out) override {
     return guarded([&]() -> Status {
+      if (bending_ && in.pass == 0) {
+        slope_angles(in.range.begin, in.range.end);
+        return Status::success();
+      }
+      if (bending_ && in.pass == 1) return slope_moments(in, in.range.begin, in.range.end);
       const int b = in.range.begin, n = in.range.end - in.range.begin;
       const double* x = part_->x.data();
       // Values needed only while this block is evaluated live in a buffer of
@@ -478,7 +479,6 @@ class ShellRfT3 final : public ElementKernel {
     d_.assign(3 * ne, 1.0);
     theta0_.assign(3 * ne, 0.0);
     gld_ = padded_ld(ne);
-    ginv_.assign(9 * static_cast<std::size_t>(gld_), 0.0);
     curv_.assign(3 * ne, 0.0);
     curv_old_.assign(bending_->uses_strain_old() ? 3 * ne : 0, 0.0);
     bstate_.assign(static_cast<std::size_t>(bending_->state_size()) * ne, 0.0);
@@ -487,18 +487,9 @@ class ShellRfT3 final : public ElementKernel {
       const int* t = &part_->triangles[3 * e];
       const Vec3 X[3] = {load3(x0, t[0]), load3(x0, t[1]), load3(x0, t[2])};
       const Vec3 n = normalized(cross(sub(X[1], X[0]), sub(X[2], X[0])));
-      const Vec3 f = load3(e1_.data(), e), m = load3(e2_.data(), e);
-      const double A0 = area0_[e];
       for (int k = 0; k < 3; ++k) {
         const int p = t[(k + 1) % 3], q = t[(k + 2) % 3];
         const Vec3 P = load3(x0, p), Q = load3(x0, q);
-        const double len = norm(sub(Q, P));
-        const Vec3 nu = normalized(cross(sub(Q, P), n));  // outward in-plane normal of edge k
-        const double a = dot(nu, f), bb = dot(nu, m);
-        // dK/dtheta_k = l_k / (2 A0) nu (x) nu, Voigt in the material frame.
-        ginv_[(3 * k) * gld_ + e] = len / (2 * A0) * a * a;
-        ginv_[(3 * k + 1) * gld_ + e] = len / (2 * A0) * bb * bb;
-        ginv_[(3 * k + 2) * gld_ + e] = len / (2 * A0) * a * bb;
         const int nb = part_->neighbours[3 * e + k];
         if (nb < 0) {
           const int ec = edge_condition_.empty() ? kEdgeFree : edge_condition_[3 * e + k];
@@ -571,6 +562,208 @@ class ShellRfT3 final : public ElementKernel {
     gstart_[ne] = static_cast<int>(gedge_.size());
   }
 
+  // The law's small-curvature rigidities D (M = D K, Voigt (11, 22, 12)) at
+  // temperature T, probed with three unit curvatures; false if the law
+  // fails or returns a non-finite value.
+  bool probe_rigidity(double T, double D[3][3]) const {
+    const double eps = 1e-6;
+    const int ns = bending_->state_size();
+    std::vector<double> chi(9, 0.0), old(9, 0.0), temp(3, T), state(static_cast<std::size_t>(ns) * 3, 0.0), M(9, 0.0), W(3, 0.0);
+    for (int j = 0; j < 3; ++j) chi[3 * j + j] = eps;
+    MaterialBlock blk;
+    blk.n = 3;
+    blk.strain = chi;
+    if (bending_->uses_strain_old()) blk.strain_old = old;
+    blk.temperature = temp;
+    blk.dt = 1e-3;
+    blk.state = state;
+    blk.stress = M;
+    blk.energy = W;
+    if (!bending_->evaluate(blk)) return false;
+    for (int r = 0; r < 3; ++r)
+      for (int j = 0; j < 3; ++j) {
+        D[r][j] = M[3 * j + r] / eps;
+        if (!std::isfinite(D[r][j])) return false;
+      }
+    return true;
+  }
+
+  // The mid-edge slopes of every element (see the header): the map L from
+  // the element's three angle changes to the slopes of its own quadratic,
+  // the weights omega per edge, and dK/ds with the free edges condensed
+  // (zero normal moment there, with the law's rigidities at the part's
+  // initial temperature T).
+  Status setup_slopes(double T) {
+    const int ne = part_->num_elements;
+    const double* x0 = part_->x0.data();
+    const int* nbr = part_->neighbours.data();
+    cs_.assign(9 * static_cast<std::size_t>(gld_), 0.0);
+    lmap_.assign(9 * static_cast<std::size_t>(ne), 0.0);
+    omega_.assign(3 * ne, 0.5);
+    eth_.assign(3 * ne, 0.0);
+    er_.assign(3 * ne, 0.0);
+    em_.assign(3 * ne, 0.0);
+    eben_.assign(ne, 0.0);
+    std::vector<char> fit(ne, 0);
+    // Gradient of the linear interpolant of values v at three points.
+    auto grad_lin = [](const double P[3][2], const double v[3], double g[2]) {
+      const double ax = P[1][0] - P[0][0], ay = P[1][1] - P[0][1], bx = P[2][0] - P[0][0], by = P[2][1] - P[0][1];
+      const double det = ax * by - ay * bx, dv1 = v[1] - v[0], dv2 = v[2] - v[0];
+      g[0] = (dv1 * by - dv2 * ay) / det;
+      g[1] = (ax * dv2 - bx * dv1) / det;
+    };
+    // The quadratics x^2 / 2, y^2 / 2 and x y and their gradients.
+    auto quad = [](int j, const double* p) { return j == 0 ? 0.5 * p[0] * p[0] : j == 1 ? 0.5 * p[1] * p[1] : p[0] * p[1]; };
+    auto quad_grad = [](int j, const double* p, double* g) {
+      g[0] = j == 0 ? p[0] : j == 1 ? 0.0 : p[1];
+      g[1] = j == 0 ? 0.0 : j == 1 ? p[1] : p[0];
+    };
+    std::vector<double> nu2(6 * static_cast<std::size_t>(ne)), len(3 * static_cast<std::size_t>(ne));
+    for (int e = 0; e < ne; ++e) {
+      const int* t = &part_->triangles[3 * e];
+      const Vec3 X[3] = {load3(x0, t[0]), load3(x0, t[1]), load3(x0, t[2])};
+      const Vec3 cen = scale(add(add(X[0], X[1]), X[2]), 1.0 / 3.0);
+      const Vec3 n = normalized(cross(sub(X[1], X[0]), sub(X[2], X[0])));
+      const Vec3 f = load3(e1_.data(), e), m = load3(e2_.data(), e);
+      double P[3][2];
+      for (int a = 0; a < 3; ++a) {
+        const Vec3 v = sub(X[a], cen);
+        P[a][0] = dot(v, f);
+        P[a][1] = dot(v, m);
+      }
+      double ge[3][2];  // gradients of the element's interpolants of the quadratics
+      for (int j = 0; j < 3; ++j) {
+        const double v[3] = {quad(j, P[0]), quad(j, P[1]), quad(j, P[2])};
+        grad_lin(P, v, ge[j]);
+      }
+      double B[3][3], R[3][3];
+      bool ok = true;
+      for (int k = 0; k < 3; ++k) {
+        const int a = (k + 1) % 3, c = (k + 2) % 3;
+        const Vec3 Pp = X[a], Pq = X[c];
+        const Vec3 nu = normalized(cross(sub(Pq, Pp), n));
+        const double nx = dot(nu, f), ny = dot(nu, m);
+        nu2[6 * e + 2 * k] = nx;
+        nu2[6 * e + 2 * k + 1] = ny;
+        len[3 * e + k] = norm(sub(Pq, Pp));
+        const double mid[2] = {0.5 * (P[a][0] + P[c][0]), 0.5 * (P[a][1] + P[c][1])};
+        for (int j = 0; j < 3; ++j) {
+          double g[2];
+          quad_grad(j, mid, g);
+          R[k][j] = (g[0] - ge[j][0]) * nx + (g[1] - ge[j][1]) * ny;
+        }
+        if (nbr[3 * e + k] >= 0) {
+          // The neighbour unfolded into the element's plane across the edge.
+          const Vec3 O = load3(x0, opp_[3 * e + k]);
+          const Vec3 eh = normalized(sub(Pq, Pp)), v = sub(O, Pp);
+          const double along = dot(v, eh), h = norm(sub(v, scale(eh, along)));
+          const double ex = (P[c][0] - P[a][0]) / len[3 * e + k], ey = (P[c][1] - P[a][1]) / len[3 * e + k];
+          const double Q[3][2] = {{P[a][0], P[a][1]}, {P[c][0], P[c][1]},
+                                  {P[a][0] + along * ex + h * nx, P[a][1] + along * ey + h * ny}};
+          for (int j = 0; j < 3; ++j) {
+            const double v3[3] = {quad(j, Q[0]), quad(j, Q[1]), quad(j, Q[2])};
+            double gn[2];
+            grad_lin(Q, v3, gn);
+            B[k][j] = (gn[0] - ge[j][0]) * nx + (gn[1] - ge[j][1]) * ny;
+          }
+        } else if (clamped_[3 * e + k]) {
+          for (int j = 0; j < 3; ++j) B[k][j] = -2 * (ge[j][0] * nx + ge[j][1] * ny);
+        } else {
+          ok = false;  // a free edge: no quadratic through the patch
+        }
+      }
+      if (!ok) continue;
+      // L = R B^-1, kept where B is well conditioned and L moderate.
+      const double det = B[0][0] * (B[1][1] * B[2][2] - B[1][2] * B[2][1]) -
+                         B[0][1] * (B[1][0] * B[2][2] - B[1][2] * B[2][0]) +
+                         B[0][2] * (B[1][0] * B[2][1] - B[1][1] * B[2][0]);
+      double bmax = 0;
+      for (const auto& row : B)
+        for (double v : row) bmax = std::max(bmax, std::abs(v));
+      if (!(std::abs(det) > 1e-6 * bmax * bmax * bmax)) continue;
+      double Bi[3][3];
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
+          Bi[r][c] = (B[r1][c1] * B[r2][c2] - B[r1][c2] * B[r2][c1]) / det;
+        }
+      double L[9], lmax = 0;
+      for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < 3; ++i) {
+          L[3 * k + i] = R[k][0] * Bi[0][i] + R[k][1] * Bi[1][i] + R[k][2] * Bi[2][i];
+          lmax = std::max(lmax, std::abs(L[3 * k + i]));
+        }
+      if (!(lmax < kMaxSlopeMap)) continue;
+      std::copy(L, L + 9, &lmap_[9 * static_cast<std::size_t>(e)]);
+      fit[e] = 1;
+    }
+    for (int e = 0; e < ne; ++e)
+      for (int k = 0; k < 3; ++k) {
+        const int nb = nbr[3 * e + k];
+        if (nb >= 0) omega_[3 * e + k] = fit[e] && fit[nb] ? 0.5 : fit[e] ? 1.0 : fit[nb] ? 0.0 : 0.5;
+      }
+    double D[3][3];
+    const bool have_d = probe_rigidity(T, D);
+    for (int e = 0; e < ne; ++e) {
+      const double A0 = area0_[e];
+      double c[3][3];  // dK/ds_k before condensation: l_k / A0 nu (x) nu
+      int free_edges[3], nf = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double nx = nu2[6 * e + 2 * k], ny = nu2[6 * e + 2 * k + 1], s = len[3 * e + k] / A0;
+        c[k][0] = s * nx * nx;
+        c[k][1] = s * ny * ny;
+        c[k][2] = s * nx * ny;
+        if (nbr[3 * e + k] < 0 && !clamped_[3 * e + k]) free_edges[nf++] = k;
+      }
+      // Free edges: the slope that makes the normal moment zero, M_nn = t . D K
+      // with t = (nx^2, ny^2, 2 nx ny), solved for (s_f) and folded into the
+      // other edges' coefficients.
+      double cp[3][3];
+      for (int k = 0; k < 3; ++k)
+        for (int r = 0; r < 3; ++r) cp[k][r] = c[k][r];
+      for (int i = 0; i < nf; ++i)
+        for (int r = 0; r < 3; ++r) cp[free_edges[i]][r] = 0.0;
+      if (have_d && nf > 0 && nf < 3) {
+        auto tDc = [&](int f, const double* v) {
+          const double nx = nu2[6 * e + 2 * f], ny = nu2[6 * e + 2 * f + 1];
+          const double tv[3] = {nx * nx, ny * ny, 2 * nx * ny};
+          double r = 0;
+          for (int a = 0; a < 3; ++a)
+            for (int bb = 0; bb < 3; ++bb) r += tv[a] * D[a][bb] * v[bb];
+          return r;
+        };
+        double A[2][2] = {{0, 0}, {0, 0}};
+        for (int i = 0; i < nf; ++i)
+          for (int j = 0; j < nf; ++j) A[i][j] = tDc(free_edges[i], c[free_edges[j]]);
+        double Ai[2][2];
+        bool solvable;
+        if (nf == 1) {
+          solvable = std::abs(A[0][0]) > 0;
+          Ai[0][0] = solvable ? 1.0 / A[0][0] : 0.0;
+        } else {
+          const double dA = A[0][0] * A[1][1] - A[0][1] * A[1][0];
+          solvable = std::abs(dA) > 1e-12 * (std::abs(A[0][0] * A[1][1]) + std::abs(A[0][1] * A[1][0]));
+          if (solvable) {
+            Ai[0][0] = A[1][1] / dA, Ai[0][1] = -A[0][1] / dA;
+            Ai[1][0] = -A[1][0] / dA, Ai[1][1] = A[0][0] / dA;
+          }
+        }
+        if (solvable)
+          for (int k = 0; k < 3; ++k) {
+            if (nbr[3 * e + k] < 0 && !clamped_[3 * e + k]) continue;
+            for (int i = 0; i < nf; ++i) {
+              double si = 0;  // d s_f(i) / d s_k
+              for (int j = 0; j < nf; ++j) si -= Ai[i][j] * tDc(free_edges[j], c[k]);
+              for (int r = 0; r < 3; ++r) cp[k][r] += si * c[free_edges[i]][r];
+            }
+          }
+      }
+      for (int k = 0; k < 3; ++k)
+        for (int r = 0; r < 3; ++r) cs_[(3 * k + r) * static_cast<std::size_t>(gld_) + e] = cp[k][r];
+    }
+    return Status::success();
+  }
+
   // What bending_forces needs of the hinges of a block [b, end) that depends
   // only on the mesh and the block's bounds; built at the block's first
   // evaluation and kept (the kernel's blocks do not change during a run).
@@ -633,31 +826,21 @@ class ShellRfT3 final : public ElementKernel {
     return *slot;
   }
 
-  // Bending curvatures, moments and forces of elements [b, end), added to
-  // the node forces with the membrane forces mf (laid out as membrane_block
-  // writes them, leading dimension ld); returns the bending energy and
-  // lowers the elements' stable steps (sc.energy_tmp) with the bending
-  // ones; [t_lo, t_hi] is the block's temperature range.
-  double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
-                        const double* mf, int ld, ElementForceOutput& out) {
+  // The angle changes of the hinges of block [b, end) (sc.hdth): its
+  // interior hinges at [0, nh) (those owned by its elements, then those
+  // owned by an element of an earlier block; returns nh), then one entry
+  // per element and edge without a neighbour at nh + 3 (e - b) + k (the
+  // ghost hinge's angle, zero at a free edge). With gradients: those of
+  // the interior hinges in sc.hg, of the ghost hinges in sc.hgrad.
+  int block_angles(int b, int end, BlockScratch& sc, const BlockHinges& bh, bool gradients) {
     const int n = end - b;
-    const double* temp = sc.temp.data();
     const double* x = part_->x.data();
     static_assert(sizeof(Vec3) == 3 * sizeof(double));
-    // The block's interior hinges: those owned by its elements (contiguous),
-    // then those owned by an element of an earlier block. An interior hinge
-    // is evaluated once for the block, in its owner's orientation; its
-    // neighbour sees the same angle with the gradients permuted.
     const int h0 = hstart_[b], nown = hstart_[end] - h0;
-    const BlockHinges& bh = block_hinges(b, end);
     const int nforeign = bh.nforeign;
     const int nh = nown + nforeign;
-    // Angle changes: the block's interior hinges at [0, nh), then one entry
-    // per element and edge without a neighbour at nh + 3 (e - b) + k (the
-    // ghost hinge's angle, zero at a free edge).
     reserve_hinges(sc, nh + 3 * n);
     const int cap = sc.hcap;
-    const int* loc = bh.loc.data();  // per element and edge of the block: its entry in dth
     const int* fnode = bh.fnode.data();
     double* dth = sc.hdth.data();
     double* G = sc.hg.data();
@@ -677,16 +860,61 @@ class ShellRfT3 final : public ElementKernel {
     for (int g = gstart_[b]; g < gstart_[end]; ++g) {
       const int e = gedge_[g] / 3, k = gedge_[g] % 3;
       const int* t = &part_->triangles[3 * e];
-      Vec3* gr = reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
+      Vec3* gr = gradients ? reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]) : nullptr;
       dth[nh + 3 * (e - b) + k] =
           clamped_[3 * e + k] == 1
               ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, gr)
               : ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, gr);
     }
-    curvature_block(n, gld_, ginv_.data() + b, loc, dth, curv_.data() + 3 * b);
+    return nh;
+  }
+
+  // Pass 0: the angle change of each edge of the block's elements (eth_)
+  // and the slopes of their own quadratics at their mid-edges (er_ = L theta).
+  void slope_angles(int b, int end) {
+    BlockScratch& sc = block_scratch(end - b);
+    const BlockHinges& bh = block_hinges(b, end);
+    block_angles(b, end, sc, bh, false);
+    const int* loc = bh.loc.data();
+    const double* dth = sc.hdth.data();
+    for (int e = b; e < end; ++e) {
+      const int q = e - b;
+      const double t0 = dth[loc[3 * q]], t1 = dth[loc[3 * q + 1]], t2 = dth[loc[3 * q + 2]];
+      const double* L = &lmap_[9 * static_cast<std::size_t>(e)];
+      eth_[3 * e] = t0;
+      eth_[3 * e + 1] = t1;
+      eth_[3 * e + 2] = t2;
+      er_[3 * e] = L[0] * t0 + L[1] * t1 + L[2] * t2;
+      er_[3 * e + 1] = L[3] * t0 + L[4] * t1 + L[5] * t2;
+      er_[3 * e + 2] = L[6] * t0 + L[7] * t1 + L[8] * t2;
+    }
+  }
+
+  // Pass 1: mid-edge slopes, curvatures, the law's moments and energies,
+  // and per element and edge dW/ds_k = A0 M : dK/ds_k (em_).
+  Status slope_moments(const ElementForceInput& in, int b, int end) {
+    const int n = end - b;
+    BlockScratch& sc = block_scratch(n);
+    const int* nbr = part_->neighbours.data();
+    const int* pk = partner_k_.data();
+    double* temp = sc.temp.data();
+    double* K = curv_.data() + 3 * b;
+    for (int e = b; e < end; ++e) {
+      const int q = e - b;
+      double sl[3];
+      for (int k = 0; k < 3; ++k) {
+        const int nb = nbr[3 * e + k], i = 3 * e + k;
+        const double w = omega_[i];
+        sl[k] = nb >= 0 ? w * er_[i] + (1 - w) * (eth_[i] - er_[3 * nb + pk[i]]) : 0.5 * eth_[i];
+      }
+      const double* c = cs_.data() + e;
+      for (int r = 0; r < 3; ++r) K[3 * q + r] = c[r * gld_] * sl[0] + c[(3 + r) * gld_] * sl[1] + c[(6 + r) * gld_] * sl[2];
+      const int* t = &part_->triangles[3 * e];
+      temp[q] = in.node_temperature[t[0]] / 3.0 + in.node_temperature[t[1]] / 3.0 + in.node_temperature[t[2]] / 3.0;
+    }
     MaterialBlock blk;
     blk.n = n;
-    blk.strain = std::span<const double>(curv_.data() + 3 * b, 3 * n);
+    blk.strain = std::span<const double>(K, 3 * n);
     if (!curv_old_.empty()) blk.strain_old = std::span<const double>(curv_old_.data() + 3 * b, 3 * n);
     blk.temperature = std::span<const double>(temp, n);
     blk.dt = in.dt;
@@ -694,17 +922,63 @@ class ShellRfT3 final : public ElementKernel {
     blk.state = std::span<double>(bstate_.data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
     blk.stress = std::span<double>(sc.moment.data(), 3 * n);
     blk.energy = std::span<double>(sc.benergy.data(), n);
-    bending_->evaluate(blk);
-    const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
-    const double dtb_scale = rmax > 0 ? 0.5 * std::sqrt(areal_mass_ / rmax) : 0.0;  // once per block
-    double energy = 0;
-    for (int e = b; e < end; ++e) energy += area0_[e] * sc.benergy[e - b];
+    if (auto st = bending_->evaluate(blk); !st) return st;
+    const double* M = sc.moment.data();
+    for (int e = b; e < end; ++e) {
+      const int q = e - b;
+      const double A0 = area0_[e], M0 = M[3 * q], M1 = M[3 * q + 1], M2 = 2 * M[3 * q + 2];
+      const double* c = cs_.data() + e;
+      for (int k = 0; k < 3; ++k)
+        em_[3 * e + k] = A0 * (M0 * c[(3 * k) * gld_] + M1 * c[(3 * k + 1) * gld_] + M2 * c[(3 * k + 2) * gld_]);
+      eben_[e] = A0 * sc.benergy[q];
+    }
+    if (in.commit && !curv_old_.empty())
+      std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
+    return Status::success();
+  }
+
+  // Pass 2: bending forces of elements [b, end), added to the node forces
+  // with the membrane forces mf (laid out as membrane_block writes them,
+  // leading dimension ld); returns the bending energy (from pass 1) and
+  // lowers the elements' stable steps (sc.energy_tmp) with the bending
+  // ones; [t_lo, t_hi] is the block's temperature range. Each element
+  // brings its share of dW/dtheta of its hinges,
+  //   g_i = (1 - omega_i) m_i + sum_k L_ki omega_k (m_k - m'_k)
+  // (m' the neighbour's dW/ds of the same edge; at a ghost edge 1/2 m_i).
+  double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
+                        const double* mf, int ld, ElementForceOutput& out) {
+    const int n = end - b;
+    const BlockHinges& bh = block_hinges(b, end);
+    block_angles(b, end, sc, bh, true);
+    const int cap = sc.hcap;
+    const double* G = sc.hg.data();
+    const double* hgrad = sc.hgrad.data();
+    const int* nbr = part_->neighbours.data();
+    const int* pk = partner_k_.data();
     double* mk = sc.mk.data();
+    for (int e = b; e < end; ++e) {
+      const int q = e - b;
+      double wmu[3];
+      for (int k = 0; k < 3; ++k) {
+        const int nb = nbr[3 * e + k], i = 3 * e + k;
+        wmu[k] = nb >= 0 ? omega_[i] * (em_[i] - em_[3 * nb + pk[i]]) : 0.0;
+      }
+      const double* L = &lmap_[9 * static_cast<std::size_t>(e)];
+      for (int i = 0; i < 3; ++i) {
+        const double own = (nbr[3 * e + i] >= 0 ? 1 - omega_[3 * e + i] : 0.5) * em_[3 * e + i];
+        mk[3 * q + i] = own + L[i] * wmu[0] + L[3 + i] * wmu[1] + L[6 + i] * wmu[2];
+      }
+    }
+    const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
     double* dte = sc.energy_tmp.data();  // the membrane's stable steps of the block's elements
-    // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative), d the
-    // smallest initial height over the element's interior edges.
-    moment_block(n, gld_, area0_.data() + b, ginv_.data() + b, sc.moment.data(), dmin2_.data() + b,
-                 rmax > 0 ? dtb_scale : std::numeric_limits<double>::infinity(), mk, dte);
+    if (rmax > 0) {
+      // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative), d the
+      // smallest initial height over the element's interior edges.
+      const double dtb_scale = 0.5 * std::sqrt(areal_mass_ / rmax);
+      for (int q = 0; q < n; ++q) dte[q] = std::min(dte[q], dmin2_[b + q] * dtb_scale);
+    }
+    double energy = 0;
+    for (int e = b; e < end; ++e) energy += eben_[e];
     // Forces, element by element: the membrane forces on its corners, and
     // the interior hinges it brings. An interior hinge is brought by its
     // owner, or, when the owner is in an earlier block, by its neighbour in
@@ -762,8 +1036,6 @@ class ShellRfT3 final : public ElementKernel {
         fq[d] += m * gr[2][d];
       }
     }
-    if (in.commit && !curv_old_.empty())
-      std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
     return energy;
   }
 
@@ -773,7 +1045,14 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<char> clamped_;
   std::vector<double> n0_;  // initial element normals (clamped elements)
   // ginv_: dK/dtheta_k, value r of edge k of element e at (3 k + r) gld_ + e.
-  std::vector<double> d_, theta0_, ginv_, curv_, curv_old_, bstate_;
+  std::vector<double> d_, theta0_, curv_, curv_old_, bstate_;
+  // Mid-edge slopes: cs_ dK/ds_k (value r of edge k of element e at
+  // (3 k + r) gld_ + e, free edges condensed), lmap_ the 3 x 3 map L from
+  // an element's angle changes to the slopes of its own quadratic (row
+  // major, 9 per element; zero where the element has no quadratic),
+  // omega_ the weight of the element's own slope per edge; per step eth_
+  // (angle changes), er_ (own slopes), em_ (dW/ds), eben_ (A0 w).
+  std::vector<double> cs_, lmap_, omega_, eth_, er_, em_, eben_;
   // Interior hinges: node offsets (3 x node) of (c, p, q, o) in the owner's
   // orientation, initial angle, owner and its edge k, neighbour and its
   // edge; hid_ per element and edge; dmin2_ the squared smallest initial
@@ -796,12 +1075,12 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.3.3";
-  d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending";
+  d.version = "0.4.0";
+  d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
 }
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.3.3", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.0", register_all)

@@ -21,6 +21,7 @@ struct ElementSetup {
   // symmetry plane x = 0, y = 0 or z = 0: the mirrored ply continues it).
   // Empty: all free.
   std::span<const int> edge_condition;
+  double temperature = 20.0;  // degC, the part's initial temperature (laws probed at set-up see it)
 };
 
 inline constexpr int kEdgeFree = 0;
@@ -44,6 +45,12 @@ struct ElementForceInput {
   // has no neighbour), each as its index i in ElementForceOutput::node_force
   // (values 3 i .. 3 i + 2).
   std::span<const int> patch_slot;
+  // Which pass of the step (0 .. ElementKernel::passes() - 1). The kernel
+  // calls every range with pass 0, then every range with pass 1, and so
+  // on; a pass may read what earlier passes wrote for any range. Only the
+  // last pass adds forces, energy and stable step (and reports a
+  // degenerate element); earlier ones only prepare.
+  int pass = 0;
 };
 
 struct ElementForceOutput {
@@ -72,6 +79,10 @@ class ElementKernel {
   virtual Status configure(const Params& params, const ElementSetup& setup) = 0;
   virtual Status internal_forces(const ElementForceInput& in, ElementForceOutput& out) = 0;
   virtual Status fields(ElementFields& out) const = 0;
+  // Passes over all ranges per force evaluation (after configure): more
+  // than one where an element's forces need values of elements of other
+  // ranges (the bending curvature of shell_rf_t3 reads its neighbours').
+  virtual int passes() const { return 1; }
 };
 
 }  // namespace ts::sdk
