@@ -824,9 +824,10 @@ double Simulation::initial_mechanical_step() {
 // smallest stable step.
 double Simulation::mechanics_stable_dt() {
   for (std::size_t p = 0; p < parts_.size(); ++p) {
-    const int blocks = mech_[p]->blocks;
-    for (int pass = 0; pass < mech_[p]->passes; ++pass) {
-#pragma omp parallel for schedule(static, 1) if (blocks > 1)
+    const int blocks = mech_[p]->blocks, passes = mech_[p]->passes;
+#pragma omp parallel if (blocks > 1)
+    for (int pass = 0; pass < passes; ++pass) {
+#pragma omp for schedule(static, 1)
       for (int b = 0; b < blocks; ++b) element_block(p, b, pass);
     }
   }

@@ -63,15 +63,9 @@ inline int padded_ld(int n) {
 }
 
 // Per-thread buffers for the values of one block of elements (indexed from
-// the block's first element, or from its first hinge); they grow to the
-// largest block once.
+// the block's first element); they grow to the largest block once.
 struct BlockScratch {
-  std::vector<double> temp, strain, ff, mf, law_stress, energy_tmp, energy, hgrad, hth, moment, benergy, mk;
-  // The block's interior hinges (structure of arrays, capacity hcap):
-  // angle minus initial angle, gradients on (c, o, p, q) x xyz, and 1 where
-  // the angle is evaluated again with the library.
-  std::vector<double> hdth, hg, hredo;
-  int hcap = 0;
+  std::vector<double> temp, strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, mk;
 };
 
 BlockScratch& block_scratch(int n) {
@@ -85,8 +79,6 @@ BlockScratch& block_scratch(int n) {
     s.law_stress.resize(3 * m);
     s.energy_tmp.resize(m);
     s.energy.resize(m);
-    s.hgrad.resize(36 * m);
-    s.hth.resize(3 * m);
     s.moment.resize(3 * m);
     s.benergy.resize(m);
     s.mk.resize(3 * m);
@@ -94,20 +86,21 @@ BlockScratch& block_scratch(int n) {
   return s;
 }
 
-void reserve_hinges(BlockScratch& s, int h) {
-  if (s.hcap >= h) return;
-  s.hcap = h;
-  const std::size_t m = static_cast<std::size_t>(h);
-  s.hdth.resize(m);
-  s.hg.resize(12 * m);
-  s.hredo.resize(m);
-}
+// The hinges of one block between the passes of a step (see
+// ShellRfT3::block_angles): interior hinges at [0, nh) (structure of arrays,
+// capacity cap): angle minus initial angle, gradients (as hinge_block writes
+// them), 1 where the angle is evaluated again with the library; ghost hinges at
+// nh + 3 (e - b) + k, their gradients on (c, p, q) in ghost_grad.
+struct BlockAngles {
+  std::vector<double> dth, G, redo, ghost_grad;
+  int cap = 0;
+};
 
 // Bending angles (minus their initial values theta0) and their gradients of
 // h hinges; the angle as ShellRfT3::hinge_angle with the same operations in
 // the same order. Hinge j has its nodes (c, p, q, o) at x[ic[j]], x[ip[j]], ...
-// (offsets 3 x node); its gradients on (c, o, p, q) go to G[(3 i + d) cap +
-// j]. redo[j] = 1 (0 otherwise) where the angle is beyond atan2_small's
+// (offsets 3 x node); its gradients go to G[r cap + j]: rows 0-2 g_c, 3-5
+// g_o, 6 sc, 7 so (the gradients on p and q follow from them). redo[j] = 1 (0 otherwise) where the angle is beyond atan2_small's
 // range (the caller evaluates it with the library).
 TS_VECTOR_CLONES
 void hinge_block(int h, int cap, const int* __restrict ic, const int* __restrict ip, const int* __restrict iq,
@@ -129,19 +122,20 @@ void hinge_block(int h, int cap, const int* __restrict ic, const int* __restrict
     const double y = m0 * e0 + m1 * e1 + m2 * e2, xx = len * (ne0 * nn0 + ne1 * nn1 + ne2 * nn2);
     redo[j] = (xx > 0) & (std::abs(y) <= 0.66 * xx) ? 0.0 : 1.0;
     dtheta[j] = atan2_small_approx(y, xx) - theta0[j];
-    // Gradient: d theta / d c = n_e / h_c = Ne len / |Ne|^2 (likewise for o
-    // with Nn); p and q take what keeps rigid motions force-free.
+      // Gradient: d theta / d c = g_c = n_e / h_c = Ne len / |Ne|^2 (likewise
+    // g_o with Nn); p and q take what keeps rigid motions force-free,
+    // g_q = -(sc g_c + so g_o), g_p = -(g_c + g_o) - g_q (sc, so the
+    // positions of c and o along the edge, from p, over its length).
     const double sc = (c0 * e0 + c1 * e1 + c2 * e2) / l2, so = (o0 * e0 + o1 * e1 + o2 * e2) / l2;
     const double se = len / (ne0 * ne0 + ne1 * ne1 + ne2 * ne2), sn = len / (nn0 * nn0 + nn1 * nn1 + nn2 * nn2);
-    const double g0[3] = {ne0 * se, ne1 * se, ne2 * se};
-    const double g1[3] = {nn0 * sn, nn1 * sn, nn2 * sn};
-    const double a2 = -(1 - sc), b2 = -(1 - so), a3 = -sc, b3 = -so;
-    for (int d = 0; d < 3; ++d) {
-      G[(0 + d) * cap + j] = g0[d];
-      G[(3 + d) * cap + j] = g1[d];
-      G[(6 + d) * cap + j] = g0[d] * a2 + g1[d] * b2;
-      G[(9 + d) * cap + j] = g0[d] * a3 + g1[d] * b3;
-    }
+    G[j] = ne0 * se;
+    G[cap + j] = ne1 * se;
+    G[2 * cap + j] = ne2 * se;
+    G[3 * cap + j] = nn0 * sn;
+    G[4 * cap + j] = nn1 * sn;
+    G[5 * cap + j] = nn2 * sn;
+    G[6 * cap + j] = sc;
+    G[7 * cap + j] = so;
   }
 }
 
@@ -195,6 +189,80 @@ void membrane_block(int n, int ld, const int* __restrict tri, const double* __re
     l2max = l2max < l12 ? l12 : l2max;
     const double h = std::sqrt((n0 * n0 + n1 * n1 + n2 * n2) / l2max);
     dte[q] = has_stiffness ? h * inv_c : inf;
+  }
+}
+
+// Per element q of a block and edge k (values of the block's elements
+// from their first one): theta_k = dth[loc[3 q + k]], rho = L theta (L row
+// major, 9 per element), eq = rho + a theta.
+TS_VECTOR_CLONES
+void slope_block(int n, const int* __restrict loc, const double* __restrict dth, const double* __restrict L,
+                 const double* __restrict a, double* __restrict eq, double* __restrict rho) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const double t0 = dth[loc[3 * q]], t1 = dth[loc[3 * q + 1]], t2 = dth[loc[3 * q + 2]];
+    const double* l = L + 9 * q;
+    const double r0 = l[0] * t0 + l[1] * t1 + l[2] * t2, r1 = l[3] * t0 + l[4] * t1 + l[5] * t2,
+                 r2 = l[6] * t0 + l[7] * t1 + l[8] * t2;
+    rho[3 * q] = r0;
+    rho[3 * q + 1] = r1;
+    rho[3 * q + 2] = r2;
+    eq[3 * q] = r0 + a[3 * q] * t0;
+    eq[3 * q + 1] = r1 + a[3 * q + 1] * t1;
+    eq[3 * q + 2] = r2 + a[3 * q + 2] * t2;
+  }
+}
+
+// Curvatures of n elements, K = sum_k c_k s_k with the shared slopes
+// s_k = eq_k - rho[nidx_k] (c_k = dK/ds_k, value r of edge k of element q at
+// c[(3 k + r) ld + q]; rho indexed over the whole part), and the elements'
+// mean temperatures from their nodes' (tri: the block's triangles).
+TS_VECTOR_CLONES
+void curvature_block(int n, int ld, const double* __restrict c, const int* __restrict nidx, const double* __restrict eq,
+                     const double* __restrict rho, const int* __restrict tri, const double* __restrict node_temp,
+                     double* __restrict K, double* __restrict temp) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const double s0 = eq[3 * q] - rho[nidx[3 * q]], s1 = eq[3 * q + 1] - rho[nidx[3 * q + 1]],
+                 s2 = eq[3 * q + 2] - rho[nidx[3 * q + 2]];
+    const double* cq = c + q;
+    K[3 * q] = cq[0] * s0 + cq[3 * ld] * s1 + cq[6 * ld] * s2;
+    K[3 * q + 1] = cq[ld] * s0 + cq[4 * ld] * s1 + cq[7 * ld] * s2;
+    K[3 * q + 2] = cq[2 * ld] * s0 + cq[5 * ld] * s1 + cq[8 * ld] * s2;
+    temp[q] = node_temp[tri[3 * q]] / 3.0 + node_temp[tri[3 * q + 1]] / 3.0 + node_temp[tri[3 * q + 2]] / 3.0;
+  }
+}
+
+// dW/ds_k = A0 M : c_k per element and edge (c laid out as for
+// curvature_block), and A0 w.
+TS_VECTOR_CLONES
+void moment_block(int n, int ld, const double* __restrict area, const double* __restrict c, const double* __restrict M,
+                  const double* __restrict w, double* __restrict em, double* __restrict ew) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const double A0 = area[q], M0 = M[3 * q], M1 = M[3 * q + 1], M2 = 2 * M[3 * q + 2];
+    const double* cq = c + q;
+    em[3 * q] = A0 * (M0 * cq[0] + M1 * cq[ld] + M2 * cq[2 * ld]);
+    em[3 * q + 1] = A0 * (M0 * cq[3 * ld] + M1 * cq[4 * ld] + M2 * cq[5 * ld]);
+    em[3 * q + 2] = A0 * (M0 * cq[6 * ld] + M1 * cq[7 * ld] + M2 * cq[8 * ld]);
+    ew[q] = A0 * w[q];
+  }
+}
+
+// Each element's share of dW/dtheta of its hinges, g_i = a_i m_i +
+// sum_k L_ki (m_k - m[nidx_k]) (L with its rows scaled by omega; m over the
+// whole part, the block's elements from entry m0).
+TS_VECTOR_CLONES
+void hinge_moment_block(int n, const double* __restrict L, const double* __restrict a, const int* __restrict nidx,
+                        const double* __restrict m, int m0, double* __restrict g) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const double m_0 = m[m0 + 3 * q], m_1 = m[m0 + 3 * q + 1], m_2 = m[m0 + 3 * q + 2];
+    const double u0 = m_0 - m[nidx[3 * q]], u1 = m_1 - m[nidx[3 * q + 1]], u2 = m_2 - m[nidx[3 * q + 2]];
+    const double* l = L + 9 * q;
+    g[3 * q] = a[3 * q] * m_0 + l[0] * u0 + l[3] * u1 + l[6] * u2;
+    g[3 * q + 1] = a[3 * q + 1] * m_1 + l[1] * u0 + l[4] * u1 + l[7] * u2;
+    g[3 * q + 2] = a[3 * q + 2] * m_2 + l[2] * u0 + l[5] * u1 + l[8] * u2;
   }
 }
 
@@ -553,6 +621,8 @@ class ShellRfT3 final : public ElementKernel {
     gstart_.assign(ne + 1, 0);
     block_hinges_.clear();
     block_hinges_.resize(ne + 1);
+    block_angles_.clear();
+    block_angles_.resize(ne + 1);
     gedge_.clear();
     for (int e = 0; e < ne; ++e) {
       gstart_[e] = static_cast<int>(gedge_.size());
@@ -599,10 +669,11 @@ class ShellRfT3 final : public ElementKernel {
     const int* nbr = part_->neighbours.data();
     cs_.assign(9 * static_cast<std::size_t>(gld_), 0.0);
     lmap_.assign(9 * static_cast<std::size_t>(ne), 0.0);
-    omega_.assign(3 * ne, 0.5);
-    eth_.assign(3 * ne, 0.0);
-    er_.assign(3 * ne, 0.0);
-    em_.assign(3 * ne, 0.0);
+    acoef_.assign(3 * ne, 0.0);
+    nidx_.assign(3 * ne, 3 * ne);
+    eq_.assign(3 * ne, 0.0);
+    erho_.assign(3 * ne + 3, 0.0);  // the last three: zero, read for edges without a neighbour
+    em_.assign(3 * ne + 3, 0.0);
     eben_.assign(ne, 0.0);
     std::vector<char> fit(ne, 0);
     // Gradient of the linear interpolant of values v at three points.
@@ -697,10 +768,16 @@ class ShellRfT3 final : public ElementKernel {
       std::copy(L, L + 9, &lmap_[9 * static_cast<std::size_t>(e)]);
       fit[e] = 1;
     }
+    // Weights omega of the element's own slope per interior edge; the rows
+    // of L scaled by them (zero for edges without a neighbour: no one reads
+    // those slopes), and a = 1 - omega (1/2 at a held edge, 0 at a free one).
     for (int e = 0; e < ne; ++e)
       for (int k = 0; k < 3; ++k) {
-        const int nb = nbr[3 * e + k];
-        if (nb >= 0) omega_[3 * e + k] = fit[e] && fit[nb] ? 0.5 : fit[e] ? 1.0 : fit[nb] ? 0.0 : 0.5;
+        const int nb = nbr[3 * e + k], i = 3 * e + k;
+        const double w = nb < 0 ? 0.0 : fit[e] && fit[nb] ? 0.5 : fit[e] ? 1.0 : fit[nb] ? 0.0 : 0.5;
+        for (int c = 0; c < 3; ++c) lmap_[9 * static_cast<std::size_t>(e) + 3 * k + c] *= w;
+        acoef_[i] = nb >= 0 ? 1 - w : clamped_[i] ? 0.5 : 0.0;
+        if (nb >= 0) nidx_[i] = 3 * nb + partner_k_[i];
       }
     double D[3][3];
     const bool have_d = probe_rigidity(T, D);
@@ -826,25 +903,34 @@ class ShellRfT3 final : public ElementKernel {
     return *slot;
   }
 
-  // The angle changes of the hinges of block [b, end) (sc.hdth): its
-  // interior hinges at [0, nh) (those owned by its elements, then those
-  // owned by an element of an earlier block; returns nh), then one entry
-  // per element and edge without a neighbour at nh + 3 (e - b) + k (the
-  // ghost hinge's angle, zero at a free edge). With gradients: those of
-  // the interior hinges in sc.hg, of the ghost hinges in sc.hgrad.
-  int block_angles(int b, int end, BlockScratch& sc, const BlockHinges& bh, bool gradients) {
+  // The angle changes of the hinges of block [b, end) and their gradients,
+  // kept for the block (BlockAngles) from pass 0 to pass 2: its interior
+  // hinges (those owned by its elements, then those owned by an element of
+  // an earlier block), then one entry per element and edge without a
+  // neighbour (the ghost hinge's angle, zero at a free edge).
+  BlockAngles& block_angles(int b, int end, const BlockHinges& bh) {
     const int n = end - b;
     const double* x = part_->x.data();
     static_assert(sizeof(Vec3) == 3 * sizeof(double));
     const int h0 = hstart_[b], nown = hstart_[end] - h0;
     const int nforeign = bh.nforeign;
     const int nh = nown + nforeign;
-    reserve_hinges(sc, nh + 3 * n);
-    const int cap = sc.hcap;
+    std::unique_ptr<BlockAngles>& slot = block_angles_[b];
+    if (!slot || slot->cap < nh + 3 * n) {
+      slot = std::make_unique<BlockAngles>();
+      slot->cap = nh + 3 * n;
+      const std::size_t m = static_cast<std::size_t>(slot->cap);
+      slot->dth.resize(m);
+      slot->G.resize(8 * m);
+      slot->redo.resize(m);
+      slot->ghost_grad.resize(36 * static_cast<std::size_t>(n));
+    }
+    BlockAngles& ba = *slot;
+    const int cap = ba.cap;
     const int* fnode = bh.fnode.data();
-    double* dth = sc.hdth.data();
-    double* G = sc.hg.data();
-    double* redo = sc.hredo.data();
+    double* dth = ba.dth.data();
+    double* G = ba.G.data();
+    double* redo = ba.redo.data();
     hinge_block(nown, cap, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, htheta0_.data() + h0,
                 dth, G, redo);
     hinge_block(nforeign, cap, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x, bh.ftheta0.data(),
@@ -855,39 +941,29 @@ class ShellRfT3 final : public ElementKernel {
         dth[j] = hinge_angle(x, hc_[h] / 3, hp_[h] / 3, hq_[h] / 3, ho_[h] / 3) - htheta0_[h];
       }
     // Ghost hinges (clamped and symmetry edges), one by one.
-    double* hgrad = sc.hgrad.data();  // per element and edge of the block: d theta / dx on (c, p, q)
+    double* ggrad = ba.ghost_grad.data();  // per element and edge of the block: d theta / dx on (c, p, q)
     std::fill(dth + nh, dth + nh + 3 * n, 0.0);
     for (int g = gstart_[b]; g < gstart_[end]; ++g) {
       const int e = gedge_[g] / 3, k = gedge_[g] % 3;
       const int* t = &part_->triangles[3 * e];
-      Vec3* gr = gradients ? reinterpret_cast<Vec3*>(&hgrad[36 * (e - b) + 12 * k]) : nullptr;
+      Vec3* gr = reinterpret_cast<Vec3*>(&ggrad[36 * (e - b) + 12 * k]);
       dth[nh + 3 * (e - b) + k] =
           clamped_[3 * e + k] == 1
               ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, gr)
               : ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, gr);
     }
-    return nh;
+    return ba;
   }
 
-  // Pass 0: the angle change of each edge of the block's elements (eth_)
-  // and the slopes of their own quadratics at their mid-edges (er_ = L theta).
+  // Pass 0: per element and edge of the block, from the angle changes
+  // theta: rho = omega r (r = L theta the slopes of the element's own
+  // quadratic at its mid-edges) and q = rho + a theta; the shared slope of
+  // an edge is then s = q - rho' (rho' the neighbour's of the same edge).
   void slope_angles(int b, int end) {
-    BlockScratch& sc = block_scratch(end - b);
     const BlockHinges& bh = block_hinges(b, end);
-    block_angles(b, end, sc, bh, false);
-    const int* loc = bh.loc.data();
-    const double* dth = sc.hdth.data();
-    for (int e = b; e < end; ++e) {
-      const int q = e - b;
-      const double t0 = dth[loc[3 * q]], t1 = dth[loc[3 * q + 1]], t2 = dth[loc[3 * q + 2]];
-      const double* L = &lmap_[9 * static_cast<std::size_t>(e)];
-      eth_[3 * e] = t0;
-      eth_[3 * e + 1] = t1;
-      eth_[3 * e + 2] = t2;
-      er_[3 * e] = L[0] * t0 + L[1] * t1 + L[2] * t2;
-      er_[3 * e + 1] = L[3] * t0 + L[4] * t1 + L[5] * t2;
-      er_[3 * e + 2] = L[6] * t0 + L[7] * t1 + L[8] * t2;
-    }
+    const BlockAngles& ba = block_angles(b, end, bh);
+    slope_block(end - b, bh.loc.data(), ba.dth.data(), lmap_.data() + 9 * static_cast<std::size_t>(b),
+                acoef_.data() + 3 * b, eq_.data() + 3 * b, erho_.data() + 3 * b);
   }
 
   // Pass 1: mid-edge slopes, curvatures, the law's moments and energies,
@@ -895,23 +971,10 @@ class ShellRfT3 final : public ElementKernel {
   Status slope_moments(const ElementForceInput& in, int b, int end) {
     const int n = end - b;
     BlockScratch& sc = block_scratch(n);
-    const int* nbr = part_->neighbours.data();
-    const int* pk = partner_k_.data();
     double* temp = sc.temp.data();
     double* K = curv_.data() + 3 * b;
-    for (int e = b; e < end; ++e) {
-      const int q = e - b;
-      double sl[3];
-      for (int k = 0; k < 3; ++k) {
-        const int nb = nbr[3 * e + k], i = 3 * e + k;
-        const double w = omega_[i];
-        sl[k] = nb >= 0 ? w * er_[i] + (1 - w) * (eth_[i] - er_[3 * nb + pk[i]]) : 0.5 * eth_[i];
-      }
-      const double* c = cs_.data() + e;
-      for (int r = 0; r < 3; ++r) K[3 * q + r] = c[r * gld_] * sl[0] + c[(3 + r) * gld_] * sl[1] + c[(6 + r) * gld_] * sl[2];
-      const int* t = &part_->triangles[3 * e];
-      temp[q] = in.node_temperature[t[0]] / 3.0 + in.node_temperature[t[1]] / 3.0 + in.node_temperature[t[2]] / 3.0;
-    }
+    curvature_block(n, gld_, cs_.data() + b, nidx_.data() + 3 * b, eq_.data() + 3 * b, erho_.data(),
+                    &part_->triangles[3 * b], in.node_temperature.data(), K, temp);
     MaterialBlock blk;
     blk.n = n;
     blk.strain = std::span<const double>(K, 3 * n);
@@ -923,15 +986,8 @@ class ShellRfT3 final : public ElementKernel {
     blk.stress = std::span<double>(sc.moment.data(), 3 * n);
     blk.energy = std::span<double>(sc.benergy.data(), n);
     if (auto st = bending_->evaluate(blk); !st) return st;
-    const double* M = sc.moment.data();
-    for (int e = b; e < end; ++e) {
-      const int q = e - b;
-      const double A0 = area0_[e], M0 = M[3 * q], M1 = M[3 * q + 1], M2 = 2 * M[3 * q + 2];
-      const double* c = cs_.data() + e;
-      for (int k = 0; k < 3; ++k)
-        em_[3 * e + k] = A0 * (M0 * c[(3 * k) * gld_] + M1 * c[(3 * k + 1) * gld_] + M2 * c[(3 * k + 2) * gld_]);
-      eben_[e] = A0 * sc.benergy[q];
-    }
+    moment_block(n, gld_, area0_.data() + b, cs_.data() + b, sc.moment.data(), sc.benergy.data(), em_.data() + 3 * b,
+                 eben_.data() + b);
     if (in.commit && !curv_old_.empty())
       std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
     return Status::success();
@@ -943,32 +999,19 @@ class ShellRfT3 final : public ElementKernel {
   // lowers the elements' stable steps (sc.energy_tmp) with the bending
   // ones; [t_lo, t_hi] is the block's temperature range. Each element
   // brings its share of dW/dtheta of its hinges,
-  //   g_i = (1 - omega_i) m_i + sum_k L_ki omega_k (m_k - m'_k)
-  // (m' the neighbour's dW/ds of the same edge; at a ghost edge 1/2 m_i).
+  //   g_i = a_i m_i + sum_k omega_k L_ki (m_k - m'_k)
+  // (m' the neighbour's dW/ds of the same edge).
   double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
                         const double* mf, int ld, ElementForceOutput& out) {
     const int n = end - b;
     const BlockHinges& bh = block_hinges(b, end);
-    block_angles(b, end, sc, bh, true);
-    const int cap = sc.hcap;
-    const double* G = sc.hg.data();
-    const double* hgrad = sc.hgrad.data();
-    const int* nbr = part_->neighbours.data();
-    const int* pk = partner_k_.data();
+    const BlockAngles& ba = *block_angles_[b];  // from pass 0
+    const int cap = ba.cap;
+    const double* G = ba.G.data();
+    const double* hgrad = ba.ghost_grad.data();
     double* mk = sc.mk.data();
-    for (int e = b; e < end; ++e) {
-      const int q = e - b;
-      double wmu[3];
-      for (int k = 0; k < 3; ++k) {
-        const int nb = nbr[3 * e + k], i = 3 * e + k;
-        wmu[k] = nb >= 0 ? omega_[i] * (em_[i] - em_[3 * nb + pk[i]]) : 0.0;
-      }
-      const double* L = &lmap_[9 * static_cast<std::size_t>(e)];
-      for (int i = 0; i < 3; ++i) {
-        const double own = (nbr[3 * e + i] >= 0 ? 1 - omega_[3 * e + i] : 0.5) * em_[3 * e + i];
-        mk[3 * q + i] = own + L[i] * wmu[0] + L[3 + i] * wmu[1] + L[6 + i] * wmu[2];
-      }
-    }
+    hinge_moment_block(n, lmap_.data() + 9 * static_cast<std::size_t>(b), acoef_.data() + 3 * b, nidx_.data() + 3 * b,
+                       em_.data(), 3 * b, mk);
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
     double* dte = sc.energy_tmp.data();  // the membrane's stable steps of the block's elements
     if (rmax > 0) {
@@ -1002,18 +1045,23 @@ class ShellRfT3 final : public ElementKernel {
         if (code < 0) continue;  // no hinge, or brought by its owner in this block
         const int j = code >> 1;
         const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-        // Gradient rows of (corner k, the node across, corner k + 1, corner
-        // k + 2): (c, o, p, q) from the owner, (o, c, q, p) from the neighbour.
-        int rk = 0, ro = 3, r1 = 6, r2 = 9;
+        // (corner k, the node across, corner k + 1, corner k + 2) are
+        // (c, o, p, q) of the owner's orientation, (o, c, q, p) of the
+        // neighbour's.
         double m = mk[3 * q + k];
         if (fm[3 * q + k] >= 0) m += mk[fm[3 * q + k]];
-        if (code & 1) rk = 3, ro = 0, r1 = 9, r2 = 6;
+        const bool nb_side = code & 1;
+        const int kp = nb_side ? k2 : k1, kq = nb_side ? k1 : k2;
+        double* fk = fc[k];
         double* fo = nf + 3 * slot[6 * q + 3 + k];
+        const double sc = G[6 * cap + j], so = G[7 * cap + j];
         for (int d = 0; d < 3; ++d) {
-          fc[k][d] += m * G[(rk + d) * cap + j];
-          fc[k1][d] += m * G[(r1 + d) * cap + j];
-          fc[k2][d] += m * G[(r2 + d) * cap + j];
-          fo[d] += m * G[(ro + d) * cap + j];
+          const double gc = G[d * cap + j], go = G[(3 + d) * cap + j];
+          const double mc = m * gc, mo = m * go, t = m * (sc * gc + so * go);
+          fk[d] += nb_side ? mo : mc;
+          fo[d] += nb_side ? mc : mo;
+          fc[kp][d] += t - mc - mo;
+          fc[kq][d] -= t;
         }
       }
       for (int a = 0; a < 3; ++a) {
@@ -1049,10 +1097,13 @@ class ShellRfT3 final : public ElementKernel {
   // Mid-edge slopes: cs_ dK/ds_k (value r of edge k of element e at
   // (3 k + r) gld_ + e, free edges condensed), lmap_ the 3 x 3 map L from
   // an element's angle changes to the slopes of its own quadratic (row
-  // major, 9 per element; zero where the element has no quadratic),
-  // omega_ the weight of the element's own slope per edge; per step eth_
-  // (angle changes), er_ (own slopes), em_ (dW/ds), eben_ (A0 w).
-  std::vector<double> cs_, lmap_, omega_, eth_, er_, em_, eben_;
+  // major, 9 per element; zero where the element has no quadratic;
+  // its rows scaled by the weight omega of the element's own slope per
+  // edge), acoef_ a per edge (see slope_angles), nidx_ per edge the entry
+  // of the neighbour's same edge (3 ne, a zero entry, where there is none);
+  // per step eq_, erho_ (slope_angles), em_ (dW/ds), eben_ (A0 w).
+  std::vector<double> cs_, lmap_, acoef_, eq_, erho_, em_, eben_;
+  std::vector<int> nidx_;
   // Interior hinges: node offsets (3 x node) of (c, p, q, o) in the owner's
   // orientation, initial angle, owner and its edge k, neighbour and its
   // edge; hid_ per element and edge; dmin2_ the squared smallest initial
@@ -1061,6 +1112,7 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<char> hk_, hkp_;
   std::vector<double> htheta0_, dmin2_;
   std::vector<std::unique_ptr<BlockHinges>> block_hinges_;  // by the block's first element
+  std::vector<std::unique_ptr<BlockAngles>> block_angles_;  // likewise
   const PartView* part_ = nullptr;
   std::vector<const MaterialLaw*> laws_;
   double areal_mass_ = 0;
