@@ -893,19 +893,23 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
         }
         contact_time = seconds_since(tc);
       }
-      // The passes of an element one after the other (a task group waits
-      // for its own tasks only, not for the contact task).
-      int passes = 0;
-      for (const auto& m : mech_) passes = std::max(passes, m->passes);
-      for (int pass = 0; pass < passes; ++pass) {
+      // The element blocks from a task of their own, their passes one after
+      // the other: a thread waiting for a pass's task group may then run
+      // only that pass's blocks, never the contact task (not a descendant).
+#pragma omp task
+      {
+        int passes = 0;
+        for (const auto& m : mech_) passes = std::max(passes, m->passes);
+        for (int pass = 0; pass < passes; ++pass) {
 #pragma omp taskgroup
-        {
-          for (std::size_t p = 0; p < parts_.size(); ++p)
-            if (pass < mech_[p]->passes)
-              for (int b = 0; b < mech_[p]->blocks; ++b) {
+          {
+            for (std::size_t p = 0; p < parts_.size(); ++p)
+              if (pass < mech_[p]->passes)
+                for (int b = 0; b < mech_[p]->blocks; ++b) {
 #pragma omp task firstprivate(p, b, pass)
-                element_block(p, b, pass);
-              }
+                  element_block(p, b, pass);
+                }
+          }
         }
       }
     }

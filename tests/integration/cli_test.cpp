@@ -193,7 +193,7 @@ TEST(Cli, NotJsonAndTruncatedFiles) {
 
 // validate also gives the steps the run starts with: the thermal demo's
 // thermal step, and for the hemisphere the mechanical step with mass
-// scaling (the target_dt of 1.5e-5 s, less at most the 12 % that the
+// scaling (the target_dt of 1.4e-5 s, less at most the 12 % that the
 // contact springs' bound may take) and the steps it implies for the stroke.
 TEST(Cli, ValidateRunsNothing) {
   const auto r = thermostamp("validate " + q(demo_job()));
