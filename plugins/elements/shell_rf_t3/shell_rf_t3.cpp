@@ -196,12 +196,12 @@ void membrane_block(int n, int ld, const int* __restrict tri, const double* __re
 // from their first one): theta_k = dth[loc[3 q + k]], rho = L theta (L row
 // major, 9 per element), eq = rho + a theta.
 TS_VECTOR_CLONES
-void slope_block(int n, const int* __restrict loc, const double* __restrict dth, const double* __restrict L,
-                 const double* __restrict a, double* __restrict eq, double* __restrict rho) {
+void slope_block(int n, const int* __restrict loc, const double* __restrict dth, const float* __restrict L,
+                 const float* __restrict a, double* __restrict eq, double* __restrict rho) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double t0 = dth[loc[3 * q]], t1 = dth[loc[3 * q + 1]], t2 = dth[loc[3 * q + 2]];
-    const double* l = L + 9 * q;
+    const float* l = L + 9 * q;
     const double r0 = l[0] * t0 + l[1] * t1 + l[2] * t2, r1 = l[3] * t0 + l[4] * t1 + l[5] * t2,
                  r2 = l[6] * t0 + l[7] * t1 + l[8] * t2;
     rho[3 * q] = r0;
@@ -218,14 +218,14 @@ void slope_block(int n, const int* __restrict loc, const double* __restrict dth,
 // c[(3 k + r) ld + q]; rho indexed over the whole part), and the elements'
 // mean temperatures from their nodes' (tri: the block's triangles).
 TS_VECTOR_CLONES
-void curvature_block(int n, int ld, const double* __restrict c, const int* __restrict nidx, const double* __restrict eq,
+void curvature_block(int n, int ld, const float* __restrict c, const int* __restrict nidx, const double* __restrict eq,
                      const double* __restrict rho, const int* __restrict tri, const double* __restrict node_temp,
                      double* __restrict K, double* __restrict temp) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double s0 = eq[3 * q] - rho[nidx[3 * q]], s1 = eq[3 * q + 1] - rho[nidx[3 * q + 1]],
                  s2 = eq[3 * q + 2] - rho[nidx[3 * q + 2]];
-    const double* cq = c + q;
+    const float* cq = c + q;
     K[3 * q] = cq[0] * s0 + cq[3 * ld] * s1 + cq[6 * ld] * s2;
     K[3 * q + 1] = cq[ld] * s0 + cq[4 * ld] * s1 + cq[7 * ld] * s2;
     K[3 * q + 2] = cq[2 * ld] * s0 + cq[5 * ld] * s1 + cq[8 * ld] * s2;
@@ -236,12 +236,12 @@ void curvature_block(int n, int ld, const double* __restrict c, const int* __res
 // dW/ds_k = A0 M : c_k per element and edge (c laid out as for
 // curvature_block), and A0 w.
 TS_VECTOR_CLONES
-void moment_block(int n, int ld, const double* __restrict area, const double* __restrict c, const double* __restrict M,
+void moment_block(int n, int ld, const double* __restrict area, const float* __restrict c, const double* __restrict M,
                   const double* __restrict w, double* __restrict em, double* __restrict ew) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double A0 = area[q], M0 = M[3 * q], M1 = M[3 * q + 1], M2 = 2 * M[3 * q + 2];
-    const double* cq = c + q;
+    const float* cq = c + q;
     em[3 * q] = A0 * (M0 * cq[0] + M1 * cq[ld] + M2 * cq[2 * ld]);
     em[3 * q + 1] = A0 * (M0 * cq[3 * ld] + M1 * cq[4 * ld] + M2 * cq[5 * ld]);
     em[3 * q + 2] = A0 * (M0 * cq[6 * ld] + M1 * cq[7 * ld] + M2 * cq[8 * ld]);
@@ -253,13 +253,13 @@ void moment_block(int n, int ld, const double* __restrict area, const double* __
 // sum_k L_ki (m_k - m[nidx_k]) (L with its rows scaled by omega; m over the
 // whole part, the block's elements from entry m0).
 TS_VECTOR_CLONES
-void hinge_moment_block(int n, const double* __restrict L, const double* __restrict a, const int* __restrict nidx,
+void hinge_moment_block(int n, const float* __restrict L, const float* __restrict a, const int* __restrict nidx,
                         const double* __restrict m, int m0, double* __restrict g) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double m_0 = m[m0 + 3 * q], m_1 = m[m0 + 3 * q + 1], m_2 = m[m0 + 3 * q + 2];
     const double u0 = m_0 - m[nidx[3 * q]], u1 = m_1 - m[nidx[3 * q + 1]], u2 = m_2 - m[nidx[3 * q + 2]];
-    const double* l = L + 9 * q;
+    const float* l = L + 9 * q;
     g[3 * q] = a[3 * q] * m_0 + l[0] * u0 + l[3] * u1 + l[6] * u2;
     g[3 * q + 1] = a[3 * q + 1] * m_1 + l[1] * u0 + l[4] * u1 + l[7] * u2;
     g[3 * q + 2] = a[3 * q + 2] * m_2 + l[2] * u0 + l[5] * u1 + l[8] * u2;
@@ -765,7 +765,7 @@ class ShellRfT3 final : public ElementKernel {
           lmax = std::max(lmax, std::abs(L[3 * k + i]));
         }
       if (!(lmax < kMaxSlopeMap)) continue;
-      std::copy(L, L + 9, &lmap_[9 * static_cast<std::size_t>(e)]);
+      for (int i = 0; i < 9; ++i) lmap_[9 * static_cast<std::size_t>(e) + i] = static_cast<float>(L[i]);
       fit[e] = 1;
     }
     // Weights omega of the element's own slope per interior edge; the rows
@@ -775,8 +775,9 @@ class ShellRfT3 final : public ElementKernel {
       for (int k = 0; k < 3; ++k) {
         const int nb = nbr[3 * e + k], i = 3 * e + k;
         const double w = nb < 0 ? 0.0 : fit[e] && fit[nb] ? 0.5 : fit[e] ? 1.0 : fit[nb] ? 0.0 : 0.5;
-        for (int c = 0; c < 3; ++c) lmap_[9 * static_cast<std::size_t>(e) + 3 * k + c] *= w;
-        acoef_[i] = nb >= 0 ? 1 - w : clamped_[i] ? 0.5 : 0.0;
+        float* row = &lmap_[9 * static_cast<std::size_t>(e) + 3 * k];
+        for (int c = 0; c < 3; ++c) row[c] = static_cast<float>(w * row[c]);
+        acoef_[i] = static_cast<float>(nb >= 0 ? 1 - w : clamped_[i] ? 0.5 : 0.0);
         if (nb >= 0) nidx_[i] = 3 * nb + partner_k_[i];
       }
     double D[3][3];
@@ -836,7 +837,7 @@ class ShellRfT3 final : public ElementKernel {
           }
       }
       for (int k = 0; k < 3; ++k)
-        for (int r = 0; r < 3; ++r) cs_[(3 * k + r) * static_cast<std::size_t>(gld_) + e] = cp[k][r];
+        for (int r = 0; r < 3; ++r) cs_[(3 * k + r) * static_cast<std::size_t>(gld_) + e] = static_cast<float>(cp[k][r]);
     }
     return Status::success();
   }
@@ -1051,17 +1052,15 @@ class ShellRfT3 final : public ElementKernel {
         double m = mk[3 * q + k];
         if (fm[3 * q + k] >= 0) m += mk[fm[3 * q + k]];
         const bool nb_side = code & 1;
-        const int kp = nb_side ? k2 : k1, kq = nb_side ? k1 : k2;
-        double* fk = fc[k];
         double* fo = nf + 3 * slot[6 * q + 3 + k];
         const double sc = G[6 * cap + j], so = G[7 * cap + j];
-        for (int d = 0; d < 3; ++d) {
+        for (int d = 0; d < 3; ++d) {  // selects, so that fc keeps constant indices (registers)
           const double gc = G[d * cap + j], go = G[(3 + d) * cap + j];
-          const double mc = m * gc, mo = m * go, t = m * (sc * gc + so * go);
-          fk[d] += nb_side ? mo : mc;
+          const double mc = m * gc, mo = m * go, t = m * (sc * gc + so * go), tp = t - mc - mo;
+          fc[k][d] += nb_side ? mo : mc;
           fo[d] += nb_side ? mc : mo;
-          fc[kp][d] += t - mc - mo;
-          fc[kq][d] -= t;
+          fc[k1][d] += nb_side ? -t : tp;
+          fc[k2][d] += nb_side ? tp : -t;
         }
       }
       for (int a = 0; a < 3; ++a) {
@@ -1094,7 +1093,8 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<double> n0_;  // initial element normals (clamped elements)
   // ginv_: dK/dtheta_k, value r of edge k of element e at (3 k + r) gld_ + e.
   std::vector<double> d_, theta0_, curv_, curv_old_, bstate_;
-  // Mid-edge slopes: cs_ dK/ds_k (value r of edge k of element e at
+  // Mid-edge slopes (the set-up coefficients in single precision: the
+  // forces stay the exact derivatives of the energy they define): cs_ dK/ds_k (value r of edge k of element e at
   // (3 k + r) gld_ + e, free edges condensed), lmap_ the 3 x 3 map L from
   // an element's angle changes to the slopes of its own quadratic (row
   // major, 9 per element; zero where the element has no quadratic;
@@ -1102,7 +1102,8 @@ class ShellRfT3 final : public ElementKernel {
   // edge), acoef_ a per edge (see slope_angles), nidx_ per edge the entry
   // of the neighbour's same edge (3 ne, a zero entry, where there is none);
   // per step eq_, erho_ (slope_angles), em_ (dW/ds), eben_ (A0 w).
-  std::vector<double> cs_, lmap_, acoef_, eq_, erho_, em_, eben_;
+  std::vector<float> cs_, lmap_, acoef_;
+  std::vector<double> eq_, erho_, em_, eben_;
   std::vector<int> nidx_;
   // Interior hinges: node offsets (3 x node) of (c, p, q, o) in the owner's
   // orientation, initial angle, owner and its edge k, neighbour and its
