@@ -7,7 +7,7 @@ hemisphere_ud_2ply_fibres_y.json, each on its own mesh pattern, on 10, 15,
 prints a Markdown table: cycles, wall time, ns per element-cycle, shear
 extrema per ply, energy balance and the lower ply's mean temperature under
 the punch pole at t = 1..5 s. Mass scaling to --target-dt (default 5e-5 s,
-the step of the tables in docs/benchmarks.md; the jobs' own 1.5e-5 s
+the step of the tables in docs/benchmarks.md; the jobs' own 1.4e-5 s
 takes 3.3 times longer).
 Takes about 15 minutes on two cores.
 Usage: scripts/bench/refinement.py [--cells 10,20,30] [--target-dt 5e-5] [--out DIR]
