@@ -1,7 +1,12 @@
 """What the CalculiX cross-check scripts share: a rectangle of 8-node
-quadrilaterals (CPS8 or S8R) as CalculiX input lines, and the node values of
-a *NODE PRINT block of the .dat file."""
+quadrilaterals (CPS8 or S8R) as CalculiX input lines, the node values of
+a *NODE PRINT block of the .dat file, and a ThermoStamp run of a job with
+its probe samples."""
+import csv
+import json
+import os
 import re
+import subprocess
 
 
 def quad8_grid(nx, ny, lx, ly, element):
@@ -35,3 +40,15 @@ def node_values(dat_path):
             if m:
                 values[int(m.group(1))] = (float(m.group(2)), float(m.group(3)), float(m.group(4)))
     return values
+
+
+def thermostamp_probes(exe, job, work):
+    """Runs the job (a dict) with the executable exe in the folder work and
+    returns the rows of its probes.csv (dicts: probe, quantity, time, value)."""
+    path = os.path.join(work, job["name"] + ".json")
+    with open(path, "w") as f:
+        json.dump(job, f)
+    out = os.path.join(work, "out")
+    subprocess.run([exe, "run", path, "--out", out, "--quiet"], check=True)
+    with open(os.path.join(out, "probes.csv")) as f:
+        return list(csv.DictReader(f))

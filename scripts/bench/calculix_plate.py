@@ -12,14 +12,12 @@ rectangle generator's alternating and crossed meshes) and CalculiX.
 Usage: scripts/bench/calculix_plate.py [divisions ...]  (default 10 20;
 after a Release build; needs ccx, Debian package calculix-ccx).
 """
-import csv
-import json
 import os
 import subprocess
 import sys
 import tempfile
 
-from calculix_grid import node_values, quad8_grid
+from calculix_grid import node_values, quad8_grid, thermostamp_probes
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 EXE = os.environ.get("THERMOSTAMP_EXE", os.path.join(ROOT, "build", "bin", "thermostamp"))
@@ -65,16 +63,7 @@ def thermostamp(n, pattern, work):
            "output": {"interval": T, "fields": ["displacement"],
                       "probes": [{"name": k, "part": "plate", "at": [fx * L, fy * W, 0],
                                   "quantities": ["displacement_z"]} for k, (fx, fy) in POINTS.items()]}}
-    path = os.path.join(work, "plate.json")
-    with open(path, "w") as f:
-        json.dump(job, f)
-    out = os.path.join(work, "out")
-    subprocess.run([EXE, "run", path, "--out", out, "--quiet"], check=True)
-    w = {}
-    with open(os.path.join(out, "probes.csv")) as f:
-        for r in csv.DictReader(f):
-            w[r["probe"]] = float(r["value"])
-    return w
+    return {r["probe"]: float(r["value"]) for r in thermostamp_probes(EXE, job, work)}
 
 
 def main():

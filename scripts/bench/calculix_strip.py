@@ -7,14 +7,12 @@ fibres at 30 and 60 degrees. Writes docs/figures/calculix_strip.png.
 Usage: scripts/bench/calculix_strip.py (after a Release build; needs ccx,
 Debian package calculix-ccx, and matplotlib).
 """
-import csv
-import json
 import math
 import os
 import subprocess
 import tempfile
 
-from calculix_grid import node_values, quad8_grid
+from calculix_grid import node_values, quad8_grid, thermostamp_probes
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -77,16 +75,8 @@ def thermostamp(deg, nx, ny, work):
                {"type": "fix", "part": "*", "box": [[-1, -1, -1], [1, 1, 1]], "dofs": ["z"]}],
            "solvers": {"mechanics": {"dt_safety": 0.8, "damping": 200.0}, "thermal": None},
            "output": {"interval": t_end, "fields": ["displacement"], "probes": probes}}
-    path = os.path.join(work, "strip.json")
-    with open(path, "w") as f:
-        json.dump(job, f)
-    out = os.path.join(work, "out")
-    subprocess.run([EXE, "run", path, "--out", out, "--quiet"], check=True)
-    vals = {}
-    with open(os.path.join(out, "probes.csv")) as f:
-        for r in csv.DictReader(f):
-            if abs(float(r["time"]) - t_end) < 1e-9:
-                vals[(r["probe"], r["quantity"])] = float(r["value"])
+    vals = {(r["probe"], r["quantity"]): float(r["value"])
+            for r in thermostamp_probes(EXE, job, work) if abs(float(r["time"]) - t_end) < 1e-9}
     return {f: [(L * i / nx, (vals[("y%g_%d" % (f, i), "displacement_x")], vals[("y%g_%d" % (f, i), "displacement_y")]))
                 for i in range(nx + 1)] for f in LINES}
 

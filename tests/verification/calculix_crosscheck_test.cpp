@@ -44,6 +44,11 @@ using Result = std::array<double, 10>;
 
 bool have_ccx() { return std::system("command -v ccx >/dev/null 2>&1") == 0; }
 
+// A probe of the job format at (x, y, 0) of a part.
+json probe_at(const std::string& name, const std::string& part, double x, double y, const json& quantities) {
+  return {{"name", name}, {"part", part}, {"at", {x, y, 0.0}}, {"quantities", quantities}};
+}
+
 // Node number of grid point (i, j) (0 .. 2 nx, 0 .. 2 ny) of write_quad8_grid.
 int quad8_id(int nx, int i, int j) { return j * (2 * nx + 1) + i + 1; }
 
@@ -153,14 +158,9 @@ bool run_ccx(double deg, int nx, int ny, Result& r, std::string& msg) {
 Result run_thermostamp(double deg, int nx, int ny) {
   const double a = deg * M_PI / 180.0, t_end = 0.1;
   json probes = json::array();
-  for (int k = 0; k < 4; ++k) {
-    std::string name = "p";
-    name += std::to_string(k);
-    probes.push_back({{"name", name},
-                      {"part", "strip"},
-                      {"at", {kProbe[k][0] * kL, kProbe[k][1] * kW, 0.0}},
-                      {"quantities", {"displacement_x", "displacement_y"}}});
-  }
+  for (int k = 0; k < 4; ++k)
+    probes.push_back(probe_at("p" + std::to_string(k), "strip", kProbe[k][0] * kL, kProbe[k][1] * kW,
+                              {"displacement_x", "displacement_y"}));
   const json j = {
       {"format", "thermostamp-job/1"},
       {"name", "clamped_strip"},
@@ -317,10 +317,8 @@ std::array<double, 4> run_thermostamp_plate(int n, const std::string& pattern) {
   const double t_end = 0.3;
   json probes = json::array();
   for (int k = 0; k < 4; ++k)
-    probes.push_back({{"name", kPlateProbeName[k]},
-                      {"part", "plate"},
-                      {"at", {kPlateProbe[k][0] * kPlate, kPlateProbe[k][1] * kPlate, 0.0}},
-                      {"quantities", {"displacement_z"}}});
+    probes.push_back(probe_at(kPlateProbeName[k], "plate", kPlateProbe[k][0] * kPlate, kPlateProbe[k][1] * kPlate,
+                              {"displacement_z"}));
   const json j = {
       {"format", "thermostamp-job/1"},
       {"name", "plate"},
