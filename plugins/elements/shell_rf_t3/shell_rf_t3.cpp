@@ -87,8 +87,8 @@ BlockScratch& block_scratch(int n) {
 }
 
 // The hinges of one block between the passes of a step (see
-// ShellRfT3::block_angles): interior hinges at [0, nh) (structure of arrays,
-// capacity cap): angle minus initial angle, gradients (as hinge_block writes
+// ShellRfT3::block_angles): interior hinges at [0, nh) (capacity cap):
+// angle minus initial angle, gradients (8 per hinge, as hinge_block writes
 // them), 1 where the angle is evaluated again with the library; ghost hinges at
 // nh + 3 (e - b) + k, their gradients on (c, p, q) in ghost_grad.
 struct BlockAngles {
@@ -99,11 +99,11 @@ struct BlockAngles {
 // Bending angles (minus their initial values theta0) and their gradients of
 // h hinges; the angle as ShellRfT3::hinge_angle with the same operations in
 // the same order. Hinge j has its nodes (c, p, q, o) at x[ic[j]], x[ip[j]], ...
-// (offsets 3 x node); its gradients go to G[r cap + j]: rows 0-2 g_c, 3-5
+// (offsets 3 x node); its gradients go to G[8 j + r]: r = 0-2 g_c, 3-5
 // g_o, 6 sc, 7 so (the gradients on p and q follow from them). redo[j] = 1 (0 otherwise) where the angle is beyond atan2_small's
 // range (the caller evaluates it with the library).
 TS_VECTOR_CLONES
-void hinge_block(int h, int cap, const int* __restrict ic, const int* __restrict ip, const int* __restrict iq,
+void hinge_block(int h, const int* __restrict ic, const int* __restrict ip, const int* __restrict iq,
                  const int* __restrict io, const double* __restrict x, const double* __restrict theta0,
                  double* __restrict dtheta, double* __restrict G, double* __restrict redo) {
 #pragma omp simd
@@ -128,14 +128,14 @@ void hinge_block(int h, int cap, const int* __restrict ic, const int* __restrict
     // positions of c and o along the edge, from p, over its length).
     const double sc = (c0 * e0 + c1 * e1 + c2 * e2) / l2, so = (o0 * e0 + o1 * e1 + o2 * e2) / l2;
     const double se = len / (ne0 * ne0 + ne1 * ne1 + ne2 * ne2), sn = len / (nn0 * nn0 + nn1 * nn1 + nn2 * nn2);
-    G[j] = ne0 * se;
-    G[cap + j] = ne1 * se;
-    G[2 * cap + j] = ne2 * se;
-    G[3 * cap + j] = nn0 * sn;
-    G[4 * cap + j] = nn1 * sn;
-    G[5 * cap + j] = nn2 * sn;
-    G[6 * cap + j] = sc;
-    G[7 * cap + j] = so;
+    G[8 * j + 0] = ne0 * se;
+    G[8 * j + 1] = ne1 * se;
+    G[8 * j + 2] = ne2 * se;
+    G[8 * j + 3] = nn0 * sn;
+    G[8 * j + 4] = nn1 * sn;
+    G[8 * j + 5] = nn2 * sn;
+    G[8 * j + 6] = sc;
+    G[8 * j + 7] = so;
   }
 }
 
@@ -152,24 +152,74 @@ void value_range(int n, const double* __restrict v, double& lo, double& hi) {
   hi = b;
 }
 
+// Strains of n elements: F e1 = sum_a x_a g1_a and F e2 = sum_a x_a g2_a
+// (component d of element q at ff[d ld + q] and ff[(3 + d) ld + q]) and
+// C = (F e1 . F e1, F e2 . F e2, F e1 . F e2) at C[3 q ..]. Returns 1 if
+// some element has det C <= 1e-12 or not a number (collapsed or inverted),
+// 0 otherwise. One vector pass, the operations of math.hpp's add, scale
+// and dot in their order.
+TS_VECTOR_CLONES
+double strain_block(int n, int ld, const int* __restrict tri, const double* __restrict x, const double* __restrict g1,
+                    const double* __restrict g2, double* __restrict ff, double* __restrict C) {
+  double bad = 0.0;
+#pragma omp simd reduction(max : bad)
+  for (int q = 0; q < n; ++q) {
+    const int i0 = 3 * tri[3 * q], i1 = 3 * tri[3 * q + 1], i2 = 3 * tri[3 * q + 2];
+    const double ga = g1[3 * q], gb = g1[3 * q + 1], gc = g1[3 * q + 2];
+    const double ha = g2[3 * q], hb = g2[3 * q + 1], hc = g2[3 * q + 2];
+    const double x0 = x[i0], x1 = x[i0 + 1], x2 = x[i0 + 2];
+    const double y0 = x[i1], y1 = x[i1 + 1], y2 = x[i1 + 2];
+    const double z0 = x[i2], z1 = x[i2 + 1], z2 = x[i2 + 2];
+    const double f10 = ((0.0 + x0 * ga) + y0 * gb) + z0 * gc, f11 = ((0.0 + x1 * ga) + y1 * gb) + z1 * gc,
+                 f12 = ((0.0 + x2 * ga) + y2 * gb) + z2 * gc;
+    const double f20 = ((0.0 + x0 * ha) + y0 * hb) + z0 * hc, f21 = ((0.0 + x1 * ha) + y1 * hb) + z1 * hc,
+                 f22 = ((0.0 + x2 * ha) + y2 * hb) + z2 * hc;
+    ff[q] = f10, ff[ld + q] = f11, ff[2 * ld + q] = f12;
+    ff[3 * ld + q] = f20, ff[4 * ld + q] = f21, ff[5 * ld + q] = f22;
+    const double c0 = f10 * f10 + f11 * f11 + f12 * f12;
+    const double c1 = f20 * f20 + f21 * f21 + f22 * f22;
+    const double c2 = f10 * f20 + f11 * f21 + f12 * f22;
+    C[3 * q] = c0;
+    C[3 * q + 1] = c1;
+    C[3 * q + 2] = c2;
+    const double det = c0 * c1 - c2 * c2;
+    bad = det > 1e-12 ? bad : 1.0;
+  }
+  return bad;
+}
+
+// The mean of the nodes' temperatures of n elements.
+TS_VECTOR_CLONES
+void element_temperature_block(int n, const int* __restrict tri, const double* __restrict node_temp,
+                               double* __restrict temp) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q)
+    temp[q] = node_temp[tri[3 * q]] / 3.0 + node_temp[tri[3 * q + 1]] / 3.0 + node_temp[tri[3 * q + 2]] / 3.0;
+}
+
 // Membrane forces of n elements (F e1, F e2 of element q at ff[d ld + q],
 // ff[(3 + d) ld + q]), f_a = A0 (c1 F e1 + c2 F e2) with c1 = S11 g1_a +
 // S12 g2_a, c2 = S12 g1_a + S22 g2_a (component d of node a of element q
 // at mf[(3 a + d) ld + q]), and each element's stable step: smallest height
 // (2 area / longest edge) times inv_c (infinite when has_stiffness is
-// false). One vector pass; the operations of the scalar form in its order,
-// so the same bits.
+// false). The height comes from C (C[3 q ..], Voigt): the current edge
+// opposite node a is F E_a with E_a = 2 A0 (g2_a, -g1_a) in the element's
+// material frame, so |F E_a|^2 = 4 A0^2 Q_a with Q_a = C11 g2_a^2 -
+// 2 C12 g1_a g2_a + C22 g1_a^2, the area is A0 sqrt(det C), and the
+// height is sqrt(det C / max_a Q_a). One vector pass without gathers.
 TS_VECTOR_CLONES
-void membrane_block(int n, int ld, const int* __restrict tri, const double* __restrict x, const double* __restrict ff,
+void membrane_block(int n, int ld, const double* __restrict C, const double* __restrict ff,
                     const double* __restrict S, const double* __restrict area, const double* __restrict g1,
                     const double* __restrict g2, double inv_c, bool has_stiffness, double* __restrict mf,
                     double* __restrict dte) {
-  const double inf = std::numeric_limits<double>::infinity();
+  // h > 0 (det C > 1e-12 here): h times infinity is infinity.
+  const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double f10 = ff[q], f11 = ff[ld + q], f12 = ff[2 * ld + q];
     const double f20 = ff[3 * ld + q], f21 = ff[4 * ld + q], f22 = ff[5 * ld + q];
     const double S11 = S[3 * q], S22 = S[3 * q + 1], S12 = S[3 * q + 2], A0 = area[q];
+    const double C11 = C[3 * q], C22 = C[3 * q + 1], C12 = C[3 * q + 2];
     for (int a = 0; a < 3; ++a) {
       const double ga = g1[3 * q + a], gb = g2[3 * q + a];
       const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
@@ -177,39 +227,38 @@ void membrane_block(int n, int ld, const int* __restrict tri, const double* __re
       mf[(3 * a + 1) * ld + q] = c1 * f11 + c2 * f21;
       mf[(3 * a + 2) * ld + q] = c1 * f12 + c2 * f22;
     }
-    const int i0 = 3 * tri[3 * q], i1 = 3 * tri[3 * q + 1], i2 = 3 * tri[3 * q + 2];
-    const double a0 = x[i0], a1 = x[i0 + 1], a2 = x[i0 + 2];
-    const double u0 = x[i1] - a0, u1 = x[i1 + 1] - a1, u2 = x[i1 + 2] - a2;  // e01
-    const double v0 = x[i2] - a0, v1 = x[i2 + 1] - a1, v2 = x[i2 + 2] - a2;  // e02
-    const double w0 = x[i2] - x[i1], w1 = x[i2 + 1] - x[i1 + 1], w2 = x[i2 + 2] - x[i1 + 2];  // e12
-    const double n0 = u1 * v2 - u2 * v1, n1 = u2 * v0 - u0 * v2, n2 = u0 * v1 - u1 * v0;
-    const double l01 = u0 * u0 + u1 * u1 + u2 * u2, l02 = v0 * v0 + v1 * v1 + v2 * v2, l12 = w0 * w0 + w1 * w1 + w2 * w2;
-    double l2max = l01;
-    l2max = l2max < l02 ? l02 : l2max;
-    l2max = l2max < l12 ? l12 : l2max;
-    const double h = std::sqrt((n0 * n0 + n1 * n1 + n2 * n2) / l2max);
-    dte[q] = has_stiffness ? h * inv_c : inf;
+    const double a0 = g1[3 * q], a1 = g1[3 * q + 1], a2 = g1[3 * q + 2];
+    const double b0 = g2[3 * q], b1 = g2[3 * q + 1], b2 = g2[3 * q + 2];
+    const double Q0 = C11 * b0 * b0 - 2 * C12 * a0 * b0 + C22 * a0 * a0;
+    const double Q1 = C11 * b1 * b1 - 2 * C12 * a1 * b1 + C22 * a1 * a1;
+    const double Q2 = C11 * b2 * b2 - 2 * C12 * a2 * b2 + C22 * a2 * a2;
+    double qmax = Q0;
+    qmax = qmax < Q1 ? Q1 : qmax;
+    qmax = qmax < Q2 ? Q2 : qmax;
+    const double h = std::sqrt((C11 * C22 - C12 * C12) / qmax);
+    dte[q] = h * cmul;
   }
 }
 
 // Per element q of a block and edge k (values of the block's elements
-// from their first one): theta_k = dth[loc[3 q + k]], rho = L theta (L row
-// major, 9 per element), eq = rho + a theta.
+// from their first one): theta_k = dth[loc[3 q + k]], rho = L theta (entry
+// (k, i) of element q's L at L[(3 k + i) ld + q]), eq = rho + a theta (a_k
+// at a[k ld + q]).
 TS_VECTOR_CLONES
-void slope_block(int n, const int* __restrict loc, const double* __restrict dth, const float* __restrict L,
+void slope_block(int n, int ld, const int* __restrict loc, const double* __restrict dth, const float* __restrict L,
                  const float* __restrict a, double* __restrict eq, double* __restrict rho) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double t0 = dth[loc[3 * q]], t1 = dth[loc[3 * q + 1]], t2 = dth[loc[3 * q + 2]];
-    const float* l = L + 9 * q;
-    const double r0 = l[0] * t0 + l[1] * t1 + l[2] * t2, r1 = l[3] * t0 + l[4] * t1 + l[5] * t2,
-                 r2 = l[6] * t0 + l[7] * t1 + l[8] * t2;
+    const float* l = L + q;
+    const double r0 = l[0] * t0 + l[ld] * t1 + l[2 * ld] * t2, r1 = l[3 * ld] * t0 + l[4 * ld] * t1 + l[5 * ld] * t2,
+                 r2 = l[6 * ld] * t0 + l[7 * ld] * t1 + l[8 * ld] * t2;
     rho[3 * q] = r0;
     rho[3 * q + 1] = r1;
     rho[3 * q + 2] = r2;
-    eq[3 * q] = r0 + a[3 * q] * t0;
-    eq[3 * q + 1] = r1 + a[3 * q + 1] * t1;
-    eq[3 * q + 2] = r2 + a[3 * q + 2] * t2;
+    eq[3 * q] = r0 + a[q] * t0;
+    eq[3 * q + 1] = r1 + a[ld + q] * t1;
+    eq[3 * q + 2] = r2 + a[2 * ld + q] * t2;
   }
 }
 
@@ -250,19 +299,20 @@ void moment_block(int n, int ld, const double* __restrict area, const float* __r
 }
 
 // Each element's share of dW/dtheta of its hinges, g_i = a_i m_i +
-// sum_k L_ki (m_k - m[nidx_k]) (L with its rows scaled by omega; m over the
-// whole part, the block's elements from entry m0).
+// sum_k L_ki (m_k - m[nidx_k]) (L with its rows scaled by omega, laid out
+// as for slope_block; m over the whole part, the block's elements from
+// entry m0).
 TS_VECTOR_CLONES
-void hinge_moment_block(int n, const float* __restrict L, const float* __restrict a, const int* __restrict nidx,
-                        const double* __restrict m, int m0, double* __restrict g) {
+void hinge_moment_block(int n, int ld, const float* __restrict L, const float* __restrict a,
+                        const int* __restrict nidx, const double* __restrict m, int m0, double* __restrict g) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double m_0 = m[m0 + 3 * q], m_1 = m[m0 + 3 * q + 1], m_2 = m[m0 + 3 * q + 2];
     const double u0 = m_0 - m[nidx[3 * q]], u1 = m_1 - m[nidx[3 * q + 1]], u2 = m_2 - m[nidx[3 * q + 2]];
-    const float* l = L + 9 * q;
-    g[3 * q] = a[3 * q] * m_0 + l[0] * u0 + l[3] * u1 + l[6] * u2;
-    g[3 * q + 1] = a[3 * q + 1] * m_1 + l[1] * u0 + l[4] * u1 + l[7] * u2;
-    g[3 * q + 2] = a[3 * q + 2] * m_2 + l[2] * u0 + l[5] * u1 + l[8] * u2;
+    const float* l = L + q;
+    g[3 * q] = a[q] * m_0 + l[0] * u0 + l[3 * ld] * u1 + l[6 * ld] * u2;
+    g[3 * q + 1] = a[ld + q] * m_1 + l[ld] * u0 + l[4 * ld] * u1 + l[7 * ld] * u2;
+    g[3 * q + 2] = a[2 * ld + q] * m_2 + l[2 * ld] * u0 + l[5 * ld] * u1 + l[8 * ld] * u2;
   }
 }
 
@@ -345,33 +395,24 @@ class ShellRfT3 final : public ElementKernel {
       // they stay in cache instead of streaming through per-element arrays.
       BlockScratch& sc = block_scratch(n);
       const int ld = padded_ld(n);  // of ff and mf
-      double* temp = sc.temp.data();
+      const double* temp = sc.temp.data();
       double* C = sc.strain.data();  // C of the block's elements (the fields compute it again from x)
       double* ff = sc.ff.data();
-      // 1. Strains and temperatures of the block.
-      for (int e = b; e < in.range.end; ++e) {
-        const int* t = &part_->triangles[3 * e];
-        Vec3 f1{0, 0, 0}, f2{0, 0, 0};
-        double T = 0;
-        for (int a = 0; a < 3; ++a) {
-          const Vec3 xa = load3(x, t[a]);
-          f1 = add(f1, scale(xa, g1_[3 * e + a]));
-          f2 = add(f2, scale(xa, g2_[3 * e + a]));
-          T += in.node_temperature[t[a]] / 3.0;
-        }
-        for (int d = 0; d < 3; ++d) {
-          ff[d * ld + (e - b)] = f1[d];
-          ff[(3 + d) * ld + (e - b)] = f2[d];
-        }
-        double* c = C + 3 * (e - b);
-        c[0] = dot(f1, f1);
-        c[1] = dot(f2, f2);
-        c[2] = dot(f1, f2);
-        temp[e - b] = T;
-        const double det = c[0] * c[1] - c[2] * c[2];
-        if (!(det > 1e-12) && out.failed_element < 0) out.failed_element = e;
+      // 1. Strains and temperatures of the block (with bending, pass 1 has
+      // formed the temperatures).
+      if (bending_) {
+        temp = etemp_.data() + b;
+      } else {
+        element_temperature_block(n, &part_->triangles[3 * b], in.node_temperature.data(), sc.temp.data());
       }
-      if (out.failed_element >= 0) return Status::success();
+      if (strain_block(n, ld, &part_->triangles[3 * b], x, g1_.data() + 3 * b, g2_.data() + 3 * b, ff, C) != 0.0)
+        for (int q = 0; q < n; ++q) {
+          const double* c = C + 3 * q;
+          if (!(c[0] * c[1] - c[2] * c[2] > 1e-12)) {
+            out.failed_element = b + q;
+            return Status::success();
+          }
+        }
       // 2. The laws, one call per law for the whole block; stresses add (the
       // first law writes straight into the element stresses and energies).
       double* energy_e = sc.energy.data();
@@ -405,7 +446,7 @@ class ShellRfT3 final : public ElementKernel {
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
       double* dte = sc.energy_tmp.data();  // free again after the laws
       double* mf = sc.mf.data();
-      membrane_block(n, ld, &part_->triangles[3 * b], x, ff, stress_.data() + 3 * b, area0_.data() + b, g1_.data() + 3 * b,
+      membrane_block(n, ld, C, ff, stress_.data() + 3 * b, area0_.data() + b, g1_.data() + 3 * b,
                      g2_.data() + 3 * b, inv_c, kmax > 0, mf, dte);
       if (bending_) {  // adds the membrane forces with the bending ones
         energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out);
@@ -548,6 +589,7 @@ class ShellRfT3 final : public ElementKernel {
     theta0_.assign(3 * ne, 0.0);
     gld_ = padded_ld(ne);
     curv_.assign(3 * ne, 0.0);
+    etemp_.assign(ne, 0.0);
     curv_old_.assign(bending_->uses_strain_old() ? 3 * ne : 0, 0.0);
     bstate_.assign(static_cast<std::size_t>(bending_->state_size()) * ne, 0.0);
     const double* x0 = part_->x0.data();
@@ -668,8 +710,7 @@ class ShellRfT3 final : public ElementKernel {
     const double* x0 = part_->x0.data();
     const int* nbr = part_->neighbours.data();
     cs_.assign(9 * static_cast<std::size_t>(gld_), 0.0);
-    lmap_.assign(9 * static_cast<std::size_t>(ne), 0.0);
-    acoef_.assign(3 * ne, 0.0);
+    std::vector<float> lmap(9 * static_cast<std::size_t>(ne), 0.0f), acoef(3 * static_cast<std::size_t>(ne), 0.0f);
     nidx_.assign(3 * ne, 3 * ne);
     eq_.assign(3 * ne, 0.0);
     erho_.assign(3 * ne + 3, 0.0);  // the last three: zero, read for edges without a neighbour
@@ -765,7 +806,7 @@ class ShellRfT3 final : public ElementKernel {
           lmax = std::max(lmax, std::abs(L[3 * k + i]));
         }
       if (!(lmax < kMaxSlopeMap)) continue;
-      for (int i = 0; i < 9; ++i) lmap_[9 * static_cast<std::size_t>(e) + i] = static_cast<float>(L[i]);
+      for (int i = 0; i < 9; ++i) lmap[9 * static_cast<std::size_t>(e) + i] = static_cast<float>(L[i]);
       fit[e] = 1;
     }
     // Weights omega of the element's own slope per interior edge; the rows
@@ -775,11 +816,18 @@ class ShellRfT3 final : public ElementKernel {
       for (int k = 0; k < 3; ++k) {
         const int nb = nbr[3 * e + k], i = 3 * e + k;
         const double w = nb < 0 ? 0.0 : fit[e] && fit[nb] ? 0.5 : fit[e] ? 1.0 : fit[nb] ? 0.0 : 0.5;
-        float* row = &lmap_[9 * static_cast<std::size_t>(e) + 3 * k];
+        float* row = &lmap[9 * static_cast<std::size_t>(e) + 3 * k];
         for (int c = 0; c < 3; ++c) row[c] = static_cast<float>(w * row[c]);
-        acoef_[i] = static_cast<float>(nb >= 0 ? 1 - w : clamped_[i] ? 0.5 : 0.0);
+        acoef[i] = static_cast<float>(nb >= 0 ? 1 - w : clamped_[i] ? 0.5 : 0.0);
         if (nb >= 0) nidx_[i] = 3 * nb + partner_k_[i];
       }
+    const std::size_t gld = static_cast<std::size_t>(gld_);
+    lmap_.assign(9 * gld, 0.0f);
+    acoef_.assign(3 * gld, 0.0f);
+    for (int e = 0; e < ne; ++e) {
+      for (int i = 0; i < 9; ++i) lmap_[i * gld + e] = lmap[9 * static_cast<std::size_t>(e) + i];
+      for (int k = 0; k < 3; ++k) acoef_[k * gld + e] = acoef[3 * static_cast<std::size_t>(e) + k];
+    }
     double D[3][3];
     const bool have_d = probe_rigidity(T, D);
     for (int e = 0; e < ne; ++e) {
@@ -927,15 +975,14 @@ class ShellRfT3 final : public ElementKernel {
       slot->ghost_grad.resize(36 * static_cast<std::size_t>(n));
     }
     BlockAngles& ba = *slot;
-    const int cap = ba.cap;
     const int* fnode = bh.fnode.data();
     double* dth = ba.dth.data();
     double* G = ba.G.data();
     double* redo = ba.redo.data();
-    hinge_block(nown, cap, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, htheta0_.data() + h0,
+    hinge_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, htheta0_.data() + h0,
                 dth, G, redo);
-    hinge_block(nforeign, cap, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x, bh.ftheta0.data(),
-                dth + nown, G + nown, redo + nown);
+    hinge_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x, bh.ftheta0.data(),
+                dth + nown, G + 8 * nown, redo + nown);
     for (int j = 0; j < nh; ++j)
       if (redo[j] != 0) {  // beyond the approximation's range: the library's atan2
         const int h = j < nown ? h0 + j : bh.fhinge[j - nown];
@@ -963,8 +1010,8 @@ class ShellRfT3 final : public ElementKernel {
   void slope_angles(int b, int end) {
     const BlockHinges& bh = block_hinges(b, end);
     const BlockAngles& ba = block_angles(b, end, bh);
-    slope_block(end - b, bh.loc.data(), ba.dth.data(), lmap_.data() + 9 * static_cast<std::size_t>(b),
-                acoef_.data() + 3 * b, eq_.data() + 3 * b, erho_.data() + 3 * b);
+    slope_block(end - b, gld_, bh.loc.data(), ba.dth.data(), lmap_.data() + b, acoef_.data() + b, eq_.data() + 3 * b,
+                erho_.data() + 3 * b);
   }
 
   // Pass 1: mid-edge slopes, curvatures, the law's moments and energies,
@@ -972,7 +1019,7 @@ class ShellRfT3 final : public ElementKernel {
   Status slope_moments(const ElementForceInput& in, int b, int end) {
     const int n = end - b;
     BlockScratch& sc = block_scratch(n);
-    double* temp = sc.temp.data();
+    double* temp = etemp_.data() + b;  // read again by pass 2
     double* K = curv_.data() + 3 * b;
     curvature_block(n, gld_, cs_.data() + b, nidx_.data() + 3 * b, eq_.data() + 3 * b, erho_.data(),
                     &part_->triangles[3 * b], in.node_temperature.data(), K, temp);
@@ -1007,11 +1054,10 @@ class ShellRfT3 final : public ElementKernel {
     const int n = end - b;
     const BlockHinges& bh = block_hinges(b, end);
     const BlockAngles& ba = *block_angles_[b];  // from pass 0
-    const int cap = ba.cap;
     const double* G = ba.G.data();
     const double* hgrad = ba.ghost_grad.data();
     double* mk = sc.mk.data();
-    hinge_moment_block(n, lmap_.data() + 9 * static_cast<std::size_t>(b), acoef_.data() + 3 * b, nidx_.data() + 3 * b,
+    hinge_moment_block(n, gld_, lmap_.data() + b, acoef_.data() + b, nidx_.data() + 3 * b,
                        em_.data(), 3 * b, mk);
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
     double* dte = sc.energy_tmp.data();  // the membrane's stable steps of the block's elements
@@ -1053,9 +1099,10 @@ class ShellRfT3 final : public ElementKernel {
         if (fm[3 * q + k] >= 0) m += mk[fm[3 * q + k]];
         const bool nb_side = code & 1;
         double* fo = nf + 3 * slot[6 * q + 3 + k];
-        const double sc = G[6 * cap + j], so = G[7 * cap + j];
+        const double* gj = G + 8 * j;  // the hinge's gradients, one cache line
+        const double sc = gj[6], so = gj[7];
         for (int d = 0; d < 3; ++d) {  // selects, so that fc keeps constant indices (registers)
-          const double gc = G[d * cap + j], go = G[(3 + d) * cap + j];
+          const double gc = gj[d], go = gj[3 + d];
           const double mc = m * gc, mo = m * go, t = m * (sc * gc + so * go), tp = t - mc - mo;
           fc[k][d] += nb_side ? mo : mc;
           fo[d] += nb_side ? mc : mo;
@@ -1092,14 +1139,15 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<char> clamped_;
   std::vector<double> n0_;  // initial element normals (clamped elements)
   // ginv_: dK/dtheta_k, value r of edge k of element e at (3 k + r) gld_ + e.
-  std::vector<double> d_, theta0_, curv_, curv_old_, bstate_;
+  std::vector<double> d_, theta0_, curv_, curv_old_, bstate_, etemp_;  // etemp_: element temperatures of the step
   // Mid-edge slopes (the set-up coefficients in single precision: the
   // forces stay the exact derivatives of the energy they define): cs_ dK/ds_k (value r of edge k of element e at
   // (3 k + r) gld_ + e, free edges condensed), lmap_ the 3 x 3 map L from
-  // an element's angle changes to the slopes of its own quadratic (row
-  // major, 9 per element; zero where the element has no quadratic;
-  // its rows scaled by the weight omega of the element's own slope per
-  // edge), acoef_ a per edge (see slope_angles), nidx_ per edge the entry
+  // an element's angle changes to the slopes of its own quadratic (entry
+  // (k, i) of element e at (3 k + i) gld_ + e; zero where the element has
+  // no quadratic; its rows scaled by the weight omega of the element's own
+  // slope per edge), acoef_ a per edge (edge k of element e at k gld_ + e;
+  // see slope_angles), nidx_ per edge the entry
   // of the neighbour's same edge (3 ne, a zero entry, where there is none);
   // per step eq_, erho_ (slope_angles), em_ (dW/ds), eben_ (A0 w).
   std::vector<float> cs_, lmap_, acoef_;
