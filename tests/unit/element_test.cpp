@@ -3,6 +3,7 @@
 // stress in every element and no force at interior nodes (patch test).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -183,6 +184,49 @@ TEST(ShellRfT3, PatchTestHomogeneousDeformation) {
       for (int d = 0; d < 3; ++d) EXPECT_NEAR(f[3 * i + d], 0.0, 1e-9 * fmax) << "interior node " << i;
     }
   }
+}
+
+// The membrane stable step of every element is its smallest current height
+// (2 A / longest edge, from the current positions) times sqrt(rho_A /
+// k_max), on an irregular patch moved to random, non-homogeneous positions
+// in space. The element forms the height from C and its set-up gradients;
+// both forms agree to round-off (1e-10 relative). A wrong edge or factor
+// in either fails it.
+TEST(ShellRfT3, MembraneStableStepIsTheSmallestCurrentHeight) {
+  Patch p(0.3);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < p.mesh.num_nodes(); ++i)
+    for (int d = 0; d < 3; ++d) p.x[3 * i + d] = p.mesh.x[3 * i + d] + 0.0012 * u(rng);
+  const int ne = p.mesh.num_elements();
+  std::vector<double> nf(3 * p.mesh.num_nodes(), 0.0), edt(ne, 0.0);
+  const std::vector<int> slots = p.patch();
+  sdk::ElementForceInput in;
+  in.range = {0, ne};
+  in.node_temperature = p.temperature;
+  in.commit = false;
+  in.patch_slot = slots;
+  sdk::ElementForceOutput out;
+  out.node_force = nf;
+  out.element_dt = edt;
+  ASSERT_EQ(p.element->passes(), 1);
+  ASSERT_TRUE(p.element->internal_forces(in, out).ok);
+  ASSERT_EQ(out.failed_element, -1);
+  const double kmax = p.law->max_stiffness(280.0);
+  ASSERT_GT(kmax, 0.0);
+  const double scale = std::sqrt(1294.0 * p.view.thickness / kmax);
+  double smallest = 1e300;
+  for (int e = 0; e < ne; ++e) {
+    const int* t = &p.mesh.triangles[3 * e];
+    const sdk::Vec3 a = sdk::load3(p.x.data(), t[0]), b = sdk::load3(p.x.data(), t[1]), c = sdk::load3(p.x.data(), t[2]);
+    const double two_area = sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a)));
+    const double longest =
+        std::max({sdk::norm(sdk::sub(b, a)), sdk::norm(sdk::sub(c, a)), sdk::norm(sdk::sub(c, b))});
+    const double expected = two_area / longest * scale;
+    EXPECT_NEAR(edt[e], expected, 1e-10 * expected) << "element " << e;
+    smallest = std::min(smallest, expected);
+  }
+  EXPECT_NEAR(out.stable_dt, smallest, 1e-10 * smallest);
 }
 
 // Forces (membrane + rotation-free bending) are the derivative of the
