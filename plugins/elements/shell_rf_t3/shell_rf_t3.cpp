@@ -710,7 +710,9 @@ class ShellRfT3 final : public ElementKernel {
     const double* x0 = part_->x0.data();
     const int* nbr = part_->neighbours.data();
     cs_.assign(9 * static_cast<std::size_t>(gld_), 0.0);
-    std::vector<float> lmap(9 * static_cast<std::size_t>(ne), 0.0f), acoef(3 * static_cast<std::size_t>(ne), 0.0f);
+    const std::size_t gld = static_cast<std::size_t>(gld_);
+    lmap_.assign(9 * gld, 0.0f);
+    acoef_.assign(3 * gld, 0.0f);
     nidx_.assign(3 * ne, 3 * ne);
     eq_.assign(3 * ne, 0.0);
     erho_.assign(3 * ne + 3, 0.0);  // the last three: zero, read for edges without a neighbour
@@ -806,7 +808,7 @@ class ShellRfT3 final : public ElementKernel {
           lmax = std::max(lmax, std::abs(L[3 * k + i]));
         }
       if (!(lmax < kMaxSlopeMap)) continue;
-      for (int i = 0; i < 9; ++i) lmap[9 * static_cast<std::size_t>(e) + i] = static_cast<float>(L[i]);
+      for (int i = 0; i < 9; ++i) lmap_[i * gld + e] = static_cast<float>(L[i]);
       fit[e] = 1;
     }
     // Weights omega of the element's own slope per interior edge; the rows
@@ -816,18 +818,13 @@ class ShellRfT3 final : public ElementKernel {
       for (int k = 0; k < 3; ++k) {
         const int nb = nbr[3 * e + k], i = 3 * e + k;
         const double w = nb < 0 ? 0.0 : fit[e] && fit[nb] ? 0.5 : fit[e] ? 1.0 : fit[nb] ? 0.0 : 0.5;
-        float* row = &lmap[9 * static_cast<std::size_t>(e) + 3 * k];
-        for (int c = 0; c < 3; ++c) row[c] = static_cast<float>(w * row[c]);
-        acoef[i] = static_cast<float>(nb >= 0 ? 1 - w : clamped_[i] ? 0.5 : 0.0);
+        for (int c = 0; c < 3; ++c) {
+          float& l = lmap_[(3 * k + c) * gld + e];
+          l = static_cast<float>(w * l);
+        }
+        acoef_[k * gld + e] = static_cast<float>(nb >= 0 ? 1 - w : clamped_[i] ? 0.5 : 0.0);
         if (nb >= 0) nidx_[i] = 3 * nb + partner_k_[i];
       }
-    const std::size_t gld = static_cast<std::size_t>(gld_);
-    lmap_.assign(9 * gld, 0.0f);
-    acoef_.assign(3 * gld, 0.0f);
-    for (int e = 0; e < ne; ++e) {
-      for (int i = 0; i < 9; ++i) lmap_[i * gld + e] = lmap[9 * static_cast<std::size_t>(e) + i];
-      for (int k = 0; k < 3; ++k) acoef_[k * gld + e] = acoef[3 * static_cast<std::size_t>(e) + k];
-    }
     double D[3][3];
     const bool have_d = probe_rigidity(T, D);
     for (int e = 0; e < ne; ++e) {
