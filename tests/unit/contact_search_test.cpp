@@ -106,5 +106,63 @@ TEST(PlyPlySearch, TargetsAreTheClosestPointsOfTheOtherPly) {
   }
 }
 
+// The closest point of a lone triangle (no neighbour to find an edge from
+// the other side), acute, right-angled and obtuse: points all around it,
+// beyond one edge's line or two, in its plane and off it, every one within
+// reach. Each target must be the brute-force closest point (distance
+// within 1e-12 m, the target point within 1e-12 m of it) with weights that
+// rebuild it: a search that takes the wrong one of two edges sharing a
+// node, or a wrong end of an edge, misses by millimetres.
+TEST(PlyPlySearch, LoneTriangleTargetsAreItsClosestPoints) {
+  PluginRegistry registry;
+  const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");
+  const std::vector<std::array<double, 9>> shapes = {
+      {0, 0, 0, 0.010, 0.001, 0.001, 0.004, 0.008, -0.002},   // acute
+      {0, 0, 0, 0.010, 0, 0, 0, 0.010, 0},                     // right angle at node 0
+      {0, 0, 0, 0.012, 0, 0.002, 0.001, 0.002, 0.001},         // obtuse at node 2
+  };
+  int checked = 0;
+  for (const auto& shape : shapes) {
+    ShellMesh b;
+    b.x.assign(shape.begin(), shape.end());
+    b.triangles = {0, 1, 2};
+    b.neighbours = {-1, -1, -1};
+    ShellMesh a;  // points on a grid around the triangle, at several heights
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 21; ++j)
+        for (int i = 0; i < 21; ++i)
+          a.x.insert(a.x.end(), {-0.006 + 0.0012 * i + 1e-5 * j, -0.006 + 0.0010 * j, -0.002 + 0.002 * k});
+    const double gap_tolerance = 0.05;  // every point is within reach
+    std::unique_ptr<sdk::ContactHandler> handler(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
+    const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+    ASSERT_TRUE(handler
+                    ->configure(validate_params(json{{"conductance", 1000.0}, {"gap_tolerance", gap_tolerance}},
+                                                "/c", r.descriptor),
+                                sdk::ContactPair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}},
+                                parts, {})
+                    .ok);
+    const std::vector<double> area_a(a.num_nodes(), 1e-4), area_b(b.num_nodes(), 1e-4);
+    const std::vector<std::span<const double>> area = {area_a, area_b};
+    sdk::ThermalContactMap map;
+    ASSERT_TRUE(handler->thermal_contacts(parts, {}, area, map).ok);
+    ASSERT_EQ(static_cast<int>(map.links.size()), a.num_nodes());
+    for (const sdk::HeatLink& l : map.links) {
+      const sdk::Vec3 x = sdk::load3(a.x.data(), l.node_a);
+      const sdk::Vec3 cp = sdk::closest_point_on_triangle(x, sdk::load3(b.x.data(), 0), sdk::load3(b.x.data(), 1),
+                                                          sdk::load3(b.x.data(), 2));
+      sdk::Vec3 target = {0, 0, 0};
+      for (int j = 0; j < 3; ++j) {
+        EXPECT_GE(l.w_b[j], -1e-12);
+        target = sdk::add(target, sdk::scale(sdk::load3(b.x.data(), l.nodes_b[j]), l.w_b[j]));
+      }
+      EXPECT_NEAR(l.w_b[0] + l.w_b[1] + l.w_b[2], 1.0, 1e-12);
+      EXPECT_NEAR(sdk::norm(sdk::sub(x, target)), sdk::norm(sdk::sub(x, cp)), 1e-12) << "node " << l.node_a;
+      EXPECT_LT(sdk::norm(sdk::sub(target, cp)), 1e-12) << "node " << l.node_a;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 3 * 3 * 21 * 21);
+}
+
 }  // namespace
 }  // namespace ts
