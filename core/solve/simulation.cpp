@@ -34,8 +34,11 @@ struct MechPart {
   std::vector<const sdk::MaterialLaw*> membrane;
   std::vector<double> curvature;
   std::vector<double> load;  // applied nodal forces at full value (N), 3 per node
-  std::vector<double> f_con, fc_prev, k_contact;  // contact forces (N) now and at the previous step; stiffness bound (N/m)
-  std::vector<double> mass, mass_node_physical, v, r_prev, fd_prev, f_int, f_prev, dx, elem_dt, elem_scale, elem_sqrt_scale, node_temperature, stress;
+  std::vector<double> f_con, k_contact;  // contact forces (N); stiffness bound (N/m)
+  std::vector<double> mass, mass_node_physical, v, f_int, elem_dt, elem_scale, elem_sqrt_scale, node_temperature, stress;
+  // Half of the next step's internal, external, damping and contact works,
+  // known at this step (see integrate_body).
+  double pending_work[4] = {0, 0, 0, 0};
   // Per element block, reused every step.
   std::vector<int> block_fail;
   std::vector<std::string> block_error;
@@ -62,6 +65,7 @@ struct MechPart {
   // free (0 where held or driven); the held or driven dofs in ascending order.
   std::vector<double> mass3, gravity3, free3;
   std::vector<int> fixed_dofs;
+  bool external = false;  // gravity or applied loads act on the part
   double mass_physical = 0, mass_added = 0;
 };
 
@@ -78,65 +82,96 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 // One explicit step of n dofs (central differences, lumped mass): the new
-// half-step velocities, displacement increments and positions, and the
-// works of the previous step by the trapezoid rule (internal, external,
-// damping, contact) with the kinetic energies at t^n, summed into sums[0..6]
-// (w_int, w_ext, w_damp, w_con, kinetic, kinetic at the half step, and x * 0,
-// which is zero unless a position is not finite). A held or driven dof
-// (free3 = 0) takes its prescribed velocity; the constraint supplies
-// R = f_int - f_ext - f_con there, and its work enters w_ext. Elementwise,
-// so the trajectory does not depend on the vector width; the sums are
-// taken lane by lane (a fixed order, but not the one of a scalar loop).
-TS_VECTOR_CLONES
-void integrate_dofs(std::size_t n, double dt, double dt_avg, double damping, bool contact,
-                    const double* __restrict mass3, const double* __restrict gravity3,
-                    const double* __restrict free3, const double* __restrict load, const double* __restrict f_int,
-                    const double* __restrict f_con, const double* __restrict prescribed, double* __restrict v,
-                    double* __restrict dx, double* __restrict x, double* __restrict f_prev,
-                    double* __restrict fc_prev, double* __restrict fd_prev, double* __restrict r_prev,
-                    double* __restrict sums) {
+// half-step velocities and positions, and the works of the previous step
+// by the trapezoid rule (internal, external, damping, contact) with the
+// kinetic energies at t^n, summed into sums[0..6] (w_int, w_ext, w_damp,
+// w_con, kinetic, kinetic at the half step, and x * 0, which is zero unless
+// a position is not finite). A held or driven dof (free3 = 0) takes its
+// prescribed velocity; the constraint supplies R = f_int - f_ext - f_con
+// there, and its work enters w_ext.
+//
+// The trapezoid work of a force f over the step from x^{n-1} to x^n is
+// 1/2 (f^{n-1} + f^n) . (x^n - x^{n-1}). Its first half is known one step
+// early: pending[0..3] carries 1/2 f^n . (x^{n+1} - x^n) of each work to the
+// next call, which adds it (so no force of the previous step is stored per
+// dof). The increment x^n - x^{n-1} is dt_prev v^{n-1/2}, the same product
+// that moved the dof (0 at the first step: dt_prev = 0). Elementwise, so the
+// trajectory does not depend on the vector width; the sums are taken lane
+// by lane (a fixed order, but not the one of a scalar loop). Instantiated
+// with and without contact forces and external forces (gravity, loads),
+// so that a run without them reads neither.
+template <bool kContact, bool kExternal>
+[[gnu::always_inline]] inline void integrate_body(std::size_t n, double dt, double dt_prev, double dt_avg,
+                                                  double damping, const double* __restrict mass3,
+                                                  const double* __restrict gravity3, const double* __restrict free3,
+                                                  const double* __restrict load, const double* __restrict f_int,
+                                                  const double* __restrict f_con, const double* __restrict prescribed,
+                                                  double* __restrict v, double* __restrict x, double* __restrict pending,
+                                                  double* __restrict sums) {
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0, nonfinite = 0;
-  if (contact) {
-#pragma omp simd reduction(+ : w_con)
-    for (std::size_t k = 0; k < n; ++k) {
-      w_con += 0.5 * (fc_prev[k] + f_con[k]) * dx[k];
-      fc_prev[k] = f_con[k];
-    }
-  }
-#pragma omp simd reduction(+ : w_int, w_ext, w_damp, kin, kin_half, nonfinite)
+  double p_int = 0, p_ext = 0, p_damp = 0, p_con = 0;
+#pragma omp simd reduction(+ : w_int, w_ext, w_damp, w_con, kin, kin_half, nonfinite, p_int, p_ext, p_damp, p_con)
   for (std::size_t k = 0; k < n; ++k) {
-    const double mi = mass3[k], vo = v[k], dxo = dx[k];
+    const double mi = mass3[k], vo = v[k], dxo = dt_prev * vo;
     const bool is_free = free3[k] != 0.0;
-    w_int += 0.5 * (f_prev[k] + f_int[k]) * dxo;
-    const double f_ext = gravity3[k] + load[k];
+    const double fi = f_int[k];
+    const double f_ext = kExternal ? gravity3[k] + load[k] : 0.0;
+    const double fc = kContact ? f_con[k] : 0.0;
     const double f_damp = damping * mi * vo;
-    const double reaction = f_int[k] - f_ext - f_con[k];
-    const double v_free = vo + dt_avg * (f_ext + f_con[k] - f_int[k] - f_damp) / mi;
+    const double reaction = fi - f_ext - fc;
+    const double v_free = vo + dt_avg * (f_ext + fc - fi - f_damp) / mi;
     const double v_new = is_free ? v_free : prescribed[k];
-    w_ext += is_free ? f_ext * dxo : (0.5 * (r_prev[k] + reaction) + f_ext) * dxo;
-    w_damp += is_free ? 0.5 * (fd_prev[k] + f_damp) * dxo : 0.0;
+    const double dxn = dt * v_new;
+    w_int += 0.5 * fi * dxo;
+    p_int += 0.5 * fi * dxn;
+    w_ext += is_free ? f_ext * dxo : (0.5 * reaction + f_ext) * dxo;
+    p_ext += is_free ? 0.0 : 0.5 * reaction * dxn;
+    w_damp += is_free ? 0.5 * f_damp * dxo : 0.0;
+    p_damp += is_free ? 0.5 * f_damp * dxn : 0.0;
+    if (kContact) {
+      w_con += 0.5 * fc * dxo;
+      p_con += 0.5 * fc * dxn;
+    }
     // Kinetic energy at t^n as the product of the half-step velocities: the
     // energy that central differences conserve exactly for a linear system.
     kin += is_free ? 0.5 * mi * vo * v_new : 0.0;
     kin_half += is_free ? 0.5 * mi * v_new * v_new : 0.0;
-    fd_prev[k] = is_free ? f_damp : fd_prev[k];
-    r_prev[k] = is_free ? r_prev[k] : reaction;
     v[k] = v_new;
-    const double dxn = dt * v_new;
-    dx[k] = dxn;
     const double xn = x[k] + dxn;
     x[k] = xn;
     nonfinite += xn * 0.0;
-    f_prev[k] = f_int[k];
   }
-  sums[0] = w_int;
-  sums[1] = w_ext;
-  sums[2] = w_damp;
-  sums[3] = w_con;
+  sums[0] = w_int + pending[0];
+  sums[1] = w_ext + pending[1];
+  sums[2] = w_damp + pending[2];
+  sums[3] = w_con + pending[3];
   sums[4] = kin;
   sums[5] = kin_half;
   sums[6] = nonfinite;
+  pending[0] = p_int;
+  pending[1] = p_ext;
+  pending[2] = p_damp;
+  pending[3] = p_con;
 }
+#define TS_INTEGRATE(NAME, CONTACT, EXTERNAL)                                                                        \
+  TS_VECTOR_CLONES void NAME(std::size_t n, double dt, double dt_prev, double dt_avg, double damping,                \
+                             const double* mass3, const double* gravity3, const double* free3, const double* load,   \
+                             const double* f_int, const double* f_con, const double* prescribed, double* v,          \
+                             double* x, double* pending, double* sums) {                                             \
+    integrate_body<CONTACT, EXTERNAL>(n, dt, dt_prev, dt_avg, damping, mass3, gravity3, free3, load, f_int, f_con,   \
+                                      prescribed, v, x, pending, sums);                                             \
+  }
+TS_INTEGRATE(integrate_dofs, false, false)
+TS_INTEGRATE(integrate_dofs_contact, true, false)
+TS_INTEGRATE(integrate_dofs_external, false, true)
+TS_INTEGRATE(integrate_dofs_contact_external, true, true)
+#undef TS_INTEGRATE
+using IntegrateDofs = void (*)(std::size_t, double, double, double, double, const double*, const double*,
+                               const double*, const double*, const double*, const double*, const double*, double*,
+                               double*, double*, double*);
+// By [contact][external forces].
+constexpr IntegrateDofs kIntegrateDofs[2][2] = {{integrate_dofs, integrate_dofs_external},
+                                                {integrate_dofs_contact, integrate_dofs_contact_external}};
 
 // The kinetic energy may not exceed this multiple of the energy supplied.
 constexpr double kKineticGrowthLimit = 10.0;
@@ -485,14 +520,9 @@ void Simulation::build_mechanics() {
     m->passes = std::max(1, m->element->passes());
     const int nn = st.mesh.num_nodes(), ne = st.mesh.num_elements();
     m->v.assign(3 * nn, 0.0);
-    m->r_prev.assign(3 * nn, 0.0);
-    m->fd_prev.assign(3 * nn, 0.0);
     m->f_int.assign(3 * nn, 0.0);
-    m->f_prev.assign(3 * nn, 0.0);
     m->f_con.assign(3 * nn, 0.0);
-    m->fc_prev.assign(3 * nn, 0.0);
     m->k_contact.assign(nn, 0.0);
-    m->dx.assign(3 * nn, 0.0);
     m->elem_dt.assign(ne, 0.0);
     m->elem_scale.assign(ne, 1.0);
     m->elem_sqrt_scale.assign(ne, 1.0);
@@ -692,6 +722,9 @@ void Simulation::build_mechanics() {
           m.fixed_dofs.push_back(k);
         }
       }
+    m.external = md.gravity[0] != 0 || md.gravity[1] != 0 || md.gravity[2] != 0;
+    for (const Load& l : loads_)
+      for (const auto& [lp, li] : l.nodes) m.external = m.external || lp == static_cast<int>(p);
     for (int i = 0; i < nn; ++i)
       if (m.k_contact[i] > 0) contact_dt_ = std::min(contact_dt_, 2.0 * std::sqrt(m.mass[i] / m.k_contact[i]));
   }
@@ -1032,9 +1065,10 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     for (const int k : m.fixed_dofs)
       reactions[3 * m.constraint_of[k] + k % 3] += m.f_int[k] - (m.gravity3[k] + m.load[k]) - m.f_con[k];
     double sums_p[7];
-    integrate_dofs(n, dt, dt_avg, md.damping, !contacts_.empty(), m.mass3.data(), m.gravity3.data(), m.free3.data(),
-                   m.load.data(), m.f_int.data(), m.f_con.data(), m.prescribed.data(), m.v.data(), m.dx.data(),
-                   st.x.data(), m.f_prev.data(), m.fc_prev.data(), m.fd_prev.data(), m.r_prev.data(), sums_p);
+    kIntegrateDofs[contacts_.empty() ? 0 : 1][m.external ? 1 : 0](
+        n, dt, step == 0 ? 0.0 : last_mech_dt_, dt_avg, md.damping, m.mass3.data(), m.gravity3.data(), m.free3.data(),
+        m.load.data(), m.f_int.data(), m.f_con.data(), m.prescribed.data(), m.v.data(), st.x.data(), m.pending_work,
+        sums_p);
     const double nonfinite = sums_p[6];
     const int nn = st.mesh.num_nodes();
     if (nonfinite != 0)  // also when NaN
