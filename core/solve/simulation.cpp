@@ -969,11 +969,11 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
 }
 
 void Simulation::compute_contact_forces(double t, double dt) {
-  for (auto& m : mech_) std::fill(m->f_con.begin(), m->f_con.end(), 0.0);
-  std::fill(tool_force_.begin(), tool_force_.end(), 0.0);
   contact_energy_ = 0;
   contact_active_ = 0;
-  if (contacts_.empty()) return;
+  if (contacts_.empty()) return;  // the contact forces stay zero
+  for (auto& m : mech_) std::fill(m->f_con.begin(), m->f_con.end(), 0.0);
+  std::fill(tool_force_.begin(), tool_force_.end(), 0.0);
   ContactSpans& cs = contact_spans_;
   if (cs.vel.empty()) {  // the arrays are stable for the run: views built once
     for (std::size_t p = 0; p < parts_.size(); ++p) {

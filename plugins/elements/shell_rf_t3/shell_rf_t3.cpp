@@ -39,9 +39,12 @@
 // curvatures, moments and dW/ds; forces (which read the neighbours' dW/ds).
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <vector>
+
+#include <unistd.h>
 
 #include <thermostamp/sdk/invariants.hpp>
 #include <thermostamp/sdk/math.hpp>
@@ -66,6 +69,7 @@ inline int padded_ld(int n) {
 // the block's first element); they grow to the largest block once.
 struct BlockScratch {
   std::vector<double> temp, strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, mk;
+  std::vector<double> G;  // hinge gradients of the block (bending_forces), grown to the largest block once
 };
 
 BlockScratch& block_scratch(int n) {
@@ -89,54 +93,108 @@ BlockScratch& block_scratch(int n) {
 // The hinges of one block between the passes of a step (see
 // ShellRfT3::block_angles): interior hinges at [0, nh) (capacity cap):
 // angle minus initial angle, gradients (8 per hinge, as hinge_block writes
-// them), 1 where the angle is evaluated again with the library; ghost hinges at
+// them; only where the part keeps them, ShellRfT3::keep_gradients_), 1
+// where the angle is evaluated again with the library; ghost hinges at
 // nh + 3 (e - b) + k, their gradients on (c, p, q) in ghost_grad.
 struct BlockAngles {
   std::vector<double> dth, G, redo, ghost_grad;
   int cap = 0;
 };
 
-// Bending angles (minus their initial values theta0) and their gradients of
-// h hinges; the angle as ShellRfT3::hinge_angle with the same operations in
-// the same order. Hinge j has its nodes (c, p, q, o) at x[ic[j]], x[ip[j]], ...
-// (offsets 3 x node); its gradients go to G[8 j + r]: r = 0-2 g_c, 3-5
-// g_o, 6 sc, 7 so (the gradients on p and q follow from them). redo[j] = 1 (0 otherwise) where the angle is beyond atan2_small's
-// range (the caller evaluates it with the library).
-TS_VECTOR_CLONES
-void hinge_block(int h, const int* __restrict ic, const int* __restrict ip, const int* __restrict iq,
-                 const int* __restrict io, const double* __restrict x, const double* __restrict theta0,
-                 double* __restrict dtheta, double* __restrict G, double* __restrict redo) {
+// The size of the processor's per-core (level 2) cache, bytes: the
+// environment's THERMOSTAMP_CACHE_BYTES where set, otherwise what the system
+// says, 1 MB where it does not.
+std::size_t level2_cache_bytes() {
+  if (const char* s = std::getenv("THERMOSTAMP_CACHE_BYTES")) {
+    char* end = nullptr;
+    const double v = std::strtod(s, &end);
+    if (end != s && v >= 0 && v < 1e18) return static_cast<std::size_t>(v);
+  }
+  const long v = sysconf(_SC_LEVEL2_CACHE_SIZE);
+  return v > 0 ? static_cast<std::size_t>(v) : std::size_t{1} << 20;
+}
+
+// The geometry of hinge (c, p, q, o) at positions x (offsets 3 x node),
+// the operations of ShellRfT3::hinge_angle (sub, dot, cross of math.hpp) in
+// their order: the edge e = q - p, c - p, o - p and the unnormalised normals
+// Ne = e x (c - p), Nn = (o - p) x e. Inlined into both hinge passes, so
+// that the angle and the gradients come from the same bits.
+struct HingeGeometry {
+  double e0, e1, e2, l2, len, c0, c1, c2, o0, o1, o2, ne0, ne1, ne2, nn0, nn1, nn2;
+};
+[[gnu::always_inline]] inline HingeGeometry hinge_geometry(const double* __restrict x, int c, int p, int q, int o) {
+  HingeGeometry g;
+  const double P0 = x[p], P1 = x[p + 1], P2 = x[p + 2];
+  g.e0 = x[q] - P0, g.e1 = x[q + 1] - P1, g.e2 = x[q + 2] - P2;
+  g.l2 = g.e0 * g.e0 + g.e1 * g.e1 + g.e2 * g.e2, g.len = std::sqrt(g.l2);
+  g.c0 = x[c] - P0, g.c1 = x[c + 1] - P1, g.c2 = x[c + 2] - P2;
+  g.o0 = x[o] - P0, g.o1 = x[o + 1] - P1, g.o2 = x[o + 2] - P2;
+  g.ne0 = g.e1 * g.c2 - g.e2 * g.c1, g.ne1 = g.e2 * g.c0 - g.e0 * g.c2, g.ne2 = g.e0 * g.c1 - g.e1 * g.c0;  // edge x cp
+  g.nn0 = g.o1 * g.e2 - g.o2 * g.e1, g.nn1 = g.o2 * g.e0 - g.o0 * g.e2, g.nn2 = g.o0 * g.e1 - g.o1 * g.e0;  // op x edge
+  return g;
+}
+
+// Bending angles (minus their initial values theta0) of h hinges (kAngle)
+// and their gradients (kGradient); the angle as ShellRfT3::hinge_angle with
+// the same operations in the same order. Hinge j has its nodes (c, p, q, o)
+// at x[ic[j]], x[ip[j]], ... (offsets 3 x node). redo[j] = 1 (0 otherwise)
+// where the angle is beyond atan2_small's range (the caller evaluates it
+// with the library). The gradients go to G[8 j + r]: r = 0-2 g_c, 3-5 g_o,
+// 6 sc, 7 so (the gradients on p and q follow from them): d theta / d c =
+// g_c = n_e / h_c = Ne len / |Ne|^2 (likewise g_o with Nn); p and q take
+// what keeps rigid motions force-free, g_q = -(sc g_c + so g_o), g_p =
+// -(g_c + g_o) - g_q (sc, so the positions of c and o along the edge, from
+// p, over its length).
+template <bool kAngle, bool kGradient>
+[[gnu::always_inline]] inline void hinge_body(int h, const int* __restrict ic, const int* __restrict ip,
+                                              const int* __restrict iq, const int* __restrict io,
+                                              const double* __restrict x, const double* __restrict theta0,
+                                              double* __restrict dtheta, double* __restrict G,
+                                              double* __restrict redo) {
 #pragma omp simd
   for (int j = 0; j < h; ++j) {
-    // Written out component by component (sub, dot, cross, scale, add of
-    // math.hpp, in their order), so that the compiler sees plain scalars.
-    const int c = ic[j], p = ip[j], q = iq[j], o = io[j];
-    const double P0 = x[p], P1 = x[p + 1], P2 = x[p + 2];
-    const double e0 = x[q] - P0, e1 = x[q + 1] - P1, e2 = x[q + 2] - P2;
-    const double l2 = e0 * e0 + e1 * e1 + e2 * e2, len = std::sqrt(l2);
-    const double c0 = x[c] - P0, c1 = x[c + 1] - P1, c2 = x[c + 2] - P2;
-    const double o0 = x[o] - P0, o1 = x[o + 1] - P1, o2 = x[o + 2] - P2;
-    const double ne0 = e1 * c2 - e2 * c1, ne1 = e2 * c0 - e0 * c2, ne2 = e0 * c1 - e1 * c0;  // edge x cp
-    const double nn0 = o1 * e2 - o2 * e1, nn1 = o2 * e0 - o0 * e2, nn2 = o0 * e1 - o1 * e0;  // op x edge
-    const double m0 = nn1 * ne2 - nn2 * ne1, m1 = nn2 * ne0 - nn0 * ne2, m2 = nn0 * ne1 - nn1 * ne0;  // Nn x Ne
-    const double y = m0 * e0 + m1 * e1 + m2 * e2, xx = len * (ne0 * nn0 + ne1 * nn1 + ne2 * nn2);
-    redo[j] = (xx > 0) & (std::abs(y) <= 0.66 * xx) ? 0.0 : 1.0;
-    dtheta[j] = atan2_small_approx(y, xx) - theta0[j];
-      // Gradient: d theta / d c = g_c = n_e / h_c = Ne len / |Ne|^2 (likewise
-    // g_o with Nn); p and q take what keeps rigid motions force-free,
-    // g_q = -(sc g_c + so g_o), g_p = -(g_c + g_o) - g_q (sc, so the
-    // positions of c and o along the edge, from p, over its length).
-    const double sc = (c0 * e0 + c1 * e1 + c2 * e2) / l2, so = (o0 * e0 + o1 * e1 + o2 * e2) / l2;
-    const double se = len / (ne0 * ne0 + ne1 * ne1 + ne2 * ne2), sn = len / (nn0 * nn0 + nn1 * nn1 + nn2 * nn2);
-    G[8 * j + 0] = ne0 * se;
-    G[8 * j + 1] = ne1 * se;
-    G[8 * j + 2] = ne2 * se;
-    G[8 * j + 3] = nn0 * sn;
-    G[8 * j + 4] = nn1 * sn;
-    G[8 * j + 5] = nn2 * sn;
-    G[8 * j + 6] = sc;
-    G[8 * j + 7] = so;
+    const HingeGeometry g = hinge_geometry(x, ic[j], ip[j], iq[j], io[j]);
+    if (kAngle) {
+      const double m0 = g.nn1 * g.ne2 - g.nn2 * g.ne1, m1 = g.nn2 * g.ne0 - g.nn0 * g.ne2,
+                   m2 = g.nn0 * g.ne1 - g.nn1 * g.ne0;  // Nn x Ne
+      const double y = m0 * g.e0 + m1 * g.e1 + m2 * g.e2, xx = g.len * (g.ne0 * g.nn0 + g.ne1 * g.nn1 + g.ne2 * g.nn2);
+      redo[j] = (xx > 0) & (std::abs(y) <= 0.66 * xx) ? 0.0 : 1.0;
+      dtheta[j] = atan2_small_approx(y, xx) - theta0[j];
+    }
+    if (kGradient) {
+      const double sc = (g.c0 * g.e0 + g.c1 * g.e1 + g.c2 * g.e2) / g.l2,
+                   so = (g.o0 * g.e0 + g.o1 * g.e1 + g.o2 * g.e2) / g.l2;
+      const double se = g.len / (g.ne0 * g.ne0 + g.ne1 * g.ne1 + g.ne2 * g.ne2),
+                   sn = g.len / (g.nn0 * g.nn0 + g.nn1 * g.nn1 + g.nn2 * g.nn2);
+      G[8 * j + 0] = g.ne0 * se;
+      G[8 * j + 1] = g.ne1 * se;
+      G[8 * j + 2] = g.ne2 * se;
+      G[8 * j + 3] = g.nn0 * sn;
+      G[8 * j + 4] = g.nn1 * sn;
+      G[8 * j + 5] = g.nn2 * sn;
+      G[8 * j + 6] = sc;
+      G[8 * j + 7] = so;
+    }
   }
+}
+// Angles and gradients in one pass (gradients kept from pass 0 to pass 2).
+TS_VECTOR_CLONES
+void hinge_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
+                 const double* theta0, double* dtheta, double* G, double* redo) {
+  hinge_body<true, true>(h, ic, ip, iq, io, x, theta0, dtheta, G, redo);
+}
+// The angles only, and the gradients only: for a part whose gradients do
+// not fit in cache, evaluated again in pass 2 from positions still in
+// cache rather than kept (the same bits either way).
+TS_VECTOR_CLONES
+void hinge_angle_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
+                       const double* theta0, double* dtheta, double* redo) {
+  hinge_body<true, false>(h, ic, ip, iq, io, x, theta0, dtheta, nullptr, redo);
+}
+TS_VECTOR_CLONES
+void hinge_gradient_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
+                          double* G) {
+  hinge_body<false, true>(h, ic, ip, iq, io, x, nullptr, nullptr, G, nullptr);
 }
 
 // Lowers lo and raises hi to the smallest and largest of v[0, n).
@@ -360,6 +418,10 @@ class ShellRfT3 final : public ElementKernel {
       }
       if (bending_) {
         setup_bending();
+        // The hinge gradients are kept from pass 0 to pass 2 where all of
+        // them fit in half the per-core cache; a larger part evaluates them
+        // again in pass 2 (fewer bytes through memory for more arithmetic).
+        keep_gradients_ = 8 * sizeof(double) * hc_.size() <= level2_cache_bytes() / 2;
         if (auto st = setup_slopes(s.temperature); !st) return st;
       }
       // The previous strains are kept only for laws that read them.
@@ -949,11 +1011,11 @@ class ShellRfT3 final : public ElementKernel {
     return *slot;
   }
 
-  // The angle changes of the hinges of block [b, end) and their gradients,
-  // kept for the block (BlockAngles) from pass 0 to pass 2: its interior
-  // hinges (those owned by its elements, then those owned by an element of
-  // an earlier block), then one entry per element and edge without a
-  // neighbour (the ghost hinge's angle, zero at a free edge).
+  // The angle changes of the hinges of block [b, end), kept for the block
+  // (BlockAngles) from pass 0 to pass 2 with the ghost hinges' gradients:
+  // its interior hinges (those owned by its elements, then those owned by
+  // an element of an earlier block), then one entry per element and edge
+  // without a neighbour (the ghost hinge's angle, zero at a free edge).
   BlockAngles& block_angles(int b, int end, const BlockHinges& bh) {
     const int n = end - b;
     const double* x = part_->x.data();
@@ -967,19 +1029,26 @@ class ShellRfT3 final : public ElementKernel {
       slot->cap = nh + 3 * n;
       const std::size_t m = static_cast<std::size_t>(slot->cap);
       slot->dth.resize(m);
-      slot->G.resize(8 * m);
+      if (keep_gradients_) slot->G.resize(8 * m);
       slot->redo.resize(m);
       slot->ghost_grad.resize(36 * static_cast<std::size_t>(n));
     }
     BlockAngles& ba = *slot;
     const int* fnode = bh.fnode.data();
     double* dth = ba.dth.data();
-    double* G = ba.G.data();
     double* redo = ba.redo.data();
-    hinge_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, htheta0_.data() + h0,
-                dth, G, redo);
-    hinge_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x, bh.ftheta0.data(),
-                dth + nown, G + 8 * nown, redo + nown);
+    if (keep_gradients_) {
+      double* G = ba.G.data();
+      hinge_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, htheta0_.data() + h0,
+                  dth, G, redo);
+      hinge_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x,
+                  bh.ftheta0.data(), dth + nown, G + 8 * nown, redo + nown);
+    } else {
+      hinge_angle_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x,
+                        htheta0_.data() + h0, dth, redo);
+      hinge_angle_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x,
+                        bh.ftheta0.data(), dth + nown, redo + nown);
+    }
     for (int j = 0; j < nh; ++j)
       if (redo[j] != 0) {  // beyond the approximation's range: the library's atan2
         const int h = j < nown ? h0 + j : bh.fhinge[j - nown];
@@ -1051,7 +1120,20 @@ class ShellRfT3 final : public ElementKernel {
     const int n = end - b;
     const BlockHinges& bh = block_hinges(b, end);
     const BlockAngles& ba = *block_angles_[b];  // from pass 0
+    // The interior hinges' gradients, in the order of their angles: kept
+    // from pass 0, or evaluated again here into the thread's buffer.
     const double* G = ba.G.data();
+    if (!keep_gradients_) {
+      const int h0 = hstart_[b], nown = hstart_[end] - h0, nforeign = bh.nforeign;
+      const std::size_t m = 8 * static_cast<std::size_t>(nown + nforeign);
+      if (sc.G.size() < m) sc.G.resize(m);
+      const int* fnode = bh.fnode.data();
+      const double* x = part_->x.data();
+      hinge_gradient_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, sc.G.data());
+      hinge_gradient_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x,
+                           sc.G.data() + 8 * nown);
+      G = sc.G.data();
+    }
     const double* hgrad = ba.ghost_grad.data();
     double* mk = sc.mk.data();
     hinge_moment_block(n, gld_, lmap_.data() + b, acoef_.data() + b, nidx_.data() + 3 * b,
@@ -1131,6 +1213,7 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   const MaterialLaw* bending_ = nullptr;
+  bool keep_gradients_ = true;  // hinge gradients kept per block from pass 0 to pass 2 (see configure)
   int gld_ = 0;
   std::vector<int> opp_, partner_k_, edge_condition_;  // partner_k_: the same edge's index in the neighbour
   std::vector<char> clamped_;
