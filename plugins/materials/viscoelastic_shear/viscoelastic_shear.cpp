@@ -89,40 +89,64 @@ struct Branch {
 }
 
 // The law over n points with NB <= kVectorBranches branches, each step of
-// the scalar path (invariants(), even_polynomial(), add_stress(),
-// prony_factors_inv(), prony_step()) written out in the same order so that
-// the results are the same bits. State per point (stride ns): S0 (3), H_i
-// (3 NB), then the cache (flag, T, omega, g_i, 1 / tau_i) at offset
-// `cache`. The new S0 and H_i replace the old ones in the state, except
-// where redo[q] = 1: the cache does not hold T or dt / tau_i >= 1e-2 (the
-// state is left as it was). Inlined into each vector clone below.
+// the scalar path (ViscoelasticShear::at(), invariants(), even_polynomial(),
+// add_stress(), prony_factors_inv(), prony_step()) written out in the same
+// order so that the results are the same bits. The parameters' lines are
+// given as `lines`: t_min, t_max, then (t_break, value at the break, slope
+// below, slope above) for omega, each g_i and each tau_i. State per point
+// (stride ns): S0 (3), H_i (3 NB). The new S0 and H_i replace the old ones
+// in the state, except where redo[q] = 1: dt / tau_i >= 1e-2 for some
+// branch (the state is left as it was). Inlined into each vector clone
+// below.
 template <int NB>
-[[gnu::always_inline]] inline void visco_body(std::size_t n, int cache, int ns, const double* __restrict C, const double* __restrict dir2,
-                 const double* __restrict temp, double dt, const double* ksh, double* __restrict state,
-                 double* __restrict S, double* __restrict W, double* __restrict redo) {
+[[gnu::always_inline]] inline void visco_body(std::size_t n, int ns, const double* __restrict C,
+                                              const double* __restrict dir2, const double* __restrict temp, double dt,
+                                              const double* ksh, const double* lines, double* __restrict state,
+                                              double* __restrict S, double* __restrict W, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
+  const double t_min = lines[0], t_max = lines[1];
+  double lo[4], lg[NB][4], lt[NB][4];
+  for (int k = 0; k < 4; ++k) {
+    lo[k] = lines[2 + k];
+    for (int i = 0; i < NB; ++i) {
+      lg[i][k] = lines[6 + 4 * i + k];
+      lt[i][k] = lines[6 + 4 * NB + 4 * i + k];
+    }
+  }
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
     double* st = state + static_cast<std::size_t>(ns) * q;
-    const double* ca = st + cache;
     const double c = dir2[2 * q], s = dir2[2 * q + 1];
     const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
-    // The cached parameters.
-    const double omega = ca[2];
-    bool ok = (ca[0] == 1.0) & (ca[1] == temp[q]);
+    // at(): the clamped parameters at the point's temperature.
+    const double T0 = temp[q];
+    const double T = T0 < t_min ? t_min : (t_max < T0 ? t_max : T0);  // std::clamp
+    const double ov = lo[1] + (T < lo[0] ? lo[2] : lo[3]) * (T - lo[0]);
+    const double omega = 0.0 < ov ? ov : 0.0;  // std::max(0.0, ov)
+    double g[NB], inv_tau[NB], g_raw_sum = 0;
+    for (int i = 0; i < NB; ++i) {
+      const double gv = lg[i][1] + (T < lg[i][0] ? lg[i][2] : lg[i][3]) * (T - lg[i][0]);
+      const double tv = lt[i][1] + (T < lt[i][0] ? lt[i][2] : lt[i][3]) * (T - lt[i][0]);
+      g[i] = 0.0 < gv ? gv : 0.0;
+      const double tau = 1e-9 < tv ? tv : 1e-9;
+      inv_tau[i] = 1.0 / tau;
+      g_raw_sum += g[i];
+    }
+    for (int i = 0; i < NB; ++i) g[i] = g_raw_sum > 1.0 ? g[i] / g_raw_sum : g[i];
     const ShearStress ss = shear_stress(C0, C1, C2, c, s, k1, k2, k3, omega);
     const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
     // prony_step(nb, g, decay, ramp, S0_old, s0, H, s)
     double g_sum = 0;
-    for (int i = 0; i < NB; ++i) g_sum += ca[3 + i];
+    for (int i = 0; i < NB; ++i) g_sum += g[i];
     const double g_inf = 1.0 - g_sum;
     double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
     double nx[3 + 3 * NB];
     nx[0] = s00;
     nx[1] = s01;
     nx[2] = s02;
+    bool ok = true;
     for (int i = 0; i < NB; ++i) {
-      const double g = ca[3 + i], x = dt * ca[3 + NB + i];
+      const double x = dt * inv_tau[i];
       // prony_factors_inv: the series (x < 1e-3 and x < 1e-2 forms)
       const double xx2 = x * x, x4 = xx2 * xx2;
       const double decay_a = (1 - x) + xx2 * (1.0 / 2 - x * (1.0 / 6)) + x4 * (1.0 / 24);
@@ -133,7 +157,7 @@ template <int NB>
                             x4 * ((1.0 / 120 - x * (1.0 / 720)) + xx2 * (1.0 / 5040));
       const double decay = x < 1e-3 ? decay_a : decay_b, ramp = x < 1e-3 ? ramp_a : ramp_b;
       ok = ok & (x < 1e-2);
-      const Branch h = maxwell_branch(decay, g, ramp, st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]);
+      const Branch h = maxwell_branch(decay, g[i], ramp, st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]);
       nx[3 + 3 * i] = h.h0;
       nx[3 + 3 * i + 1] = h.h1;
       nx[3 + 3 * i + 2] = h.h2;
@@ -155,19 +179,19 @@ template <int NB>
   }
 }
 
-#define TS_VISCO_BLOCK(NB)                                                                                          \
-  TS_VECTOR_CLONES void visco_block##NB(std::size_t n, int cache, int ns, const double* C, const double* dir2,      \
-                                        const double* temp, double dt, const double* ksh, double* state,             \
-                                        double* S, double* W, double* redo) {                                 \
-    visco_body<NB>(n, cache, ns, C, dir2, temp, dt, ksh, state, S, W, redo);                                        \
+#define TS_VISCO_BLOCK(NB)                                                                                    \
+  TS_VECTOR_CLONES void visco_block##NB(std::size_t n, int ns, const double* C, const double* dir2,           \
+                                        const double* temp, double dt, const double* ksh, const double* lines, \
+                                        double* state, double* S, double* W, double* redo) {                   \
+    visco_body<NB>(n, ns, C, dir2, temp, dt, ksh, lines, state, S, W, redo);                                  \
   }
 TS_VISCO_BLOCK(1)
 TS_VISCO_BLOCK(2)
 TS_VISCO_BLOCK(3)
 TS_VISCO_BLOCK(4)
 #undef TS_VISCO_BLOCK
-using ViscoBlock = void (*)(std::size_t, int, int, const double*, const double*, const double*, double, const double*,
-                            double*, double*, double*, double*);
+using ViscoBlock = void (*)(std::size_t, int, const double*, const double*, const double*, double, const double*,
+                            const double*, double*, double*, double*, double*);
 constexpr ViscoBlock kViscoBlock[kVectorBranches + 1] = {nullptr, visco_block1, visco_block2, visco_block3, visco_block4};
 
 // The same for n points at one temperature: omega, g_i and the factors
@@ -270,16 +294,18 @@ class ViscoelasticShear final : public MaterialLaw {
       }
       if (sum > 1.0)
         return Status::failure("the Maxwell weights g sum to " + std::to_string(sum) + " at t_break; it must be <= 1");
+      // The lines as the vector pass reads them (see visco_body).
+      lines_ = {t_min_, t_max_, omega_.t_break, omega_.value_at_break, omega_.slope_below, omega_.slope_above};
+      for (const auto* set : {&g_, &tau_})
+        for (const BrokenLine& l : *set) lines_.insert(lines_.end(), {l.t_break, l.value_at_break, l.slope_below, l.slope_above});
       return Status::success();
     });
   }
   LawRole role() const override { return LawRole::Membrane; }
   bool uses_strain_old() const override { return false; }
   // Per point: S0 at the previous step (3), the branch states H_i (3 per
-  // branch), then the parameters at the point's last temperature (a flag,
-  // T, omega, g_i, 1 / tau_i): the temperature changes only when the
-  // thermal solver advances, so they are evaluated once per thermal step.
-  int state_size() const override { return 3 + 3 * n_ + 3 + 2 * n_; }
+  // branch).
+  int state_size() const override { return 3 + 3 * n_; }
   std::pair<double, double> temperature_range() const override { return {t_min_, t_max_}; }
 
   // Clamped parameters at temperature T.
@@ -304,7 +330,7 @@ class ViscoelasticShear final : public MaterialLaw {
       double g[16], decay[16], ramp[16], omega = 0;
       for (std::size_t q = 0; q < b.n; ++q) {
         if (uniform && q > 0)
-          shared_point(b, q, 0, omega, g, decay, ramp);
+          shared_point(b, q, omega, g, decay, ramp);
         else
           point(b, q, &omega, g, decay, ramp);
       }
@@ -315,8 +341,7 @@ class ViscoelasticShear final : public MaterialLaw {
     double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
     if (uniform) {
       // The first point as one, its parameters and factors for the others
-      // in one vector pass (their kept parameters are left as they are:
-      // they are only used where they match the temperature).
+      // in one vector pass.
       double g[16], decay[16], ramp[16], omega = 0;
       point(b, 0, &omega, g, decay, ramp);
       if (b.n > 1)
@@ -324,28 +349,24 @@ class ViscoelasticShear final : public MaterialLaw {
                           b.state.data() + state_size(), b.stress.data() + 3, W + 1);
       return Status::success();
     }
-    // Otherwise one vector pass over the block for the points whose
-    // parameters are cached at their current temperature (all of them
-    // between two thermal steps) and whose dt / tau_i are in the factors'
-    // series range; it computes the new state aside. The other points are
-    // evaluated one by one, which also refreshes their cache. Both give the
-    // same bits.
-    kViscoBlock[n_](b.n, 3 + 3 * n_, state_size(), b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_,
+    // Otherwise one vector pass over the block, the parameters evaluated
+    // at each point's temperature, for the points whose dt / tau_i are in
+    // the factors' series range; the other points are evaluated one by one.
+    // Both give the same bits.
+    kViscoBlock[n_](b.n, state_size(), b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_, lines_.data(),
                     b.state.data(), b.stress.data(), W, sc.redo.data());
     for (std::size_t q = 0; q < b.n; ++q)
       if (sc.redo[q] != 0) point(b, q);
     return Status::success();
   }
 
-  // One point: parameters at its temperature (from its cache when the
-  // temperature is the cached one), Prony step.
+  // One point: parameters at its temperature, Prony step.
   // The parameters and factors used are returned when asked for (omega_out,
   // g_out, decay_out, ramp_out: 16 each).
   void point(const MaterialBlock& b, std::size_t q, double* omega_out = nullptr, double* g_out = nullptr,
              double* decay_out = nullptr, double* ramp_out = nullptr) const {
     const FibreFrame f;
     double g[16], inv_tau[16], decay[16], ramp[16], omega = 0;
-    const int ns = state_size(), cache = 3 + 3 * n_;
     const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
     FibreFrame fr = f;
     if (!b.dir2.empty()) {
@@ -353,27 +374,9 @@ class ViscoelasticShear final : public MaterialLaw {
       fr.s = b.dir2[2 * q + 1];
     }
     const Invariants v = invariants(C, fr, kSh);
-    double* st = b.state.data() + static_cast<std::size_t>(ns) * q;
-    const double T = b.temperature[q];
-    double* c = st + cache;
-    if (c[0] == 1.0 && c[1] == T) {  // as at this point's previous step
-      omega = c[2];
-      for (int i = 0; i < n_; ++i) {
-        g[i] = c[3 + i];
-        inv_tau[i] = c[3 + n_ + i];
-      }
-    } else {
-      double tau[16];
-      at(T, &omega, g, tau);
-      for (int i = 0; i < n_; ++i) inv_tau[i] = 1.0 / tau[i];
-      c[0] = 1.0;
-      c[1] = T;
-      c[2] = omega;
-      for (int i = 0; i < n_; ++i) {
-        c[3 + i] = g[i];
-        c[3 + n_ + i] = inv_tau[i];
-      }
-    }
+    double tau[16];
+    at(b.temperature[q], &omega, g, tau);
+    for (int i = 0; i < n_; ++i) inv_tau[i] = 1.0 / tau[i];
     prony_factors_inv(n_, inv_tau, b.dt, decay, ramp);
     if (omega_out) {
       *omega_out = omega;
@@ -386,21 +389,16 @@ class ViscoelasticShear final : public MaterialLaw {
     finish(b, q, v, omega, g, decay, ramp);
   }
 
-  // One point at the temperature of point q0 (its parameters and factors
-  // given); the point's cache is brought up to date from q0's.
-  void shared_point(const MaterialBlock& b, std::size_t q, std::size_t q0, double omega, const double* g,
-                    const double* decay, const double* ramp) const {
+  // One point at the temperature of another (its parameters and factors
+  // given).
+  void shared_point(const MaterialBlock& b, std::size_t q, double omega, const double* g, const double* decay,
+                    const double* ramp) const {
     FibreFrame fr;
     if (!b.dir2.empty()) {
       fr.c = b.dir2[2 * q];
       fr.s = b.dir2[2 * q + 1];
     }
     const Invariants v = invariants({b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]}, fr, kSh);
-    const int ns = state_size(), cache = 3 + 3 * n_;
-    double* c = b.state.data() + static_cast<std::size_t>(ns) * q + cache;
-    const double* c0 = b.state.data() + static_cast<std::size_t>(ns) * q0 + cache;
-    if (!(c[0] == 1.0 && c[1] == b.temperature[q]))
-      for (int k = 0; k < 3 + 2 * n_; ++k) c[k] = c0[k];
     finish(b, q, v, omega, g, decay, ramp);
   }
 
@@ -431,6 +429,7 @@ class ViscoelasticShear final : public MaterialLaw {
   double k_sh_[3] = {0, 0, 0};
   BrokenLine omega_;
   std::vector<BrokenLine> g_, tau_;
+  std::vector<double> lines_;
   int n_ = 0;
 };
 
@@ -440,7 +439,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.0.4";
+  d.version = "1.1.0";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
@@ -463,4 +462,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.0.4", register_all)
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.1.0", register_all)
