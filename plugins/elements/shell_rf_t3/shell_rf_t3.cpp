@@ -93,11 +93,12 @@ BlockScratch& block_scratch(int n) {
 // The hinges of one block between the passes of a step (see
 // ShellRfT3::block_angles): interior hinges at [0, nh) (capacity cap):
 // angle minus initial angle, gradients (8 per hinge, as hinge_block writes
-// them; only where the part keeps them, ShellRfT3::keep_gradients_), 1
-// where the angle is evaluated again with the library; ghost hinges at
-// nh + 3 (e - b) + k, their gradients on (c, p, q) in ghost_grad.
+// them; only where the part keeps them, ShellRfT3::keep_gradients_); then
+// one entry per edge without a neighbour (BlockHinges::loc: zero at a free
+// edge, the ghost hinge's angle at a clamped or symmetry edge), their
+// gradients on (c, p, q) in ghost_grad.
 struct BlockAngles {
-  std::vector<double> dth, G, redo, ghost_grad;
+  std::vector<double> dth, G, ghost_grad;
   int cap = 0;
 };
 
@@ -137,9 +138,9 @@ struct HingeGeometry {
 // Bending angles (minus their initial values theta0) of h hinges (kAngle)
 // and their gradients (kGradient); the angle as ShellRfT3::hinge_angle with
 // the same operations in the same order. Hinge j has its nodes (c, p, q, o)
-// at x[ic[j]], x[ip[j]], ... (offsets 3 x node). redo[j] = 1 (0 otherwise)
-// where the angle is beyond atan2_small's range (the caller evaluates it
-// with the library). The gradients go to G[8 j + r]: r = 0-2 g_c, 3-5 g_o,
+// at x[ic[j]], x[ip[j]], ... (offsets 3 x node). Where the angle is beyond
+// atan2_small's range, dtheta[j] is NaN (the caller evaluates it with the
+// library). The gradients go to G[8 j + r]: r = 0-2 g_c, 3-5 g_o,
 // 6 sc, 7 so (the gradients on p and q follow from them): d theta / d c =
 // g_c = n_e / h_c = Ne len / |Ne|^2 (likewise g_o with Nn); p and q take
 // what keeps rigid motions force-free, g_q = -(sc g_c + so g_o), g_p =
@@ -149,8 +150,7 @@ template <bool kAngle, bool kGradient>
 [[gnu::always_inline]] inline void hinge_body(int h, const int* __restrict ic, const int* __restrict ip,
                                               const int* __restrict iq, const int* __restrict io,
                                               const double* __restrict x, const double* __restrict theta0,
-                                              double* __restrict dtheta, double* __restrict G,
-                                              double* __restrict redo) {
+                                              double* __restrict dtheta, double* __restrict G) {
 #pragma omp simd
   for (int j = 0; j < h; ++j) {
     const HingeGeometry g = hinge_geometry(x, ic[j], ip[j], iq[j], io[j]);
@@ -158,8 +158,8 @@ template <bool kAngle, bool kGradient>
       const double m0 = g.nn1 * g.ne2 - g.nn2 * g.ne1, m1 = g.nn2 * g.ne0 - g.nn0 * g.ne2,
                    m2 = g.nn0 * g.ne1 - g.nn1 * g.ne0;  // Nn x Ne
       const double y = m0 * g.e0 + m1 * g.e1 + m2 * g.e2, xx = g.len * (g.ne0 * g.nn0 + g.ne1 * g.nn1 + g.ne2 * g.nn2);
-      redo[j] = (xx > 0) & (std::abs(y) <= 0.66 * xx) ? 0.0 : 1.0;
-      dtheta[j] = atan2_small_approx(y, xx) - theta0[j];
+      const double d = atan2_small_approx(y, xx) - theta0[j];
+      dtheta[j] = (xx > 0) & (std::abs(y) <= 0.66 * xx) ? d : std::numeric_limits<double>::quiet_NaN();
     }
     if (kGradient) {
       const double sc = (g.c0 * g.e0 + g.c1 * g.e1 + g.c2 * g.e2) / g.l2,
@@ -180,21 +180,21 @@ template <bool kAngle, bool kGradient>
 // Angles and gradients in one pass (gradients kept from pass 0 to pass 2).
 TS_VECTOR_CLONES
 void hinge_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
-                 const double* theta0, double* dtheta, double* G, double* redo) {
-  hinge_body<true, true>(h, ic, ip, iq, io, x, theta0, dtheta, G, redo);
+                 const double* theta0, double* dtheta, double* G) {
+  hinge_body<true, true>(h, ic, ip, iq, io, x, theta0, dtheta, G);
 }
 // The angles only, and the gradients only: for a part whose gradients do
 // not fit in cache, evaluated again in pass 2 from positions still in
 // cache rather than kept (the same bits either way).
 TS_VECTOR_CLONES
 void hinge_angle_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
-                       const double* theta0, double* dtheta, double* redo) {
-  hinge_body<true, false>(h, ic, ip, iq, io, x, theta0, dtheta, nullptr, redo);
+                       const double* theta0, double* dtheta) {
+  hinge_body<true, false>(h, ic, ip, iq, io, x, theta0, dtheta, nullptr);
 }
 TS_VECTOR_CLONES
 void hinge_gradient_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
                           double* G) {
-  hinge_body<false, true>(h, ic, ip, iq, io, x, nullptr, nullptr, G, nullptr);
+  hinge_body<false, true>(h, ic, ip, iq, io, x, nullptr, nullptr, G);
 }
 
 // Lowers lo and raises hi to the smallest and largest of v[0, n).
@@ -956,6 +956,7 @@ class ShellRfT3 final : public ElementKernel {
   // the same time never share it, and a range with other bounds rebuilds it.
   struct BlockHinges {
     int end = -1, nforeign = 0;
+    int nbound = 0;  // edges without a neighbour (their entries follow the hinges')
     // Per element and edge of the block: the edge's entry in the angle
     // changes (see bending_forces).
     std::vector<int> loc;
@@ -1002,7 +1003,7 @@ class ShellRfT3 final : public ElementKernel {
     const int nh = nown + bh->nforeign;
     for (int e = b; e < end; ++e)
       for (int k = 0; k < 3; ++k)
-        if (hid_[3 * e + k] < 0) bh->loc[3 * (e - b) + k] = nh + 3 * (e - b) + k;
+        if (hid_[3 * e + k] < 0) bh->loc[3 * (e - b) + k] = nh + bh->nbound++;
     bh->fnode = fc;
     bh->fnode.insert(bh->fnode.end(), fp.begin(), fp.end());
     bh->fnode.insert(bh->fnode.end(), fq.begin(), fq.end());
@@ -1024,44 +1025,42 @@ class ShellRfT3 final : public ElementKernel {
     const int nforeign = bh.nforeign;
     const int nh = nown + nforeign;
     std::unique_ptr<BlockAngles>& slot = block_angles_[b];
-    if (!slot || slot->cap < nh + 3 * n) {
+    if (!slot || slot->cap < nh + bh.nbound) {
       slot = std::make_unique<BlockAngles>();
-      slot->cap = nh + 3 * n;
+      slot->cap = nh + bh.nbound;
       const std::size_t m = static_cast<std::size_t>(slot->cap);
       slot->dth.resize(m);
       if (keep_gradients_) slot->G.resize(8 * m);
-      slot->redo.resize(m);
       slot->ghost_grad.resize(36 * static_cast<std::size_t>(n));
     }
     BlockAngles& ba = *slot;
     const int* fnode = bh.fnode.data();
     double* dth = ba.dth.data();
-    double* redo = ba.redo.data();
     if (keep_gradients_) {
       double* G = ba.G.data();
       hinge_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, htheta0_.data() + h0,
-                  dth, G, redo);
+                  dth, G);
       hinge_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x,
-                  bh.ftheta0.data(), dth + nown, G + 8 * nown, redo + nown);
+                  bh.ftheta0.data(), dth + nown, G + 8 * nown);
     } else {
       hinge_angle_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x,
-                        htheta0_.data() + h0, dth, redo);
+                        htheta0_.data() + h0, dth);
       hinge_angle_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x,
-                        bh.ftheta0.data(), dth + nown, redo + nown);
+                        bh.ftheta0.data(), dth + nown);
     }
     for (int j = 0; j < nh; ++j)
-      if (redo[j] != 0) {  // beyond the approximation's range: the library's atan2
+      if (dth[j] != dth[j]) {  // NaN: beyond the approximation's range, the library's atan2
         const int h = j < nown ? h0 + j : bh.fhinge[j - nown];
         dth[j] = hinge_angle(x, hc_[h] / 3, hp_[h] / 3, hq_[h] / 3, ho_[h] / 3) - htheta0_[h];
       }
     // Ghost hinges (clamped and symmetry edges), one by one.
     double* ggrad = ba.ghost_grad.data();  // per element and edge of the block: d theta / dx on (c, p, q)
-    std::fill(dth + nh, dth + nh + 3 * n, 0.0);
+    std::fill(dth + nh, dth + nh + bh.nbound, 0.0);
     for (int g = gstart_[b]; g < gstart_[end]; ++g) {
       const int e = gedge_[g] / 3, k = gedge_[g] % 3;
       const int* t = &part_->triangles[3 * e];
       Vec3* gr = reinterpret_cast<Vec3*>(&ggrad[36 * (e - b) + 12 * k]);
-      dth[nh + 3 * (e - b) + k] =
+      dth[bh.loc[3 * (e - b) + k]] =
           clamped_[3 * e + k] == 1
               ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, gr)
               : ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], Vec3{0, 0, 0}, clamped_[3 * e + k] - 2, gr);
