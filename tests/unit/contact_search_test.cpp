@@ -34,6 +34,24 @@ ShellMesh ply_mesh(const std::array<double, 3>& origin, const std::array<double,
   return m;
 }
 
+// The heat links of ply a's nodes on ply b (0.5 mm plies) from a
+// penalty_node_surface handler configured with the given gap tolerance.
+sdk::ThermalContactMap ply_links(const PluginRecord& r, const ShellMesh& a, const ShellMesh& b, double gap_tolerance) {
+  std::unique_ptr<sdk::ContactHandler> handler(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
+  const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+  sdk::ThermalContactMap map;
+  EXPECT_TRUE(handler
+                  ->configure(validate_params(json{{"conductance", 1000.0}, {"gap_tolerance", gap_tolerance}}, "/c",
+                                              r.descriptor),
+                              sdk::ContactPair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}}, parts,
+                              {})
+                  .ok);
+  const std::vector<double> area_a(a.num_nodes(), 1e-4), area_b(b.num_nodes(), 1e-4);
+  const std::vector<std::span<const double>> area = {area_a, area_b};
+  EXPECT_TRUE(handler->thermal_contacts(parts, {}, area, map).ok);
+  return map;
+}
+
 // Every node of ply a within reach of ply b (mid-surface distance at most
 // h + gap_tolerance) gets a heat link, and the link's target point on b is
 // a closest point of b: its distance equals the brute-force minimum over all
@@ -51,20 +69,9 @@ TEST(PlyPlySearch, TargetsAreTheClosestPointsOfTheOtherPly) {
   // keeps between its two sweeps).
   for (const auto& [same_cells, gap_tolerance] : {std::pair{false, 0.002}, std::pair{true, 0.002}, std::pair{false, 0.03}}) {
     const double reach = 0.0005 + gap_tolerance;
-    std::unique_ptr<sdk::ContactHandler> handler(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
     const ShellMesh a = same_cells ? ply_mesh({0, 0, 0}, {0.06, 0.06}, {6, 6}, true, 0.005)
                                    : ply_mesh({0.004, 0.007, 0}, {0.05, 0.05}, {7, 5}, false, 0.005);
-    const std::vector<sdk::PartView> parts = {test::part_view(a, 0), test::part_view(b, 1)};
-    ASSERT_TRUE(handler
-                    ->configure(validate_params(json{{"conductance", 1000.0}, {"gap_tolerance", gap_tolerance}},
-                                                "/c", r.descriptor),
-                                sdk::ContactPair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}},
-                                parts, {})
-                    .ok);
-    const std::vector<double> area_a(a.num_nodes(), 1e-4), area_b(b.num_nodes(), 1e-4);
-    const std::vector<std::span<const double>> area = {area_a, area_b};
-    sdk::ThermalContactMap map;
-    ASSERT_TRUE(handler->thermal_contacts(parts, {}, area, map).ok);
+    const sdk::ThermalContactMap map = ply_links(r, a, b, gap_tolerance);
     std::vector<int> link(a.num_nodes(), -1);
     for (std::size_t l = 0; l < map.links.size(); ++l) link[map.links[l].node_a] = static_cast<int>(l);
     int within = 0, beyond = 0;
@@ -132,19 +139,7 @@ TEST(PlyPlySearch, LoneTriangleTargetsAreItsClosestPoints) {
       for (int j = 0; j < 21; ++j)
         for (int i = 0; i < 21; ++i)
           a.x.insert(a.x.end(), {-0.006 + 0.0012 * i + 1e-5 * j, -0.006 + 0.0010 * j, -0.002 + 0.002 * k});
-    const double gap_tolerance = 0.05;  // every point is within reach
-    std::unique_ptr<sdk::ContactHandler> handler(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
-    const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
-    ASSERT_TRUE(handler
-                    ->configure(validate_params(json{{"conductance", 1000.0}, {"gap_tolerance", gap_tolerance}},
-                                                "/c", r.descriptor),
-                                sdk::ContactPair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}},
-                                parts, {})
-                    .ok);
-    const std::vector<double> area_a(a.num_nodes(), 1e-4), area_b(b.num_nodes(), 1e-4);
-    const std::vector<std::span<const double>> area = {area_a, area_b};
-    sdk::ThermalContactMap map;
-    ASSERT_TRUE(handler->thermal_contacts(parts, {}, area, map).ok);
+    const sdk::ThermalContactMap map = ply_links(r, a, b, 0.05);  // every point is within reach
     ASSERT_EQ(static_cast<int>(map.links.size()), a.num_nodes());
     for (const sdk::HeatLink& l : map.links) {
       const sdk::Vec3 x = sdk::load3(a.x.data(), l.node_a);
