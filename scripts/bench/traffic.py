@@ -16,7 +16,8 @@ runs as well (compare.py).
 
 Usage: scripts/bench/traffic.py [--n 71] [--short 50] [--long 250]
        [--cache-bytes B] [--top 20] [--exe build/bin/thermostamp]
-(n = 71 gives the 10k plate; valgrind runs about 50 times slower.)
+(n = 71 gives the 10k plate; valgrind runs about 50 times slower; it is
+the Debian package valgrind, which scripts/setup does not install.)
 """
 import argparse
 import collections
