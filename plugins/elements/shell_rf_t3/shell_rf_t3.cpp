@@ -1012,6 +1012,19 @@ class ShellRfT3 final : public ElementKernel {
     return *slot;
   }
 
+  // The interior hinges of block [b, end) as two lists: those its elements
+  // own, then those owned by an element of an earlier block. Calls f(h, c,
+  // p, q, o, theta0, j0) for each: h hinges with node offsets c[j] ...
+  // o[j] and initial angles theta0[j], entries j0 .. j0 + h - 1 of the
+  // block's hinges.
+  template <class F>
+  void hinge_lists(int b, int end, const BlockHinges& bh, F&& f) const {
+    const int h0 = hstart_[b], nown = hstart_[end] - h0, nf = bh.nforeign;
+    const int* fnode = bh.fnode.data();
+    f(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, htheta0_.data() + h0, 0);
+    f(nf, fnode, fnode + nf, fnode + 2 * nf, fnode + 3 * nf, bh.ftheta0.data(), nown);
+  }
+
   // The angle changes of the hinges of block [b, end), kept for the block
   // (BlockAngles) from pass 0 to pass 2 with the ghost hinges' gradients:
   // its interior hinges (those owned by its elements, then those owned by
@@ -1034,20 +1047,14 @@ class ShellRfT3 final : public ElementKernel {
       slot->ghost_grad.resize(36 * static_cast<std::size_t>(n));
     }
     BlockAngles& ba = *slot;
-    const int* fnode = bh.fnode.data();
     double* dth = ba.dth.data();
-    if (keep_gradients_) {
-      double* G = ba.G.data();
-      hinge_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, htheta0_.data() + h0,
-                  dth, G);
-      hinge_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x,
-                  bh.ftheta0.data(), dth + nown, G + 8 * nown);
-    } else {
-      hinge_angle_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x,
-                        htheta0_.data() + h0, dth);
-      hinge_angle_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x,
-                        bh.ftheta0.data(), dth + nown);
-    }
+    double* G = ba.G.data();
+    hinge_lists(b, end, bh, [&](int h, const int* c, const int* p, const int* q, const int* o, const double* t0, int j0) {
+      if (keep_gradients_)
+        hinge_block(h, c, p, q, o, x, t0, dth + j0, G + 8 * j0);
+      else
+        hinge_angle_block(h, c, p, q, o, x, t0, dth + j0);
+    });
     for (int j = 0; j < nh; ++j)
       if (dth[j] != dth[j]) {  // NaN: beyond the approximation's range, the library's atan2
         const int h = j < nown ? h0 + j : bh.fhinge[j - nown];
@@ -1123,15 +1130,14 @@ class ShellRfT3 final : public ElementKernel {
     // from pass 0, or evaluated again here into the thread's buffer.
     const double* G = ba.G.data();
     if (!keep_gradients_) {
-      const int h0 = hstart_[b], nown = hstart_[end] - h0, nforeign = bh.nforeign;
-      const std::size_t m = 8 * static_cast<std::size_t>(nown + nforeign);
+      const std::size_t m = 8 * static_cast<std::size_t>(hstart_[end] - hstart_[b] + bh.nforeign);
       if (sc.G.size() < m) sc.G.resize(m);
-      const int* fnode = bh.fnode.data();
       const double* x = part_->x.data();
-      hinge_gradient_block(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, x, sc.G.data());
-      hinge_gradient_block(nforeign, fnode, fnode + nforeign, fnode + 2 * nforeign, fnode + 3 * nforeign, x,
-                           sc.G.data() + 8 * nown);
-      G = sc.G.data();
+      double* Gw = sc.G.data();
+      hinge_lists(b, end, bh, [&](int h, const int* c, const int* p, const int* q, const int* o, const double*, int j0) {
+        hinge_gradient_block(h, c, p, q, o, x, Gw + 8 * j0);
+      });
+      G = Gw;
     }
     const double* hgrad = ba.ghost_grad.data();
     double* mk = sc.mk.data();
