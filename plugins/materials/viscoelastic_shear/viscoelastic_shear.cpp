@@ -98,6 +98,11 @@ struct Branch {
 // in the state, except where redo[q] = 1: dt / tau_i >= 1e-2 for some
 // branch (the state is left as it was). Inlined into each vector clone
 // below.
+// BrokenLine::operator() of a line given as (t_break, value at the break,
+// slope below, slope above): the same operations, so the same bits.
+[[gnu::always_inline]] inline double broken_line(const double* l, double T) {
+  return l[1] + (T < l[0] ? l[2] : l[3]) * (T - l[0]);
+}
 template <int NB>
 [[gnu::always_inline]] inline void visco_body(std::size_t n, int ns, const double* __restrict C,
                                               const double* __restrict dir2, const double* __restrict temp, double dt,
@@ -121,12 +126,11 @@ template <int NB>
     // at(): the clamped parameters at the point's temperature.
     const double T0 = temp[q];
     const double T = T0 < t_min ? t_min : (t_max < T0 ? t_max : T0);  // std::clamp
-    const double ov = lo[1] + (T < lo[0] ? lo[2] : lo[3]) * (T - lo[0]);
+    const double ov = broken_line(lo, T);
     const double omega = 0.0 < ov ? ov : 0.0;  // std::max(0.0, ov)
     double g[NB], inv_tau[NB], g_raw_sum = 0;
     for (int i = 0; i < NB; ++i) {
-      const double gv = lg[i][1] + (T < lg[i][0] ? lg[i][2] : lg[i][3]) * (T - lg[i][0]);
-      const double tv = lt[i][1] + (T < lt[i][0] ? lt[i][2] : lt[i][3]) * (T - lt[i][0]);
+      const double gv = broken_line(lg[i], T), tv = broken_line(lt[i], T);
       g[i] = 0.0 < gv ? gv : 0.0;
       const double tau = 1e-9 < tv ? tv : 1e-9;
       inv_tau[i] = 1.0 / tau;
