@@ -795,6 +795,7 @@ void Simulation::element_block(std::size_t p, int b, int pass) {
   in.patch_slot = std::span<const int>(m.slot_local.data() + 6 * static_cast<std::size_t>(in.range.begin),
                                        6 * static_cast<std::size_t>(in.range.end - in.range.begin));
   in.pass = pass;
+  in.fields_due = fields_due_;
   sdk::ElementForceOutput out;
   out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
   out.element_dt = m.elem_dt;
@@ -1520,6 +1521,12 @@ RunResult Simulation::run(const RunOptions& opt) {
                   contact_energy_, contact_active_);
       if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
       double next_sample = 0, audit_scale = 0, supplied_max = 0;
+      // The stresses and curvatures are asked of the elements only for the
+      // frames that show them, and for the last frame of an interrupted run.
+      const auto& out_fields = job_.output.fields;
+      const bool frames_need_fields =
+          std::find(out_fields.begin(), out_fields.end(), "membrane_stress") != out_fields.end() ||
+          std::find(out_fields.begin(), out_fields.end(), "curvature") != out_fields.end();
       while (t < t_end - eps_t) {
         const double next_frame = std::min(t_end, frame_index * interval);
         // Over its last 100 steps the run lands on t_end in equal steps (at
@@ -1537,7 +1544,10 @@ RunResult Simulation::run(const RunOptions& opt) {
         ++mech_steps;
         t += dt;
         mech_dt = dt;
-        // Forces and stable step at the new positions (also for the next step).
+        // Forces and stable step at the new positions (also for the next
+        // step). A stop request seen here ends the loop after this step.
+        const int stop_seen = stop_requested();
+        fields_due_ = frames_need_fields && (t >= next_frame - eps_t || stop_seen != 0);
         stable = forces_and_stable_dt(t, dt);
         audit.contact_stored = contact_energy_;
         if (job_.thermal) {
@@ -1626,7 +1636,7 @@ RunResult Simulation::run(const RunOptions& opt) {
           frame_t = t;
         }
         progress.update(t, mech_steps);
-        if ((stop_signal = stop_requested()) != 0) break;
+        if ((stop_signal = stop_seen) != 0) break;
       }
     } else {
     while (t < t_end - eps_t) {

@@ -119,6 +119,10 @@ class Simulation {
   void check_field(double time, long long step);
   double seen_min_ = 0, seen_max_ = 0;
   double last_mech_dt_ = 0;
+  // Whether the element fields that only output frames show (stresses,
+  // curvatures) are written after the force evaluation being done
+  // (ElementForceInput::fields_due).
+  bool fields_due_ = true;
   std::vector<double> part_sums_;  // per part: works, kinetic energies, reactions of the step (mechanics_step)
   std::vector<int> part_bad_;      // per part: first non-finite coordinate of the step, -1 if none
 

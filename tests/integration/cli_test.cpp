@@ -5,7 +5,9 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -39,7 +41,7 @@ std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.6.0 (plugin SDK 0.6.0, ABI 6)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.7.0 (plugin SDK 0.7.0, ABI 7)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {
@@ -453,6 +455,90 @@ TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
   }
   EXPECT_GT(pulled, 0);
   EXPECT_GT(held, 0);
+}
+
+// The elements keep their stresses and curvatures only for the steps after
+// which a frame shows them (ElementForceInput::fields_due). Every frame of
+// a run with frames now and then, and the last frame of a run stopped by
+// a request, must hold the values of a run with a frame after every step at
+// the same time, bit for bit: a cantilever strip of the UD card (membrane
+// laws with a viscoelastic history, bending) under its own weight.
+TEST(Output, FramesShowTheStressesAndCurvaturesOfTheirStep) {
+  json card = json::parse(std::ifstream(source_dir() / "share" / "materials" / "pa66_cf_ud.json"));
+  json j = {{"format", "thermostamp-job/1"},
+            {"name", "fields_due"},
+            {"time", {{"end", 3e-4}}},
+            {"materials", {{"ud", card}}},
+            {"parts",
+             {{{"name", "strip"},
+               {"thickness", 0.0005},
+               {"material", "ud"},
+               {"fibre_direction", {1, 1, 0}},
+               {"initial_temperature", 280.0},
+               {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {0.05, 0.01}}, {"divisions", {10, 2}}}}}}},
+            {"constraints",
+             {{{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-9, -1, -1}, {1e-9, 1, 1}}}, {"dofs", {"x", "y", "z"}}}}},
+            {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"gravity", {0, 0, -9.81}}}}, {"thermal", nullptr}}},
+            {"output", {{"interval", 3e-4 / 3}, {"fields", {"displacement", "membrane_stress", "curvature"}}}}};
+  // Frames of a run: time -> (membrane_stress, curvature).
+  auto frames = [](const std::filesystem::path& out) {
+    std::map<double, std::pair<std::vector<double>, std::vector<double>>> m;
+    const hid_t file = H5Fopen((out / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    EXPECT_GE(file, 0);
+    const hid_t g = H5Gopen2(file, "frames", H5P_DEFAULT);
+    hsize_t n = 0;
+    H5Gget_num_objs(g, &n);
+    H5Gclose(g);
+    auto read = [&](const std::string& name) {
+      const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+      const hid_t space = H5Dget_space(set);
+      hsize_t dims[2] = {0, 0};
+      H5Sget_simple_extent_dims(space, dims, nullptr);
+      std::vector<double> v(dims[0] * dims[1]);
+      H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+      H5Sclose(space);
+      H5Dclose(set);
+      return v;
+    };
+    for (hsize_t k = 0; k < n; ++k) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frames/%06d", static_cast<int>(k));
+      const hid_t fg = H5Gopen2(file, name, H5P_DEFAULT);
+      const hid_t at = H5Aopen(fg, "time", H5P_DEFAULT);
+      double t = -1;
+      H5Aread(at, H5T_NATIVE_DOUBLE, &t);
+      H5Aclose(at);
+      H5Gclose(fg);
+      m[t] = {read(std::string(name) + "/strip/membrane_stress"), read(std::string(name) + "/strip/curvature")};
+    }
+    H5Fclose(file);
+    return m;
+  };
+  const auto every = temp_dir("fields_due_every"), some = temp_dir("fields_due_some"), stop = temp_dir("fields_due_stop");
+  json je = j;
+  je["output"]["interval"] = 1e-12;  // a frame after every step
+  ASSERT_TRUE(run_json(je, 1, every).result.ok);
+  ASSERT_TRUE(run_json(j, 1, some).result.ok);
+  request_stop(SIGTERM);
+  const JobRun stopped = run_json(j, 1, stop);
+  clear_stop();
+  ASSERT_EQ(stopped.result.interrupted, SIGTERM);
+  const auto ref = frames(every), got = frames(some), last = frames(stop);
+  ASSERT_GT(ref.size(), 100u);
+  ASSERT_EQ(got.size(), 4u);
+  ASSERT_EQ(last.size(), 2u);
+  double smax = 0, kmax = 0;
+  for (const auto* run : {&got, &last})
+    for (const auto& [t, v] : *run) {
+      const auto it = ref.find(t);
+      ASSERT_NE(it, ref.end()) << "no step ends at t = " << t;
+      EXPECT_EQ(v.first, it->second.first) << "membrane_stress at t = " << t;
+      EXPECT_EQ(v.second, it->second.second) << "curvature at t = " << t;
+      for (double s : v.first) smax = std::max(smax, std::abs(s));
+      for (double k : v.second) kmax = std::max(kmax, std::abs(k));
+    }
+  EXPECT_GT(smax, 0.0);
+  EXPECT_GT(kmax, 0.0);
 }
 
 TEST(Cli, MechanicsBadMaterialParameter) {

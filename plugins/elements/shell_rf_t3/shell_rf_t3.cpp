@@ -68,7 +68,9 @@ inline int padded_ld(int n) {
 // Per-thread buffers for the values of one block of elements (indexed from
 // the block's first element); they grow to the largest block once.
 struct BlockScratch {
-  std::vector<double> temp, strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, mk;
+  // stress and curv: the stresses and curvatures of a step after which the
+  // kernel writes no fields (ElementForceInput::fields_due).
+  std::vector<double> temp, strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, mk, stress, curv;
   std::vector<double> G;  // hinge gradients of the block (bending_forces), grown to the largest block once
 };
 
@@ -81,6 +83,8 @@ BlockScratch& block_scratch(int n) {
     s.ff.resize(6 * ld);
     s.mf.resize(9 * ld);
     s.law_stress.resize(3 * m);
+    s.stress.resize(3 * m);
+    s.curv.resize(3 * m);
     s.energy_tmp.resize(m);
     s.energy.resize(m);
     s.moment.resize(3 * m);
@@ -100,6 +104,7 @@ BlockScratch& block_scratch(int n) {
 struct BlockAngles {
   std::vector<double> dth, G, ghost_grad;
   int cap = 0;
+  double bending_energy = 0;  // sum of A0 w over the block's elements (pass 1, for pass 2)
 };
 
 // The size of the processor's per-core (level 2) cache, bytes: the
@@ -477,7 +482,9 @@ class ShellRfT3 final : public ElementKernel {
         }
       // 2. The laws, one call per law for the whole block; stresses add (the
       // first law writes straight into the element stresses and energies).
+      // The stresses are kept for fields() only where the kernel asks.
       double* energy_e = sc.energy.data();
+      double* S = in.fields_due ? stress_.data() + 3 * b : sc.stress.data();
       for (std::size_t k = 0; k < laws_.size(); ++k) {
         const int ns = laws_[k]->state_size();
         MaterialBlock blk;
@@ -487,15 +494,15 @@ class ShellRfT3 final : public ElementKernel {
         blk.temperature = std::span<const double>(temp, n);
         blk.dt = in.dt;
         blk.state = std::span<double>(states_[k].data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
-        blk.stress = std::span<double>(k == 0 ? stress_.data() + 3 * b : sc.law_stress.data(), 3 * n);
+        blk.stress = std::span<double>(k == 0 ? S : sc.law_stress.data(), 3 * n);
         blk.energy = std::span<double>(k == 0 ? energy_e : sc.energy_tmp.data(), n);
         if (auto s = laws_[k]->evaluate(blk); !s) return s;
         if (k == 0) continue;
-        for (int q = 0; q < 3 * n; ++q) stress_[3 * b + q] += sc.law_stress[q];
+        for (int q = 0; q < 3 * n; ++q) S[q] += sc.law_stress[q];
         for (int q = 0; q < n; ++q) energy_e[q] += sc.energy_tmp[q];
       }
       if (laws_.empty()) {
-        std::fill(stress_.begin() + 3 * b, stress_.begin() + 3 * (b + n), 0.0);
+        std::fill(S, S + 3 * n, 0.0);
         std::fill(energy_e, energy_e + n, 0.0);
       }
       // 3. Nodal forces, energy, stable step. The largest tangent stiffness
@@ -508,7 +515,7 @@ class ShellRfT3 final : public ElementKernel {
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
       double* dte = sc.energy_tmp.data();  // free again after the laws
       double* mf = sc.mf.data();
-      membrane_block(n, ld, C, ff, stress_.data() + 3 * b, area0_.data() + b, g1_.data() + 3 * b,
+      membrane_block(n, ld, C, ff, S, area0_.data() + b, g1_.data() + 3 * b,
                      g2_.data() + 3 * b, inv_c, kmax > 0, mf, dte);
       if (bending_) {  // adds the membrane forces with the bending ones
         energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out);
@@ -779,7 +786,6 @@ class ShellRfT3 final : public ElementKernel {
     eq_.assign(3 * ne, 0.0);
     erho_.assign(3 * ne + 3, 0.0);  // the last three: zero, read for edges without a neighbour
     em_.assign(3 * ne + 3, 0.0);
-    eben_.assign(ne, 0.0);
     std::vector<char> fit(ne, 0);
     // Gradient of the linear interpolant of values v at three points.
     auto grad_lin = [](const double P[3][2], const double v[3], double g[2]) {
@@ -1092,7 +1098,7 @@ class ShellRfT3 final : public ElementKernel {
     const int n = end - b;
     BlockScratch& sc = block_scratch(n);
     double* temp = etemp_.data() + b;  // read again by pass 2
-    double* K = curv_.data() + 3 * b;
+    double* K = in.fields_due ? curv_.data() + 3 * b : sc.curv.data();  // kept for fields() only where asked
     curvature_block(n, gld_, cs_.data() + b, nidx_.data() + 3 * b, eq_.data() + 3 * b, erho_.data(),
                     &part_->triangles[3 * b], in.node_temperature.data(), K, temp);
     MaterialBlock blk;
@@ -1106,10 +1112,13 @@ class ShellRfT3 final : public ElementKernel {
     blk.stress = std::span<double>(sc.moment.data(), 3 * n);
     blk.energy = std::span<double>(sc.benergy.data(), n);
     if (auto st = bending_->evaluate(blk); !st) return st;
+    double* ew = sc.energy_tmp.data();
     moment_block(n, gld_, area0_.data() + b, cs_.data() + b, sc.moment.data(), sc.benergy.data(), em_.data() + 3 * b,
-                 eben_.data() + b);
-    if (in.commit && !curv_old_.empty())
-      std::copy(curv_.begin() + 3 * b, curv_.begin() + 3 * end, curv_old_.begin() + 3 * b);
+                 ew);
+    double energy = 0;  // in element order, as pass 2 adds the membrane energies after it
+    for (int q = 0; q < n; ++q) energy += ew[q];
+    block_angles_[b]->bending_energy = energy;
+    if (in.commit && !curv_old_.empty()) std::copy(K, K + 3 * n, curv_old_.begin() + 3 * b);
     return Status::success();
   }
 
@@ -1151,8 +1160,7 @@ class ShellRfT3 final : public ElementKernel {
       const double dtb_scale = 0.5 * std::sqrt(areal_mass_ / rmax);
       for (int q = 0; q < n; ++q) dte[q] = std::min(dte[q], dmin2_[b + q] * dtb_scale);
     }
-    double energy = 0;
-    for (int e = b; e < end; ++e) energy += eben_[e];
+    double energy = ba.bending_energy;
     // Forces, element by element: the membrane forces on its corners, and
     // the interior hinges it brings. An interior hinge is brought by its
     // owner, or, when the owner is in an earlier block, by its neighbour in
@@ -1234,9 +1242,9 @@ class ShellRfT3 final : public ElementKernel {
   // slope per edge), acoef_ a per edge (edge k of element e at k gld_ + e;
   // see slope_angles), nidx_ per edge the entry
   // of the neighbour's same edge (3 ne, a zero entry, where there is none);
-  // per step eq_, erho_ (slope_angles), em_ (dW/ds), eben_ (A0 w).
+  // per step eq_, erho_ (slope_angles), em_ (dW/ds).
   std::vector<float> cs_, lmap_, acoef_;
-  std::vector<double> eq_, erho_, em_, eben_;
+  std::vector<double> eq_, erho_, em_;
   std::vector<int> nidx_;
   // Interior hinges: node offsets (3 x node) of (c, p, q, o) in the owner's
   // orientation, initial angle, owner and its edge k, neighbour and its
@@ -1269,4 +1277,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.3", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.4", register_all)

@@ -51,6 +51,13 @@ struct ElementForceInput {
   // last pass adds forces, energy and stable step (and reports a
   // degenerate element); earlier ones only prepare.
   int pass = 0;
+  // Whether the kernel writes the stresses and curvatures of fields() for
+  // the state of this evaluation (an output frame follows it). Where false,
+  // an element may skip storing values that only fields() reports: its
+  // stresses and curvatures then stay those of the last evaluation with
+  // fields_due (shear angle and fibre direction come from the positions
+  // and are always current).
+  bool fields_due = true;
 };
 
 struct ElementForceOutput {
