@@ -63,7 +63,7 @@ struct MechPart {
   std::vector<double> prescribed;   // 3 per node: velocity where fixed (0 for fix / symmetry)
   // Per dof, for the integration's vector pass: mass, gravity force, 1 where
   // free (0 where held or driven); the held or driven dofs in ascending order.
-  std::vector<double> mass3, gravity3, free3;
+  std::vector<double> mass3, gravity3;  // mass3: per dof, negated where held or driven (listed in fixed_dofs)
   std::vector<int> fixed_dofs;
   bool external = false;  // gravity or applied loads act on the part
   double mass_physical = 0, mass_added = 0;
@@ -86,9 +86,12 @@ using Clock = std::chrono::steady_clock;
 // by the trapezoid rule (internal, external, damping, contact) with the
 // kinetic energies at t^n, summed into sums[0..6] (w_int, w_ext, w_damp,
 // w_con, kinetic, kinetic at the half step, and x * 0, which is zero unless
-// a position is not finite). A held or driven dof (free3 = 0) takes its
-// prescribed velocity; the constraint supplies R = f_int - f_ext - f_con
-// there, and its work enters w_ext.
+// a position is not finite). A held or driven dof (listed in fixed[0..nfixed),
+// its mass3 negated to mark it) takes its prescribed velocity; the constraint supplies
+// R = f_int - f_ext - f_con there, and its work enters w_ext. The vector
+// pass leaves those dofs as they are; a scalar pass over the list moves
+// them (so that the pass reads neither a per-dof flag nor the prescribed
+// velocities).
 //
 // The trapezoid work of a force f over the step from x^{n-1} to x^n is
 // 1/2 (f^{n-1} + f^n) . (x^n - x^{n-1}). Its first half is known one step
@@ -103,39 +106,57 @@ using Clock = std::chrono::steady_clock;
 template <bool kContact, bool kExternal>
 [[gnu::always_inline]] inline void integrate_body(std::size_t n, double dt, double dt_prev, double dt_avg,
                                                   double damping, const double* __restrict mass3,
-                                                  const double* __restrict gravity3, const double* __restrict free3,
-                                                  const double* __restrict load, const double* __restrict f_int,
-                                                  const double* __restrict f_con, const double* __restrict prescribed,
-                                                  double* __restrict v, double* __restrict x, double* __restrict pending,
+                                                  const double* __restrict gravity3, const double* __restrict load,
+                                                  const double* __restrict f_int, const double* __restrict f_con,
+                                                  const int* __restrict fixed, std::size_t nfixed,
+                                                  const double* __restrict prescribed, double* __restrict v,
+                                                  double* __restrict x, double* __restrict pending,
                                                   double* __restrict sums) {
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0, nonfinite = 0;
   double p_int = 0, p_ext = 0, p_damp = 0, p_con = 0;
 #pragma omp simd reduction(+ : w_int, w_ext, w_damp, w_con, kin, kin_half, nonfinite, p_int, p_ext, p_damp, p_con)
   for (std::size_t k = 0; k < n; ++k) {
     const double mi = mass3[k], vo = v[k], dxo = dt_prev * vo;
-    const bool is_free = free3[k] != 0.0;
+    const bool is_free = !(mi < 0);
     const double fi = f_int[k];
     const double f_ext = kExternal ? gravity3[k] + load[k] : 0.0;
     const double fc = kContact ? f_con[k] : 0.0;
     const double f_damp = damping * mi * vo;
-    const double reaction = fi - f_ext - fc;
-    const double v_free = vo + dt_avg * (f_ext + fc - fi - f_damp) / mi;
-    const double v_new = is_free ? v_free : prescribed[k];
+    const double v_new = vo + dt_avg * (f_ext + fc - fi - f_damp) / mi;
     const double dxn = dt * v_new;
-    w_int += 0.5 * fi * dxo;
-    p_int += 0.5 * fi * dxn;
-    w_ext += is_free ? f_ext * dxo : (0.5 * reaction + f_ext) * dxo;
-    p_ext += is_free ? 0.0 : 0.5 * reaction * dxn;
+    const double xo = x[k], xn = xo + dxn;
+    w_int += is_free ? 0.5 * fi * dxo : 0.0;
+    p_int += is_free ? 0.5 * fi * dxn : 0.0;
+    w_ext += is_free ? f_ext * dxo : 0.0;
     w_damp += is_free ? 0.5 * f_damp * dxo : 0.0;
     p_damp += is_free ? 0.5 * f_damp * dxn : 0.0;
     if (kContact) {
-      w_con += 0.5 * fc * dxo;
-      p_con += 0.5 * fc * dxn;
+      w_con += is_free ? 0.5 * fc * dxo : 0.0;
+      p_con += is_free ? 0.5 * fc * dxn : 0.0;
     }
     // Kinetic energy at t^n as the product of the half-step velocities: the
     // energy that central differences conserve exactly for a linear system.
     kin += is_free ? 0.5 * mi * vo * v_new : 0.0;
     kin_half += is_free ? 0.5 * mi * v_new * v_new : 0.0;
+    v[k] = is_free ? v_new : vo;
+    x[k] = is_free ? xn : xo;
+    nonfinite += is_free ? xn * 0.0 : 0.0;
+  }
+  for (std::size_t j = 0; j < nfixed; ++j) {
+    const int k = fixed[j];
+    const double vo = v[k], dxo = dt_prev * vo, fi = f_int[k];
+    const double f_ext = kExternal ? gravity3[k] + load[k] : 0.0;
+    const double fc = kContact ? f_con[k] : 0.0;
+    const double reaction = fi - f_ext - fc;
+    const double v_new = prescribed[k], dxn = dt * v_new;
+    w_int += 0.5 * fi * dxo;
+    p_int += 0.5 * fi * dxn;
+    w_ext += (0.5 * reaction + f_ext) * dxo;
+    p_ext += 0.5 * reaction * dxn;
+    if (kContact) {
+      w_con += 0.5 * fc * dxo;
+      p_con += 0.5 * fc * dxn;
+    }
     v[k] = v_new;
     const double xn = x[k] + dxn;
     x[k] = xn;
@@ -155,11 +176,12 @@ template <bool kContact, bool kExternal>
 }
 #define TS_INTEGRATE(NAME, CONTACT, EXTERNAL)                                                                        \
   TS_VECTOR_CLONES void NAME(std::size_t n, double dt, double dt_prev, double dt_avg, double damping,                \
-                             const double* mass3, const double* gravity3, const double* free3, const double* load,   \
-                             const double* f_int, const double* f_con, const double* prescribed, double* v,          \
-                             double* x, double* pending, double* sums) {                                             \
-    integrate_body<CONTACT, EXTERNAL>(n, dt, dt_prev, dt_avg, damping, mass3, gravity3, free3, load, f_int, f_con,   \
-                                      prescribed, v, x, pending, sums);                                             \
+                             const double* mass3, const double* gravity3,                                            \
+                             const double* load, const double* f_int, const double* f_con, const int* fixed,         \
+                             std::size_t nfixed, const double* prescribed, double* v, double* x, double* pending,    \
+                             double* sums) {                                                                         \
+    integrate_body<CONTACT, EXTERNAL>(n, dt, dt_prev, dt_avg, damping, mass3, gravity3, load, f_int, f_con,          \
+                                      fixed, nfixed, prescribed, v, x, pending, sums);                               \
   }
 TS_INTEGRATE(integrate_dofs, false, false)
 TS_INTEGRATE(integrate_dofs_contact, true, false)
@@ -167,8 +189,8 @@ TS_INTEGRATE(integrate_dofs_external, false, true)
 TS_INTEGRATE(integrate_dofs_contact_external, true, true)
 #undef TS_INTEGRATE
 using IntegrateDofs = void (*)(std::size_t, double, double, double, double, const double*, const double*,
-                               const double*, const double*, const double*, const double*, const double*, double*,
-                               double*, double*, double*);
+                               const double*, const double*, const double*, const int*,
+                               std::size_t, const double*, double*, double*, double*, double*);
 // By [contact][external forces].
 constexpr IntegrateDofs kIntegrateDofs[2][2] = {{integrate_dofs, integrate_dofs_external},
                                                 {integrate_dofs_contact, integrate_dofs_contact_external}};
@@ -710,7 +732,6 @@ void Simulation::build_mechanics() {
     m.mass_added = total - m.mass_physical;
     m.mass3.assign(3 * static_cast<std::size_t>(nn), 0.0);
     m.gravity3.assign(3 * static_cast<std::size_t>(nn), 0.0);
-    m.free3.assign(3 * static_cast<std::size_t>(nn), 1.0);
     m.fixed_dofs.clear();
     for (int i = 0; i < nn; ++i)
       for (int d = 0; d < 3; ++d) {
@@ -718,7 +739,7 @@ void Simulation::build_mechanics() {
         m.mass3[k] = m.mass[i];
         m.gravity3[k] = md.gravity[d] * m.mass_node_physical[i];
         if (m.fixed[k]) {
-          m.free3[k] = 0.0;
+          m.mass3[k] = -m.mass[i];
           m.fixed_dofs.push_back(k);
         }
       }
@@ -1067,9 +1088,9 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
       reactions[3 * m.constraint_of[k] + k % 3] += m.f_int[k] - (m.gravity3[k] + m.load[k]) - m.f_con[k];
     double sums_p[7];
     kIntegrateDofs[contacts_.empty() ? 0 : 1][m.external ? 1 : 0](
-        n, dt, step == 0 ? 0.0 : last_mech_dt_, dt_avg, md.damping, m.mass3.data(), m.gravity3.data(), m.free3.data(),
-        m.load.data(), m.f_int.data(), m.f_con.data(), m.prescribed.data(), m.v.data(), st.x.data(), m.pending_work,
-        sums_p);
+        n, dt, step == 0 ? 0.0 : last_mech_dt_, dt_avg, md.damping, m.mass3.data(), m.gravity3.data(),
+        m.load.data(), m.f_int.data(), m.f_con.data(), m.fixed_dofs.data(), m.fixed_dofs.size(), m.prescribed.data(),
+        m.v.data(), st.x.data(), m.pending_work, sums_p);
     const double nonfinite = sums_p[6];
     const int nn = st.mesh.num_nodes();
     if (nonfinite != 0)  // also when NaN
