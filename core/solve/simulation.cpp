@@ -52,10 +52,11 @@ struct MechPart {
   // block_node_start[b] .. block_node_start[b + 1] of block_node (ascending
   // global ids); slot_local holds each element slot's local index (-1: no
   // node). A node of one block only is written to f_int by that block; a
-  // node shared by several blocks is summed after them, in block order
-  // (shared_start / shared_src: offsets in block_force).
-  std::vector<int> block_node_start, block_node, slot_local, shared_node, shared_start, shared_src;
-  std::vector<char> block_node_shared;
+  // node shared by several blocks is summed after them, in block order:
+  // the forces of shared node s from its blocks are entries shared_start[s]
+  // .. shared_start[s + 1] of block_force (3 values each), and local slot l
+  // writes entry shared_entry[l] (-1 for a node of one block only).
+  std::vector<int> block_node_start, block_node, slot_local, shared_node, shared_start, shared_entry;
   std::vector<double> block_force;
   std::vector<char> fixed;          // 3 per node
   std::vector<int> edge_condition;  // 3 per element (sdk::kEdgeFree / kEdgeClamped)
@@ -597,8 +598,7 @@ void Simulation::build_mechanics() {
       m->block_node.insert(m->block_node.end(), nodes.begin(), nodes.end());
       m->block_node_start[b + 1] = static_cast<int>(m->block_node.size());
     }
-    m->block_force.assign(3 * m->block_node.size(), 0.0);
-    m->block_node_shared.assign(m->block_node.size(), 0);
+    m->shared_entry.assign(m->block_node.size(), -1);
     m->shared_node.clear();
     for (int i = 0; i < nn; ++i)
       if (blocks_of_node[i] > 1) m->shared_node.push_back(i);
@@ -608,13 +608,10 @@ void Simulation::build_mechanics() {
     for (std::size_t l = 0; l < m->block_node.size(); ++l)
       if (shared_index[m->block_node[l]] >= 0) ++m->shared_start[shared_index[m->block_node[l]] + 1];
     for (std::size_t s = 0; s < m->shared_node.size(); ++s) m->shared_start[s + 1] += m->shared_start[s];
-    m->shared_src.assign(m->shared_start.back(), 0);
+    m->block_force.assign(3 * static_cast<std::size_t>(m->shared_start.back()), 0.0);
     std::vector<int> fill(m->shared_start.begin(), m->shared_start.end() - 1);
     for (std::size_t l = 0; l < m->block_node.size(); ++l)  // blocks in order
-      if (const int s = shared_index[m->block_node[l]]; s >= 0) {
-        m->block_node_shared[l] = 1;
-        m->shared_src[fill[s]++] = static_cast<int>(3 * l);
-      }
+      if (const int s = shared_index[m->block_node[l]]; s >= 0) m->shared_entry[l] = fill[s]++;
     // Constraints.
     m->fixed.assign(3 * nn, 0);
     m->constraint_of.assign(3 * nn, -1);
@@ -689,7 +686,9 @@ void Simulation::build_mechanics() {
   }
   // Stable steps of the initial configuration; mass scaling per element.
   const MechanicsDef& md = job_.mechanics_settings;
+  want_element_dt_ = true;
   mechanics_stable_dt();
+  want_element_dt_ = false;
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
@@ -806,7 +805,12 @@ void Simulation::element_block(std::size_t p, int b, int pass) {
   const int l0 = m.block_node_start[b], l1 = m.block_node_start[b + 1];
   if (pass == 0) m.block_error[b].clear();
   if (!m.block_error[b].empty()) return;  // an earlier pass failed
-  double* bf = m.block_force.data() + 3 * static_cast<std::size_t>(l0);
+  // The block's node slots in a buffer of the calling thread (it stays in
+  // cache); those of nodes shared with other blocks go to block_force for
+  // finish_elements.
+  thread_local std::vector<double> slots;
+  if (slots.size() < 3 * static_cast<std::size_t>(l1 - l0)) slots.resize(3 * static_cast<std::size_t>(l1 - l0));
+  double* bf = slots.data();
   const bool last = pass == m.passes - 1;
   if (last) std::fill(bf, bf + 3 * (l1 - l0), 0.0);
   sdk::ElementForceInput in;
@@ -819,23 +823,18 @@ void Simulation::element_block(std::size_t p, int b, int pass) {
   in.fields_due = fields_due_;
   sdk::ElementForceOutput out;
   out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
-  out.element_dt = m.elem_dt;
+  in.dt_scale = m.elem_sqrt_scale;
+  if (want_element_dt_) out.element_dt = m.elem_dt;
   if (auto s = m.element->internal_forces(in, out); !s) m.block_error[b] = s.message;
   if (!last) return;
   m.block_fail[b] = out.failed_element;
   if (!m.block_error[b].empty() || m.block_fail[b] >= 0) return;
-  double dtb = std::numeric_limits<double>::infinity();
-  const double* edt = m.elem_dt.data();
-  const double* esc = m.elem_sqrt_scale.data();
-#pragma omp simd reduction(min : dtb)
-  for (int e = in.range.begin; e < in.range.end; ++e) {
-    const double d = edt[e] * esc[e];
-    dtb = d < dtb ? d : dtb;
+  m.block_dt[b] = out.stable_dt;
+  for (int l = l0; l < l1; ++l) {
+    const int se = m.shared_entry[l];
+    double* to = se >= 0 ? &m.block_force[3 * static_cast<std::size_t>(se)] : &m.f_int[3 * m.block_node[l]];
+    for (int d = 0; d < 3; ++d) to[d] = bf[3 * (l - l0) + d];
   }
-  m.block_dt[b] = dtb;
-  for (int l = l0; l < l1; ++l)
-    if (!m.block_node_shared[l])
-      for (int d = 0; d < 3; ++d) m.f_int[3 * m.block_node[l] + d] = m.block_force[3 * l + d];
 }
 
 // After every block of every part: errors in block order, the forces of
@@ -860,7 +859,7 @@ double Simulation::finish_elements() {
     for (int s = 0; s < ns; ++s) {
       double f[3] = {0, 0, 0};
       for (int q = m.shared_start[s]; q < m.shared_start[s + 1]; ++q)
-        for (int d = 0; d < 3; ++d) f[d] += m.block_force[m.shared_src[q] + d];
+        for (int d = 0; d < 3; ++d) f[d] += m.block_force[3 * static_cast<std::size_t>(q) + d];
       for (int d = 0; d < 3; ++d) m.f_int[3 * m.shared_node[s] + d] = f[d];
     }
   }

@@ -123,6 +123,7 @@ class Simulation {
   // curvatures) are written after the force evaluation being done
   // (ElementForceInput::fields_due).
   bool fields_due_ = true;
+  bool want_element_dt_ = false;  // the elements' own stable steps, for the mass scaling at set-up
   std::vector<double> part_sums_;  // per part: works, kinetic energies, reactions of the step (mechanics_step)
   std::vector<int> part_bad_;      // per part: first non-finite coordinate of the step, -1 if none
 

@@ -528,9 +528,12 @@ class ShellRfT3 final : public ElementKernel {
             for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * ld + q];
           }
       }
-      for (int e = b; e < in.range.end; ++e) {
-        energy += area0_[e] * energy_e[e - b];
-        dt_min = std::min(dt_min, dte[e - b]);
+      for (int e = b; e < in.range.end; ++e) energy += area0_[e] * energy_e[e - b];
+      if (in.dt_scale.empty()) {
+        for (int q = 0; q < n; ++q) dt_min = std::min(dt_min, dte[q]);
+      } else {
+        const double* scale = in.dt_scale.data() + b;
+        for (int q = 0; q < n; ++q) dt_min = std::min(dt_min, dte[q] * scale[q]);
       }
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
       if (in.commit && keep_old_)

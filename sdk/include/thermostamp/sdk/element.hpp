@@ -58,6 +58,11 @@ struct ElementForceInput {
   // fields_due (shear angle and fibre direction come from the positions
   // and are always current).
   bool fields_due = true;
+  // Optional, one per element of the part (indexed by element number, not
+  // from range.begin): a factor on each element's stable step (the
+  // kernel's mass scaling); ElementForceOutput::stable_dt is the smallest
+  // scaled step of the range. Empty: factor 1.
+  std::span<const double> dt_scale;
 };
 
 struct ElementForceOutput {
@@ -67,8 +72,8 @@ struct ElementForceOutput {
   // adds into a small array that stays in cache.
   std::span<double> node_force;
   double energy = 0.0;              // J, hyperelastic energy of the range (accumulated)
-  double stable_dt = 0.0;           // s, minimum over the range (set by the call)
-  std::span<double> element_dt;     // optional: stable step of each element (entries of the range)
+  double stable_dt = 0.0;           // s, minimum over the range of the steps times dt_scale (set by the call)
+  std::span<double> element_dt;     // optional: stable step of each element, unscaled (entries of the range)
   int failed_element = -1;          // first degenerate element found, -1 if none
 };
 
