@@ -62,9 +62,9 @@ struct MechPart {
   std::vector<int> edge_condition;  // 3 per element (sdk::kEdgeFree / kEdgeClamped)
   std::vector<int> constraint_of;   // 3 per node: index of the constraint holding the dof, -1 if none
   std::vector<double> prescribed;   // 3 per node: velocity where fixed (0 for fix / symmetry)
-  // Per dof, for the integration's vector pass: mass, gravity force, 1 where
-  // free (0 where held or driven); the held or driven dofs in ascending order.
-  std::vector<double> mass3, gravity3;  // mass3: per dof, negated where held or driven (listed in fixed_dofs)
+  // Per dof, for the integration's vector pass: mass (negated where held or
+  // driven) and gravity force; the held or driven dofs in ascending order.
+  std::vector<double> mass3, gravity3;
   std::vector<int> fixed_dofs;
   bool external = false;  // gravity or applied loads act on the part
   double mass_physical = 0, mass_added = 0;
@@ -821,9 +821,9 @@ void Simulation::element_block(std::size_t p, int b, int pass) {
                                        6 * static_cast<std::size_t>(in.range.end - in.range.begin));
   in.pass = pass;
   in.fields_due = fields_due_;
+  in.dt_scale = m.elem_sqrt_scale;
   sdk::ElementForceOutput out;
   out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
-  in.dt_scale = m.elem_sqrt_scale;
   if (want_element_dt_) out.element_dt = m.elem_dt;
   if (auto s = m.element->internal_forces(in, out); !s) m.block_error[b] = s.message;
   if (!last) return;

@@ -481,8 +481,9 @@ class ShellRfT3 final : public ElementKernel {
           }
         }
       // 2. The laws, one call per law for the whole block; stresses add (the
-      // first law writes straight into the element stresses and energies).
-      // The stresses are kept for fields() only where the kernel asks.
+      // first law writes straight into the block's stresses and energies).
+      // The stresses are kept for fields() only where the kernel asks
+      // (fields_due); otherwise they live in the thread's block buffer.
       double* energy_e = sc.energy.data();
       double* S = in.fields_due ? stress_.data() + 3 * b : sc.stress.data();
       for (std::size_t k = 0; k < laws_.size(); ++k) {
