@@ -792,6 +792,7 @@ void Simulation::update_node_temperature() {
       m.node_temperature[i] = s;
     }
   }
+  ++temperature_version_;
 }
 
 // Pass `pass` of the internal forces of element block b of part p at the
@@ -822,6 +823,7 @@ void Simulation::element_block(std::size_t p, int b, int pass) {
   in.pass = pass;
   in.fields_due = fields_due_;
   in.dt_scale = m.elem_sqrt_scale;
+  in.temperature_version = temperature_version_;
   sdk::ElementForceOutput out;
   out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
   if (want_element_dt_) out.element_dt = m.elem_dt;

@@ -3,6 +3,7 @@
 // and the time loop. Construction validates everything a run needs (throws
 // JobError); run() integrates and writes the output folder.
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -124,6 +125,9 @@ class Simulation {
   // (ElementForceInput::fields_due).
   bool fields_due_ = true;
   bool want_element_dt_ = false;  // the elements' own stable steps, for the mass scaling at set-up
+  // Raised whenever the node temperatures the elements see change
+  // (ElementForceInput::temperature_version; 0 before the first).
+  std::uint64_t temperature_version_ = 0;
   std::vector<double> part_sums_;  // per part: works, kinetic energies, reactions of the step (mechanics_step)
   std::vector<int> part_bad_;      // per part: first non-finite coordinate of the step, -1 if none
 

@@ -41,7 +41,7 @@ std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.7.0 (plugin SDK 0.7.0, ABI 7)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.8.0 (plugin SDK 0.8.0, ABI 8)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {
@@ -539,6 +539,93 @@ TEST(Output, FramesShowTheStressesAndCurvaturesOfTheirStep) {
     }
   EXPECT_GT(smax, 0.0);
   EXPECT_GT(kmax, 0.0);
+}
+
+// The laws get the element temperatures of the thermal field as it
+// evolves (the kernel raises ElementForceInput::temperature_version at each
+// thermal step, and an element may keep its temperatures between them): a
+// held ply at 300 degC cools by convection on both faces towards 200 degC,
+// its only law a test law whose stress is k (T - t_ref) in both directions.
+// At every frame the stress of each element must give the mean of its
+// nodes' mean temperatures. The frame's temperatures are those after the
+// thermal step that ends the frame's step, the stresses those of the
+// forces before it (one mechanical step of 3.2e-4 s, at most (T - 200)
+// dt / tau = 100 * 3.2e-4 / 0.115 = 0.28 K earlier; tau = rho c h / 2 h_c;
+// measured 0.10 K): hence 1 K.
+// Temperatures kept from the start would be off by the whole cooling,
+// required to exceed 30 K.
+TEST(Coupling, LawsSeeTheTemperaturesOfTheThermalField) {
+  json j = {{"format", "thermostamp-job/1"},
+            {"name", "law_temperatures"},
+            {"time", {{"end", 0.2}}},
+            {"plugin_paths", {THERMOSTAMP_TEST_PLUGIN_DIR}},
+            {"materials",
+             {{"probe",
+               {{"density", 1294.0},
+                {"specific_heat", 1775.0},
+                {"conductivity", {3.89, 0.31, 0.31}},
+                {"membrane", {{{"law", "temperature_stress"}, {"k", 50.0}, {"t_ref", 0.0}}}}}}}},
+            {"parts",
+             {{{"name", "ply"},
+               {"thickness", 0.0005},
+               {"material", "probe"},
+               {"fibre_direction", {1, 0, 0}},
+               {"initial_temperature", 300.0},
+               {"thickness_layers", 4},
+               {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {0.02, 0.02}}, {"divisions", {4, 4}}}}}}},
+            {"interactions",
+             {{{"type", "heat_exchange"}, {"part", "ply"}, {"face", "both"}, {"h", 5000.0}, {"ambient", 200.0},
+               {"region", {{"box", {{-1, -1}, {0.005, 1}}}}}}}},
+            {"constraints",
+             {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y", "z"}}}}},
+            {"solvers",
+             {{"mechanics", {{"dt_safety", 0.8}}},
+              {"thermal", {{"splitter", "adi"}, {"through_thickness", "implicit"}, {"subcycle", 1}}}}},
+            {"output", {{"interval", 0.05}, {"fields", {"membrane_stress", "temperature_mean"}}}}};
+  const auto dir = temp_dir("law_temperatures");
+  const JobRun run = run_json(j, 1, dir);
+  ASSERT_TRUE(run.result.ok) << run.result.error;
+  const hid_t file = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  auto read = [&](const std::string& name, hid_t type, auto& v) {
+    const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+    const hid_t space = H5Dget_space(set);
+    hsize_t dims[2] = {0, 1};
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    v.resize(dims[0] * (H5Sget_simple_extent_ndims(space) > 1 ? dims[1] : 1));
+    H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+    H5Sclose(space);
+    H5Dclose(set);
+  };
+  std::vector<int> tri;
+  read("parts/ply/triangles", H5T_NATIVE_INT, tri);
+  const std::size_t ne = tri.size() / 3;
+  ASSERT_EQ(ne, 32u);
+  double cooled = 0, worst = 0, spread = 0;
+  for (int k = 1; k <= 4; ++k) {
+    char name[48];
+    std::snprintf(name, sizeof name, "frames/%06d/ply/", k);
+    std::vector<double> S, T;
+    read(std::string(name) + "membrane_stress", H5T_NATIVE_DOUBLE, S);
+    read(std::string(name) + "temperature_mean", H5T_NATIVE_DOUBLE, T);
+    ASSERT_EQ(S.size(), 3 * ne);
+    double lo = 1e9, hi = -1e9;
+    for (std::size_t e = 0; e < ne; ++e) {
+      const double mean = (T[tri[3 * e]] + T[tri[3 * e + 1]] + T[tri[3 * e + 2]]) / 3.0;
+      const double seen = S[3 * e] / 50.0;
+      EXPECT_NEAR(seen, mean, 1.0) << "frame " << k << ", element " << e;
+      EXPECT_EQ(S[3 * e + 1], S[3 * e]);
+      worst = std::max(worst, std::abs(seen - mean));
+      cooled = std::max(cooled, 300.0 - mean);
+      lo = std::min(lo, mean);
+      hi = std::max(hi, mean);
+    }
+    spread = std::max(spread, hi - lo);
+  }
+  H5Fclose(file);
+  EXPECT_GT(cooled, 30.0);
+  EXPECT_GT(spread, 5.0) << "the cooled strip and the rest differ";
+  std::printf("largest cooling %.1f K, spread %.1f K, largest difference %.3f K\n", cooled, spread, worst);
 }
 
 TEST(Cli, MechanicsBadMaterialParameter) {

@@ -102,6 +102,7 @@ struct Patch {
   // kernel calls them (hinges across a range border are seen from both).
   int blocks = 1;
   bool commit = false;  // update the laws' history
+  std::uint64_t temperature_version = 0;  // ElementForceInput::temperature_version
   // Node forces and energy of all elements.
   double evaluate(std::vector<double>& nf) {
     nf.assign(3 * mesh.num_nodes(), 0.0);
@@ -114,6 +115,7 @@ struct Patch {
         sdk::ElementForceInput in;
         in.range = {k * ne / blocks, (k + 1) * ne / blocks};
         in.node_temperature = temperature;
+        in.temperature_version = temperature_version;
         in.commit = commit;
         in.pass = pass;
         in.patch_slot = std::span<const int>(slots).subspan(6 * in.range.begin, 6 * (in.range.end - in.range.begin));
@@ -349,6 +351,78 @@ TEST(ShellRfT3, PreviousStrainsOnlyForLawsThatReadThem) {
         EXPECT_EQ(rec.strain_old[k], step == 0 ? (k % 3 == 2 ? 0.0 : 1.0) : before[k]) << "step " << step << ", " << k;
       before = rec.strain;
     }
+  }
+}
+
+// A membrane law that returns no stress and records the element
+// temperatures it is given, block by block.
+struct TemperatureLaw final : sdk::MaterialLaw {
+  mutable std::vector<double> temperature;
+  sdk::Status configure(const sdk::Params&) override { return sdk::Status::success(); }
+  sdk::LawRole role() const override { return sdk::LawRole::Membrane; }
+  sdk::Status evaluate(const sdk::MaterialBlock& b) const override {
+    temperature.insert(temperature.end(), b.temperature.begin(), b.temperature.end());
+    std::fill(b.stress.begin(), b.stress.end(), 0.0);
+    std::fill(b.energy.begin(), b.energy.end(), 0.0);
+    return sdk::Status::success();
+  }
+  double max_stiffness(double) const override { return 0.0; }
+  bool uses_strain_old() const override { return false; }
+};
+
+// The element temperatures the laws get are the means of their nodes',
+// formed again whenever ElementForceInput::temperature_version changes, is
+// 0 (unknown) or the ranges change; with the same nonzero version the
+// element keeps those it formed (the host promises the same node
+// temperatures), with and without bending.
+TEST(ShellRfT3, ElementTemperaturesFollowTheTemperatureVersion) {
+  for (const bool bending : {false, true}) {
+    Patch p(0.3, bending);
+    TemperatureLaw rec;
+    const std::vector<const sdk::MaterialLaw*> laws = {p.law.get(), &rec};
+    const auto& er = p.registry.require(sdk::PluginKind::Element, "shell_rf_t3", "/element");
+    sdk::ElementSetup setup;
+    setup.part = &p.view;
+    setup.membrane = laws;
+    setup.density = 1294.0;
+    setup.edge_condition = p.edges;
+    if (bending) setup.bending = p.bend.get();
+    ASSERT_TRUE(p.element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
+    const int ne = p.mesh.num_elements();
+    auto means = [&] {
+      std::vector<double> m(ne);
+      for (int e = 0; e < ne; ++e) {
+        const int* t = &p.mesh.triangles[3 * e];
+        m[e] = p.temperature[t[0]] / 3.0 + p.temperature[t[1]] / 3.0 + p.temperature[t[2]] / 3.0;
+      }
+      return m;
+    };
+    auto seen = [&](std::uint64_t version, int blocks) {
+      p.temperature_version = version;
+      p.blocks = blocks;
+      rec.temperature.clear();
+      p.forces();
+      return rec.temperature;
+    };
+    auto heat = [&](double base) {
+      for (int i = 0; i < p.mesh.num_nodes(); ++i) p.temperature[i] = base + 3.0 * std::sin(1.7 * i);
+    };
+    const char* what = bending ? "with bending" : "membrane only";
+    heat(280.0);
+    const std::vector<double> t1 = means();
+    EXPECT_EQ(seen(1, 1), t1) << what;
+    heat(300.0);  // new temperatures under a new version: formed again
+    const std::vector<double> t2 = means();
+    EXPECT_EQ(seen(2, 1), t2) << what;
+    EXPECT_EQ(seen(2, 1), t2) << what;
+    heat(320.0);  // the same version: the host says nothing changed, the element keeps its values
+    EXPECT_EQ(seen(2, 1), t2) << what;
+    EXPECT_EQ(seen(2, 3), means()) << what << ": other ranges";
+    heat(340.0);
+    EXPECT_EQ(seen(0, 3), means()) << what << ": version unknown";
+    heat(360.0);
+    EXPECT_EQ(seen(0, 3), means()) << what << ": version unknown";
+    EXPECT_NE(t1, t2);
   }
 }
 

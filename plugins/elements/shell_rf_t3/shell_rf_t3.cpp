@@ -327,12 +327,14 @@ void slope_block(int n, int ld, const int* __restrict loc, const double* __restr
 
 // Curvatures of n elements, K = sum_k c_k s_k with the shared slopes
 // s_k = eq_k - rho[nidx_k] (c_k = dK/ds_k, value r of edge k of element q at
-// c[(3 k + r) ld + q]; rho indexed over the whole part), and the elements'
-// mean temperatures from their nodes' (tri: the block's triangles).
-TS_VECTOR_CLONES
-void curvature_block(int n, int ld, const float* __restrict c, const int* __restrict nidx, const double* __restrict eq,
-                     const double* __restrict rho, const int* __restrict tri, const double* __restrict node_temp,
-                     double* __restrict K, double* __restrict temp) {
+// c[(3 k + r) ld + q]; rho indexed over the whole part), and with kTemp the
+// elements' mean temperatures from their nodes' (tri: the block's
+// triangles), as element_temperature_block forms them.
+template <bool kTemp>
+[[gnu::always_inline]] inline void curvature_body(int n, int ld, const float* __restrict c, const int* __restrict nidx,
+                                                  const double* __restrict eq, const double* __restrict rho,
+                                                  const int* __restrict tri, const double* __restrict node_temp,
+                                                  double* __restrict K, double* __restrict temp) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double s0 = eq[3 * q] - rho[nidx[3 * q]], s1 = eq[3 * q + 1] - rho[nidx[3 * q + 1]],
@@ -341,8 +343,22 @@ void curvature_block(int n, int ld, const float* __restrict c, const int* __rest
     K[3 * q] = cq[0] * s0 + cq[3 * ld] * s1 + cq[6 * ld] * s2;
     K[3 * q + 1] = cq[ld] * s0 + cq[4 * ld] * s1 + cq[7 * ld] * s2;
     K[3 * q + 2] = cq[2 * ld] * s0 + cq[5 * ld] * s1 + cq[8 * ld] * s2;
-    temp[q] = node_temp[tri[3 * q]] / 3.0 + node_temp[tri[3 * q + 1]] / 3.0 + node_temp[tri[3 * q + 2]] / 3.0;
+    if (kTemp)
+      temp[q] = node_temp[tri[3 * q]] / 3.0 + node_temp[tri[3 * q + 1]] / 3.0 + node_temp[tri[3 * q + 2]] / 3.0;
   }
+}
+TS_VECTOR_CLONES
+void curvature_block(int n, int ld, const float* __restrict c, const int* __restrict nidx, const double* __restrict eq,
+                     const double* __restrict rho, const int* __restrict tri, const double* __restrict node_temp,
+                     double* __restrict K, double* __restrict temp) {
+  curvature_body<true>(n, ld, c, nidx, eq, rho, tri, node_temp, K, temp);
+}
+// The curvatures alone (the elements' temperatures kept from an earlier
+// evaluation at the same node temperatures).
+TS_VECTOR_CLONES
+void curvature_only_block(int n, int ld, const float* __restrict c, const int* __restrict nidx,
+                          const double* __restrict eq, const double* __restrict rho, double* __restrict K) {
+  curvature_body<false>(n, ld, c, nidx, eq, rho, nullptr, nullptr, K, nullptr);
 }
 
 // dW/ds_k = A0 M : c_k per element and edge (c laid out as for
@@ -437,6 +453,9 @@ class ShellRfT3 final : public ElementKernel {
         strain_old_[3 * e + 1] = 1.0;
       }
       stress_.assign(3 * ne, 0.0);
+      etemp_.assign(ne, 0.0);
+      etemp_version_.assign(ne + 1, 0);
+      etemp_end_.assign(ne + 1, -1);
       states_.clear();
       for (const auto* l : laws_) states_.emplace_back(static_cast<std::size_t>(l->state_size()) * ne, 0.0);
       return Status::success();
@@ -467,10 +486,10 @@ class ShellRfT3 final : public ElementKernel {
       double* ff = sc.ff.data();
       // 1. Strains and temperatures of the block (with bending, pass 1 has
       // formed the temperatures).
-      if (bending_) {
-        temp = etemp_.data() + b;
-      } else {
-        element_temperature_block(n, &part_->triangles[3 * b], in.node_temperature.data(), sc.temp.data());
+      temp = etemp_.data() + b;
+      if (!bending_ && !temperatures_kept(in, b, in.range.end)) {
+        element_temperature_block(n, &part_->triangles[3 * b], in.node_temperature.data(), etemp_.data() + b);
+        keep_temperatures(in, b, in.range.end);
       }
       if (strain_block(n, ld, &part_->triangles[3 * b], x, g1_.data() + 3 * b, g2_.data() + 3 * b, ff, C) != 0.0)
         for (int q = 0; q < n; ++q) {
@@ -662,7 +681,6 @@ class ShellRfT3 final : public ElementKernel {
     theta0_.assign(3 * ne, 0.0);
     gld_ = padded_ld(ne);
     curv_.assign(3 * ne, 0.0);
-    etemp_.assign(ne, 0.0);
     curv_old_.assign(bending_->uses_strain_old() ? 3 * ne : 0, 0.0);
     bstate_.assign(static_cast<std::size_t>(bending_->state_size()) * ne, 0.0);
     const double* x0 = part_->x0.data();
@@ -1103,8 +1121,13 @@ class ShellRfT3 final : public ElementKernel {
     BlockScratch& sc = block_scratch(n);
     double* temp = etemp_.data() + b;  // read again by pass 2
     double* K = in.fields_due ? curv_.data() + 3 * b : sc.curv.data();  // kept for fields() only where asked
-    curvature_block(n, gld_, cs_.data() + b, nidx_.data() + 3 * b, eq_.data() + 3 * b, erho_.data(),
-                    &part_->triangles[3 * b], in.node_temperature.data(), K, temp);
+    if (temperatures_kept(in, b, end)) {
+      curvature_only_block(n, gld_, cs_.data() + b, nidx_.data() + 3 * b, eq_.data() + 3 * b, erho_.data(), K);
+    } else {
+      curvature_block(n, gld_, cs_.data() + b, nidx_.data() + 3 * b, eq_.data() + 3 * b, erho_.data(),
+                      &part_->triangles[3 * b], in.node_temperature.data(), K, temp);
+      keep_temperatures(in, b, end);
+    }
     MaterialBlock blk;
     blk.n = n;
     blk.strain = std::span<const double>(K, 3 * n);
@@ -1236,7 +1259,20 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<char> clamped_;
   std::vector<double> n0_;  // initial element normals (clamped elements)
   // ginv_: dK/dtheta_k, value r of edge k of element e at (3 k + r) gld_ + e.
-  std::vector<double> d_, theta0_, curv_, curv_old_, bstate_, etemp_;  // etemp_: element temperatures of the step
+  std::vector<double> d_, theta0_, curv_, curv_old_, bstate_;
+  // The element temperatures of the step (from the node temperatures), and
+  // per block [b, end) at entry b the node temperatures' version they were
+  // formed for and end (ElementForceInput::temperature_version; 0: none).
+  std::vector<double> etemp_;
+  std::vector<std::uint64_t> etemp_version_;
+  std::vector<int> etemp_end_;
+  bool temperatures_kept(const ElementForceInput& in, int b, int end) const {
+    return in.temperature_version != 0 && etemp_version_[b] == in.temperature_version && etemp_end_[b] == end;
+  }
+  void keep_temperatures(const ElementForceInput& in, int b, int end) {
+    etemp_version_[b] = in.temperature_version;
+    etemp_end_[b] = end;
+  }
   // Mid-edge slopes (the set-up coefficients in single precision: the
   // forces stay the exact derivatives of the energy they define): cs_ dK/ds_k (value r of edge k of element e at
   // (3 k + r) gld_ + e, free edges condensed), lmap_ the 3 x 3 map L from
@@ -1273,7 +1309,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.4.3";
+  d.version = "0.4.5";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1281,4 +1317,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.4", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.5", register_all)

@@ -1,6 +1,7 @@
 #pragma once
 // Shell elements: internal forces, energy and stable step over a range of
 // elements, one call per range (OpenMP blocks), tight loops inside.
+#include <cstdint>
 #include <span>
 
 #include "material.hpp"
@@ -63,6 +64,12 @@ struct ElementForceInput {
   // kernel's mass scaling); ElementForceOutput::stable_dt is the smallest
   // scaled step of the range. Empty: factor 1.
   std::span<const double> dt_scale;
+  // Optional: a number that changes whenever node_temperature changes and
+  // never returns to an earlier value. Evaluations with the same nonzero
+  // value see the same node temperatures, so an element may keep what it
+  // derives from them alone (its elements' temperatures) from one to the
+  // next. 0: unknown, the temperatures may differ at every evaluation.
+  std::uint64_t temperature_version = 0;
 };
 
 struct ElementForceOutput {
