@@ -202,6 +202,44 @@ void hinge_gradient_block(int h, const int* ic, const int* ip, const int* iq, co
   hinge_body<false, true>(h, ic, ip, iq, io, x, nullptr, nullptr, G);
 }
 
+typedef double V4d __attribute__((vector_size(32)));
+typedef long long V4l __attribute__((vector_size(32)));
+
+// Sum of a[q] b[q] over q < n (b null: of a[q]) in four lanes, value q in
+// lane q mod 4, the lanes added as (l0 + l1) + (l2 + l3): a fixed order
+// (the same for any thread count), and four independent chains of
+// additions instead of one.
+TS_VECTOR_CLONES
+double lane_dot(int n, const double* __restrict a, const double* __restrict b) {
+  V4d s = {0.0, 0.0, 0.0, 0.0};
+  int q = 0;
+  for (; q + 4 <= n; q += 4) {
+    V4d av, bv = {1.0, 1.0, 1.0, 1.0};
+    __builtin_memcpy(&av, a + q, sizeof av);
+    if (b) __builtin_memcpy(&bv, b + q, sizeof bv);
+    s += av * bv;
+  }
+  for (int l = 0; q < n; ++q, ++l) s[l] += a[q] * (b ? b[q] : 1.0);
+  return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
+// The smallest of lo and the steps dte[q] (times scale[q] where scale is
+// not null) over q < n.
+TS_VECTOR_CLONES
+double smallest_step(int n, const double* __restrict dte, const double* __restrict scale, double lo) {
+  if (scale) {
+#pragma omp simd reduction(min : lo)
+    for (int q = 0; q < n; ++q) {
+      const double v = dte[q] * scale[q];
+      lo = v < lo ? v : lo;
+    }
+  } else {
+#pragma omp simd reduction(min : lo)
+    for (int q = 0; q < n; ++q) lo = dte[q] < lo ? dte[q] : lo;
+  }
+  return lo;
+}
+
 // Lowers lo and raises hi to the smallest and largest of v[0, n).
 TS_VECTOR_CLONES
 void value_range(int n, const double* __restrict v, double& lo, double& hi) {
@@ -395,6 +433,58 @@ void hinge_moment_block(int n, int ld, const float* __restrict L, const float* _
   }
 }
 
+// The forces of n elements of a block into their node slots: per element
+// its membrane forces on its corners (component d of node a at mf[(3 a + d)
+// ld + q]) and the interior hinges it brings (per edge k: code fj[3 q + k]
+// = 2 j + side, j the hinge's entry in G (8 values: g_c, g_o, sc, so),
+// side 1 where the element is the hinge's neighbour, negative for none;
+// the moment mk[3 q + k], plus mk[fm[3 q + k]] where fm >= 0), summed with
+// the corner forces in registers; a hinge also adds into the node across
+// its edge (slot[6 q + 3 + k]), the corners go to slot[6 q + a] at the end.
+// Each node's x, y and z are one vector (the fourth lane unused, never
+// stored), so the products and sums of the scalar form are done once per
+// node instead of once per component, in the same order (the same bits).
+[[gnu::always_inline]] inline void add_xyz(double* __restrict f, V4d v) {
+  f[0] += v[0];
+  f[1] += v[1];
+  f[2] += v[2];
+}
+TS_VECTOR_CLONES
+void hinge_force_block(int n, int ld, const double* __restrict mf, const int* __restrict fj,
+                       const int* __restrict fm, const double* __restrict mk, const int* __restrict slot,
+                       const double* __restrict G, double* __restrict nf) {
+  for (int q = 0; q < n; ++q) {
+    V4d fc[3];
+    for (int a = 0; a < 3; ++a) fc[a] = V4d{mf[(3 * a) * ld + q], mf[(3 * a + 1) * ld + q], mf[(3 * a + 2) * ld + q], 0.0};
+#pragma GCC unroll 3
+    for (int k = 0; k < 3; ++k) {
+      const int code = fj[3 * q + k];
+      if (code < 0) continue;  // no hinge, or brought by its owner in this block
+      const int j = code >> 1;
+      const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
+      // (corner k, the node across, corner k + 1, corner k + 2) are
+      // (c, o, p, q) of the owner's orientation, (o, c, q, p) of the
+      // neighbour's.
+      double m = mk[3 * q + k];
+      if (fm[3 * q + k] >= 0) m += mk[fm[3 * q + k]];
+      const double* gj = G + 8 * j;  // the hinge's gradients, one cache line
+      V4d gc, go;
+      __builtin_memcpy(&gc, gj, sizeof gc);      // g_c and, unused, g_o's x
+      __builtin_memcpy(&go, gj + 3, sizeof go);  // g_o and, unused, sc
+      const double sc = gj[6], so = gj[7];
+      const V4d mv = V4d{m, m, m, m};
+      const V4d mc = mv * gc, mo = mv * go, t = mv * (sc * gc + so * go), tp = t - mc - mo;
+      const long long side = -static_cast<long long>(code & 1);
+      const V4l nb = V4l{side, side, side, side};
+      fc[k] += nb ? mo : mc;
+      add_xyz(nf + 3 * slot[6 * q + 3 + k], nb ? mc : mo);
+      fc[k1] += nb ? -t : tp;
+      fc[k2] += nb ? tp : -t;
+    }
+    for (int a = 0; a < 3; ++a) add_xyz(nf + 3 * slot[6 * q + a], fc[a]);
+  }
+}
+
 // Largest entry of an element's map L from angle changes to the slopes of
 // its own quadratic; a patch whose map is larger (nearly on a conic) uses
 // its neighbours' quadratics instead.
@@ -548,13 +638,8 @@ class ShellRfT3 final : public ElementKernel {
             for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * ld + q];
           }
       }
-      for (int e = b; e < in.range.end; ++e) energy += area0_[e] * energy_e[e - b];
-      if (in.dt_scale.empty()) {
-        for (int q = 0; q < n; ++q) dt_min = std::min(dt_min, dte[q]);
-      } else {
-        const double* scale = in.dt_scale.data() + b;
-        for (int q = 0; q < n; ++q) dt_min = std::min(dt_min, dte[q] * scale[q]);
-      }
+      energy += lane_dot(n, area0_.data() + b, energy_e);
+      dt_min = smallest_step(n, dte, in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b, dt_min);
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
       if (in.commit && keep_old_)
         std::copy(C, C + 3 * n, strain_old_.begin() + 3 * b);
@@ -1142,9 +1227,7 @@ class ShellRfT3 final : public ElementKernel {
     double* ew = sc.energy_tmp.data();
     moment_block(n, gld_, area0_.data() + b, cs_.data() + b, sc.moment.data(), sc.benergy.data(), em_.data() + 3 * b,
                  ew);
-    double energy = 0;  // in element order, as pass 2 adds the membrane energies after it
-    for (int q = 0; q < n; ++q) energy += ew[q];
-    block_angles_[b]->bending_energy = energy;
+    block_angles_[b]->bending_energy = lane_dot(n, ew, nullptr);  // pass 2 adds the membrane energies to it
     if (in.commit && !curv_old_.empty()) std::copy(K, K + 3 * n, curv_old_.begin() + 3 * b);
     return Status::success();
   }
@@ -1198,42 +1281,7 @@ class ShellRfT3 final : public ElementKernel {
     // per corner node) and on the node across the edge.
     double* nf = out.node_force.data();
     const int* slot = in.patch_slot.data();
-    const int* fj = bh.force_hinge.data();
-    const int* fm = bh.force_partner.data();
-    for (int e = b; e < end; ++e) {
-      const int q = e - b;
-      double fc[3][3];
-      for (int a = 0; a < 3; ++a)
-        for (int d = 0; d < 3; ++d) fc[a][d] = mf[(3 * a + d) * ld + q];
-#pragma GCC unroll 3
-      for (int k = 0; k < 3; ++k) {
-        const int code = fj[3 * q + k];
-        if (code < 0) continue;  // no hinge, or brought by its owner in this block
-        const int j = code >> 1;
-        const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-        // (corner k, the node across, corner k + 1, corner k + 2) are
-        // (c, o, p, q) of the owner's orientation, (o, c, q, p) of the
-        // neighbour's.
-        double m = mk[3 * q + k];
-        if (fm[3 * q + k] >= 0) m += mk[fm[3 * q + k]];
-        const bool nb_side = code & 1;
-        double* fo = nf + 3 * slot[6 * q + 3 + k];
-        const double* gj = G + 8 * j;  // the hinge's gradients, one cache line
-        const double sc = gj[6], so = gj[7];
-        for (int d = 0; d < 3; ++d) {  // selects, so that fc keeps constant indices (registers)
-          const double gc = gj[d], go = gj[3 + d];
-          const double mc = m * gc, mo = m * go, t = m * (sc * gc + so * go), tp = t - mc - mo;
-          fc[k][d] += nb_side ? mo : mc;
-          fo[d] += nb_side ? mc : mo;
-          fc[k1][d] += nb_side ? -t : tp;
-          fc[k2][d] += nb_side ? tp : -t;
-        }
-      }
-      for (int a = 0; a < 3; ++a) {
-        double* f = nf + 3 * slot[6 * q + a];
-        for (int d = 0; d < 3; ++d) f[d] += fc[a][d];
-      }
-    }
+    hinge_force_block(n, ld, mf, bh.force_hinge.data(), bh.force_partner.data(), mk, slot, G, nf);
     for (int g = gstart_[b]; g < gstart_[end]; ++g) {
       const int e = gedge_[g] / 3, k = gedge_[g] % 3;
       // Ghost neighbour: gradient on (c, p, q); a clamp's theta is 2 x the rotation.
