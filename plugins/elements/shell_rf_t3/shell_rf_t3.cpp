@@ -254,20 +254,22 @@ void value_range(int n, const double* __restrict v, double& lo, double& hi) {
 }
 
 // Strains of n elements: F e1 = sum_a x_a g1_a and F e2 = sum_a x_a g2_a
-// (component d of element q at ff[d ld + q] and ff[(3 + d) ld + q]) and
+// (component d of element q at ff[d ld + q] and ff[(3 + d) ld + q];
+// g1_a of element q at g[a gld + q], g2_a at g[(3 + a) gld + q], the
+// offset 3 i of its node a in x at off[a gld + q]) and
 // C = (F e1 . F e1, F e2 . F e2, F e1 . F e2) at C[3 q ..]. Returns 1 if
 // some element has det C <= 1e-12 or not a number (collapsed or inverted),
 // 0 otherwise. One vector pass, the operations of math.hpp's add, scale
 // and dot in their order.
 TS_VECTOR_CLONES
-double strain_block(int n, int ld, const int* __restrict tri, const double* __restrict x, const double* __restrict g1,
-                    const double* __restrict g2, double* __restrict ff, double* __restrict C) {
+double strain_block(int n, int ld, const int* __restrict off, const double* __restrict x, const double* __restrict g,
+                    int gld, double* __restrict ff, double* __restrict C) {
   double bad = 0.0;
 #pragma omp simd reduction(max : bad)
   for (int q = 0; q < n; ++q) {
-    const int i0 = 3 * tri[3 * q], i1 = 3 * tri[3 * q + 1], i2 = 3 * tri[3 * q + 2];
-    const double ga = g1[3 * q], gb = g1[3 * q + 1], gc = g1[3 * q + 2];
-    const double ha = g2[3 * q], hb = g2[3 * q + 1], hc = g2[3 * q + 2];
+    const int i0 = off[q], i1 = off[gld + q], i2 = off[2 * gld + q];
+    const double ga = g[q], gb = g[gld + q], gc = g[2 * gld + q];
+    const double ha = g[3 * gld + q], hb = g[4 * gld + q], hc = g[5 * gld + q];
     const double x0 = x[i0], x1 = x[i0 + 1], x2 = x[i0 + 2];
     const double y0 = x[i1], y1 = x[i1 + 1], y2 = x[i1 + 2];
     const double z0 = x[i2], z1 = x[i2 + 1], z2 = x[i2 + 2];
@@ -301,7 +303,8 @@ void element_temperature_block(int n, const int* __restrict tri, const double* _
 // Membrane forces of n elements (F e1, F e2 of element q at ff[d ld + q],
 // ff[(3 + d) ld + q]), f_a = A0 (c1 F e1 + c2 F e2) with c1 = S11 g1_a +
 // S12 g2_a, c2 = S12 g1_a + S22 g2_a (component d of node a of element q
-// at mf[(3 a + d) ld + q]), and each element's stable step: smallest height
+// at mf[(3 a + d) ld + q]; g1_a, g2_a as strain_block reads them), and
+// each element's stable step: smallest height
 // (2 area / longest edge) times inv_c (infinite when has_stiffness is
 // false). The height comes from C (C[3 q ..], Voigt): the current edge
 // opposite node a is F E_a with E_a = 2 A0 (g2_a, -g1_a) in the element's
@@ -310,9 +313,8 @@ void element_temperature_block(int n, const int* __restrict tri, const double* _
 // height is sqrt(det C / max_a Q_a). One vector pass without gathers.
 TS_VECTOR_CLONES
 void membrane_block(int n, int ld, const double* __restrict C, const double* __restrict ff,
-                    const double* __restrict S, const double* __restrict area, const double* __restrict g1,
-                    const double* __restrict g2, double inv_c, bool has_stiffness, double* __restrict mf,
-                    double* __restrict dte) {
+                    const double* __restrict S, const double* __restrict area, const double* __restrict g,
+                    int gld, double inv_c, bool has_stiffness, double* __restrict mf, double* __restrict dte) {
   // h > 0 (det C > 1e-12 here): h times infinity is infinity.
   const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
 #pragma omp simd
@@ -322,14 +324,14 @@ void membrane_block(int n, int ld, const double* __restrict C, const double* __r
     const double S11 = S[3 * q], S22 = S[3 * q + 1], S12 = S[3 * q + 2], A0 = area[q];
     const double C11 = C[3 * q], C22 = C[3 * q + 1], C12 = C[3 * q + 2];
     for (int a = 0; a < 3; ++a) {
-      const double ga = g1[3 * q + a], gb = g2[3 * q + a];
+      const double ga = g[a * gld + q], gb = g[(3 + a) * gld + q];
       const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
       mf[(3 * a) * ld + q] = c1 * f10 + c2 * f20;
       mf[(3 * a + 1) * ld + q] = c1 * f11 + c2 * f21;
       mf[(3 * a + 2) * ld + q] = c1 * f12 + c2 * f22;
     }
-    const double a0 = g1[3 * q], a1 = g1[3 * q + 1], a2 = g1[3 * q + 2];
-    const double b0 = g2[3 * q], b1 = g2[3 * q + 1], b2 = g2[3 * q + 2];
+    const double a0 = g[q], a1 = g[gld + q], a2 = g[2 * gld + q];
+    const double b0 = g[3 * gld + q], b1 = g[4 * gld + q], b2 = g[5 * gld + q];
     const double Q0 = C11 * b0 * b0 - 2 * C12 * a0 * b0 + C22 * a0 * a0;
     const double Q1 = C11 * b1 * b1 - 2 * C12 * a1 * b1 + C22 * a1 * a1;
     const double Q2 = C11 * b2 * b2 - 2 * C12 * a2 * b2 + C22 * a2 * a2;
@@ -342,30 +344,31 @@ void membrane_block(int n, int ld, const double* __restrict C, const double* __r
 }
 
 // Per element q of a block and edge k (values of the block's elements
-// from their first one): theta_k = dth[loc[3 q + k]], rho = L theta (entry
+// from their first one): theta_k = dth[loc[k n + q]], rho = L theta (entry
 // (k, i) of element q's L at L[(3 k + i) ld + q]), eq = rho + a theta (a_k
-// at a[k ld + q]).
+// at a[k ld + q]; rho_k and eq_k at rho[k ld + q] and eq[k ld + q]).
 TS_VECTOR_CLONES
 void slope_block(int n, int ld, const int* __restrict loc, const double* __restrict dth, const float* __restrict L,
                  const float* __restrict a, double* __restrict eq, double* __restrict rho) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
-    const double t0 = dth[loc[3 * q]], t1 = dth[loc[3 * q + 1]], t2 = dth[loc[3 * q + 2]];
+    const double t0 = dth[loc[q]], t1 = dth[loc[n + q]], t2 = dth[loc[2 * n + q]];
     const float* l = L + q;
     const double r0 = l[0] * t0 + l[ld] * t1 + l[2 * ld] * t2, r1 = l[3 * ld] * t0 + l[4 * ld] * t1 + l[5 * ld] * t2,
                  r2 = l[6 * ld] * t0 + l[7 * ld] * t1 + l[8 * ld] * t2;
-    rho[3 * q] = r0;
-    rho[3 * q + 1] = r1;
-    rho[3 * q + 2] = r2;
-    eq[3 * q] = r0 + a[q] * t0;
-    eq[3 * q + 1] = r1 + a[ld + q] * t1;
-    eq[3 * q + 2] = r2 + a[2 * ld + q] * t2;
+    rho[q] = r0;
+    rho[ld + q] = r1;
+    rho[2 * ld + q] = r2;
+    eq[q] = r0 + a[q] * t0;
+    eq[ld + q] = r1 + a[ld + q] * t1;
+    eq[2 * ld + q] = r2 + a[2 * ld + q] * t2;
   }
 }
 
 // Curvatures of n elements, K = sum_k c_k s_k with the shared slopes
 // s_k = eq_k - rho[nidx_k] (c_k = dK/ds_k, value r of edge k of element q at
-// c[(3 k + r) ld + q]; rho indexed over the whole part), and with kTemp the
+// c[(3 k + r) ld + q]; eq_k and nidx_k at [k ld + q], rho indexed over the
+// whole part), and with kTemp the
 // elements' mean temperatures from their nodes' (tri: the block's
 // triangles), as element_temperature_block forms them.
 template <bool kTemp>
@@ -375,8 +378,8 @@ template <bool kTemp>
                                                   double* __restrict K, double* __restrict temp) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
-    const double s0 = eq[3 * q] - rho[nidx[3 * q]], s1 = eq[3 * q + 1] - rho[nidx[3 * q + 1]],
-                 s2 = eq[3 * q + 2] - rho[nidx[3 * q + 2]];
+    const double s0 = eq[q] - rho[nidx[q]], s1 = eq[ld + q] - rho[nidx[ld + q]],
+                 s2 = eq[2 * ld + q] - rho[nidx[2 * ld + q]];
     const float* cq = c + q;
     K[3 * q] = cq[0] * s0 + cq[3 * ld] * s1 + cq[6 * ld] * s2;
     K[3 * q + 1] = cq[ld] * s0 + cq[4 * ld] * s1 + cq[7 * ld] * s2;
@@ -400,7 +403,7 @@ void curvature_only_block(int n, int ld, const float* __restrict c, const int* _
 }
 
 // dW/ds_k = A0 M : c_k per element and edge (c laid out as for
-// curvature_block), and A0 w.
+// curvature_block; edge k of element q at em[k ld + q]), and A0 w.
 TS_VECTOR_CLONES
 void moment_block(int n, int ld, const double* __restrict area, const float* __restrict c, const double* __restrict M,
                   const double* __restrict w, double* __restrict em, double* __restrict ew) {
@@ -408,24 +411,24 @@ void moment_block(int n, int ld, const double* __restrict area, const float* __r
   for (int q = 0; q < n; ++q) {
     const double A0 = area[q], M0 = M[3 * q], M1 = M[3 * q + 1], M2 = 2 * M[3 * q + 2];
     const float* cq = c + q;
-    em[3 * q] = A0 * (M0 * cq[0] + M1 * cq[ld] + M2 * cq[2 * ld]);
-    em[3 * q + 1] = A0 * (M0 * cq[3 * ld] + M1 * cq[4 * ld] + M2 * cq[5 * ld]);
-    em[3 * q + 2] = A0 * (M0 * cq[6 * ld] + M1 * cq[7 * ld] + M2 * cq[8 * ld]);
+    em[q] = A0 * (M0 * cq[0] + M1 * cq[ld] + M2 * cq[2 * ld]);
+    em[ld + q] = A0 * (M0 * cq[3 * ld] + M1 * cq[4 * ld] + M2 * cq[5 * ld]);
+    em[2 * ld + q] = A0 * (M0 * cq[6 * ld] + M1 * cq[7 * ld] + M2 * cq[8 * ld]);
     ew[q] = A0 * w[q];
   }
 }
 
 // Each element's share of dW/dtheta of its hinges, g_i = a_i m_i +
 // sum_k L_ki (m_k - m[nidx_k]) (L with its rows scaled by omega, laid out
-// as for slope_block; m over the whole part, the block's elements from
-// entry m0).
+// as for slope_block; m over the whole part, edge k of the block's element
+// q at m[k ld + m0 + q], nidx as for curvature_block; g at g[3 q + k]).
 TS_VECTOR_CLONES
 void hinge_moment_block(int n, int ld, const float* __restrict L, const float* __restrict a,
                         const int* __restrict nidx, const double* __restrict m, int m0, double* __restrict g) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
-    const double m_0 = m[m0 + 3 * q], m_1 = m[m0 + 3 * q + 1], m_2 = m[m0 + 3 * q + 2];
-    const double u0 = m_0 - m[nidx[3 * q]], u1 = m_1 - m[nidx[3 * q + 1]], u2 = m_2 - m[nidx[3 * q + 2]];
+    const double m_0 = m[m0 + q], m_1 = m[ld + m0 + q], m_2 = m[2 * ld + m0 + q];
+    const double u0 = m_0 - m[nidx[q]], u1 = m_1 - m[nidx[ld + q]], u2 = m_2 - m[nidx[2 * ld + q]];
     const float* l = L + q;
     g[3 * q] = a[q] * m_0 + l[0] * u0 + l[3 * ld] * u1 + l[6 * ld] * u2;
     g[3 * q + 1] = a[ld + q] * m_1 + l[ld] * u0 + l[4 * ld] * u1 + l[7 * ld] * u2;
@@ -500,8 +503,11 @@ class ShellRfT3 final : public ElementKernel {
       edge_condition_.assign(s.edge_condition.begin(), s.edge_condition.end());
       areal_mass_ = s.density * part_->thickness;
       const int ne = part_->num_elements;
-      g1_.resize(3 * ne);
-      g2_.resize(3 * ne);
+      mld_ = padded_ld(ne);
+      g_.assign(6 * static_cast<std::size_t>(mld_), 0.0);
+      off_.assign(3 * static_cast<std::size_t>(mld_), 0);
+      for (int e = 0; e < ne; ++e)
+        for (int a = 0; a < 3; ++a) off_[a * mld_ + e] = 3 * part_->triangles[3 * e + a];
       area0_.resize(ne);
       e1_.resize(3 * ne);
       e2_.resize(3 * ne);
@@ -523,8 +529,8 @@ class ShellRfT3 final : public ElementKernel {
         // grad0 N_a = n x (X_c - X_b) / (2 A0), components on (f, m).
         for (int a = 0; a < 3; ++a) {
           const Vec3 g = scale(cross(n, sub(X[(a + 2) % 3], X[(a + 1) % 3])), 1.0 / two_a);
-          g1_[3 * e + a] = dot(g, f);
-          g2_[3 * e + a] = dot(g, m);
+          g_[a * mld_ + e] = dot(g, f);
+          g_[(3 + a) * mld_ + e] = dot(g, m);
         }
       }
       if (bending_) {
@@ -581,7 +587,7 @@ class ShellRfT3 final : public ElementKernel {
         element_temperature_block(n, &part_->triangles[3 * b], in.node_temperature.data(), etemp_.data() + b);
         keep_temperatures(in, b, in.range.end);
       }
-      if (strain_block(n, ld, &part_->triangles[3 * b], x, g1_.data() + 3 * b, g2_.data() + 3 * b, ff, C) != 0.0)
+      if (strain_block(n, ld, off_.data() + b, x, g_.data() + b, mld_, ff, C) != 0.0)
         for (int q = 0; q < n; ++q) {
           const double* c = C + 3 * q;
           if (!(c[0] * c[1] - c[2] * c[2] > 1e-12)) {
@@ -625,8 +631,7 @@ class ShellRfT3 final : public ElementKernel {
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
       double* dte = sc.energy_tmp.data();  // free again after the laws
       double* mf = sc.mf.data();
-      membrane_block(n, ld, C, ff, S, area0_.data() + b, g1_.data() + 3 * b,
-                     g2_.data() + 3 * b, inv_c, kmax > 0, mf, dte);
+      membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
       if (bending_) {  // adds the membrane forces with the bending ones
         energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out);
       } else {
@@ -657,8 +662,8 @@ class ShellRfT3 final : public ElementKernel {
       Vec3 f1{0, 0, 0}, f2{0, 0, 0};
       for (int a = 0; a < 3; ++a) {
         const Vec3 xa = load3(part_->x.data(), t[a]);
-        f1 = add(f1, scale(xa, g1_[3 * e + a]));
-        f2 = add(f2, scale(xa, g2_[3 * e + a]));
+        f1 = add(f1, scale(xa, g_[a * mld_ + e]));
+        f2 = add(f2, scale(xa, g_[(3 + a) * mld_ + e]));
       }
       if (!out.shear_angle.empty()) {  // gamma = asin(I_sh), I_sh = C12 / sqrt(C11 C22)
         const double ish = dot(f1, f2) / std::sqrt(dot(f1, f1) * dot(f2, f2));
@@ -889,10 +894,10 @@ class ShellRfT3 final : public ElementKernel {
     const std::size_t gld = static_cast<std::size_t>(gld_);
     lmap_.assign(9 * gld, 0.0f);
     acoef_.assign(3 * gld, 0.0f);
-    nidx_.assign(3 * ne, 3 * ne);
-    eq_.assign(3 * ne, 0.0);
-    erho_.assign(3 * ne + 3, 0.0);  // the last three: zero, read for edges without a neighbour
-    em_.assign(3 * ne + 3, 0.0);
+    nidx_.assign(3 * gld, static_cast<int>(3 * gld));
+    eq_.assign(3 * gld, 0.0);
+    erho_.assign(3 * gld + 1, 0.0);  // the last: zero, read for edges without a neighbour
+    em_.assign(3 * gld + 1, 0.0);
     std::vector<char> fit(ne, 0);
     // Gradient of the linear interpolant of values v at three points.
     auto grad_lin = [](const double P[3][2], const double v[3], double g[2]) {
@@ -998,7 +1003,7 @@ class ShellRfT3 final : public ElementKernel {
           l = static_cast<float>(w * l);
         }
         acoef_[k * gld + e] = static_cast<float>(nb >= 0 ? 1 - w : clamped_[i] ? 0.5 : 0.0);
-        if (nb >= 0) nidx_[i] = 3 * nb + partner_k_[i];
+        if (nb >= 0) nidx_[k * gld + e] = static_cast<int>(partner_k_[i] * gld + nb);
       }
     double D[3][3];
     const bool have_d = probe_rigidity(T, D);
@@ -1071,8 +1076,9 @@ class ShellRfT3 final : public ElementKernel {
     int end = -1, nforeign = 0;
     int nbound = 0;  // edges without a neighbour (their entries follow the hinges')
     // Per element and edge of the block: the edge's entry in the angle
-    // changes (see bending_forces).
-    std::vector<int> loc;
+    // changes (see bending_forces), edge k of the block's element q at
+    // loc[3 q + k], and again at loc_k[k n + q] (n elements) for slope_block.
+    std::vector<int> loc, loc_k;
     // The hinges owned by an element of an earlier block: node offsets c,
     // p, q, o (nforeign each), initial angles and hinge numbers.
     std::vector<int> fnode, fhinge;
@@ -1117,6 +1123,9 @@ class ShellRfT3 final : public ElementKernel {
     for (int e = b; e < end; ++e)
       for (int k = 0; k < 3; ++k)
         if (hid_[3 * e + k] < 0) bh->loc[3 * (e - b) + k] = nh + bh->nbound++;
+    bh->loc_k.resize(3 * n);
+    for (int q = 0; q < n; ++q)
+      for (int k = 0; k < 3; ++k) bh->loc_k[k * n + q] = bh->loc[3 * q + k];
     bh->fnode = fc;
     bh->fnode.insert(bh->fnode.end(), fp.begin(), fp.end());
     bh->fnode.insert(bh->fnode.end(), fq.begin(), fq.end());
@@ -1195,8 +1204,8 @@ class ShellRfT3 final : public ElementKernel {
   void slope_angles(int b, int end) {
     const BlockHinges& bh = block_hinges(b, end);
     const BlockAngles& ba = block_angles(b, end, bh);
-    slope_block(end - b, gld_, bh.loc.data(), ba.dth.data(), lmap_.data() + b, acoef_.data() + b, eq_.data() + 3 * b,
-                erho_.data() + 3 * b);
+    slope_block(end - b, gld_, bh.loc_k.data(), ba.dth.data(), lmap_.data() + b, acoef_.data() + b, eq_.data() + b,
+                erho_.data() + b);
   }
 
   // Pass 1: mid-edge slopes, curvatures, the law's moments and energies,
@@ -1207,9 +1216,9 @@ class ShellRfT3 final : public ElementKernel {
     double* temp = etemp_.data() + b;  // read again by pass 2
     double* K = in.fields_due ? curv_.data() + 3 * b : sc.curv.data();  // kept for fields() only where asked
     if (temperatures_kept(in, b, end)) {
-      curvature_only_block(n, gld_, cs_.data() + b, nidx_.data() + 3 * b, eq_.data() + 3 * b, erho_.data(), K);
+      curvature_only_block(n, gld_, cs_.data() + b, nidx_.data() + b, eq_.data() + b, erho_.data(), K);
     } else {
-      curvature_block(n, gld_, cs_.data() + b, nidx_.data() + 3 * b, eq_.data() + 3 * b, erho_.data(),
+      curvature_block(n, gld_, cs_.data() + b, nidx_.data() + b, eq_.data() + b, erho_.data(),
                       &part_->triangles[3 * b], in.node_temperature.data(), K, temp);
       keep_temperatures(in, b, end);
     }
@@ -1225,7 +1234,7 @@ class ShellRfT3 final : public ElementKernel {
     blk.energy = std::span<double>(sc.benergy.data(), n);
     if (auto st = bending_->evaluate(blk); !st) return st;
     double* ew = sc.energy_tmp.data();
-    moment_block(n, gld_, area0_.data() + b, cs_.data() + b, sc.moment.data(), sc.benergy.data(), em_.data() + 3 * b,
+    moment_block(n, gld_, area0_.data() + b, cs_.data() + b, sc.moment.data(), sc.benergy.data(), em_.data() + b,
                  ew);
     block_angles_[b]->bending_energy = lane_dot(n, ew, nullptr);  // pass 2 adds the membrane energies to it
     if (in.commit && !curv_old_.empty()) std::copy(K, K + 3 * n, curv_old_.begin() + 3 * b);
@@ -1260,8 +1269,7 @@ class ShellRfT3 final : public ElementKernel {
     }
     const double* hgrad = ba.ghost_grad.data();
     double* mk = sc.mk.data();
-    hinge_moment_block(n, gld_, lmap_.data() + b, acoef_.data() + b, nidx_.data() + 3 * b,
-                       em_.data(), 3 * b, mk);
+    hinge_moment_block(n, gld_, lmap_.data() + b, acoef_.data() + b, nidx_.data() + b, em_.data(), b, mk);
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
     double* dte = sc.energy_tmp.data();  // the membrane's stable steps of the block's elements
     if (rmax > 0) {
@@ -1328,9 +1336,10 @@ class ShellRfT3 final : public ElementKernel {
   // (k, i) of element e at (3 k + i) gld_ + e; zero where the element has
   // no quadratic; its rows scaled by the weight omega of the element's own
   // slope per edge), acoef_ a per edge (edge k of element e at k gld_ + e;
-  // see slope_angles), nidx_ per edge the entry
-  // of the neighbour's same edge (3 ne, a zero entry, where there is none);
-  // per step eq_, erho_ (slope_angles), em_ (dW/ds).
+  // see slope_angles), nidx_ per edge (edge k of element e at k gld_ + e)
+  // the entry of the neighbour's same edge in erho_ and em_ (3 gld_, a
+  // zero entry, where there is none); per step eq_, erho_ (slope_angles),
+  // em_ (dW/ds), edge k of element e at k gld_ + e.
   std::vector<float> cs_, lmap_, acoef_;
   std::vector<double> eq_, erho_, em_;
   std::vector<int> nidx_;
@@ -1347,7 +1356,12 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<const MaterialLaw*> laws_;
   double areal_mass_ = 0;
   bool keep_old_ = true;
-  std::vector<double> g1_, g2_, area0_, e1_, e2_, strain_old_, stress_;
+  // g_: the initial shape-function gradients grad0 N_a on the material
+  // frame (f, m): g1_a of element e at a mld_ + e, g2_a at (3 + a) mld_ + e.
+  // off_: the offset 3 i in x of node a of element e at a mld_ + e.
+  int mld_ = 0;
+  std::vector<int> off_;
+  std::vector<double> g_, area0_, e1_, e2_, strain_old_, stress_;
   std::vector<std::vector<double>> states_;
 };
 
