@@ -80,6 +80,18 @@ struct Patch {
     }
     EXPECT_TRUE(element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
   }
+  // Configures the element again with other membrane laws (the patch's
+  // edges and bending law as before).
+  void configure_with(const std::vector<const sdk::MaterialLaw*>& membrane) {
+    const auto& er = registry.require(sdk::PluginKind::Element, "shell_rf_t3", "/element");
+    sdk::ElementSetup setup;
+    setup.part = &view;
+    setup.membrane = membrane;
+    setup.density = 1294.0;
+    setup.edge_condition = edges;
+    setup.bending = bend.get();
+    ASSERT_TRUE(element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
+  }
   // The 6-node patch of every element (its nodes, then the node across each
   // edge, -1 if none), as global node ids: forces go straight to the nodes.
   std::vector<int> patch() const {
@@ -303,16 +315,19 @@ TEST(ShellRfT3, HingeGradientsKeptOrEvaluatedAgainGiveTheSameBits) {
   }
 }
 
-// A membrane law that returns no stress and records the strains it is given.
+// A membrane law that returns no stress and records the strains it is
+// given (of its last call) and the element temperatures (of every call
+// since they were last cleared, block after block).
 struct RecordingLaw final : sdk::MaterialLaw {
   explicit RecordingLaw(bool reads) : reads(reads) {}
   bool reads;
-  mutable std::vector<double> strain, strain_old;
+  mutable std::vector<double> strain, strain_old, temperature;
   sdk::Status configure(const sdk::Params&) override { return sdk::Status::success(); }
   sdk::LawRole role() const override { return sdk::LawRole::Membrane; }
   sdk::Status evaluate(const sdk::MaterialBlock& b) const override {
     strain.assign(b.strain.begin(), b.strain.end());
     strain_old.assign(b.strain_old.begin(), b.strain_old.end());
+    temperature.insert(temperature.end(), b.temperature.begin(), b.temperature.end());
     std::fill(b.stress.begin(), b.stress.end(), 0.0);
     std::fill(b.energy.begin(), b.energy.end(), 0.0);
     return sdk::Status::success();
@@ -328,13 +343,7 @@ TEST(ShellRfT3, PreviousStrainsOnlyForLawsThatReadThem) {
   for (const bool reads : {true, false}) {
     Patch p(0.3);
     RecordingLaw rec(reads);
-    const std::vector<const sdk::MaterialLaw*> laws = {p.law.get(), &rec};
-    const auto& er = p.registry.require(sdk::PluginKind::Element, "shell_rf_t3", "/element");
-    sdk::ElementSetup setup;
-    setup.part = &p.view;
-    setup.membrane = laws;
-    setup.density = 1294.0;
-    ASSERT_TRUE(p.element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
+    p.configure_with({p.law.get(), &rec});
     p.commit = true;
     std::vector<double> before;
     for (int step = 0; step < 3; ++step) {
@@ -354,22 +363,6 @@ TEST(ShellRfT3, PreviousStrainsOnlyForLawsThatReadThem) {
   }
 }
 
-// A membrane law that returns no stress and records the element
-// temperatures it is given, block by block.
-struct TemperatureLaw final : sdk::MaterialLaw {
-  mutable std::vector<double> temperature;
-  sdk::Status configure(const sdk::Params&) override { return sdk::Status::success(); }
-  sdk::LawRole role() const override { return sdk::LawRole::Membrane; }
-  sdk::Status evaluate(const sdk::MaterialBlock& b) const override {
-    temperature.insert(temperature.end(), b.temperature.begin(), b.temperature.end());
-    std::fill(b.stress.begin(), b.stress.end(), 0.0);
-    std::fill(b.energy.begin(), b.energy.end(), 0.0);
-    return sdk::Status::success();
-  }
-  double max_stiffness(double) const override { return 0.0; }
-  bool uses_strain_old() const override { return false; }
-};
-
 // The element temperatures the laws get are the means of their nodes',
 // formed again whenever ElementForceInput::temperature_version changes, is
 // 0 (unknown) or the ranges change; with the same nonzero version the
@@ -378,16 +371,8 @@ struct TemperatureLaw final : sdk::MaterialLaw {
 TEST(ShellRfT3, ElementTemperaturesFollowTheTemperatureVersion) {
   for (const bool bending : {false, true}) {
     Patch p(0.3, bending);
-    TemperatureLaw rec;
-    const std::vector<const sdk::MaterialLaw*> laws = {p.law.get(), &rec};
-    const auto& er = p.registry.require(sdk::PluginKind::Element, "shell_rf_t3", "/element");
-    sdk::ElementSetup setup;
-    setup.part = &p.view;
-    setup.membrane = laws;
-    setup.density = 1294.0;
-    setup.edge_condition = p.edges;
-    if (bending) setup.bending = p.bend.get();
-    ASSERT_TRUE(p.element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
+    RecordingLaw rec(false);
+    p.configure_with({p.law.get(), &rec});
     const int ne = p.mesh.num_elements();
     auto means = [&] {
       std::vector<double> m(ne);
