@@ -70,15 +70,14 @@ inline int padded_ld(int n) {
 struct BlockScratch {
   // stress and curv: the stresses and curvatures of a step after which the
   // kernel writes no fields (ElementForceInput::fields_due).
-  std::vector<double> temp, strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, mk, stress, curv;
+  std::vector<double> strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, mk, stress, curv;
   std::vector<double> G;  // hinge gradients of the block (bending_forces), grown to the largest block once
 };
 
 BlockScratch& block_scratch(int n) {
   thread_local BlockScratch s;
   const std::size_t m = static_cast<std::size_t>(n), ld = static_cast<std::size_t>(padded_ld(n));
-  if (s.temp.size() < m || s.ff.size() < 6 * ld) {
-    s.temp.resize(m);
+  if (s.energy.size() < m || s.ff.size() < 6 * ld) {
     s.strain.resize(3 * m);
     s.ff.resize(6 * ld);
     s.mf.resize(9 * ld);
@@ -368,9 +367,9 @@ void slope_block(int n, int ld, const int* __restrict loc, const double* __restr
 // Curvatures of n elements, K = sum_k c_k s_k with the shared slopes
 // s_k = eq_k - rho[nidx_k] (c_k = dK/ds_k, value r of edge k of element q at
 // c[(3 k + r) ld + q]; eq_k and nidx_k at [k ld + q], rho indexed over the
-// whole part), and with kTemp the
-// elements' mean temperatures from their nodes' (tri: the block's
-// triangles), as element_temperature_block forms them.
+// whole part), and with kTemp the elements' mean temperatures from their
+// nodes' (tri: the block's triangles), as element_temperature_block forms
+// them.
 template <bool kTemp>
 [[gnu::always_inline]] inline void curvature_body(int n, int ld, const float* __restrict c, const int* __restrict nidx,
                                                   const double* __restrict eq, const double* __restrict rho,
@@ -577,12 +576,11 @@ class ShellRfT3 final : public ElementKernel {
       // they stay in cache instead of streaming through per-element arrays.
       BlockScratch& sc = block_scratch(n);
       const int ld = padded_ld(n);  // of ff and mf
-      const double* temp = sc.temp.data();
       double* C = sc.strain.data();  // C of the block's elements (the fields compute it again from x)
       double* ff = sc.ff.data();
       // 1. Strains and temperatures of the block (with bending, pass 1 has
       // formed the temperatures).
-      temp = etemp_.data() + b;
+      const double* temp = etemp_.data() + b;
       if (!bending_ && !temperatures_kept(in, b, in.range.end)) {
         element_temperature_block(n, &part_->triangles[3 * b], in.node_temperature.data(), etemp_.data() + b);
         keep_temperatures(in, b, in.range.end);
