@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <type_traits>
 #include <vector>
 
 #include <thermostamp/sdk/plugin.hpp>
@@ -37,6 +38,20 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 }
 
 std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+// Dataset `name` of an open results file, its rows one after the other.
+template <class T>
+std::vector<T> read_dataset(hid_t file, const std::string& name) {
+  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+  const hid_t space = H5Dget_space(set);
+  hsize_t dims[2] = {0, 1};
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  std::vector<T> v(dims[0] * (H5Sget_simple_extent_ndims(space) > 1 ? dims[1] : 1));
+  H5Dread(set, std::is_same_v<T, int> ? H5T_NATIVE_INT : H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+  H5Sclose(space);
+  H5Dclose(set);
+  return v;
+}
 
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
@@ -427,17 +442,7 @@ TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
   // at all.
   const hid_t file = H5Fopen((dir / "out" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
-  auto read = [&](const std::string& name) {
-    const hid_t set = H5Dopen2(file, ("frames/000002/strip/" + name).c_str(), H5P_DEFAULT);
-    const hid_t space = H5Dget_space(set);
-    hsize_t dims[2] = {0, 0};
-    H5Sget_simple_extent_dims(space, dims, nullptr);
-    std::vector<double> v(dims[0] * dims[1]);
-    if (dims[1] == 3) H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
-    H5Sclose(space);
-    H5Dclose(set);
-    return v;
-  };
+  auto read = [&](const std::string& name) { return read_dataset<double>(file, "frames/000002/strip/" + name); };
   const auto v = read("velocity"), x = read("nodes"), u = read("displacement");
   H5Fclose(file);
   ASSERT_EQ(v.size(), x.size());
@@ -489,17 +494,7 @@ TEST(Output, FramesShowTheStressesAndCurvaturesOfTheirStep) {
     hsize_t n = 0;
     H5Gget_num_objs(g, &n);
     H5Gclose(g);
-    auto read = [&](const std::string& name) {
-      const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
-      const hid_t space = H5Dget_space(set);
-      hsize_t dims[2] = {0, 0};
-      H5Sget_simple_extent_dims(space, dims, nullptr);
-      std::vector<double> v(dims[0] * dims[1]);
-      H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
-      H5Sclose(space);
-      H5Dclose(set);
-      return v;
-    };
+    auto read = [&](const std::string& name) { return read_dataset<double>(file, name); };
     for (hsize_t k = 0; k < n; ++k) {
       char name[32];
       std::snprintf(name, sizeof name, "frames/%06d", static_cast<int>(k));
@@ -587,27 +582,15 @@ TEST(Coupling, LawsSeeTheTemperaturesOfTheThermalField) {
   ASSERT_TRUE(run.result.ok) << run.result.error;
   const hid_t file = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
-  auto read = [&](const std::string& name, hid_t type, auto& v) {
-    const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
-    const hid_t space = H5Dget_space(set);
-    hsize_t dims[2] = {0, 1};
-    H5Sget_simple_extent_dims(space, dims, nullptr);
-    v.resize(dims[0] * (H5Sget_simple_extent_ndims(space) > 1 ? dims[1] : 1));
-    H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
-    H5Sclose(space);
-    H5Dclose(set);
-  };
-  std::vector<int> tri;
-  read("parts/ply/triangles", H5T_NATIVE_INT, tri);
+  const std::vector<int> tri = read_dataset<int>(file, "parts/ply/triangles");
   const std::size_t ne = tri.size() / 3;
   ASSERT_EQ(ne, 32u);
   double cooled = 0, worst = 0, spread = 0;
   for (int k = 1; k <= 4; ++k) {
     char name[48];
     std::snprintf(name, sizeof name, "frames/%06d/ply/", k);
-    std::vector<double> S, T;
-    read(std::string(name) + "membrane_stress", H5T_NATIVE_DOUBLE, S);
-    read(std::string(name) + "temperature_mean", H5T_NATIVE_DOUBLE, T);
+    const std::vector<double> S = read_dataset<double>(file, std::string(name) + "membrane_stress");
+    const std::vector<double> T = read_dataset<double>(file, std::string(name) + "temperature_mean");
     ASSERT_EQ(S.size(), 3 * ne);
     double lo = 1e9, hi = -1e9;
     for (std::size_t e = 0; e < ne; ++e) {

@@ -290,13 +290,18 @@ double strain_block(int n, int ld, const int* __restrict off, const double* __re
   return bad;
 }
 
+// The mean of the nodes' temperatures of element q (tri: its block's
+// triangles).
+[[gnu::always_inline]] inline double mean_temperature(const int* __restrict tri, const double* __restrict node_temp,
+                                                      int q) {
+  return node_temp[tri[3 * q]] / 3.0 + node_temp[tri[3 * q + 1]] / 3.0 + node_temp[tri[3 * q + 2]] / 3.0;
+}
 // The mean of the nodes' temperatures of n elements.
 TS_VECTOR_CLONES
 void element_temperature_block(int n, const int* __restrict tri, const double* __restrict node_temp,
                                double* __restrict temp) {
 #pragma omp simd
-  for (int q = 0; q < n; ++q)
-    temp[q] = node_temp[tri[3 * q]] / 3.0 + node_temp[tri[3 * q + 1]] / 3.0 + node_temp[tri[3 * q + 2]] / 3.0;
+  for (int q = 0; q < n; ++q) temp[q] = mean_temperature(tri, node_temp, q);
 }
 
 // Membrane forces of n elements (F e1, F e2 of element q at ff[d ld + q],
@@ -368,8 +373,7 @@ void slope_block(int n, int ld, const int* __restrict loc, const double* __restr
 // s_k = eq_k - rho[nidx_k] (c_k = dK/ds_k, value r of edge k of element q at
 // c[(3 k + r) ld + q]; eq_k and nidx_k at [k ld + q], rho indexed over the
 // whole part), and with kTemp the elements' mean temperatures from their
-// nodes' (tri: the block's triangles), as element_temperature_block forms
-// them.
+// nodes' (tri: the block's triangles).
 template <bool kTemp>
 [[gnu::always_inline]] inline void curvature_body(int n, int ld, const float* __restrict c, const int* __restrict nidx,
                                                   const double* __restrict eq, const double* __restrict rho,
@@ -383,8 +387,7 @@ template <bool kTemp>
     K[3 * q] = cq[0] * s0 + cq[3 * ld] * s1 + cq[6 * ld] * s2;
     K[3 * q + 1] = cq[ld] * s0 + cq[4 * ld] * s1 + cq[7 * ld] * s2;
     K[3 * q + 2] = cq[2 * ld] * s0 + cq[5 * ld] * s1 + cq[8 * ld] * s2;
-    if (kTemp)
-      temp[q] = node_temp[tri[3 * q]] / 3.0 + node_temp[tri[3 * q + 1]] / 3.0 + node_temp[tri[3 * q + 2]] / 3.0;
+    if (kTemp) temp[q] = mean_temperature(tri, node_temp, q);
   }
 }
 TS_VECTOR_CLONES
