@@ -529,6 +529,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       md.gravity = {g[0], g[1], g[2]};
       md.energy_tolerance = mr.real("energy_tolerance", 0.05, 0.0, true);
       md.contact_schedule = mr.choice("contact_schedule", {"auto", "beside", "in_turn"}, std::string("auto"));
+      md.bending_subcycles = static_cast<int>(mr.integer("bending_subcycles", 1, 1, 64));
       mr.finish();
     }
     if (const json* t = r.optional_raw("thermal")) {

@@ -125,6 +125,9 @@ struct MechanicsDef {
   // How elements and contact share the threads: "auto" (timed), "beside"
   // (contact as one task beside the element blocks) or "in_turn".
   std::string contact_schedule = "auto";
+  // At most how many steps one evaluation of the bending carries (1: the
+  // bending every step); fewer where the bending's stable step demands it.
+  int bending_subcycles = 1;
 };
 
 struct ConstraintDef {

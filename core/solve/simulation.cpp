@@ -47,6 +47,10 @@ struct MechPart {
   int block_size = 0, blocks = 0;
   int passes = 1;  // the element's passes over the blocks per force evaluation
   std::vector<double> block_dt;
+  // The bending's own stable steps (mass scaling included): per block from
+  // the last evaluation with bending, and their smallest.
+  std::vector<double> block_bdt;
+  double bend_dt = std::numeric_limits<double>::infinity();
   // Node forces of each block, added by the element into the block's own
   // slots (ElementForceInput::patch_slot): the local nodes of block b are entries
   // block_node_start[b] .. block_node_start[b + 1] of block_node (ascending
@@ -576,6 +580,7 @@ void Simulation::build_mechanics() {
     m->blocks = std::max(1, (ne + size - 1) / size);
     m->block_size = std::max(1, (ne + m->blocks - 1) / m->blocks);
     m->block_dt.assign(m->blocks, 0.0);
+    m->block_bdt.assign(m->blocks, std::numeric_limits<double>::infinity());
     m->block_fail.resize(m->blocks);
     m->block_error.resize(m->blocks);
     m->slot_local.assign(6 * ne, -1);
@@ -824,6 +829,7 @@ void Simulation::element_block(std::size_t p, int b, int pass) {
   in.fields_due = fields_due_;
   in.dt_scale = m.elem_sqrt_scale;
   in.temperature_version = temperature_version_;
+  in.bending_weight = bending_weight_;
   sdk::ElementForceOutput out;
   out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
   if (want_element_dt_) out.element_dt = m.elem_dt;
@@ -832,6 +838,7 @@ void Simulation::element_block(std::size_t p, int b, int pass) {
   m.block_fail[b] = out.failed_element;
   if (!m.block_error[b].empty() || m.block_fail[b] >= 0) return;
   m.block_dt[b] = out.stable_dt;
+  if (bending_weight_ > 0) m.block_bdt[b] = out.bending_dt;
   for (int l = l0; l < l1; ++l) {
     const int se = m.shared_entry[l];
     double* to = se >= 0 ? &m.block_force[3 * static_cast<std::size_t>(se)] : &m.f_int[3 * m.block_node[l]];
@@ -856,6 +863,10 @@ double Simulation::finish_elements() {
                        st.def->name + "'");
       dt = std::min(dt, m.block_dt[b]);
     }
+    // Between evaluations of the bending the elements' steps are the
+    // membrane's: the bending's last ones bound them too.
+    if (bending_weight_ > 0) m.bend_dt = *std::min_element(m.block_bdt.begin(), m.block_bdt.end());
+    dt = std::min(dt, m.bend_dt);
     const int ns = static_cast<int>(m.shared_node.size());
 #pragma omp parallel for schedule(static) if (ns > 2048)
     for (int s = 0; s < ns; ++s) {
@@ -867,7 +878,8 @@ double Simulation::finish_elements() {
   }
   // Element and contact springs act on the same nodes: 1/dt^2 adds up.
   if (std::isfinite(contact_dt_)) dt = 1.0 / std::sqrt(1.0 / (dt * dt) + 1.0 / (contact_dt_ * contact_dt_));
-  return std::min(dt, tool_dt_);
+  last_stable_ = std::min(dt, tool_dt_);
+  return last_stable_;
 }
 
 double Simulation::initial_mechanical_step() {
@@ -890,6 +902,33 @@ double Simulation::mechanics_stable_dt() {
   return finish_elements();
 }
 
+// With solvers.mechanics.bending_subcycles k > 1 the bending is evaluated
+// at most every k-th step, as an impulse: the evaluation that carries it
+// weighs its bending forces by the number of steps j it stands for (the
+// velocity then changes by j dt f_b / m at once), the j - 1 evaluations
+// after it carry none (ElementForceInput::bending_weight). j is the
+// largest whole number of steps that keeps j dt within dt_safety times the
+// bending's own stable step (j dt_safety stable <= dt_safety bend_dt), at
+// most k: where the bending governs the step, j = 1 (every step).
+void Simulation::choose_bending_weight() {
+  const int k = job_.mechanics_settings.bending_subcycles;
+  if (k <= 1) return;  // bending_weight_ stays 1
+  if (bending_left_ > 0) {
+    bending_weight_ = 0.0;
+    --bending_left_;
+    return;
+  }
+  double bend_dt = std::numeric_limits<double>::infinity();
+  for (const auto& m : mech_) bend_dt = std::min(bend_dt, m->bend_dt);
+  int j = k;
+  if (std::isfinite(bend_dt) && last_stable_ > 0)
+    j = static_cast<int>(std::clamp(std::floor(bend_dt / last_stable_), 1.0, static_cast<double>(k)));
+  bending_weight_ = j;
+  bending_left_ = j - 1;
+  ++bending_evaluations_;
+  bending_largest_ = std::max(bending_largest_, j);
+}
+
 // Element forces and contact forces at the current positions (they write
 // separate arrays); returns the smallest stable step. Two ways of sharing
 // them out over the threads, with the same results (every force is computed
@@ -905,6 +944,7 @@ double Simulation::mechanics_stable_dt() {
 // (kTrial each), keeps the faster, and times both again every kRecheck
 // calls; "beside" and "in_turn" fix the way.
 double Simulation::forces_and_stable_dt(double t, double dt) {
+  choose_bending_weight();
 #ifdef _OPENMP
   const int threads = omp_get_max_threads();
 #else
@@ -1757,6 +1797,8 @@ RunResult Simulation::run(const RunOptions& opt) {
   result.heat_balance_error = std::abs(stored_change - heat_in) / scale;
   result.limited_node_steps = limited_total;
   result.mechanical_steps = mech_steps;
+  result.bending_evaluations = bending_evaluations_;
+  result.bending_largest = bending_largest_;
   result.mechanical_dt = mech_dt;
   result.energy = audit;
   for (std::size_t q = 0; q < tools_.size(); ++q) {
@@ -1797,6 +1839,10 @@ RunResult Simulation::run(const RunOptions& opt) {
     if (job_.mechanics)  // share of the steps whose contact ran beside the element blocks
       summary["contact_beside_elements"] =
           schedule_.calls > 0 ? static_cast<double>(schedule_.beside_calls) / static_cast<double>(schedule_.calls) : 0.0;
+    if (job_.mechanics && job_.mechanics_settings.bending_subcycles > 1)
+      summary["bending_subcycles"] = {{"at_most", job_.mechanics_settings.bending_subcycles},
+                                      {"evaluations", bending_evaluations_},
+                                      {"largest", bending_largest_}};
     summary["energy"] = {{"kinetic", audit.kinetic}, {"internal", audit.internal}, {"external_work", audit.external},
                          {"contact", audit.contact}, {"contact_stored", audit.contact_stored},
                          {"damping", audit.damping}, {"balance_error", audit.balance_error},

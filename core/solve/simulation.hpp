@@ -62,6 +62,10 @@ struct RunResult {
   std::vector<ProbeSample> probes;
   long long mechanical_steps = 0;
   double mechanical_dt = 0;  // last step
+  // With bending_subcycles > 1: the evaluations that carried the bending,
+  // and the most steps one of them stood for.
+  long long bending_evaluations = 0;
+  int bending_largest = 1;
   EnergyAudit energy;
 };
 
@@ -128,6 +132,15 @@ class Simulation {
   // Raised whenever the node temperatures the elements see change
   // (ElementForceInput::temperature_version; 0 before the first).
   std::uint64_t temperature_version_ = 0;
+  // Bending evaluated less often than the membrane (bending_subcycles):
+  // the weight of the coming evaluation's bending forces, the evaluations
+  // still to come without bending, how many carried it and the most steps
+  // one stood for; the last smallest stable step (finish_elements).
+  void choose_bending_weight();
+  double bending_weight_ = 1.0;
+  int bending_left_ = 0, bending_largest_ = 1;
+  long long bending_evaluations_ = 0;
+  double last_stable_ = 0;
   std::vector<double> part_sums_;  // per part: works, kinetic energies, reactions of the step (mechanics_step)
   std::vector<int> part_bad_;      // per part: first non-finite coordinate of the step, -1 if none
 

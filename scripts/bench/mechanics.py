@@ -6,7 +6,8 @@ membrane loop on the same plate (scripts/bench/bare_membrane.cpp, one
 thread), run in turn with the one-thread job, smallest of --reps runs each.
 The ratio of the two does not depend on how fast the machine happens to be.
 
-Usage: scripts/bench/mechanics.py [--quick] [--reps N] (after a Release build).
+Usage: scripts/bench/mechanics.py [--quick] [--reps N] [--bending-subcycles K]
+(after a Release build).
 """
 import argparse
 import json
@@ -19,7 +20,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 EXE = os.environ.get("THERMOSTAMP_EXE", os.path.join(ROOT, "build", "bin", "thermostamp"))
 
 
-def job(n, steps):
+def job(n, steps, bending_subcycles=1):
     size = n * 0.001
     card = json.load(open(os.path.join(ROOT, "share", "materials", "pa66_cf_ud.json")))
     dt_est = 0.8 * 0.7e-3 / (2 * 5.0e6 / (1294.0 * 0.0005)) ** 0.5
@@ -33,7 +34,7 @@ def job(n, steps):
         "constraints": [
             {"type": "fix", "part": "ply", "box": [[-1e-9, -1, -1], [1e-9, 1, 1]], "dofs": ["x", "y", "z"]},
             {"type": "velocity", "part": "ply", "box": [[size - 1e-9, -1, -1], [size + 1e-9, 1, 1]], "velocity": [1.0, 0, 0]}],
-        "solvers": {"mechanics": {"dt_safety": 0.8}, "thermal": None},
+        "solvers": {"mechanics": {"dt_safety": 0.8, "bending_subcycles": bending_subcycles}, "thermal": None},
         "output": {"interval": t_end, "fields": ["displacement"]},
     }
 
@@ -66,10 +67,12 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="10k and 100k elements only")
     ap.add_argument("--reps", type=int, default=3, help="runs per case; the smallest time is kept")
+    ap.add_argument("--bending-subcycles", type=int, default=1,
+                    help="solvers.mechanics.bending_subcycles of the job (1: the bending every step)")
     args = ap.parse_args()
     sizes = [71, 224] if args.quick else [71, 224, 500]
     print("### shell_rf_t3 (membrane + bending) + ud_hyperelastic + viscoelastic_shear + thermo_linear_bending, "
-          "cost per element per cycle (smallest of %d runs)\n" % args.reps)
+          "cost per element per cycle (smallest of %d runs, bending_subcycles %d)\n" % (args.reps, args.bending_subcycles))
     print("| elements | threads | cycles | wall time (s) | ns per element-cycle | speed-up | bare membrane loop (ns) | ratio to the bare loop |")
     print("|---|---|---|---|---|---|---|---|")
     for n in sizes:
@@ -77,7 +80,7 @@ def main():
         best, bare = {}, None
         for _ in range(args.reps):
             for th in (1, 2):
-                s = run(job(n, 200), th)
+                s = run(job(n, 200, args.bending_subcycles), th)
                 if th == 1:
                     # the yardstick right after the one-thread run, as many cycles
                     b = bare_membrane(n, s["steps"]["mechanics"])

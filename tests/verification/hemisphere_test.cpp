@@ -143,6 +143,41 @@ TEST(Hemisphere, OneAndTwoThreadsIdentical) {
   }
 }
 
+// The bending evaluated at most every 8th step (bending_subcycles, its
+// forces as impulses; on this scene the bending's stable step allows all
+// 8): the same forming within 2 % (shear extrema of both plies) and 0.2 K
+// (through-thickness temperatures at the four probes, every second), with
+// the scene's energy balance under 2 %.
+TEST(Hemisphere, BendingSubcyclesKeepTheAnswer) {
+  json j = coarse_scene();
+  const JobRun a = run_json(j);
+  j["solvers"]["mechanics"]["bending_subcycles"] = 8;
+  const JobRun b = run_json(j);
+  ASSERT_TRUE(a.result.ok) << a.result.error;
+  ASSERT_TRUE(b.result.ok) << b.result.error;
+  EXPECT_EQ(b.result.bending_largest, 8);
+  EXPECT_LT(b.result.bending_evaluations, b.result.mechanical_steps / 7);
+  double shear = 0, temp = 0;
+  for (std::size_t p = 0; p < a.result.part_shear_max_deg.size(); ++p) {
+    const double ma = a.result.part_shear_max_deg[p], mb = b.result.part_shear_max_deg[p];
+    const double na = a.result.part_shear_min_deg[p], nb = b.result.part_shear_min_deg[p];
+    shear = std::max({shear, std::abs(mb - ma) / std::abs(ma), std::abs(nb - na) / std::abs(na)});
+  }
+  for (int probe = 0; probe < 4; ++probe)
+    for (double t : {1.0, 2.0, 3.0, 4.0, 5.0}) {
+      const auto& va = a.sample(probe, "temperature_profile", t)->values;
+      const auto& vb = b.sample(probe, "temperature_profile", t)->values;
+      for (std::size_t k = 0; k < va.size(); ++k) temp = std::max(temp, std::abs(va[k] - vb[k]));
+    }
+  std::printf("bending every step / at most every 8th: %lld / %lld evaluations of %lld steps, shear extrema %.2e apart "
+              "(relative), temperatures %.3f K apart, energy balance %.2e / %.2e\n",
+              a.result.mechanical_steps, b.result.bending_evaluations, b.result.mechanical_steps, shear, temp,
+              a.result.energy.balance_error, b.result.energy.balance_error);
+  EXPECT_LT(shear, 0.02);
+  EXPECT_LT(temp, 0.2);
+  EXPECT_LT(b.result.energy.balance_error, 0.02);
+}
+
 // Two clocks: the thermal answer does not depend on the mass-scaling factor
 // (required: temperatures within 0.5 K for mass factors 4x apart, i.e. target
 // steps 2x apart).

@@ -567,11 +567,22 @@ class ShellRfT3 final : public ElementKernel {
 
   Status internal_forces(const ElementForceInput& in, ElementForceOutput& out) override {
     return guarded([&]() -> Status {
+      // Bending in this evaluation (ElementForceInput::bending_weight): 0
+      // skips its passes, w > 0 scales its forces by w.
+      const bool bend = bending_ && in.bending_weight > 0;
       if (bending_ && in.pass == 0) {
-        slope_angles(in.range.begin, in.range.end);
+        if (bend) slope_angles(in.range.begin, in.range.end);
         return Status::success();
       }
-      if (bending_ && in.pass == 1) return slope_moments(in, in.range.begin, in.range.end);
+      if (bending_ && in.pass == 1) {
+        if (!bend) return Status::success();
+        if (auto st = slope_moments(in, in.range.begin, in.range.end); !st) return st;
+        if (in.bending_weight != 1.0)  // dW/ds times w: every hinge moment and bending force follows
+          for (int k = 0; k < 3; ++k)
+            for (int q = in.range.begin; q < in.range.end; ++q)
+              em_[static_cast<std::size_t>(k) * gld_ + q] *= in.bending_weight;
+        return Status::success();
+      }
       const int b = in.range.begin, n = in.range.end - in.range.begin;
       const double* x = part_->x.data();
       // Values needed only while this block is evaluated live in a buffer of
@@ -581,10 +592,10 @@ class ShellRfT3 final : public ElementKernel {
       const int ld = padded_ld(n);  // of ff and mf
       double* C = sc.strain.data();  // C of the block's elements (the fields compute it again from x)
       double* ff = sc.ff.data();
-      // 1. Strains and temperatures of the block (with bending, pass 1 has
-      // formed the temperatures).
+      // 1. Strains and temperatures of the block (with bending in this
+      // evaluation, pass 1 has formed the temperatures).
       const double* temp = etemp_.data() + b;
-      if (!bending_ && !temperatures_kept(in, b, in.range.end)) {
+      if (!bend && !temperatures_kept(in, b, in.range.end)) {
         element_temperature_block(n, &part_->triangles[3 * b], in.node_temperature.data(), etemp_.data() + b);
         keep_temperatures(in, b, in.range.end);
       }
@@ -633,9 +644,10 @@ class ShellRfT3 final : public ElementKernel {
       double* dte = sc.energy_tmp.data();  // free again after the laws
       double* mf = sc.mf.data();
       membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
-      if (bending_) {  // adds the membrane forces with the bending ones
+      if (bend) {  // adds the membrane forces with the bending ones
         energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out);
       } else {
+        if (bending_ && block_angles_[b]) energy += block_angles_[b]->bending_energy;  // of the last one with bending
         double* nf = out.node_force.data();
         const int* slot = in.patch_slot.data();
         for (int q = 0; q < n; ++q)
@@ -1277,7 +1289,14 @@ class ShellRfT3 final : public ElementKernel {
       // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative), d the
       // smallest initial height over the element's interior edges.
       const double dtb_scale = 0.5 * std::sqrt(areal_mass_ / rmax);
-      for (int q = 0; q < n; ++q) dte[q] = std::min(dte[q], dmin2_[b + q] * dtb_scale);
+      const double* scale = in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b;
+      double bdt = std::numeric_limits<double>::infinity();
+      for (int q = 0; q < n; ++q) {
+        const double dtb = dmin2_[b + q] * dtb_scale;
+        bdt = std::min(bdt, scale ? dtb * scale[q] : dtb);
+        dte[q] = std::min(dte[q], dtb);
+      }
+      out.bending_dt = bdt;
     }
     double energy = ba.bending_energy;
     // Forces, element by element: the membrane forces on its corners, and
@@ -1372,7 +1391,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.4.5";
+  d.version = "0.4.6";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1380,4 +1399,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.5", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.6", register_all)

@@ -2,6 +2,7 @@
 // Shell elements: internal forces, energy and stable step over a range of
 // elements, one call per range (OpenMP blocks), tight loops inside.
 #include <cstdint>
+#include <limits>
 #include <span>
 
 #include "material.hpp"
@@ -70,6 +71,14 @@ struct ElementForceInput {
   // derives from them alone (its elements' temperatures) from one to the
   // next. 0: unknown, the temperatures may differ at every evaluation.
   std::uint64_t temperature_version = 0;
+  // The weight of the bending forces in this evaluation: 1 as a rule. Where
+  // the kernel evaluates the bending less often than the membrane
+  // (solvers.mechanics.bending_subcycles), 0 in the evaluations that carry
+  // no bending (an element may skip its bending passes and then reports
+  // the bending energy of its last evaluation with bending) and k in the
+  // one that carries the bending of the next k steps (its bending forces
+  // times k, an impulse). Elements without bending ignore it.
+  double bending_weight = 1.0;
 };
 
 struct ElementForceOutput {
@@ -82,6 +91,12 @@ struct ElementForceOutput {
   double stable_dt = 0.0;           // s, minimum over the range of the steps times dt_scale (set by the call)
   std::span<double> element_dt;     // optional: stable step of each element, unscaled (entries of the range)
   int failed_element = -1;          // first degenerate element found, -1 if none
+  // s, the smallest stable step of the range's bending alone, times
+  // dt_scale, from an evaluation with a bending_weight above 0 (set by the
+  // call; infinity where the element has no bending or did not evaluate
+  // it). The kernel chooses how many steps one bending evaluation carries
+  // from it.
+  double bending_dt = std::numeric_limits<double>::infinity();
 };
 
 // Per-element results for output.
