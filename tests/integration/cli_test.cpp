@@ -171,6 +171,7 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"arc_not_circular", [](json& j) { j["tools"][0]["surface"] = {{"type", "revolved"}, {"profile", {{{"arc", {{"from", {0, 0.01}}, {"to", {0.02, 0}}, {"centre", {0, 0}}}}}}}}; }, "error: /tools/0/surface/profile/0/arc/centre: the arc's end points are not at the same distance"},
       {"mesh_file_missing", [](json& j) { j["parts"][0]["mesh"] = {{"file", "nowhere.msh"}}; }, "error: /parts/0/mesh/file: mesh file"},
       {"mechanics_no_law", [](json& j) { j["solvers"]["mechanics"] = {{"dt_safety", 0.8}}; }, "error: /materials/pa66_cf_ud: material 'pa66_cf_ud' has no membrane law"},
+      {"bending_subcycles_zero", [](json& j) { j["solvers"]["mechanics"] = {{"bending_subcycles", 0}}; }, "error: /solvers/mechanics/bending_subcycles: must be >= 1, found 0"},
       {"explicit_dt", [](json& j) { j["solvers"]["thermal"]["through_thickness"] = "explicit"; j["solvers"]["thermal"]["dt"] = 0.1; }, "error: /solvers/thermal/dt: thermal step 0.1 s exceeds the stable step"},
       {"fibre_normal", [](json& j) { j["parts"][0]["fibre_direction"] = {0, 0, 1}; }, "error: /parts/0/fibre_direction: the fibre direction is normal to the ply"},
       {"bad_field", [](json& j) { j["output"]["fields"] = {"temprature"}; }, "error: /output/fields/0: unknown field 'temprature'; did you mean 'temperature'?"},
