@@ -81,15 +81,16 @@ struct Patch {
     EXPECT_TRUE(element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
   }
   // Configures the element again with other membrane laws (the patch's
-  // edges and bending law as before).
-  void configure_with(const std::vector<const sdk::MaterialLaw*>& membrane) {
+  // edges as before, and its bending law unless another is given).
+  void configure_with(const std::vector<const sdk::MaterialLaw*>& membrane,
+                      const sdk::MaterialLaw* bending = nullptr) {
     const auto& er = registry.require(sdk::PluginKind::Element, "shell_rf_t3", "/element");
     sdk::ElementSetup setup;
     setup.part = &view;
     setup.membrane = membrane;
     setup.density = 1294.0;
     setup.edge_condition = edges;
-    setup.bending = bend.get();
+    setup.bending = bending ? bending : bend.get();
     ASSERT_TRUE(element->configure(validate_params(json::object(), "/e", er.descriptor), setup).ok);
   }
   // The 6-node patch of every element (its nodes, then the node across each
@@ -115,6 +116,8 @@ struct Patch {
   int blocks = 1;
   bool commit = false;  // update the laws' history
   std::uint64_t temperature_version = 0;  // ElementForceInput::temperature_version
+  double bending_weight = 1.0;            // ElementForceInput::bending_weight
+  double dt = 0.0;                        // ElementForceInput::dt
   // Node forces and energy of all elements.
   double evaluate(std::vector<double>& nf) {
     nf.assign(3 * mesh.num_nodes(), 0.0);
@@ -129,6 +132,8 @@ struct Patch {
         in.node_temperature = temperature;
         in.temperature_version = temperature_version;
         in.commit = commit;
+        in.bending_weight = bending_weight;
+        in.dt = dt;
         in.pass = pass;
         in.patch_slot = std::span<const int>(slots).subspan(6 * in.range.begin, 6 * (in.range.end - in.range.begin));
         sdk::ElementForceOutput out;
@@ -409,6 +414,69 @@ TEST(ShellRfT3, ElementTemperaturesFollowTheTemperatureVersion) {
     EXPECT_EQ(seen(0, 3), means()) << what << ": version unknown";
     EXPECT_NE(t1, t2);
   }
+}
+
+// ElementForceInput::bending_weight: 0 leaves the bending out (membrane
+// forces only, the energy with the bending energy of the last evaluation
+// with bending), w scales the bending forces by w (to round-off: the
+// dW/ds values are multiplied by w before the hinge moments), on a bent
+// patch with clamped and symmetry edges, in one range and in three.
+// A bending law gets as its history step the time since the last
+// evaluation with bending.
+struct DtRecordingBending final : sdk::MaterialLaw {
+  mutable std::vector<double> dt;
+  sdk::Status configure(const sdk::Params&) override { return sdk::Status::success(); }
+  sdk::LawRole role() const override { return sdk::LawRole::Bending; }
+  sdk::Status evaluate(const sdk::MaterialBlock& b) const override {
+    dt.push_back(b.dt);
+    std::fill(b.stress.begin(), b.stress.end(), 0.0);
+    std::fill(b.energy.begin(), b.energy.end(), 0.0);
+    return sdk::Status::success();
+  }
+  double max_stiffness(double) const override { return 0.0; }
+};
+
+TEST(ShellRfT3, BendingWeightScalesOrSkipsTheBending) {
+  for (const int blocks : {1, 3}) {
+    Patch p(0.3, true);
+    p.blocks = blocks;
+    for (int i = 0; i < p.mesh.num_nodes(); ++i) {  // bent about y and a little about x
+      const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
+      p.x[3 * i + 2] = 4.0 * X * X + 1.0 * X * Y;
+    }
+    auto at = [&](double w, double* energy = nullptr) {
+      p.bending_weight = w;
+      std::vector<double> f;
+      const double e = p.evaluate(f);
+      if (energy) *energy = e;
+      return f;
+    };
+    double e1 = 0, e0 = 0;
+    const auto f1 = at(1.0, &e1), f0 = at(0.0, &e0), f3 = at(3.0);
+    double scale = 0, worst = 0;
+    for (std::size_t k = 0; k < f1.size(); ++k) scale = std::max(scale, std::abs(f1[k] - f0[k]));
+    for (std::size_t k = 0; k < f1.size(); ++k) worst = std::max(worst, std::abs((f3[k] - f0[k]) - 3.0 * (f1[k] - f0[k])));
+    EXPECT_GT(scale, 1e-6) << "the bending forces of the bent patch";
+    EXPECT_LT(worst, 1e-12 * scale) << blocks << " ranges";
+    EXPECT_NEAR(e0, e1, 1e-12 * std::abs(e1)) << blocks << " ranges";
+    std::printf("%d range(s): bending forces up to %.3e N, w = 3 against 3 x w = 1: %.1e N apart; energy %.6e / %.6e J\n",
+                blocks, scale, worst, e1, e0);
+  }
+  Patch p(0.3, true);
+  DtRecordingBending rec;
+  p.configure_with({p.law.get()}, &rec);
+  rec.dt.clear();  // (the element probes the law's rigidities at set-up)
+  p.commit = true;
+  const std::pair<double, double> steps[] = {{1.0, 0.1}, {0.0, 0.2}, {0.0, 0.3}, {3.0, 0.4}, {1.0, 0.5}};
+  for (const auto& [w, dt] : steps) {
+    p.bending_weight = w;
+    p.dt = dt;
+    p.energy();
+  }
+  ASSERT_EQ(rec.dt.size(), 3u);
+  EXPECT_DOUBLE_EQ(rec.dt[0], 0.1);
+  EXPECT_DOUBLE_EQ(rec.dt[1], 0.2 + 0.3 + 0.4);
+  EXPECT_DOUBLE_EQ(rec.dt[2], 0.5);
 }
 
 // Curvature patch test: a regular mesh wrapped on a cylinder of radius r

@@ -104,6 +104,10 @@ struct BlockAngles {
   std::vector<double> dth, G, ghost_grad;
   int cap = 0;
   double bending_energy = 0;  // sum of A0 w over the block's elements (pass 1, for pass 2)
+  // Time stepped since the block's last evaluation with bending, before this
+  // evaluation's step (ElementForceInput::bending_weight 0 in between): the
+  // bending law's history step is in.dt plus it.
+  double elapsed = 0;
 };
 
 // The size of the processor's per-core (level 2) cache, bytes: the
@@ -647,7 +651,10 @@ class ShellRfT3 final : public ElementKernel {
       if (bend) {  // adds the membrane forces with the bending ones
         energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out);
       } else {
-        if (bending_ && block_angles_[b]) energy += block_angles_[b]->bending_energy;  // of the last one with bending
+        if (bending_ && block_angles_[b]) {
+          energy += block_angles_[b]->bending_energy;  // of the last one with bending
+          if (in.commit) block_angles_[b]->elapsed += in.dt;
+        }
         double* nf = out.node_force.data();
         const int* slot = in.patch_slot.data();
         for (int q = 0; q < n; ++q)
@@ -1240,7 +1247,9 @@ class ShellRfT3 final : public ElementKernel {
     blk.strain = std::span<const double>(K, 3 * n);
     if (!curv_old_.empty()) blk.strain_old = std::span<const double>(curv_old_.data() + 3 * b, 3 * n);
     blk.temperature = std::span<const double>(temp, n);
-    blk.dt = in.dt;
+    BlockAngles& ba = *block_angles_[b];
+    blk.dt = in.dt + ba.elapsed;  // since the last evaluation with bending
+    if (in.commit) ba.elapsed = 0;
     const int ns = bending_->state_size();
     blk.state = std::span<double>(bstate_.data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
     blk.stress = std::span<double>(sc.moment.data(), 3 * n);
