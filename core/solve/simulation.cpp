@@ -855,6 +855,7 @@ double Simulation::finish_elements() {
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
+    double bend_dt = std::numeric_limits<double>::infinity();
     for (int b = 0; b < m.blocks; ++b) {
       if (!m.block_error[b].empty())
         throw RunError("element '" + st.def->element + "' of part '" + st.def->name + "': " + m.block_error[b]);
@@ -862,10 +863,11 @@ double Simulation::finish_elements() {
         throw RunError("degenerate (collapsed or inverted) element " + std::to_string(m.block_fail[b]) + " in part '" +
                        st.def->name + "'");
       dt = std::min(dt, m.block_dt[b]);
+      bend_dt = std::min(bend_dt, m.block_bdt[b]);
     }
     // Between evaluations of the bending the elements' steps are the
     // membrane's: the bending's last ones bound them too.
-    if (bending_weight_ > 0) m.bend_dt = *std::min_element(m.block_bdt.begin(), m.block_bdt.end());
+    if (bending_weight_ > 0) m.bend_dt = bend_dt;
     dt = std::min(dt, m.bend_dt);
     const int ns = static_cast<int>(m.shared_node.size());
 #pragma omp parallel for schedule(static) if (ns > 2048)

@@ -320,19 +320,22 @@ TEST(ShellRfT3, HingeGradientsKeptOrEvaluatedAgainGiveTheSameBits) {
   }
 }
 
-// A membrane law that returns no stress and records the strains it is
-// given (of its last call) and the element temperatures (of every call
-// since they were last cleared, block after block).
+// A law (membrane, or bending with `as`) that returns no stress and records
+// the strains it is given (of its last call), and the element temperatures
+// and the history steps (of every call since they were last cleared, block
+// after block).
 struct RecordingLaw final : sdk::MaterialLaw {
-  explicit RecordingLaw(bool reads) : reads(reads) {}
+  explicit RecordingLaw(bool reads, sdk::LawRole as = sdk::LawRole::Membrane) : reads(reads), as(as) {}
   bool reads;
-  mutable std::vector<double> strain, strain_old, temperature;
+  sdk::LawRole as;
+  mutable std::vector<double> strain, strain_old, temperature, dt;
   sdk::Status configure(const sdk::Params&) override { return sdk::Status::success(); }
-  sdk::LawRole role() const override { return sdk::LawRole::Membrane; }
+  sdk::LawRole role() const override { return as; }
   sdk::Status evaluate(const sdk::MaterialBlock& b) const override {
     strain.assign(b.strain.begin(), b.strain.end());
     strain_old.assign(b.strain_old.begin(), b.strain_old.end());
     temperature.insert(temperature.end(), b.temperature.begin(), b.temperature.end());
+    dt.push_back(b.dt);
     std::fill(b.stress.begin(), b.stress.end(), 0.0);
     std::fill(b.energy.begin(), b.energy.end(), 0.0);
     return sdk::Status::success();
@@ -423,19 +426,6 @@ TEST(ShellRfT3, ElementTemperaturesFollowTheTemperatureVersion) {
 // patch with clamped and symmetry edges, in one range and in three.
 // A bending law gets as its history step the time since the last
 // evaluation with bending.
-struct DtRecordingBending final : sdk::MaterialLaw {
-  mutable std::vector<double> dt;
-  sdk::Status configure(const sdk::Params&) override { return sdk::Status::success(); }
-  sdk::LawRole role() const override { return sdk::LawRole::Bending; }
-  sdk::Status evaluate(const sdk::MaterialBlock& b) const override {
-    dt.push_back(b.dt);
-    std::fill(b.stress.begin(), b.stress.end(), 0.0);
-    std::fill(b.energy.begin(), b.energy.end(), 0.0);
-    return sdk::Status::success();
-  }
-  double max_stiffness(double) const override { return 0.0; }
-};
-
 TEST(ShellRfT3, BendingWeightScalesOrSkipsTheBending) {
   for (const int blocks : {1, 3}) {
     Patch p(0.3, true);
@@ -463,7 +453,7 @@ TEST(ShellRfT3, BendingWeightScalesOrSkipsTheBending) {
                 blocks, scale, worst, e1, e0);
   }
   Patch p(0.3, true);
-  DtRecordingBending rec;
+  RecordingLaw rec(false, sdk::LawRole::Bending);
   p.configure_with({p.law.get()}, &rec);
   rec.dt.clear();  // (the element probes the law's rigidities at set-up)
   p.commit = true;
