@@ -600,7 +600,9 @@ TEST(Bending, StripUnderEndMoment) {
   const double w = r.sample(0, "displacement_z", 1.0)->values[0];
   const double expected = kappa * (L - a) * (L - a) / 2;
   EXPECT_NEAR(w / expected, 1.0, 0.02);
-  if (c.subcycles > 1) EXPECT_GT(r.result.bending_largest, 1);
+  if (c.subcycles > 1) {
+    EXPECT_GT(r.result.bending_largest, 1);
+  }
   std::printf("end moment, R = %.0e N m, bending at most every %d steps (%d used): deflection at x = L - a %.5g m, "
               "kappa (L - a)^2 / 2 = %.5g m (%+.2f %%), %lld steps, energy balance %.2e\n",
               R, c.subcycles, r.result.bending_largest, w, expected, 100 * (w / expected - 1),
