@@ -2,7 +2,9 @@
 """Contact benchmark: cost of penalty_node_surface per node per cycle, for a
 stack of two plies on a plane die (one tool pair, one ply/ply pair searched
 in both directions), 10k to 1M nodes per ply, 1 and 2 threads; and the
-time breakdown of the hemisphere scene.
+time breakdown of the hemisphere scene, with the bare membrane loop of
+mechanics.py on as many elements (1800) timed just before each run as the
+yardstick of the machine's speed at that moment.
 Usage: scripts/bench/contact.py [--quick] (after a Release build).
 """
 import json
@@ -10,6 +12,8 @@ import os
 import subprocess
 import sys
 import tempfile
+
+from mechanics import bare_membrane
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 EXE = os.environ.get("THERMOSTAMP_EXE", os.path.join(ROOT, "build", "bin", "thermostamp"))
@@ -66,18 +70,20 @@ def main():
             print("| %d | %d | %d | %.3f | %.1f | %.1f |" % (n * n, th, cyc, t["contact"], t["contact"] / (nodes * cyc) * 1e9,
                                                              t["elements_and_laws"] / (elems * cyc) * 1e9))
     print("\n### Hemisphere scene (share/jobs/hemisphere_ud_2ply.json), time breakdown\n")
-    print("| threads | wall time (s) | cycles | elements and laws | contact | thermal | integration and audit | output | ns per element-cycle (all) |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| threads | wall time (s) | cycles | elements and laws | contact | thermal | integration and audit | output | ns per element-cycle (all) | bare loop (ns) | in bare loops |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     scene = os.path.join(ROOT, "share", "jobs", "hemisphere_ud_2ply.json")
     for th in (1, 2):
         extra = ("--set", "time.end=1.0") if quick else ()
+        bare = bare_membrane(30, 100000)  # 2 x 30 x 30 = 1800 elements, the scene's count
         s = run(scene, th, extra)
         t = s["timing_s"]
         cyc = s["steps"]["mechanics"]
         elems = sum(p["elements"] for p in s["parts"])
-        print("| %d | %.1f | %d | %.1f s | %.1f s | %.1f s | %.1f s | %.2f s | %.0f |" % (
+        ns = s["wall_time_s"] / (elems * cyc) * 1e9
+        print("| %d | %.1f | %d | %.1f s | %.1f s | %.1f s | %.1f s | %.2f s | %.0f | %.1f | %.1f |" % (
             th, s["wall_time_s"], cyc, t["elements_and_laws"], t["contact"], t["thermal"],
-            t["time_integration_and_audit"], t["output"], s["wall_time_s"] / (elems * cyc) * 1e9))
+            t["time_integration_and_audit"], t["output"], ns, bare, ns / bare))
 
 
 if __name__ == "__main__":
