@@ -73,7 +73,8 @@ void update(Way way, int n, double* x, double* v, const double* f, double* xs, d
 int main(int argc, char** argv) {
   const int cycles = argc > 1 ? std::atoi(argv[1]) : 100000;
   const int n = kN / 2;
-  auto alloc = [&] { return static_cast<double*>(std::aligned_alloc(64, sizeof(double) * n)); };
+  // aligned_alloc takes a size that is a whole number of alignments.
+  auto alloc = [&] { return static_cast<double*>(std::aligned_alloc(64, (sizeof(double) * n + 63) / 64 * 64)); };
   double *x = alloc(), *v = alloc(), *f = alloc(), *xs = alloc(), *vs = alloc();
   for (int i = 0; i < n; ++i) x[i] = 1.0, v[i] = 0.5, f[i] = 0.1;
   double sink = 0;
