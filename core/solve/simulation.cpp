@@ -72,6 +72,7 @@ struct MechPart {
   std::vector<int> fixed_dofs;
   bool external = false;  // gravity or applied loads act on the part
   double mass_physical = 0, mass_added = 0;
+  double mass_added_contact = 0;  // the part of mass_added that the contact springs asked for
 };
 
 struct PartState {
@@ -215,6 +216,18 @@ void compute_normals(const ShellMesh& m, const std::vector<double>& x, std::vect
   for (std::size_t i = 0; i < nn.size() / 3; ++i) {
     const Vec3 u = sdk::normalized(sdk::load3(nn.data(), static_cast<int>(i)));
     for (int d = 0; d < 3; ++d) nn[3 * i + d] = u[d];
+  }
+}
+
+// Moves a sampling time `next` past `limit` by whole intervals iv: one
+// addition at a time where a few suffice (the times the schedule has always
+// had), in one jump where many intervals fit in a step, and never stuck
+// where iv is below the round-off of `next`.
+void advance_past(double& next, double iv, double limit) {
+  if (limit - next > 16 * iv) next += std::floor((limit - next) / iv) * iv;
+  while (next <= limit) {
+    const double n = next + iv;
+    next = n > next ? n : std::nextafter(limit, std::numeric_limits<double>::infinity());
   }
 }
 
@@ -692,7 +705,19 @@ void Simulation::build_mechanics() {
   // Stable steps of the initial configuration; mass scaling per element.
   const MechanicsDef& md = job_.mechanics_settings;
   want_element_dt_ = true;
-  mechanics_stable_dt();
+  try {
+    mechanics_stable_dt();
+  } catch (const RunError&) {
+    // A degenerate element of the initial mesh is an input error.
+    for (std::size_t p = 0; p < parts_.size(); ++p)
+      for (int b = 0; b < mech_[p]->blocks; ++b)
+        if (mech_[p]->block_error[b].empty() && mech_[p]->block_fail[b] >= 0)
+          throw JobError(parts_[p]->def->pointer + "/mesh",
+                         "element " + std::to_string(mech_[p]->block_fail[b]) + " of part '" + parts_[p]->def->name +
+                             "' is degenerate in the initial mesh (zero area, or too small for the precision of its "
+                             "coordinates)");
+    throw;
+  }
   want_element_dt_ = false;
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
@@ -725,7 +750,10 @@ void Simulation::build_mechanics() {
     if (md.target_dt > 0)
       for (int i = 0; i < nn; ++i) {
         const double need = m.k_contact[i] * (md.target_dt / md.dt_safety) * (md.target_dt / md.dt_safety);
-        if (m.mass[i] < need) m.mass[i] = need;
+        if (m.mass[i] < need) {
+          m.mass_added_contact += need - m.mass[i];
+          m.mass[i] = need;
+        }
       }
     m.mass_physical = 0;
     double total = 0;
@@ -756,6 +784,55 @@ void Simulation::build_mechanics() {
   for (std::size_t t = 0; t < tools_.size(); ++t)
     if (tools_[t]->force_controlled() && tool_k[t] > 0)
       tool_dt_ = std::min(tool_dt_, 2.0 * std::sqrt(job_.tools[t].motion.mass / tool_k[t]));
+  check_initial_step(tool_k);
+}
+
+// Input that makes the explicit step unusable, refused before the run:
+// a step so short that the run would take more than kMaxSteps steps (an
+// estimate from the initial configuration, mass scaling included), and a
+// mass-proportional damping c with c dt >= 2, where the update of a free
+// node's velocity, v (1 - c dt) + ..., grows without bound. The error names
+// what sets the step.
+void Simulation::check_initial_step(const std::vector<double>& tool_k) const {
+  constexpr double kMaxSteps = 2e8;
+  const MechanicsDef& md = job_.mechanics_settings;
+  double elements = std::numeric_limits<double>::infinity();
+  for (const auto& m : mech_)
+    for (std::size_t e = 0; e < m->elem_dt.size(); ++e)
+      if (std::isfinite(m->elem_dt[e])) elements = std::min(elements, m->elem_dt[e] * m->elem_sqrt_scale[e]);
+  double stable = elements;
+  if (std::isfinite(contact_dt_))
+    stable = std::isfinite(stable) ? 1.0 / std::sqrt(1.0 / (stable * stable) + 1.0 / (contact_dt_ * contact_dt_))
+                                   : contact_dt_;
+  const bool by_tool = tool_dt_ < stable;
+  stable = std::min(stable, tool_dt_);
+  if (!std::isfinite(stable) || !(stable > 0)) return;  // no stiffness: the run says so at its start
+  const double dt = md.dt_safety * stable;
+  if (const double steps = job_.t_end / dt; steps > kMaxSteps) {
+    std::string what = "the elements", where = md.dt_safety < 1e-3 ? "/solvers/mechanics/dt_safety" : "/solvers/mechanics";
+    if (by_tool) {
+      for (std::size_t t = 0; t < tools_.size(); ++t)
+        if (tools_[t]->force_controlled() && tool_k[t] > 0 &&
+            2.0 * std::sqrt(job_.tools[t].motion.mass / tool_k[t]) <= tool_dt_) {
+          what = "the force-controlled tool '" + job_.tools[t].name + "' (mass " + fmt_g(job_.tools[t].motion.mass) +
+                 " kg) on the contact springs under it (" + fmt_g(tool_k[t]) + " N/m)";
+          if (md.dt_safety >= 1e-3) where = job_.tools[t].pointer + "/motion/mass";
+          break;
+        }
+    } else if (contact_dt_ < elements) {
+      what = "the contact springs (penalty times node area, against the node masses)";
+    }
+    throw JobError(where, "the mechanical step " + fmt_g(dt, 3) + " s (dt_safety " + fmt_g(md.dt_safety) +
+                              " times the stable step " + fmt_g(stable, 3) + " s, set by " + what +
+                              ") would need about " + fmt_g(steps, 3) + " steps to reach " + fmt_g(job_.t_end) +
+                              " s (at most " + fmt_g(kMaxSteps, 3) + ")");
+  }
+  if (md.damping * dt >= 2.0)
+    throw JobError("/solvers/mechanics/damping",
+                   "damping " + fmt_g(md.damping) + " /s times the initial step " + fmt_g(dt, 3) + " s is " +
+                       fmt_g(md.damping * dt, 3) +
+                       ": the explicit update is unstable from 2 (a free node's velocity changes sign and grows "
+                       "every step); use a damping below " + fmt_g(2.0 / dt, 3) + " /s");
 }
 
 // Warns once per law when a ply the law belongs to leaves the temperature
@@ -1345,6 +1422,15 @@ RunResult Simulation::run(const RunOptions& opt) {
   for (std::size_t p = 0; p < mech_.size(); ++p)
     log->info("part '{}': mass {:.6g} kg, added by mass scaling {:.6g} kg ({:.3g} %)", parts_[p]->def->name,
               mech_[p]->mass_physical, mech_[p]->mass_added, 100 * mech_[p]->mass_added / mech_[p]->mass_physical);
+  // More than a thousand times the ply's own mass: the inertia, not the
+  // material, then decides how the ply deforms.
+  for (std::size_t p = 0; p < mech_.size(); ++p)
+    if (const MechPart& m = *mech_[p]; m.mass_added > 1e3 * m.mass_physical)
+      log->warn("mass scaling multiplies the mass of part '{}' by {:.3g}{}: its inertia will dominate the "
+                "response; lower solvers.mechanics.mass_scaling{}",
+                parts_[p]->def->name, (m.mass_physical + m.mass_added) / m.mass_physical,
+                m.mass_added_contact > 0.5 * m.mass_added ? " (most of it for the contact springs)" : "",
+                m.mass_added_contact > 0.5 * m.mass_added ? " or the contacts' penalty" : "");
   log->info("thermal contact: {} tool face node(s), {} ply/ply link(s)", contact_map_.tool_contacts.size(),
             contact_map_.links.size());
 
@@ -1601,7 +1687,10 @@ RunResult Simulation::run(const RunOptions& opt) {
         double dt = md.dt_safety * stable;
         const double remaining = t_end - t;
         if (remaining < 100 * dt) dt = remaining / std::max(1.0, std::ceil(remaining / dt - 1e-9));
-        if (dt < 1e-14) throw RunError("the mechanical step fell below 1e-14 s at t = " + fmt_g(t) + " s");
+        // The stable step, not the last steps cut to land on t_end (those may
+        // be as short as the time left).
+        if (md.dt_safety * stable < 1e-14)
+          throw RunError("the mechanical step fell below 1e-14 s at t = " + fmt_g(t) + " s");
         auto tc = Clock::now();
         mechanics_step(dt, t, mech_steps, audit);
         timing_[kTimeIntegrate] += seconds_since(tc);
@@ -1688,7 +1777,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             update_element_fields();
             sample_probes(t, q);
             timing_[kTimeOutput] += seconds_since(tc);
-            while (next_probe[q] <= t + eps_t) next_probe[q] += iv;
+            advance_past(next_probe[q], iv, t + eps_t);
           }
         }
         if (t >= next_frame - eps_t) {
@@ -1729,7 +1818,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             any_step_probe = true;
           } else if (t >= next_probe[q] - eps_t) {
             sample_probes(t, q);
-            while (next_probe[q] <= t + eps_t) next_probe[q] += iv;
+            advance_past(next_probe[q], iv, t + eps_t);
           }
         }
         if (any_step_probe)

@@ -176,6 +176,8 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"fibre_normal", [](json& j) { j["parts"][0]["fibre_direction"] = {0, 0, 1}; }, "error: /parts/0/fibre_direction: the fibre direction is normal to the ply"},
       {"bad_field", [](json& j) { j["output"]["fields"] = {"temprature"}; }, "error: /output/fields/0: unknown field 'temprature'; did you mean 'temperature'?"},
       {"bad_format", [](json& j) { j["format"] = "thermostamp-job/9"; }, "error: /format: unsupported format"},
+      {"frames_beyond_count", [](json& j) { j["output"]["interval"] = 1e-30; }, "error: /output/interval: an interval of 1e-30 s would write 1e+30 frames"},
+      {"probe_samples_beyond_count", [](json& j) { j["output"]["probes"][0]["interval"] = 1e-30; }, "error: /output/probes/0/interval: an interval of 1e-30 s would take 1e+30 samples"},
   };
   for (const auto& c : cases) {
     const auto job = small_job("bad_" + c.name, c.edit);
@@ -610,6 +612,58 @@ TEST(Coupling, LawsSeeTheTemperaturesOfTheThermalField) {
   EXPECT_GT(cooled, 30.0);
   EXPECT_GT(spread, 5.0) << "the cooled strip and the rest differ";
   std::printf("largest cooling %.1f K, spread %.1f K, largest difference %.3f K\n", cooled, spread, worst);
+}
+
+// Input that would make the explicit step unusable is refused before the
+// run, naming what sets the step: the hemisphere scene, coarse.
+TEST(Cli, MechanicsUnusableStepIsAnInputError) {
+  const std::vector<BadCase> cases = {
+      {"damping", [](json& j) { j["solvers"]["mechanics"]["damping"] = 1e30; }, "error: /solvers/mechanics/damping: damping 1e+30 /s times the initial step"},
+      {"dt_safety", [](json& j) { j["solvers"]["mechanics"]["dt_safety"] = 1e-30; }, "error: /solvers/mechanics/dt_safety: the mechanical step"},
+      {"holder_mass", [](json& j) { j["tools"][2]["motion"]["mass"] = 1e-30; }, "error: /tools/2/motion/mass: the mechanical step"},
+      {"holder_penalty", [](json& j) { j["interactions"][1]["penalty"] = 1e30; }, "error: /tools/2/motion/mass: the mechanical step"},
+      // Elements of 1e-31 m: their shape-function gradients and positions
+      // lose every digit of C = F^T F to round-off.
+      {"degenerate_mesh", [](json& j) { j["parts"][0]["mesh"]["size"] = {1e-30, 1e-30}; j["parts"][0]["mesh"]["divisions"] = {15, 15}; }, "error: /parts/0/mesh: element"},
+  };
+  for (const auto& c : cases) {
+    const auto dir = temp_dir("unusable_" + c.name);
+    json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+    j["time"]["end"] = 0.01;
+    j["output"]["interval"] = 0.01;
+    j["output"].erase("probes");
+    for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+    c.edit(j);
+    std::ofstream(dir / "job.json") << j.dump(2);
+    const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out"));
+    EXPECT_EQ(r.exit_code, 2) << c.name << ": " << r.err;
+    EXPECT_EQ(r.err.rfind(c.expected, 0), 0u) << c.name << ": got '" << r.err << "'";
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << c.name << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out")) << c.name << ": nothing may run before the job is valid";
+  }
+  // An end time shorter than a step is not one of them: the run lands on it.
+  const auto dir = temp_dir("unusable_short_end");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = 1e-30;
+  j["output"].erase("probes");
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out") + " --quiet");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  // Nor is a probe interval far below the step: one sample per step.
+  j["time"]["end"] = 0.001;
+  json probe = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json")["output"]["probes"][0];
+  probe["interval"] = 1e-30;
+  probe["quantities"] = {"displacement_z"};
+  j["output"]["probes"] = {probe};
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto r2 = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out2") + " --quiet");
+  ASSERT_EQ(r2.exit_code, 0) << r2.err;
+  const json s = json::parse(std::ifstream(dir / "out2" / "summary.json"));
+  std::ifstream csv(dir / "out2" / "probes.csv");
+  int rows = -1;  // the header
+  for (std::string line; std::getline(csv, line);) ++rows;
+  EXPECT_EQ(rows, s["steps"]["mechanics"].get<int>() + 1) << "t = 0 and after every step";
 }
 
 TEST(Cli, MechanicsBadMaterialParameter) {
