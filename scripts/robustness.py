@@ -69,6 +69,8 @@ def main():
                     code, last = "timeout", ""
                 counts[code] = counts.get(code, 0) + 1
                 where = "/" + "/".join(str(k) for k in path)
+                if code == 3:
+                    print("stopped %s = %g: %s" % (where, v, last[:200]), flush=True)
                 if code not in (0, 2, 3):
                     bad.append((where, v, code, last))
                     print("FAIL %s = %g: %s %s" % (where, v, code, last[:200]), flush=True)
