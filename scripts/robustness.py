@@ -64,7 +64,8 @@ def main():
                 cmd = [EXE, "run", job_path, "--out", os.path.join(d, "out"), "--quiet", "--threads", "1"]
                 try:
                     r = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout)
-                    code, last = r.returncode, (r.stderr.strip().splitlines() or [""])[-1]
+                    errors = [l for l in r.stderr.splitlines() if l.startswith("error:")]
+                    code, last = r.returncode, (errors or r.stderr.strip().splitlines() or [""])[-1]
                 except subprocess.TimeoutExpired:
                     code, last = "timeout", ""
                 counts[code] = counts.get(code, 0) + 1
