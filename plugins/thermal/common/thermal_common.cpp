@@ -4,6 +4,9 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include <thermostamp/sdk/math.hpp>
@@ -217,11 +220,28 @@ constexpr auto kRowKernels = make_row_kernels(std::make_index_sequence<34>{});
 
 }  // namespace
 
+namespace {
+std::string fmt_count(double v) {
+  std::ostringstream s;
+  s.precision(3);
+  s << v;
+  return s.str();
+}
+}  // namespace
+
 int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, std::span<double> scratch,
                     int stride) {
   if (ply.inplane_rate <= 0) return 0;
   const double dt_max = 0.9 * 2.0 / ply.inplane_rate;
-  const int steps = std::max(1, static_cast<int>(std::ceil(dt / dt_max - 1e-12)));
+  const double needed = std::ceil(dt / dt_max - 1e-12);
+  // Beyond this the explicit in-plane scheme is the wrong tool (and the
+  // count would not fit an int).
+  constexpr double kMaxSubsteps = 1e6;
+  if (!(needed <= kMaxSubsteps))
+    throw std::runtime_error("in-plane conduction of part '" + std::string(ply.view->name) + "' would need " +
+                             fmt_count(needed) + " explicit sub-steps in a thermal step of " + fmt_count(dt) +
+                             " s (at most 1e6): its in-plane conductivity is too high for this mesh");
+  const int steps = std::max(1, static_cast<int>(needed));
   const double ds = dt / steps;
   const int n = ply.k2d.n;
   const int* rs = ply.k2d.row_start.data();

@@ -65,7 +65,8 @@ void solve_tridiagonal(int n, const double* a, const double* b, const double* c,
 // stable step). `values` holds `stride` values per node (node-major; stride
 // 1: the mean, stride nz: every layer of the rods), each advanced by the
 // same operator, in place; `scratch` has as many entries. Returns the number
-// of sub-steps. Where K is not an M-matrix (anisotropic conductivity, obtuse
+// of sub-steps; throws std::runtime_error where more than 1e6 would be
+// needed. Where K is not an M-matrix (anisotropic conductivity, obtuse
 // or distorted triangles give K_ij > 0), the pairs with K_ij > 0 carry
 // anti-diffusive fluxes; they are limited (Zalesak, algebraic flux
 // correction) so that no value leaves the range its stencil held before the
