@@ -471,8 +471,12 @@ void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double*
       nout[2] = 1;
       return;
     }
-    c0[d] = std::clamp(static_cast<int>(std::floor(lo)), 0, gn_[d] - 1);
-    c1[d] = std::clamp(static_cast<int>(std::floor(hi)), 0, gn_[d] - 1);
+    // Clamped as doubles: a point far away (or NaN) never reaches the int
+    // conversion out of its range.
+    const double top = gn_[d] - 1;
+    auto cell = [top](double v) { return static_cast<int>(!(v >= 0) ? 0.0 : v > top ? top : v); };
+    c0[d] = cell(std::floor(lo));
+    c1[d] = cell(std::floor(hi));
   }
   double best = reach * reach;
   int best_e = -1;

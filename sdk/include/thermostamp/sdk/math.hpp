@@ -46,13 +46,13 @@ inline Vec3 load3(const double* p, int i) { return {p[3 * i], p[3 * i + 1], p[3 
 // the cells per axis to n and returns the cell size.
 inline double bucket_grid(const Vec3& lo, const Vec3& hi, double cell, int n[3], long long max_cells = 4'000'000) {
   for (;;) {
-    long long cells = 1;
+    double cells = 1;  // a double: three counts of up to 1e9 overflow a long long
     for (int d = 0; d < 3; ++d) {
       const double span = std::max(0.0, hi[d] - lo[d]);
       n[d] = 1 + static_cast<int>(std::min(std::ceil(span / cell), 1e9));
       cells *= n[d];
     }
-    if (cells <= max_cells) return cell;
+    if (cells <= static_cast<double>(max_cells)) return cell;
     cell *= 1.5;
   }
 }
