@@ -1665,10 +1665,16 @@ RunResult Simulation::run(const RunOptions& opt) {
         for (double k : mech_[p]->k_contact) k_max = std::max(k_max, k);
         h_min = std::min(h_min, parts_[p]->def->thickness);
       }
-      if (contact_energy_ > 0.5 * k_max * (1e-6 * h_min) * (1e-6 * h_min))
+      // What a failed audit below blames: an unstable step, or a start with
+      // loaded contact springs, whose release at once the audit cannot follow.
+      std::string unstable = "the run is unstable (step too large?)";
+      if (contact_energy_ > 0.5 * k_max * (1e-6 * h_min) * (1e-6 * h_min)) {
+        unstable += ", or it started with " + fmt_g(contact_energy_, 3) +
+                    " J in the contact springs (a ply inside a tool or another ply at t = 0)";
         log->warn("contact springs hold {:.4g} J at t = 0 on {} node(s): a ply starts inside a tool or another ply "
                   "(check the tools' positions and the side their profile faces)",
                   contact_energy_, contact_active_);
+      }
       if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
       double next_sample = 0, audit_scale = 0, supplied_max = 0;
       // The stresses and curvatures are asked of the elements only for the
@@ -1705,7 +1711,8 @@ RunResult Simulation::run(const RunOptions& opt) {
         audit.contact_stored = contact_energy_;
         if (job_.thermal) {
           ++since_thermal;
-          if (subcycle <= 0) subcycle = std::max(1, static_cast<int>(thermal_dt_ / (md.dt_safety * stable)));
+          if (subcycle <= 0)
+            subcycle = static_cast<int>(std::clamp(thermal_dt_ / (md.dt_safety * stable), 1.0, 1e9));
           if (since_thermal >= subcycle || t >= t_end - eps_t) {
             tc = Clock::now();
             update_element_fields();
@@ -1741,7 +1748,7 @@ RunResult Simulation::run(const RunOptions& opt) {
           throw RunError("energy balance error " + fmt_g(audit.balance_error, 3) + " above energy_tolerance " +
                          fmt_g(md.energy_tolerance, 3) + " at t = " + fmt_g(t) + " s (mechanical step " +
                          std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) +
-                         " s): the run is unstable (step too large?)");
+                         " s): " + unstable);
         // Kinetic energy growth: the plies start at rest and stress free, so
         // their kinetic energy cannot exceed what loads, driven dofs and tools
         // have supplied (external work, plus the tools' work: the contact
@@ -1755,7 +1762,7 @@ RunResult Simulation::run(const RunOptions& opt) {
                          fmt_g(kKineticGrowthLimit, 3) + " times the energy supplied by loads, driven dofs and tools (" +
                          fmt_g(supplied_max, 3) + " J) at t = " + fmt_g(t) + " s (mechanical step " +
                          std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) +
-                         " s): the run is unstable (step too large?)");
+                         " s): " + unstable);
         if (t >= next_sample - eps_t) {
           const double row[8] = {t, audit.kinetic, audit.internal, audit.external, audit.damping, audit.contact,
                                  audit.contact_stored, audit.balance_error};

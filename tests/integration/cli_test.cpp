@@ -666,6 +666,35 @@ TEST(Cli, MechanicsUnusableStepIsAnInputError) {
   EXPECT_EQ(rows, s["steps"]["mechanics"].get<int>() + 1) << "t = 0 and after every step";
 }
 
+// A ply that starts half inside the die: the release of the loaded contact
+// springs breaks the energy audit, and the failure names that start, not
+// only an unstable step.
+TEST(Cli, AuditFailureNamesAStartInsideATool) {
+  const auto dir = temp_dir("start_inside");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = 0.005;
+  j["output"]["interval"] = 0.005;
+  j["output"].erase("probes");
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  j["parts"][0]["mesh"]["origin"][2] = 0.0;
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out"));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("error: run failed: energy balance error"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("or it started with 4.91 J in the contact springs (a ply inside a tool or another ply at t = 0)"),
+            std::string::npos) << r.err;
+}
+
+// An in-plane conductivity far beyond what the explicit in-plane scheme
+// can step: the run stops with a message at the first thermal step.
+TEST(Cli, InplaneConductionBeyondTheExplicitSchemeStops) {
+  const auto job = small_job("inplane_beyond", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {1e30, 1e30, 0.31}; });
+  const auto r = thermostamp("run " + q(job) + " --out " + q(job.parent_path() / "out"));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("in-plane conduction of part 'ply_bottom' would need "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" explicit sub-steps in a thermal step of "), std::string::npos) << r.err;
+}
+
 TEST(Cli, MechanicsBadMaterialParameter) {
   const auto dir = temp_dir("mech_bad");
   json j = read_job_document(source_dir() / "share" / "jobs" / "ud_strip_tension.json");
