@@ -23,7 +23,7 @@ try:
     import matplotlib.pyplot as plt
     import numpy as np
 except ImportError as e:  # pragma: no cover
-    sys.stderr.write("report: needs python3-matplotlib and python3-numpy (%s)\n" % e)
+    sys.stderr.write("error: report: needs python3-matplotlib and python3-numpy (%s)\n" % e)
     sys.exit(3)
 
 
@@ -238,23 +238,29 @@ def main():
     folder = sys.argv[1]
     out = os.path.join(folder, "figures")
     os.makedirs(out, exist_ok=True)
-    made = []
-    if os.path.exists(os.path.join(folder, "study.csv")):
-        made += plot_study(folder, out)
-    if os.path.exists(os.path.join(folder, "probes.csv")):
-        made += plot_probes(folder, out)
-    if os.path.exists(os.path.join(folder, "results.h5")):
-        made += plot_maps(folder, out)
-    if os.path.exists(os.path.join(folder, "tools.csv")):
-        made += plot_tools(folder, out)
-    if os.path.exists(os.path.join(folder, "energy.csv")):
-        made += plot_energy(folder, out)
-    if not made:
-        sys.stderr.write("report: nothing to plot in %s\n" % folder)
-        return 3
+    made, failed = [], 0
+    # Each file's figures on their own: a file that cannot be read (a run
+    # killed while writing it, a file edited by hand) is named in one line,
+    # and the figures of the others are still made.
+    for name, plot in (("study.csv", plot_study), ("probes.csv", plot_probes), ("results.h5", plot_maps),
+                       ("tools.csv", plot_tools), ("energy.csv", plot_energy)):
+        if not os.path.exists(os.path.join(folder, name)):
+            continue
+        try:
+            made += plot(folder, out)
+        except Exception as e:  # noqa: BLE001 (any reader or plotting error)
+            failed += 1
+            reason = "no column %s" % e if isinstance(e, KeyError) else " ".join(str(e).split()) or type(e).__name__
+            sys.stderr.write("error: report: cannot plot %s: %s\n" % (os.path.join(folder, name), reason))
+        finally:
+            plt.close("all")
     for m in made:
         print(m)
-    return 0
+    if not made and not failed:
+        sys.stderr.write("error: report: nothing to plot in %s (no study.csv, probes.csv, results.h5, tools.csv or "
+                         "energy.csv)\n" % folder)
+        return 3
+    return 3 if failed else 0
 
 
 if __name__ == "__main__":

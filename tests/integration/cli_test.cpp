@@ -666,6 +666,47 @@ TEST(Cli, MechanicsUnusableStepIsAnInputError) {
   EXPECT_EQ(rows, s["steps"]["mechanics"].get<int>() + 1) << "t = 0 and after every step";
 }
 
+// `thermostamp report DIR`: the figures of a run (the hemisphere scene,
+// coarse and short); a results file cut short is named in one line while
+// the other files' figures are still made; a folder without results.
+TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
+  const auto dir = temp_dir("report");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = 0.01;
+  j["output"]["interval"] = 0.005;
+  for (auto& p : j["output"]["probes"]) p["interval"] = 0.0025;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto out = dir / "out";
+  ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet").exit_code, 0);
+  const auto r = thermostamp("report " + q(out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<std::string> figures = {
+      "profile_pole_top.png", "profile_pole_bottom.png", "profile_flank_top.png", "profile_flank_bottom.png",
+      "probes_mean.png",      "map_ply_top.png",         "map_ply_bottom.png",    "shear_ply_top.png",
+      "shear_ply_bottom.png", "tool_forces.png",         "energy.png"};
+  for (const auto& f : figures) {
+    std::ifstream png(out / "figures" / f, std::ios::binary);
+    char magic[4] = {0, 0, 0, 0};
+    png.read(magic, 4);
+    EXPECT_EQ(std::string(magic + 1, 3), "PNG") << f;
+  }
+  // The results file cut short, as by a machine that went down while
+  // writing it: one line names it, the other figures are made again.
+  std::filesystem::remove_all(out / "figures");
+  std::filesystem::resize_file(out / "results.h5", 1000);
+  const auto cut = thermostamp("report " + q(out));
+  EXPECT_EQ(cut.exit_code, 3);
+  EXPECT_EQ(cut.err.rfind("error: report: cannot plot " + (out / "results.h5").string() + ": ", 0), 0u) << cut.err;
+  EXPECT_EQ(std::count(cut.err.begin(), cut.err.end(), '\n'), 1) << cut.err;
+  EXPECT_TRUE(std::filesystem::exists(out / "figures" / "energy.png"));
+  EXPECT_FALSE(std::filesystem::exists(out / "figures" / "map_ply_top.png"));
+  const auto empty = temp_dir("report_empty");
+  const auto none = thermostamp("report " + q(empty));
+  EXPECT_EQ(none.exit_code, 3);
+  EXPECT_EQ(none.err.rfind("error: report: nothing to plot in ", 0), 0u) << none.err;
+}
+
 // A ply that starts half inside the die: the release of the loaded contact
 // springs breaks the energy audit, and the failure names that start, not
 // only an unstable step.
