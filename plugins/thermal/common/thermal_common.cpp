@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -220,15 +220,6 @@ constexpr auto kRowKernels = make_row_kernels(std::make_index_sequence<34>{});
 
 }  // namespace
 
-namespace {
-std::string fmt_count(double v) {
-  std::ostringstream s;
-  s.precision(3);
-  s << v;
-  return s.str();
-}
-}  // namespace
-
 int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, std::span<double> scratch,
                     int stride) {
   if (ply.inplane_rate <= 0) return 0;
@@ -237,10 +228,12 @@ int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, 
   // Beyond this the explicit in-plane scheme is the wrong tool (and the
   // count would not fit an int).
   constexpr double kMaxSubsteps = 1e6;
-  if (!(needed <= kMaxSubsteps))
+  if (!(needed <= kMaxSubsteps)) {
+    char counts[96];
+    std::snprintf(counts, sizeof counts, "%.3g explicit sub-steps in a thermal step of %.3g s", needed, dt);
     throw std::runtime_error("in-plane conduction of part '" + std::string(ply.view->name) + "' would need " +
-                             fmt_count(needed) + " explicit sub-steps in a thermal step of " + fmt_count(dt) +
-                             " s (at most 1e6): its in-plane conductivity is too high for this mesh");
+                             counts + " (at most 1e6): its in-plane conductivity is too high for this mesh");
+  }
   const int steps = std::max(1, static_cast<int>(needed));
   const double ds = dt / steps;
   const int n = ply.k2d.n;
