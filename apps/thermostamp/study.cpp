@@ -159,7 +159,12 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   top.declare("name");
   top.finish();
 
-  const json base_doc = read_job_document(job_file);
+  json base_doc;
+  try {
+    base_doc = read_job_document(job_file);
+  } catch (const JobError& e) {  // the job file's own problem, named at the study's "job" key
+    throw JobError("/job", e.what());
+  }
   // Validate every variant before running anything.
   std::vector<Variant> all = {reference};
   all.insert(all.end(), variants.begin(), variants.end());

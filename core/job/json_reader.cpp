@@ -145,9 +145,16 @@ long long ObjectReader::integer(const std::string& key, std::optional<long long>
       throw JobError(at(key), "expected an integer, found " + json_type_name(*v));
     }
   }
-  const long long x = static_cast<long long>(v->get<double>());
-  if (x < min) throw JobError(at(key), "must be >= " + std::to_string(min) + ", found " + std::to_string(x));
-  if (x > max) throw JobError(at(key), "must be <= " + std::to_string(max) + ", found " + std::to_string(x));
+  // The range is checked on the value as written (1e30 does not fit a long
+  // long: converting it first would report garbage).
+  const double d = v->get<double>();
+  if (d < static_cast<double>(min)) throw JobError(at(key), "must be >= " + std::to_string(min) + ", found " + v->dump());
+  if (d > static_cast<double>(max)) throw JobError(at(key), "must be <= " + std::to_string(max) + ", found " + v->dump());
+  if (!(std::abs(d) < 9.2e18))  // beyond what a long long holds (a max of LLONG_MAX rounds up as a double)
+    throw JobError(at(key), "must be <= " + std::to_string(max) + ", found " + v->dump());
+  const long long x = v->is_number_float() ? static_cast<long long>(d) : v->get<long long>();
+  if (x < min) throw JobError(at(key), "must be >= " + std::to_string(min) + ", found " + v->dump());
+  if (x > max) throw JobError(at(key), "must be <= " + std::to_string(max) + ", found " + v->dump());
   return x;
 }
 

@@ -129,6 +129,13 @@ TEST(Cli, StudyWritesItsTable) {
   const auto bad = thermostamp("study " + q(dir / "bad.json") + " --out " + q(dir / "bad") + " --quiet");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("/repeat"), std::string::npos) << bad.err;
+  // A job file that cannot be read is named at the study's "job" key.
+  st["repeat"] = 1;
+  st["job"] = (dir / "nowhere.json").string();
+  std::ofstream(dir / "bad.json") << st.dump(2);
+  const auto lost = thermostamp("study " + q(dir / "bad.json") + " --out " + q(dir / "bad") + " --quiet");
+  EXPECT_EQ(lost.exit_code, 2);
+  EXPECT_EQ(lost.err.rfind("error: /job: cannot open job file '", 0), 0u) << lost.err;
 }
 
 TEST(Cli, SetOverridesAValue) {
@@ -176,6 +183,7 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"fibre_normal", [](json& j) { j["parts"][0]["fibre_direction"] = {0, 0, 1}; }, "error: /parts/0/fibre_direction: the fibre direction is normal to the ply"},
       {"bad_field", [](json& j) { j["output"]["fields"] = {"temprature"}; }, "error: /output/fields/0: unknown field 'temprature'; did you mean 'temperature'?"},
       {"bad_format", [](json& j) { j["format"] = "thermostamp-job/9"; }, "error: /format: unsupported format"},
+      {"layers_beyond_long_long", [](json& j) { j["parts"][0]["thickness_layers"] = 1e30; }, "error: /parts/0/thickness_layers: must be <= 10000, found 1e+30"},
       {"frames_beyond_count", [](json& j) { j["output"]["interval"] = 1e-30; }, "error: /output/interval: an interval of 1e-30 s would write 1e+30 frames"},
       {"probe_samples_beyond_count", [](json& j) { j["output"]["probes"][0]["interval"] = 1e-30; }, "error: /output/probes/0/interval: an interval of 1e-30 s would take 1e+30 samples"},
   };
