@@ -10,7 +10,7 @@ running, with one line naming a JSON path) or 3 (stopped with a message),
 within the timeout. Anything else (a crash, a signal, a hang, an input
 error without a JSON path) is listed and makes the script exit 1.
 
-Usage: scripts/robustness.py [JOB] [--end S] [--timeout S] [--values a,b,...] [--structure]
+Usage: scripts/robustness.py [JOB] [--end S] [--timeout S] [--values a,b,...] [--structure] [--threads N]
 (after a build; JOB defaults to the hemisphere scene, about 15 minutes for
 the numbers and as long again for the structure; the variants are written
 to a temporary folder, so a job that names files by relative paths needs
@@ -75,6 +75,7 @@ def main():
     ap.add_argument("--timeout", type=float, default=120, help="wall time allowed per variant (s)")
     ap.add_argument("--values", default="0,-1,1e30,1e-30,3.5")
     ap.add_argument("--structure", action="store_true", help="also remove keys and change the types of values")
+    ap.add_argument("--threads", type=int, default=1, help="threads of every run")
     args = ap.parse_args()
     base = json.load(open(args.job))
     base["time"]["end"] = args.end
@@ -88,7 +89,7 @@ def main():
         job_path = os.path.join(d, "job.json")
         for what, job in variants(base, values, args.structure):
             json.dump(job, open(job_path, "w"))
-            cmd = [EXE, "run", job_path, "--out", os.path.join(d, "out"), "--quiet", "--threads", "1"]
+            cmd = [EXE, "run", job_path, "--out", os.path.join(d, "out"), "--quiet", "--threads", str(args.threads)]
             try:
                 r = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout)
                 errors = [l for l in r.stderr.splitlines() if l.startswith("error:")]
