@@ -11,8 +11,9 @@ within the timeout. Anything else (a crash, a signal, a hang, an input
 error without a JSON path) is listed and makes the script exit 1.
 
 Usage: scripts/robustness.py [JOB] [--end S] [--timeout S] [--values a,b,...] [--structure] [--threads N]
-(after a build; JOB defaults to the hemisphere scene, about 15 minutes for
-the numbers and as long again for the structure; the variants are written
+(after a build; JOB defaults to the hemisphere scene: about 15 minutes for
+the numbers, a few for the structure, whose variants are mostly refused
+at once; the variants are written
 to a temporary folder, so a job that names files by relative paths needs
 them made absolute first).
 """
