@@ -11,12 +11,6 @@ namespace {
 // any run can take: refused at input (see the output section).
 constexpr double kMaxFrames = 1e6;
 constexpr double kMaxProbeSamples = 1e7;
-std::string fmt_real(double v) {
-  std::ostringstream s;
-  s.precision(4);
-  s << v;
-  return s.str();
-}
 }  // namespace
 
 bool RegionDef::contains(double x, double y) const {
@@ -585,9 +579,9 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
     // hours of tiny steps. (With mechanics a frame comes at most once per
     // step: an interval below the step writes one after every step.)
     if (const double frames = job.t_end / job.output.interval; !job.mechanics && frames > kMaxFrames)
-      throw JobError(r.at("interval"), "an interval of " + fmt_real(job.output.interval) + " s would write " +
-                                           fmt_real(frames) + " frames over " + fmt_real(job.t_end) +
-                                           " s (at most " + fmt_real(kMaxFrames) + ")");
+      throw JobError(r.at("interval"), "an interval of " + fmt_number(job.output.interval) + " s would write " +
+                                           fmt_number(frames) + " frames over " + fmt_number(job.t_end) +
+                                           " s (at most " + fmt_number(kMaxFrames) + ")");
     job.output.fields = r.texts("fields", std::vector<std::string>{"temperature"});
     for (std::size_t i = 0; i < job.output.fields.size(); ++i) {
       const auto& f = job.output.fields[i];
@@ -627,9 +621,9 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
         }
         p.interval = q.real("interval", 0.0, 0.0);
         if (!job.mechanics && p.interval > 0 && job.t_end / p.interval > kMaxProbeSamples)
-          throw JobError(q.at("interval"), "an interval of " + fmt_real(p.interval) + " s would take " +
-                                               fmt_real(job.t_end / p.interval) + " samples over " +
-                                               fmt_real(job.t_end) + " s (at most " + fmt_real(kMaxProbeSamples) +
+          throw JobError(q.at("interval"), "an interval of " + fmt_number(p.interval) + " s would take " +
+                                               fmt_number(job.t_end / p.interval) + " samples over " +
+                                               fmt_number(job.t_end) + " s (at most " + fmt_number(kMaxProbeSamples) +
                                                "; 0 samples every step)");
         q.finish();
         probe_names.push_back(p.name);

@@ -53,6 +53,8 @@ class ObjectReader {
 };
 
 double as_real(const json& v, const std::string& ptr);
+// A number as the job reader's messages print it (the stream's default form).
+std::string fmt_number(double v);
 std::vector<double> as_reals(const json& v, const std::string& ptr, int size);
 
 }  // namespace ts

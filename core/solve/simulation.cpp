@@ -781,10 +781,23 @@ void Simulation::build_mechanics() {
     for (int i = 0; i < nn; ++i)
       if (m.k_contact[i] > 0) contact_dt_ = std::min(contact_dt_, 2.0 * std::sqrt(m.mass[i] / m.k_contact[i]));
   }
+  int limiting_tool = -1;  // the force-controlled tool that sets tool_dt_
   for (std::size_t t = 0; t < tools_.size(); ++t)
-    if (tools_[t]->force_controlled() && tool_k[t] > 0)
-      tool_dt_ = std::min(tool_dt_, 2.0 * std::sqrt(job_.tools[t].motion.mass / tool_k[t]));
-  check_initial_step(tool_k);
+    if (tools_[t]->force_controlled() && tool_k[t] > 0) {
+      const double dt = 2.0 * std::sqrt(job_.tools[t].motion.mass / tool_k[t]);
+      if (dt < tool_dt_) {
+        tool_dt_ = dt;
+        limiting_tool = static_cast<int>(t);
+      }
+    }
+  check_initial_step(limiting_tool, limiting_tool >= 0 ? tool_k[limiting_tool] : 0.0);
+}
+
+// The stable step of the elements' step dt with the contact springs:
+// element and contact springs act on the same nodes, so 1/dt^2 adds up.
+double Simulation::with_contact_springs(double dt) const {
+  if (!std::isfinite(contact_dt_)) return dt;
+  return 1.0 / std::sqrt(1.0 / (dt * dt) + 1.0 / (contact_dt_ * contact_dt_));
 }
 
 // Input that makes the explicit step unusable, refused before the run:
@@ -793,17 +806,14 @@ void Simulation::build_mechanics() {
 // mass-proportional damping c with c dt >= 2, where the update of a free
 // node's velocity, v (1 - c dt) + ..., grows without bound. The error names
 // what sets the step.
-void Simulation::check_initial_step(const std::vector<double>& tool_k) const {
+void Simulation::check_initial_step(int limiting_tool, double tool_stiffness) const {
   constexpr double kMaxSteps = 2e8;
   const MechanicsDef& md = job_.mechanics_settings;
   double elements = std::numeric_limits<double>::infinity();
   for (const auto& m : mech_)
     for (std::size_t e = 0; e < m->elem_dt.size(); ++e)
       if (std::isfinite(m->elem_dt[e])) elements = std::min(elements, m->elem_dt[e] * m->elem_sqrt_scale[e]);
-  double stable = elements;
-  if (std::isfinite(contact_dt_))
-    stable = std::isfinite(stable) ? 1.0 / std::sqrt(1.0 / (stable * stable) + 1.0 / (contact_dt_ * contact_dt_))
-                                   : contact_dt_;
+  double stable = with_contact_springs(elements);
   const bool by_tool = tool_dt_ < stable;
   stable = std::min(stable, tool_dt_);
   if (!std::isfinite(stable) || !(stable > 0)) return;  // no stiffness: the run says so at its start
@@ -811,14 +821,10 @@ void Simulation::check_initial_step(const std::vector<double>& tool_k) const {
   if (const double steps = job_.t_end / dt; steps > kMaxSteps) {
     std::string what = "the elements", where = md.dt_safety < 1e-3 ? "/solvers/mechanics/dt_safety" : "/solvers/mechanics";
     if (by_tool) {
-      for (std::size_t t = 0; t < tools_.size(); ++t)
-        if (tools_[t]->force_controlled() && tool_k[t] > 0 &&
-            2.0 * std::sqrt(job_.tools[t].motion.mass / tool_k[t]) <= tool_dt_) {
-          what = "the force-controlled tool '" + job_.tools[t].name + "' (mass " + fmt_g(job_.tools[t].motion.mass) +
-                 " kg) on the contact springs under it (" + fmt_g(tool_k[t]) + " N/m)";
-          if (md.dt_safety >= 1e-3) where = job_.tools[t].pointer + "/motion/mass";
-          break;
-        }
+      const ToolDef& tool = job_.tools[limiting_tool];
+      what = "the force-controlled tool '" + tool.name + "' (mass " + fmt_g(tool.motion.mass) +
+             " kg) on the contact springs under it (" + fmt_g(tool_stiffness) + " N/m)";
+      if (md.dt_safety >= 1e-3) where = tool.pointer + "/motion/mass";
     } else if (contact_dt_ < elements) {
       what = "the contact springs (penalty times node area, against the node masses)";
     }
@@ -955,8 +961,7 @@ double Simulation::finish_elements() {
       for (int d = 0; d < 3; ++d) m.f_int[3 * m.shared_node[s] + d] = f[d];
     }
   }
-  // Element and contact springs act on the same nodes: 1/dt^2 adds up.
-  if (std::isfinite(contact_dt_)) dt = 1.0 / std::sqrt(1.0 / (dt * dt) + 1.0 / (contact_dt_ * contact_dt_));
+  dt = with_contact_springs(dt);
   last_stable_ = std::min(dt, tool_dt_);
   return last_stable_;
 }

@@ -108,7 +108,8 @@ class Simulation {
   // One explicit step of every part; returns the step taken.
   double mechanics_step(double dt, double t, long long step, EnergyAudit& audit);
   double mechanics_stable_dt();
-  void check_initial_step(const std::vector<double>& tool_k) const;
+  void check_initial_step(int limiting_tool, double tool_stiffness) const;
+  double with_contact_springs(double dt) const;
   void element_block(std::size_t part, int block, int pass);
   double finish_elements();
   double forces_and_stable_dt(double t, double dt);
