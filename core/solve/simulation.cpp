@@ -17,6 +17,7 @@
 #endif
 
 #include <thermostamp/sdk/math.hpp>
+#include <thermostamp/sdk/parallel.hpp>
 #include <thermostamp/sdk/simd.hpp>
 
 #include "io/logging.hpp"
@@ -953,13 +954,12 @@ double Simulation::finish_elements() {
     if (bending_weight_ > 0) m.bend_dt = bend_dt;
     dt = std::min(dt, m.bend_dt);
     const int ns = static_cast<int>(m.shared_node.size());
-#pragma omp parallel for schedule(static) if (ns > 2048)
-    for (int s = 0; s < ns; ++s) {
+    sdk::for_each_index(ns, ns > 2048, 0, [&m](int s) {
       double f[3] = {0, 0, 0};
       for (int q = m.shared_start[s]; q < m.shared_start[s + 1]; ++q)
         for (int d = 0; d < 3; ++d) f[d] += m.block_force[3 * static_cast<std::size_t>(q) + d];
       for (int d = 0; d < 3; ++d) m.f_int[3 * m.shared_node[s] + d] = f[d];
-    }
+    });
   }
   dt = with_contact_springs(dt);
   last_stable_ = std::min(dt, tool_dt_);
@@ -977,7 +977,12 @@ double Simulation::initial_mechanical_step() {
 double Simulation::mechanics_stable_dt() {
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     const int blocks = mech_[p]->blocks, passes = mech_[p]->passes;
-#pragma omp parallel if (blocks > 1)
+    if (!sdk::team_available(blocks > 1)) {  // one thread: no region (sdk/parallel.hpp)
+      for (int pass = 0; pass < passes; ++pass)
+        for (int b = 0; b < blocks; ++b) element_block(p, b, pass);
+      continue;
+    }
+#pragma omp parallel
     for (int pass = 0; pass < passes; ++pass) {
 #pragma omp for schedule(static, 1)
       for (int b = 0; b < blocks; ++b) element_block(p, b, pass);
@@ -1202,8 +1207,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   part_bad_.assign(np, -1);  // per part: first non-finite coordinate
   std::size_t nodes_all = 0;
   for (const auto& st : parts_) nodes_all += st->x.size() / 3;
-#pragma omp parallel for schedule(static) if (np > 1 && nodes_all > 512)
-  for (int p = 0; p < np; ++p) {
+  sdk::for_each_index(np, np > 1 && nodes_all > 512, 0, [&](int p) {
     double* reactions = &part_sums_[p * (6 + nr) + 6];
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
@@ -1226,7 +1230,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         }
     double* sums = &part_sums_[p * (6 + nr)];
     for (int j = 0; j < 6; ++j) sums[j] = sums_p[j];
-  }
+  });
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
   for (int p = 0; p < np; ++p) {
     if (part_bad_[p] >= 0)

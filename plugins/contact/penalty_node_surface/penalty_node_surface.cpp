@@ -27,6 +27,7 @@
 #include <vector>
 
 #include <thermostamp/sdk/math.hpp>
+#include <thermostamp/sdk/parallel.hpp>
 #include <thermostamp/sdk/plugin.hpp>
 #include <thermostamp/sdk/simd.hpp>
 
@@ -95,10 +96,10 @@ void surface_geometry(const sdk::PartView& p, std::vector<double>& geo) {
   geo.resize(kGeo * static_cast<std::size_t>(p.num_elements));
   constexpr int kChunk = 512;
   const int chunks = (p.num_elements + kChunk - 1) / kChunk;
-#pragma omp parallel for schedule(static) if (chunks > 4)
-  for (int c = 0; c < chunks; ++c)
+  sdk::for_each_index(chunks, chunks > 4, 0, [&](int c) {
     geometry_block(std::min(kChunk, p.num_elements - c * kChunk), &p.triangles[3 * c * kChunk], p.x.data(),
                    &geo[kGeo * static_cast<std::size_t>(c) * kChunk]);
+  });
 }
 
 // Candidate target elements of every node of body A: a uniform bucket grid
@@ -571,19 +572,18 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // Written below for every node (energy) or every node in contact (forces).
     scratch_.resize(3 * static_cast<std::size_t>(a.num_nodes));
     energy_.resize(a.num_nodes);
-#pragma omp parallel for schedule(static, 128) if (a.num_nodes > 256)
-    for (int i = 0; i < a.num_nodes; ++i) {
+    sdk::for_each_index(a.num_nodes, a.num_nodes > 256, 128, [&](int i) {
       const double pen = h2 - dist_[i];
       if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
         for (int d = 0; d < 3; ++d) pass_[0].ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
         energy_[i] = 0.0;
-        continue;
+        return;
       }
       const Vec3 n = sdk::load3(tn_.data(), i);
       const Vec3 vrel = sdk::sub(sdk::load3(v.data(), i), vtool);
       energy_[i] = node_force(pass_[0].ft, i, pen, penalty_ * area[i], in.mass[a.index][i], 1.0, n, vrel, in.dt,
                               &scratch_[3 * static_cast<std::size_t>(i)]);
-    }
+    });
     // Fixed-order sums: the same results for any thread count.
     auto f = out.force[a.index];
     for (int i = 0; i < a.num_nodes; ++i) {
@@ -624,15 +624,14 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // The nodes of a, dealt to the threads in interleaved chunks: the cost
     // of a node differs with where it lies (corner or centre of a cell, in
     // contact or not), and a mesh numbers such nodes in runs.
-#pragma omp parallel for schedule(static, 128) if (a.num_nodes > 256)
-    for (int i = 0; i < a.num_nodes; ++i) {
+    sdk::for_each_index(a.num_nodes, a.num_nodes > 256, 128, [&](int i) {
       double* tg = &target_[4 * static_cast<std::size_t>(i)];
       tg[0] = -1;
       const Projection pr = project(ps, a, b, i, track);
       if (pr.element < 0) {
         ps.side[i] = 0;
         for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
-        continue;
+        return;
       }
       const int* t = &b.triangles[3 * pr.element];
       const Vec3 ne = pr.n;
@@ -652,11 +651,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const double pen = hsum2 - ps.side[i] * pr.d;
       if (!(pen > 0)) {
         for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
-        continue;
+        return;
       }
       if (pen > 2 * hsum2) {  // went through the other ply: release
         ps.side[i] = 0;
-        continue;
+        return;
       }
       double mb = 0;
       for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
@@ -667,7 +666,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       tg[1] = pr.w[0];
       tg[2] = pr.w[1];
       tg[3] = pr.w[2];
-    }
+    });
     auto fa = out.force[a.index];
     auto fb = out.force[b.index];
     for (int i = 0; i < a.num_nodes; ++i) {
@@ -708,7 +707,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.4.1";
+  d.version = "0.4.2";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces";
   d.params = {
@@ -744,4 +743,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.4.1", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.4.2", ts::contact::register_all)

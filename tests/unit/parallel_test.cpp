@@ -1,0 +1,92 @@
+// sdk/parallel.hpp: loops shared out only where a second thread can take a
+// share, each iteration run once either way.
+#include <gtest/gtest.h>
+
+#include <omp.h>
+
+#include <vector>
+
+#include <thermostamp/sdk/parallel.hpp>
+
+namespace ts::test {
+namespace {
+
+struct Record {
+  std::vector<int> count, thread;
+  explicit Record(int n) : count(n, 0), thread(n, -1) {}
+  void run(int n, bool worthwhile, int chunk) {
+    sdk::for_each_index(n, worthwhile, chunk, [this](int i) {
+      ++count[i];
+      thread[i] = omp_get_thread_num();
+    });
+  }
+};
+
+class SdkParallel : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    threads_ = omp_get_max_threads();
+    levels_ = omp_get_max_active_levels();
+    omp_set_num_threads(2);
+    omp_set_max_active_levels(1);
+  }
+  void TearDown() override {
+    omp_set_num_threads(threads_);
+    omp_set_max_active_levels(levels_);
+  }
+  int threads_ = 1, levels_ = 1;
+};
+
+TEST_F(SdkParallel, SharesOutOnlyWhereASecondThreadCanTakeAShare) {
+  const int n = 1000;
+  // Two threads and the loop worth it: chunks of 128 dealt round robin.
+  Record shared(n);
+  shared.run(n, true, 128);
+  for (int i = 0; i < n; ++i) {
+    ASSERT_EQ(shared.count[i], 1) << i;
+    EXPECT_EQ(shared.thread[i], (i / 128) % 2) << i;
+  }
+  // Contiguous ranges without a chunk.
+  Record ranges(n);
+  ranges.run(n, true, 0);
+  for (int i = 0; i < n; ++i) EXPECT_EQ(ranges.thread[i], i < n / 2 ? 0 : 1) << i;
+  // Not worth it, or one thread in all: in order on the calling thread.
+  Record small(n);
+  small.run(n, false, 128);
+  omp_set_num_threads(1);
+  EXPECT_FALSE(sdk::team_available(true));
+  Record alone(n);
+  alone.run(n, true, 128);
+  for (int i = 0; i < n; ++i) {
+    ASSERT_EQ(small.count[i], 1);
+    ASSERT_EQ(alone.count[i], 1);
+    EXPECT_EQ(small.thread[i], 0);
+    EXPECT_EQ(alone.thread[i], 0);
+  }
+  omp_set_num_threads(2);
+  EXPECT_TRUE(sdk::team_available(true));
+}
+
+TEST_F(SdkParallel, RunsOnTheCallingThreadInsideAnActiveRegion) {
+  // As in the kernel's contact task beside the element blocks: a nested
+  // region would get one thread, so the loop runs without one.
+  const int n = 600;
+  std::vector<Record> rec(2, Record(n));
+  std::vector<int> available(2, -1);
+#pragma omp parallel num_threads(2)
+  {
+    const int me = omp_get_thread_num();
+    available[me] = sdk::team_available(true);
+    rec[me].run(n, true, 128);
+  }
+  for (int t = 0; t < 2; ++t) {
+    EXPECT_EQ(available[t], 0) << t;
+    for (int i = 0; i < n; ++i) {
+      ASSERT_EQ(rec[t].count[i], 1);
+      EXPECT_EQ(rec[t].thread[i], t);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ts::test
