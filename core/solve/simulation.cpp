@@ -12,8 +12,12 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <thread>
 #ifdef _OPENMP
 #include <omp.h>
+#endif
+#if defined(__SSE2__)
+#include <immintrin.h>
 #endif
 
 #include <thermostamp/sdk/math.hpp>
@@ -204,6 +208,14 @@ constexpr IntegrateDofs kIntegrateDofs[2][2] = {{integrate_dofs, integrate_dofs_
 
 // The kinetic energy may not exceed this multiple of the energy supplied.
 constexpr double kKineticGrowthLimit = 10.0;
+// A spin-wait hint to the processor (a shorter wait on x86 than a plain
+// loop, and the sibling hyperthread gets the core).
+inline void spin_pause() {
+#if defined(__SSE2__)
+  _mm_pause();
+#endif
+}
+
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 void compute_normals(const ShellMesh& m, const std::vector<double>& x, std::vector<double>& nn) {
   nn.assign(x.size(), 0.0);
@@ -1065,11 +1077,29 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
   } else {
     double contact_time = 0;
     std::exception_ptr contact_error;
+    // The contact on the first thread; the element blocks claimed one at a
+    // time by every thread (the first joins when its contact is done), pass
+    // after pass: a thread out of blocks to claim waits until the pass's last
+    // block is done. No OpenMP task or barrier inside the region: libgomp
+    // ends each of those with a system call (sdk/parallel.hpp).
+    int passes = 0;
+    for (const auto& m : mech_) passes = std::max(passes, m->passes);
+    if (static_cast<int>(fs.work.size()) != passes) {
+      fs.work.assign(passes, {});
+      for (int pass = 0; pass < passes; ++pass)
+        for (std::size_t p = 0; p < parts_.size(); ++p)
+          if (pass < mech_[p]->passes)
+            for (int b = 0; b < mech_[p]->blocks; ++b) fs.work[pass].emplace_back(static_cast<int>(p), b);
+      fs.claimed = std::make_unique<ForceSchedule::Counter[]>(passes);
+      fs.done = std::make_unique<ForceSchedule::Counter[]>(passes);
+    }
+    for (int pass = 0; pass < passes; ++pass) {
+      fs.claimed[pass].value.store(0, std::memory_order_relaxed);
+      fs.done[pass].value.store(0, std::memory_order_relaxed);
+    }
 #pragma omp parallel
-#pragma omp single
     {
-#pragma omp task shared(contact_time, contact_error)
-      {
+      if (omp_get_thread_num() == 0) {
         const auto tc = Clock::now();
         try {
           compute_contact_forces(t, dt);
@@ -1078,24 +1108,19 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
         }
         contact_time = seconds_since(tc);
       }
-      // The element blocks from a task of their own, their passes one after
-      // the other: a thread waiting for a pass's task group may then run
-      // only that pass's blocks, never the contact task (not a descendant).
-#pragma omp task
-      {
-        int passes = 0;
-        for (const auto& m : mech_) passes = std::max(passes, m->passes);
-        for (int pass = 0; pass < passes; ++pass) {
-#pragma omp taskgroup
-          {
-            for (std::size_t p = 0; p < parts_.size(); ++p)
-              if (pass < mech_[p]->passes)
-                for (int b = 0; b < mech_[p]->blocks; ++b) {
-#pragma omp task firstprivate(p, b, pass)
-                  element_block(p, b, pass);
-                }
-          }
+      for (int pass = 0; pass < passes; ++pass) {
+        const auto& work = fs.work[pass];
+        const int n = static_cast<int>(work.size());
+        for (int k; (k = fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed)) < n;) {
+          element_block(work[k].first, work[k].second, pass);
+          fs.done[pass].value.fetch_add(1, std::memory_order_release);
         }
+        // The next pass reads what this one wrote for neighbouring blocks.
+        for (int spins = 0; fs.done[pass].value.load(std::memory_order_acquire) < n; ++spins)
+          if (spins < 4096)
+            spin_pause();
+          else
+            std::this_thread::yield();  // more threads than cores: let the block's thread run
       }
     }
     if (contact_error) std::rethrow_exception(contact_error);

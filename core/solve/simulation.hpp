@@ -3,6 +3,7 @@
 // and the time loop. Construction validates everything a run needs (throws
 // JobError); run() integrates and writes the output folder.
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -165,6 +166,13 @@ class Simulation {
     long long calls = 0, next_trial = 0, beside_calls = 0;
     double time[2] = {0, 0};
     long long count[2] = {0, 0};
+    // Beside: the element blocks of each pass in order, (part, block), and
+    // per pass the next block to claim and the blocks done.
+    std::vector<std::vector<std::pair<int, int>>> work;
+    struct alignas(64) Counter {
+      std::atomic<int> value{0};
+    };
+    std::unique_ptr<Counter[]> claimed, done;
   } schedule_;
   double contact_energy_ = 0;       // penalty energy stored, current
   struct Load {
