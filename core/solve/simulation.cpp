@@ -984,22 +984,67 @@ double Simulation::initial_mechanical_step() {
   return std::isfinite(stable) ? job_.mechanics_settings.dt_safety * stable : 0.0;
 }
 
+// Every pass of every element block at the current positions, and with
+// `contact` the contact forces beside them on the first thread. The blocks
+// of a pass are claimed one at a time by every thread (the first joins when
+// its contact is done); a thread out of blocks to claim waits until the
+// pass's last block is done, since the next pass reads what this one wrote
+// for neighbouring blocks. No OpenMP task or barrier inside the region:
+// libgomp ends each of those with a system call (sdk/parallel.hpp). Where
+// no second thread can help, the blocks run in order on this one.
+void Simulation::element_passes(BesideContact* contact) {
+  ForceSchedule& fs = schedule_;
+  int passes = 0;
+  for (const auto& m : mech_) passes = std::max(passes, m->passes);
+  if (static_cast<int>(fs.work.size()) != passes) {
+    fs.work.assign(passes, {});
+    for (int pass = 0; pass < passes; ++pass)
+      for (std::size_t p = 0; p < parts_.size(); ++p)
+        if (pass < mech_[p]->passes)
+          for (int b = 0; b < mech_[p]->blocks; ++b) fs.work[pass].emplace_back(static_cast<int>(p), b);
+    fs.claimed = std::make_unique<ForceSchedule::Counter[]>(passes);
+    fs.done = std::make_unique<ForceSchedule::Counter[]>(passes);
+  }
+  if (!contact && !sdk::team_available(passes > 0 && fs.work[0].size() > 1)) {
+    for (int pass = 0; pass < passes; ++pass)
+      for (const auto& [p, b] : fs.work[pass]) element_block(p, b, pass);
+    return;
+  }
+  for (int pass = 0; pass < passes; ++pass) {
+    fs.claimed[pass].value.store(0, std::memory_order_relaxed);
+    fs.done[pass].value.store(0, std::memory_order_relaxed);
+  }
+#pragma omp parallel
+  {
+    if (contact && omp_get_thread_num() == 0) {
+      const auto tc = Clock::now();
+      try {
+        compute_contact_forces(contact->t, contact->dt);
+      } catch (...) {
+        contact->error = std::current_exception();
+      }
+      contact->seconds = seconds_since(tc);
+    }
+    for (int pass = 0; pass < passes; ++pass) {
+      const auto& work = fs.work[pass];
+      const int n = static_cast<int>(work.size());
+      for (int k; (k = fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed)) < n;) {
+        element_block(work[k].first, work[k].second, pass);
+        fs.done[pass].value.fetch_add(1, std::memory_order_release);
+      }
+      for (int spins = 0; fs.done[pass].value.load(std::memory_order_acquire) < n; ++spins)
+        if (spins < 4096)
+          spin_pause();
+        else
+          std::this_thread::yield();  // more threads than cores: let the block's thread run
+    }
+  }
+}
+
 // Internal forces of every part at the current positions; returns the
 // smallest stable step.
 double Simulation::mechanics_stable_dt() {
-  for (std::size_t p = 0; p < parts_.size(); ++p) {
-    const int blocks = mech_[p]->blocks, passes = mech_[p]->passes;
-    if (!sdk::team_available(blocks > 1)) {  // one thread: no region (sdk/parallel.hpp)
-      for (int pass = 0; pass < passes; ++pass)
-        for (int b = 0; b < blocks; ++b) element_block(p, b, pass);
-      continue;
-    }
-#pragma omp parallel
-    for (int pass = 0; pass < passes; ++pass) {
-#pragma omp for schedule(static, 1)
-      for (int b = 0; b < blocks; ++b) element_block(p, b, pass);
-    }
-  }
+  element_passes(nullptr);
   return finish_elements();
 }
 
@@ -1036,10 +1081,11 @@ void Simulation::choose_bending_weight() {
 // the same way in both):
 // - in turn: the element blocks, then the contact pairs, each shared out
 //   in its own loops;
-// - beside: the contact pairs as one task on one thread (their handlers'
-//   loops then run on that thread) while the other threads take the element
-//   blocks; one meeting point per step instead of one per loop, best where
-//   contact costs about as much as the elements.
+// - beside: the contact pairs on the first thread (their handlers' loops
+//   then run on that thread) while the other threads take the element
+//   blocks, which the first joins when its contact is done; one parallel
+//   region per step instead of one per loop, best where contact costs about
+//   as much as the elements.
 // Which one is faster depends on the scene and the machine: with
 // "contact_schedule": "auto" the run times both over its first calls
 // (kTrial each), keeps the faster, and times both again every kRecheck
@@ -1075,60 +1121,14 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
     compute_contact_forces(t, dt);
     timing_[kTimeContact] += seconds_since(tc);
   } else {
-    double contact_time = 0;
-    std::exception_ptr contact_error;
-    // The contact on the first thread; the element blocks claimed one at a
-    // time by every thread (the first joins when its contact is done), pass
-    // after pass: a thread out of blocks to claim waits until the pass's last
-    // block is done. No OpenMP task or barrier inside the region: libgomp
-    // ends each of those with a system call (sdk/parallel.hpp).
-    int passes = 0;
-    for (const auto& m : mech_) passes = std::max(passes, m->passes);
-    if (static_cast<int>(fs.work.size()) != passes) {
-      fs.work.assign(passes, {});
-      for (int pass = 0; pass < passes; ++pass)
-        for (std::size_t p = 0; p < parts_.size(); ++p)
-          if (pass < mech_[p]->passes)
-            for (int b = 0; b < mech_[p]->blocks; ++b) fs.work[pass].emplace_back(static_cast<int>(p), b);
-      fs.claimed = std::make_unique<ForceSchedule::Counter[]>(passes);
-      fs.done = std::make_unique<ForceSchedule::Counter[]>(passes);
-    }
-    for (int pass = 0; pass < passes; ++pass) {
-      fs.claimed[pass].value.store(0, std::memory_order_relaxed);
-      fs.done[pass].value.store(0, std::memory_order_relaxed);
-    }
-#pragma omp parallel
-    {
-      if (omp_get_thread_num() == 0) {
-        const auto tc = Clock::now();
-        try {
-          compute_contact_forces(t, dt);
-        } catch (...) {
-          contact_error = std::current_exception();
-        }
-        contact_time = seconds_since(tc);
-      }
-      for (int pass = 0; pass < passes; ++pass) {
-        const auto& work = fs.work[pass];
-        const int n = static_cast<int>(work.size());
-        for (int k; (k = fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed)) < n;) {
-          element_block(work[k].first, work[k].second, pass);
-          fs.done[pass].value.fetch_add(1, std::memory_order_release);
-        }
-        // The next pass reads what this one wrote for neighbouring blocks.
-        for (int spins = 0; fs.done[pass].value.load(std::memory_order_acquire) < n; ++spins)
-          if (spins < 4096)
-            spin_pause();
-          else
-            std::this_thread::yield();  // more threads than cores: let the block's thread run
-      }
-    }
-    if (contact_error) std::rethrow_exception(contact_error);
+    BesideContact contact{t, dt};
+    element_passes(&contact);
+    if (contact.error) std::rethrow_exception(contact.error);
     stable = finish_elements();
     // The contact ran within the elements' wall time: elements_and_laws is
     // the wall time of both, contact its own share.
-    timing_[kTimeElements] += seconds_since(t0) - contact_time;
-    timing_[kTimeContact] += contact_time;
+    timing_[kTimeElements] += seconds_since(t0) - contact.seconds;
+    timing_[kTimeContact] += contact.seconds;
   }
   ++fs.calls;
   fs.beside_calls += beside;

@@ -5,6 +5,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -185,6 +186,12 @@ class Simulation {
   double tool_dt_ = std::numeric_limits<double>::infinity();     // force-controlled tools' bound
   long long contact_active_ = 0;
   void compute_contact_forces(double t, double dt);
+  struct BesideContact {  // the contact forces at (t, dt) beside the element blocks
+    double t = 0, dt = 0;
+    double seconds = 0;            // out: the contact's own wall time
+    std::exception_ptr error;      // out: what it threw
+  };
+  void element_passes(BesideContact* contact);
   struct ContactSpans {  // per part views handed to the contact handlers every step
     std::vector<std::span<const double>> vel, areas, mass;
     std::vector<std::span<double>> force, status;
