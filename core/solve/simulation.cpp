@@ -1025,10 +1025,16 @@ void Simulation::element_passes(BesideContact* contact) {
       }
       contact->seconds = seconds_since(tc);
     }
+    // Without contact beside, every thread takes the same blocks at every
+    // pass and step (round robin), so that a block's data stays in one
+    // core's cache; with it, blocks go to whichever thread is free.
+    const int me = omp_get_thread_num(), team = omp_get_num_threads();
     for (int pass = 0; pass < passes; ++pass) {
       const auto& work = fs.work[pass];
       const int n = static_cast<int>(work.size());
-      for (int k; (k = fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed)) < n;) {
+      for (int j = 0;; ++j) {
+        const int k = contact ? fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed) : me + j * team;
+        if (k >= n) break;
         element_block(work[k].first, work[k].second, pass);
         fs.done[pass].value.fetch_add(1, std::memory_order_release);
       }
