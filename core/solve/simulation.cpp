@@ -985,11 +985,12 @@ double Simulation::initial_mechanical_step() {
 }
 
 // Every pass of every element block at the current positions, and with
-// `contact` the contact forces beside them on the first thread. The blocks
-// of a pass are claimed one at a time by every thread (the first joins when
-// its contact is done); a thread out of blocks to claim waits until the
-// pass's last block is done, since the next pass reads what this one wrote
-// for neighbouring blocks. No OpenMP task or barrier inside the region:
+// `contact` the contact forces beside them on the first thread. With the
+// contact, the blocks of a pass are claimed one at a time by every thread
+// (the first joins when its contact is done); without, they are dealt round
+// robin. A thread done with its blocks waits until the pass's last block is
+// done, since the next pass reads what this one wrote for neighbouring
+// blocks. No OpenMP task or barrier inside the region:
 // libgomp ends each of those with a system call (sdk/parallel.hpp). Where
 // no second thread can help, the blocks run in order on this one.
 void Simulation::element_passes(BesideContact* contact) {
