@@ -990,9 +990,9 @@ double Simulation::initial_mechanical_step() {
 // (the first joins when its contact is done); without, they are dealt round
 // robin. A thread done with its blocks waits until the pass's last block is
 // done, since the next pass reads what this one wrote for neighbouring
-// blocks. No OpenMP task or barrier inside the region:
-// libgomp ends each of those with a system call (sdk/parallel.hpp). Where
-// no second thread can help, the blocks run in order on this one.
+// blocks. No OpenMP task or barrier inside the region: libgomp ends each
+// of those with a system call (sdk/parallel.hpp). Where no second thread
+// can help, the blocks run in order on this one.
 void Simulation::element_passes(BesideContact* contact) {
   ForceSchedule& fs = schedule_;
   int passes = 0;

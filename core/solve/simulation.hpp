@@ -167,8 +167,8 @@ class Simulation {
     long long calls = 0, next_trial = 0, beside_calls = 0;
     double time[2] = {0, 0};
     long long count[2] = {0, 0};
-    // Beside: the element blocks of each pass in order, (part, block), and
-    // per pass the next block to claim and the blocks done.
+    // element_passes: the element blocks of each pass in order, (part,
+    // block), and per pass the next block to claim and the blocks done.
     std::vector<std::vector<std::pair<int, int>>> work;
     struct alignas(64) Counter {
       std::atomic<int> value{0};

@@ -3,8 +3,8 @@
 // take a share.
 //
 // An OpenMP parallel region that runs on one thread (one thread in all,
-// `if (false)`, or nested inside the kernel's task that runs a contact
-// handler beside the elements) still costs the runtime its closing
+// `if (false)`, or nested inside the kernel's region that runs the
+// contact handlers beside the element blocks) still costs the runtime its closing
 // barrier, and GNU libgomp ends every barrier with a futex system call:
 // about 1.4 us on a virtual machine, more than many loops of a step take.
 // Loops called at every mechanical step therefore run their serial form
