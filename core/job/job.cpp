@@ -534,7 +534,8 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       const auto g = mr.reals("gravity", 3, std::vector<double>{0, 0, 0});
       md.gravity = {g[0], g[1], g[2]};
       md.energy_tolerance = mr.real("energy_tolerance", 0.05, 0.0, true);
-      md.contact_schedule = mr.choice("contact_schedule", {"auto", "beside", "in_turn"}, std::string("auto"));
+      md.contact_schedule =
+          mr.choice("contact_schedule", {"auto", "beside", "in_turn", "by_part"}, std::string("auto"));
       md.bending_subcycles = static_cast<int>(mr.integer("bending_subcycles", 1, 1, 64));
       mr.finish();
     }

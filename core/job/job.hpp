@@ -123,7 +123,8 @@ struct MechanicsDef {
   std::array<double, 3> gravity{0, 0, 0};
   double energy_tolerance = 0.05;  // relative energy balance error that stops the run
   // How elements and contact share the threads: "auto" (timed), "beside"
-  // (contact on the first thread beside the element blocks) or "in_turn".
+  // (contact on the first thread beside the element blocks), "in_turn" or
+  // "by_part" (each ply's elements and contact on a thread of its own).
   std::string contact_schedule = "auto";
   // At most how many steps one evaluation of the bending carries (1: the
   // bending every step); fewer where the bending's stable step demands it.

@@ -985,14 +985,17 @@ double Simulation::initial_mechanical_step() {
 }
 
 // Every pass of every element block at the current positions, and with
-// `contact` the contact forces beside them on the first thread. With the
-// contact, the blocks of a pass are claimed one at a time by every thread
-// (the first joins when its contact is done); without, they are dealt round
-// robin. A thread done with its blocks waits until the pass's last block is
-// done, since the next pass reads what this one wrote for neighbouring
-// blocks. No OpenMP task or barrier inside the region: libgomp ends each
-// of those with a system call (sdk/parallel.hpp). Where no second thread
-// can help, the blocks run in order on this one.
+// `contact` the contact forces beside them. Beside: the contact on the
+// first thread, and the blocks of a pass claimed one at a time by every
+// thread (the first joins when its contact is done). By part: every thread
+// the blocks and contact tasks of the parts it owns (part_threads), which
+// keeps each part's data in one core's cache. Without contact, the blocks
+// are dealt round robin. A thread done with its blocks of a pass waits until
+// the pass's last block is done, since the next pass reads what this one
+// wrote for neighbouring blocks of the part. No OpenMP task or barrier
+// inside the region: libgomp ends each of those with a system call
+// (sdk/parallel.hpp). Where no second thread can help, the blocks run in
+// order on this one.
 void Simulation::element_passes(BesideContact* contact) {
   ForceSchedule& fs = schedule_;
   int passes = 0;
@@ -1015,37 +1018,96 @@ void Simulation::element_passes(BesideContact* contact) {
     fs.claimed[pass].value.store(0, std::memory_order_relaxed);
     fs.done[pass].value.store(0, std::memory_order_relaxed);
   }
-#pragma omp parallel
+  const bool by_part = contact && contact->by_part;
+  if (by_part && contact_tasks_.empty()) build_contact_tasks();
+#ifdef _OPENMP
+  const std::vector<int>& owner = part_threads(omp_get_max_threads());
+#else
+  const std::vector<int>& owner = part_threads(1);
+#endif
+  double contact_seconds = 0;
+#pragma omp parallel reduction(max : contact_seconds)
   {
-    if (contact && omp_get_thread_num() == 0) {
-      const auto tc = Clock::now();
-      try {
-        compute_contact_forces(contact->t, contact->dt);
-      } catch (...) {
-        contact->error = std::current_exception();
-      }
-      contact->seconds = seconds_since(tc);
-    }
-    // Without contact beside, every thread takes the same blocks at every
-    // pass and step (round robin), so that a block's data stays in one
-    // core's cache; with it, blocks go to whichever thread is free.
     const int me = omp_get_thread_num(), team = omp_get_num_threads();
-    for (int pass = 0; pass < passes; ++pass) {
-      const auto& work = fs.work[pass];
-      const int n = static_cast<int>(work.size());
-      for (int j = 0;; ++j) {
-        const int k = contact ? fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed) : me + j * team;
-        if (k >= n) break;
-        element_block(work[k].first, work[k].second, pass);
-        fs.done[pass].value.fetch_add(1, std::memory_order_release);
+    if (by_part) {
+      // This thread's parts and tasks (a team smaller than asked: parts
+      // dealt again by their number).
+      auto mine = [&](int p) { return (team == fs.team ? owner[p] : p % team) == me; };
+      const auto tc = Clock::now();
+      for (std::size_t p = 0; p < parts_.size(); ++p)
+        if (mine(static_cast<int>(p))) start_part_contact(static_cast<int>(p));
+      for (ContactTask& task : contact_tasks_) {
+        if (!mine(task.owner)) continue;
+        try {
+          task.error = nullptr;
+          run_contact_task(task, contact->t, contact->dt);
+        } catch (...) {
+          task.error = std::current_exception();
+        }
       }
-      for (int spins = 0; fs.done[pass].value.load(std::memory_order_acquire) < n; ++spins)
-        if (spins < 4096)
-          spin_pause();
-        else
-          std::this_thread::yield();  // more threads than cores: let the block's thread run
+      contact_seconds = seconds_since(tc);
+      for (int pass = 0; pass < passes; ++pass)
+        for (const auto& [p, b] : fs.work[pass])
+          if (mine(p)) element_block(p, b, pass);
+    } else {
+      if (contact && me == 0) {
+        const auto tc = Clock::now();
+        try {
+          compute_contact_forces(contact->t, contact->dt);
+        } catch (...) {
+          contact->error = std::current_exception();
+        }
+        contact_seconds = seconds_since(tc);
+      }
+      // Without contact beside, every thread takes the same blocks at every
+      // pass and step (round robin), so that a block's data stays in one
+      // core's cache; with it, blocks go to whichever thread is free.
+      for (int pass = 0; pass < passes; ++pass) {
+        const auto& work = fs.work[pass];
+        const int n = static_cast<int>(work.size());
+        for (int j = 0;; ++j) {
+          const int k = contact ? fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed) : me + j * team;
+          if (k >= n) break;
+          element_block(work[k].first, work[k].second, pass);
+          fs.done[pass].value.fetch_add(1, std::memory_order_release);
+        }
+        for (int spins = 0; fs.done[pass].value.load(std::memory_order_acquire) < n; ++spins)
+          if (spins < 4096)
+            spin_pause();
+          else
+            std::this_thread::yield();  // more threads than cores: let the block's thread run
+      }
     }
   }
+  if (contact) {
+    contact->seconds = contact_seconds;
+    if (by_part)  // the first error in task order, whichever thread met it
+      for (const ContactTask& task : contact_tasks_)
+        if (task.error) {
+          contact->error = task.error;
+          break;
+        }
+  }
+}
+
+// The thread that owns each part for a team of `team` threads: parts
+// dealt largest first to the thread with the fewest elements so far.
+const std::vector<int>& Simulation::part_threads(int team) {
+  ForceSchedule& fs = schedule_;
+  if (fs.team == team && fs.part_thread.size() == parts_.size()) return fs.part_thread;
+  fs.team = team;
+  fs.part_thread.assign(parts_.size(), 0);
+  std::vector<int> order(parts_.size());
+  for (std::size_t p = 0; p < order.size(); ++p) order[p] = static_cast<int>(p);
+  auto elements = [&](int p) { return parts_[p]->mesh.num_elements(); };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return elements(a) > elements(b); });
+  std::vector<long long> load(std::max(team, 1), 0);
+  for (const int p : order) {
+    const int t = static_cast<int>(std::min_element(load.begin(), load.end()) - load.begin());
+    fs.part_thread[p] = t;
+    load[t] += elements(p);
+  }
+  return fs.part_thread;
 }
 
 // Internal forces of every part at the current positions; returns the
@@ -1083,20 +1145,23 @@ void Simulation::choose_bending_weight() {
 }
 
 // Element forces and contact forces at the current positions (they write
-// separate arrays); returns the smallest stable step. Two ways of sharing
+// separate arrays); returns the smallest stable step. Three ways of sharing
 // them out over the threads, with the same results (every force is computed
-// the same way in both):
-// - in turn: the element blocks, then the contact pairs, each shared out
+// and summed the same way in all):
+// - in turn: the element blocks, then the contact tasks, each shared out
 //   in its own loops;
-// - beside: the contact pairs on the first thread (their handlers' loops
+// - beside: the contact tasks on the first thread (their handlers' loops
 //   then run on that thread) while the other threads take the element
 //   blocks, which the first joins when its contact is done; one parallel
 //   region per step instead of one per loop, best where contact costs about
-//   as much as the elements.
+//   as much as the elements;
+// - by part (two parts or more): every thread the element blocks and the
+//   contact tasks of its own parts, each part's data staying in one core's
+//   cache, best where the parts and their contacts cost about the same.
 // Which one is faster depends on the scene and the machine: with
-// "contact_schedule": "auto" the run times both over its first calls
-// (kTrial each), keeps the faster, and times both again every kRecheck
-// calls; "beside" and "in_turn" fix the way.
+// "contact_schedule": "auto" the run times each over its first calls
+// (kTrial each), keeps the fastest, and times them again every kRecheck
+// calls; "beside", "in_turn" and "by_part" fix the way.
 double Simulation::forces_and_stable_dt(double t, double dt) {
   choose_bending_weight();
 #ifdef _OPENMP
@@ -1104,23 +1169,37 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
 #else
   const int threads = 1;
 #endif
-  constexpr int kTrial = 64;
+  // A trial: kRounds rounds of kTrial calls each way; each way keeps the
+  // mean of its fastest round (a round that met a busy spell of the host
+  // does not count against a way).
+  constexpr int kTrial = 32, kRounds = 4;
   constexpr long long kRecheck = 20000;
   ForceSchedule& fs = schedule_;
-  const std::string& way = job_.mechanics_settings.contact_schedule;
-  const bool choice = threads > 1 && !contacts_.empty() && way == "auto";
-  bool beside = threads > 1 && !contacts_.empty() && way == "beside";
+  const std::string& choice_name = job_.mechanics_settings.contact_schedule;
+  const bool shared = threads > 1 && !contacts_.empty();
+  const bool parts_apart = shared && parts_.size() > 1;
+  const bool choice = shared && choice_name == "auto";
+  int way = kInTurn;
+  if (choice_name == "beside" && shared) way = kBeside;
+  if (choice_name == "by_part" && parts_apart) way = kByPart;
+  // The ways a trial times, in its order within a round.
+  const int trial_ways[kWays] = {kBeside, kInTurn, kByPart};
+  const int ways = parts_apart ? 3 : 2;
+  const int round_calls = ways * kTrial;
   if (choice) {
-    if (fs.trial_left == 0 && fs.calls >= fs.next_trial) {  // a trial: kTrial calls beside, then kTrial in turn
-      fs.trial_left = 2 * kTrial;
-      fs.time[0] = fs.time[1] = 0;
-      fs.count[0] = fs.count[1] = 0;
+    if (fs.trial_left == 0 && fs.calls >= fs.next_trial) {
+      fs.trial_left = kRounds * round_calls;
+      for (int w = 0; w < kWays; ++w) {
+        fs.time[w] = 0;
+        fs.count[w] = 0;
+        fs.best[w] = std::numeric_limits<double>::infinity();
+      }
     }
-    beside = fs.trial_left > 0 ? fs.trial_left > kTrial : fs.beside;
+    way = fs.trial_left > 0 ? trial_ways[(kRounds * round_calls - fs.trial_left) % round_calls / kTrial] : fs.way;
   }
   const auto t0 = Clock::now();
   double stable;
-  if (!beside) {
+  if (way == kInTurn) {
     auto tc = Clock::now();
     stable = mechanics_stable_dt();
     timing_[kTimeElements] += seconds_since(tc);
@@ -1128,65 +1207,143 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
     compute_contact_forces(t, dt);
     timing_[kTimeContact] += seconds_since(tc);
   } else {
-    BesideContact contact{t, dt};
+    BesideContact contact{t, dt, way == kByPart, 0.0, nullptr};
     element_passes(&contact);
     if (contact.error) std::rethrow_exception(contact.error);
     stable = finish_elements();
     // The contact ran within the elements' wall time: elements_and_laws is
-    // the wall time of both, contact its own share.
+    // the wall time of both, contact its own share (the longest thread's).
     timing_[kTimeElements] += seconds_since(t0) - contact.seconds;
     timing_[kTimeContact] += contact.seconds;
   }
+  finish_contact_forces();
   ++fs.calls;
-  fs.beside_calls += beside;
-  if (choice) {
-    if (fs.trial_left > 0) {
-      fs.time[beside] += seconds_since(t0);
-      ++fs.count[beside];
-      if (--fs.trial_left == 0) {
-        fs.beside = fs.time[1] / fs.count[1] < fs.time[0] / fs.count[0];
-        fs.next_trial = fs.calls + kRecheck;
-      }
+  ++fs.way_calls[way];
+  if (choice && fs.trial_left > 0) {
+    fs.time[way] += seconds_since(t0);
+    if (++fs.count[way] == kTrial) {  // the way's round is over
+      fs.best[way] = std::min(fs.best[way], fs.time[way] / kTrial);
+      fs.time[way] = 0;
+      fs.count[way] = 0;
+    }
+    if (--fs.trial_left == 0) {
+      fs.way = trial_ways[0];
+      for (int j = 1; j < ways; ++j)
+        if (fs.best[trial_ways[j]] < fs.best[fs.way]) fs.way = trial_ways[j];
+      fs.next_trial = fs.calls + kRecheck;
     }
   }
   return stable;
 }
 
-void Simulation::compute_contact_forces(double t, double dt) {
-  contact_energy_ = 0;
-  contact_active_ = 0;
-  if (contacts_.empty()) return;  // the contact forces stay zero
-  for (auto& m : mech_) std::fill(m->f_con.begin(), m->f_con.end(), 0.0);
-  std::fill(tool_force_.begin(), tool_force_.end(), 0.0);
-  ContactSpans& cs = contact_spans_;
-  if (cs.vel.empty()) {  // the arrays are stable for the run: views built once
-    for (std::size_t p = 0; p < parts_.size(); ++p) {
-      cs.vel.emplace_back(mech_[p]->v);
-      cs.mass.emplace_back(mech_[p]->mass);
-      cs.areas.emplace_back(parts_[p]->area);
-      cs.force.emplace_back(mech_[p]->f_con);
-      if (!job_.thermal) cs.status.emplace_back(parts_[p]->contact_status);
+void Simulation::build_contact_tasks() {
+  const std::size_t np = parts_.size();
+  cross_into_.assign(np, {});
+  contact_tasks_.clear();
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    const ContactDef& def = job_.contacts[c];
+    const int first = def.first.index, second = def.second.is_tool ? -1 : def.second.index;
+    const int sides = second >= 0 && contacts_[c]->sides() == 2 ? 2 : 1;
+    for (int s = 0; s < sides; ++s) {
+      ContactTask task;
+      task.contact = static_cast<int>(c);
+      task.side = sides == 2 ? s : -1;
+      task.owner = s == 0 ? first : second;
+      task.other = s == 0 ? second : first;
+      contact_tasks_.push_back(std::move(task));
     }
   }
+  for (std::size_t k = 0; k < contact_tasks_.size(); ++k) {
+    ContactTask& task = contact_tasks_[k];
+    task.tool_force.assign(3 * tools_.size(), 0.0);
+    task.force.assign(np, {});
+    task.status.assign(job_.thermal ? 0 : np, {});
+    task.force[task.owner] = mech_[task.owner]->f_con;
+    if (!job_.thermal) task.status[task.owner] = parts_[task.owner]->contact_status;
+    if (task.other >= 0 && task.other != task.owner) {
+      const std::size_t nn = static_cast<std::size_t>(parts_[task.other]->mesh.num_nodes());
+      task.cross.assign(3 * nn, 0.0);
+      task.force[task.other] = task.cross;
+      if (!job_.thermal) {
+        task.cross_status.assign(nn, 0.0);
+        task.status[task.other] = task.cross_status;
+      }
+      cross_into_[task.other].push_back(static_cast<int>(k));
+    }
+  }
+  ContactSpans& cs = contact_spans_;
+  for (std::size_t p = 0; p < np; ++p) {
+    cs.vel.emplace_back(mech_[p]->v);
+    cs.mass.emplace_back(mech_[p]->mass);
+    cs.areas.emplace_back(parts_[p]->area);
+  }
+}
+
+// Before the first task that moves the part's nodes: its contact forces
+// (and, isothermal, its contact status) start from zero.
+void Simulation::start_part_contact(int part) {
+  std::fill(mech_[part]->f_con.begin(), mech_[part]->f_con.end(), 0.0);
   if (!job_.thermal)  // isothermal: the status field shows the mechanical contact
-    for (auto& st : parts_) std::fill(st->contact_status.begin(), st->contact_status.end(), 0.0);
+    std::fill(parts_[part]->contact_status.begin(), parts_[part]->contact_status.end(), 0.0);
+}
+
+void Simulation::run_contact_task(ContactTask& task, double t, double dt) {
+  std::fill(task.cross.begin(), task.cross.end(), 0.0);
+  std::fill(task.cross_status.begin(), task.cross_status.end(), 0.0);
+  std::fill(task.tool_force.begin(), task.tool_force.end(), 0.0);
   sdk::ContactForceInput in;
   in.parts = part_views_;
   in.tools = tool_views_;
   in.time = t;
   in.dt = dt;
-  in.velocity = cs.vel;
-  in.node_area = cs.areas;
-  in.mass = cs.mass;
-  for (std::size_t c = 0; c < contacts_.size(); ++c) {
-    sdk::ContactForceOutput out;
-    out.force = cs.force;
-    out.tool_force = tool_force_;
-    out.status = cs.status;
-    if (auto s = contacts_[c]->contact_forces(in, out); !s)
-      throw RunError("contact handler of " + job_.contacts[c].pointer + " at t = " + fmt_g(t) + " s: " + s.message);
-    contact_energy_ += out.energy;
-    contact_active_ += out.active;
+  in.velocity = contact_spans_.vel;
+  in.node_area = contact_spans_.areas;
+  in.mass = contact_spans_.mass;
+  in.side = task.side;
+  sdk::ContactForceOutput out;
+  out.force = task.force;
+  out.tool_force = task.tool_force;
+  out.status = task.status;
+  if (auto s = contacts_[task.contact]->contact_forces(in, out); !s)
+    throw RunError("contact handler of " + job_.contacts[task.contact].pointer + " at t = " + fmt_g(t) +
+                   " s: " + s.message);
+  task.energy = out.energy;
+  task.active = out.active;
+}
+
+// The forces of the tasks that moved other parts' nodes onto this one,
+// in task order (by the thread that integrates the part).
+void Simulation::merge_part_contact(int part) {
+  if (part >= static_cast<int>(cross_into_.size())) return;
+  std::vector<double>& f = mech_[part]->f_con;
+  for (const int k : cross_into_[part]) {
+    const ContactTask& task = contact_tasks_[k];
+    for (std::size_t i = 0; i < f.size(); ++i) f[i] += task.cross[i];
+    if (!task.cross_status.empty()) {
+      std::vector<double>& st = parts_[part]->contact_status;
+      for (std::size_t i = 0; i < st.size(); ++i) st[i] = std::max(st[i], task.cross_status[i]);
+    }
+  }
+}
+
+// Every task in order on this thread (their handlers' loops shared out
+// where a team is free).
+void Simulation::compute_contact_forces(double t, double dt) {
+  if (contacts_.empty()) return;  // the contact forces stay zero
+  if (contact_tasks_.empty()) build_contact_tasks();
+  for (std::size_t p = 0; p < parts_.size(); ++p) start_part_contact(static_cast<int>(p));
+  for (ContactTask& task : contact_tasks_) run_contact_task(task, t, dt);
+}
+
+// The tasks' tool forces, energies and counts, summed in task order.
+void Simulation::finish_contact_forces() {
+  contact_energy_ = 0;
+  contact_active_ = 0;
+  std::fill(tool_force_.begin(), tool_force_.end(), 0.0);
+  for (const ContactTask& task : contact_tasks_) {
+    for (std::size_t q = 0; q < tool_force_.size(); ++q) tool_force_[q] += task.tool_force[q];
+    contact_energy_ += task.energy;
+    contact_active_ += task.active;
   }
 }
 
@@ -1239,7 +1396,8 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   part_bad_.assign(np, -1);  // per part: first non-finite coordinate
   std::size_t nodes_all = 0;
   for (const auto& st : parts_) nodes_all += st->x.size() / 3;
-  sdk::for_each_index(np, np > 1 && nodes_all > 512, 0, [&](int p) {
+  auto integrate_part = [&](int p) {
+    merge_part_contact(p);
     double* reactions = &part_sums_[p * (6 + nr) + 6];
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
@@ -1262,7 +1420,21 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
         }
     double* sums = &part_sums_[p * (6 + nr)];
     for (int j = 0; j < 6; ++j) sums[j] = sums_p[j];
-  });
+  };
+  // With several parts, each on the thread that owns it (by part, the one
+  // that computed its forces; otherwise dealt in turn).
+  if (sdk::team_available(np > 1 && nodes_all > 512)) {
+#pragma omp parallel
+    {
+      const int me = omp_get_thread_num(), team = omp_get_num_threads();
+      const ForceSchedule& fs = schedule_;
+      const bool owned = team == fs.team && fs.part_thread.size() == static_cast<std::size_t>(np);
+      for (int p = 0; p < np; ++p)
+        if ((owned ? fs.part_thread[p] : p % team) == me) integrate_part(p);
+    }
+  } else {
+    for (int p = 0; p < np; ++p) integrate_part(p);
+  }
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
   for (int p = 0; p < np; ++p) {
     if (part_bad_[p] >= 0)
@@ -1699,6 +1871,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       check_law_ranges(0.0);
       double stable = mechanics_stable_dt();
       compute_contact_forces(0.0, 0.0);
+      finish_contact_forces();
       // Overlaps below 1e-6 of a ply's thickness (round-off where a ply
       // starts exactly on a tool) are not worth a warning.
       double k_max = 0, h_min = std::numeric_limits<double>::infinity();
@@ -1975,9 +2148,14 @@ RunResult Simulation::run(const RunOptions& opt) {
                              {"thermal", timing_[kTimeThermal]},
                              {"time_integration_and_audit", timing_[kTimeIntegrate]},
                              {"output", timing_[kTimeOutput]}};
-    if (job_.mechanics)  // share of the steps whose contact ran beside the element blocks
-      summary["contact_beside_elements"] =
-          schedule_.calls > 0 ? static_cast<double>(schedule_.beside_calls) / static_cast<double>(schedule_.calls) : 0.0;
+    if (job_.mechanics) {  // share of the steps whose contact ran beside the element blocks (either way)
+      const ForceSchedule& fs = schedule_;
+      const double calls = static_cast<double>(std::max(fs.calls, 1LL));
+      summary["contact_beside_elements"] = static_cast<double>(fs.way_calls[kBeside] + fs.way_calls[kByPart]) / calls;
+      summary["contact_schedule_share"] = {{"in_turn", static_cast<double>(fs.way_calls[kInTurn]) / calls},
+                                           {"beside", static_cast<double>(fs.way_calls[kBeside]) / calls},
+                                           {"by_part", static_cast<double>(fs.way_calls[kByPart]) / calls}};
+    }
     if (job_.mechanics && job_.mechanics_settings.bending_subcycles > 1)
       summary["bending_subcycles"] = {{"at_most", job_.mechanics_settings.bending_subcycles},
                                       {"evaluations", bending_evaluations_},

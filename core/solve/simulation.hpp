@@ -158,15 +158,19 @@ class Simulation {
   enum { kTimeElements, kTimeContact, kTimeThermal, kTimeIntegrate, kTimeOutput, kTimeCount };
   double timing_[kTimeCount] = {0, 0, 0, 0, 0};  // wall time per phase of the mechanics loop (s)
   // How forces_and_stable_dt shares out elements and contact (see there):
-  // the way chosen (beside or in turn), the calls left in the current
-  // trial of both ways, the calls so far and at the next trial, and each
-  // way's time and calls in the trial (index 1: beside).
+  // the way chosen, the calls left in the current trial of the ways, the
+  // calls so far and at the next trial, the calls made each way, and each
+  // way's time and calls in the trial's current round and its best mean
+  // time per call over the trial's rounds.
+  enum Way { kInTurn, kBeside, kByPart, kWays };
   struct ForceSchedule {
-    bool beside = false;
+    int way = kInTurn;
     int trial_left = 0;
-    long long calls = 0, next_trial = 0, beside_calls = 0;
-    double time[2] = {0, 0};
-    long long count[2] = {0, 0};
+    long long calls = 0, next_trial = 0;
+    long long way_calls[kWays] = {0, 0, 0};
+    double time[kWays] = {0, 0, 0};
+    long long count[kWays] = {0, 0, 0};
+    double best[kWays] = {0, 0, 0};
     // element_passes: the element blocks of each pass in order, (part,
     // block), and per pass the next block to claim and the blocks done.
     std::vector<std::vector<std::pair<int, int>>> work;
@@ -174,6 +178,10 @@ class Simulation {
       std::atomic<int> value{0};
     };
     std::unique_ptr<Counter[]> claimed, done;
+    // by_part: the thread that owns each part (its element blocks, the
+    // contact tasks that move its nodes, its integration), for `team` threads.
+    std::vector<int> part_thread;
+    int team = 0;
   } schedule_;
   double contact_energy_ = 0;       // penalty energy stored, current
   struct Load {
@@ -185,16 +193,41 @@ class Simulation {
   double contact_dt_ = std::numeric_limits<double>::infinity();  // contact bound of the stable step
   double tool_dt_ = std::numeric_limits<double>::infinity();     // force-controlled tools' bound
   long long contact_active_ = 0;
+  // The contact forces as tasks: a pair, or one side of a ply/ply pair
+  // whose handler splits it (ContactHandler::sides). A task adds its forces
+  // on the part whose nodes it moves (its owner) into that part's f_con, and
+  // those on the pair's other part into an array of its own, which the other
+  // part's integration adds in task order: the same sums in the same order
+  // whichever thread runs which task.
+  struct ContactTask {
+    int contact = 0, side = -1;
+    int owner = 0, other = -1;     // parts (-1: a tool)
+    std::vector<double> cross;     // 3 per node of `other`
+    std::vector<double> cross_status;  // per node of `other` (isothermal runs)
+    std::vector<double> tool_force;    // 3 per tool
+    std::vector<std::span<double>> force, status;  // per part, the views given to the handler
+    double energy = 0;
+    long long active = 0;
+    std::exception_ptr error;
+  };
+  std::vector<ContactTask> contact_tasks_;
+  std::vector<std::vector<int>> cross_into_;  // per part: the tasks whose `cross` it receives, in order
+  void build_contact_tasks();
+  void start_part_contact(int part);
+  void run_contact_task(ContactTask& task, double t, double dt);
+  void merge_part_contact(int part);
   void compute_contact_forces(double t, double dt);
+  void finish_contact_forces();
   struct BesideContact {  // the contact forces at (t, dt) beside the element blocks
     double t = 0, dt = 0;
-    double seconds = 0;            // out: the contact's own wall time
+    bool by_part = false;          // every thread its parts' tasks, else all on the first thread
+    double seconds = 0;            // out: the contact's own wall time (the longest of the threads')
     std::exception_ptr error;      // out: what it threw
   };
   void element_passes(BesideContact* contact);
+  const std::vector<int>& part_threads(int team);
   struct ContactSpans {  // per part views handed to the contact handlers every step
     std::vector<std::span<const double>> vel, areas, mass;
-    std::vector<std::span<double>> force, status;
   } contact_spans_;
   void accumulate_tool_heat(double dt);
   std::vector<sdk::PartView> part_views_;

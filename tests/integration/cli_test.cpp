@@ -56,7 +56,7 @@ std::vector<T> read_dataset(hid_t file, const std::string& name) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.9.1 (plugin SDK 0.9.1, ABI 9)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.10.0 (plugin SDK 0.10.0, ABI 10)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {
@@ -347,10 +347,12 @@ TEST(Interrupt, SigintStopsTheCommandLineRun) {
 
 // A contact handler that fails mid-run: exit 3 with the interaction's JSON
 // path and the time, the frames before it kept, on one thread and on two
-// (where the contact runs as a task beside the element blocks).
+// (the contact beside the element blocks on the first thread, or run by
+// the thread of the ply whose nodes it moves).
 TEST(Plugins, ContactFailureStopsTheRunOnAnyThreadCount) {
-  for (const int threads : {1, 2}) {
-    const auto dir = temp_dir("contact_fail_" + std::to_string(threads));
+  const std::pair<int, const char*> cases[] = {{1, "auto"}, {2, "beside"}, {2, "by_part"}};
+  for (const auto& [threads, way] : cases) {
+    const auto dir = temp_dir("contact_fail_" + std::to_string(threads) + "_" + way);
     json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
     j["time"]["end"] = 0.5;
     j["output"]["interval"] = 0.1;
@@ -359,17 +361,75 @@ TEST(Plugins, ContactFailureStopsTheRunOnAnyThreadCount) {
     j["solvers"]["mechanics"]["mass_scaling"]["target_dt"] = 1e-4;
     j["interactions"][3] = {{"type", "contact"}, {"handler", "fail_after"}, {"between", {"ply_top", "ply_bottom"}},
                             {"fail_time", 0.25}};
+    j["solvers"]["mechanics"]["contact_schedule"] = way;
     j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR};
     std::ofstream(dir / "job.json") << j.dump(2);
     const auto out = dir / "out";
     const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet --threads " +
                                std::to_string(threads));
-    EXPECT_EQ(r.exit_code, 3) << r.err;
+    EXPECT_EQ(r.exit_code, 3) << way << ": " << r.err;
     EXPECT_NE(r.err.find("contact handler of /interactions/3 at t = 0.25"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("failed on purpose"), std::string::npos) << r.err;
     const json s = json::parse(std::ifstream(out / "summary.json"));
     EXPECT_EQ(s["status"], "failed");
     EXPECT_EQ(s["frames"], 3);  // 0, 0.1, 0.2
+  }
+}
+
+// A ply/ply handler that computes its pair whole (sides() 1) and ties the
+// plies node to node, with the top ply lifted at 10 mm/s and no other
+// contact: the bottom ply, held by nothing else, must follow the top one
+// (its pole within 1 % of the top pole's 5 mm lift; the springs lag
+// by 0.4 % of it), which it does only if the forces the handler writes
+// on the second ply reach that ply's integration. The runs agree bit for
+// bit under every schedule (probes, energies, tools).
+TEST(Plugins, WholePairHandlerForcesReachBothPlies) {
+  auto text = [](const std::filesystem::path& f) {
+    std::stringstream ss;
+    ss << std::ifstream(f).rdbuf();
+    return ss.str();
+  };
+  const std::pair<int, const char*> cases[] = {{1, "auto"}, {2, "beside"}, {2, "by_part"}, {2, "in_turn"}};
+  std::string probes0, energy0, tools0;
+  for (const auto& [threads, way] : cases) {
+    const auto dir = temp_dir(std::string("node_pairs_") + std::to_string(threads) + "_" + way);
+    json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+    j["time"]["end"] = 0.5;
+    j["output"]["interval"] = 0.25;
+    for (auto& p : j["parts"]) p["mesh"]["divisions"] = {6, 6};
+    j["solvers"]["mechanics"]["mass_scaling"]["target_dt"] = 1e-4;
+    j["solvers"]["mechanics"]["contact_schedule"] = way;
+    j["interactions"] = json::array({{{"type", "contact"},
+                                      {"handler", "node_pairs"},
+                                      {"between", {"ply_top", "ply_bottom"}},
+                                      {"stiffness", 200.0}}});
+    j["constraints"].push_back({{"type", "velocity"}, {"part", "ply_top"}, {"box", {{-1, -1, -1}, {1, 1, 1}}},
+                                {"velocity", {0, 0, 0.01}}});
+    j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR};
+    std::ofstream(dir / "job.json") << j.dump(2);
+    const auto out = dir / "out";
+    const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet --threads " +
+                               std::to_string(threads));
+    ASSERT_EQ(r.exit_code, 0) << way << ": " << r.err;
+    double lift[2] = {0, 0};  // pole_top, pole_bottom at the end
+    std::ifstream csv(out / "probes.csv");
+    for (std::string line; std::getline(csv, line);)
+      for (int k = 0; k < 2; ++k)
+        if (line.rfind(std::string(k == 0 ? "pole_top" : "pole_bottom") + ",displacement_z,0.5,,", 0) == 0)
+          lift[k] = std::stod(line.substr(line.rfind(',') + 1));
+    std::printf("node_pairs, %s on %d threads: poles lifted %.6e and %.6e m\n", way, threads, lift[0], lift[1]);
+    EXPECT_NEAR(lift[0], 0.005, 1e-6) << way;
+    EXPECT_NEAR(lift[1], lift[0], 0.01 * lift[0]) << way;
+    if (probes0.empty()) {
+      probes0 = text(out / "probes.csv");
+      energy0 = text(out / "energy.csv");
+      tools0 = text(out / "tools.csv");
+      ASSERT_FALSE(probes0.empty());
+    } else {
+      EXPECT_TRUE(text(out / "probes.csv") == probes0) << way;
+      EXPECT_TRUE(text(out / "energy.csv") == energy0) << way;
+      EXPECT_TRUE(text(out / "tools.csv") == tools0) << way;
+    }
   }
 }
 

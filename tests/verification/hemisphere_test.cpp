@@ -121,8 +121,10 @@ TEST(Hemisphere, ShearSymmetricAboutTheDiagonalOnlyForDiagonalFibres) {
 }
 
 // Same answer, bit for bit, with 1 and 2 threads over the first second of
-// the stroke, and on 2 threads with the contact pairs as one task beside the
-// element blocks or after them in their own loops (contact_schedule).
+// the stroke, and on 2 threads with every contact_schedule: the contact
+// pairs on the first thread beside the element blocks, after them in their
+// own loops, each ply with its own contact on its own thread (also on 3
+// threads, one of them without a ply), and the trial of the three.
 TEST(Hemisphere, OneAndTwoThreadsIdentical) {
   json j = coarse_scene();
   j["time"]["end"] = 1.0;
@@ -130,16 +132,18 @@ TEST(Hemisphere, OneAndTwoThreadsIdentical) {
   const JobRun a = run_json(j, 1);
   ASSERT_TRUE(a.result.ok) << a.result.error;
   ASSERT_GT(a.result.probes.size(), 40u);
-  for (const char* way : {"beside", "in_turn", "auto"}) {
+  const std::pair<const char*, int> cases[] = {{"beside", 2}, {"in_turn", 2}, {"by_part", 2}, {"by_part", 3}, {"auto", 2}};
+  for (const auto& [way, threads] : cases) {
     j["solvers"]["mechanics"]["contact_schedule"] = way;
-    const JobRun b = run_json(j, 2);
+    const JobRun b = run_json(j, threads);
+    const std::string what = std::string(way) + " on " + std::to_string(threads) + " threads";
     ASSERT_TRUE(b.result.ok) << b.result.error;
-    ASSERT_EQ(a.result.probes.size(), b.result.probes.size()) << way;
+    ASSERT_EQ(a.result.probes.size(), b.result.probes.size()) << what;
     for (std::size_t i = 0; i < a.result.probes.size(); ++i)
-      EXPECT_EQ(a.result.probes[i].values, b.result.probes[i].values) << way << ", sample " << i;
-    EXPECT_EQ(a.result.energy.tool_forces, b.result.energy.tool_forces) << way;
-    EXPECT_EQ(a.result.energy.internal, b.result.energy.internal) << way;
-    EXPECT_EQ(a.result.mechanical_steps, b.result.mechanical_steps) << way;
+      EXPECT_EQ(a.result.probes[i].values, b.result.probes[i].values) << what << ", sample " << i;
+    EXPECT_EQ(a.result.energy.tool_forces, b.result.energy.tool_forces) << what;
+    EXPECT_EQ(a.result.energy.internal, b.result.energy.internal) << what;
+    EXPECT_EQ(a.result.mechanical_steps, b.result.mechanical_steps) << what;
   }
 }
 

@@ -57,11 +57,12 @@ void node_normals(const sdk::PartView& p, std::vector<double>& nn) {
 // kGeo values per element: its unit normal n and the in-plane gradients g1,
 // g2 of its barycentric coordinates w1, w2 (w_k = (x - p0) . g_k for the
 // projection of a point x on the triangle's plane, w0 = 1 - w1 - w2; the
-// gradient of w0 is g0 = -(g1 + g2)). A degenerate (zero-area) triangle gets
+// gradient of w0 is g0 = -(g1 + g2)), then its first corner p0, so that a
+// search reads one row per candidate. A degenerate (zero-area) triangle gets
 // n = 0 and NaN gradients: its weights compare false, so it is never taken
 // for a face and always gets the full closest-point search. One vector pass
 // over n triangles, written out component by component.
-constexpr int kGeo = 9;
+constexpr int kGeo = 12;
 
 TS_VECTOR_CLONES
 void geometry_block(int n, const int* __restrict tri, const double* __restrict x, double* __restrict geo) {
@@ -87,6 +88,9 @@ void geometry_block(int n, const int* __restrict tri, const double* __restrict x
     g[6] = (u1 * e12 - u2 * e11) * ginv;  // g2 = n x (p1 - p0) / 2A
     g[7] = (u2 * e10 - u0 * e12) * ginv;
     g[8] = (u0 * e11 - u1 * e10) * ginv;
+    g[9] = a0;
+    g[10] = a1;
+    g[11] = a2;
   }
 }
 
@@ -223,6 +227,9 @@ struct Pass {
   std::vector<double> ft;         // per node of a: tangential spring force (N)
   std::vector<double> geo_b;  // surface_geometry of b, kGeo per element
   Candidates cand;
+  // Per node of a, written by the node's loop, read by the fixed-order sums:
+  // its force (3), its spring energy, its target (element, 3 weights).
+  std::vector<double> scratch, energy, target;
 };
 
 class PenaltyNodeSurface final : public sdk::ContactHandler {
@@ -326,12 +333,14 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
 
   sdk::Status contact_forces(const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) override {
     return sdk::guarded([&] {
-      parts_ = in.parts;
-      tools_ = in.tools;
       if (pair_.second.type == sdk::BodyRef::Type::Tool) return tool_forces(in, out);
       return ply_forces(in, out);
     });
   }
+
+  // Ply/ply: the two passes (nodes of each ply against the other's surface)
+  // share nothing they write, so the kernel may run them at the same time.
+  int sides() const override { return pair_.second.type == sdk::BodyRef::Type::Part ? 2 : 1; }
 
  private:
   // Distances and normals of a's nodes to the tool, for the nodes that can
@@ -423,9 +432,9 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     if (!begin) return best;
     const bool self = a.index == b.index;
     // Plane distance and projection weights of x on candidate e.
-    auto locate = [&](int e, const int* t, double* w, double& plane) {
+    auto locate = [&](int e, double* w, double& plane) {
       const double* g = &ps.geo_b[kGeo * static_cast<std::size_t>(e)];
-      const double* p0 = &b.x[3 * static_cast<std::size_t>(t[0])];
+      const double* p0 = g + 9;
       const double rx = x[0] - p0[0], ry = x[1] - p0[1], rz = x[2] - p0[2];
       plane = rx * g[0] + ry * g[1] + rz * g[2];
       w[1] = rx * g[3] + ry * g[4] + rz * g[5];
@@ -475,7 +484,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const int* t = &b.triangles[3 * e];
       if (self && (t[0] == i || t[1] == i || t[2] == i)) continue;  // self contact
       double w[3], plane;
-      if (!locate(e, t, w, plane)) {
+      if (!locate(e, w, plane)) {
         if (keep) kept[nkept++] = {e, plane, {w[0], w[1], w[2]}};
         continue;
       }
@@ -492,7 +501,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         const int* t = &b.triangles[3 * e];
         if (self && (t[0] == i || t[1] == i || t[2] == i)) continue;
         double w[3], plane;
-        if (!locate(e, t, w, plane)) edge_or_vertex(e, t, w, plane);
+        if (!locate(e, w, plane)) edge_or_vertex(e, t, w, plane);
       }
     }
     if (best.element < 0) return best;
@@ -562,38 +571,40 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   }
 
   sdk::Status tool_forces(const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
-    const sdk::PartView& a = parts_[pair_.first.index];
-    const sdk::ToolView& tool = tools_[pair_.second.index];
+    const sdk::PartView& a = in.parts[pair_.first.index];
+    const sdk::ToolView& tool = in.tools[pair_.second.index];
     query_tool(a, tool);
+    std::vector<double>& scratch = pass_[0].scratch;
+    std::vector<double>& energy = pass_[0].energy;
     const auto v = in.velocity[a.index];
     const auto area = in.node_area[a.index];
     const Vec3 vtool = tool.velocity ? Vec3{tool.velocity[0], tool.velocity[1], tool.velocity[2]} : Vec3{0, 0, 0};
     const double h2 = 0.5 * a.thickness;
     // Written below for every node (energy) or every node in contact (forces).
-    scratch_.resize(3 * static_cast<std::size_t>(a.num_nodes));
-    energy_.resize(a.num_nodes);
+    scratch.resize(3 * static_cast<std::size_t>(a.num_nodes));
+    energy.resize(a.num_nodes);
     sdk::for_each_index(a.num_nodes, a.num_nodes > 256, 128, [&](int i) {
       const double pen = h2 - dist_[i];
       if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
         for (int d = 0; d < 3; ++d) pass_[0].ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
-        energy_[i] = 0.0;
+        energy[i] = 0.0;
         return;
       }
       const Vec3 n = sdk::load3(tn_.data(), i);
       const Vec3 vrel = sdk::sub(sdk::load3(v.data(), i), vtool);
-      energy_[i] = node_force(pass_[0].ft, i, pen, penalty_ * area[i], in.mass[a.index][i], 1.0, n, vrel, in.dt,
-                              &scratch_[3 * static_cast<std::size_t>(i)]);
+      energy[i] = node_force(pass_[0].ft, i, pen, penalty_ * area[i], in.mass[a.index][i], 1.0, n, vrel, in.dt,
+                              &scratch[3 * static_cast<std::size_t>(i)]);
     });
     // Fixed-order sums: the same results for any thread count.
     auto f = out.force[a.index];
     for (int i = 0; i < a.num_nodes; ++i) {
-      if (!(energy_[i] > 0)) continue;
+      if (!(energy[i] > 0)) continue;
       ++out.active;
-      out.energy += energy_[i];
+      out.energy += energy[i];
       if (!out.status.empty()) out.status[a.index][i] = std::max(out.status[a.index][i], 1.0);
       for (int d = 0; d < 3; ++d) {
-        f[3 * i + d] += scratch_[3 * i + d];
-        out.tool_force[3 * tool.index + d] -= scratch_[3 * i + d];
+        f[3 * i + d] += scratch[3 * i + d];
+        out.tool_force[3 * tool.index + d] -= scratch[3 * i + d];
       }
     }
     return sdk::Status::success();
@@ -603,13 +614,17 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // surface), each with half the penalty, so that two faceted plies wrapped
   // on a curved tool hold each other wherever they touch.
   sdk::Status ply_forces(const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
-    for (Pass& ps : pass_) ply_pass(ps, 0.5, in, out);
+    if (in.side == 0 || in.side == 1) {
+      ply_pass(pass_[in.side], 0.5, in, out);
+    } else {
+      for (Pass& ps : pass_) ply_pass(ps, 0.5, in, out);
+    }
     return sdk::Status::success();
   }
 
   void ply_pass(Pass& ps, double scale, const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
-    const sdk::PartView& a = parts_[ps.a];
-    const sdk::PartView& b = parts_[ps.b];
+    const sdk::PartView& a = in.parts[ps.a];
+    const sdk::PartView& b = in.parts[ps.b];
     const double hsum2 = 0.5 * (a.thickness + b.thickness);
     const double track = hsum2 + gap_tol_ + hsum2;  // keep the side while the node stays this close
     refresh_candidates(ps, a, b, track);
@@ -617,15 +632,18 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const auto vb = in.velocity[b.index];
     const auto area = in.node_area[a.index];
     // Read below only for the nodes whose target is set (tg[0] >= 0).
-    scratch_.resize(3 * static_cast<std::size_t>(a.num_nodes));
-    energy_.resize(a.num_nodes);
-    target_.resize(4 * static_cast<std::size_t>(a.num_nodes));
+    std::vector<double>& scratch = ps.scratch;
+    std::vector<double>& energy = ps.energy;
+    std::vector<double>& target = ps.target;
+    scratch.resize(3 * static_cast<std::size_t>(a.num_nodes));
+    energy.resize(a.num_nodes);
+    target.resize(4 * static_cast<std::size_t>(a.num_nodes));
     surface_geometry(b, ps.geo_b);
     // The nodes of a, dealt to the threads in interleaved chunks: the cost
     // of a node differs with where it lies (corner or centre of a cell, in
     // contact or not), and a mesh numbers such nodes in runs.
     sdk::for_each_index(a.num_nodes, a.num_nodes > 256, 128, [&](int i) {
-      double* tg = &target_[4 * static_cast<std::size_t>(i)];
+      double* tg = &target[4 * static_cast<std::size_t>(i)];
       tg[0] = -1;
       const Projection pr = project(ps, a, b, i, track);
       if (pr.element < 0) {
@@ -660,8 +678,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       double mb = 0;
       for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
       const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
-      energy_[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, sdk::scale(ne, ps.side[i]),
-                              vrel, in.dt, &scratch_[3 * static_cast<std::size_t>(i)]);
+      energy[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, sdk::scale(ne, ps.side[i]),
+                              vrel, in.dt, &scratch[3 * static_cast<std::size_t>(i)]);
       tg[0] = pr.element;
       tg[1] = pr.w[0];
       tg[2] = pr.w[1];
@@ -670,10 +688,10 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     auto fa = out.force[a.index];
     auto fb = out.force[b.index];
     for (int i = 0; i < a.num_nodes; ++i) {
-      const double* tg = &target_[4 * static_cast<std::size_t>(i)];
+      const double* tg = &target[4 * static_cast<std::size_t>(i)];
       if (tg[0] < 0) continue;
       ++out.active;
-      out.energy += energy_[i];
+      out.energy += energy[i];
       const int* t = &b.triangles[3 * static_cast<int>(tg[0])];
       if (!out.status.empty()) {
         out.status[a.index][i] = 2.0;
@@ -681,7 +699,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
           if (tg[1 + j] > 0) out.status[b.index][t[j]] = 2.0;
       }
       for (int d = 0; d < 3; ++d) {
-        const double f = scratch_[3 * i + d];
+        const double f = scratch[3 * i + d];
         fa[3 * i + d] += f;
         for (int j = 0; j < 3; ++j) fb[3 * t[j] + d] -= tg[1 + j] * f;
       }
@@ -690,10 +708,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
 
   sdk::ContactPair pair_;
   double penalty_ = 0, friction_ = 0, slip_velocity_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
-  std::span<const sdk::PartView> parts_;
-  std::span<const sdk::ToolView> tools_;
   Pass pass_[2];  // tool pairs use pass_[0].ft only
-  std::vector<double> nn_a_, dist_, tn_, scratch_, energy_, target_;
+  std::vector<double> nn_a_, dist_, tn_;
   // Tool queries: where each node beyond the cutoff was last asked (xq_,
   // and the tool's path length then, sq_).
   std::vector<double> xq_, sq_;
@@ -743,4 +759,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.4.2", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.5.0", ts::contact::register_all)

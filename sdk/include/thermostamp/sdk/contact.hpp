@@ -51,7 +51,15 @@ struct ContactForceInput {
   std::span<const std::span<const double>> velocity;  // per part, 3 * num_nodes (m/s)
   std::span<const std::span<const double>> node_area; // per part, num_nodes (m^2), initial tributary area
   std::span<const std::span<const double>> mass;      // per part, num_nodes (kg), lumped, mass scaling included
+  // The side of the pair to compute, for a handler whose sides() is 2:
+  // 0 the nodes of the pair's first body against the second body, 1 the
+  // nodes of the second against the first, -1 both.
+  int side = -1;
 };
+// The kernel hands every call arrays of its own for the parts of the pair
+// (or arrays that only calls run in turn on the same thread share): add to
+// them, never read them for other pairs' forces, and write nothing to the
+// spans of parts outside the pair (they may be empty).
 struct ContactForceOutput {
   std::span<const std::span<double>> force;  // per part, 3 * num_nodes (accumulate)
   std::span<double> tool_force;              // 3 * num_tools (accumulate)
@@ -72,6 +80,13 @@ class ContactHandler {
   virtual Status contact_forces(const ContactForceInput&, ContactForceOutput&) {
     return Status::failure("this contact handler has no mechanical contact");
   }
+  // The sides of a pair of two plies that contact_forces can compute one
+  // at a time (ContactForceInput::side): 2 lets the kernel run the two
+  // sides of one step at the same time on two threads, each beside the
+  // elements of the ply whose nodes it moves, so the handler must then keep
+  // whatever a side writes (scratch arrays, state) apart from the other
+  // side's. 1 (the default): every call computes the whole pair (side -1).
+  virtual int sides() const { return 1; }
   // Upper bound of the contact stiffness (N/m) the pair can put on every
   // node, accumulated into `stiffness` (per part, num_nodes) for the nodes of
   // both bodies. The kernel uses it for the stable step and mass scaling, so
