@@ -57,12 +57,11 @@ void node_normals(const sdk::PartView& p, std::vector<double>& nn) {
 // kGeo values per element: its unit normal n and the in-plane gradients g1,
 // g2 of its barycentric coordinates w1, w2 (w_k = (x - p0) . g_k for the
 // projection of a point x on the triangle's plane, w0 = 1 - w1 - w2; the
-// gradient of w0 is g0 = -(g1 + g2)), then its first corner p0, so that a
-// search reads one row per candidate. A degenerate (zero-area) triangle gets
+// gradient of w0 is g0 = -(g1 + g2)). A degenerate (zero-area) triangle gets
 // n = 0 and NaN gradients: its weights compare false, so it is never taken
 // for a face and always gets the full closest-point search. One vector pass
 // over n triangles, written out component by component.
-constexpr int kGeo = 12;
+constexpr int kGeo = 9;
 
 TS_VECTOR_CLONES
 void geometry_block(int n, const int* __restrict tri, const double* __restrict x, double* __restrict geo) {
@@ -88,9 +87,6 @@ void geometry_block(int n, const int* __restrict tri, const double* __restrict x
     g[6] = (u1 * e12 - u2 * e11) * ginv;  // g2 = n x (p1 - p0) / 2A
     g[7] = (u2 * e10 - u0 * e12) * ginv;
     g[8] = (u0 * e11 - u1 * e10) * ginv;
-    g[9] = a0;
-    g[10] = a1;
-    g[11] = a2;
   }
 }
 
@@ -432,9 +428,9 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     if (!begin) return best;
     const bool self = a.index == b.index;
     // Plane distance and projection weights of x on candidate e.
-    auto locate = [&](int e, double* w, double& plane) {
+    auto locate = [&](int e, const int* t, double* w, double& plane) {
       const double* g = &ps.geo_b[kGeo * static_cast<std::size_t>(e)];
-      const double* p0 = g + 9;
+      const double* p0 = &b.x[3 * static_cast<std::size_t>(t[0])];
       const double rx = x[0] - p0[0], ry = x[1] - p0[1], rz = x[2] - p0[2];
       plane = rx * g[0] + ry * g[1] + rz * g[2];
       w[1] = rx * g[3] + ry * g[4] + rz * g[5];
@@ -484,7 +480,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const int* t = &b.triangles[3 * e];
       if (self && (t[0] == i || t[1] == i || t[2] == i)) continue;  // self contact
       double w[3], plane;
-      if (!locate(e, w, plane)) {
+      if (!locate(e, t, w, plane)) {
         if (keep) kept[nkept++] = {e, plane, {w[0], w[1], w[2]}};
         continue;
       }
@@ -501,7 +497,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         const int* t = &b.triangles[3 * e];
         if (self && (t[0] == i || t[1] == i || t[2] == i)) continue;
         double w[3], plane;
-        if (!locate(e, w, plane)) edge_or_vertex(e, t, w, plane);
+        if (!locate(e, t, w, plane)) edge_or_vertex(e, t, w, plane);
       }
     }
     if (best.element < 0) return best;
