@@ -345,6 +345,26 @@ TEST(Interrupt, SigintStopsTheCommandLineRun) {
   H5Fclose(file);
 }
 
+// The hemisphere scene made small for the tests of plugins that replace
+// its contact: 6 x 6 cells per ply, mass scaling to 1e-4 s, `end` seconds,
+// frames every `interval`, the test plugins' folder on the plugin path.
+json small_hemisphere(double end, double interval) {
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = end;
+  j["output"]["interval"] = interval;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {6, 6};
+  j["solvers"]["mechanics"]["mass_scaling"]["target_dt"] = 1e-4;
+  j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR};
+  return j;
+}
+
+// Writes `j` to dir/job.json and runs it on `threads` threads into dir/out.
+CommandResult run_job_in(const std::filesystem::path& dir, const json& j, int threads) {
+  std::ofstream(dir / "job.json") << j.dump(2);
+  return thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out") + " --quiet --threads " +
+                     std::to_string(threads));
+}
+
 // A contact handler that fails mid-run: exit 3 with the interaction's JSON
 // path and the time, the frames before it kept, on one thread and on two
 // (the contact beside the element blocks on the first thread, or run by
@@ -353,20 +373,13 @@ TEST(Plugins, ContactFailureStopsTheRunOnAnyThreadCount) {
   const std::pair<int, const char*> cases[] = {{1, "auto"}, {2, "beside"}, {2, "by_part"}};
   for (const auto& [threads, way] : cases) {
     const auto dir = temp_dir("contact_fail_" + std::to_string(threads) + "_" + way);
-    json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
-    j["time"]["end"] = 0.5;
-    j["output"]["interval"] = 0.1;
+    json j = small_hemisphere(0.5, 0.1);
     j["output"]["probes"] = json::array();
-    for (auto& p : j["parts"]) p["mesh"]["divisions"] = {6, 6};
-    j["solvers"]["mechanics"]["mass_scaling"]["target_dt"] = 1e-4;
     j["interactions"][3] = {{"type", "contact"}, {"handler", "fail_after"}, {"between", {"ply_top", "ply_bottom"}},
                             {"fail_time", 0.25}};
     j["solvers"]["mechanics"]["contact_schedule"] = way;
-    j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR};
-    std::ofstream(dir / "job.json") << j.dump(2);
     const auto out = dir / "out";
-    const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet --threads " +
-                               std::to_string(threads));
+    const auto r = run_job_in(dir, j, threads);
     EXPECT_EQ(r.exit_code, 3) << way << ": " << r.err;
     EXPECT_NE(r.err.find("contact handler of /interactions/3 at t = 0.25"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("failed on purpose"), std::string::npos) << r.err;
@@ -393,11 +406,7 @@ TEST(Plugins, WholePairHandlerForcesReachBothPlies) {
   std::string probes0, energy0, tools0;
   for (const auto& [threads, way] : cases) {
     const auto dir = temp_dir(std::string("node_pairs_") + std::to_string(threads) + "_" + way);
-    json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
-    j["time"]["end"] = 0.5;
-    j["output"]["interval"] = 0.25;
-    for (auto& p : j["parts"]) p["mesh"]["divisions"] = {6, 6};
-    j["solvers"]["mechanics"]["mass_scaling"]["target_dt"] = 1e-4;
+    json j = small_hemisphere(0.5, 0.25);
     j["solvers"]["mechanics"]["contact_schedule"] = way;
     j["interactions"] = json::array({{{"type", "contact"},
                                       {"handler", "node_pairs"},
@@ -405,11 +414,8 @@ TEST(Plugins, WholePairHandlerForcesReachBothPlies) {
                                       {"stiffness", 200.0}}});
     j["constraints"].push_back({{"type", "velocity"}, {"part", "ply_top"}, {"box", {{-1, -1, -1}, {1, 1, 1}}},
                                 {"velocity", {0, 0, 0.01}}});
-    j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR};
-    std::ofstream(dir / "job.json") << j.dump(2);
     const auto out = dir / "out";
-    const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet --threads " +
-                               std::to_string(threads));
+    const auto r = run_job_in(dir, j, threads);
     ASSERT_EQ(r.exit_code, 0) << way << ": " << r.err;
     double lift[2] = {0, 0};  // pole_top, pole_bottom at the end
     std::ifstream csv(out / "probes.csv");
