@@ -1186,6 +1186,26 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
   const int trial_ways[kWays] = {kBeside, kInTurn, kByPart};
   const int ways = parts_apart ? 3 : 2;
   const int round_calls = ways * kTrial;
+  // A call of a trial is timed from its start to the next call's: the
+  // step's integration and audit count too, since where a way leaves the
+  // plies' data decides what they cost.
+  const auto t0 = Clock::now();
+  if (fs.pending_way >= 0) {
+    const int w = fs.pending_way;
+    fs.pending_way = -1;
+    fs.time[w] += std::chrono::duration<double>(t0 - fs.pending_start).count();
+    if (++fs.count[w] == kTrial) {  // the way's round is over
+      fs.best[w] = std::min(fs.best[w], fs.time[w] / kTrial);
+      fs.time[w] = 0;
+      fs.count[w] = 0;
+    }
+    if (--fs.trial_left == 0) {
+      fs.way = trial_ways[0];
+      for (int j = 1; j < ways; ++j)
+        if (fs.best[trial_ways[j]] < fs.best[fs.way]) fs.way = trial_ways[j];
+      fs.next_trial = fs.calls + kRecheck;
+    }
+  }
   if (choice) {
     if (fs.trial_left == 0 && fs.calls >= fs.next_trial) {
       fs.trial_left = kRounds * round_calls;
@@ -1197,7 +1217,6 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
     }
     way = fs.trial_left > 0 ? trial_ways[(kRounds * round_calls - fs.trial_left) % round_calls / kTrial] : fs.way;
   }
-  const auto t0 = Clock::now();
   double stable;
   if (way == kInTurn) {
     auto tc = Clock::now();
@@ -1220,18 +1239,8 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
   ++fs.calls;
   ++fs.way_calls[way];
   if (choice && fs.trial_left > 0) {
-    fs.time[way] += seconds_since(t0);
-    if (++fs.count[way] == kTrial) {  // the way's round is over
-      fs.best[way] = std::min(fs.best[way], fs.time[way] / kTrial);
-      fs.time[way] = 0;
-      fs.count[way] = 0;
-    }
-    if (--fs.trial_left == 0) {
-      fs.way = trial_ways[0];
-      for (int j = 1; j < ways; ++j)
-        if (fs.best[trial_ways[j]] < fs.best[fs.way]) fs.way = trial_ways[j];
-      fs.next_trial = fs.calls + kRecheck;
-    }
+    fs.pending_way = way;
+    fs.pending_start = t0;
   }
   return stable;
 }

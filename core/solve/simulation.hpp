@@ -4,6 +4,7 @@
 // JobError); run() integrates and writes the output folder.
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <exception>
 #include <filesystem>
@@ -171,6 +172,8 @@ class Simulation {
     double time[kWays] = {0, 0, 0};
     long long count[kWays] = {0, 0, 0};
     double best[kWays] = {0, 0, 0};
+    int pending_way = -1;  // a trial's call whose time runs until the next call starts
+    std::chrono::steady_clock::time_point pending_start;
     // element_passes: the element blocks of each pass in order, (part,
     // block), and per pass the next block to claim and the blocks done.
     std::vector<std::vector<std::pair<int, int>>> work;
