@@ -268,7 +268,10 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), re
       st->bottom.assign(st->mesh.num_nodes(), 0.0);
     }
   }
-  if (job_.mechanics) build_mechanics();
+  if (job_.mechanics) {
+    build_mechanics();
+    if (!contacts_.empty()) build_contact_tasks();
+  }
   build_probes();
 }
 
@@ -1019,20 +1022,15 @@ void Simulation::element_passes(BesideContact* contact) {
     fs.done[pass].value.store(0, std::memory_order_relaxed);
   }
   const bool by_part = contact && contact->by_part;
-  if (by_part && contact_tasks_.empty()) build_contact_tasks();
 #ifdef _OPENMP
-  const std::vector<int>& owner = part_threads(omp_get_max_threads());
-#else
-  const std::vector<int>& owner = part_threads(1);
+  part_threads(omp_get_max_threads());
 #endif
   double contact_seconds = 0;
 #pragma omp parallel reduction(max : contact_seconds)
   {
     const int me = omp_get_thread_num(), team = omp_get_num_threads();
     if (by_part) {
-      // This thread's parts and tasks (a team smaller than asked: parts
-      // dealt again by their number).
-      auto mine = [&](int p) { return (team == fs.team ? owner[p] : p % team) == me; };
+      auto mine = [&](int p) { return thread_of_part(p, team) == me; };
       const auto tc = Clock::now();
       for (std::size_t p = 0; p < parts_.size(); ++p)
         if (mine(static_cast<int>(p))) start_part_contact(static_cast<int>(p));
@@ -1092,9 +1090,9 @@ void Simulation::element_passes(BesideContact* contact) {
 
 // The thread that owns each part for a team of `team` threads: parts
 // dealt largest first to the thread with the fewest elements so far.
-const std::vector<int>& Simulation::part_threads(int team) {
+void Simulation::part_threads(int team) {
   ForceSchedule& fs = schedule_;
-  if (fs.team == team && fs.part_thread.size() == parts_.size()) return fs.part_thread;
+  if (fs.team == team && fs.part_thread.size() == parts_.size()) return;
   fs.team = team;
   fs.part_thread.assign(parts_.size(), 0);
   std::vector<int> order(parts_.size());
@@ -1107,7 +1105,14 @@ const std::vector<int>& Simulation::part_threads(int team) {
     fs.part_thread[p] = t;
     load[t] += elements(p);
   }
-  return fs.part_thread;
+}
+
+// The thread of `team` that owns the part: as part_threads dealt it, or,
+// in a team of another size than the one dealt for, by the part's number.
+int Simulation::thread_of_part(int part, int team) const {
+  const ForceSchedule& fs = schedule_;
+  const bool dealt = team == fs.team && fs.part_thread.size() == parts_.size();
+  return dealt ? fs.part_thread[part] : part % team;
 }
 
 // Internal forces of every part at the current positions; returns the
@@ -1339,7 +1344,6 @@ void Simulation::merge_part_contact(int part) {
 // where a team is free).
 void Simulation::compute_contact_forces(double t, double dt) {
   if (contacts_.empty()) return;  // the contact forces stay zero
-  if (contact_tasks_.empty()) build_contact_tasks();
   for (std::size_t p = 0; p < parts_.size(); ++p) start_part_contact(static_cast<int>(p));
   for (ContactTask& task : contact_tasks_) run_contact_task(task, t, dt);
 }
@@ -1436,10 +1440,8 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
 #pragma omp parallel
     {
       const int me = omp_get_thread_num(), team = omp_get_num_threads();
-      const ForceSchedule& fs = schedule_;
-      const bool owned = team == fs.team && fs.part_thread.size() == static_cast<std::size_t>(np);
       for (int p = 0; p < np; ++p)
-        if ((owned ? fs.part_thread[p] : p % team) == me) integrate_part(p);
+        if (thread_of_part(p, team) == me) integrate_part(p);
     }
   } else {
     for (int p = 0; p < np; ++p) integrate_part(p);

@@ -228,7 +228,8 @@ class Simulation {
     std::exception_ptr error;      // out: what it threw
   };
   void element_passes(BesideContact* contact);
-  const std::vector<int>& part_threads(int team);
+  void part_threads(int team);
+  int thread_of_part(int part, int team) const;
   struct ContactSpans {  // per part views handed to the contact handlers every step
     std::vector<std::span<const double>> vel, areas, mass;
   } contact_spans_;
