@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <fstream>
@@ -213,6 +214,25 @@ constexpr double kKineticGrowthLimit = 10.0;
 inline void spin_pause() {
 #if defined(__SSE2__)
   _mm_pause();
+#endif
+}
+
+// dst = src, written with streaming (non-temporal) stores: the lines go to
+// memory without being read into this core's cache, and another core's
+// copies of them are dropped without this core waiting for each.
+// Ordered before later stores by the sfence at the end.
+void stream_copy(const double* src, double* dst, std::size_t n) {
+#if defined(__SSE2__)
+  std::size_t i = 0;
+  if (reinterpret_cast<std::uintptr_t>(dst) % 16 != 0 && n > 0) {
+    dst[0] = src[0];
+    i = 1;
+  }
+  for (; i + 2 <= n; i += 2) _mm_stream_pd(dst + i, _mm_loadu_pd(src + i));
+  for (; i < n; ++i) dst[i] = src[i];
+  _mm_sfence();
+#else
+  std::copy(src, src + n, dst);
 #endif
 }
 
@@ -1026,22 +1046,44 @@ void Simulation::element_passes(BesideContact* contact) {
   part_threads(omp_get_max_threads());
 #endif
   double contact_seconds = 0;
+  const long long round = by_part ? ++exchange_round_ : 0;  // of the exchange copies
 #pragma omp parallel reduction(max : contact_seconds)
   {
     const int me = omp_get_thread_num(), team = omp_get_num_threads();
     if (by_part) {
       auto mine = [&](int p) { return thread_of_part(p, team) == me; };
       const auto tc = Clock::now();
-      for (std::size_t p = 0; p < parts_.size(); ++p)
-        if (mine(static_cast<int>(p))) start_part_contact(static_cast<int>(p));
+      for (std::size_t p = 0; p < parts_.size(); ++p) {
+        if (!mine(static_cast<int>(p))) continue;
+        start_part_contact(static_cast<int>(p));
+        // The part's exchange copies, where a task on another thread reads them.
+        bool publish = false;
+        for (const ContactTask& task : contact_tasks_)
+          publish = publish || (task.other == static_cast<int>(p) && crosses_threads(task, team));
+        if (Exchange* ex = exchange_[p].get(); ex && publish) {
+          stream_copy(parts_[p]->x.data(), ex->x.data(), ex->x.size());
+          stream_copy(mech_[p]->v.data(), ex->v.data(), ex->v.size());
+          ex->round.store(round, std::memory_order_release);
+        }
+      }
       for (ContactTask& task : contact_tasks_) {
         if (!mine(task.owner)) continue;
+        task.published = crosses_threads(task, team);
+        if (task.published) {  // until the other part's thread has written its copies
+          for (int spins = 0; exchange_[task.other]->round.load(std::memory_order_acquire) != round; ++spins) {
+            if (spins < 4096)
+              spin_pause();
+            else
+              std::this_thread::yield();
+          }
+        }
         try {
           task.error = nullptr;
           run_contact_task(task, contact->t, contact->dt);
         } catch (...) {
           task.error = std::current_exception();
         }
+        if (task.published) stream_copy(task.cross.data(), task.cross_out.data(), task.cross.size());
       }
       contact_seconds = seconds_since(tc);
       for (int pass = 0; pass < passes; ++pass)
@@ -1291,6 +1333,30 @@ void Simulation::build_contact_tasks() {
     cs.mass.emplace_back(mech_[p]->mass);
     cs.areas.emplace_back(parts_[p]->area);
   }
+  // The exchange copies of the parts that tasks of other parts read, and
+  // the views of such tasks (used where the two parts' threads differ).
+  exchange_.resize(np);
+  for (ContactTask& task : contact_tasks_) {
+    if (task.other < 0 || task.other == task.owner) continue;
+    const int o = task.other;
+    if (!exchange_[o]) {
+      exchange_[o] = std::make_unique<Exchange>();
+      exchange_[o]->x = parts_[o]->x;
+      exchange_[o]->v = mech_[o]->v;
+    }
+    task.views = part_views_;
+    task.views[o].x = exchange_[o]->x;
+    task.vel = cs.vel;
+    task.vel[o] = exchange_[o]->v;
+    task.cross_out.assign(task.cross.size(), 0.0);
+  }
+}
+
+// by_part on `team` threads: whether the task's other part is integrated
+// on another thread than the task's own.
+bool Simulation::crosses_threads(const ContactTask& task, int team) const {
+  return task.other >= 0 && task.other != task.owner &&
+         thread_of_part(task.other, team) != thread_of_part(task.owner, team);
 }
 
 // Before the first task that moves the part's nodes: its contact forces
@@ -1311,6 +1377,10 @@ void Simulation::run_contact_task(ContactTask& task, double t, double dt) {
   in.time = t;
   in.dt = dt;
   in.velocity = contact_spans_.vel;
+  if (task.published) {  // by_part across threads: the other part's exchange copies
+    in.parts = task.views;
+    in.velocity = task.vel;
+  }
   in.node_area = contact_spans_.areas;
   in.mass = contact_spans_.mass;
   in.side = task.side;
@@ -1332,7 +1402,8 @@ void Simulation::merge_part_contact(int part) {
   std::vector<double>& f = mech_[part]->f_con;
   for (const int k : cross_into_[part]) {
     const ContactTask& task = contact_tasks_[k];
-    for (std::size_t i = 0; i < f.size(); ++i) f[i] += task.cross[i];
+    const std::vector<double>& cross = task.published ? task.cross_out : task.cross;
+    for (std::size_t i = 0; i < f.size(); ++i) f[i] += cross[i];
     if (!task.cross_status.empty()) {
       std::vector<double>& st = parts_[part]->contact_status;
       for (std::size_t i = 0; i < st.size(); ++i) st[i] = std::max(st[i], task.cross_status[i]);
@@ -1345,7 +1416,10 @@ void Simulation::merge_part_contact(int part) {
 void Simulation::compute_contact_forces(double t, double dt) {
   if (contacts_.empty()) return;  // the contact forces stay zero
   for (std::size_t p = 0; p < parts_.size(); ++p) start_part_contact(static_cast<int>(p));
-  for (ContactTask& task : contact_tasks_) run_contact_task(task, t, dt);
+  for (ContactTask& task : contact_tasks_) {
+    task.published = false;
+    run_contact_task(task, t, dt);
+  }
 }
 
 // The tasks' tool forces, energies and counts, summed in task order.

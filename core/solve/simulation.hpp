@@ -212,8 +212,30 @@ class Simulation {
     double energy = 0;
     long long active = 0;
     std::exception_ptr error;
+    // by_part, where `other` is integrated on another thread than the one
+    // running the task: the task reads `other`'s positions and velocities
+    // from that part's exchange copies (views, vel), and hands its forces
+    // on `other` over through cross_out, written with streaming stores
+    // (published: cross_out holds this step's forces, else cross does).
+    std::vector<sdk::PartView> views;
+    std::vector<std::span<const double>> vel;
+    std::vector<double> cross_out;
+    bool published = false;
   };
   std::vector<ContactTask> contact_tasks_;
+  // Per part read by a contact task of another part's thread: copies of its
+  // positions and velocities that its own thread writes with streaming
+  // stores at the start of each by_part force phase, so that the other
+  // core reads them from memory and this part's own lines stay in its
+  // core's cache (a store to a line another core has read waits for that
+  // core; docs/benchmarks.md). `round` says which phase the copies are of.
+  struct Exchange {
+    std::vector<double> x, v;
+    alignas(64) std::atomic<long long> round{0};
+  };
+  std::vector<std::unique_ptr<Exchange>> exchange_;  // per part, null where no task reads it
+  long long exchange_round_ = 0;
+  bool crosses_threads(const ContactTask& task, int team) const;
   std::vector<std::vector<int>> cross_into_;  // per part: the tasks whose `cross` it receives, in order
   void build_contact_tasks();
   void start_part_contact(int part);
