@@ -56,6 +56,11 @@ struct ContactForceInput {
   // nodes of the second against the first, -1 both.
   int side = -1;
 };
+// The views in `parts` and `velocity` hold this step's values, but may be
+// copies of the kernel's arrays (with contact_schedule by_part, the other
+// ply's positions and velocities, written for this step by the thread
+// that integrates that ply): read them within the call and keep no
+// pointer into them from one call to the next.
 // The kernel hands every call arrays of its own for the parts of the pair
 // (or arrays that only calls run in turn on the same thread share): add to
 // them, never read them for other pairs' forces, and write nothing to the
