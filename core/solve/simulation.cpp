@@ -1251,6 +1251,11 @@ double Simulation::forces_and_stable_dt(double t, double dt) {
       for (int j = 1; j < ways; ++j)
         if (fs.best[trial_ways[j]] < fs.best[fs.way]) fs.way = trial_ways[j];
       fs.next_trial = fs.calls + kRecheck;
+      static const char* const kName[kWays] = {"in_turn", "beside", "by_part"};
+      logger("solve")->debug("contact_schedule auto at t = {:.4g} s: {} (best round per step: beside {:.0f} us, "
+                             "in_turn {:.0f} us{})",
+                             t, kName[fs.way], 1e6 * fs.best[kBeside], 1e6 * fs.best[kInTurn],
+                             ways > 2 ? fmt::format(", by_part {:.0f} us", 1e6 * fs.best[kByPart]) : "");
     }
   }
   if (choice) {
