@@ -217,6 +217,17 @@ inline void spin_pause() {
 #endif
 }
 
+// Waits until ready() holds: spinning, then yielding (with more threads
+// than cores, the thread being waited for needs the core).
+template <class Ready>
+void spin_until(Ready ready) {
+  for (int spins = 0; !ready(); ++spins)
+    if (spins < 4096)
+      spin_pause();
+    else
+      std::this_thread::yield();
+}
+
 // dst = src, written with streaming (non-temporal) stores: the lines go to
 // memory without being read into this core's cache, and another core's
 // copies of them are dropped without this core waiting for each.
@@ -1069,14 +1080,8 @@ void Simulation::element_passes(BesideContact* contact) {
       for (ContactTask& task : contact_tasks_) {
         if (!mine(task.owner)) continue;
         task.published = crosses_threads(task, team);
-        if (task.published) {  // until the other part's thread has written its copies
-          for (int spins = 0; exchange_[task.other]->round.load(std::memory_order_acquire) != round; ++spins) {
-            if (spins < 4096)
-              spin_pause();
-            else
-              std::this_thread::yield();
-          }
-        }
+        if (task.published)  // until the other part's thread has written its copies
+          spin_until([&] { return exchange_[task.other]->round.load(std::memory_order_acquire) == round; });
         try {
           task.error = nullptr;
           run_contact_task(task, contact->t, contact->dt);
@@ -1111,11 +1116,7 @@ void Simulation::element_passes(BesideContact* contact) {
           element_block(work[k].first, work[k].second, pass);
           fs.done[pass].value.fetch_add(1, std::memory_order_release);
         }
-        for (int spins = 0; fs.done[pass].value.load(std::memory_order_acquire) < n; ++spins)
-          if (spins < 4096)
-            spin_pause();
-          else
-            std::this_thread::yield();  // more threads than cores: let the block's thread run
+        spin_until([&] { return fs.done[pass].value.load(std::memory_order_acquire) >= n; });
       }
     }
   }
