@@ -159,5 +159,98 @@ TEST(PlyPlySearch, LoneTriangleTargetsAreItsClosestPoints) {
   EXPECT_EQ(checked, 3 * 3 * 21 * 21);
 }
 
+// search_interval k: from one full search to the next (every k-th call)
+// each node keeps the triangle the last search found and takes the closest
+// point on it. A node pressed 0.1 mm into a flat plate of two triangles
+// (faces at +-h/2 of 0.5 mm plies) crosses their shared diagonal, 1 um per
+// call, at the third call. Every step (k = 1) the plate's force moves to
+// the other triangle's far node at that call; with k = 3 it stays on the
+// diagonal's two nodes until the fourth call, the next search. There the
+// node, s past the kept triangle's edge at the plane distance d, is
+// sqrt(d^2 + s^2) from it (1e-9 of the penetration further at s = 0.5 um,
+// d = 0.4 mm) and pushed along the line from the edge. Forces within 1e-12
+// of those values; a search every step gives the exact plane forces.
+TEST(PlyPlySearch, SearchIntervalKeepsTheTriangleUntilTheNextSearch) {
+  PluginRegistry registry;
+  const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");
+  ShellMesh b;
+  b.x = {0, 0, 0, 0.01, 0, 0, 0.01, 0.01, 0, 0, 0.01, 0};
+  b.triangles = {0, 1, 2, 0, 2, 3};  // node 1 beyond the diagonal 0-2 on one side, node 3 on the other
+  b.neighbours = {-1, 1, -1, 0, -1, -1};
+  const double s2 = std::sqrt(0.5), d = 0.0004, penalty = 1e11, area = 1e-4;
+  auto at = [&](int call) {  // 1.5 um on node 1's side of the diagonal at call 0, 1 um towards node 3 per call
+    const double off = 1.5e-6 - 1e-6 * call;
+    return std::array<double, 3>{0.005 + off * s2, 0.005 - off * s2, d};
+  };
+  std::vector<std::array<double, 3>> fa[2];    // node force, per call
+  std::vector<std::array<double, 4>> fz_b[2];  // z force on b's four nodes, per call
+  for (int run = 0; run < 2; ++run) {
+    const int interval = run == 0 ? 1 : 3;
+    std::unique_ptr<sdk::ContactHandler> handler(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
+    ShellMesh a;
+    a.x = {0, 0, 0};
+    const sdk::ContactPair pair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}};
+    {
+      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+      ASSERT_TRUE(handler
+                      ->configure(validate_params(json{{"penalty", penalty}, {"damping", 0.0},
+                                                       {"search_interval", interval}},
+                                                  "/c", r.descriptor),
+                                  pair, parts, {})
+                      .ok);
+    }
+    const std::vector<double> va(3, 0.0), vb(12, 0.0), area_a(1, area), area_b(4, area), ma(1, 1e-3), mb(4, 1e-3);
+    const std::vector<std::span<const double>> vel = {va, vb}, areas = {area_a, area_b}, mass = {ma, mb};
+    for (int call = 0; call < 6; ++call) {
+      const auto p = at(call);
+      a.x = {p[0], p[1], p[2]};
+      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+      std::vector<double> f_a(3, 0.0), f_b(12, 0.0), tool_force;
+      const std::vector<std::span<double>> force = {f_a, f_b};
+      sdk::ContactForceInput in;
+      in.parts = parts;
+      in.dt = 1e-5;
+      in.velocity = vel;
+      in.node_area = areas;
+      in.mass = mass;
+      in.side = 0;  // a's node against b's triangles
+      sdk::ContactForceOutput out;
+      out.force = force;
+      out.tool_force = tool_force;
+      ASSERT_TRUE(handler->contact_forces(in, out).ok);
+      fa[run].push_back({f_a[0], f_a[1], f_a[2]});
+      fz_b[run].push_back({f_b[2], f_b[5], f_b[8], f_b[11]});
+    }
+  }
+  // Half the penalty per direction; only the direction of a's node here.
+  const double exact = 0.5 * penalty * area * (0.0005 - d);
+  for (int call = 0; call < 6; ++call) {
+    const bool beyond = at(call)[0] < 0.005;  // past the diagonal, over triangle 0-2-3
+    const bool searched = call % 3 == 0;
+    const double off = std::abs(1.5e-6 - 1e-6 * call);
+    // Every step: the exact force, on the triangle under the node.
+    EXPECT_NEAR(fa[0][call][2], exact, 1e-12 * exact) << "call " << call;
+    EXPECT_EQ(fz_b[0][call][1] != 0.0, !beyond) << "call " << call;
+    EXPECT_EQ(fz_b[0][call][3] != 0.0, beyond) << "call " << call;
+    // Every third step: the triangle of the last search.
+    const bool kept_beyond = at(call - call % 3)[0] < 0.005;
+    EXPECT_EQ(fz_b[1][call][1] != 0.0, !kept_beyond && !beyond) << "call " << call;
+    EXPECT_EQ(fz_b[1][call][3] != 0.0, kept_beyond && beyond) << "call " << call;
+    // On the kept triangle's edge: at distance sqrt(d^2 + off^2), pushed
+    // along the line from the edge, so its z share is d / distance.
+    const double dist = beyond != kept_beyond ? std::sqrt(d * d + off * off) : d;
+    const double expected = 0.5 * penalty * area * (0.0005 - dist) * d / dist;
+    EXPECT_NEAR(fa[1][call][2], expected, 1e-12 * exact) << "call " << call;
+    if (searched) EXPECT_EQ(fa[1][call][2], fa[0][call][2]) << "call " << call;
+    double sum = 0;
+    for (double f : fz_b[1][call]) sum += f;
+    EXPECT_NEAR(sum, -fa[1][call][2], 1e-12 * exact) << "call " << call;  // momentum
+  }
+  // The crossing at the third call (index 2) is seen at the fourth with k = 3.
+  EXPECT_EQ(fz_b[1][2][3], 0.0);
+  EXPECT_GT(std::abs(fz_b[1][3][3]), 0.0);
+  EXPECT_GT(std::abs(fz_b[0][2][3]), 0.0);
+}
+
 }  // namespace
 }  // namespace ts

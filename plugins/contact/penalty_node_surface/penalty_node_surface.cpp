@@ -226,6 +226,10 @@ struct Pass {
   // Per node of a, written by the node's loop, read by the fixed-order sums:
   // its force (3), its spring energy, its target (element, 3 weights).
   std::vector<double> scratch, energy, target;
+  // With search_interval > 1: the triangle of b that the last full search
+  // found for each node of a (-1: none within reach), and the passes run.
+  std::vector<int> kept;
+  long long calls = 0;
 };
 
 class PenaltyNodeSurface final : public sdk::ContactHandler {
@@ -240,6 +244,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       damping_ = params.real("damping");
       conductance_ = params.real("conductance");
       gap_tol_ = params.real("gap_tolerance");
+      search_interval_ = params.integer("search_interval");
       const sdk::PartView& a = parts[pair.first.index];
       double h = a.thickness;
       if (pair.second.type == sdk::BodyRef::Type::Part) h = std::min(h, parts[pair.second.index].thickness);
@@ -397,14 +402,17 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     }
   }
 
-  void refresh_candidates(Pass& ps, const sdk::PartView& a, const sdk::PartView& b, double reach) {
-    if (!ps.cand.needs_rebuild(a, b)) return;
+  // Rebuilds ps's candidate lists if a node has moved too far since the
+  // last build; says whether it did.
+  bool refresh_candidates(Pass& ps, const sdk::PartView& a, const sdk::PartView& b, double reach) {
+    if (!ps.cand.needs_rebuild(a, b)) return false;
     double h = 0;
     for (int e = 0; e < b.num_elements; ++e)
       for (int k = 0; k < 3; ++k)
         h = std::max(h, sdk::norm(sdk::sub(sdk::load3(b.x.data(), b.triangles[3 * e + k]),
                                            sdk::load3(b.x.data(), b.triangles[3 * e + (k + 1) % 3]))));
     ps.cand.build(a, b, reach, std::max(0.1 * h, 0.5 * reach));
+    return true;
   }
 
   // The target of node i within `reach` of B's mid-surface: the closest
@@ -509,6 +517,42 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const double dist = std::sqrt(best_d2);
     best.d = best_dn >= 0 ? dist : -dist;
     if (dist > 0) best.n = sdk::scale(best_r, (best_dn >= 0 ? 1.0 : -1.0) / dist);
+    return best;
+  }
+
+  // The closest point of node i on triangle e of B alone, as project()
+  // computes it for that one candidate (no target if farther than reach).
+  Projection project_on(const Pass& ps, const sdk::PartView& a, const sdk::PartView& b, int i, int e,
+                        double reach) const {
+    Projection best;
+    const Vec3 x = sdk::load3(a.x.data(), i);
+    const int* t = &b.triangles[3 * static_cast<std::size_t>(e)];
+    const double* g = &ps.geo_b[kGeo * static_cast<std::size_t>(e)];
+    const double* p0 = &b.x[3 * static_cast<std::size_t>(t[0])];
+    const double rx = x[0] - p0[0], ry = x[1] - p0[1], rz = x[2] - p0[2];
+    const double plane = rx * g[0] + ry * g[1] + rz * g[2];
+    double w[3];
+    w[1] = rx * g[3] + ry * g[4] + rz * g[5];
+    w[2] = rx * g[6] + ry * g[7] + rz * g[8];
+    w[0] = 1.0 - w[1] - w[2];
+    const double reach2 = reach * reach;
+    best.n = sdk::load3(g, 0);
+    if (w[0] >= 0 && w[1] >= 0 && w[2] >= 0) {
+      if (plane * plane > reach2) return best;
+      best.element = e;
+      best.d = plane;
+    } else {
+      const Vec3 cp = sdk::closest_point_on_triangle(x, sdk::load3(b.x.data(), t[0]), sdk::load3(b.x.data(), t[1]),
+                                                     sdk::load3(b.x.data(), t[2]), w);
+      const Vec3 r = sdk::sub(x, cp);
+      const double d2 = sdk::dot(r, r);
+      if (d2 > reach2) return best;
+      best.element = e;
+      const double dn = sdk::dot(r, sdk::load3(g, 0)), dist = std::sqrt(d2);
+      best.d = dn >= 0 ? dist : -dist;
+      if (dist > 0) best.n = sdk::scale(r, (dn >= 0 ? 1.0 : -1.0) / dist);
+    }
+    for (int k = 0; k < 3; ++k) best.w[k] = w[k];
     return best;
   }
 
@@ -623,7 +667,15 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const sdk::PartView& b = in.parts[ps.b];
     const double hsum2 = 0.5 * (a.thickness + b.thickness);
     const double track = hsum2 + gap_tol_ + hsum2;  // keep the side while the node stays this close
-    refresh_candidates(ps, a, b, track);
+    const bool rebuilt = refresh_candidates(ps, a, b, track);
+    // A full search every search_interval passes (and whenever the candidate
+    // lists change); in between, each node's triangle of the last one.
+    if (ps.kept.size() != static_cast<std::size_t>(a.num_nodes)) {
+      ps.kept.assign(a.num_nodes, -1);
+      ps.calls = 0;
+    }
+    const bool full = search_interval_ <= 1 || rebuilt || ps.calls % search_interval_ == 0;
+    ps.calls = full ? 1 : ps.calls + 1;
     const auto va = in.velocity[a.index];
     const auto vb = in.velocity[b.index];
     const auto area = in.node_area[a.index];
@@ -641,7 +693,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     sdk::for_each_index(a.num_nodes, a.num_nodes > 256, 128, [&](int i) {
       double* tg = &target[4 * static_cast<std::size_t>(i)];
       tg[0] = -1;
-      const Projection pr = project(ps, a, b, i, track);
+      Projection pr;
+      if (full) {
+        pr = project(ps, a, b, i, track);
+        ps.kept[i] = pr.element;
+      } else if (ps.kept[i] >= 0) {
+        pr = project_on(ps, a, b, i, ps.kept[i], track);
+      }
       if (pr.element < 0) {
         ps.side[i] = 0;
         for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
@@ -704,6 +762,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
 
   sdk::ContactPair pair_;
   double penalty_ = 0, friction_ = 0, slip_velocity_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
+  long long search_interval_ = 1;
   Pass pass_[2];  // tool pairs use pass_[0].ft only
   std::vector<double> nn_a_, dist_, tn_;
   // Tool queries: where each node beyond the cutoff was last asked (xq_,
@@ -719,7 +778,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.4.2";
+  d.version = "0.5.0";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces";
   d.params = {
@@ -747,6 +806,12 @@ void register_all(sdk::Registrar& r) {
                       "largest gap between facing shell surfaces still counted as touching for heat exchange; "
                       "negative = 1 % of the thinner ply"),
       sdk::bool_param("self", false, "allow a body in contact with itself"),
+      sdk::int_param("search_interval", "1",
+                     "ply/ply: steps from one full closest-point search to the next. 1: every step (exact). k > 1: "
+                     "in the steps between, each node keeps the triangle the last search found and takes the "
+                     "closest point on it; a node that slides onto a neighbouring triangle meets it at most k - 1 "
+                     "steps late (a cheaper search at a small error, see the user guide)",
+                     1, 64),
   };
   d.example = R"({ "type": "contact", "handler": "penalty_node_surface", "between": ["die", "ply_bottom"], "friction": 0.2, "conductance": 1000.0 })";
   r.add_contact(d, &create);
