@@ -171,6 +171,7 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"negative_conductance", [](json& j) { j["interactions"][0]["conductance"] = -1.0; }, "error: /interactions/0/conductance: must be >= 0"},
       {"negative_penalty", [](json& j) { j["interactions"][0]["penalty"] = -1.0; }, "error: /interactions/0/penalty: must be >= 0"},
       {"negative_friction", [](json& j) { j["interactions"][1]["friction"] = -0.1; }, "error: /interactions/1/friction: must be >= 0"},
+      {"search_interval_on_a_tool", [](json& j) { j["interactions"][1]["search_interval"] = 2; }, "error: /interactions/1: contact handler 'penalty_node_surface': search_interval applies to ply/ply pairs only"},
       {"search_interval_zero", [](json& j) { j["interactions"][0]["search_interval"] = 0; }, "error: /interactions/0/search_interval: must be between 1 and 64, found 0"},
       {"tool_mesh_missing", [](json& j) { j["tools"][0]["surface"] = {{"type", "mesh"}, {"file", "nowhere.stl"}}; }, "error: /tools/0/surface/file: cannot read the tool mesh"},
       {"tool_mesh_unreadable", [](json& j) { j["tools"][0]["surface"] = {{"type", "mesh"}, {"file", "job.json"}}; }, "error: /tools/0/surface/file: cannot read the tool mesh"},

@@ -245,6 +245,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       conductance_ = params.real("conductance");
       gap_tol_ = params.real("gap_tolerance");
       search_interval_ = params.integer("search_interval");
+      if (search_interval_ != 1 && pair.second.type != sdk::BodyRef::Type::Part)
+        return sdk::Status::failure("search_interval applies to ply/ply pairs only (a tool's distances are exact at every step)");
       const sdk::PartView& a = parts[pair.first.index];
       double h = a.thickness;
       if (pair.second.type == sdk::BodyRef::Type::Part) h = std::min(h, parts[pair.second.index].thickness);
