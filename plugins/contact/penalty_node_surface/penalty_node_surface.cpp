@@ -405,16 +405,15 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   }
 
   // Rebuilds ps's candidate lists if a node has moved too far since the
-  // last build; says whether it did.
-  bool refresh_candidates(Pass& ps, const sdk::PartView& a, const sdk::PartView& b, double reach) {
-    if (!ps.cand.needs_rebuild(a, b)) return false;
+  // last build.
+  void refresh_candidates(Pass& ps, const sdk::PartView& a, const sdk::PartView& b, double reach) {
+    if (!ps.cand.needs_rebuild(a, b)) return;
     double h = 0;
     for (int e = 0; e < b.num_elements; ++e)
       for (int k = 0; k < 3; ++k)
         h = std::max(h, sdk::norm(sdk::sub(sdk::load3(b.x.data(), b.triangles[3 * e + k]),
                                            sdk::load3(b.x.data(), b.triangles[3 * e + (k + 1) % 3]))));
     ps.cand.build(a, b, reach, std::max(0.1 * h, 0.5 * reach));
-    return true;
   }
 
   // The target of node i within `reach` of B's mid-surface: the closest
@@ -669,15 +668,17 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const sdk::PartView& b = in.parts[ps.b];
     const double hsum2 = 0.5 * (a.thickness + b.thickness);
     const double track = hsum2 + gap_tol_ + hsum2;  // keep the side while the node stays this close
-    const bool rebuilt = refresh_candidates(ps, a, b, track);
-    // A full search every search_interval passes (and whenever the candidate
-    // lists change); in between, each node's triangle of the last one.
+    // A full search every search_interval passes; in between, each node's
+    // triangle of the last one. The candidate lists serve the full searches
+    // only, so they are checked (and rebuilt where nodes moved too far)
+    // just before each.
     if (ps.kept.size() != static_cast<std::size_t>(a.num_nodes)) {
       ps.kept.assign(a.num_nodes, -1);
       ps.calls = 0;
     }
-    const bool full = search_interval_ <= 1 || rebuilt || ps.calls % search_interval_ == 0;
+    const bool full = search_interval_ <= 1 || ps.calls % search_interval_ == 0;
     ps.calls = full ? 1 : ps.calls + 1;
+    if (full) refresh_candidates(ps, a, b, track);
     const auto va = in.velocity[a.index];
     const auto vb = in.velocity[b.index];
     const auto area = in.node_area[a.index];
