@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 #include <map>
+#include <utility>
 
 #include "test_support.hpp"
 
@@ -33,6 +34,25 @@ Faces faces(const JobRun& r, int probe, double t) {
   double m = 0;
   for (std::size_t k = 0; k < v.size(); ++k) m += (k == 0 || k + 1 == v.size() ? 0.5 : 1.0) * v[k];
   return {v.front(), m / (v.size() - 1), v.back()};
+}
+
+// How far two runs of the coarse scene are apart: the largest relative
+// difference of the plies' shear extrema, and the largest difference of
+// the through-thickness temperatures at the four probes, every second (K).
+std::pair<double, double> apart(const JobRun& a, const JobRun& b) {
+  double shear = 0, temp = 0;
+  for (std::size_t p = 0; p < a.result.part_shear_max_deg.size(); ++p) {
+    const double ma = a.result.part_shear_max_deg[p], mb = b.result.part_shear_max_deg[p];
+    const double na = a.result.part_shear_min_deg[p], nb = b.result.part_shear_min_deg[p];
+    shear = std::max({shear, std::abs(mb - ma) / std::abs(ma), std::abs(nb - na) / std::abs(na)});
+  }
+  for (int probe = 0; probe < 4; ++probe)
+    for (double t : {1.0, 2.0, 3.0, 4.0, 5.0}) {
+      const auto& va = a.sample(probe, "temperature_profile", t)->values;
+      const auto& vb = b.sample(probe, "temperature_profile", t)->values;
+      for (std::size_t k = 0; k < va.size(); ++k) temp = std::max(temp, std::abs(va[k] - vb[k]));
+    }
+  return {shear, temp};
 }
 
 }  // namespace
@@ -163,18 +183,7 @@ TEST(Hemisphere, BendingSubcyclesKeepTheAnswer) {
   ASSERT_TRUE(b.result.ok) << b.result.error;
   EXPECT_EQ(b.result.bending_largest, 8);
   EXPECT_LT(b.result.bending_evaluations, b.result.mechanical_steps / 7);
-  double shear = 0, temp = 0;
-  for (std::size_t p = 0; p < a.result.part_shear_max_deg.size(); ++p) {
-    const double ma = a.result.part_shear_max_deg[p], mb = b.result.part_shear_max_deg[p];
-    const double na = a.result.part_shear_min_deg[p], nb = b.result.part_shear_min_deg[p];
-    shear = std::max({shear, std::abs(mb - ma) / std::abs(ma), std::abs(nb - na) / std::abs(na)});
-  }
-  for (int probe = 0; probe < 4; ++probe)
-    for (double t : {1.0, 2.0, 3.0, 4.0, 5.0}) {
-      const auto& va = a.sample(probe, "temperature_profile", t)->values;
-      const auto& vb = b.sample(probe, "temperature_profile", t)->values;
-      for (std::size_t k = 0; k < va.size(); ++k) temp = std::max(temp, std::abs(va[k] - vb[k]));
-    }
+  const auto [shear, temp] = apart(a, b);
   std::printf("bending every step / at most every 8th: %lld / %lld evaluations of %lld steps, shear extrema %.2e apart "
               "(relative), temperatures %.3f K apart, energy balance %.2e / %.2e\n",
               a.result.mechanical_steps, b.result.bending_evaluations, b.result.mechanical_steps, shear, temp,
@@ -186,12 +195,12 @@ TEST(Hemisphere, BendingSubcyclesKeepTheAnswer) {
 
 // The ply/ply search every 4th step (search_interval, the jobs' own
 // setting; between searches each node keeps its triangle) against every
-// step: the same forming within 1 % (shear
-// extrema of both plies), 0.1 K (through-thickness temperatures at the
-// four probes, every second) and 1e-5 m (the punch's travel is prescribed;
-// the holder's, which follows the force balance, at the end), with the
-// energy balance under 2 %. On this coarse scene a step is 7 times the
-// default scene's, so the plies slide further between searches.
+// step: the same forming within 1 % (shear extrema of both plies), 0.1 K
+// (through-thickness temperatures at the four probes, every second) and
+// 1e-5 m (the punch's travel is prescribed; the holder's, which follows
+// the force balance, at the end), with the energy balance under 2 %. On
+// this coarse scene a step is 7 times the default scene's, so the plies
+// slide further between searches.
 TEST(Hemisphere, PlyPlySearchIntervalKeepsTheAnswer) {
   json j = coarse_scene();
   json* plies = nullptr;
@@ -204,18 +213,7 @@ TEST(Hemisphere, PlyPlySearchIntervalKeepsTheAnswer) {
   const JobRun b = run_json(j);
   ASSERT_TRUE(a.result.ok) << a.result.error;
   ASSERT_TRUE(b.result.ok) << b.result.error;
-  double shear = 0, temp = 0;
-  for (std::size_t p = 0; p < a.result.part_shear_max_deg.size(); ++p) {
-    const double ma = a.result.part_shear_max_deg[p], mb = b.result.part_shear_max_deg[p];
-    const double na = a.result.part_shear_min_deg[p], nb = b.result.part_shear_min_deg[p];
-    shear = std::max({shear, std::abs(mb - ma) / std::abs(ma), std::abs(nb - na) / std::abs(na)});
-  }
-  for (int probe = 0; probe < 4; ++probe)
-    for (double t : {1.0, 2.0, 3.0, 4.0, 5.0}) {
-      const auto& va = a.sample(probe, "temperature_profile", t)->values;
-      const auto& vb = b.sample(probe, "temperature_profile", t)->values;
-      for (std::size_t k = 0; k < va.size(); ++k) temp = std::max(temp, std::abs(va[k] - vb[k]));
-    }
+  const auto [shear, temp] = apart(a, b);
   double travel = 0;
   for (std::size_t k = 0; k < a.result.energy.tool_displacements.size(); ++k)
     travel = std::max(travel, std::abs(a.result.energy.tool_displacements[k] - b.result.energy.tool_displacements[k]));
