@@ -227,7 +227,8 @@ struct Pass {
   // its force (3), its spring energy, its target (element, 3 weights).
   std::vector<double> scratch, energy, target;
   // With search_interval > 1: the triangle of b that the last full search
-  // found for each node of a (-1: none within reach), and the passes run.
+  // found for each node of a (-1: none within reach), and the passes since
+  // that search (counting it).
   std::vector<int> kept;
   long long calls = 0;
 };
@@ -246,7 +247,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       gap_tol_ = params.real("gap_tolerance");
       search_interval_ = params.integer("search_interval");
       if (search_interval_ != 1 && pair.second.type != sdk::BodyRef::Type::Part)
-        return sdk::Status::failure("search_interval applies to ply/ply pairs only (a tool's distances are exact at every step)");
+        return sdk::Status::failure(
+            "search_interval applies to ply/ply pairs only (a tool's distances are exact at every step)");
       const sdk::PartView& a = parts[pair.first.index];
       double h = a.thickness;
       if (pair.second.type == sdk::BodyRef::Type::Part) h = std::min(h, parts[pair.second.index].thickness);
