@@ -588,10 +588,12 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         // contacts (a tool and the other ply, both ply/ply passes) hold the
         // same node. At the full stopping force, two such contacts reverse
         // the slip every step: a vibration at the step's frequency limit.
+        // As a force per unit slip speed (mag / |v_t|), so that one
+        // division follows the square root.
         const double vm = sdk::norm(vt);
         if (vm > 0) {
-          const double mag = std::min({lim, lim * vm / slip_velocity_, 0.5 * share * m * vm / dt});
-          ft = sdk::scale(vt, -mag / vm);
+          const double per_speed = std::min({lim / vm, lim / slip_velocity_, 0.5 * share * m / dt});
+          ft = sdk::scale(vt, -per_speed);
         }
       } else {
         // Elastic slip: a tangential spring, held at the Coulomb limit while
