@@ -216,6 +216,29 @@ struct Projection {
   double w[3] = {0, 0, 0};  // weights of the target point on the element's nodes
 };
 
+// Plane distance of x from the triangle with per-element geometry g (kGeo
+// values) and first node p0, and the weights of x's projection on its
+// plane; whether the projection lies in the (closed) triangle (false for a
+// degenerate triangle: NaN weights).
+inline bool locate(const Vec3& x, const double* g, const double* p0, double* w, double& plane) {
+  const double rx = x[0] - p0[0], ry = x[1] - p0[1], rz = x[2] - p0[2];
+  plane = rx * g[0] + ry * g[1] + rz * g[2];
+  w[1] = rx * g[3] + ry * g[4] + rz * g[5];
+  w[2] = rx * g[6] + ry * g[7] + rz * g[8];
+  w[0] = 1.0 - w[1] - w[2];
+  return w[0] >= 0 && w[1] >= 0 && w[2] >= 0;
+}
+
+// A target over an edge or a vertex: r = x - closest point (r . r = d2),
+// dn = r . n_e. Its distance is signed by the side of n_e, and its normal
+// is the direction from the closest point (the same whichever of the
+// triangles sharing that point was found).
+inline void off_face(Projection& p, const Vec3& r, double d2, double dn) {
+  const double dist = std::sqrt(d2);
+  p.d = dn >= 0 ? dist : -dist;
+  if (dist > 0) p.n = sdk::scale(r, (dn >= 0 ? 1.0 : -1.0) / dist);
+}
+
 // One direction of ply/ply search: nodes of `a` against the surface of `b`.
 struct Pass {
   int a = 0, b = 0;
@@ -439,15 +462,9 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     if (!begin) return best;
     const bool self = a.index == b.index;
     // Plane distance and projection weights of x on candidate e.
-    auto locate = [&](int e, const int* t, double* w, double& plane) {
-      const double* g = &ps.geo_b[kGeo * static_cast<std::size_t>(e)];
-      const double* p0 = &b.x[3 * static_cast<std::size_t>(t[0])];
-      const double rx = x[0] - p0[0], ry = x[1] - p0[1], rz = x[2] - p0[2];
-      plane = rx * g[0] + ry * g[1] + rz * g[2];
-      w[1] = rx * g[3] + ry * g[4] + rz * g[5];
-      w[2] = rx * g[6] + ry * g[7] + rz * g[8];
-      w[0] = 1.0 - w[1] - w[2];
-      return w[0] >= 0 && w[1] >= 0 && w[2] >= 0;  // false for a degenerate triangle (NaN)
+    auto locate_on = [&](int e, const int* t, double* w, double& plane) {
+      return locate(x, &ps.geo_b[kGeo * static_cast<std::size_t>(e)], &b.x[3 * static_cast<std::size_t>(t[0])], w,
+                    plane);
     };
     bool face = false;
     Vec3 best_r{0, 0, 0};
@@ -491,7 +508,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const int* t = &b.triangles[3 * e];
       if (self && (t[0] == i || t[1] == i || t[2] == i)) continue;  // self contact
       double w[3], plane;
-      if (!locate(e, t, w, plane)) {
+      if (!locate_on(e, t, w, plane)) {
         if (keep) kept[nkept++] = {e, plane, {w[0], w[1], w[2]}};
         continue;
       }
@@ -508,18 +525,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         const int* t = &b.triangles[3 * e];
         if (self && (t[0] == i || t[1] == i || t[2] == i)) continue;
         double w[3], plane;
-        if (!locate(e, t, w, plane)) edge_or_vertex(e, t, w, plane);
+        if (!locate_on(e, t, w, plane)) edge_or_vertex(e, t, w, plane);
       }
     }
     if (best.element < 0) return best;
     best.n = sdk::load3(&ps.geo_b[kGeo * static_cast<std::size_t>(best.element)], 0);
     if (face) return best;  // d: the plane distance, n: the triangle's normal
-    // Over an edge or a vertex the normal is the direction from the closest
-    // point: it does not depend on which of the triangles sharing it was
-    // found first.
-    const double dist = std::sqrt(best_d2);
-    best.d = best_dn >= 0 ? dist : -dist;
-    if (dist > 0) best.n = sdk::scale(best_r, (best_dn >= 0 ? 1.0 : -1.0) / dist);
+    off_face(best, best_r, best_d2, best_dn);
     return best;
   }
 
@@ -531,16 +543,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const Vec3 x = sdk::load3(a.x.data(), i);
     const int* t = &b.triangles[3 * static_cast<std::size_t>(e)];
     const double* g = &ps.geo_b[kGeo * static_cast<std::size_t>(e)];
-    const double* p0 = &b.x[3 * static_cast<std::size_t>(t[0])];
-    const double rx = x[0] - p0[0], ry = x[1] - p0[1], rz = x[2] - p0[2];
-    const double plane = rx * g[0] + ry * g[1] + rz * g[2];
-    double w[3];
-    w[1] = rx * g[3] + ry * g[4] + rz * g[5];
-    w[2] = rx * g[6] + ry * g[7] + rz * g[8];
-    w[0] = 1.0 - w[1] - w[2];
+    double w[3], plane;
+    const bool inside = locate(x, g, &b.x[3 * static_cast<std::size_t>(t[0])], w, plane);
     const double reach2 = reach * reach;
     best.n = sdk::load3(g, 0);
-    if (w[0] >= 0 && w[1] >= 0 && w[2] >= 0) {
+    if (inside) {
       if (plane * plane > reach2) return best;
       best.element = e;
       best.d = plane;
@@ -551,9 +558,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const double d2 = sdk::dot(r, r);
       if (d2 > reach2) return best;
       best.element = e;
-      const double dn = sdk::dot(r, sdk::load3(g, 0)), dist = std::sqrt(d2);
-      best.d = dn >= 0 ? dist : -dist;
-      if (dist > 0) best.n = sdk::scale(r, (dn >= 0 ? 1.0 : -1.0) / dist);
+      off_face(best, r, d2, sdk::dot(r, sdk::load3(g, 0)));
     }
     for (int k = 0; k < 3; ++k) best.w[k] = w[k];
     return best;
