@@ -36,6 +36,8 @@ namespace {
 
 using sdk::Vec3;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Nodes per share of the per-node loops (dealt to the threads round robin).
+constexpr int kChunk = 128;
 
 // Unit normals of the nodes (area-weighted over their elements).
 void node_normals(const sdk::PartView& p, std::vector<double>& nn) {
@@ -63,10 +65,14 @@ void node_normals(const sdk::PartView& p, std::vector<double>& nn) {
 // over n triangles, written out component by component.
 constexpr int kGeo = 9;
 
-TS_VECTOR_CLONES
-void geometry_block(int n, const int* __restrict tri, const double* __restrict x, double* __restrict geo) {
+// With a list, the triangles list[0..n) of the part, written in that order
+// (the k-th at geo + kGeo k).
+template <bool kList>
+[[gnu::always_inline]] inline void geometry_body(int n, const int* __restrict list, const int* __restrict tri,
+                                                 const double* __restrict x, double* __restrict geo) {
 #pragma omp simd
-  for (int e = 0; e < n; ++e) {
+  for (int k = 0; k < n; ++k) {
+    const int e = kList ? list[k] : k;
     const int i0 = 3 * tri[3 * e], i1 = 3 * tri[3 * e + 1], i2 = 3 * tri[3 * e + 2];
     const double a0 = x[i0], a1 = x[i0 + 1], a2 = x[i0 + 2];
     const double e10 = x[i1] - a0, e11 = x[i1 + 1] - a1, e12 = x[i1 + 2] - a2;  // p1 - p0
@@ -77,7 +83,7 @@ void geometry_block(int n, const int* __restrict tri, const double* __restrict x
     const double inv = 1.0 / area2;
     const double ginv = ok ? inv : std::numeric_limits<double>::quiet_NaN();
     const double u0 = ok ? n0 * inv : 0.0, u1 = ok ? n1 * inv : 0.0, u2 = ok ? n2 * inv : 0.0;
-    double* g = geo + kGeo * e;
+    double* g = geo + kGeo * k;
     g[0] = u0;
     g[1] = u1;
     g[2] = u2;
@@ -88,6 +94,15 @@ void geometry_block(int n, const int* __restrict tri, const double* __restrict x
     g[7] = (u2 * e10 - u0 * e12) * ginv;
     g[8] = (u0 * e11 - u1 * e10) * ginv;
   }
+}
+TS_VECTOR_CLONES
+void geometry_block(int n, const int* __restrict tri, const double* __restrict x, double* __restrict geo) {
+  geometry_body<false>(n, nullptr, tri, x, geo);
+}
+TS_VECTOR_CLONES
+void geometry_list(int n, const int* __restrict list, const int* __restrict tri, const double* __restrict x,
+                   double* __restrict geo) {
+  geometry_body<true>(n, list, tri, x, geo);
 }
 
 // The geometry of all of p's triangles, in chunks shared out over the
@@ -100,6 +115,67 @@ void surface_geometry(const sdk::PartView& p, std::vector<double>& geo) {
     geometry_block(std::min(kChunk, p.num_elements - c * kChunk), &p.triangles[3 * c * kChunk], p.x.data(),
                    &geo[kGeo * static_cast<std::size_t>(c) * kChunk]);
   });
+}
+
+// The normal force with its damper and the rate-regularised friction force
+// of one node (PenaltyNodeSurface::node_force() with friction > 0 and
+// slip_velocity > 0: the same operations in the same order, so the same
+// bits), written for vector loops: n the unit normal pushing the node out,
+// v its velocity relative to the target, k its penalty stiffness, m its
+// effective mass; damping2 = 2 damping, half_share = share / 2. Returns the
+// force and the penalty energy.
+struct RateConstants {
+  double damping2, friction, slip, half_share, dt;
+};
+struct RateForce {
+  double f0, f1, f2, energy;
+};
+[[gnu::always_inline]] inline RateForce rate_force(double pen, double k, double m, double n0, double n1, double n2,
+                                                double v0, double v1, double v2, double damping2,
+                                                double friction, double slip, double half_share, double dt) {
+  const double vn = v0 * n0 + v1 * n1 + v2 * n2;
+  const double fd = k * pen - damping2 * std::sqrt(k * m) * vn;
+  const double fn = 0.0 < fd ? fd : 0.0;  // std::max(0.0, fd)
+  const double t0 = v0 - n0 * vn, t1 = v1 - n1 * vn, t2 = v2 - n2 * vn;
+  const double lim = friction * k * pen;
+  const double vm = std::sqrt(t0 * t0 + t1 * t1 + t2 * t2);
+  // std::min({lim / vm, lim / slip, share m / 2 dt}): the first of equals
+  double ps = lim / vm;
+  const double p1 = lim / slip, p2 = half_share * m / dt;
+  ps = p1 < ps ? p1 : ps;
+  ps = p2 < ps ? p2 : ps;
+  const bool slips = vm > 0;
+  return {fn * n0 + (slips ? t0 * -ps : 0.0), fn * n1 + (slips ? t1 * -ps : 0.0), fn * n2 + (slips ? t2 * -ps : 0.0),
+          0.5 * k * pen * pen};
+}
+
+// n nodes against a tool, one vector lane per node: the penetration from
+// the distance, then rate_force(). A node apart, or through the tool (no
+// force from the far side), gets energy 0 and a force that is not read.
+// The tangential springs are cleared (there are none with a slip
+// velocity). Every node is computed, in contact or not: a vector pass over
+// all of them costs less than a scalar loop over those in contact.
+TS_VECTOR_CLONES
+void tool_force_block(int n, const double* __restrict dist, const double* __restrict tn, const double* __restrict v,
+                      const double* __restrict area, const double* __restrict mass, const double* vtool, double h2,
+                      double penalty, RateConstants c, double* __restrict f, double* __restrict energy,
+                      double* __restrict ft) {
+  const double w0 = vtool[0], w1 = vtool[1], w2 = vtool[2];
+  const double c0 = c.damping2, c1 = c.friction, c2 = c.slip, c3 = c.half_share, c4 = c.dt;
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
+    const double pen = h2 - dist[i];
+    const bool on = (pen > 0) & !(pen > 2 * h2);
+    const RateForce r = rate_force(pen, penalty * area[i], mass[i], tn[3 * i], tn[3 * i + 1], tn[3 * i + 2],
+                                   v[3 * i] - w0, v[3 * i + 1] - w1, v[3 * i + 2] - w2, c0, c1, c2, c3, c4);
+    energy[i] = on ? r.energy : 0.0;
+    f[3 * i] = r.f0;
+    f[3 * i + 1] = r.f1;
+    f[3 * i + 2] = r.f2;
+    ft[3 * i] = 0.0;
+    ft[3 * i + 1] = 0.0;
+    ft[3 * i + 2] = 0.0;
+  }
 }
 
 // Candidate target elements of every node of body A: a uniform bucket grid
@@ -254,6 +330,11 @@ struct Pass {
   // that search (counting it).
   std::vector<int> kept;
   long long calls = 0;
+  // The distinct triangles in kept, their geometry (kGeo each, evaluated at
+  // the passes between full searches), each node's place in that list
+  // (-1: none), and per triangle of b its place (building the list).
+  std::vector<int> kept_list, slot, used;
+  std::vector<double> geo_kept;
 };
 
 class PenaltyNodeSurface final : public sdk::ContactHandler {
@@ -537,12 +618,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
 
   // The closest point of node i on triangle e of B alone, as project()
   // computes it for that one candidate (no target if farther than reach).
-  Projection project_on(const Pass& ps, const sdk::PartView& a, const sdk::PartView& b, int i, int e,
+  Projection project_on(const sdk::PartView& a, const sdk::PartView& b, int i, int e, const double* g,
                         double reach) const {
     Projection best;
     const Vec3 x = sdk::load3(a.x.data(), i);
     const int* t = &b.triangles[3 * static_cast<std::size_t>(e)];
-    const double* g = &ps.geo_b[kGeo * static_cast<std::size_t>(e)];
     double w[3], plane;
     const bool inside = locate(x, g, &b.x[3 * static_cast<std::size_t>(t[0])], w, plane);
     const double reach2 = reach * reach;
@@ -620,6 +700,25 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     return energy;
   }
 
+  // One node against the tool (any friction model).
+  void tool_node(const sdk::ContactForceInput& in, const sdk::PartView& a, const Vec3& vtool, double h2, int i) {
+    const double pen = h2 - dist_[i];
+    if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
+      for (int d = 0; d < 3; ++d) pass_[0].ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
+      pass_[0].energy[i] = 0.0;
+      return;
+    }
+    const Vec3 n = sdk::load3(tn_.data(), i);
+    const Vec3 vrel = sdk::sub(sdk::load3(in.velocity[a.index].data(), i), vtool);
+    pass_[0].energy[i] = node_force(pass_[0].ft, i, pen, penalty_ * in.node_area[a.index][i], in.mass[a.index][i],
+                                    1.0, n, vrel, in.dt, &pass_[0].scratch[3 * static_cast<std::size_t>(i)]);
+  }
+
+  // node_force()'s constants for rate_force().
+  RateConstants rate_constants(double share, double dt) const {
+    return {damping_ * 2.0, friction_, slip_velocity_, 0.5 * share, dt};
+  }
+
   sdk::Status tool_forces(const sdk::ContactForceInput& in, sdk::ContactForceOutput& out) {
     const sdk::PartView& a = in.parts[pair_.first.index];
     const sdk::ToolView& tool = in.tools[pair_.second.index];
@@ -633,18 +732,18 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // Written below for every node (energy) or every node in contact (forces).
     scratch.resize(3 * static_cast<std::size_t>(a.num_nodes));
     energy.resize(a.num_nodes);
-    sdk::for_each_index(a.num_nodes, a.num_nodes > 256, 128, [&](int i) {
-      const double pen = h2 - dist_[i];
-      if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
-        for (int d = 0; d < 3; ++d) pass_[0].ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
-        energy[i] = 0.0;
-        return;
-      }
-      const Vec3 n = sdk::load3(tn_.data(), i);
-      const Vec3 vrel = sdk::sub(sdk::load3(v.data(), i), vtool);
-      energy[i] = node_force(pass_[0].ft, i, pen, penalty_ * area[i], in.mass[a.index][i], 1.0, n, vrel, in.dt,
-                              &scratch[3 * static_cast<std::size_t>(i)]);
-    });
+    if (friction_ > 0 && slip_velocity_ > 0) {  // vector lanes, chunks of kChunk nodes
+      const int chunks = (a.num_nodes + kChunk - 1) / kChunk;
+      const RateConstants c = rate_constants(1.0, in.dt);
+      sdk::for_each_index(chunks, a.num_nodes > 256, 1, [&](int ch) {
+        const std::size_t i0 = static_cast<std::size_t>(ch) * kChunk;
+        tool_force_block(std::min(kChunk, a.num_nodes - ch * kChunk), &dist_[i0], &tn_[3 * i0], &v[3 * i0], &area[i0],
+                         &in.mass[a.index][i0], vtool.data(), h2, penalty_, c, &scratch[3 * i0], &energy[i0],
+                         &pass_[0].ft[3 * i0]);
+      });
+    } else {
+      sdk::for_each_index(a.num_nodes, a.num_nodes > 256, kChunk, [&](int i) { tool_node(in, a, vtool, h2, i); });
+    }
     // Fixed-order sums: the same results for any thread count.
     auto f = out.force[a.index];
     for (int i = 0; i < a.num_nodes; ++i) {
@@ -698,11 +797,18 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     scratch.resize(3 * static_cast<std::size_t>(a.num_nodes));
     energy.resize(a.num_nodes);
     target.resize(4 * static_cast<std::size_t>(a.num_nodes));
-    surface_geometry(b, ps.geo_b);
+    // Between full searches only the kept triangles are read.
+    if (full) {
+      surface_geometry(b, ps.geo_b);
+    } else {
+      ps.geo_kept.resize(kGeo * ps.kept_list.size());
+      geometry_list(static_cast<int>(ps.kept_list.size()), ps.kept_list.data(), b.triangles.data(), b.x.data(),
+                    ps.geo_kept.data());
+    }
     // The nodes of a, dealt to the threads in interleaved chunks: the cost
     // of a node differs with where it lies (corner or centre of a cell, in
     // contact or not), and a mesh numbers such nodes in runs.
-    sdk::for_each_index(a.num_nodes, a.num_nodes > 256, 128, [&](int i) {
+    sdk::for_each_index(a.num_nodes, a.num_nodes > 256, kChunk, [&](int i) {
       double* tg = &target[4 * static_cast<std::size_t>(i)];
       tg[0] = -1;
       Projection pr;
@@ -710,7 +816,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         pr = project(ps, a, b, i, track);
         ps.kept[i] = pr.element;
       } else if (ps.kept[i] >= 0) {
-        pr = project_on(ps, a, b, i, ps.kept[i], track);
+        pr = project_on(a, b, i, ps.kept[i], &ps.geo_kept[kGeo * static_cast<std::size_t>(ps.slot[i])], track);
       }
       if (pr.element < 0) {
         ps.side[i] = 0;
@@ -751,6 +857,21 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       tg[2] = pr.w[1];
       tg[3] = pr.w[2];
     });
+    if (full && search_interval_ > 1) {
+      // The triangles kept, each once, in increasing order, and each node's
+      // place in that list.
+      ps.used.assign(b.num_elements, -1);
+      for (int i = 0; i < a.num_nodes; ++i)
+        if (ps.kept[i] >= 0) ps.used[ps.kept[i]] = 0;
+      ps.kept_list.clear();
+      for (int e = 0; e < b.num_elements; ++e) {
+        if (ps.used[e] < 0) continue;
+        ps.used[e] = static_cast<int>(ps.kept_list.size());
+        ps.kept_list.push_back(e);
+      }
+      ps.slot.resize(a.num_nodes);
+      for (int i = 0; i < a.num_nodes; ++i) ps.slot[i] = ps.kept[i] >= 0 ? ps.used[ps.kept[i]] : -1;
+    }
     auto fa = out.force[a.index];
     auto fb = out.force[b.index];
     for (int i = 0; i < a.num_nodes; ++i) {
@@ -790,7 +911,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.5.0";
+  d.version = "0.5.1";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces";
   d.params = {
@@ -832,4 +953,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.5.0", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.5.1", ts::contact::register_all)
