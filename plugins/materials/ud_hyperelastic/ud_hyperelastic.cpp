@@ -35,30 +35,50 @@ inline double log1p_series(double x) {
   return x * (1 - x * (1.0 / 2 - x * (1.0 / 3 - x * (1.0 / 4 - x * (1.0 / 5 - x * (1.0 / 6 - x * (1.0 / 7 - x * (1.0 / 8))))))));
 }
 
-// The law over n points, L1 = (1, 0), L2 = (0, 1): I_e1 = 1/2 ln C11,
+// The law at one point, L1 = (1, 0), L2 = (0, 1): I_e1 = 1/2 ln C11,
 // I_lt = 1/2 ln(det C / C11), I_sh = C12 / sqrt(C11 C22),
 //   S = 2 [2 k_f I_e1 dI_e1/dC + 2 p_ct I_lt dI_lt/dC + w_sh' dI_sh/dC],
 //   dI_e1/dC = (1 / 2 C11, 0, 0), dI_lt/dC = 1/2 (C22 / I3 - 1 / C11, C11 / I3, -C12 / I3),
-//   dI_sh/dC = (-I_sh / 2 C11, -I_sh / 2 C22, 1 / 2 sqrt(C11 C22)).
-// redo[q] = 1 where C11 - 1 or det C / C11 - 1 is beyond the series' range.
+//   dI_sh/dC = (-I_sh / 2 C11, -I_sh / 2 C22, 1 / 2 sqrt(C11 C22)),
+// with C^-1 as C22 / I3 = C22 (1 / I3) (one division). kSeries: the
+// logarithms by their series (vector loops; the result is right where
+// C11 - 1 and det C / C11 - 1 are within 1e-2, and *in_range says whether
+// they are), else as log_near_one() (the library's beyond that range).
+template <bool kSeries>
+[[gnu::always_inline]] inline void ud_point(const double* __restrict C, double kf, double pct, double k1, double k2,
+                                            double k3, double* __restrict S, double* __restrict W, double* in_range) {
+  const double a = C[0], b = C[1], c = C[2];
+  const double inv_a = 1.0 / a, i3 = a * b - c * c, inv_3 = 1.0 / i3;
+  const double xa = a - 1.0, xt = i3 / a - 1.0;  // as the SDK forms I3 / I41
+  double e1, lt;
+  if (kSeries) {
+    *in_range = (std::abs(xa) < 1e-2) & (std::abs(xt) < 1e-2) ? 1.0 : 0.0;
+    e1 = 0.5 * log1p_series(xa);
+    lt = 0.5 * log1p_series(xt);
+  } else {
+    e1 = 0.5 * log_near_one(a);
+    lt = 0.5 * log_near_one(i3 / a);
+  }
+  const double inv_r = 1.0 / std::sqrt(a * b), sh = c * inv_r, x2 = sh * sh;
+  const double wsh = x2 * (k1 + x2 * (k2 + x2 * k3)), dwsh = sh * (2 * k1 + x2 * (4 * k2 + x2 * 6 * k3));
+  const double fe = 2 * (2 * kf * e1), fl = 2 * (2 * pct * lt), fs = 2 * dwsh;
+  S[0] = fe * (0.5 * inv_a) + fl * (0.5 * (b * inv_3 - inv_a)) + fs * (-0.5 * sh * inv_a);
+  S[1] = fl * (0.5 * (a * inv_3)) + fs * (-0.5 * sh * (a * inv_r * inv_r));
+  S[2] = fl * (0.5 * (-c * inv_3)) + fs * (0.5 * inv_r);
+  *W = kf * e1 * e1 + pct * lt * lt + wsh;
+}
+
+// The law over n points by the series; redo[q] = 1 where C11 - 1 or
+// det C / C11 - 1 is beyond the series' range.
 TS_VECTOR_CLONES
 void ud_block(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh, double* __restrict S,
               double* __restrict W, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
-    const double a = C[3 * q], b = C[3 * q + 1], c = C[3 * q + 2];
-    const double inv_a = 1.0 / a, i3 = a * b - c * c, inv_3 = 1.0 / i3;
-    const double xa = a - 1.0, xt = i3 / a - 1.0;  // as the SDK forms I3 / I41
-    redo[q] = (std::abs(xa) < 1e-2) & (std::abs(xt) < 1e-2) ? 0.0 : 1.0;
-    const double e1 = 0.5 * log1p_series(xa), lt = 0.5 * log1p_series(xt);
-    const double inv_r = 1.0 / std::sqrt(a * b), sh = c * inv_r, x2 = sh * sh;
-    const double wsh = x2 * (k1 + x2 * (k2 + x2 * k3)), dwsh = sh * (2 * k1 + x2 * (4 * k2 + x2 * 6 * k3));
-    const double fe = 2 * (2 * kf * e1), fl = 2 * (2 * pct * lt), fs = 2 * dwsh;
-    S[3 * q] = fe * (0.5 * inv_a) + fl * (0.5 * (b * inv_3 - inv_a)) + fs * (-0.5 * sh * inv_a);
-    S[3 * q + 1] = fl * (0.5 * (a * inv_3)) + fs * (-0.5 * sh * (a * inv_r * inv_r));
-    S[3 * q + 2] = fl * (0.5 * (-c * inv_3)) + fs * (0.5 * inv_r);
-    W[q] = kf * e1 * e1 + pct * lt * lt + wsh;
+    double in_range;
+    ud_point<true>(C + 3 * q, kf, pct, k1, k2, k3, S + 3 * q, W + q, &in_range);
+    redo[q] = 1.0 - in_range;
   }
 }
 
@@ -70,7 +90,6 @@ class UdHyperelastic final : public MaterialLaw {
       p_ct_ = p.real("p_ct");
       const auto& ks = p.list("k_sh");
       for (int i = 0; i < 3; ++i) k_sh_[i] = ks[i];
-      has_shear_ = ks[0] != 0 || ks[1] != 0 || ks[2] != 0;
       return Status::success();
     });
   }
@@ -78,34 +97,20 @@ class UdHyperelastic final : public MaterialLaw {
   bool uses_strain_old() const override { return false; }
   Status evaluate(const MaterialBlock& b) const override {
     // Vector pass over the block; the points whose logarithms fall outside
-    // the series' range are evaluated again one by one.
+    // the series' range are evaluated again one by one with the library's.
     Scratch& sc = scratch(b.n);
     double* redo = sc.redo.data();
-    ud_block(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), b.energy.empty() ? sc.energy.data() : b.energy.data(),
-             redo);
+    double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
+    ud_block(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), W, redo);
     for (std::size_t q = 0; q < b.n; ++q)
-      if (redo[q] != 0) point(b, q);
+      if (redo[q] != 0)
+        ud_point<false>(&b.strain[3 * q], k_fibre_, p_ct_, k_sh_[0], k_sh_[1], k_sh_[2], &b.stress[3 * q], &W[q], nullptr);
     return Status::success();
-  }
-  // One point with the SDK's invariants (any elongation).
-  void point(const MaterialBlock& b, std::size_t q) const {
-    const FibreFrame f;  // L2 = n x L1 = (0, 1) in the material frame
-    const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
-    const Invariants v = invariants(C, f, has_shear_ ? kE1 | kLt | kSh : kE1 | kLt);
-    double wsh, dwsh;
-    even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
-    Sym2 S{0, 0, 0};
-    add_stress(S, 2 * k_fibre_ * v.e1, v.de1);
-    add_stress(S, 2 * p_ct_ * v.lt, v.dlt);
-    add_stress(S, dwsh, v.dsh);
-    for (int k = 0; k < 3; ++k) b.stress[3 * q + k] = S[k];
-    if (!b.energy.empty()) b.energy[q] = k_fibre_ * v.e1 * v.e1 + p_ct_ * v.lt * v.lt + wsh;
   }
   double max_stiffness(double) const override { return 2 * std::max(k_fibre_, p_ct_); }
 
  private:
   double k_fibre_ = 0, p_ct_ = 0, k_sh_[3] = {0, 0, 0};
-  bool has_shear_ = false;
 };
 
 MaterialLaw* create() { return new UdHyperelastic(); }
@@ -114,7 +119,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "ud_hyperelastic";
-  d.version = "1.0.2";
+  d.version = "1.0.3";
   d.summary = "UD membrane: fibre elongation, transverse elongation I_lt = 1/2 ln(I3/I41), optional elastic shear";
   const ParamSpec ksh = list_param("k_sh", "[0, 0, 0]", "N/m",
                                    "elastic shear coefficients of w_sh = sum k_sh^i I_sh^(2i) (zero when viscoelastic_shear carries the shear)", 3);
@@ -126,4 +131,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.0.2", register_all)
+THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.0.3", register_all)
