@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <random>
 #include <span>
@@ -287,9 +288,14 @@ TEST(MaterialLaws, ViscoelasticBlockMatchesPointwise) {
     ASSERT_EQ(ns, 3 + 3 * 2);  // S0 and the two branches' H
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
-    for (const int variant : {0, 1, 2, 3}) {
-      const bool woven = variant & 1, uniform = variant & 2;  // uniform: one temperature (the pointwise path)
+    const int nc = visco.law->cache_size();
+    ASSERT_EQ(nc, 3 + 2 * 2);  // temperature, omega, g_inf, g_i, 1 / tau_i
+    // cached: the block keeps its parameters in MaterialBlock::cache between
+    // calls (evaluated again where the temperatures changed).
+    for (const int variant : {0, 1, 2, 3, 4, 5, 6, 7}) {
+      const bool woven = variant & 1, uniform = variant & 2, cached = variant & 4;  // uniform: one temperature
       std::vector<double> sa(n * ns, 0.0), sb(n * ns, 0.0), C(3 * n), T(n), S(3 * n), W(n), dir2(2 * n);
+      std::vector<double> cache(n * nc, std::numeric_limits<double>::quiet_NaN());
       for (int q = 0; q < n; ++q) {
         const double a = 1.3 + 0.3 * u(rng);
         dir2[2 * q] = std::cos(a);
@@ -305,7 +311,10 @@ TEST(MaterialLaws, ViscoelasticBlockMatchesPointwise) {
         }
         sdk::MaterialBlock b = block_of(C, T, S, W, sa, dt);
         if (woven) b.dir2 = dir2;
+        if (cached) b.cache = cache;
         ASSERT_TRUE(visco.law->evaluate(b).ok);
+        if (cached && !uniform)  // the cache holds the temperatures its parameters are for (its first row)
+          for (int q = 0; q < n; ++q) ASSERT_EQ(cache[q], T[q]) << "step " << k << " point " << q;
         for (int q = 0; q < n; ++q) {
           double s1[3], w1;
           sdk::MaterialBlock p = block_of(std::span<const double>(&C[3 * q], 3), std::span<const double>(&T[q], 1),
@@ -313,7 +322,8 @@ TEST(MaterialLaws, ViscoelasticBlockMatchesPointwise) {
                                           std::span<double>(&sb[ns * q], ns), dt);
           if (woven) p.dir2 = std::span<const double>(&dir2[2 * q], 2);
           ASSERT_TRUE(visco.law->evaluate(p).ok);
-          for (int j = 0; j < 3; ++j) ASSERT_EQ(S[3 * q + j], s1[j]) << "step " << k << " point " << q << " woven " << woven;
+          for (int j = 0; j < 3; ++j)
+            ASSERT_EQ(S[3 * q + j], s1[j]) << "step " << k << " point " << q << " variant " << variant;
           ASSERT_EQ(W[q], w1) << "step " << k << " point " << q;
           for (int j = 0; j < ns; ++j) ASSERT_EQ(sa[ns * q + j], sb[ns * q + j]) << "state " << j << " step " << k;
         }

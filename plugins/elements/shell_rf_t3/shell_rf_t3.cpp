@@ -560,6 +560,15 @@ class ShellRfT3 final : public ElementKernel {
       etemp_end_.assign(ne + 1, -1);
       states_.clear();
       for (const auto* l : laws_) states_.emplace_back(static_cast<std::size_t>(l->state_size()) * ne, 0.0);
+      // The laws' caches (MaterialLaw::cache_size()) are kept where all of
+      // them fit in half the per-core cache, as the hinge gradients.
+      std::size_t cache_values = 0;
+      for (const auto* l : laws_) cache_values += static_cast<std::size_t>(l->cache_size()) * ne;
+      const bool keep_caches = sizeof(double) * cache_values <= level2_cache_bytes() / 2;
+      caches_.clear();
+      for (const auto* l : laws_)
+        caches_.emplace_back(keep_caches ? static_cast<std::size_t>(l->cache_size()) * ne : 0,
+                             std::numeric_limits<double>::quiet_NaN());
       return Status::success();
     });
   }
@@ -626,6 +635,10 @@ class ShellRfT3 final : public ElementKernel {
         blk.temperature = std::span<const double>(temp, n);
         blk.dt = in.dt;
         blk.state = std::span<double>(states_[k].data() + static_cast<std::size_t>(ns) * b, static_cast<std::size_t>(ns) * n);
+        if (!caches_[k].empty()) {
+          const std::size_t nc = static_cast<std::size_t>(laws_[k]->cache_size());
+          blk.cache = std::span<double>(caches_[k].data() + nc * b, nc * n);
+        }
         blk.stress = std::span<double>(k == 0 ? S : sc.law_stress.data(), 3 * n);
         blk.energy = std::span<double>(k == 0 ? energy_e : sc.energy_tmp.data(), n);
         if (auto s = laws_[k]->evaluate(blk); !s) return s;
@@ -1392,6 +1405,7 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<int> off_;
   std::vector<double> g_, area0_, e1_, e2_, strain_old_, stress_;
   std::vector<std::vector<double>> states_;
+  std::vector<std::vector<double>> caches_;  // per membrane law: cache_size() per element, or none
 };
 
 ElementKernel* create() { return new ShellRfT3(); }
@@ -1400,7 +1414,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.4.6";
+  d.version = "0.4.7";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1408,4 +1422,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.6", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.7", register_all)

@@ -103,84 +103,158 @@ struct Branch {
 [[gnu::always_inline]] inline double broken_line(const double* l, double T) {
   return l[1] + (T < l[0] ? l[2] : l[3]) * (T - l[0]);
 }
+// The parameters' lines as the vector passes read them, unpacked.
+template <int NB>
+struct Lines {
+  double t_min, t_max, lo[4], lg[NB][4], lt[NB][4];
+  explicit Lines(const double* lines) {
+    t_min = lines[0];
+    t_max = lines[1];
+    for (int k = 0; k < 4; ++k) {
+      lo[k] = lines[2 + k];
+      for (int i = 0; i < NB; ++i) {
+        lg[i][k] = lines[6 + 4 * i + k];
+        lt[i][k] = lines[6 + 4 * NB + 4 * i + k];
+      }
+    }
+  }
+};
+// at() at temperature T0: omega, the weights g_i (scaled to sum 1 where
+// they sum to more), 1 / tau_i and g_inf = 1 - sum g_i.
+template <int NB>
+struct Parameters {
+  double omega, g_inf, g[NB], inv_tau[NB];
+};
+template <int NB>
+[[gnu::always_inline]] inline Parameters<NB> parameters(const Lines<NB>& l, double T0) {
+  Parameters<NB> p;
+  const double T = T0 < l.t_min ? l.t_min : (l.t_max < T0 ? l.t_max : T0);  // std::clamp
+  const double ov = broken_line(l.lo, T);
+  p.omega = 0.0 < ov ? ov : 0.0;  // std::max(0.0, ov)
+  double g_raw_sum = 0;
+  for (int i = 0; i < NB; ++i) {
+    const double gv = broken_line(l.lg[i], T), tv = broken_line(l.lt[i], T);
+    p.g[i] = 0.0 < gv ? gv : 0.0;
+    const double tau = 1e-9 < tv ? tv : 1e-9;
+    p.inv_tau[i] = 1.0 / tau;
+    g_raw_sum += p.g[i];
+  }
+  for (int i = 0; i < NB; ++i) p.g[i] = g_raw_sum > 1.0 ? p.g[i] / g_raw_sum : p.g[i];
+  // prony_step(nb, g, decay, ramp, S0_old, s0, H, s)
+  double g_sum = 0;
+  for (int i = 0; i < NB; ++i) g_sum += p.g[i];
+  p.g_inf = 1.0 - g_sum;
+  return p;
+}
+// The law at point q with parameters p (see visco_body).
+template <int NB>
+[[gnu::always_inline]] inline void visco_point(std::size_t q, int ns, const double* __restrict C,
+                                               const double* __restrict dir2, const Parameters<NB>& p, double dt,
+                                               double k1, double k2, double k3, double* __restrict state,
+                                               double* __restrict S, double* __restrict W, double* __restrict redo) {
+  double* st = state + static_cast<std::size_t>(ns) * q;
+  const double c = dir2[2 * q], s = dir2[2 * q + 1];
+  const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
+  const ShearStress ss = shear_stress(C0, C1, C2, c, s, k1, k2, k3, p.omega);
+  const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
+  double o0 = p.g_inf * s00, o1 = p.g_inf * s01, o2 = p.g_inf * s02;
+  double nx[3 + 3 * NB];
+  nx[0] = s00;
+  nx[1] = s01;
+  nx[2] = s02;
+  bool ok = true;
+  for (int i = 0; i < NB; ++i) {
+    const double x = dt * p.inv_tau[i];
+    // prony_factors_inv: the series (x < 1e-3 and x < 1e-2 forms)
+    const double xx2 = x * x, x4 = xx2 * xx2;
+    const double decay_a = (1 - x) + xx2 * (1.0 / 2 - x * (1.0 / 6)) + x4 * (1.0 / 24);
+    const double ramp_a = (1 - x * (1.0 / 2)) + xx2 * (1.0 / 6 - x * (1.0 / 24)) + x4 * (1.0 / 120);
+    const double decay_b =
+        (1 - x) + xx2 * (1.0 / 2 - x * (1.0 / 6)) + x4 * ((1.0 / 24 - x * (1.0 / 120)) + xx2 * (1.0 / 720));
+    const double ramp_b = (1 - x * (1.0 / 2)) + xx2 * (1.0 / 6 - x * (1.0 / 24)) +
+                          x4 * ((1.0 / 120 - x * (1.0 / 720)) + xx2 * (1.0 / 5040));
+    const double decay = x < 1e-3 ? decay_a : decay_b, ramp = x < 1e-3 ? ramp_a : ramp_b;
+    ok = ok & (x < 1e-2);
+    const Branch h = maxwell_branch(decay, p.g[i], ramp, st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]);
+    nx[3 + 3 * i] = h.h0;
+    nx[3 + 3 * i + 1] = h.h1;
+    nx[3 + 3 * i + 2] = h.h2;
+    o0 += h.h0;
+    o1 += h.h1;
+    o2 += h.h2;
+  }
+  const double rq = ok ? 0.0 : 1.0;
+  redo[q] = rq;
+  // A store in every case (strided stores cannot be masked): the old
+  // values where the point is evaluated again.
+  double keep[3 + 3 * NB];
+  for (int k = 0; k < 3 + 3 * NB; ++k) keep[k] = rq == 0.0 ? nx[k] : st[k];
+  for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = keep[k];
+  S[3 * q] = o0;
+  S[3 * q + 1] = o1;
+  S[3 * q + 2] = o2;
+  W[q] = ss.w;
+}
 template <int NB>
 [[gnu::always_inline]] inline void visco_body(std::size_t n, int ns, const double* __restrict C,
                                               const double* __restrict dir2, const double* __restrict temp, double dt,
                                               const double* ksh, const double* lines, double* __restrict state,
                                               double* __restrict S, double* __restrict W, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
-  const double t_min = lines[0], t_max = lines[1];
-  double lo[4], lg[NB][4], lt[NB][4];
-  for (int k = 0; k < 4; ++k) {
-    lo[k] = lines[2 + k];
-    for (int i = 0; i < NB; ++i) {
-      lg[i][k] = lines[6 + 4 * i + k];
-      lt[i][k] = lines[6 + 4 * NB + 4 * i + k];
-    }
-  }
+  const Lines<NB> l(lines);
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
-    double* st = state + static_cast<std::size_t>(ns) * q;
-    const double c = dir2[2 * q], s = dir2[2 * q + 1];
-    const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
-    // at(): the clamped parameters at the point's temperature.
-    const double T0 = temp[q];
-    const double T = T0 < t_min ? t_min : (t_max < T0 ? t_max : T0);  // std::clamp
-    const double ov = broken_line(lo, T);
-    const double omega = 0.0 < ov ? ov : 0.0;  // std::max(0.0, ov)
-    double g[NB], inv_tau[NB], g_raw_sum = 0;
-    for (int i = 0; i < NB; ++i) {
-      const double gv = broken_line(lg[i], T), tv = broken_line(lt[i], T);
-      g[i] = 0.0 < gv ? gv : 0.0;
-      const double tau = 1e-9 < tv ? tv : 1e-9;
-      inv_tau[i] = 1.0 / tau;
-      g_raw_sum += g[i];
-    }
-    for (int i = 0; i < NB; ++i) g[i] = g_raw_sum > 1.0 ? g[i] / g_raw_sum : g[i];
-    const ShearStress ss = shear_stress(C0, C1, C2, c, s, k1, k2, k3, omega);
-    const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
-    // prony_step(nb, g, decay, ramp, S0_old, s0, H, s)
-    double g_sum = 0;
-    for (int i = 0; i < NB; ++i) g_sum += g[i];
-    const double g_inf = 1.0 - g_sum;
-    double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
-    double nx[3 + 3 * NB];
-    nx[0] = s00;
-    nx[1] = s01;
-    nx[2] = s02;
-    bool ok = true;
-    for (int i = 0; i < NB; ++i) {
-      const double x = dt * inv_tau[i];
-      // prony_factors_inv: the series (x < 1e-3 and x < 1e-2 forms)
-      const double xx2 = x * x, x4 = xx2 * xx2;
-      const double decay_a = (1 - x) + xx2 * (1.0 / 2 - x * (1.0 / 6)) + x4 * (1.0 / 24);
-      const double ramp_a = (1 - x * (1.0 / 2)) + xx2 * (1.0 / 6 - x * (1.0 / 24)) + x4 * (1.0 / 120);
-      const double decay_b =
-          (1 - x) + xx2 * (1.0 / 2 - x * (1.0 / 6)) + x4 * ((1.0 / 24 - x * (1.0 / 120)) + xx2 * (1.0 / 720));
-      const double ramp_b = (1 - x * (1.0 / 2)) + xx2 * (1.0 / 6 - x * (1.0 / 24)) +
-                            x4 * ((1.0 / 120 - x * (1.0 / 720)) + xx2 * (1.0 / 5040));
-      const double decay = x < 1e-3 ? decay_a : decay_b, ramp = x < 1e-3 ? ramp_a : ramp_b;
-      ok = ok & (x < 1e-2);
-      const Branch h = maxwell_branch(decay, g[i], ramp, st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]);
-      nx[3 + 3 * i] = h.h0;
-      nx[3 + 3 * i + 1] = h.h1;
-      nx[3 + 3 * i + 2] = h.h2;
-      o0 += h.h0;
-      o1 += h.h1;
-      o2 += h.h2;
-    }
-    const double rq = ok ? 0.0 : 1.0;
-    redo[q] = rq;
-    // A store in every case (strided stores cannot be masked): the old
-    // values where the point is evaluated again.
-    double keep[3 + 3 * NB];
-    for (int k = 0; k < 3 + 3 * NB; ++k) keep[k] = rq == 0.0 ? nx[k] : st[k];
-    for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = keep[k];
-    S[3 * q] = o0;
-    S[3 * q + 1] = o1;
-    S[3 * q + 2] = o2;
-    W[q] = ss.w;
+    const Parameters<NB> p = parameters<NB>(l, temp[q]);
+    visco_point<NB>(q, ns, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
   }
+}
+
+// The per-point parameters kept in MaterialBlock::cache, one value after
+// the other (ld = n apart): the temperature they are for, omega, g_inf,
+// g_i, 1 / tau_i (3 + 2 NB rows). visco_parameters writes them for the
+// temperatures temp; visco_cached is visco_body with them read instead of
+// evaluated (the same bits).
+template <int NB>
+[[gnu::always_inline]] inline void parameters_body(std::size_t n, const double* __restrict temp,
+                                                   const double* lines, double* __restrict cache) {
+  const Lines<NB> l(lines);
+#pragma omp simd
+  for (std::size_t q = 0; q < n; ++q) {
+    const Parameters<NB> p = parameters<NB>(l, temp[q]);
+    cache[q] = temp[q];
+    cache[n + q] = p.omega;
+    cache[2 * n + q] = p.g_inf;
+    for (int i = 0; i < NB; ++i) {
+      cache[(3 + i) * n + q] = p.g[i];
+      cache[(3 + NB + i) * n + q] = p.inv_tau[i];
+    }
+  }
+}
+template <int NB>
+[[gnu::always_inline]] inline void cached_body(std::size_t n, int ns, const double* __restrict C,
+                                               const double* __restrict dir2, const double* __restrict cache,
+                                               double dt, const double* ksh, double* __restrict state,
+                                               double* __restrict S, double* __restrict W, double* __restrict redo) {
+  const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
+#pragma omp simd
+  for (std::size_t q = 0; q < n; ++q) {
+    Parameters<NB> p;
+    p.omega = cache[n + q];
+    p.g_inf = cache[2 * n + q];
+    for (int i = 0; i < NB; ++i) {
+      p.g[i] = cache[(3 + i) * n + q];
+      p.inv_tau[i] = cache[(3 + NB + i) * n + q];
+    }
+    visco_point<NB>(q, ns, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+  }
+}
+// Whether the cache's temperatures are those of temp (NaN at the start: no).
+TS_VECTOR_CLONES
+bool same_temperatures(std::size_t n, const double* __restrict temp, const double* __restrict cached) {
+  double differ = 0;
+#pragma omp simd reduction(+ : differ)
+  for (std::size_t q = 0; q < n; ++q) differ += temp[q] == cached[q] ? 0.0 : 1.0;
+  return differ == 0;
 }
 
 #define TS_VISCO_BLOCK(NB)                                                                                    \
@@ -197,6 +271,28 @@ TS_VISCO_BLOCK(4)
 using ViscoBlock = void (*)(std::size_t, int, const double*, const double*, const double*, double, const double*,
                             const double*, double*, double*, double*, double*);
 constexpr ViscoBlock kViscoBlock[kVectorBranches + 1] = {nullptr, visco_block1, visco_block2, visco_block3, visco_block4};
+#define TS_VISCO_CACHED(NB)                                                                                      \
+  TS_VECTOR_CLONES void visco_parameters##NB(std::size_t n, const double* temp, const double* lines,             \
+                                             double* cache) {                                                   \
+    parameters_body<NB>(n, temp, lines, cache);                                                                  \
+  }                                                                                                              \
+  TS_VECTOR_CLONES void visco_cached##NB(std::size_t n, int ns, const double* C, const double* dir2,             \
+                                         const double* cache, double dt, const double* ksh, double* state,        \
+                                         double* S, double* W, double* redo) {                                   \
+    cached_body<NB>(n, ns, C, dir2, cache, dt, ksh, state, S, W, redo);                                          \
+  }
+TS_VISCO_CACHED(1)
+TS_VISCO_CACHED(2)
+TS_VISCO_CACHED(3)
+TS_VISCO_CACHED(4)
+#undef TS_VISCO_CACHED
+using ViscoParameters = void (*)(std::size_t, const double*, const double*, double*);
+constexpr ViscoParameters kViscoParameters[kVectorBranches + 1] = {nullptr, visco_parameters1, visco_parameters2,
+                                                                   visco_parameters3, visco_parameters4};
+using ViscoCached = void (*)(std::size_t, int, const double*, const double*, const double*, double, const double*,
+                             double*, double*, double*, double*);
+constexpr ViscoCached kViscoCached[kVectorBranches + 1] = {nullptr, visco_cached1, visco_cached2, visco_cached3,
+                                                           visco_cached4};
 
 // The same for n points at one temperature: omega, g_i and the factors
 // decay_i, ramp_i given (computed once for the block); the new S0 and H_i
@@ -310,6 +406,9 @@ class ViscoelasticShear final : public MaterialLaw {
   // Per point: S0 at the previous step (3), the branch states H_i (3 per
   // branch).
   int state_size() const override { return 3 + 3 * n_; }
+  // Per point, for the vector pass at varying temperatures: the
+  // temperature, omega, g_inf, g_i and 1 / tau_i there (parameters_body).
+  int cache_size() const override { return n_ >= 1 && n_ <= kVectorBranches ? 3 + 2 * n_ : 0; }
   std::pair<double, double> temperature_range() const override { return {t_min_, t_max_}; }
 
   // Clamped parameters at temperature T.
@@ -354,11 +453,19 @@ class ViscoelasticShear final : public MaterialLaw {
       return Status::success();
     }
     // Otherwise one vector pass over the block, the parameters evaluated
-    // at each point's temperature, for the points whose dt / tau_i are in
-    // the factors' series range; the other points are evaluated one by one.
-    // Both give the same bits.
-    kViscoBlock[n_](b.n, state_size(), b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_, lines_.data(),
-                    b.state.data(), b.stress.data(), W, sc.redo.data());
+    // at each point's temperature (or read from the cache, evaluated there
+    // when the temperatures changed), for the points whose dt / tau_i are
+    // in the factors' series range; the other points are evaluated one by
+    // one. All give the same bits.
+    if (b.cache.size() == static_cast<std::size_t>(cache_size()) * b.n) {
+      if (!same_temperatures(b.n, b.temperature.data(), b.cache.data()))
+        kViscoParameters[n_](b.n, b.temperature.data(), lines_.data(), b.cache.data());
+      kViscoCached[n_](b.n, state_size(), b.strain.data(), dir2, b.cache.data(), b.dt, k_sh_, b.state.data(),
+                       b.stress.data(), W, sc.redo.data());
+    } else {
+      kViscoBlock[n_](b.n, state_size(), b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_, lines_.data(),
+                      b.state.data(), b.stress.data(), W, sc.redo.data());
+    }
     for (std::size_t q = 0; q < b.n; ++q)
       if (sc.redo[q] != 0) point(b, q);
     return Status::success();
@@ -443,7 +550,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.1.0";
+  d.version = "1.2.0";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
@@ -466,4 +573,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.1.0", register_all)
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.2.0", register_all)

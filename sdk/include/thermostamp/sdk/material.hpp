@@ -25,6 +25,7 @@ struct MaterialBlock {
   std::span<const double> temperature;  // n, degC
   double dt = 0.0;                      // s
   std::span<double> state;              // n * state_size(), updated in place
+  std::span<double> cache;              // n * cache_size() or empty (MaterialLaw::cache_size())
   std::span<double> stress;             // 3n out: S (N/m) or moments M (N m/m)
   std::span<double> energy;             // n out: w (J/m^2), may be empty
   std::span<double> dissipation;        // n out: energy dissipated this step (J/m^2), may be empty
@@ -36,6 +37,17 @@ class MaterialLaw {
   virtual Status configure(const Params& params) = 0;
   virtual LawRole role() const = 0;
   virtual int state_size() const { return 0; }
+  // Values a law derives from inputs that change seldom (parameters at the
+  // point's temperature, which changes only at thermal steps) and keeps to
+  // save evaluating them again: cache_size() doubles per point, which the
+  // element keeps (NaN at the start) and hands as MaterialBlock::cache,
+  // the same span for the same points at every call. They are not history:
+  // an element may hand an empty span instead (where the caches of a part
+  // would not fit in the processor's cache and reading them costs more
+  // than computing), and the law then computes what it needs. The law lays
+  // out a block's values as it likes, and must check that they are still
+  // valid (for instance, keep the temperature they are for).
+  virtual int cache_size() const { return 0; }
   virtual Status evaluate(const MaterialBlock& block) const = 0;
   // Largest tangent stiffness (N/m for membrane, N m for bending) at a
   // temperature, for the stable step estimate.

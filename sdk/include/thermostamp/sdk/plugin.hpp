@@ -22,8 +22,8 @@
 namespace ts::sdk {
 
 // Bump when any type of this SDK changes layout or meaning.
-inline constexpr int kAbiVersion = 10;
-inline constexpr const char* kSdkVersion = "0.10.0";
+inline constexpr int kAbiVersion = 11;
+inline constexpr const char* kSdkVersion = "0.11.0";
 
 enum class PluginKind { Element, Material, Thermal, Contact };
 
