@@ -88,6 +88,17 @@ struct Branch {
   return {decay * h[0] + g * ramp * ds0, decay * h[1] + g * ramp * ds1, decay * h[2] + g * ramp * ds2};
 }
 
+// A branch's new values h stored at out[0, 3) and added to the stress o.
+[[gnu::always_inline]] inline void take_branch(const Branch& h, double* __restrict out, double& o0, double& o1,
+                                               double& o2) {
+  out[0] = h.h0;
+  out[1] = h.h1;
+  out[2] = h.h2;
+  o0 += h.h0;
+  o1 += h.h1;
+  o2 += h.h2;
+}
+
 // The law over n points with NB <= kVectorBranches branches, each step of
 // the scalar path (ViscoelasticShear::at(), invariants(), even_polynomial(),
 // add_stress(), prony_factors_inv(), prony_step()) written out in the same
@@ -175,13 +186,8 @@ template <int NB>
                           x4 * ((1.0 / 120 - x * (1.0 / 720)) + xx2 * (1.0 / 5040));
     const double decay = x < 1e-3 ? decay_a : decay_b, ramp = x < 1e-3 ? ramp_a : ramp_b;
     ok = ok & (x < 1e-2);
-    const Branch h = maxwell_branch(decay, p.g[i], ramp, st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]);
-    nx[3 + 3 * i] = h.h0;
-    nx[3 + 3 * i + 1] = h.h1;
-    nx[3 + 3 * i + 2] = h.h2;
-    o0 += h.h0;
-    o1 += h.h1;
-    o2 += h.h2;
+    take_branch(maxwell_branch(decay, p.g[i], ramp, st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]),
+                nx + 3 + 3 * i, o0, o1, o2);
   }
   const double rq = ok ? 0.0 : 1.0;
   redo[q] = rq;
@@ -322,13 +328,8 @@ template <int NB>
     const double o00 = st[0], o01 = st[1], o02 = st[2];
     double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
     for (int i = 0; i < NB; ++i) {
-      const Branch h = maxwell_branch(ds[i], gs[i], rs[i], st + 3 + 3 * i, s00 - o00, s01 - o01, s02 - o02);
-      st[3 + 3 * i] = h.h0;
-      st[3 + 3 * i + 1] = h.h1;
-      st[3 + 3 * i + 2] = h.h2;
-      o0 += h.h0;
-      o1 += h.h1;
-      o2 += h.h2;
+      take_branch(maxwell_branch(ds[i], gs[i], rs[i], st + 3 + 3 * i, s00 - o00, s01 - o01, s02 - o02),
+                  st + 3 + 3 * i, o0, o1, o2);
     }
     st[0] = s00;
     st[1] = s01;
