@@ -99,22 +99,14 @@ struct Branch {
   o2 += h.h2;
 }
 
-// The law over n points with NB <= kVectorBranches branches, each step of
-// the scalar path (ViscoelasticShear::at(), invariants(), even_polynomial(),
-// add_stress(), prony_factors_inv(), prony_step()) written out in the same
-// order so that the results are the same bits. The parameters' lines are
-// given as `lines`: t_min, t_max, then (t_break, value at the break, slope
-// below, slope above) for omega, each g_i and each tau_i. State per point
-// (stride ns): S0 (3), H_i (3 NB). The new S0 and H_i replace the old ones
-// in the state, except where redo[q] = 1: dt / tau_i >= 1e-2 for some
-// branch (the state is left as it was). Inlined into each vector clone
-// below.
 // BrokenLine::operator() of a line given as (t_break, value at the break,
 // slope below, slope above): the same operations, so the same bits.
 [[gnu::always_inline]] inline double broken_line(const double* l, double T) {
   return l[1] + (T < l[0] ? l[2] : l[3]) * (T - l[0]);
 }
-// The parameters' lines as the vector passes read them, unpacked.
+// The parameters' lines as the vector passes read them (`lines`: t_min,
+// t_max, then (t_break, value at the break, slope below, slope above) for
+// omega, each g_i and each tau_i), unpacked.
 template <int NB>
 struct Lines {
   double t_min, t_max, lo[4], lg[NB][4], lt[NB][4];
@@ -157,7 +149,13 @@ template <int NB>
   p.g_inf = 1.0 - g_sum;
   return p;
 }
-// The law at point q with parameters p (see visco_body).
+// The law at point q with parameters p; with parameters(), each step of
+// the scalar path (ViscoelasticShear::at(), invariants(), even_polynomial(),
+// add_stress(), prony_factors_inv(), prony_step()) written out in the same
+// order so that the results are the same bits. State per point (stride
+// ns): S0 (3), H_i (3 NB). The new S0 and H_i replace the old ones in the
+// state, except where redo[q] = 1: dt / tau_i >= 1e-2 for some branch (the
+// state is left as it was). Inlined into each vector clone below.
 template <int NB>
 [[gnu::always_inline]] inline void visco_point(std::size_t q, int ns, const double* __restrict C,
                                                const double* __restrict dir2, const Parameters<NB>& p, double dt,
@@ -201,6 +199,8 @@ template <int NB>
   S[3 * q + 2] = o2;
   W[q] = ss.w;
 }
+// The law over n points, the parameters evaluated at each point's
+// temperature.
 template <int NB>
 [[gnu::always_inline]] inline void visco_body(std::size_t n, int ns, const double* __restrict C,
                                               const double* __restrict dir2, const double* __restrict temp, double dt,
