@@ -119,11 +119,21 @@ void surface_geometry(const sdk::PartView& p, std::vector<double>& geo) {
 
 // The normal force with its damper and the rate-regularised friction force
 // of one node (PenaltyNodeSurface::node_force() with friction > 0 and
-// slip_velocity > 0: the same operations in the same order, so the same
-// bits), written for vector loops: n the unit normal pushing the node out,
-// v its velocity relative to the target, k its penalty stiffness, m its
-// effective mass; damping2 = 2 damping, half_share = share / 2. Returns the
-// force and the penalty energy.
+// slip_velocity > 0), written for vector loops as well: n the unit normal
+// pushing the node out, v its velocity relative to the target, k its
+// penalty stiffness, m its effective mass; damping2 = 2 damping,
+// half_share = share / 2 (share: this pair's share of the node's
+// friction). Returns the force and the penalty energy.
+//
+// Rate-regularised Coulomb: mu N min(1, |v_t| / v0) against the slip, and
+// never more than half the force that stops the slip within the step
+// (share m |v_t| / 2 dt): on the steep branch the slip then decays without
+// changing sign, also where several contacts (a tool and the other ply,
+// both ply/ply passes) hold the same node. At the full stopping force, two
+// such contacts reverse the slip every step: a vibration at the step's
+// frequency limit. Taken as a force per unit slip speed (mag / |v_t|), so
+// that one division follows the square root; its limit follows the penalty
+// (elastic) pressure only, as node_force() explains.
 struct RateConstants {
   double damping2, friction, slip, half_share, dt;
 };
@@ -644,14 +654,25 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     return best;
   }
 
-  // Normal penalty force with its damper and the elastic-slip Coulomb
-  // friction force on one node: n is the unit normal pushing the node out,
-  // vrel the velocity relative to the target, m the effective mass, share
-  // this pair's share of the node's friction (0.5 for each of the two
-  // ply/ply passes). Updates the node's tangential spring; returns the
-  // stored spring energy.
+  // Normal penalty force with its damper and the Coulomb friction force on
+  // one node (elastic slip, or rate-regularised with a slip velocity:
+  // rate_force()): n is the unit normal pushing the node out, vrel the
+  // velocity relative to the target, m the effective mass, share this
+  // pair's share of the node's friction (0.5 for each of the two ply/ply
+  // passes). Updates the node's tangential spring (none with a slip
+  // velocity); returns the stored spring energy.
   double node_force(std::vector<double>& ftv, int i, double pen, double k, double m, double share, const Vec3& n,
                     const Vec3& vrel, double dt, double* f) {
+    if (friction_ > 0 && slip_velocity_ > 0) {  // rate-regularised Coulomb friction
+      const RateConstants c = rate_constants(share, dt);
+      const RateForce r = rate_force(pen, k, m, n[0], n[1], n[2], vrel[0], vrel[1], vrel[2], c.damping2, c.friction,
+                                     c.slip, c.half_share, c.dt);
+      for (int d = 0; d < 3; ++d) ftv[3 * static_cast<std::size_t>(i) + d] = 0.0;
+      f[0] = r.f0;
+      f[1] = r.f1;
+      f[2] = r.f2;
+      return r.energy;
+    }
     const double vn = sdk::dot(vrel, n);  // < 0 while approaching
     // Viscous normal damping, a fraction of the critical value of the node on
     // its penalty spring; the normal force never pulls.
@@ -664,36 +685,18 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       // followed the damper would tie the tangential force to the normal
       // velocity, a non-symmetric coupling that can feed vibrations.
       const double lim = friction_ * k * pen;
-      Vec3 spring = {0, 0, 0};
-      if (slip_velocity_ > 0) {
-        // Rate-regularised Coulomb: mu N min(1, |v_t| / v0) against the
-        // slip, and never more than half the force that stops the slip
-        // within the step (share m |v_t| / 2 dt): on the steep branch the
-        // slip then decays without changing sign, also where several
-        // contacts (a tool and the other ply, both ply/ply passes) hold the
-        // same node. At the full stopping force, two such contacts reverse
-        // the slip every step: a vibration at the step's frequency limit.
-        // As a force per unit slip speed (mag / |v_t|), so that one
-        // division follows the square root.
-        const double vm = sdk::norm(vt);
-        if (vm > 0) {
-          const double per_speed = std::min({lim / vm, lim / slip_velocity_, 0.5 * share * m / dt});
-          ft = sdk::scale(vt, -per_speed);
-        }
-      } else {
-        // Elastic slip: a tangential spring, held at the Coulomb limit while
-        // sliding; last step's spring rotated into the current tangent plane.
-        Vec3 old = sdk::load3(ftv.data(), i);
-        const double mag = sdk::norm(old);
-        old = sdk::sub(old, sdk::scale(n, sdk::dot(old, n)));
-        const double m2 = sdk::norm(old);
-        if (m2 > 0) old = sdk::scale(old, mag / m2);
-        spring = sdk::sub(old, sdk::scale(vt, k * dt));
-        const double len = sdk::norm(spring);
-        if (len > lim) spring = sdk::scale(spring, lim / len);
-        ft = spring;
-        energy += 0.5 * sdk::dot(spring, spring) / k;
-      }
+      // Elastic slip: a tangential spring, held at the Coulomb limit while
+      // sliding; last step's spring rotated into the current tangent plane.
+      Vec3 old = sdk::load3(ftv.data(), i);
+      const double mag = sdk::norm(old);
+      old = sdk::sub(old, sdk::scale(n, sdk::dot(old, n)));
+      const double m2 = sdk::norm(old);
+      if (m2 > 0) old = sdk::scale(old, mag / m2);
+      Vec3 spring = sdk::sub(old, sdk::scale(vt, k * dt));
+      const double len = sdk::norm(spring);
+      if (len > lim) spring = sdk::scale(spring, lim / len);
+      ft = spring;
+      energy += 0.5 * sdk::dot(spring, spring) / k;
       for (int d = 0; d < 3; ++d) ftv[3 * static_cast<std::size_t>(i) + d] = spring[d];
     }
     for (int d = 0; d < 3; ++d) f[d] = fn * n[d] + ft[d];
