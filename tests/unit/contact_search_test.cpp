@@ -241,7 +241,9 @@ TEST(PlyPlySearch, SearchIntervalKeepsTheTriangleUntilTheNextSearch) {
     const double dist = beyond != kept_beyond ? std::sqrt(d * d + off * off) : d;
     const double expected = 0.5 * penalty * area * (0.0005 - dist) * d / dist;
     EXPECT_NEAR(fa[1][call][2], expected, 1e-12 * exact) << "call " << call;
-    if (searched) EXPECT_EQ(fa[1][call][2], fa[0][call][2]) << "call " << call;
+    if (searched) {
+      EXPECT_EQ(fa[1][call][2], fa[0][call][2]) << "call " << call;
+    }
     double sum = 0;
     for (double f : fz_b[1][call]) sum += f;
     EXPECT_NEAR(sum, -fa[1][call][2], 1e-12 * exact) << "call " << call;  // momentum

@@ -313,8 +313,9 @@ TEST(MaterialLaws, ViscoelasticBlockMatchesPointwise) {
         if (woven) b.dir2 = dir2;
         if (cached) b.cache = cache;
         ASSERT_TRUE(visco.law->evaluate(b).ok);
-        if (cached && !uniform)  // the cache holds the temperatures its parameters are for (its first row)
+        if (cached && !uniform) {  // the cache holds the temperatures its parameters are for (its first row)
           for (int q = 0; q < n; ++q) ASSERT_EQ(cache[q], T[q]) << "step " << k << " point " << q;
+        }
         for (int q = 0; q < n; ++q) {
           double s1[3], w1;
           sdk::MaterialBlock p = block_of(std::span<const double>(&C[3 * q], 3), std::span<const double>(&T[q], 1),
@@ -325,7 +326,8 @@ TEST(MaterialLaws, ViscoelasticBlockMatchesPointwise) {
           for (int j = 0; j < 3; ++j)
             ASSERT_EQ(S[3 * q + j], s1[j]) << "step " << k << " point " << q << " variant " << variant;
           ASSERT_EQ(W[q], w1) << "step " << k << " point " << q;
-          for (int j = 0; j < ns; ++j) ASSERT_EQ(sa[ns * q + j], sb[ns * q + j]) << "state " << j << " step " << k;
+          // The block lays its state out by rows (value j of point q at j n + q).
+          for (int j = 0; j < ns; ++j) ASSERT_EQ(sa[j * n + q], sb[ns * q + j]) << "state " << j << " step " << k;
         }
       }
     }

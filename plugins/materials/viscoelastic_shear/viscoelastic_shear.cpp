@@ -152,16 +152,18 @@ template <int NB>
 // The law at point q with parameters p; with parameters(), each step of
 // the scalar path (ViscoelasticShear::at(), invariants(), even_polynomial(),
 // add_stress(), prony_factors_inv(), prony_step()) written out in the same
-// order so that the results are the same bits. State per point (stride
-// ns): S0 (3), H_i (3 NB). The new S0 and H_i replace the old ones in the
+// order so that the results are the same bits. State of a block: row k
+// (value k of every point, ld apart) holds S0 (rows 0-2), then H_i (rows
+// 3 + 3 i to 5 + 3 i). The new S0 and H_i replace the old ones in the
 // state, except where redo[q] = 1: dt / tau_i >= 1e-2 for some branch (the
 // state is left as it was). Inlined into each vector clone below.
 template <int NB>
-[[gnu::always_inline]] inline void visco_point(std::size_t q, int ns, const double* __restrict C,
+[[gnu::always_inline]] inline void visco_point(std::size_t q, std::size_t ld, const double* __restrict C,
                                                const double* __restrict dir2, const Parameters<NB>& p, double dt,
                                                double k1, double k2, double k3, double* __restrict state,
                                                double* __restrict S, double* __restrict W, double* __restrict redo) {
-  double* st = state + static_cast<std::size_t>(ns) * q;
+  double st[3 + 3 * NB];
+  for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = state[k * ld + q];
   const double c = dir2[2 * q], s = dir2[2 * q + 1];
   const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
   const ShearStress ss = shear_stress(C0, C1, C2, c, s, k1, k2, k3, p.omega);
@@ -189,11 +191,9 @@ template <int NB>
   }
   const double rq = ok ? 0.0 : 1.0;
   redo[q] = rq;
-  // A store in every case (strided stores cannot be masked): the old
-  // values where the point is evaluated again.
-  double keep[3 + 3 * NB];
-  for (int k = 0; k < 3 + 3 * NB; ++k) keep[k] = rq == 0.0 ? nx[k] : st[k];
-  for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = keep[k];
+  // A store in every case (contiguous rows: a select and a vector store):
+  // the old values where the point is evaluated again.
+  for (int k = 0; k < 3 + 3 * NB; ++k) state[k * ld + q] = rq == 0.0 ? nx[k] : st[k];
   S[3 * q] = o0;
   S[3 * q + 1] = o1;
   S[3 * q + 2] = o2;
@@ -202,7 +202,7 @@ template <int NB>
 // The law over n points, the parameters evaluated at each point's
 // temperature.
 template <int NB>
-[[gnu::always_inline]] inline void visco_body(std::size_t n, int ns, const double* __restrict C,
+[[gnu::always_inline]] inline void visco_body(std::size_t n, const double* __restrict C,
                                               const double* __restrict dir2, const double* __restrict temp, double dt,
                                               const double* ksh, const double* lines, double* __restrict state,
                                               double* __restrict S, double* __restrict W, double* __restrict redo) {
@@ -211,7 +211,7 @@ template <int NB>
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
     const Parameters<NB> p = parameters<NB>(l, temp[q]);
-    visco_point<NB>(q, ns, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+    visco_point<NB>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
   }
 }
 
@@ -237,7 +237,7 @@ template <int NB>
   }
 }
 template <int NB>
-[[gnu::always_inline]] inline void cached_body(std::size_t n, int ns, const double* __restrict C,
+[[gnu::always_inline]] inline void cached_body(std::size_t n, const double* __restrict C,
                                                const double* __restrict dir2, const double* __restrict cache,
                                                double dt, const double* ksh, double* __restrict state,
                                                double* __restrict S, double* __restrict W, double* __restrict redo) {
@@ -251,7 +251,7 @@ template <int NB>
       p.g[i] = cache[(3 + i) * n + q];
       p.inv_tau[i] = cache[(3 + NB + i) * n + q];
     }
-    visco_point<NB>(q, ns, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+    visco_point<NB>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
   }
 }
 // Whether the cache's temperatures are those of temp (NaN at the start: no).
@@ -264,17 +264,17 @@ bool same_temperatures(std::size_t n, const double* __restrict temp, const doubl
 }
 
 #define TS_VISCO_BLOCK(NB)                                                                                    \
-  TS_VECTOR_CLONES void visco_block##NB(std::size_t n, int ns, const double* C, const double* dir2,           \
-                                        const double* temp, double dt, const double* ksh, const double* lines, \
-                                        double* state, double* S, double* W, double* redo) {                   \
-    visco_body<NB>(n, ns, C, dir2, temp, dt, ksh, lines, state, S, W, redo);                                  \
+  TS_VECTOR_CLONES void visco_block##NB(std::size_t n, const double* C, const double* dir2, const double* temp, \
+                                        double dt, const double* ksh, const double* lines, double* state,      \
+                                        double* S, double* W, double* redo) {                                  \
+    visco_body<NB>(n, C, dir2, temp, dt, ksh, lines, state, S, W, redo);                                      \
   }
 TS_VISCO_BLOCK(1)
 TS_VISCO_BLOCK(2)
 TS_VISCO_BLOCK(3)
 TS_VISCO_BLOCK(4)
 #undef TS_VISCO_BLOCK
-using ViscoBlock = void (*)(std::size_t, int, const double*, const double*, const double*, double, const double*,
+using ViscoBlock = void (*)(std::size_t, const double*, const double*, const double*, double, const double*,
                             const double*, double*, double*, double*, double*);
 constexpr ViscoBlock kViscoBlock[kVectorBranches + 1] = {nullptr, visco_block1, visco_block2, visco_block3, visco_block4};
 #define TS_VISCO_CACHED(NB)                                                                                      \
@@ -282,10 +282,10 @@ constexpr ViscoBlock kViscoBlock[kVectorBranches + 1] = {nullptr, visco_block1, 
                                              double* cache) {                                                   \
     parameters_body<NB>(n, temp, lines, cache);                                                                  \
   }                                                                                                              \
-  TS_VECTOR_CLONES void visco_cached##NB(std::size_t n, int ns, const double* C, const double* dir2,             \
-                                         const double* cache, double dt, const double* ksh, double* state,        \
-                                         double* S, double* W, double* redo) {                                   \
-    cached_body<NB>(n, ns, C, dir2, cache, dt, ksh, state, S, W, redo);                                          \
+  TS_VECTOR_CLONES void visco_cached##NB(std::size_t n, const double* C, const double* dir2, const double* cache, \
+                                         double dt, const double* ksh, double* state, double* S, double* W,       \
+                                         double* redo) {                                                          \
+    cached_body<NB>(n, C, dir2, cache, dt, ksh, state, S, W, redo);                                              \
   }
 TS_VISCO_CACHED(1)
 TS_VISCO_CACHED(2)
@@ -295,16 +295,17 @@ TS_VISCO_CACHED(4)
 using ViscoParameters = void (*)(std::size_t, const double*, const double*, double*);
 constexpr ViscoParameters kViscoParameters[kVectorBranches + 1] = {nullptr, visco_parameters1, visco_parameters2,
                                                                    visco_parameters3, visco_parameters4};
-using ViscoCached = void (*)(std::size_t, int, const double*, const double*, const double*, double, const double*,
+using ViscoCached = void (*)(std::size_t, const double*, const double*, const double*, double, const double*,
                              double*, double*, double*, double*);
 constexpr ViscoCached kViscoCached[kVectorBranches + 1] = {nullptr, visco_cached1, visco_cached2, visco_cached3,
                                                            visco_cached4};
 
 // The same for n points at one temperature: omega, g_i and the factors
 // decay_i, ramp_i given (computed once for the block); the new S0 and H_i
-// are written to the state in place (no point needs evaluating again).
+// are written to the state in place (rows ld apart; no point needs
+// evaluating again).
 template <int NB>
-[[gnu::always_inline]] inline void visco_uniform_body(std::size_t n, int ns, const double* __restrict C,
+[[gnu::always_inline]] inline void visco_uniform_body(std::size_t n, std::size_t ld, const double* __restrict C,
                                                       const double* __restrict dir2, double omega, const double* g,
                                                       const double* decay, const double* ramp, const double* ksh,
                                                       double* __restrict state, double* __restrict S,
@@ -320,20 +321,22 @@ template <int NB>
   const double g_inf = 1.0 - g_sum;
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
-    double* st = state + static_cast<std::size_t>(ns) * q;
+    double st[3 + 3 * NB];
+    for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = state[k * ld + q];
     const double c = dir2[2 * q], s = dir2[2 * q + 1];
     const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
     const ShearStress ss = shear_stress(C0, C1, C2, c, s, k1, k2, k3, omega);
     const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
     const double o00 = st[0], o01 = st[1], o02 = st[2];
     double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
+    st[0] = s00;
+    st[1] = s01;
+    st[2] = s02;
     for (int i = 0; i < NB; ++i) {
       take_branch(maxwell_branch(ds[i], gs[i], rs[i], st + 3 + 3 * i, s00 - o00, s01 - o01, s02 - o02),
                   st + 3 + 3 * i, o0, o1, o2);
     }
-    st[0] = s00;
-    st[1] = s01;
-    st[2] = s02;
+    for (int k = 0; k < 3 + 3 * NB; ++k) state[k * ld + q] = st[k];
     S[3 * q] = o0;
     S[3 * q + 1] = o1;
     S[3 * q + 2] = o2;
@@ -341,17 +344,17 @@ template <int NB>
   }
 }
 #define TS_VISCO_UNIFORM(NB)                                                                                       \
-  TS_VECTOR_CLONES void visco_uniform##NB(std::size_t n, int ns, const double* C, const double* dir2, double omega, \
-                                          const double* g, const double* decay, const double* ramp,                \
+  TS_VECTOR_CLONES void visco_uniform##NB(std::size_t n, std::size_t ld, const double* C, const double* dir2,   \
+                                          double omega, const double* g, const double* decay, const double* ramp,  \
                                           const double* ksh, double* state, double* S, double* W) {                \
-    visco_uniform_body<NB>(n, ns, C, dir2, omega, g, decay, ramp, ksh, state, S, W);                               \
+    visco_uniform_body<NB>(n, ld, C, dir2, omega, g, decay, ramp, ksh, state, S, W);                               \
   }
 TS_VISCO_UNIFORM(1)
 TS_VISCO_UNIFORM(2)
 TS_VISCO_UNIFORM(3)
 TS_VISCO_UNIFORM(4)
 #undef TS_VISCO_UNIFORM
-using ViscoUniform = void (*)(std::size_t, int, const double*, const double*, double, const double*, const double*,
+using ViscoUniform = void (*)(std::size_t, std::size_t, const double*, const double*, double, const double*, const double*,
                               const double*, const double*, double*, double*, double*);
 constexpr ViscoUniform kViscoUniform[kVectorBranches + 1] = {nullptr, visco_uniform1, visco_uniform2, visco_uniform3,
                                                              visco_uniform4};
@@ -405,7 +408,7 @@ class ViscoelasticShear final : public MaterialLaw {
   LawRole role() const override { return LawRole::Membrane; }
   bool uses_strain_old() const override { return false; }
   // Per point: S0 at the previous step (3), the branch states H_i (3 per
-  // branch).
+  // branch); a block's values row by row (value k of point q at k n + q).
   int state_size() const override { return 3 + 3 * n_; }
   // Per point, for the vector pass at varying temperatures: the
   // temperature, omega, g_inf, g_i and 1 / tau_i there (parameters_body).
@@ -449,8 +452,8 @@ class ViscoelasticShear final : public MaterialLaw {
       double g[16], decay[16], ramp[16], omega = 0;
       point(b, 0, &omega, g, decay, ramp);
       if (b.n > 1)
-        kViscoUniform[n_](b.n - 1, state_size(), b.strain.data() + 3, dir2 + 2, omega, g, decay, ramp, k_sh_,
-                          b.state.data() + state_size(), b.stress.data() + 3, W + 1);
+        kViscoUniform[n_](b.n - 1, b.n, b.strain.data() + 3, dir2 + 2, omega, g, decay, ramp, k_sh_,
+                          b.state.data() + 1, b.stress.data() + 3, W + 1);
       return Status::success();
     }
     // Otherwise one vector pass over the block, the parameters evaluated
@@ -461,11 +464,11 @@ class ViscoelasticShear final : public MaterialLaw {
     if (b.cache.size() == static_cast<std::size_t>(cache_size()) * b.n) {
       if (!same_temperatures(b.n, b.temperature.data(), b.cache.data()))
         kViscoParameters[n_](b.n, b.temperature.data(), lines_.data(), b.cache.data());
-      kViscoCached[n_](b.n, state_size(), b.strain.data(), dir2, b.cache.data(), b.dt, k_sh_, b.state.data(),
-                       b.stress.data(), W, sc.redo.data());
+      kViscoCached[n_](b.n, b.strain.data(), dir2, b.cache.data(), b.dt, k_sh_, b.state.data(), b.stress.data(), W,
+                       sc.redo.data());
     } else {
-      kViscoBlock[n_](b.n, state_size(), b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_, lines_.data(),
-                      b.state.data(), b.stress.data(), W, sc.redo.data());
+      kViscoBlock[n_](b.n, b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_, lines_.data(), b.state.data(),
+                      b.stress.data(), W, sc.redo.data());
     }
     for (std::size_t q = 0; q < b.n; ++q)
       if (sc.redo[q] != 0) point(b, q);
@@ -517,7 +520,10 @@ class ViscoelasticShear final : public MaterialLaw {
   // Prony step of one point from its invariants and factors.
   void finish(const MaterialBlock& b, std::size_t q, const Invariants& v, double omega, const double* g,
               const double* decay, const double* ramp) const {
-    double* st = b.state.data() + static_cast<std::size_t>(state_size()) * q;
+    // The point's values, row k of the block's state at k n + q.
+    double st[3 + 3 * 16];
+    const int ns = state_size();
+    for (int k = 0; k < ns; ++k) st[k] = b.state[k * b.n + q];
     double wsh, dwsh;
     even_polynomial(k_sh_, 3, v.sh, &wsh, &dwsh);
     Sym2 s0{0, 0, 0};
@@ -528,6 +534,7 @@ class ViscoelasticShear final : public MaterialLaw {
       st[k] = s0[k];
       b.stress[3 * q + k] = s[k];
     }
+    for (int k = 0; k < ns; ++k) b.state[k * b.n + q] = st[k];
     if (!b.energy.empty()) b.energy[q] = omega * wsh;  // elastic (unrelaxed) energy
   }
   double max_stiffness(double T) const override {
@@ -551,7 +558,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.2.0";
+  d.version = "1.2.1";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
@@ -574,4 +581,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.2.0", register_all)
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.2.1", register_all)

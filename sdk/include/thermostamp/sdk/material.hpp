@@ -24,7 +24,7 @@ struct MaterialBlock {
   std::span<const double> dir2;         // 2n, may be empty for UD laws
   std::span<const double> temperature;  // n, degC
   double dt = 0.0;                      // s
-  std::span<double> state;              // n * state_size(), updated in place
+  std::span<double> state;              // n * state_size(), updated in place (see state_size())
   std::span<double> cache;              // n * cache_size() or empty (MaterialLaw::cache_size())
   std::span<double> stress;             // 3n out: S (N/m) or moments M (N m/m)
   std::span<double> energy;             // n out: w (J/m^2), may be empty
@@ -36,6 +36,10 @@ class MaterialLaw {
   virtual ~MaterialLaw() = default;
   virtual Status configure(const Params& params) = 0;
   virtual LawRole role() const = 0;
+  // History values per point: the element keeps n * state_size() doubles
+  // per block, zero at the start, and hands them as MaterialBlock::state,
+  // the same span for the same points at every call, so the law lays out a
+  // block's values as it likes (point after point, or value after value).
   virtual int state_size() const { return 0; }
   // Values a law derives from inputs that change seldom (parameters at the
   // point's temperature, which changes only at thermal steps) and keeps to

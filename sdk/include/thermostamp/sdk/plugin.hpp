@@ -23,7 +23,7 @@ namespace ts::sdk {
 
 // Bump when any type of this SDK changes layout or meaning.
 inline constexpr int kAbiVersion = 11;
-inline constexpr const char* kSdkVersion = "0.11.0";
+inline constexpr const char* kSdkVersion = "0.11.1";
 
 enum class PluginKind { Element, Material, Thermal, Contact };
 
