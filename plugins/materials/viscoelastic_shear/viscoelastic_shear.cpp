@@ -23,21 +23,15 @@ using namespace ts::sdk;
 // Branches handled by the vector pass (more: point by point).
 constexpr int kVectorBranches = 4;
 
-// Per-thread buffers of a block; dir2 holds the weft direction (0, 1) of
-// every point (for laws given no directions).
+// Per-thread buffers of a block.
 struct Scratch {
   std::vector<double> redo;  // 0 or 1 (a double: a narrower type would widen the vector loops)
-  std::vector<double> dir2, energy;
+  std::vector<double> energy;
 };
 Scratch& scratch(std::size_t n) {
   thread_local Scratch s;
   if (s.redo.size() < n) {
     s.redo.resize(n);
-    s.dir2.resize(2 * n);
-    for (std::size_t q = 0; q < n; ++q) {
-      s.dir2[2 * q] = 0.0;
-      s.dir2[2 * q + 1] = 1.0;
-    }
     s.energy.resize(n);
   }
   return s;
@@ -75,6 +69,44 @@ struct ShearStress {
   v += k3 * p;
   const double dw = kStressFactor * (omega * d);
   return {0.0 + dw * dsh0, 0.0 + dw * dsh1, 0.0 + dw * dsh2, omega * v};
+}
+
+// shear_stress() for a UD law's frame (c, s) = (0, 1): l22 = (0, 1, 0),
+// l12 = (0, 0, 1/2). Every product with those zeros is a signed zero that
+// the sums and differences of shear_stress() drop without a trace (C11,
+// C22 > 0 and all values finite), so i41 = C0, i42 = C1, i412 = C2 and the
+// terms below are the same bits, with 4 divisions instead of 10 and no
+// direction read.
+[[gnu::always_inline]] inline ShearStress ud_shear_stress(double C0, double C1, double C2, double k1, double k2,
+                                                          double k3, double omega) {
+  const double i41 = C0, i42 = C1, i412 = C2;
+  const double r = std::sqrt(i41 * i42), sh = i412 / r;
+  const double dsh0 = 0.0 - 0.5 * sh * (1.0 / i41);
+  const double dsh1 = 0.0 - 0.5 * sh * (1.0 / i42);
+  const double dsh2 = 0.5 / r;
+  const double x2 = sh * sh;
+  double v = 0, d = 0, p = 1;
+  d += 2 * 1 * k1 * p * sh;
+  p *= x2;
+  v += k1 * p;
+  d += 2 * 2 * k2 * p * sh;
+  p *= x2;
+  v += k2 * p;
+  d += 2 * 3 * k3 * p * sh;
+  p *= x2;
+  v += k3 * p;
+  const double dw = kStressFactor * (omega * d);
+  return {0.0 + dw * dsh0, 0.0 + dw * dsh1, 0.0 + dw * dsh2, omega * v};
+}
+// The shear stress at point q: UD (kUd, no directions) or with the weft
+// direction dir2.
+template <bool kUd>
+[[gnu::always_inline]] inline ShearStress point_shear(std::size_t q, const double* __restrict C,
+                                                      const double* __restrict dir2, double k1, double k2, double k3,
+                                                      double omega) {
+  const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
+  if constexpr (kUd) return ud_shear_stress(C0, C1, C2, k1, k2, k3, omega);
+  return shear_stress(C0, C1, C2, dir2[2 * q], dir2[2 * q + 1], k1, k2, k3, omega);
 }
 
 // One Maxwell branch over a step (prony_step()'s update, same order):
@@ -157,16 +189,14 @@ template <int NB>
 // 3 + 3 i to 5 + 3 i). The new S0 and H_i replace the old ones in the
 // state, except where redo[q] = 1: dt / tau_i >= 1e-2 for some branch (the
 // state is left as it was). Inlined into each vector clone below.
-template <int NB>
+template <int NB, bool kUd>
 [[gnu::always_inline]] inline void visco_point(std::size_t q, std::size_t ld, const double* __restrict C,
                                                const double* __restrict dir2, const Parameters<NB>& p, double dt,
                                                double k1, double k2, double k3, double* __restrict state,
                                                double* __restrict S, double* __restrict W, double* __restrict redo) {
   double st[3 + 3 * NB];
   for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = state[k * ld + q];
-  const double c = dir2[2 * q], s = dir2[2 * q + 1];
-  const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
-  const ShearStress ss = shear_stress(C0, C1, C2, c, s, k1, k2, k3, p.omega);
+  const ShearStress ss = point_shear<kUd>(q, C, dir2, k1, k2, k3, p.omega);
   const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
   double o0 = p.g_inf * s00, o1 = p.g_inf * s01, o2 = p.g_inf * s02;
   double nx[3 + 3 * NB];
@@ -201,7 +231,7 @@ template <int NB>
 }
 // The law over n points, the parameters evaluated at each point's
 // temperature.
-template <int NB>
+template <int NB, bool kUd>
 [[gnu::always_inline]] inline void visco_body(std::size_t n, const double* __restrict C,
                                               const double* __restrict dir2, const double* __restrict temp, double dt,
                                               const double* ksh, const double* lines, double* __restrict state,
@@ -211,7 +241,7 @@ template <int NB>
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
     const Parameters<NB> p = parameters<NB>(l, temp[q]);
-    visco_point<NB>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+    visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
   }
 }
 
@@ -236,7 +266,7 @@ template <int NB>
     }
   }
 }
-template <int NB>
+template <int NB, bool kUd>
 [[gnu::always_inline]] inline void cached_body(std::size_t n, const double* __restrict C,
                                                const double* __restrict dir2, const double* __restrict cache,
                                                double dt, const double* ksh, double* __restrict state,
@@ -251,7 +281,7 @@ template <int NB>
       p.g[i] = cache[(3 + i) * n + q];
       p.inv_tau[i] = cache[(3 + NB + i) * n + q];
     }
-    visco_point<NB>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+    visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
   }
 }
 // Whether the cache's temperatures are those of temp (NaN at the start: no).
@@ -263,48 +293,67 @@ bool same_temperatures(std::size_t n, const double* __restrict temp, const doubl
   return differ == 0;
 }
 
-#define TS_VISCO_BLOCK(NB)                                                                                    \
-  TS_VECTOR_CLONES void visco_block##NB(std::size_t n, const double* C, const double* dir2, const double* temp, \
-                                        double dt, const double* ksh, const double* lines, double* state,      \
-                                        double* S, double* W, double* redo) {                                  \
-    visco_body<NB>(n, C, dir2, temp, dt, ksh, lines, state, S, W, redo);                                      \
+// Each vector pass for 1 to 4 branches, with the weft directions (V) and
+// for UD (U, no directions read); the tables below are indexed [ud][NB].
+#define TS_VISCO_BLOCK(NB, V, UD)                                                                                \
+  TS_VECTOR_CLONES void visco_block##V##NB(std::size_t n, const double* C, const double* dir2, const double* temp, \
+                                           double dt, const double* ksh, const double* lines, double* state,      \
+                                           double* S, double* W, double* redo) {                                  \
+    visco_body<NB, UD>(n, C, dir2, temp, dt, ksh, lines, state, S, W, redo);                                     \
   }
-TS_VISCO_BLOCK(1)
-TS_VISCO_BLOCK(2)
-TS_VISCO_BLOCK(3)
-TS_VISCO_BLOCK(4)
+TS_VISCO_BLOCK(1, V, false)
+TS_VISCO_BLOCK(2, V, false)
+TS_VISCO_BLOCK(3, V, false)
+TS_VISCO_BLOCK(4, V, false)
+TS_VISCO_BLOCK(1, U, true)
+TS_VISCO_BLOCK(2, U, true)
+TS_VISCO_BLOCK(3, U, true)
+TS_VISCO_BLOCK(4, U, true)
 #undef TS_VISCO_BLOCK
 using ViscoBlock = void (*)(std::size_t, const double*, const double*, const double*, double, const double*,
                             const double*, double*, double*, double*, double*);
-constexpr ViscoBlock kViscoBlock[kVectorBranches + 1] = {nullptr, visco_block1, visco_block2, visco_block3, visco_block4};
-#define TS_VISCO_CACHED(NB)                                                                                      \
-  TS_VECTOR_CLONES void visco_parameters##NB(std::size_t n, const double* temp, const double* lines,             \
-                                             double* cache) {                                                   \
-    parameters_body<NB>(n, temp, lines, cache);                                                                  \
-  }                                                                                                              \
-  TS_VECTOR_CLONES void visco_cached##NB(std::size_t n, const double* C, const double* dir2, const double* cache, \
-                                         double dt, const double* ksh, double* state, double* S, double* W,       \
-                                         double* redo) {                                                          \
-    cached_body<NB>(n, C, dir2, cache, dt, ksh, state, S, W, redo);                                              \
+constexpr ViscoBlock kViscoBlock[2][kVectorBranches + 1] = {
+    {nullptr, visco_blockV1, visco_blockV2, visco_blockV3, visco_blockV4},
+    {nullptr, visco_blockU1, visco_blockU2, visco_blockU3, visco_blockU4}};
+#define TS_VISCO_PARAMETERS(NB)                                                                      \
+  TS_VECTOR_CLONES void visco_parameters##NB(std::size_t n, const double* temp, const double* lines, \
+                                             double* cache) {                                       \
+    parameters_body<NB>(n, temp, lines, cache);                                                      \
   }
-TS_VISCO_CACHED(1)
-TS_VISCO_CACHED(2)
-TS_VISCO_CACHED(3)
-TS_VISCO_CACHED(4)
+TS_VISCO_PARAMETERS(1)
+TS_VISCO_PARAMETERS(2)
+TS_VISCO_PARAMETERS(3)
+TS_VISCO_PARAMETERS(4)
+#undef TS_VISCO_PARAMETERS
+#define TS_VISCO_CACHED(NB, V, UD)                                                                          \
+  TS_VECTOR_CLONES void visco_cached##V##NB(std::size_t n, const double* C, const double* dir2,             \
+                                            const double* cache, double dt, const double* ksh, double* state, \
+                                            double* S, double* W, double* redo) {                            \
+    cached_body<NB, UD>(n, C, dir2, cache, dt, ksh, state, S, W, redo);                                     \
+  }
+TS_VISCO_CACHED(1, V, false)
+TS_VISCO_CACHED(2, V, false)
+TS_VISCO_CACHED(3, V, false)
+TS_VISCO_CACHED(4, V, false)
+TS_VISCO_CACHED(1, U, true)
+TS_VISCO_CACHED(2, U, true)
+TS_VISCO_CACHED(3, U, true)
+TS_VISCO_CACHED(4, U, true)
 #undef TS_VISCO_CACHED
 using ViscoParameters = void (*)(std::size_t, const double*, const double*, double*);
 constexpr ViscoParameters kViscoParameters[kVectorBranches + 1] = {nullptr, visco_parameters1, visco_parameters2,
                                                                    visco_parameters3, visco_parameters4};
 using ViscoCached = void (*)(std::size_t, const double*, const double*, const double*, double, const double*,
                              double*, double*, double*, double*);
-constexpr ViscoCached kViscoCached[kVectorBranches + 1] = {nullptr, visco_cached1, visco_cached2, visco_cached3,
-                                                           visco_cached4};
+constexpr ViscoCached kViscoCached[2][kVectorBranches + 1] = {
+    {nullptr, visco_cachedV1, visco_cachedV2, visco_cachedV3, visco_cachedV4},
+    {nullptr, visco_cachedU1, visco_cachedU2, visco_cachedU3, visco_cachedU4}};
 
 // The same for n points at one temperature: omega, g_i and the factors
 // decay_i, ramp_i given (computed once for the block); the new S0 and H_i
 // are written to the state in place (rows ld apart; no point needs
 // evaluating again).
-template <int NB>
+template <int NB, bool kUd>
 [[gnu::always_inline]] inline void visco_uniform_body(std::size_t n, std::size_t ld, const double* __restrict C,
                                                       const double* __restrict dir2, double omega, const double* g,
                                                       const double* decay, const double* ramp, const double* ksh,
@@ -323,9 +372,7 @@ template <int NB>
   for (std::size_t q = 0; q < n; ++q) {
     double st[3 + 3 * NB];
     for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = state[k * ld + q];
-    const double c = dir2[2 * q], s = dir2[2 * q + 1];
-    const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
-    const ShearStress ss = shear_stress(C0, C1, C2, c, s, k1, k2, k3, omega);
+    const ShearStress ss = point_shear<kUd>(q, C, dir2, k1, k2, k3, omega);
     const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
     const double o00 = st[0], o01 = st[1], o02 = st[2];
     double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
@@ -343,21 +390,27 @@ template <int NB>
     W[q] = ss.w;
   }
 }
-#define TS_VISCO_UNIFORM(NB)                                                                                       \
-  TS_VECTOR_CLONES void visco_uniform##NB(std::size_t n, std::size_t ld, const double* C, const double* dir2,   \
-                                          double omega, const double* g, const double* decay, const double* ramp,  \
-                                          const double* ksh, double* state, double* S, double* W) {                \
-    visco_uniform_body<NB>(n, ld, C, dir2, omega, g, decay, ramp, ksh, state, S, W);                               \
+#define TS_VISCO_UNIFORM(NB, V, UD)                                                                               \
+  TS_VECTOR_CLONES void visco_uniform##V##NB(std::size_t n, std::size_t ld, const double* C, const double* dir2, \
+                                             double omega, const double* g, const double* decay,                \
+                                             const double* ramp, const double* ksh, double* state, double* S,   \
+                                             double* W) {                                                        \
+    visco_uniform_body<NB, UD>(n, ld, C, dir2, omega, g, decay, ramp, ksh, state, S, W);                         \
   }
-TS_VISCO_UNIFORM(1)
-TS_VISCO_UNIFORM(2)
-TS_VISCO_UNIFORM(3)
-TS_VISCO_UNIFORM(4)
+TS_VISCO_UNIFORM(1, V, false)
+TS_VISCO_UNIFORM(2, V, false)
+TS_VISCO_UNIFORM(3, V, false)
+TS_VISCO_UNIFORM(4, V, false)
+TS_VISCO_UNIFORM(1, U, true)
+TS_VISCO_UNIFORM(2, U, true)
+TS_VISCO_UNIFORM(3, U, true)
+TS_VISCO_UNIFORM(4, U, true)
 #undef TS_VISCO_UNIFORM
 using ViscoUniform = void (*)(std::size_t, std::size_t, const double*, const double*, double, const double*, const double*,
                               const double*, const double*, double*, double*, double*);
-constexpr ViscoUniform kViscoUniform[kVectorBranches + 1] = {nullptr, visco_uniform1, visco_uniform2, visco_uniform3,
-                                                             visco_uniform4};
+constexpr ViscoUniform kViscoUniform[2][kVectorBranches + 1] = {
+    {nullptr, visco_uniformV1, visco_uniformV2, visco_uniformV3, visco_uniformV4},
+    {nullptr, visco_uniformU1, visco_uniformU2, visco_uniformU3, visco_uniformU4}};
 
 class ViscoelasticShear final : public MaterialLaw {
  public:
@@ -444,7 +497,8 @@ class ViscoelasticShear final : public MaterialLaw {
       return Status::success();
     }
     Scratch& sc = scratch(b.n);
-    const double* dir2 = b.dir2.empty() ? sc.dir2.data() : b.dir2.data();
+    const int ud = b.dir2.empty() ? 1 : 0;  // UD: the passes that read no directions
+    const double* dir2 = ud ? nullptr : b.dir2.data();
     double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
     if (uniform) {
       // The first point as one, its parameters and factors for the others
@@ -452,7 +506,7 @@ class ViscoelasticShear final : public MaterialLaw {
       double g[16], decay[16], ramp[16], omega = 0;
       point(b, 0, &omega, g, decay, ramp);
       if (b.n > 1)
-        kViscoUniform[n_](b.n - 1, b.n, b.strain.data() + 3, dir2 + 2, omega, g, decay, ramp, k_sh_,
+        kViscoUniform[ud][n_](b.n - 1, b.n, b.strain.data() + 3, ud ? nullptr : dir2 + 2, omega, g, decay, ramp, k_sh_,
                           b.state.data() + 1, b.stress.data() + 3, W + 1);
       return Status::success();
     }
@@ -464,10 +518,10 @@ class ViscoelasticShear final : public MaterialLaw {
     if (b.cache.size() == static_cast<std::size_t>(cache_size()) * b.n) {
       if (!same_temperatures(b.n, b.temperature.data(), b.cache.data()))
         kViscoParameters[n_](b.n, b.temperature.data(), lines_.data(), b.cache.data());
-      kViscoCached[n_](b.n, b.strain.data(), dir2, b.cache.data(), b.dt, k_sh_, b.state.data(), b.stress.data(), W,
+      kViscoCached[ud][n_](b.n, b.strain.data(), dir2, b.cache.data(), b.dt, k_sh_, b.state.data(), b.stress.data(), W,
                        sc.redo.data());
     } else {
-      kViscoBlock[n_](b.n, b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_, lines_.data(), b.state.data(),
+      kViscoBlock[ud][n_](b.n, b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_, lines_.data(), b.state.data(),
                       b.stress.data(), W, sc.redo.data());
     }
     for (std::size_t q = 0; q < b.n; ++q)
