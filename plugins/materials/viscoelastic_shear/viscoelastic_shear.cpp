@@ -351,51 +351,62 @@ constexpr ViscoCached kViscoCached[2][kVectorBranches + 1] = {
 
 // The same for n points at one temperature: omega, g_i and the factors
 // decay_i, ramp_i given (computed once for the block); the new S0 and H_i
-// are written to the state in place (rows ld apart; no point needs
-// evaluating again).
+// are written to the state in place (no point needs evaluating again).
+template <int NB>
+struct Uniform {
+  double omega, g_inf, g[NB], decay[NB], ramp[NB];
+};
+// One point (inlined: with its arrays declared in the vector loop itself,
+// GCC 12 gives each lane a copy and leaves the loop scalar).
 template <int NB, bool kUd>
-[[gnu::always_inline]] inline void visco_uniform_body(std::size_t n, std::size_t ld, const double* __restrict C,
+[[gnu::always_inline]] inline void uniform_point(std::size_t q, std::size_t n, const double* __restrict C,
+                                                 const double* __restrict dir2, const Uniform<NB>& u, double k1,
+                                                 double k2, double k3, double* __restrict state,
+                                                 double* __restrict S, double* __restrict W) {
+  double st[3 + 3 * NB];
+  for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = state[k * n + q];
+  const ShearStress ss = point_shear<kUd>(q, C, dir2, k1, k2, k3, u.omega);
+  const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
+  double o0 = u.g_inf * s00, o1 = u.g_inf * s01, o2 = u.g_inf * s02;
+  double nx[3 + 3 * NB];
+  nx[0] = s00;
+  nx[1] = s01;
+  nx[2] = s02;
+  for (int i = 0; i < NB; ++i) {
+    take_branch(maxwell_branch(u.decay[i], u.g[i], u.ramp[i], st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]),
+                nx + 3 + 3 * i, o0, o1, o2);
+  }
+  for (int k = 0; k < 3 + 3 * NB; ++k) state[k * n + q] = nx[k];
+  S[3 * q] = o0;
+  S[3 * q + 1] = o1;
+  S[3 * q + 2] = o2;
+  W[q] = ss.w;
+}
+template <int NB, bool kUd>
+[[gnu::always_inline]] inline void visco_uniform_body(std::size_t n, const double* __restrict C,
                                                       const double* __restrict dir2, double omega, const double* g,
                                                       const double* decay, const double* ramp, const double* ksh,
                                                       double* __restrict state, double* __restrict S,
                                                       double* __restrict W) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
-  double gs[NB], ds[NB], rs[NB], g_sum = 0;
+  Uniform<NB> u;
+  u.omega = omega;
+  double g_sum = 0;
   for (int i = 0; i < NB; ++i) {
-    gs[i] = g[i];
-    ds[i] = decay[i];
-    rs[i] = ramp[i];
+    u.g[i] = g[i];
+    u.decay[i] = decay[i];
+    u.ramp[i] = ramp[i];
     g_sum += g[i];
   }
-  const double g_inf = 1.0 - g_sum;
+  u.g_inf = 1.0 - g_sum;
 #pragma omp simd
-  for (std::size_t q = 0; q < n; ++q) {
-    double st[3 + 3 * NB];
-    for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = state[k * ld + q];
-    const ShearStress ss = point_shear<kUd>(q, C, dir2, k1, k2, k3, omega);
-    const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
-    const double o00 = st[0], o01 = st[1], o02 = st[2];
-    double o0 = g_inf * s00, o1 = g_inf * s01, o2 = g_inf * s02;
-    st[0] = s00;
-    st[1] = s01;
-    st[2] = s02;
-    for (int i = 0; i < NB; ++i) {
-      take_branch(maxwell_branch(ds[i], gs[i], rs[i], st + 3 + 3 * i, s00 - o00, s01 - o01, s02 - o02),
-                  st + 3 + 3 * i, o0, o1, o2);
-    }
-    for (int k = 0; k < 3 + 3 * NB; ++k) state[k * ld + q] = st[k];
-    S[3 * q] = o0;
-    S[3 * q + 1] = o1;
-    S[3 * q + 2] = o2;
-    W[q] = ss.w;
-  }
+  for (std::size_t q = 0; q < n; ++q) uniform_point<NB, kUd>(q, n, C, dir2, u, k1, k2, k3, state, S, W);
 }
 #define TS_VISCO_UNIFORM(NB, V, UD)                                                                               \
-  TS_VECTOR_CLONES void visco_uniform##V##NB(std::size_t n, std::size_t ld, const double* C, const double* dir2, \
-                                             double omega, const double* g, const double* decay,                \
-                                             const double* ramp, const double* ksh, double* state, double* S,   \
-                                             double* W) {                                                        \
-    visco_uniform_body<NB, UD>(n, ld, C, dir2, omega, g, decay, ramp, ksh, state, S, W);                         \
+  TS_VECTOR_CLONES void visco_uniform##V##NB(std::size_t n, const double* C, const double* dir2, double omega, \
+                                             const double* g, const double* decay, const double* ramp,          \
+                                             const double* ksh, double* state, double* S, double* W) {          \
+    visco_uniform_body<NB, UD>(n, C, dir2, omega, g, decay, ramp, ksh, state, S, W);                             \
   }
 TS_VISCO_UNIFORM(1, V, false)
 TS_VISCO_UNIFORM(2, V, false)
@@ -406,7 +417,7 @@ TS_VISCO_UNIFORM(2, U, true)
 TS_VISCO_UNIFORM(3, U, true)
 TS_VISCO_UNIFORM(4, U, true)
 #undef TS_VISCO_UNIFORM
-using ViscoUniform = void (*)(std::size_t, std::size_t, const double*, const double*, double, const double*, const double*,
+using ViscoUniform = void (*)(std::size_t, const double*, const double*, double, const double*, const double*,
                               const double*, const double*, double*, double*, double*);
 constexpr ViscoUniform kViscoUniform[2][kVectorBranches + 1] = {
     {nullptr, visco_uniformV1, visco_uniformV2, visco_uniformV3, visco_uniformV4},
@@ -488,11 +499,12 @@ class ViscoelasticShear final : public MaterialLaw {
     for (std::size_t q = 1; q < b.n && uniform; ++q) uniform = b.temperature[q] == b.temperature[0];
     if (n_ < 1 || n_ > kVectorBranches) {
       double g[16], decay[16], ramp[16], omega = 0;
+      if (uniform) factors(b.temperature[0], b.dt, &omega, g, decay, ramp);
       for (std::size_t q = 0; q < b.n; ++q) {
-        if (uniform && q > 0)
+        if (uniform)
           shared_point(b, q, omega, g, decay, ramp);
         else
-          point(b, q, &omega, g, decay, ramp);
+          point(b, q);
       }
       return Status::success();
     }
@@ -501,13 +513,12 @@ class ViscoelasticShear final : public MaterialLaw {
     const double* dir2 = ud ? nullptr : b.dir2.data();
     double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
     if (uniform) {
-      // The first point as one, its parameters and factors for the others
-      // in one vector pass.
+      // The parameters and factors at the block's temperature, shared by
+      // every point in one vector pass.
       double g[16], decay[16], ramp[16], omega = 0;
-      point(b, 0, &omega, g, decay, ramp);
-      if (b.n > 1)
-        kViscoUniform[ud][n_](b.n - 1, b.n, b.strain.data() + 3, ud ? nullptr : dir2 + 2, omega, g, decay, ramp, k_sh_,
-                          b.state.data() + 1, b.stress.data() + 3, W + 1);
+      factors(b.temperature[0], b.dt, &omega, g, decay, ramp);
+      kViscoUniform[ud][n_](b.n, b.strain.data(), dir2, omega, g, decay, ramp, k_sh_, b.state.data(), b.stress.data(),
+                            W);
       return Status::success();
     }
     // Otherwise one vector pass over the block, the parameters evaluated
@@ -529,33 +540,20 @@ class ViscoelasticShear final : public MaterialLaw {
     return Status::success();
   }
 
-  // One point: parameters at its temperature, Prony step.
-  // The parameters and factors used are returned when asked for (omega_out,
-  // g_out, decay_out, ramp_out: 16 each).
-  void point(const MaterialBlock& b, std::size_t q, double* omega_out = nullptr, double* g_out = nullptr,
-             double* decay_out = nullptr, double* ramp_out = nullptr) const {
-    const FibreFrame f;
-    double g[16], inv_tau[16], decay[16], ramp[16], omega = 0;
-    const Sym2 C = {b.strain[3 * q], b.strain[3 * q + 1], b.strain[3 * q + 2]};
-    FibreFrame fr = f;
-    if (!b.dir2.empty()) {
-      fr.c = b.dir2[2 * q];
-      fr.s = b.dir2[2 * q + 1];
-    }
-    const Invariants v = invariants(C, fr, kSh);
-    double tau[16];
-    at(b.temperature[q], &omega, g, tau);
+  // The parameters at temperature T and the Prony factors of a step dt
+  // (16 values each at most).
+  void factors(double T, double dt, double* omega, double* g, double* decay, double* ramp) const {
+    double tau[16], inv_tau[16];
+    at(T, omega, g, tau);
     for (int i = 0; i < n_; ++i) inv_tau[i] = 1.0 / tau[i];
-    prony_factors_inv(n_, inv_tau, b.dt, decay, ramp);
-    if (omega_out) {
-      *omega_out = omega;
-      for (int i = 0; i < n_; ++i) {
-        g_out[i] = g[i];
-        decay_out[i] = decay[i];
-        ramp_out[i] = ramp[i];
-      }
-    }
-    finish(b, q, v, omega, g, decay, ramp);
+    prony_factors_inv(n_, inv_tau, dt, decay, ramp);
+  }
+
+  // One point: parameters at its temperature, Prony step.
+  void point(const MaterialBlock& b, std::size_t q) const {
+    double g[16], decay[16], ramp[16], omega = 0;
+    factors(b.temperature[q], b.dt, &omega, g, decay, ramp);
+    shared_point(b, q, omega, g, decay, ramp);
   }
 
   // One point at the temperature of another (its parameters and factors
