@@ -325,6 +325,23 @@ inline void off_face(Projection& p, const Vec3& r, double d2, double dn) {
   if (dist > 0) p.n = sdk::scale(r, (dn >= 0 ? 1.0 : -1.0) / dist);
 }
 
+// Which nodes a tool query may skip (1) or must ask (0): a node last asked
+// at x_q, when the tool had travelled sq, at a distance dist beyond the
+// cutoff, cannot have come within the cutoff while it has moved less than
+// the slack that the tool's travel since (path - sq) leaves; a relative
+// margin covers the round-off of the sums. Nodes at a distance that is not
+// finite are always asked. One vector pass.
+TS_VECTOR_CLONES
+void skip_flags(std::size_t n, const double* __restrict dist, const double* __restrict sq, const double* __restrict x,
+                const double* __restrict xq, double cutoff, double path, double* __restrict skip) {
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i) {
+    const double slack = dist[i] - cutoff - (path - sq[i]) * (1 + 1e-9) - 1e-9 * cutoff;
+    const double dx = x[3 * i] - xq[3 * i], dy = x[3 * i + 1] - xq[3 * i + 1], dz = x[3 * i + 2] - xq[3 * i + 2];
+    skip[i] = (slack > 0) & (std::abs(dist[i]) < kInf) & (dx * dx + dy * dy + dz * dz < slack * slack) ? 1.0 : 0.0;
+  }
+}
+
 // One direction of ply/ply search: nodes of `a` against the surface of `b`.
 struct Pass {
   int a = 0, b = 0;
@@ -494,14 +511,12 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // Runs of consecutive nodes to ask are queried in place (one call per
     // run, no copies); where and when a node was asked is kept only for
     // nodes beyond the cutoff, the only ones that can be skipped next time.
-    auto skip = [&](std::size_t i) {
-      const double slack = dist_[i] - cutoff - (tool_path_ - sq_[i]) * (1 + 1e-9) - 1e-9 * cutoff;
-      if (!tool.displacement || !(slack > 0) || !std::isfinite(dist_[i])) return false;
-      const double* x = &a.x[3 * i];
-      const double* q = &xq_[3 * i];
-      const double dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
-      return dx * dx + dy * dy + dz * dz < slack * slack;
-    };
+    skip_.resize(n);
+    if (tool.displacement)
+      skip_flags(n, dist_.data(), sq_.data(), a.x.data(), xq_.data(), cutoff, tool_path_, skip_.data());
+    else
+      std::fill(skip_.begin(), skip_.end(), 0.0);
+    auto skip = [&](std::size_t i) { return skip_[i] != 0.0; };
     for (std::size_t i = 0; i < n;) {
       if (skip(i)) {
         ++i;
@@ -904,6 +919,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // Tool queries: where each node beyond the cutoff was last asked (xq_,
   // and the tool's path length then, sq_).
   std::vector<double> xq_, sq_;
+  std::vector<double> skip_;  // per node: 1 if not asked at this query
   double tool_path_ = 0;
   Vec3 tool_u_ = {0, 0, 0};
 };
