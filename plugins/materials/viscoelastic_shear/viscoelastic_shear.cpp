@@ -45,17 +45,10 @@ Scratch& scratch(std::size_t n) {
 struct ShearStress {
   double s0, s1, s2, w;
 };
-[[gnu::always_inline]] inline ShearStress shear_stress(double C0, double C1, double C2, double c, double s, double k1,
-                                                       double k2, double k3, double omega) {
-  const double l22_0 = c * c, l22_1 = s * s, l22_2 = c * s;
-  const double l12_0 = c, l12_1 = 0.0, l12_2 = 0.5 * s;
-  const double i41 = C0 * 1.0 + C1 * 0.0 + 2 * C2 * 0.0;
-  const double i42 = C0 * l22_0 + C1 * l22_1 + 2 * C2 * l22_2;
-  const double i412 = C0 * l12_0 + C1 * l12_1 + 2 * C2 * l12_2;
-  const double r = std::sqrt(i41 * i42), sh = i412 / r;
-  const double dsh0 = l12_0 / r - 0.5 * sh * (1.0 / i41 + l22_0 / i42);
-  const double dsh1 = l12_1 / r - 0.5 * sh * (0.0 / i41 + l22_1 / i42);
-  const double dsh2 = l12_2 / r - 0.5 * sh * (0.0 / i41 + l22_2 / i42);
+// The stress and energy from I_sh and dI_sh/dC (dsh0-2):
+// even_polynomial() and add_stress() written out.
+[[gnu::always_inline]] inline ShearStress shear_polynomial(double sh, double dsh0, double dsh1, double dsh2, double k1,
+                                                           double k2, double k3, double omega) {
   const double x2 = sh * sh;
   double v = 0, d = 0, p = 1;
   d += 2 * 1 * k1 * p * sh;
@@ -69,6 +62,20 @@ struct ShearStress {
   v += k3 * p;
   const double dw = kStressFactor * (omega * d);
   return {0.0 + dw * dsh0, 0.0 + dw * dsh1, 0.0 + dw * dsh2, omega * v};
+}
+// I_sh and dI_sh/dC for the frame (c, s), as invariants() forms them.
+[[gnu::always_inline]] inline ShearStress shear_stress(double C0, double C1, double C2, double c, double s, double k1,
+                                                       double k2, double k3, double omega) {
+  const double l22_0 = c * c, l22_1 = s * s, l22_2 = c * s;
+  const double l12_0 = c, l12_1 = 0.0, l12_2 = 0.5 * s;
+  const double i41 = C0 * 1.0 + C1 * 0.0 + 2 * C2 * 0.0;
+  const double i42 = C0 * l22_0 + C1 * l22_1 + 2 * C2 * l22_2;
+  const double i412 = C0 * l12_0 + C1 * l12_1 + 2 * C2 * l12_2;
+  const double r = std::sqrt(i41 * i42), sh = i412 / r;
+  const double dsh0 = l12_0 / r - 0.5 * sh * (1.0 / i41 + l22_0 / i42);
+  const double dsh1 = l12_1 / r - 0.5 * sh * (0.0 / i41 + l22_1 / i42);
+  const double dsh2 = l12_2 / r - 0.5 * sh * (0.0 / i41 + l22_2 / i42);
+  return shear_polynomial(sh, dsh0, dsh1, dsh2, k1, k2, k3, omega);
 }
 
 // shear_stress() for a UD law's frame (c, s) = (0, 1): l22 = (0, 1, 0),
@@ -84,19 +91,7 @@ struct ShearStress {
   const double dsh0 = 0.0 - 0.5 * sh * (1.0 / i41);
   const double dsh1 = 0.0 - 0.5 * sh * (1.0 / i42);
   const double dsh2 = 0.5 / r;
-  const double x2 = sh * sh;
-  double v = 0, d = 0, p = 1;
-  d += 2 * 1 * k1 * p * sh;
-  p *= x2;
-  v += k1 * p;
-  d += 2 * 2 * k2 * p * sh;
-  p *= x2;
-  v += k2 * p;
-  d += 2 * 3 * k3 * p * sh;
-  p *= x2;
-  v += k3 * p;
-  const double dw = kStressFactor * (omega * d);
-  return {0.0 + dw * dsh0, 0.0 + dw * dsh1, 0.0 + dw * dsh2, omega * v};
+  return shear_polynomial(sh, dsh0, dsh1, dsh2, k1, k2, k3, omega);
 }
 // The shear stress at point q: UD (kUd, no directions) or with the weft
 // direction dir2.
@@ -159,6 +154,7 @@ struct Lines {
 template <int NB>
 struct Parameters {
   double omega, g_inf, g[NB], inv_tau[NB];
+  double decay[NB], ramp[NB];  // the Prony factors, where given for the block (kGiven in visco_point)
 };
 template <int NB>
 [[gnu::always_inline]] inline Parameters<NB> parameters(const Lines<NB>& l, double T0) {
@@ -188,8 +184,10 @@ template <int NB>
 // (value k of every point, ld apart) holds S0 (rows 0-2), then H_i (rows
 // 3 + 3 i to 5 + 3 i). The new S0 and H_i replace the old ones in the
 // state, except where redo[q] = 1: dt / tau_i >= 1e-2 for some branch (the
-// state is left as it was). Inlined into each vector clone below.
-template <int NB, bool kUd>
+// state is left as it was). With kGiven the factors are p.decay and
+// p.ramp (computed once for a block at one temperature) and no point is
+// to be redone. Inlined into each vector clone below.
+template <int NB, bool kUd, bool kGiven = false>
 [[gnu::always_inline]] inline void visco_point(std::size_t q, std::size_t ld, const double* __restrict C,
                                                const double* __restrict dir2, const Parameters<NB>& p, double dt,
                                                double k1, double k2, double k3, double* __restrict state,
@@ -205,6 +203,11 @@ template <int NB, bool kUd>
   nx[2] = s02;
   bool ok = true;
   for (int i = 0; i < NB; ++i) {
+    if constexpr (kGiven) {
+      take_branch(maxwell_branch(p.decay[i], p.g[i], p.ramp[i], st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]),
+                  nx + 3 + 3 * i, o0, o1, o2);
+      continue;
+    }
     const double x = dt * p.inv_tau[i];
     // prony_factors_inv: the series (x < 1e-3 and x < 1e-2 forms)
     const double xx2 = x * x, x4 = xx2 * xx2;
@@ -352,61 +355,33 @@ constexpr ViscoCached kViscoCached[2][kVectorBranches + 1] = {
 // The same for n points at one temperature: omega, g_i and the factors
 // decay_i, ramp_i given (computed once for the block); the new S0 and H_i
 // are written to the state in place (no point needs evaluating again).
-template <int NB>
-struct Uniform {
-  double omega, g_inf, g[NB], decay[NB], ramp[NB];
-};
-// One point (inlined: with its arrays declared in the vector loop itself,
-// GCC 12 gives each lane a copy and leaves the loop scalar).
-template <int NB, bool kUd>
-[[gnu::always_inline]] inline void uniform_point(std::size_t q, std::size_t n, const double* __restrict C,
-                                                 const double* __restrict dir2, const Uniform<NB>& u, double k1,
-                                                 double k2, double k3, double* __restrict state,
-                                                 double* __restrict S, double* __restrict W) {
-  double st[3 + 3 * NB];
-  for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = state[k * n + q];
-  const ShearStress ss = point_shear<kUd>(q, C, dir2, k1, k2, k3, u.omega);
-  const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
-  double o0 = u.g_inf * s00, o1 = u.g_inf * s01, o2 = u.g_inf * s02;
-  double nx[3 + 3 * NB];
-  nx[0] = s00;
-  nx[1] = s01;
-  nx[2] = s02;
-  for (int i = 0; i < NB; ++i) {
-    take_branch(maxwell_branch(u.decay[i], u.g[i], u.ramp[i], st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]),
-                nx + 3 + 3 * i, o0, o1, o2);
-  }
-  for (int k = 0; k < 3 + 3 * NB; ++k) state[k * n + q] = nx[k];
-  S[3 * q] = o0;
-  S[3 * q + 1] = o1;
-  S[3 * q + 2] = o2;
-  W[q] = ss.w;
-}
 template <int NB, bool kUd>
 [[gnu::always_inline]] inline void visco_uniform_body(std::size_t n, const double* __restrict C,
                                                       const double* __restrict dir2, double omega, const double* g,
                                                       const double* decay, const double* ramp, const double* ksh,
                                                       double* __restrict state, double* __restrict S,
-                                                      double* __restrict W) {
+                                                      double* __restrict W, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
-  Uniform<NB> u;
-  u.omega = omega;
+  Parameters<NB> p;
+  p.omega = omega;
   double g_sum = 0;
   for (int i = 0; i < NB; ++i) {
-    u.g[i] = g[i];
-    u.decay[i] = decay[i];
-    u.ramp[i] = ramp[i];
+    p.g[i] = g[i];
+    p.inv_tau[i] = 0.0;  // not read
+    p.decay[i] = decay[i];
+    p.ramp[i] = ramp[i];
     g_sum += g[i];
   }
-  u.g_inf = 1.0 - g_sum;
+  p.g_inf = 1.0 - g_sum;
 #pragma omp simd
-  for (std::size_t q = 0; q < n; ++q) uniform_point<NB, kUd>(q, n, C, dir2, u, k1, k2, k3, state, S, W);
+  for (std::size_t q = 0; q < n; ++q) visco_point<NB, kUd, true>(q, n, C, dir2, p, 0.0, k1, k2, k3, state, S, W, redo);
 }
 #define TS_VISCO_UNIFORM(NB, V, UD)                                                                               \
   TS_VECTOR_CLONES void visco_uniform##V##NB(std::size_t n, const double* C, const double* dir2, double omega, \
                                              const double* g, const double* decay, const double* ramp,          \
-                                             const double* ksh, double* state, double* S, double* W) {          \
-    visco_uniform_body<NB, UD>(n, C, dir2, omega, g, decay, ramp, ksh, state, S, W);                             \
+                                             const double* ksh, double* state, double* S, double* W,            \
+                                             double* redo) {                                                     \
+    visco_uniform_body<NB, UD>(n, C, dir2, omega, g, decay, ramp, ksh, state, S, W, redo);                       \
   }
 TS_VISCO_UNIFORM(1, V, false)
 TS_VISCO_UNIFORM(2, V, false)
@@ -418,7 +393,7 @@ TS_VISCO_UNIFORM(3, U, true)
 TS_VISCO_UNIFORM(4, U, true)
 #undef TS_VISCO_UNIFORM
 using ViscoUniform = void (*)(std::size_t, const double*, const double*, double, const double*, const double*,
-                              const double*, const double*, double*, double*, double*);
+                              const double*, const double*, double*, double*, double*, double*);
 constexpr ViscoUniform kViscoUniform[2][kVectorBranches + 1] = {
     {nullptr, visco_uniformV1, visco_uniformV2, visco_uniformV3, visco_uniformV4},
     {nullptr, visco_uniformU1, visco_uniformU2, visco_uniformU3, visco_uniformU4}};
@@ -518,7 +493,7 @@ class ViscoelasticShear final : public MaterialLaw {
       double g[16], decay[16], ramp[16], omega = 0;
       factors(b.temperature[0], b.dt, &omega, g, decay, ramp);
       kViscoUniform[ud][n_](b.n, b.strain.data(), dir2, omega, g, decay, ramp, k_sh_, b.state.data(), b.stress.data(),
-                            W);
+                            W, sc.redo.data());
       return Status::success();
     }
     // Otherwise one vector pass over the block, the parameters evaluated
