@@ -298,26 +298,21 @@ bool same_temperatures(std::size_t n, const double* __restrict temp, const doubl
 
 // Each vector pass for 1 to 4 branches, with the weft directions (V) and
 // for UD (U, no directions read); the tables below are indexed [ud][NB].
+#define TS_VISCO_VARIANTS(M) \
+  M(1, V, false) M(2, V, false) M(3, V, false) M(4, V, false) M(1, U, true) M(2, U, true) M(3, U, true) M(4, U, true)
+#define TS_VISCO_TABLE(f) \
+  { {nullptr, f##V1, f##V2, f##V3, f##V4}, {nullptr, f##U1, f##U2, f##U3, f##U4} }
 #define TS_VISCO_BLOCK(NB, V, UD)                                                                                \
   TS_VECTOR_CLONES void visco_block##V##NB(std::size_t n, const double* C, const double* dir2, const double* temp, \
                                            double dt, const double* ksh, const double* lines, double* state,      \
                                            double* S, double* W, double* redo) {                                  \
     visco_body<NB, UD>(n, C, dir2, temp, dt, ksh, lines, state, S, W, redo);                                     \
   }
-TS_VISCO_BLOCK(1, V, false)
-TS_VISCO_BLOCK(2, V, false)
-TS_VISCO_BLOCK(3, V, false)
-TS_VISCO_BLOCK(4, V, false)
-TS_VISCO_BLOCK(1, U, true)
-TS_VISCO_BLOCK(2, U, true)
-TS_VISCO_BLOCK(3, U, true)
-TS_VISCO_BLOCK(4, U, true)
+TS_VISCO_VARIANTS(TS_VISCO_BLOCK)
 #undef TS_VISCO_BLOCK
 using ViscoBlock = void (*)(std::size_t, const double*, const double*, const double*, double, const double*,
                             const double*, double*, double*, double*, double*);
-constexpr ViscoBlock kViscoBlock[2][kVectorBranches + 1] = {
-    {nullptr, visco_blockV1, visco_blockV2, visco_blockV3, visco_blockV4},
-    {nullptr, visco_blockU1, visco_blockU2, visco_blockU3, visco_blockU4}};
+constexpr ViscoBlock kViscoBlock[2][kVectorBranches + 1] = TS_VISCO_TABLE(visco_block);
 #define TS_VISCO_PARAMETERS(NB)                                                                      \
   TS_VECTOR_CLONES void visco_parameters##NB(std::size_t n, const double* temp, const double* lines, \
                                              double* cache) {                                       \
@@ -334,23 +329,14 @@ TS_VISCO_PARAMETERS(4)
                                             double* S, double* W, double* redo) {                            \
     cached_body<NB, UD>(n, C, dir2, cache, dt, ksh, state, S, W, redo);                                     \
   }
-TS_VISCO_CACHED(1, V, false)
-TS_VISCO_CACHED(2, V, false)
-TS_VISCO_CACHED(3, V, false)
-TS_VISCO_CACHED(4, V, false)
-TS_VISCO_CACHED(1, U, true)
-TS_VISCO_CACHED(2, U, true)
-TS_VISCO_CACHED(3, U, true)
-TS_VISCO_CACHED(4, U, true)
+TS_VISCO_VARIANTS(TS_VISCO_CACHED)
 #undef TS_VISCO_CACHED
 using ViscoParameters = void (*)(std::size_t, const double*, const double*, double*);
 constexpr ViscoParameters kViscoParameters[kVectorBranches + 1] = {nullptr, visco_parameters1, visco_parameters2,
                                                                    visco_parameters3, visco_parameters4};
 using ViscoCached = void (*)(std::size_t, const double*, const double*, const double*, double, const double*,
                              double*, double*, double*, double*);
-constexpr ViscoCached kViscoCached[2][kVectorBranches + 1] = {
-    {nullptr, visco_cachedV1, visco_cachedV2, visco_cachedV3, visco_cachedV4},
-    {nullptr, visco_cachedU1, visco_cachedU2, visco_cachedU3, visco_cachedU4}};
+constexpr ViscoCached kViscoCached[2][kVectorBranches + 1] = TS_VISCO_TABLE(visco_cached);
 
 // The same for n points at one temperature: omega, g_i and the factors
 // decay_i, ramp_i given (computed once for the block); the new S0 and H_i
@@ -383,20 +369,13 @@ template <int NB, bool kUd>
                                              double* redo) {                                                     \
     visco_uniform_body<NB, UD>(n, C, dir2, omega, g, decay, ramp, ksh, state, S, W, redo);                       \
   }
-TS_VISCO_UNIFORM(1, V, false)
-TS_VISCO_UNIFORM(2, V, false)
-TS_VISCO_UNIFORM(3, V, false)
-TS_VISCO_UNIFORM(4, V, false)
-TS_VISCO_UNIFORM(1, U, true)
-TS_VISCO_UNIFORM(2, U, true)
-TS_VISCO_UNIFORM(3, U, true)
-TS_VISCO_UNIFORM(4, U, true)
+TS_VISCO_VARIANTS(TS_VISCO_UNIFORM)
 #undef TS_VISCO_UNIFORM
 using ViscoUniform = void (*)(std::size_t, const double*, const double*, double, const double*, const double*,
                               const double*, const double*, double*, double*, double*, double*);
-constexpr ViscoUniform kViscoUniform[2][kVectorBranches + 1] = {
-    {nullptr, visco_uniformV1, visco_uniformV2, visco_uniformV3, visco_uniformV4},
-    {nullptr, visco_uniformU1, visco_uniformU2, visco_uniformU3, visco_uniformU4}};
+constexpr ViscoUniform kViscoUniform[2][kVectorBranches + 1] = TS_VISCO_TABLE(visco_uniform);
+#undef TS_VISCO_TABLE
+#undef TS_VISCO_VARIANTS
 
 class ViscoelasticShear final : public MaterialLaw {
  public:
