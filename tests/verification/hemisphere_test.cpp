@@ -91,12 +91,16 @@ TEST(Hemisphere, ThermalPrintsReachTheLowerPlyThroughTheUpperOne) {
 // extrema of each ply at the end of the stroke.
 // Required for [1,-1,0]: + and - extrema within 5 % of each other (physics.md
 // section 5), and s(p) + s(mirror p) within 5 % of the peak shear angle at
-// every pair. Measured: 0.006 % (extrema) and 0.003 % / 0.004 % (pairs).
-// The check is kept tighter, at 0.5 %: the field is symmetric to
-// round-off, and each asymmetry found so far (sticking friction, a snag on
-// the holder rim, the friction vibration at the step's frequency limit)
-// showed as 2-30 %. Fibres along y: extrema
-// more than 30 % apart (measured 75 %).
+// every pair. Measured: 0.000 / 0.013 % (extrema) and 0.010 / 0.012 % (pairs).
+// The check is kept tighter, at 0.5 %: on this scene the field is
+// symmetric to round-off, and each defect that broke the symmetry so far
+// (sticking friction, a snag on the holder rim, the friction vibration at
+// the step's frequency limit) showed as 2-30 %. The default scene, with
+// its smaller step and the job's ply/ply search every 64th step, takes a
+// slightly asymmetric state instead (extrema 1.0 and 1.6 % apart), which
+// fibres turned by 0.006 deg also give with the search every step: should
+// this scene ever take it, the 5 % of physics.md is the bound, not 0.5 %.
+// Fibres along y: extrema more than 30 % apart (measured 75 %).
 TEST(Hemisphere, ShearSymmetricAboutTheDiagonalOnlyForDiagonalFibres) {
   // Nodes of the [1,-1,0] scene's mesh (10 mm cells: corners and centres).
   const std::vector<std::array<double, 2>> points = {{0.045, 0.015}, {0.06, 0.03},  {0.075, 0.015},
