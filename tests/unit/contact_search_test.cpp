@@ -254,5 +254,71 @@ TEST(PlyPlySearch, SearchIntervalKeepsTheTriangleUntilTheNextSearch) {
   EXPECT_GT(std::abs(fz_b[0][2][3]), 0.0);
 }
 
+// search_interval is a most: the next full search comes sooner where the
+// plies' fastest nodes could close half the gap of a node that the last
+// search found out of reach. A node 2 mm above a plate (0.5 mm plies:
+// touching below 0.5 mm, out of reach beyond 1.005 mm) falls at 5 m/s,
+// 50 um per step of 10 us. With k = 64 and the searches every 64th step
+// only, it would be 1.2 mm below the plate at the next search and never
+// pushed back; the bound takes a search every floor(0.5 x 0.505 mm / 50 um)
+// = 5 steps, which finds the plate at 1.0 mm (step 20), so the node feels
+// the plate from the step it touches it (31, 0.45 mm), with the forces of
+// a search every step.
+TEST(PlyPlySearch, SearchIntervalShortensForFastPlies) {
+  PluginRegistry registry;
+  const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");
+  ShellMesh b;
+  b.x = {0, 0, 0, 0.01, 0, 0, 0.01, 0.01, 0, 0, 0.01, 0};
+  b.triangles = {0, 1, 2, 0, 2, 3};
+  b.neighbours = {-1, 1, -1, 0, -1, -1};
+  const double speed = 5.0, dt = 1e-5, penalty = 1e11, area = 1e-4;
+  const int calls = 40;
+  std::vector<double> fz[2];
+  for (int run = 0; run < 2; ++run) {
+    const int interval = run == 0 ? 1 : 64;
+    std::unique_ptr<sdk::ContactHandler> handler(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
+    ShellMesh a;
+    a.x = {0.007, 0.002, 0.002};
+    const sdk::ContactPair pair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}};
+    {
+      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+      ASSERT_TRUE(handler
+                      ->configure(validate_params(json{{"penalty", penalty}, {"damping", 0.0},
+                                                       {"search_interval", interval}},
+                                                  "/c", r.descriptor),
+                                  pair, parts, {})
+                      .ok);
+    }
+    const std::vector<double> va = {0.0, 0.0, -speed}, vb(12, 0.0), area_a(1, area), area_b(4, area), ma(1, 1e-3),
+                              mb(4, 1e-3);
+    const std::vector<std::span<const double>> vel = {va, vb}, areas = {area_a, area_b}, mass = {ma, mb};
+    for (int call = 0; call < calls; ++call) {
+      a.x[2] = 0.002 - speed * dt * call;
+      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+      std::vector<double> f_a(3, 0.0), f_b(12, 0.0), tool_force;
+      const std::vector<std::span<double>> force = {f_a, f_b};
+      sdk::ContactForceInput in;
+      in.parts = parts;
+      in.dt = dt;
+      in.velocity = vel;
+      in.node_area = areas;
+      in.mass = mass;
+      in.side = 0;
+      sdk::ContactForceOutput out;
+      out.force = force;
+      out.tool_force = tool_force;
+      ASSERT_TRUE(handler->contact_forces(in, out).ok);
+      fz[run].push_back(f_a[2]);
+    }
+  }
+  int first = -1;
+  for (int call = 0; call < calls; ++call) {
+    if (first < 0 && fz[0][call] != 0.0) first = call;
+    EXPECT_EQ(fz[1][call], fz[0][call]) << "call " << call;
+  }
+  EXPECT_EQ(first, 31);  // 0.45 mm above the plate's mid-surface
+  EXPECT_GT(fz[1][calls - 1], 0.0);
+}
+
 }  // namespace
 }  // namespace ts

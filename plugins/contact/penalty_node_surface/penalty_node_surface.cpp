@@ -353,10 +353,10 @@ struct Pass {
   // its force (3), its spring energy, its target (element, 3 weights).
   std::vector<double> scratch, energy, target;
   // With search_interval > 1: the triangle of b that the last full search
-  // found for each node of a (-1: none within reach), and the passes since
-  // that search (counting it).
+  // found for each node of a (-1: none within reach), the passes since
+  // that search (counting it), and the passes it covers (search_limit()).
   std::vector<int> kept;
-  long long calls = 0;
+  long long calls = 0, limit = 1;
   // The distinct triangles in kept, their geometry (kGeo each, evaluated at
   // the passes between full searches), each node's place in that list
   // (-1: none), and per triangle of b its place (building the list).
@@ -802,9 +802,12 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       ps.kept.assign(a.num_nodes, -1);
       ps.calls = 0;
     }
-    const bool full = search_interval_ <= 1 || ps.calls % search_interval_ == 0;
+    const bool full = search_interval_ <= 1 || ps.calls == 0 || ps.calls >= ps.limit;
     ps.calls = full ? 1 : ps.calls + 1;
-    if (full) refresh_candidates(ps, a, b, track);
+    if (full) {
+      refresh_candidates(ps, a, b, track);
+      ps.limit = search_limit(in.velocity[a.index], in.velocity[b.index], in.dt, track - hsum2);
+    }
     const auto va = in.velocity[a.index];
     const auto vb = in.velocity[b.index];
     const auto area = in.node_area[a.index];
@@ -911,6 +914,25 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     }
   }
 
+  // The passes a full search covers: search_interval, fewer where the
+  // plies' speeds could close `gap` in fewer steps. A node without a target
+  // at the search is farther than `track` from the other ply's mid-surface,
+  // so it is at least gap = track - hsum2 from touching, and the two plies'
+  // points approach each other at most at the sum of their largest node
+  // speeds. Half of that many steps at the present step, for steps that grow
+  // and speeds that change until the next search.
+  long long search_limit(std::span<const double> va, std::span<const double> vb, double dt, double gap) const {
+    auto fastest = [](std::span<const double> v) {
+      double m = 0;
+      for (std::size_t k = 0; k + 2 < v.size(); k += 3) m = std::max(m, v[k] * v[k] + v[k + 1] * v[k + 1] + v[k + 2] * v[k + 2]);
+      return std::sqrt(m);
+    };
+    const double travel = (fastest(va) + fastest(vb)) * dt;  // per step, at most
+    const double n = 0.5 * gap / travel;
+    if (!(n < static_cast<double>(search_interval_))) return search_interval_;  // also travel 0
+    return std::max<long long>(1, static_cast<long long>(n));
+  }
+
   sdk::ContactPair pair_;
   double penalty_ = 0, friction_ = 0, slip_velocity_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
   long long search_interval_ = 1;
@@ -962,7 +984,9 @@ void register_all(sdk::Registrar& r) {
                      "ply/ply: steps from one full closest-point search to the next. 1: every step (exact). k > 1: "
                      "in the steps between, each node keeps the triangle the last search found and takes the "
                      "closest point on it; a node that slides onto a neighbouring triangle meets it at most k - 1 "
-                     "steps late (a cheaper search at a small error, see the user guide)",
+                     "steps late (a cheaper search at a small error, see the user guide). The next search comes "
+                     "sooner where the plies' fastest nodes could close half the gap that a node without a target "
+                     "had at the last one",
                      1, 64),
   };
   d.example = R"({ "type": "contact", "handler": "penalty_node_surface", "between": ["die", "ply_bottom"], "friction": 0.2, "conductance": 1000.0 })";
@@ -972,4 +996,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.5.2", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.6.0", ts::contact::register_all)
