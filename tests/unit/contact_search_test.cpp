@@ -2,6 +2,8 @@
 // force over every triangle of the other ply.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -159,6 +161,63 @@ TEST(PlyPlySearch, LoneTriangleTargetsAreItsClosestPoints) {
   EXPECT_EQ(checked, 3 * 3 * 21 * 21);
 }
 
+// One node (part 0) against a flat plate of two triangles (part 1: a 10 mm
+// square split along its diagonal 0-2, node 1 on one side of it and node 3
+// on the other), both plies 0.5 mm thick, through the handler's
+// contact_forces() for the node's side of the pair. The plate is at rest;
+// masses 1 g, areas 1 cm2, no damping.
+class NodeOverPlate {
+ public:
+  static constexpr double kPenalty = 1e11, kArea = 1e-4;
+  NodeOverPlate(const PluginRecord& r, int search_interval)
+      : handler_(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)()) {
+    b_.x = {0, 0, 0, 0.01, 0, 0, 0.01, 0.01, 0, 0, 0.01, 0};
+    b_.triangles = {0, 1, 2, 0, 2, 3};
+    b_.neighbours = {-1, 1, -1, 0, -1, -1};
+    a_.x = {0, 0, 0};
+    const std::vector<sdk::PartView> parts = {test::part_view(a_, 0, 0.0005), test::part_view(b_, 1, 0.0005)};
+    const sdk::ContactPair pair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}};
+    ok_ = handler_
+              ->configure(validate_params(json{{"penalty", kPenalty}, {"damping", 0.0},
+                                               {"search_interval", search_interval}},
+                                          "/c", r.descriptor),
+                          pair, parts, {})
+              .ok;
+  }
+  bool ok() const { return ok_; }
+  // The forces on the node (3 values) and on the plate's nodes (12) with the
+  // node at x, moving at v, after a step dt.
+  bool step(const std::array<double, 3>& x, const std::array<double, 3>& v, double dt, std::array<double, 3>& fa,
+            std::array<double, 12>& fb) {
+    a_.x = {x[0], x[1], x[2]};
+    const std::vector<sdk::PartView> parts = {test::part_view(a_, 0, 0.0005), test::part_view(b_, 1, 0.0005)};
+    const std::vector<double> va(v.begin(), v.end()), vb(12, 0.0), area_a(1, kArea), area_b(4, kArea),
+        ma(1, 1e-3), mb(4, 1e-3);
+    const std::vector<std::span<const double>> vel = {va, vb}, areas = {area_a, area_b}, mass = {ma, mb};
+    std::vector<double> f_a(3, 0.0), f_b(12, 0.0), tool_force;
+    const std::vector<std::span<double>> force = {f_a, f_b};
+    sdk::ContactForceInput in;
+    in.parts = parts;
+    in.dt = dt;
+    in.velocity = vel;
+    in.node_area = areas;
+    in.mass = mass;
+    in.side = 0;  // a's node against b's triangles
+    sdk::ContactForceOutput out;
+    out.force = force;
+    out.tool_force = tool_force;
+    if (!handler_->contact_forces(in, out).ok) return false;
+    std::copy(f_a.begin(), f_a.end(), fa.begin());
+    std::copy(f_b.begin(), f_b.end(), fb.begin());
+    return true;
+  }
+
+ private:
+  std::unique_ptr<sdk::ContactHandler> handler_;
+  ShellMesh a_, b_;
+  bool ok_ = false;
+};
+
 // search_interval k: from one full search to the next (every k-th call)
 // each node keeps the triangle the last search found and takes the closest
 // point on it. A node pressed 0.1 mm into a flat plate of two triangles
@@ -173,11 +232,7 @@ TEST(PlyPlySearch, LoneTriangleTargetsAreItsClosestPoints) {
 TEST(PlyPlySearch, SearchIntervalKeepsTheTriangleUntilTheNextSearch) {
   PluginRegistry registry;
   const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");
-  ShellMesh b;
-  b.x = {0, 0, 0, 0.01, 0, 0, 0.01, 0.01, 0, 0, 0.01, 0};
-  b.triangles = {0, 1, 2, 0, 2, 3};  // node 1 beyond the diagonal 0-2 on one side, node 3 on the other
-  b.neighbours = {-1, 1, -1, 0, -1, -1};
-  const double s2 = std::sqrt(0.5), d = 0.0004, penalty = 1e11, area = 1e-4;
+  const double s2 = std::sqrt(0.5), d = 0.0004, penalty = NodeOverPlate::kPenalty, area = NodeOverPlate::kArea;
   auto at = [&](int call) {  // 1.5 um on node 1's side of the diagonal at call 0, 1 um towards node 3 per call
     const double off = 1.5e-6 - 1e-6 * call;
     return std::array<double, 3>{0.005 + off * s2, 0.005 - off * s2, d};
@@ -185,40 +240,13 @@ TEST(PlyPlySearch, SearchIntervalKeepsTheTriangleUntilTheNextSearch) {
   std::vector<std::array<double, 3>> fa[2];    // node force, per call
   std::vector<std::array<double, 4>> fz_b[2];  // z force on b's four nodes, per call
   for (int run = 0; run < 2; ++run) {
-    const int interval = run == 0 ? 1 : 3;
-    std::unique_ptr<sdk::ContactHandler> handler(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
-    ShellMesh a;
-    a.x = {0, 0, 0};
-    const sdk::ContactPair pair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}};
-    {
-      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
-      ASSERT_TRUE(handler
-                      ->configure(validate_params(json{{"penalty", penalty}, {"damping", 0.0},
-                                                       {"search_interval", interval}},
-                                                  "/c", r.descriptor),
-                                  pair, parts, {})
-                      .ok);
-    }
-    const std::vector<double> va(3, 0.0), vb(12, 0.0), area_a(1, area), area_b(4, area), ma(1, 1e-3), mb(4, 1e-3);
-    const std::vector<std::span<const double>> vel = {va, vb}, areas = {area_a, area_b}, mass = {ma, mb};
+    NodeOverPlate plate(r, run == 0 ? 1 : 3);
+    ASSERT_TRUE(plate.ok());
     for (int call = 0; call < 6; ++call) {
-      const auto p = at(call);
-      a.x = {p[0], p[1], p[2]};
-      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
-      std::vector<double> f_a(3, 0.0), f_b(12, 0.0), tool_force;
-      const std::vector<std::span<double>> force = {f_a, f_b};
-      sdk::ContactForceInput in;
-      in.parts = parts;
-      in.dt = 1e-5;
-      in.velocity = vel;
-      in.node_area = areas;
-      in.mass = mass;
-      in.side = 0;  // a's node against b's triangles
-      sdk::ContactForceOutput out;
-      out.force = force;
-      out.tool_force = tool_force;
-      ASSERT_TRUE(handler->contact_forces(in, out).ok);
-      fa[run].push_back({f_a[0], f_a[1], f_a[2]});
+      std::array<double, 3> f_a;
+      std::array<double, 12> f_b;
+      ASSERT_TRUE(plate.step(at(call), {0, 0, 0}, 1e-5, f_a, f_b));
+      fa[run].push_back(f_a);
       fz_b[run].push_back({f_b[2], f_b[5], f_b[8], f_b[11]});
     }
   }
@@ -267,47 +295,16 @@ TEST(PlyPlySearch, SearchIntervalKeepsTheTriangleUntilTheNextSearch) {
 TEST(PlyPlySearch, SearchIntervalShortensForFastPlies) {
   PluginRegistry registry;
   const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");
-  ShellMesh b;
-  b.x = {0, 0, 0, 0.01, 0, 0, 0.01, 0.01, 0, 0, 0.01, 0};
-  b.triangles = {0, 1, 2, 0, 2, 3};
-  b.neighbours = {-1, 1, -1, 0, -1, -1};
-  const double speed = 5.0, dt = 1e-5, penalty = 1e11, area = 1e-4;
+  const double speed = 5.0, dt = 1e-5;
   const int calls = 40;
   std::vector<double> fz[2];
   for (int run = 0; run < 2; ++run) {
-    const int interval = run == 0 ? 1 : 64;
-    std::unique_ptr<sdk::ContactHandler> handler(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
-    ShellMesh a;
-    a.x = {0.007, 0.002, 0.002};
-    const sdk::ContactPair pair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}};
-    {
-      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
-      ASSERT_TRUE(handler
-                      ->configure(validate_params(json{{"penalty", penalty}, {"damping", 0.0},
-                                                       {"search_interval", interval}},
-                                                  "/c", r.descriptor),
-                                  pair, parts, {})
-                      .ok);
-    }
-    const std::vector<double> va = {0.0, 0.0, -speed}, vb(12, 0.0), area_a(1, area), area_b(4, area), ma(1, 1e-3),
-                              mb(4, 1e-3);
-    const std::vector<std::span<const double>> vel = {va, vb}, areas = {area_a, area_b}, mass = {ma, mb};
+    NodeOverPlate plate(r, run == 0 ? 1 : 64);
+    ASSERT_TRUE(plate.ok());
     for (int call = 0; call < calls; ++call) {
-      a.x[2] = 0.002 - speed * dt * call;
-      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
-      std::vector<double> f_a(3, 0.0), f_b(12, 0.0), tool_force;
-      const std::vector<std::span<double>> force = {f_a, f_b};
-      sdk::ContactForceInput in;
-      in.parts = parts;
-      in.dt = dt;
-      in.velocity = vel;
-      in.node_area = areas;
-      in.mass = mass;
-      in.side = 0;
-      sdk::ContactForceOutput out;
-      out.force = force;
-      out.tool_force = tool_force;
-      ASSERT_TRUE(handler->contact_forces(in, out).ok);
+      std::array<double, 3> f_a;
+      std::array<double, 12> f_b;
+      ASSERT_TRUE(plate.step({0.007, 0.002, 0.002 - speed * dt * call}, {0, 0, -speed}, dt, f_a, f_b));
       fz[run].push_back(f_a[2]);
     }
   }
