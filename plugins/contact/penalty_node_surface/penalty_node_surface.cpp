@@ -806,7 +806,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     ps.calls = full ? 1 : ps.calls + 1;
     if (full) {
       refresh_candidates(ps, a, b, track);
-      ps.limit = search_limit(in.velocity[a.index], in.velocity[b.index], in.dt, track - hsum2);
+      if (search_interval_ > 1)
+        ps.limit = search_limit(in.velocity[a.index], in.velocity[b.index], in.dt, track - hsum2);
     }
     const auto va = in.velocity[a.index];
     const auto vb = in.velocity[b.index];
@@ -924,7 +925,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   long long search_limit(std::span<const double> va, std::span<const double> vb, double dt, double gap) const {
     auto fastest = [](std::span<const double> v) {
       double m = 0;
-      for (std::size_t k = 0; k + 2 < v.size(); k += 3) m = std::max(m, v[k] * v[k] + v[k + 1] * v[k + 1] + v[k + 2] * v[k + 2]);
+      for (std::size_t k = 0; k + 2 < v.size(); k += 3)
+        m = std::max(m, v[k] * v[k] + v[k + 1] * v[k + 1] + v[k + 2] * v[k + 2]);
       return std::sqrt(m);
     };
     const double travel = (fastest(va) + fastest(vb)) * dt;  // per step, at most
