@@ -1042,10 +1042,10 @@ void Simulation::element_passes(BesideContact* contact) {
           for (int b = 0; b < mech_[p]->blocks; ++b) fs.work[pass].emplace_back(static_cast<int>(p), b);
     fs.claimed = std::make_unique<ForceSchedule::Counter[]>(passes);
     fs.done = std::make_unique<ForceSchedule::Counter[]>(passes);
+    one_thread_order(passes);
   }
   if (!contact && !sdk::team_available(passes > 0 && fs.work[0].size() > 1)) {
-    for (int pass = 0; pass < passes; ++pass)
-      for (const auto& [p, b] : fs.work[pass]) element_block(p, b, pass);
+    for (const ForceSchedule::Step& s : fs.one_thread) element_block(s.part, s.block, s.pass);
     return;
   }
   for (int pass = 0; pass < passes; ++pass) {
@@ -1091,9 +1091,8 @@ void Simulation::element_passes(BesideContact* contact) {
         if (task.published) stream_copy(task.cross.data(), task.cross_out.data(), task.cross.size());
       }
       contact_seconds = seconds_since(tc);
-      for (int pass = 0; pass < passes; ++pass)
-        for (const auto& [p, b] : fs.work[pass])
-          if (mine(p)) element_block(p, b, pass);
+      for (const ForceSchedule::Step& s : fs.one_thread)
+        if (mine(s.part)) element_block(s.part, s.block, s.pass);
     } else {
       if (contact && me == 0) {
         const auto tc = Clock::now();
@@ -1104,19 +1103,24 @@ void Simulation::element_passes(BesideContact* contact) {
         }
         contact_seconds = seconds_since(tc);
       }
-      // Without contact beside, every thread takes the same blocks at every
-      // pass and step (round robin), so that a block's data stays in one
-      // core's cache; with it, blocks go to whichever thread is free.
-      for (int pass = 0; pass < passes; ++pass) {
-        const auto& work = fs.work[pass];
-        const int n = static_cast<int>(work.size());
-        for (int j = 0;; ++j) {
-          const int k = contact ? fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed) : me + j * team;
-          if (k >= n) break;
-          element_block(work[k].first, work[k].second, pass);
-          fs.done[pass].value.fetch_add(1, std::memory_order_release);
+      // One thread alone takes the blocks in the one-thread order. Without
+      // contact beside, every thread takes the same blocks at every pass and
+      // step (round robin), so that a block's data stays in one core's
+      // cache; with it, blocks go to whichever thread is free.
+      if (team == 1) {
+        for (const ForceSchedule::Step& s : fs.one_thread) element_block(s.part, s.block, s.pass);
+      } else {
+        for (int pass = 0; pass < passes; ++pass) {
+          const auto& work = fs.work[pass];
+          const int n = static_cast<int>(work.size());
+          for (int j = 0;; ++j) {
+            const int k = contact ? fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed) : me + j * team;
+            if (k >= n) break;
+            element_block(work[k].first, work[k].second, pass);
+            fs.done[pass].value.fetch_add(1, std::memory_order_release);
+          }
+          spin_until([&] { return fs.done[pass].value.load(std::memory_order_acquire) >= n; });
         }
-        spin_until([&] { return fs.done[pass].value.load(std::memory_order_acquire) >= n; });
       }
     }
   }
@@ -1128,6 +1132,51 @@ void Simulation::element_passes(BesideContact* contact) {
           contact->error = task.error;
           break;
         }
+  }
+}
+
+// The order of the element evaluations of a step on one thread, (part,
+// block, pass). Where the element declares how far a pass reads what the
+// pass before wrote (ElementKernel::pass_reach, r steps across edges),
+// pass k of a block comes as soon as pass k - 1 is done for every block
+// holding an element within r steps of the block's, the latest pass first,
+// so that a block's values are still in cache for its next pass instead of
+// every block of the part passing through in between. Otherwise, and on
+// several threads (where a thread would wait for another's blocks at every
+// block), the passes go one after the other. A block computes the same in
+// any order, so the results do not depend on it.
+void Simulation::one_thread_order(int passes) {
+  ForceSchedule& fs = schedule_;
+  fs.one_thread.clear();
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    const MechPart& m = *mech_[p];
+    const ShellMesh& mesh = parts_[p]->mesh;
+    const int ne = mesh.num_elements(), np = std::min(passes, m.passes), nb = m.blocks;
+    if (np <= 0 || nb <= 0) continue;
+    // reach[b]: the last block holding an element that a pass of blocks
+    // 0 .. b reads.
+    std::vector<int> reach(nb, nb - 1);
+    if (const int r = m.element->pass_reach(); r >= 0) {
+      std::vector<int> far(ne), next(ne);  // per element, the last block within i steps
+      for (int e = 0; e < ne; ++e) far[e] = e / m.block_size;
+      for (int i = 0; i < r; ++i) {
+        for (int e = 0; e < ne; ++e) {
+          next[e] = far[e];
+          for (int k = 0; k < 3; ++k)
+            if (const int n = mesh.neighbours[3 * e + k]; n >= 0) next[e] = std::max(next[e], far[n]);
+        }
+        far.swap(next);
+      }
+      std::fill(reach.begin(), reach.end(), 0);
+      for (int e = 0; e < ne; ++e) reach[e / m.block_size] = std::max(reach[e / m.block_size], far[e]);
+      for (int b = 1; b < nb; ++b) reach[b] = std::max(reach[b], reach[b - 1]);
+    }
+    std::vector<int> done(np, 0);  // per pass, the blocks done (in block order)
+    while (done[np - 1] < nb) {
+      int k = np - 1;
+      while (k > 0 && !(done[k] < nb && done[k - 1] > reach[done[k]])) --k;
+      fs.one_thread.push_back({static_cast<int>(p), done[k]++, k});
+    }
   }
 }
 

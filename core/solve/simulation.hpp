@@ -177,6 +177,12 @@ class Simulation {
     // element_passes: the element blocks of each pass in order, (part,
     // block), and per pass the next block to claim and the blocks done.
     std::vector<std::vector<std::pair<int, int>>> work;
+    // The evaluations of a step on one thread in their order
+    // (one_thread_order): pass `pass` of block `block` of part `part`.
+    struct Step {
+      int part = 0, block = 0, pass = 0;
+    };
+    std::vector<Step> one_thread;
     struct alignas(64) Counter {
       std::atomic<int> value{0};
     };
@@ -251,6 +257,7 @@ class Simulation {
   };
   void element_passes(BesideContact* contact);
   void part_threads(int team);
+  void one_thread_order(int passes);
   int thread_of_part(int part, int team) const;
   struct ContactSpans {  // per part views handed to the contact handlers every step
     std::vector<std::span<const double>> vel, areas, mass;

@@ -583,6 +583,9 @@ class ShellRfT3 final : public ElementKernel {
   // elements' own quadratics; the mid-edge slopes, curvatures and moments;
   // the forces (which read the moments of the neighbours).
   int passes() const override { return bending_ ? 3 : 1; }
+  // Pass 1 reads the own-quadratic slopes of the neighbours across the
+  // edges (pass 0), pass 2 their dW/ds (pass 1); nothing further.
+  int pass_reach() const override { return 1; }
 
   Status internal_forces(const ElementForceInput& in, ElementForceOutput& out) override {
     return guarded([&]() -> Status {
@@ -1420,7 +1423,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.4.7";
+  d.version = "0.4.8";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1428,4 +1431,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.7", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.8", register_all)

@@ -50,10 +50,11 @@ struct ElementForceInput {
   // has no neighbour), each as its index i in ElementForceOutput::node_force
   // (values 3 i .. 3 i + 2).
   std::span<const int> patch_slot;
-  // Which pass of the step (0 .. ElementKernel::passes() - 1). The kernel
-  // calls every range with pass 0, then every range with pass 1, and so
-  // on; a pass may read what earlier passes wrote for any range. Only the
-  // last pass adds forces, energy and stable step (and reports a
+  // Which pass of the step (0 .. ElementKernel::passes() - 1). A range is
+  // called with pass k only after every range it may read (see
+  // ElementKernel::pass_reach) has been called with pass k - 1: by default
+  // every range with pass 0, then every range with pass 1, and so on. Only
+  // the last pass adds forces, energy and stable step (and reports a
   // degenerate element); earlier ones only prepare.
   int pass = 0;
   // Whether the kernel writes the stresses and curvatures of fields() for
@@ -120,6 +121,14 @@ class ElementKernel {
   // than one where an element's forces need values of elements of other
   // ranges (the bending curvature of shell_rf_t3 reads its neighbours').
   virtual int passes() const { return 1; }
+  // How far pass k of a range reads what pass k - 1 wrote: for the elements
+  // at most this many steps across edges (1: the range's elements and their
+  // neighbours across their edges), or -1 (the default) for any element of
+  // the part. With a reach, the kernel may call a range's next pass as soon
+  // as the ranges holding those elements have done theirs, before the rest
+  // of the part (on one thread it does, so that a range's values are still
+  // in cache for its next pass); the results must not depend on that order.
+  virtual int pass_reach() const { return -1; }
 };
 
 }  // namespace ts::sdk

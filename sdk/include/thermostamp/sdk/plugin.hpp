@@ -22,8 +22,8 @@
 namespace ts::sdk {
 
 // Bump when any type of this SDK changes layout or meaning.
-inline constexpr int kAbiVersion = 11;
-inline constexpr const char* kSdkVersion = "0.11.1";
+inline constexpr int kAbiVersion = 12;
+inline constexpr const char* kSdkVersion = "0.12.0";
 
 enum class PluginKind { Element, Material, Thermal, Contact };
 
