@@ -289,37 +289,6 @@ TEST(ShellRfT3, BendingForcesAreTheDerivativeOfTheEnergy) {
   }
 }
 
-// The hinge gradients are kept from the first pass to the last where they
-// fit in cache and evaluated again in the last pass otherwise
-// (THERMOSTAMP_CACHE_BYTES sets the cache size the choice is made for):
-// both give the same forces and energy, bit for bit, in one range or several.
-TEST(ShellRfT3, HingeGradientsKeptOrEvaluatedAgainGiveTheSameBits) {
-  auto run = [](const char* cache_bytes, int blocks, double& energy) {
-    setenv("THERMOSTAMP_CACHE_BYTES", cache_bytes, 1);
-    Patch p(0.5, true);
-    unsetenv("THERMOSTAMP_CACHE_BYTES");
-    for (int i = 0; i < p.mesh.num_nodes(); ++i) {
-      const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
-      p.x[3 * i] = 1.01 * X;
-      p.x[3 * i + 2] = 2.0 * X * X + 1.5 * X * Y - 3.0 * Y * Y + 1e-4 * std::sin(11 * i);
-    }
-    p.blocks = blocks;
-    std::vector<double> f;
-    energy = p.evaluate(f);
-    return f;
-  };
-  for (const int blocks : {1, 3}) {
-    double e_keep = 0, e_again = 0;
-    const auto keep = run("1e12", blocks, e_keep);
-    const auto again = run("0", blocks, e_again);
-    double fmax = 0;
-    for (const double v : keep) fmax = std::max(fmax, std::abs(v));
-    EXPECT_GT(fmax, 0.0);
-    EXPECT_EQ(keep, again) << blocks << " ranges";
-    EXPECT_EQ(e_keep, e_again) << blocks << " ranges";
-  }
-}
-
 // A law (membrane, or bending with `as`) that returns no stress and records
 // the strains it is given (of its last call), and the element temperatures
 // and the history steps (of every call since they were last cleared, block

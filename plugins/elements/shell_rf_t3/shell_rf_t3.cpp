@@ -34,9 +34,12 @@
 //   temperature), folded into the coefficients of the other edges.
 // The law returns the moments M (N m/m) and the energy w; the forces are
 // the derivatives of sum A0 w through d theta / dx on the four nodes of each
-// hinge. An element's curvature reads its neighbours' angles, so a step
-// takes three passes over the blocks: angles and own slopes; slopes,
-// curvatures, moments and dW/ds; forces (which read the neighbours' dW/ds).
+// hinge, which splits into one part per element of the hinge along that
+// element's normal (membrane_body). An element's curvature reads its
+// neighbours' angles, so a step takes four passes over the blocks: angles
+// and own slopes; slopes, curvatures, moments and dW/ds; each element's
+// share of dW/dtheta of its hinges (which reads the neighbours' dW/ds);
+// membrane and bending forces (which read the neighbours' shares).
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -70,8 +73,7 @@ inline int padded_ld(int n) {
 struct BlockScratch {
   // stress and curv: the stresses and curvatures of a step after which the
   // kernel writes no fields (ElementForceInput::fields_due).
-  std::vector<double> strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, mk, stress, curv;
-  std::vector<double> G;  // hinge gradients of the block (bending_forces), grown to the largest block once
+  std::vector<double> strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, stress, curv;
 };
 
 BlockScratch& block_scratch(int n) {
@@ -88,20 +90,19 @@ BlockScratch& block_scratch(int n) {
     s.energy.resize(m);
     s.moment.resize(3 * m);
     s.benergy.resize(m);
-    s.mk.resize(3 * m);
   }
   return s;
 }
 
 // The hinges of one block between the passes of a step (see
 // ShellRfT3::block_angles): interior hinges at [0, nh) (capacity cap):
-// angle minus initial angle, gradients (8 per hinge, as hinge_block writes
-// them; only where the part keeps them, ShellRfT3::keep_gradients_); then
-// one entry per edge without a neighbour (BlockHinges::loc: zero at a free
-// edge, the ghost hinge's angle at a clamped or symmetry edge), their
-// gradients on (c, p, q) in ghost_grad.
+// angle minus initial angle; then one entry per edge without a neighbour
+// (BlockHinges::loc: zero at a free edge, the ghost hinge's angle at a
+// clamped or symmetry edge); per element and edge of the block, the ghost
+// hinges' gradients on (c, p, q) (ghost_grad, 12 values each) and their
+// dW/dtheta (ghost_m, from pass 2).
 struct BlockAngles {
-  std::vector<double> dth, G, ghost_grad;
+  std::vector<double> dth, ghost_grad, ghost_m;
   int cap = 0;
   double bending_energy = 0;  // sum of A0 w over the block's elements (pass 1, for pass 2)
   // Time stepped since the block's last evaluation with bending, before this
@@ -126,8 +127,7 @@ std::size_t level2_cache_bytes() {
 // The geometry of hinge (c, p, q, o) at positions x (offsets 3 x node),
 // the operations of ShellRfT3::hinge_angle (sub, dot, cross of math.hpp) in
 // their order: the edge e = q - p, c - p, o - p and the unnormalised normals
-// Ne = e x (c - p), Nn = (o - p) x e. Inlined into both hinge passes, so
-// that the angle and the gradients come from the same bits.
+// Ne = e x (c - p), Nn = (o - p) x e.
 struct HingeGeometry {
   double e0, e1, e2, l2, len, c0, c1, c2, o0, o1, o2, ne0, ne1, ne2, nn0, nn1, nn2;
 };
@@ -143,70 +143,32 @@ struct HingeGeometry {
   return g;
 }
 
-// Bending angles (minus their initial values theta0) of h hinges (kAngle)
-// and their gradients (kGradient); the angle as ShellRfT3::hinge_angle with
-// the same operations in the same order. Hinge j has its nodes (c, p, q, o)
-// at x[ic[j]], x[ip[j]], ... (offsets 3 x node). Where the angle is beyond
-// atan2_small's range, dtheta[j] is NaN (the caller evaluates it with the
-// library). The gradients go to G[8 j + r]: r = 0-2 g_c, 3-5 g_o,
-// 6 sc, 7 so (the gradients on p and q follow from them): d theta / d c =
-// g_c = n_e / h_c = Ne len / |Ne|^2 (likewise g_o with Nn); p and q take
-// what keeps rigid motions force-free, g_q = -(sc g_c + so g_o), g_p =
-// -(g_c + g_o) - g_q (sc, so the positions of c and o along the edge, from
-// p, over its length).
-template <bool kAngle, bool kGradient>
-[[gnu::always_inline]] inline void hinge_body(int h, const int* __restrict ic, const int* __restrict ip,
-                                              const int* __restrict iq, const int* __restrict io,
-                                              const double* __restrict x, const double* __restrict theta0,
-                                              double* __restrict dtheta, double* __restrict G) {
-#pragma omp simd
+// Bending angles (minus their initial values theta0) of h hinges, as
+// ShellRfT3::hinge_angle with the same operations in the same order. Hinge
+// j has its nodes (c, p, q, o) at x[ic[j]], x[ip[j]], ... (offsets 3 x
+// node). Where the angle is beyond atan2_small's range, dtheta[j] is NaN
+// (the caller evaluates it with the library); returns 1 if some is, 0
+// otherwise.
+TS_VECTOR_CLONES
+double hinge_angle_block(int h, const int* __restrict ic, const int* __restrict ip, const int* __restrict iq,
+                         const int* __restrict io, const double* __restrict x, const double* __restrict theta0,
+                         double* __restrict dtheta) {
+  double beyond = 0.0;
+#pragma omp simd reduction(max : beyond)
   for (int j = 0; j < h; ++j) {
     const HingeGeometry g = hinge_geometry(x, ic[j], ip[j], iq[j], io[j]);
-    if (kAngle) {
-      const double m0 = g.nn1 * g.ne2 - g.nn2 * g.ne1, m1 = g.nn2 * g.ne0 - g.nn0 * g.ne2,
-                   m2 = g.nn0 * g.ne1 - g.nn1 * g.ne0;  // Nn x Ne
-      const double y = m0 * g.e0 + m1 * g.e1 + m2 * g.e2, xx = g.len * (g.ne0 * g.nn0 + g.ne1 * g.nn1 + g.ne2 * g.nn2);
-      const double d = atan2_small_approx(y, xx) - theta0[j];
-      dtheta[j] = (xx > 0) & (std::abs(y) <= 0.66 * xx) ? d : std::numeric_limits<double>::quiet_NaN();
-    }
-    if (kGradient) {
-      const double sc = (g.c0 * g.e0 + g.c1 * g.e1 + g.c2 * g.e2) / g.l2,
-                   so = (g.o0 * g.e0 + g.o1 * g.e1 + g.o2 * g.e2) / g.l2;
-      const double se = g.len / (g.ne0 * g.ne0 + g.ne1 * g.ne1 + g.ne2 * g.ne2),
-                   sn = g.len / (g.nn0 * g.nn0 + g.nn1 * g.nn1 + g.nn2 * g.nn2);
-      G[8 * j + 0] = g.ne0 * se;
-      G[8 * j + 1] = g.ne1 * se;
-      G[8 * j + 2] = g.ne2 * se;
-      G[8 * j + 3] = g.nn0 * sn;
-      G[8 * j + 4] = g.nn1 * sn;
-      G[8 * j + 5] = g.nn2 * sn;
-      G[8 * j + 6] = sc;
-      G[8 * j + 7] = so;
-    }
+    const double m0 = g.nn1 * g.ne2 - g.nn2 * g.ne1, m1 = g.nn2 * g.ne0 - g.nn0 * g.ne2,
+                 m2 = g.nn0 * g.ne1 - g.nn1 * g.ne0;  // Nn x Ne
+    const double y = m0 * g.e0 + m1 * g.e1 + m2 * g.e2, xx = g.len * (g.ne0 * g.nn0 + g.ne1 * g.nn1 + g.ne2 * g.nn2);
+    const double d = atan2_small_approx(y, xx) - theta0[j];
+    const bool in_range = (xx > 0) & (std::abs(y) <= 0.66 * xx);
+    dtheta[j] = in_range ? d : std::numeric_limits<double>::quiet_NaN();
+    beyond = in_range ? beyond : 1.0;
   }
-}
-// Angles and gradients in one pass (gradients kept from pass 0 to pass 2).
-TS_VECTOR_CLONES
-void hinge_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
-                 const double* theta0, double* dtheta, double* G) {
-  hinge_body<true, true>(h, ic, ip, iq, io, x, theta0, dtheta, G);
-}
-// The angles only, and the gradients only: for a part whose gradients do
-// not fit in cache, evaluated again in pass 2 from positions still in
-// cache rather than kept (the same bits either way).
-TS_VECTOR_CLONES
-void hinge_angle_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
-                       const double* theta0, double* dtheta) {
-  hinge_body<true, false>(h, ic, ip, iq, io, x, theta0, dtheta, nullptr);
-}
-TS_VECTOR_CLONES
-void hinge_gradient_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
-                          double* G) {
-  hinge_body<false, true>(h, ic, ip, iq, io, x, nullptr, nullptr, G);
+  return beyond;
 }
 
 typedef double V4d __attribute__((vector_size(32)));
-typedef long long V4l __attribute__((vector_size(32)));
 
 // Sum of a[q] b[q] over q < n (b null: of a[q]) in four lanes, value q in
 // lane q mod 4, the lanes added as (l0 + l1) + (l2 + l3): a fixed order
@@ -319,36 +281,86 @@ void element_temperature_block(int n, const int* __restrict tri, const double* _
 // material frame, so |F E_a|^2 = 4 A0^2 Q_a with Q_a = C11 g2_a^2 -
 // 2 C12 g1_a g2_a + C22 g1_a^2, the area is A0 sqrt(det C), and the
 // height is sqrt(det C / max_a Q_a). One vector pass without gathers.
-TS_VECTOR_CLONES
-void membrane_block(int n, int ld, const double* __restrict C, const double* __restrict ff,
-                    const double* __restrict S, const double* __restrict area, const double* __restrict g,
-                    int gld, double inv_c, bool has_stiffness, double* __restrict mf, double* __restrict dte) {
-  // h > 0 (det C > 1e-12 here): h times infinity is infinity.
-  const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
+//
+// With kBend, the bending forces of the element's side of its hinges are
+// added: edge k (opposite corner k, from corner k + 1 = p to k + 2 = q)
+// with dW/dtheta m_k = hm[k gld + q] + hm_all[nidx[k gld + q]] (the two
+// elements' shares; zero where the edge has no neighbour). The gradient of
+// the hinge angle on the element's corners is along its normal n:
+// n / h on corner k (h its height over the edge) and -(1 - s) n / h, -s n / h
+// on p and q (s the position of corner k's foot along the edge from p, over
+// the edge's length); the neighbour adds its side likewise. In terms of C:
+// h = sqrt(det C / Q_k), s = -P_k / Q_k with P_k = (R g_(k+2))^T C (R g_k),
+// R g = (g2, -g1), and n = N / sqrt(det C) with N = F e1 x F e2, so the
+// forces on corners k, k + 2 and k + 1 are m_k sqrt(Q_k) N / det C,
+// m_k P_k N / (sqrt(Q_k) det C) and minus their sum.
+template <bool kBend>
+[[gnu::always_inline]] inline void membrane_body(int n, int ld, const double* __restrict C, const double* __restrict ff,
+                                                 const double* __restrict S, const double* __restrict area,
+                                                 const double* __restrict g, int gld, double cmul,
+                                                 const double* __restrict hm, const int* __restrict nidx,
+                                                 const double* __restrict hm_all, int hld, double* __restrict mf,
+                                                 double* __restrict dte) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double f10 = ff[q], f11 = ff[ld + q], f12 = ff[2 * ld + q];
     const double f20 = ff[3 * ld + q], f21 = ff[4 * ld + q], f22 = ff[5 * ld + q];
     const double S11 = S[3 * q], S22 = S[3 * q + 1], S12 = S[3 * q + 2], A0 = area[q];
     const double C11 = C[3 * q], C22 = C[3 * q + 1], C12 = C[3 * q + 2];
-    for (int a = 0; a < 3; ++a) {
-      const double ga = g[a * gld + q], gb = g[(3 + a) * gld + q];
-      const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
-      mf[(3 * a) * ld + q] = c1 * f10 + c2 * f20;
-      mf[(3 * a + 1) * ld + q] = c1 * f11 + c2 * f21;
-      mf[(3 * a + 2) * ld + q] = c1 * f12 + c2 * f22;
-    }
     const double a0 = g[q], a1 = g[gld + q], a2 = g[2 * gld + q];
     const double b0 = g[3 * gld + q], b1 = g[4 * gld + q], b2 = g[5 * gld + q];
     const double Q0 = C11 * b0 * b0 - 2 * C12 * a0 * b0 + C22 * a0 * a0;
     const double Q1 = C11 * b1 * b1 - 2 * C12 * a1 * b1 + C22 * a1 * a1;
     const double Q2 = C11 * b2 * b2 - 2 * C12 * a2 * b2 + C22 * a2 * a2;
+    const double detc = C11 * C22 - C12 * C12;
+    double w0 = 0, w1 = 0, w2 = 0;  // the bending forces on the corners along N
+    if (kBend) {
+      const double m0 = hm[q] + hm_all[nidx[q]], m1 = hm[hld + q] + hm_all[nidx[hld + q]],
+                   m2 = hm[2 * hld + q] + hm_all[nidx[2 * hld + q]];
+      // P_k = (R g_(k+2))^T C (R g_k), R g = (g2, -g1)
+      const double P0 = C11 * b2 * b0 - C12 * (b2 * a0 + a2 * b0) + C22 * a2 * a0;
+      const double P1 = C11 * b0 * b1 - C12 * (b0 * a1 + a0 * b1) + C22 * a0 * a1;
+      const double P2 = C11 * b1 * b2 - C12 * (b1 * a2 + a1 * b2) + C22 * a1 * a2;
+      // t_k = m_k / (sqrt(Q_k) det C), with one division
+      const double r0 = std::sqrt(Q0), r1 = std::sqrt(Q1), r2 = std::sqrt(Q2);
+      const double id = 1.0 / (detc * (r0 * r1 * r2));
+      const double t0 = m0 * (id * (r1 * r2)), t1 = m1 * (id * (r0 * r2)), t2 = m2 * (id * (r0 * r1));
+      // edge k: corner k t_k Q_k, corner k + 2 t_k P_k, corner k + 1 minus both
+      const double u0 = t0 * Q0, v0 = t0 * P0, u1 = t1 * Q1, v1 = t1 * P1, u2 = t2 * Q2, v2 = t2 * P2;
+      w0 = (u0 + v1) - (u2 + v2);
+      w1 = (u1 + v2) - (u0 + v0);
+      w2 = (u2 + v0) - (u1 + v1);
+    }
+    const double N0 = f11 * f22 - f12 * f21, N1 = f12 * f20 - f10 * f22, N2 = f10 * f21 - f11 * f20;
+    for (int a = 0; a < 3; ++a) {
+      const double ga = g[a * gld + q], gb = g[(3 + a) * gld + q];
+      const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
+      const double w = a == 0 ? w0 : a == 1 ? w1 : w2;
+      mf[(3 * a) * ld + q] = kBend ? (c1 * f10 + c2 * f20) + w * N0 : c1 * f10 + c2 * f20;
+      mf[(3 * a + 1) * ld + q] = kBend ? (c1 * f11 + c2 * f21) + w * N1 : c1 * f11 + c2 * f21;
+      mf[(3 * a + 2) * ld + q] = kBend ? (c1 * f12 + c2 * f22) + w * N2 : c1 * f12 + c2 * f22;
+    }
     double qmax = Q0;
     qmax = qmax < Q1 ? Q1 : qmax;
     qmax = qmax < Q2 ? Q2 : qmax;
-    const double h = std::sqrt((C11 * C22 - C12 * C12) / qmax);
+    const double h = std::sqrt(detc / qmax);
     dte[q] = h * cmul;
   }
+}
+TS_VECTOR_CLONES
+void membrane_block(int n, int ld, const double* C, const double* ff, const double* S, const double* area,
+                    const double* g, int gld, double inv_c, bool has_stiffness, double* mf, double* dte) {
+  // h > 0 (det C > 1e-12 here): h times infinity is infinity.
+  const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
+  membrane_body<false>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, nullptr, 0, mf, dte);
+}
+// The membrane and bending forces (see membrane_body).
+TS_VECTOR_CLONES
+void membrane_bending_block(int n, int ld, const double* C, const double* ff, const double* S, const double* area,
+                            const double* g, int gld, double inv_c, bool has_stiffness, const double* hm,
+                            const int* nidx, const double* hm_all, int hld, double* mf, double* dte) {
+  const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
+  membrane_body<true>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, hm_all, hld, mf, dte);
 }
 
 // Per element q of a block and edge k (values of the block's elements
@@ -427,7 +439,7 @@ void moment_block(int n, int ld, const double* __restrict area, const float* __r
 // Each element's share of dW/dtheta of its hinges, g_i = a_i m_i +
 // sum_k L_ki (m_k - m[nidx_k]) (L with its rows scaled by omega, laid out
 // as for slope_block; m over the whole part, edge k of the block's element
-// q at m[k ld + m0 + q], nidx as for curvature_block; g at g[3 q + k]).
+// q at m[k ld + m0 + q], nidx as for curvature_block; g_i at g[i ld + q]).
 TS_VECTOR_CLONES
 void hinge_moment_block(int n, int ld, const float* __restrict L, const float* __restrict a,
                         const int* __restrict nidx, const double* __restrict m, int m0, double* __restrict g) {
@@ -436,69 +448,21 @@ void hinge_moment_block(int n, int ld, const float* __restrict L, const float* _
     const double m_0 = m[m0 + q], m_1 = m[ld + m0 + q], m_2 = m[2 * ld + m0 + q];
     const double u0 = m_0 - m[nidx[q]], u1 = m_1 - m[nidx[ld + q]], u2 = m_2 - m[nidx[2 * ld + q]];
     const float* l = L + q;
-    g[3 * q] = a[q] * m_0 + l[0] * u0 + l[3 * ld] * u1 + l[6 * ld] * u2;
-    g[3 * q + 1] = a[ld + q] * m_1 + l[ld] * u0 + l[4 * ld] * u1 + l[7 * ld] * u2;
-    g[3 * q + 2] = a[2 * ld + q] * m_2 + l[2 * ld] * u0 + l[5 * ld] * u1 + l[8 * ld] * u2;
+    g[q] = a[q] * m_0 + l[0] * u0 + l[3 * ld] * u1 + l[6 * ld] * u2;
+    g[ld + q] = a[ld + q] * m_1 + l[ld] * u0 + l[4 * ld] * u1 + l[7 * ld] * u2;
+    g[2 * ld + q] = a[2 * ld + q] * m_2 + l[2 * ld] * u0 + l[5 * ld] * u1 + l[8 * ld] * u2;
   }
 }
 
-// The forces of n elements of a block into their node slots: per element
-// its membrane forces on its corners (component d of node a at mf[(3 a + d)
-// ld + q]) and the interior hinges it brings (per edge k: code fj[3 q + k]
-// = 2 j + side, j the hinge's entry in G (8 values: g_c, g_o, sc, so),
-// side 1 where the element is the hinge's neighbour, negative for none;
-// the moment mk[3 q + k], plus mk[fm[3 q + k]] where fm >= 0), summed with
-// the corner forces in registers; a hinge also adds into the node across
-// its edge (slot[6 q + 3 + k]), the corners go to slot[6 q + a] at the end.
-// Each node's x, y and z are one vector (the fourth lane unused, never
-// stored), so the products and sums of the scalar form are done once per
-// node instead of once per component, in the same order (the same bits).
-[[gnu::always_inline]] inline void add_xyz(double* __restrict f, V4d v) {
-  f[0] += v[0];
-  f[1] += v[1];
-  f[2] += v[2];
-}
-// (GCC 12 takes fc[] below for maybe uninitialized: the first loop sets
-// all three; initialising them in the declaration costs 8 % more
-// instructions in this pass.)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-TS_VECTOR_CLONES
-void hinge_force_block(int n, int ld, const double* __restrict mf, const int* __restrict fj,
-                       const int* __restrict fm, const double* __restrict mk, const int* __restrict slot,
-                       const double* __restrict G, double* __restrict nf) {
-  for (int q = 0; q < n; ++q) {
-    V4d fc[3];
-    for (int a = 0; a < 3; ++a) fc[a] = V4d{mf[(3 * a) * ld + q], mf[(3 * a + 1) * ld + q], mf[(3 * a + 2) * ld + q], 0.0};
-#pragma GCC unroll 3
-    for (int k = 0; k < 3; ++k) {
-      const int code = fj[3 * q + k];
-      if (code < 0) continue;  // no hinge, or brought by its owner in this block
-      const int j = code >> 1;
-      const int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
-      // (corner k, the node across, corner k + 1, corner k + 2) are
-      // (c, o, p, q) of the owner's orientation, (o, c, q, p) of the
-      // neighbour's.
-      double m = mk[3 * q + k];
-      if (fm[3 * q + k] >= 0) m += mk[fm[3 * q + k]];
-      const double* gj = G + 8 * j;  // the hinge's gradients, one cache line
-      V4d gc, go;
-      __builtin_memcpy(&gc, gj, sizeof gc);      // g_c and, unused, g_o's x
-      __builtin_memcpy(&go, gj + 3, sizeof go);  // g_o and, unused, sc
-      const double sc = gj[6], so = gj[7];
-      const V4d mv = V4d{m, m, m, m};
-      const V4d mc = mv * gc, mo = mv * go, t = mv * (sc * gc + so * go), tp = t - mc - mo;
-      const long long side = -static_cast<long long>(code & 1);
-      const V4l nb = V4l{side, side, side, side};
-      fc[k] += nb ? mo : mc;
-      add_xyz(nf + 3 * slot[6 * q + 3 + k], nb ? mc : mo);
-      fc[k1] += nb ? -t : tp;
-      fc[k2] += nb ? tp : -t;
+// Adds the forces of n elements, component d of corner a of element q at
+// mf[(3 a + d) ld + q], into their corners' node slots (slot[6 q + a]).
+void corner_forces(int n, int ld, const double* __restrict mf, const int* __restrict slot, double* __restrict nf) {
+  for (int q = 0; q < n; ++q)
+    for (int a = 0; a < 3; ++a) {
+      double* f = nf + 3 * slot[6 * q + a];
+      for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * ld + q];
     }
-    for (int a = 0; a < 3; ++a) add_xyz(nf + 3 * slot[6 * q + a], fc[a]);
-  }
 }
-#pragma GCC diagnostic pop
 
 // Largest entry of an element's map L from angle changes to the slopes of
 // its own quadratic; a patch whose map is larger (nearly on a conic) uses
@@ -547,13 +511,6 @@ class ShellRfT3 final : public ElementKernel {
       }
       if (bending_) {
         setup_bending();
-        // The hinge gradients are kept from pass 0 to pass 2 where all of
-        // them fit in twice the per-core cache; a larger part evaluates them
-        // again in pass 2 (fewer bytes through memory for more arithmetic).
-        // Measured on plates of 1 MB per-core cache, one and two threads:
-        // kept is faster up to 20 000 elements (1.9 MB of gradients), slower
-        // from 30 000 (2.9 MB).
-        keep_gradients_ = 8 * sizeof(double) * hc_.size() <= 2 * level2_cache_bytes();
         if (auto st = setup_slopes(s.temperature); !st) return st;
       }
       // The previous strains are kept only for laws that read them.
@@ -582,12 +539,14 @@ class ShellRfT3 final : public ElementKernel {
     });
   }
 
-  // With bending, three passes: the angle changes and the slopes of the
+  // With bending, four passes: the angle changes and the slopes of the
   // elements' own quadratics; the mid-edge slopes, curvatures and moments;
-  // the forces (which read the moments of the neighbours).
-  int passes() const override { return bending_ ? 3 : 1; }
+  // each element's share of its hinges' dW/dtheta (which reads the
+  // neighbours' moments); the forces (which read the neighbours' shares).
+  int passes() const override { return bending_ ? 4 : 1; }
   // Pass 1 reads the own-quadratic slopes of the neighbours across the
-  // edges (pass 0), pass 2 their dW/ds (pass 1); nothing further.
+  // edges (pass 0), pass 2 their dW/ds (pass 1), pass 3 their shares of
+  // dW/dtheta (pass 2); nothing further.
   int pass_reach() const override { return 1; }
 
   Status internal_forces(const ElementForceInput& in, ElementForceOutput& out) override {
@@ -606,6 +565,10 @@ class ShellRfT3 final : public ElementKernel {
           for (int k = 0; k < 3; ++k)
             for (int q = in.range.begin; q < in.range.end; ++q)
               em_[static_cast<std::size_t>(k) * gld_ + q] *= in.bending_weight;
+        return Status::success();
+      }
+      if (bending_ && in.pass == 2) {
+        if (bend) hinge_moments(in.range.begin, in.range.end);
         return Status::success();
       }
       const int b = in.range.begin, n = in.range.end - in.range.begin;
@@ -672,22 +635,18 @@ class ShellRfT3 final : public ElementKernel {
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
       double* dte = sc.energy_tmp.data();  // free again after the laws
       double* mf = sc.mf.data();
-      membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
-      if (bend) {  // adds the membrane forces with the bending ones
+      if (bend) {  // the membrane forces with the bending ones
+        membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0,
+                               hm_.data() + b, nidx_.data() + b, hm_.data(), gld_, mf, dte);
         energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out);
       } else {
+        membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
         if (bending_ && block_angles_[b]) {
           energy += block_angles_[b]->bending_energy;  // of the last one with bending
           if (in.commit) block_angles_[b]->elapsed += in.dt;
         }
-        double* nf = out.node_force.data();
-        const int* slot = in.patch_slot.data();
-        for (int q = 0; q < n; ++q)
-          for (int a = 0; a < 3; ++a) {
-            double* f = nf + 3 * slot[6 * q + a];
-            for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * ld + q];
-          }
       }
+      corner_forces(n, ld, mf, in.patch_slot.data(), out.node_force.data());
       energy += lane_dot(n, area0_.data() + b, energy_e);
       dt_min = smallest_step(n, dte, in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b, dt_min);
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
@@ -943,6 +902,7 @@ class ShellRfT3 final : public ElementKernel {
     eq_.assign(3 * gld, 0.0);
     erho_.assign(3 * gld + 1, 0.0);  // the last: zero, read for edges without a neighbour
     em_.assign(3 * gld + 1, 0.0);
+    hm_.assign(3 * gld + 1, 0.0);
     std::vector<char> fit(ne, 0);
     // Gradient of the linear interpolant of values v at three points.
     auto grad_lin = [](const double P[3][2], const double v[3], double g[2]) {
@@ -1128,11 +1088,6 @@ class ShellRfT3 final : public ElementKernel {
     // p, q, o (nforeign each), initial angles and hinge numbers.
     std::vector<int> fnode, fhinge;
     std::vector<double> ftheta0;
-    // Per element and edge: 2 j + (1 if the element is the hinge's
-    // neighbour, its gradient rows permuted) for a hinge j whose forces the
-    // element brings, -1 for none; and the entry in mk of the moment of the
-    // hinge's other element when that element is in the block, -1 if not.
-    std::vector<int> force_hinge, force_partner;
   };
   const BlockHinges& block_hinges(int b, int end) {
     std::unique_ptr<BlockHinges>& slot = block_hinges_[b];
@@ -1142,8 +1097,6 @@ class ShellRfT3 final : public ElementKernel {
     const int n = end - b, h0 = hstart_[b], nown = hstart_[end] - h0;
     bh->end = end;
     bh->loc.assign(3 * n, 0);
-    bh->force_hinge.assign(3 * n, -1);
-    bh->force_partner.assign(3 * n, -1);
     std::vector<int> fc, fp, fq, fo;
     for (int e = b; e < end; ++e)
       for (int k = 0; k < 3; ++k) {
@@ -1160,9 +1113,6 @@ class ShellRfT3 final : public ElementKernel {
           bh->ftheta0.push_back(htheta0_[h]);
           bh->fhinge.push_back(h);
         }
-        if (nb >= b && nb < e) continue;  // brought by its owner nb
-        bh->force_hinge[i] = 2 * bh->loc[i] + (nb > e ? 0 : 1);
-        if (nb > e && nb < end) bh->force_partner[i] = 3 * (nb - b) + partner_k_[3 * e + k];
       }
     const int nh = nown + bh->nforeign;
     for (int e = b; e < end; ++e)
@@ -1210,19 +1160,15 @@ class ShellRfT3 final : public ElementKernel {
       slot->cap = nh + bh.nbound;
       const std::size_t m = static_cast<std::size_t>(slot->cap);
       slot->dth.resize(m);
-      if (keep_gradients_) slot->G.resize(8 * m);
       slot->ghost_grad.resize(36 * static_cast<std::size_t>(n));
     }
     BlockAngles& ba = *slot;
     double* dth = ba.dth.data();
-    double* G = ba.G.data();
+    double beyond = 0.0;
     hinge_lists(b, end, bh, [&](int h, const int* c, const int* p, const int* q, const int* o, const double* t0, int j0) {
-      if (keep_gradients_)
-        hinge_block(h, c, p, q, o, x, t0, dth + j0, G + 8 * j0);
-      else
-        hinge_angle_block(h, c, p, q, o, x, t0, dth + j0);
+      beyond = std::max(beyond, hinge_angle_block(h, c, p, q, o, x, t0, dth + j0));
     });
-    for (int j = 0; j < nh; ++j)
+    for (int j = 0; j < (beyond != 0.0 ? nh : 0); ++j)
       if (dth[j] != dth[j]) {  // NaN: beyond the approximation's range, the library's atan2
         const int h = j < nown ? h0 + j : bh.fhinge[j - nown];
         dth[j] = hinge_angle(x, hc_[h] / 3, hp_[h] / 3, hq_[h] / 3, ho_[h] / 3) - htheta0_[h];
@@ -1288,35 +1234,37 @@ class ShellRfT3 final : public ElementKernel {
     return Status::success();
   }
 
-  // Pass 2: bending forces of elements [b, end), added to the node forces
-  // with the membrane forces mf (laid out as membrane_block writes them,
-  // leading dimension ld); returns the bending energy (from pass 1) and
-  // lowers the elements' stable steps (sc.energy_tmp) with the bending
-  // ones; [t_lo, t_hi] is the block's temperature range. Each element
-  // brings its share of dW/dtheta of its hinges,
+  // Pass 2: each element's share of dW/dtheta of its hinges,
   //   g_i = a_i m_i + sum_k omega_k L_ki (m_k - m'_k)
-  // (m' the neighbour's dW/ds of the same edge).
-  double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
-                        const double* mf, int ld, ElementForceOutput& out) {
+  // (m' the neighbour's dW/ds of the same edge), into hm_; the shares of
+  // the ghost hinges (clamped and symmetry edges) go to the block's
+  // ghost_m, and their entries in hm_ are zero (as are those of free
+  // edges), so that pass 3 reads the two shares of interior hinges only.
+  void hinge_moments(int b, int end) {
     const int n = end - b;
-    const BlockHinges& bh = block_hinges(b, end);
-    const BlockAngles& ba = *block_angles_[b];  // from pass 0
-    // The interior hinges' gradients, in the order of their angles: kept
-    // from pass 0, or evaluated again here into the thread's buffer.
-    const double* G = ba.G.data();
-    if (!keep_gradients_) {
-      const std::size_t m = 8 * static_cast<std::size_t>(hstart_[end] - hstart_[b] + bh.nforeign);
-      if (sc.G.size() < m) sc.G.resize(m);
-      const double* x = part_->x.data();
-      double* Gw = sc.G.data();
-      hinge_lists(b, end, bh, [&](int h, const int* c, const int* p, const int* q, const int* o, const double*, int j0) {
-        hinge_gradient_block(h, c, p, q, o, x, Gw + 8 * j0);
-      });
-      G = Gw;
+    hinge_moment_block(n, gld_, lmap_.data() + b, acoef_.data() + b, nidx_.data() + b, em_.data(), b,
+                       hm_.data() + b);
+    if (gstart_[b] == gstart_[end]) return;
+    BlockAngles& ba = *block_angles_[b];
+    if (ba.ghost_m.size() < 3 * static_cast<std::size_t>(n)) ba.ghost_m.resize(3 * static_cast<std::size_t>(n));
+    for (int g = gstart_[b]; g < gstart_[end]; ++g) {
+      const int e = gedge_[g] / 3, k = gedge_[g] % 3;
+      double& h = hm_[static_cast<std::size_t>(k) * gld_ + e];
+      ba.ghost_m[3 * (e - b) + k] = h;
+      h = 0.0;
     }
-    const double* hgrad = ba.ghost_grad.data();
-    double* mk = sc.mk.data();
-    hinge_moment_block(n, gld_, lmap_.data() + b, acoef_.data() + b, nidx_.data() + b, em_.data(), b, mk);
+  }
+
+  // Pass 3, after membrane_bending_block has added the interior hinges'
+  // forces to the membrane forces mf (laid out as membrane_block writes
+  // them, leading dimension ld): the ghost hinges' forces into mf; returns
+  // the bending energy (from pass 1) and lowers the elements' stable steps
+  // (sc.energy_tmp) with the bending ones; [t_lo, t_hi] is the block's
+  // temperature range.
+  double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
+                        double* mf, int ld, ElementForceOutput& out) {
+    const int n = end - b;
+    const BlockAngles& ba = *block_angles_[b];  // from passes 0 to 2
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
     double* dte = sc.energy_tmp.data();  // the membrane's stable steps of the block's elements
     if (rmax > 0) {
@@ -1332,38 +1280,22 @@ class ShellRfT3 final : public ElementKernel {
       }
       out.bending_dt = bdt;
     }
-    double energy = ba.bending_energy;
-    // Forces, element by element: the membrane forces on its corners, and
-    // the interior hinges it brings. An interior hinge is brought by its
-    // owner, or, when the owner is in an earlier block, by its neighbour in
-    // this block; a hinge whose two elements are both in the block carries
-    // both moments, one shared with another block the moment of this
-    // block's element. A hinge adds its gradients on the bringing element's
-    // corners (summed in registers with the membrane forces, one addition
-    // per corner node) and on the node across the edge.
-    double* nf = out.node_force.data();
-    const int* slot = in.patch_slot.data();
-    hinge_force_block(n, ld, mf, bh.force_hinge.data(), bh.force_partner.data(), mk, slot, G, nf);
+    // Ghost hinges: gradient on the element's corners (c, p, q) = (k, k + 1,
+    // k + 2); a clamp's theta is 2 x the rotation.
+    const double* hgrad = ba.ghost_grad.data();
     for (int g = gstart_[b]; g < gstart_[end]; ++g) {
-      const int e = gedge_[g] / 3, k = gedge_[g] % 3;
-      // Ghost neighbour: gradient on (c, p, q); a clamp's theta is 2 x the rotation.
-      const Vec3* gr = reinterpret_cast<const Vec3*>(&hgrad[36 * (e - b) + 12 * k]);
-      const double m = (clamped_[3 * e + k] == 1 ? 2.0 : 1.0) * mk[3 * (e - b) + k];
-      const int* sl = slot + 6 * (e - b);
-      double* fc = nf + 3 * sl[k];
-      double* fp = nf + 3 * sl[(k + 1) % 3];
-      double* fq = nf + 3 * sl[(k + 2) % 3];
-      for (int d = 0; d < 3; ++d) {
-        fc[d] += m * gr[0][d];
-        fp[d] += m * gr[1][d];
-        fq[d] += m * gr[2][d];
+      const int e = gedge_[g] / 3, k = gedge_[g] % 3, q = e - b;
+      const Vec3* gr = reinterpret_cast<const Vec3*>(&hgrad[36 * q + 12 * k]);
+      const double m = (clamped_[3 * e + k] == 1 ? 2.0 : 1.0) * ba.ghost_m[3 * q + k];
+      for (int j = 0; j < 3; ++j) {
+        const int a = (k + j) % 3;
+        for (int d = 0; d < 3; ++d) mf[(3 * a + d) * ld + q] += m * gr[j][d];
       }
     }
-    return energy;
+    return ba.bending_energy;
   }
 
   const MaterialLaw* bending_ = nullptr;
-  bool keep_gradients_ = true;  // hinge gradients kept per block from pass 0 to pass 2 (see configure)
   int gld_ = 0;
   std::vector<int> opp_, partner_k_, edge_condition_;  // partner_k_: the same edge's index in the neighbour
   std::vector<char> clamped_;
@@ -1391,11 +1323,12 @@ class ShellRfT3 final : public ElementKernel {
   // no quadratic; its rows scaled by the weight omega of the element's own
   // slope per edge), acoef_ a per edge (edge k of element e at k gld_ + e;
   // see slope_angles), nidx_ per edge (edge k of element e at k gld_ + e)
-  // the entry of the neighbour's same edge in erho_ and em_ (3 gld_, a
-  // zero entry, where there is none); per step eq_, erho_ (slope_angles),
-  // em_ (dW/ds), edge k of element e at k gld_ + e.
+  // the entry of the neighbour's same edge in erho_, em_ and hm_ (3 gld_,
+  // a zero entry, where there is none); per step eq_, erho_ (slope_angles),
+  // em_ (dW/ds), hm_ (the element's share of dW/dtheta, hinge_moments),
+  // edge k of element e at k gld_ + e.
   std::vector<float> cs_, lmap_, acoef_;
-  std::vector<double> eq_, erho_, em_;
+  std::vector<double> eq_, erho_, em_, hm_;
   std::vector<int> nidx_;
   // Interior hinges: node offsets (3 x node) of (c, p, q, o) in the owner's
   // orientation, initial angle, owner and its edge k, neighbour and its
@@ -1426,7 +1359,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.4.9";
+  d.version = "0.5.0";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1434,4 +1367,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.4.9", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.5.0", register_all)
