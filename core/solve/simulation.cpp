@@ -52,6 +52,10 @@ struct MechPart {
   // thread count, so the results are the same for any number of threads.
   int block_size = 0, blocks = 0;
   int passes = 1;  // the element's passes over the blocks per force evaluation
+  // In the one-thread order (Simulation::one_thread_order): the blocks
+  // whose values between passes may be needed at once
+  // (ElementForceInput::pass_window), 0 for no bound below the block count.
+  int pass_window = 0;
   std::vector<double> block_dt;
   // The bending's own stable steps (mass scaling included): per block from
   // the last evaluation with bending, and their smallest.
@@ -936,7 +940,7 @@ void Simulation::update_node_temperature() {
 // current positions. In the last pass the block adds its elements' forces
 // into its own node slots, and nodes of this block alone get their force
 // at once; earlier passes only prepare (ElementForceInput::pass).
-void Simulation::element_block(std::size_t p, int b, int pass) {
+void Simulation::element_block(std::size_t p, int b, int pass, bool interleaved) {
   PartState& st = *parts_[p];
   MechPart& m = *mech_[p];
   const int ne = st.mesh.num_elements();
@@ -962,6 +966,11 @@ void Simulation::element_block(std::size_t p, int b, int pass) {
   in.dt_scale = m.elem_sqrt_scale;
   in.temperature_version = temperature_version_;
   in.bending_weight = bending_weight_;
+  if (interleaved && m.pass_window > 0) {
+    in.pass_window = m.pass_window;
+    in.block = b;
+    in.block_size = m.block_size;
+  }
   sdk::ElementForceOutput out;
   out.node_force = std::span<double>(bf, 3 * static_cast<std::size_t>(l1 - l0));
   if (want_element_dt_) out.element_dt = m.elem_dt;
@@ -1047,7 +1056,7 @@ void Simulation::element_passes(BesideContact* contact) {
     one_thread_order(passes);
   }
   if (!contact && !sdk::team_available(passes > 0 && fs.work[0].size() > 1)) {
-    for (const ForceSchedule::Step& s : fs.one_thread) element_block(s.part, s.block, s.pass);
+    for (const ForceSchedule::Step& s : fs.one_thread) element_block(s.part, s.block, s.pass, true);
     return;
   }
   for (int pass = 0; pass < passes; ++pass) {
@@ -1094,7 +1103,7 @@ void Simulation::element_passes(BesideContact* contact) {
       }
       contact_seconds = seconds_since(tc);
       for (const ForceSchedule::Step& s : fs.one_thread)
-        if (mine(s.part)) element_block(s.part, s.block, s.pass);
+        if (mine(s.part)) element_block(s.part, s.block, s.pass, true);
     } else {
       if (contact && me == 0) {
         const auto tc = Clock::now();
@@ -1110,7 +1119,7 @@ void Simulation::element_passes(BesideContact* contact) {
       // step (round robin), so that a block's data stays in one core's
       // cache; with it, blocks go to whichever thread is free.
       if (team == 1) {
-        for (const ForceSchedule::Step& s : fs.one_thread) element_block(s.part, s.block, s.pass);
+        for (const ForceSchedule::Step& s : fs.one_thread) element_block(s.part, s.block, s.pass, true);
       } else {
         for (int pass = 0; pass < passes; ++pass) {
           const auto& work = fs.work[pass];
@@ -1118,7 +1127,7 @@ void Simulation::element_passes(BesideContact* contact) {
           for (int j = 0;; ++j) {
             const int k = contact ? fs.claimed[pass].value.fetch_add(1, std::memory_order_relaxed) : me + j * team;
             if (k >= n) break;
-            element_block(work[k].first, work[k].second, pass);
+            element_block(work[k].first, work[k].second, pass, false);
             fs.done[pass].value.fetch_add(1, std::memory_order_release);
           }
           spin_until([&] { return fs.done[pass].value.load(std::memory_order_acquire) >= n; });
@@ -1156,28 +1165,66 @@ void Simulation::one_thread_order(int passes) {
     const int ne = mesh.num_elements(), np = std::min(passes, m.passes), nb = m.blocks;
     if (np <= 0 || nb <= 0) continue;
     // reach[b]: the last block holding an element that a pass of blocks
-    // 0 .. b reads.
-    std::vector<int> reach(nb, nb - 1);
-    if (const int r = m.element->pass_reach(); r >= 0) {
-      std::vector<int> far(ne), next(ne);  // per element, the last block within i steps
-      for (int e = 0; e < ne; ++e) far[e] = e / m.block_size;
+    // 0 .. b reads; lo[b], hi[b]: the first and last block holding an
+    // element that a pass of block b reads.
+    std::vector<int> reach(nb, nb - 1), lo(nb, 0), hi(nb, nb - 1);
+    const int r = m.element->pass_reach();
+    if (r >= 0) {
+      // per element, the first and last block within i steps
+      std::vector<int> near(ne), far(ne), next_near(ne), next_far(ne);
+      for (int e = 0; e < ne; ++e) near[e] = far[e] = e / m.block_size;
       for (int i = 0; i < r; ++i) {
         for (int e = 0; e < ne; ++e) {
-          next[e] = far[e];
+          next_near[e] = near[e];
+          next_far[e] = far[e];
           for (int k = 0; k < 3; ++k)
-            if (const int n = mesh.neighbours[3 * e + k]; n >= 0) next[e] = std::max(next[e], far[n]);
+            if (const int n = mesh.neighbours[3 * e + k]; n >= 0) {
+              next_near[e] = std::min(next_near[e], near[n]);
+              next_far[e] = std::max(next_far[e], far[n]);
+            }
         }
-        far.swap(next);
+        near.swap(next_near);
+        far.swap(next_far);
       }
-      std::fill(reach.begin(), reach.end(), 0);
-      for (int e = 0; e < ne; ++e) reach[e / m.block_size] = std::max(reach[e / m.block_size], far[e]);
+      std::fill(lo.begin(), lo.end(), nb - 1);
+      std::fill(hi.begin(), hi.end(), 0);
+      for (int e = 0; e < ne; ++e) {
+        const int b = e / m.block_size;
+        lo[b] = std::min(lo[b], near[e]);
+        hi[b] = std::max(hi[b], far[e]);
+      }
+      reach = hi;
       for (int b = 1; b < nb; ++b) reach[b] = std::max(reach[b], reach[b - 1]);
     }
+    const std::size_t first_step = fs.one_thread.size();
     std::vector<int> done(np, 0);  // per pass, the blocks done (in block order)
     while (done[np - 1] < nb) {
       int k = np - 1;
       while (k > 0 && !(done[k] < nb && done[k - 1] > reach[done[k]])) --k;
       fs.one_thread.push_back({static_cast<int>(p), done[k]++, k});
+    }
+    // The window: block b's values are read until the last pass of the
+    // last block that reads b (one within [lo, hi] of b) is done; W is one
+    // more than the largest number of blocks after b whose pass 0 comes
+    // before that.
+    MechPart& mw = *mech_[p];
+    mw.pass_window = 0;
+    if (r >= 0 && np > 1) {
+      std::vector<long long> first(nb, 0), last(nb, 0), end(nb, 0);
+      for (std::size_t t = first_step; t < fs.one_thread.size(); ++t) {
+        const ForceSchedule::Step& s = fs.one_thread[t];
+        if (s.pass == 0) first[s.block] = static_cast<long long>(t);
+        if (s.pass == np - 1) last[s.block] = static_cast<long long>(t);
+      }
+      for (int b = 0; b < nb; ++b) end[b] = last[b];
+      for (int b = 0; b < nb; ++b)  // reader b reads blocks lo[b] .. hi[b]
+        for (int c = lo[b]; c <= hi[b]; ++c) end[c] = std::max(end[c], last[b]);
+      int w = 1;
+      for (int b = 0, j = 0; b < nb; ++b) {
+        while (j + 1 < nb && first[j + 1] <= end[b]) ++j;
+        w = std::max(w, j - b + 1);
+      }
+      if (w < nb) mw.pass_window = w;
     }
   }
 }

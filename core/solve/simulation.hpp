@@ -113,7 +113,9 @@ class Simulation {
   double mechanics_stable_dt();
   void check_initial_step(int limiting_tool, double tool_stiffness) const;
   double with_contact_springs(double dt) const;
-  void element_block(std::size_t part, int block, int pass);
+  // interleaved: called in the one-thread order (one_thread_order), which
+  // the element learns through ElementForceInput::pass_window.
+  void element_block(std::size_t part, int block, int pass, bool interleaved);
   double finish_elements();
   double forces_and_stable_dt(double t, double dt);
   void update_node_temperature();

@@ -114,6 +114,11 @@ struct Patch {
   // The elements are evaluated in `blocks` consecutive ranges, as the
   // kernel calls them (hinges across a range border are seen from both).
   int blocks = 1;
+  // With uniform_ranges: ranges of one size (the last smaller), as the
+  // kernel's blocks, each called with ElementForceInput::pass_window =
+  // ring_window (0: none).
+  bool uniform_ranges = false;
+  int ring_window = 0;
   bool commit = false;  // update the laws' history
   std::uint64_t temperature_version = 0;  // ElementForceInput::temperature_version
   double bending_weight = 1.0;            // ElementForceInput::bending_weight
@@ -129,6 +134,15 @@ struct Patch {
       for (int k = 0; k < blocks; ++k) {
         sdk::ElementForceInput in;
         in.range = {k * ne / blocks, (k + 1) * ne / blocks};
+        if (uniform_ranges) {
+          const int bs = (ne + blocks - 1) / blocks;
+          in.range = {std::min(ne, k * bs), std::min(ne, (k + 1) * bs)};
+          if (ring_window > 0) {
+            in.pass_window = ring_window;
+            in.block = k;
+            in.block_size = bs;
+          }
+        }
         in.node_temperature = temperature;
         in.temperature_version = temperature_version;
         in.commit = commit;
@@ -286,6 +300,34 @@ TEST(ShellRfT3, BendingForcesAreTheDerivativeOfTheEnergy) {
       err = std::max(err, std::abs((ep - em) / (2 * h) - f[k]));
     }
     EXPECT_LT(err, 1e-5 * fmax) << "max force " << fmax << ", " << blocks << " ranges";
+  }
+}
+
+// Where the kernel interleaves the passes it gives a window of blocks
+// (ElementForceInput::pass_window) and the element keeps the values between
+// its passes in a ring of block buffers instead of arrays over the part:
+// the same forces and energy, bit for bit. (Called pass by pass here, with
+// a window of all the blocks: every block has its own buffer.)
+TEST(ShellRfT3, RingOfBlockBuffersGivesTheSameBits) {
+  Patch p(0.5, true, {6, 5});
+  for (int i = 0; i < p.mesh.num_nodes(); ++i) {
+    const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
+    p.x[3 * i] = 1.01 * X;
+    p.x[3 * i + 2] = 2.0 * X * X + 1.5 * X * Y - 3.0 * Y * Y + 1e-4 * std::sin(11 * i);
+  }
+  p.uniform_ranges = true;
+  for (const int blocks : {2, 4, 7}) {
+    p.blocks = blocks;
+    p.ring_window = 0;
+    std::vector<double> f_full, f_ring;
+    const double e_full = p.evaluate(f_full);
+    p.ring_window = blocks;
+    const double e_ring = p.evaluate(f_ring);
+    double fmax = 0;
+    for (const double v : f_full) fmax = std::max(fmax, std::abs(v));
+    EXPECT_GT(fmax, 0.0);
+    EXPECT_EQ(f_full, f_ring) << blocks << " blocks";
+    EXPECT_EQ(e_full, e_ring) << blocks << " blocks";
   }
 }
 

@@ -284,7 +284,7 @@ void element_temperature_block(int n, const int* __restrict tri, const double* _
 //
 // With kBend, the bending forces of the element's side of its hinges are
 // added: edge k (opposite corner k, from corner k + 1 = p to k + 2 = q)
-// with dW/dtheta m_k = hm[k gld + q] + hm_all[nidx[k gld + q]] (the two
+// with dW/dtheta m_k = hm[k hld + q] + hm_all[nidx[k nld + q]] (the two
 // elements' shares; zero where the edge has no neighbour). The gradient of
 // the hinge angle on the element's corners is along its normal n:
 // n / h on corner k (h its height over the edge) and -(1 - s) n / h, -s n / h
@@ -298,7 +298,7 @@ template <bool kBend>
 [[gnu::always_inline]] inline void membrane_body(int n, int ld, const double* __restrict C, const double* __restrict ff,
                                                  const double* __restrict S, const double* __restrict area,
                                                  const double* __restrict g, int gld, double cmul,
-                                                 const double* __restrict hm, const int* __restrict nidx,
+                                                 const double* __restrict hm, const int* __restrict nidx, int nld,
                                                  const double* __restrict hm_all, int hld, double* __restrict mf,
                                                  double* __restrict dte) {
 #pragma omp simd
@@ -315,8 +315,8 @@ template <bool kBend>
     const double detc = C11 * C22 - C12 * C12;
     double w0 = 0, w1 = 0, w2 = 0;  // the bending forces on the corners along N
     if (kBend) {
-      const double m0 = hm[q] + hm_all[nidx[q]], m1 = hm[hld + q] + hm_all[nidx[hld + q]],
-                   m2 = hm[2 * hld + q] + hm_all[nidx[2 * hld + q]];
+      const double m0 = hm[q] + hm_all[nidx[q]], m1 = hm[hld + q] + hm_all[nidx[nld + q]],
+                   m2 = hm[2 * hld + q] + hm_all[nidx[2 * nld + q]];
       // P_k = (R g_(k+2))^T C (R g_k), R g = (g2, -g1)
       const double P0 = C11 * b2 * b0 - C12 * (b2 * a0 + a2 * b0) + C22 * a2 * a0;
       const double P1 = C11 * b0 * b1 - C12 * (b0 * a1 + a0 * b1) + C22 * a0 * a1;
@@ -352,24 +352,24 @@ void membrane_block(int n, int ld, const double* C, const double* ff, const doub
                     const double* g, int gld, double inv_c, bool has_stiffness, double* mf, double* dte) {
   // h > 0 (det C > 1e-12 here): h times infinity is infinity.
   const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
-  membrane_body<false>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, nullptr, 0, mf, dte);
+  membrane_body<false>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, 0, nullptr, 0, mf, dte);
 }
 // The membrane and bending forces (see membrane_body).
 TS_VECTOR_CLONES
 void membrane_bending_block(int n, int ld, const double* C, const double* ff, const double* S, const double* area,
                             const double* g, int gld, double inv_c, bool has_stiffness, const double* hm,
-                            const int* nidx, const double* hm_all, int hld, double* mf, double* dte) {
+                            const int* nidx, int nld, const double* hm_all, int hld, double* mf, double* dte) {
   const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
-  membrane_body<true>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, hm_all, hld, mf, dte);
+  membrane_body<true>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte);
 }
 
 // Per element q of a block and edge k (values of the block's elements
 // from their first one): theta_k = dth[loc[k n + q]], rho = L theta (entry
 // (k, i) of element q's L at L[(3 k + i) ld + q]), eq = rho + a theta (a_k
-// at a[k ld + q]; rho_k and eq_k at rho[k ld + q] and eq[k ld + q]).
+// at a[k ld + q]; rho_k and eq_k at rho[k sld + q] and eq[k sld + q]).
 TS_VECTOR_CLONES
 void slope_block(int n, int ld, const int* __restrict loc, const double* __restrict dth, const float* __restrict L,
-                 const float* __restrict a, double* __restrict eq, double* __restrict rho) {
+                 const float* __restrict a, int sld, double* __restrict eq, double* __restrict rho) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double t0 = dth[loc[q]], t1 = dth[loc[n + q]], t2 = dth[loc[2 * n + q]];
@@ -377,28 +377,28 @@ void slope_block(int n, int ld, const int* __restrict loc, const double* __restr
     const double r0 = l[0] * t0 + l[ld] * t1 + l[2 * ld] * t2, r1 = l[3 * ld] * t0 + l[4 * ld] * t1 + l[5 * ld] * t2,
                  r2 = l[6 * ld] * t0 + l[7 * ld] * t1 + l[8 * ld] * t2;
     rho[q] = r0;
-    rho[ld + q] = r1;
-    rho[2 * ld + q] = r2;
+    rho[sld + q] = r1;
+    rho[2 * sld + q] = r2;
     eq[q] = r0 + a[q] * t0;
-    eq[ld + q] = r1 + a[ld + q] * t1;
-    eq[2 * ld + q] = r2 + a[2 * ld + q] * t2;
+    eq[sld + q] = r1 + a[ld + q] * t1;
+    eq[2 * sld + q] = r2 + a[2 * ld + q] * t2;
   }
 }
 
 // Curvatures of n elements, K = sum_k c_k s_k with the shared slopes
 // s_k = eq_k - rho[nidx_k] (c_k = dK/ds_k, value r of edge k of element q at
-// c[(3 k + r) ld + q]; eq_k and nidx_k at [k ld + q], rho indexed over the
-// whole part), and with kTemp the elements' mean temperatures from their
-// nodes' (tri: the block's triangles).
+// c[(3 k + r) ld + q]; nidx_k at [k ld + q], eq_k at eq[k sld + q], rho
+// indexed over the whole part or ring), and with kTemp the elements' mean
+// temperatures from their nodes' (tri: the block's triangles).
 template <bool kTemp>
 [[gnu::always_inline]] inline void curvature_body(int n, int ld, const float* __restrict c, const int* __restrict nidx,
-                                                  const double* __restrict eq, const double* __restrict rho,
+                                                  int sld, const double* __restrict eq, const double* __restrict rho,
                                                   const int* __restrict tri, const double* __restrict node_temp,
                                                   double* __restrict K, double* __restrict temp) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
-    const double s0 = eq[q] - rho[nidx[q]], s1 = eq[ld + q] - rho[nidx[ld + q]],
-                 s2 = eq[2 * ld + q] - rho[nidx[2 * ld + q]];
+    const double s0 = eq[q] - rho[nidx[q]], s1 = eq[sld + q] - rho[nidx[ld + q]],
+                 s2 = eq[2 * sld + q] - rho[nidx[2 * ld + q]];
     const float* cq = c + q;
     K[3 * q] = cq[0] * s0 + cq[3 * ld] * s1 + cq[6 * ld] * s2;
     K[3 * q + 1] = cq[ld] * s0 + cq[4 * ld] * s1 + cq[7 * ld] * s2;
@@ -407,50 +407,52 @@ template <bool kTemp>
   }
 }
 TS_VECTOR_CLONES
-void curvature_block(int n, int ld, const float* __restrict c, const int* __restrict nidx, const double* __restrict eq,
-                     const double* __restrict rho, const int* __restrict tri, const double* __restrict node_temp,
-                     double* __restrict K, double* __restrict temp) {
-  curvature_body<true>(n, ld, c, nidx, eq, rho, tri, node_temp, K, temp);
+void curvature_block(int n, int ld, const float* __restrict c, const int* __restrict nidx, int sld,
+                     const double* __restrict eq, const double* __restrict rho, const int* __restrict tri,
+                     const double* __restrict node_temp, double* __restrict K, double* __restrict temp) {
+  curvature_body<true>(n, ld, c, nidx, sld, eq, rho, tri, node_temp, K, temp);
 }
 // The curvatures alone (the elements' temperatures kept from an earlier
 // evaluation at the same node temperatures).
 TS_VECTOR_CLONES
-void curvature_only_block(int n, int ld, const float* __restrict c, const int* __restrict nidx,
+void curvature_only_block(int n, int ld, const float* __restrict c, const int* __restrict nidx, int sld,
                           const double* __restrict eq, const double* __restrict rho, double* __restrict K) {
-  curvature_body<false>(n, ld, c, nidx, eq, rho, nullptr, nullptr, K, nullptr);
+  curvature_body<false>(n, ld, c, nidx, sld, eq, rho, nullptr, nullptr, K, nullptr);
 }
 
 // dW/ds_k = A0 M : c_k per element and edge (c laid out as for
-// curvature_block; edge k of element q at em[k ld + q]), and A0 w.
+// curvature_block; edge k of element q at em[k sld + q]), and A0 w.
 TS_VECTOR_CLONES
 void moment_block(int n, int ld, const double* __restrict area, const float* __restrict c, const double* __restrict M,
-                  const double* __restrict w, double* __restrict em, double* __restrict ew) {
+                  const double* __restrict w, int sld, double* __restrict em, double* __restrict ew) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const double A0 = area[q], M0 = M[3 * q], M1 = M[3 * q + 1], M2 = 2 * M[3 * q + 2];
     const float* cq = c + q;
     em[q] = A0 * (M0 * cq[0] + M1 * cq[ld] + M2 * cq[2 * ld]);
-    em[ld + q] = A0 * (M0 * cq[3 * ld] + M1 * cq[4 * ld] + M2 * cq[5 * ld]);
-    em[2 * ld + q] = A0 * (M0 * cq[6 * ld] + M1 * cq[7 * ld] + M2 * cq[8 * ld]);
+    em[sld + q] = A0 * (M0 * cq[3 * ld] + M1 * cq[4 * ld] + M2 * cq[5 * ld]);
+    em[2 * sld + q] = A0 * (M0 * cq[6 * ld] + M1 * cq[7 * ld] + M2 * cq[8 * ld]);
     ew[q] = A0 * w[q];
   }
 }
 
 // Each element's share of dW/dtheta of its hinges, g_i = a_i m_i +
-// sum_k L_ki (m_k - m[nidx_k]) (L with its rows scaled by omega, laid out
-// as for slope_block; m over the whole part, edge k of the block's element
-// q at m[k ld + m0 + q], nidx as for curvature_block; g_i at g[i ld + q]).
+// sum_k L_ki (m_k - m_all[nidx_k]) (L with its rows scaled by omega, laid
+// out as for slope_block; nidx as for curvature_block; m_k of the block's
+// element q at m[k sld + q], g_i at g[i sld + q]; m_all over the whole part
+// or ring).
 TS_VECTOR_CLONES
 void hinge_moment_block(int n, int ld, const float* __restrict L, const float* __restrict a,
-                        const int* __restrict nidx, const double* __restrict m, int m0, double* __restrict g) {
+                        const int* __restrict nidx, int sld, const double* __restrict m,
+                        const double* __restrict m_all, double* __restrict g) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
-    const double m_0 = m[m0 + q], m_1 = m[ld + m0 + q], m_2 = m[2 * ld + m0 + q];
-    const double u0 = m_0 - m[nidx[q]], u1 = m_1 - m[nidx[ld + q]], u2 = m_2 - m[nidx[2 * ld + q]];
+    const double m_0 = m[q], m_1 = m[sld + q], m_2 = m[2 * sld + q];
+    const double u0 = m_0 - m_all[nidx[q]], u1 = m_1 - m_all[nidx[ld + q]], u2 = m_2 - m_all[nidx[2 * ld + q]];
     const float* l = L + q;
     g[q] = a[q] * m_0 + l[0] * u0 + l[3 * ld] * u1 + l[6 * ld] * u2;
-    g[ld + q] = a[ld + q] * m_1 + l[ld] * u0 + l[4 * ld] * u1 + l[7 * ld] * u2;
-    g[2 * ld + q] = a[2 * ld + q] * m_2 + l[2 * ld] * u0 + l[5 * ld] * u1 + l[8 * ld] * u2;
+    g[sld + q] = a[ld + q] * m_1 + l[ld] * u0 + l[4 * ld] * u1 + l[7 * ld] * u2;
+    g[2 * sld + q] = a[2 * ld + q] * m_2 + l[2 * ld] * u0 + l[5 * ld] * u1 + l[8 * ld] * u2;
   }
 }
 
@@ -555,20 +557,21 @@ class ShellRfT3 final : public ElementKernel {
       // skips its passes, w > 0 scales its forces by w.
       const bool bend = bending_ && in.bending_weight > 0;
       if (bending_ && in.pass == 0) {
-        if (bend) slope_angles(in.range.begin, in.range.end);
+        if (bend) slope_angles(in, in.range.begin, in.range.end);
         return Status::success();
       }
       if (bending_ && in.pass == 1) {
         if (!bend) return Status::success();
         if (auto st = slope_moments(in, in.range.begin, in.range.end); !st) return st;
-        if (in.bending_weight != 1.0)  // dW/ds times w: every hinge moment and bending force follows
+        if (in.bending_weight != 1.0) {  // dW/ds times w: every hinge moment and bending force follows
+          const StepValues sv = step_values(in);
           for (int k = 0; k < 3; ++k)
-            for (int q = in.range.begin; q < in.range.end; ++q)
-              em_[static_cast<std::size_t>(k) * gld_ + q] *= in.bending_weight;
+            for (int q = 0; q < in.range.end - in.range.begin; ++q) sv.em[k * sv.ld + q] *= in.bending_weight;
+        }
         return Status::success();
       }
       if (bending_ && in.pass == 2) {
-        if (bend) hinge_moments(in.range.begin, in.range.end);
+        if (bend) hinge_moments(in, in.range.begin, in.range.end);
         return Status::success();
       }
       const int b = in.range.begin, n = in.range.end - in.range.begin;
@@ -636,8 +639,9 @@ class ShellRfT3 final : public ElementKernel {
       double* dte = sc.energy_tmp.data();  // free again after the laws
       double* mf = sc.mf.data();
       if (bend) {  // the membrane forces with the bending ones
-        membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0,
-                               hm_.data() + b, nidx_.data() + b, hm_.data(), gld_, mf, dte);
+        const StepValues sv = step_values(in);
+        membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, sv.hm,
+                               sv.nidx, gld_, sv.hm_all, sv.ld, mf, dte);
         energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out);
       } else {
         membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
@@ -1192,11 +1196,12 @@ class ShellRfT3 final : public ElementKernel {
   // theta: rho = omega r (r = L theta the slopes of the element's own
   // quadratic at its mid-edges) and q = rho + a theta; the shared slope of
   // an edge is then s = q - rho' (rho' the neighbour's of the same edge).
-  void slope_angles(int b, int end) {
+  void slope_angles(const ElementForceInput& in, int b, int end) {
     const BlockHinges& bh = block_hinges(b, end);
     const BlockAngles& ba = block_angles(b, end, bh);
-    slope_block(end - b, gld_, bh.loc_k.data(), ba.dth.data(), lmap_.data() + b, acoef_.data() + b, eq_.data() + b,
-                erho_.data() + b);
+    const StepValues sv = step_values(in);
+    slope_block(end - b, gld_, bh.loc_k.data(), ba.dth.data(), lmap_.data() + b, acoef_.data() + b, sv.ld, sv.eq,
+                sv.rho);
   }
 
   // Pass 1: mid-edge slopes, curvatures, the law's moments and energies,
@@ -1206,11 +1211,12 @@ class ShellRfT3 final : public ElementKernel {
     BlockScratch& sc = block_scratch(n);
     double* temp = etemp_.data() + b;  // read again by pass 2
     double* K = in.fields_due ? curv_.data() + 3 * b : sc.curv.data();  // kept for fields() only where asked
+    const StepValues sv = step_values(in);
     if (temperatures_kept(in, b, end)) {
-      curvature_only_block(n, gld_, cs_.data() + b, nidx_.data() + b, eq_.data() + b, erho_.data(), K);
+      curvature_only_block(n, gld_, cs_.data() + b, sv.nidx, sv.ld, sv.eq, sv.rho_all, K);
     } else {
-      curvature_block(n, gld_, cs_.data() + b, nidx_.data() + b, eq_.data() + b, erho_.data(),
-                      &part_->triangles[3 * b], in.node_temperature.data(), K, temp);
+      curvature_block(n, gld_, cs_.data() + b, sv.nidx, sv.ld, sv.eq, sv.rho_all, &part_->triangles[3 * b],
+                      in.node_temperature.data(), K, temp);
       keep_temperatures(in, b, end);
     }
     MaterialBlock blk;
@@ -1227,8 +1233,7 @@ class ShellRfT3 final : public ElementKernel {
     blk.energy = std::span<double>(sc.benergy.data(), n);
     if (auto st = bending_->evaluate(blk); !st) return st;
     double* ew = sc.energy_tmp.data();
-    moment_block(n, gld_, area0_.data() + b, cs_.data() + b, sc.moment.data(), sc.benergy.data(), em_.data() + b,
-                 ew);
+    moment_block(n, gld_, area0_.data() + b, cs_.data() + b, sc.moment.data(), sc.benergy.data(), sv.ld, sv.em, ew);
     block_angles_[b]->bending_energy = lane_dot(n, ew, nullptr);  // pass 2 adds the membrane energies to it
     if (in.commit && !curv_old_.empty()) std::copy(K, K + 3 * n, curv_old_.begin() + 3 * b);
     return Status::success();
@@ -1240,16 +1245,16 @@ class ShellRfT3 final : public ElementKernel {
   // the ghost hinges (clamped and symmetry edges) go to the block's
   // ghost_m, and their entries in hm_ are zero (as are those of free
   // edges), so that pass 3 reads the two shares of interior hinges only.
-  void hinge_moments(int b, int end) {
+  void hinge_moments(const ElementForceInput& in, int b, int end) {
     const int n = end - b;
-    hinge_moment_block(n, gld_, lmap_.data() + b, acoef_.data() + b, nidx_.data() + b, em_.data(), b,
-                       hm_.data() + b);
+    const StepValues sv = step_values(in);
+    hinge_moment_block(n, gld_, lmap_.data() + b, acoef_.data() + b, sv.nidx, sv.ld, sv.em, sv.em_all, sv.hm);
     if (gstart_[b] == gstart_[end]) return;
     BlockAngles& ba = *block_angles_[b];
     if (ba.ghost_m.size() < 3 * static_cast<std::size_t>(n)) ba.ghost_m.resize(3 * static_cast<std::size_t>(n));
     for (int g = gstart_[b]; g < gstart_[end]; ++g) {
       const int e = gedge_[g] / 3, k = gedge_[g] % 3;
-      double& h = hm_[static_cast<std::size_t>(k) * gld_ + e];
+      double& h = sv.hm[k * sv.ld + (e - b)];
       ba.ghost_m[3 * (e - b) + k] = h;
       h = 0.0;
     }
@@ -1294,6 +1299,59 @@ class ShellRfT3 final : public ElementKernel {
     }
     return ba.bending_energy;
   }
+
+  // The per-step values of the elements' edges between the passes (eq,
+  // rho, dW/ds, the shares of dW/dtheta) of the range in.range, edge k of
+  // its element q at [k ld + q], and nidx (from the range's first element,
+  // rows of gld_) into the arrays *_all for the neighbours' same edges: the
+  // arrays over the whole part (eq_, erho_, em_, hm_, nidx_), or where the
+  // kernel interleaves the passes (ElementForceInput::pass_window W > 0)
+  // a ring of W block buffers that stays in cache, block b in buffer b mod W
+  // (ring_*, ring_nidx_).
+  struct StepValues {
+    double *eq, *rho, *em, *hm;
+    int ld;
+    const int* nidx;
+    const double *rho_all, *em_all, *hm_all;
+  };
+  StepValues step_values(const ElementForceInput& in) {
+    const int b = in.range.begin;
+    if (in.pass_window > 0 && in.block_size > 0) {
+      if (in.pass_window != ring_w_ || in.block_size != ring_bs_) set_up_ring(in.pass_window, in.block_size);
+      const std::size_t o = static_cast<std::size_t>(in.block % ring_w_) * 3 * rld_;
+      return {ring_eq_.data() + o, ring_rho_.data() + o, ring_em_.data() + o, ring_hm_.data() + o, rld_,
+              ring_nidx_.data() + b, ring_rho_.data(), ring_em_.data(), ring_hm_.data()};
+    }
+    return {eq_.data() + b, erho_.data() + b, em_.data() + b, hm_.data() + b, gld_, nidx_.data() + b,
+            erho_.data(), em_.data(), hm_.data()};
+  }
+  // The ring for a window of w blocks of bs elements: w buffers of 3 rld_
+  // values per array (and a zero entry at the end, for edges without a
+  // neighbour), and nidx_ with the neighbours' edges in the ring.
+  void set_up_ring(int w, int bs) {
+    ring_w_ = w;
+    ring_bs_ = bs;
+    rld_ = padded_ld(bs);
+    const std::size_t m = static_cast<std::size_t>(w) * 3 * rld_;
+    ring_eq_.assign(m, 0.0);
+    ring_rho_.assign(m + 1, 0.0);
+    ring_em_.assign(m + 1, 0.0);
+    ring_hm_.assign(m + 1, 0.0);
+    const int ne = part_->num_elements;
+    ring_nidx_.assign(nidx_.size(), static_cast<int>(m));
+    for (int k = 0; k < 3; ++k)
+      for (int e = 0; e < ne; ++e) {
+        const int v = nidx_[static_cast<std::size_t>(k) * gld_ + e];
+        if (v >= 3 * gld_) continue;  // no neighbour
+        const int kp = v / gld_, nb = v % gld_, blk = nb / bs;
+        ring_nidx_[static_cast<std::size_t>(k) * gld_ + e] =
+            static_cast<int>(static_cast<std::size_t>(blk % w) * 3 * rld_ + static_cast<std::size_t>(kp) * rld_) +
+            (nb - blk * bs);
+      }
+  }
+  int ring_w_ = 0, ring_bs_ = 0, rld_ = 0;
+  std::vector<double> ring_eq_, ring_rho_, ring_em_, ring_hm_;
+  std::vector<int> ring_nidx_;
 
   const MaterialLaw* bending_ = nullptr;
   int gld_ = 0;
@@ -1359,7 +1417,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.5.0";
+  d.version = "0.5.1";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1367,4 +1425,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.5.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.5.1", register_all)

@@ -83,6 +83,21 @@ struct ElementForceInput {
   // one that carries the bending of the next k steps (its bending forces
   // times k, an impulse). Elements without bending ignore it.
   double bending_weight = 1.0;
+  // Where the kernel runs the part's passes interleaved (see
+  // ElementKernel::pass_reach; on one thread it does): the ranges are the
+  // part's blocks of block_size elements in order (range b = [b block_size,
+  // min(n, (b + 1) block_size)), the last one may be smaller), block is
+  // this range's b, and pass_window W > 0 says that whatever a block's
+  // passes leave for later passes (its own, and those of the ranges within
+  // the reach that read it) has been read for the last time before block
+  // b + W starts its pass 0. An element may then keep such values of a step
+  // in W block-sized buffers, block b's in buffer b mod W, which stay in
+  // cache, instead of arrays over the whole part. 0 (the default): no such
+  // bound (each range's pass k - 1 may come before any range's pass k);
+  // block and block_size are then 0 too.
+  int pass_window = 0;
+  int block = 0;
+  int block_size = 0;
 };
 
 struct ElementForceOutput {
