@@ -104,7 +104,7 @@ BlockScratch& block_scratch(int n) {
 struct BlockAngles {
   std::vector<double> dth, ghost_grad, ghost_m;
   int cap = 0;
-  double bending_energy = 0;  // sum of A0 w over the block's elements (pass 1, for pass 2)
+  double bending_energy = 0;  // sum of A0 w over the block's elements (pass 1, for pass 3)
   // Time stepped since the block's last evaluation with bending, before this
   // evaluation's step (ElementForceInput::bending_weight 0 in between): the
   // bending law's history step is in.dt plus it.
@@ -692,7 +692,7 @@ class ShellRfT3 final : public ElementKernel {
  private:
   // Bending angle of hinge k of element e at positions x (edge nodes p, q in
   // the element's counter-clockwise order, c opposite in e, o in the
-  // neighbour); hinge_block evaluates it with its gradient for many hinges.
+  // neighbour); hinge_angle_block evaluates it for many hinges.
   double hinge_angle(const double* x, int c, int p, int q, int o) const {
     const Vec3 C = load3(x, c), P = load3(x, p), Q = load3(x, q), O = load3(x, o);
     const Vec3 edge = sub(Q, P);
@@ -822,7 +822,6 @@ class ShellRfT3 final : public ElementKernel {
     hstart_.assign(ne + 1, 0);
     hid_.assign(3 * ne, -1);
     hc_.clear(), hp_.clear(), hq_.clear(), ho_.clear(), htheta0_.clear();
-    howner_.clear(), hnb_.clear(), hk_.clear(), hkp_.clear();
     dmin2_.assign(ne, std::numeric_limits<double>::infinity());
     for (int e = 0; e < ne; ++e) {
       hstart_[e] = static_cast<int>(hc_.size());
@@ -840,10 +839,6 @@ class ShellRfT3 final : public ElementKernel {
         hq_.push_back(3 * t[(k + 2) % 3]);
         ho_.push_back(3 * opp_[3 * e + k]);
         htheta0_.push_back(theta0_[3 * e + k]);
-        howner_.push_back(e);
-        hnb_.push_back(nb);
-        hk_.push_back(static_cast<char>(k));
-        hkp_.push_back(static_cast<char>(partner_k_[3 * e + k]));
       }
     }
     hstart_[ne] = static_cast<int>(hc_.size());
@@ -1076,7 +1071,7 @@ class ShellRfT3 final : public ElementKernel {
     return Status::success();
   }
 
-  // What bending_forces needs of the hinges of a block [b, end) that depends
+  // What the bending passes need of the hinges of a block [b, end) that depends
   // only on the mesh and the block's bounds; built at the block's first
   // evaluation and kept (the kernel's blocks do not change during a run).
   // Slot b belongs to the block starting at element b: blocks evaluated at
@@ -1147,7 +1142,7 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   // The angle changes of the hinges of block [b, end), kept for the block
-  // (BlockAngles) from pass 0 to pass 2 with the ghost hinges' gradients:
+  // (BlockAngles) from pass 0 to pass 3 with the ghost hinges' gradients:
   // its interior hinges (those owned by its elements, then those owned by
   // an element of an earlier block), then one entry per element and edge
   // without a neighbour (the ghost hinge's angle, zero at a free edge).
@@ -1209,7 +1204,7 @@ class ShellRfT3 final : public ElementKernel {
   Status slope_moments(const ElementForceInput& in, int b, int end) {
     const int n = end - b;
     BlockScratch& sc = block_scratch(n);
-    double* temp = etemp_.data() + b;  // read again by pass 2
+    double* temp = etemp_.data() + b;  // read again by pass 3
     double* K = in.fields_due ? curv_.data() + 3 * b : sc.curv.data();  // kept for fields() only where asked
     const StepValues sv = step_values(in);
     if (temperatures_kept(in, b, end)) {
@@ -1234,7 +1229,7 @@ class ShellRfT3 final : public ElementKernel {
     if (auto st = bending_->evaluate(blk); !st) return st;
     double* ew = sc.energy_tmp.data();
     moment_block(n, gld_, area0_.data() + b, cs_.data() + b, sc.moment.data(), sc.benergy.data(), sv.ld, sv.em, ew);
-    block_angles_[b]->bending_energy = lane_dot(n, ew, nullptr);  // pass 2 adds the membrane energies to it
+    block_angles_[b]->bending_energy = lane_dot(n, ew, nullptr);  // pass 3 adds the membrane energies to it
     if (in.commit && !curv_old_.empty()) std::copy(K, K + 3 * n, curv_old_.begin() + 3 * b);
     return Status::success();
   }
@@ -1389,11 +1384,11 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<double> eq_, erho_, em_, hm_;
   std::vector<int> nidx_;
   // Interior hinges: node offsets (3 x node) of (c, p, q, o) in the owner's
-  // orientation, initial angle, owner and its edge k, neighbour and its
-  // edge; hid_ per element and edge; dmin2_ the squared smallest initial
-  // height over an element's interior edges.
-  std::vector<int> hstart_, hid_, hc_, hp_, hq_, ho_, howner_, hnb_, gstart_, gedge_;
-  std::vector<char> hk_, hkp_;
+  // orientation and initial angle; hid_ per element and edge; hstart_ the
+  // first hinge owned by each element; gstart_, gedge_ the ghost hinges
+  // (3 e + k) by element; dmin2_ the squared smallest initial height over
+  // an element's interior edges.
+  std::vector<int> hstart_, hid_, hc_, hp_, hq_, ho_, gstart_, gedge_;
   std::vector<double> htheta0_, dmin2_;
   std::vector<std::unique_ptr<BlockHinges>> block_hinges_;  // by the block's first element
   std::vector<std::unique_ptr<BlockAngles>> block_angles_;  // likewise
