@@ -21,6 +21,7 @@
 #include <immintrin.h>
 #endif
 
+#include <thermostamp/sdk/memory.hpp>
 #include <thermostamp/sdk/math.hpp>
 #include <thermostamp/sdk/parallel.hpp>
 #include <thermostamp/sdk/simd.hpp>
@@ -40,8 +41,12 @@ struct MechPart {
   std::vector<const sdk::MaterialLaw*> membrane;
   std::vector<double> curvature;
   std::vector<double> load;  // applied nodal forces at full value (N), 3 per node
-  std::vector<double> f_con, k_contact;  // contact forces (N); stiffness bound (N/m)
-  std::vector<double> mass, mass_node_physical, v, f_int, elem_dt, elem_scale, elem_sqrt_scale, node_temperature, stress;
+  sdk::large_vector<double> f_con;  // contact forces (N)
+  std::vector<double> k_contact;     // contact stiffness bound (N/m)
+  // The arrays every step streams through: on huge pages where the system
+  // offers them (sdk/memory.hpp).
+  sdk::large_vector<double> v, f_int, elem_sqrt_scale, node_temperature;
+  std::vector<double> mass, mass_node_physical, elem_dt, elem_scale, stress;
   // Half of the next step's internal, external, damping and contact works,
   // known at this step (see integrate_body).
   double pending_work[4] = {0, 0, 0, 0};
@@ -70,7 +75,8 @@ struct MechPart {
   // the forces of shared node s from its blocks are entries shared_start[s]
   // .. shared_start[s + 1] of block_force (3 values each), and local slot l
   // writes entry shared_entry[l] (-1 for a node of one block only).
-  std::vector<int> block_node_start, block_node, slot_local, shared_node, shared_start, shared_entry;
+  std::vector<int> block_node_start, block_node, shared_node, shared_start, shared_entry;
+  sdk::large_vector<int> slot_local;
   std::vector<double> block_force;
   std::vector<char> fixed;          // 3 per node
   std::vector<int> edge_condition;  // 3 per element (sdk::kEdgeFree / kEdgeClamped)
@@ -78,7 +84,7 @@ struct MechPart {
   std::vector<double> prescribed;   // 3 per node: velocity where fixed (0 for fix / symmetry)
   // Per dof, for the integration's vector pass: mass (negated where held or
   // driven) and gravity force; the held or driven dofs in ascending order.
-  std::vector<double> mass3, gravity3;
+  sdk::large_vector<double> mass3, gravity3;
   std::vector<int> fixed_dofs;
   bool external = false;  // gravity or applied loads act on the part
   double mass_physical = 0, mass_added = 0;
@@ -88,7 +94,8 @@ struct MechPart {
 struct PartState {
   const PartDef* def = nullptr;
   ShellMesh mesh;
-  std::vector<double> x0, x, fibre, area, normals, displacement, shear_angle, contact_status;
+  std::vector<double> x0, fibre, area, normals, displacement, shear_angle, contact_status;
+  sdk::large_vector<double> x;  // positions (m), on huge pages where offered (sdk/memory.hpp)
   int nz = 1;
   std::vector<double> T, cap, mean, top, bottom;
   std::vector<double> h_bottom, t_bottom, h_top, t_top;
@@ -252,7 +259,7 @@ void stream_copy(const double* src, double* dst, std::size_t n) {
 }
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-void compute_normals(const ShellMesh& m, const std::vector<double>& x, std::vector<double>& nn) {
+void compute_normals(const ShellMesh& m, std::span<const double> x, std::vector<double>& nn) {
   nn.assign(x.size(), 0.0);
   for (int e = 0; e < m.num_elements(); ++e) {
     const int* t = &m.triangles[3 * e];
@@ -330,7 +337,7 @@ void Simulation::build_parts() {
         std::swap(st->mesh.neighbours[3 * e + 1], st->mesh.neighbours[3 * e + 2]);
       }
     st->x0 = st->mesh.x;
-    st->x = st->mesh.x;
+    st->x.assign(st->mesh.x.begin(), st->mesh.x.end());
     const int ne = st->mesh.num_elements(), nn = st->mesh.num_nodes();
     st->area = node_areas(st->mesh);
     compute_normals(st->mesh, st->x, st->normals);
@@ -1453,8 +1460,8 @@ void Simulation::build_contact_tasks() {
     const int o = task.other;
     if (!exchange_[o]) {
       exchange_[o] = std::make_unique<Exchange>();
-      exchange_[o]->x = parts_[o]->x;
-      exchange_[o]->v = mech_[o]->v;
+      exchange_[o]->x.assign(parts_[o]->x.begin(), parts_[o]->x.end());
+      exchange_[o]->v.assign(mech_[o]->v.begin(), mech_[o]->v.end());
     }
     task.views = part_views_;
     task.views[o].x = exchange_[o]->x;
@@ -1511,7 +1518,7 @@ void Simulation::run_contact_task(ContactTask& task, double t, double dt) {
 // in task order (by the thread that integrates the part).
 void Simulation::merge_part_contact(int part) {
   if (part >= static_cast<int>(cross_into_.size())) return;
-  std::vector<double>& f = mech_[part]->f_con;
+  sdk::large_vector<double>& f = mech_[part]->f_con;
   for (const int k : cross_into_[part]) {
     const ContactTask& task = contact_tasks_[k];
     const std::vector<double>& cross = task.published ? task.cross_out : task.cross;

@@ -1,11 +1,13 @@
 // sdk/parallel.hpp: loops shared out only where a second thread can take a
-// share, each iteration run once either way.
+// share, each iteration run once either way; sdk/memory.hpp: large_vector.
 #include <gtest/gtest.h>
 
 #include <omp.h>
 
+#include <cstdint>
 #include <vector>
 
+#include <thermostamp/sdk/memory.hpp>
 #include <thermostamp/sdk/parallel.hpp>
 
 namespace ts::test {
@@ -86,6 +88,25 @@ TEST_F(SdkParallel, RunsOnTheCallingThreadInsideAnActiveRegion) {
       EXPECT_EQ(rec[t].thread[i], t);
     }
   }
+}
+
+// large_vector: arrays from 1 MiB up start on a 2 MiB boundary (where a
+// huge page can back them), smaller ones as std::allocator gives them; both
+// keep their contents as a std::vector does (growth, copy).
+TEST(SdkMemory, LargeVectorsAlignToHugePagesAndKeepTheirContents) {
+  sdk::large_vector<double> big(sdk::kLargeArrayBytes / sizeof(double) + 1, 0.0);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(big.data()) % sdk::kHugePageBytes, 0u);
+  for (std::size_t i = 0; i < big.size(); ++i) big[i] = static_cast<double>(i);
+  big.resize(3 * big.size(), -1.0);  // reallocates: the first entries move along
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(big.data()) % sdk::kHugePageBytes, 0u);
+  for (std::size_t i = 0; i < big.size() / 3; i += 4099) EXPECT_EQ(big[i], static_cast<double>(i));
+  EXPECT_EQ(big.back(), -1.0);
+  sdk::large_vector<int> small(100, 7);
+  const sdk::large_vector<int> copy = small;
+  EXPECT_EQ(copy, small);
+  small.clear();
+  small.shrink_to_fit();
+  EXPECT_TRUE(small.empty());
 }
 
 }  // namespace

@@ -51,6 +51,7 @@
 
 #include <thermostamp/sdk/invariants.hpp>
 #include <thermostamp/sdk/math.hpp>
+#include <thermostamp/sdk/memory.hpp>
 #include <thermostamp/sdk/plugin.hpp>
 #include <thermostamp/sdk/simd.hpp>
 
@@ -1346,7 +1347,7 @@ class ShellRfT3 final : public ElementKernel {
   }
   int ring_w_ = 0, ring_bs_ = 0, rld_ = 0;
   std::vector<double> ring_eq_, ring_rho_, ring_em_, ring_hm_;
-  std::vector<int> ring_nidx_;
+  large_vector<int> ring_nidx_;
 
   const MaterialLaw* bending_ = nullptr;
   int gld_ = 0;
@@ -1354,11 +1355,12 @@ class ShellRfT3 final : public ElementKernel {
   std::vector<char> clamped_;
   std::vector<double> n0_;  // initial element normals (clamped elements)
   // ginv_: dK/dtheta_k, value r of edge k of element e at (3 k + r) gld_ + e.
-  std::vector<double> d_, theta0_, curv_, curv_old_, bstate_;
+  std::vector<double> d_, theta0_, curv_;
+  large_vector<double> curv_old_, bstate_;
   // The element temperatures of the step (from the node temperatures), and
   // per block [b, end) at entry b the node temperatures' version they were
   // formed for and end (ElementForceInput::temperature_version; 0: none).
-  std::vector<double> etemp_;
+  large_vector<double> etemp_;
   std::vector<std::uint64_t> etemp_version_;
   std::vector<int> etemp_end_;
   bool temperatures_kept(const ElementForceInput& in, int b, int end) const {
@@ -1380,16 +1382,17 @@ class ShellRfT3 final : public ElementKernel {
   // a zero entry, where there is none); per step eq_, erho_ (slope_angles),
   // em_ (dW/ds), hm_ (the element's share of dW/dtheta, hinge_moments),
   // edge k of element e at k gld_ + e.
-  std::vector<float> cs_, lmap_, acoef_;
-  std::vector<double> eq_, erho_, em_, hm_;
-  std::vector<int> nidx_;
+  large_vector<float> cs_, lmap_, acoef_;
+  large_vector<double> eq_, erho_, em_, hm_;
+  large_vector<int> nidx_;
   // Interior hinges: node offsets (3 x node) of (c, p, q, o) in the owner's
   // orientation and initial angle; hid_ per element and edge; hstart_ the
   // first hinge owned by each element; gstart_, gedge_ the ghost hinges
   // (3 e + k) by element; dmin2_ the squared smallest initial height over
   // an element's interior edges.
-  std::vector<int> hstart_, hid_, hc_, hp_, hq_, ho_, gstart_, gedge_;
-  std::vector<double> htheta0_, dmin2_;
+  std::vector<int> hstart_, hid_, gstart_, gedge_;
+  large_vector<int> hc_, hp_, hq_, ho_;
+  large_vector<double> htheta0_, dmin2_;
   std::vector<std::unique_ptr<BlockHinges>> block_hinges_;  // by the block's first element
   std::vector<std::unique_ptr<BlockAngles>> block_angles_;  // likewise
   const PartView* part_ = nullptr;
@@ -1400,10 +1403,11 @@ class ShellRfT3 final : public ElementKernel {
   // frame (f, m): g1_a of element e at a mld_ + e, g2_a at (3 + a) mld_ + e.
   // off_: the offset 3 i in x of node a of element e at a mld_ + e.
   int mld_ = 0;
-  std::vector<int> off_;
-  std::vector<double> g_, area0_, e1_, e2_, strain_old_, stress_;
-  std::vector<std::vector<double>> states_;
-  std::vector<std::vector<double>> caches_;  // per membrane law: cache_size() per element, or none
+  large_vector<int> off_;
+  large_vector<double> g_, area0_, strain_old_, stress_;
+  std::vector<double> e1_, e2_;
+  std::vector<large_vector<double>> states_;
+  std::vector<large_vector<double>> caches_;  // per membrane law: cache_size() per element, or none
 };
 
 ElementKernel* create() { return new ShellRfT3(); }
