@@ -123,10 +123,12 @@ struct Patch {
   std::uint64_t temperature_version = 0;  // ElementForceInput::temperature_version
   double bending_weight = 1.0;            // ElementForceInput::bending_weight
   double dt = 0.0;                        // ElementForceInput::dt
+  int slot_offset = 0;  // added to every slot (node i's forces at slot i + slot_offset)
   // Node forces and energy of all elements.
   double evaluate(std::vector<double>& nf) {
-    nf.assign(3 * mesh.num_nodes(), 0.0);
-    const std::vector<int> slots = patch();
+    nf.assign(3 * (mesh.num_nodes() + static_cast<std::size_t>(slot_offset)), 0.0);
+    std::vector<int> slots = patch();
+    for (int& s : slots) s += s >= 0 ? slot_offset : 0;
     const int ne = mesh.num_elements();
     double energy = 0;
     const int passes = element->passes();
@@ -156,6 +158,7 @@ struct Patch {
         EXPECT_EQ(out.failed_element, -1);
         energy += out.energy;
       }
+    nf.erase(nf.begin(), nf.begin() + 3 * static_cast<std::ptrdiff_t>(slot_offset));
     return energy;
   }
   double energy() {
@@ -329,6 +332,29 @@ TEST(ShellRfT3, RingOfBlockBuffersGivesTheSameBits) {
     EXPECT_EQ(f_full, f_ring) << blocks << " blocks";
     EXPECT_EQ(e_full, e_ring) << blocks << " blocks";
   }
+}
+
+// The element keeps the node slots of its corners in 16 bits where they
+// fit and uses the kernel's slots where they do not: the same forces.
+TEST(ShellRfT3, ForcesGoToTheirSlotsWhateverTheSlotNumbers) {
+  std::vector<double> f[2];
+  double e[2];
+  for (const int i : {0, 1}) {
+    Patch p(0.5, true, {6, 5});
+    for (int n = 0; n < p.mesh.num_nodes(); ++n) {
+      const double X = p.mesh.x[3 * n], Y = p.mesh.x[3 * n + 1];
+      p.x[3 * n] = 1.01 * X;
+      p.x[3 * n + 2] = 2.0 * X * X + 1.5 * X * Y - 3.0 * Y * Y;
+    }
+    p.blocks = 3;
+    p.slot_offset = i == 0 ? 0 : 70000;  // beyond 16 bits
+    e[i] = p.evaluate(f[i]);
+  }
+  double fmax = 0;
+  for (const double v : f[0]) fmax = std::max(fmax, std::abs(v));
+  EXPECT_GT(fmax, 0.0);
+  EXPECT_EQ(f[0], f[1]);
+  EXPECT_EQ(e[0], e[1]);
 }
 
 // A law (membrane, or bending with `as`) that returns no stress and records

@@ -42,6 +42,7 @@
 // membrane and bending forces (which read the neighbours' shares).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <limits>
 #include <memory>
@@ -75,6 +76,8 @@ struct BlockScratch {
   // stress and curv: the stresses and curvatures of a step after which the
   // kernel writes no fields (ElementForceInput::fields_due).
   std::vector<double> strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, stress, curv;
+  // The angle changes of the block's hinges in pass 0 (ShellRfT3::block_angles).
+  std::vector<double> dth;
 };
 
 BlockScratch& block_scratch(int n) {
@@ -87,6 +90,7 @@ BlockScratch& block_scratch(int n) {
     s.law_stress.resize(3 * m);
     s.stress.resize(3 * m);
     s.curv.resize(3 * m);
+    s.dth.resize(3 * m);
     s.energy_tmp.resize(m);
     s.energy.resize(m);
     s.moment.resize(3 * m);
@@ -95,16 +99,13 @@ BlockScratch& block_scratch(int n) {
   return s;
 }
 
-// The hinges of one block between the passes of a step (see
-// ShellRfT3::block_angles): interior hinges at [0, nh) (capacity cap):
-// angle minus initial angle; then one entry per edge without a neighbour
-// (BlockHinges::loc: zero at a free edge, the ghost hinge's angle at a
-// clamped or symmetry edge); per element and edge of the block, the ghost
-// hinges' gradients on (c, p, q) (ghost_grad, 12 values each) and their
-// dW/dtheta (ghost_m, from pass 2).
+// What one block keeps between the passes of a step (see
+// ShellRfT3::block_angles): per ghost hinge of the block (clamped and
+// symmetry edges, in the order of ShellRfT3::gstart_), its gradient on
+// (c, p, q) (ghost_grad, 12 values each); per element and edge, the ghost
+// hinges' dW/dtheta (ghost_m, from pass 2).
 struct BlockAngles {
-  std::vector<double> dth, ghost_grad, ghost_m;
-  int cap = 0;
+  std::vector<double> ghost_grad, ghost_m;
   double bending_energy = 0;  // sum of A0 w over the block's elements (pass 1, for pass 3)
   // Time stepped since the block's last evaluation with bending, before this
   // evaluation's step (ElementForceInput::bending_weight 0 in between): the
@@ -467,6 +468,17 @@ void corner_forces(int n, int ld, const double* __restrict mf, const int* __rest
     }
 }
 
+// As corner_forces, with the slots of the corners at slot[3 q + a] in 16
+// bits (ShellRfT3::corner_slots).
+void corner_forces_compact(int n, int ld, const double* __restrict mf, const std::uint16_t* __restrict slot,
+                           double* __restrict nf) {
+  for (int q = 0; q < n; ++q)
+    for (int a = 0; a < 3; ++a) {
+      double* f = nf + 3 * static_cast<int>(slot[3 * q + a]);
+      for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * ld + q];
+    }
+}
+
 // Largest entry of an element's map L from angle changes to the slopes of
 // its own quadratic; a patch whose map is larger (nearly on a conic) uses
 // its neighbours' quadratics instead.
@@ -527,6 +539,9 @@ class ShellRfT3 final : public ElementKernel {
       etemp_.assign(ne, 0.0);
       etemp_version_.assign(ne + 1, 0);
       etemp_end_.assign(ne + 1, -1);
+      cslot_.assign(3 * static_cast<std::size_t>(ne), 0);
+      cslot_end_.assign(ne + 1, -1);
+      cslot_fit_.assign(ne + 1, 0);
       states_.clear();
       for (const auto* l : laws_) states_.emplace_back(static_cast<std::size_t>(l->state_size()) * ne, 0.0);
       // The laws' caches (MaterialLaw::cache_size()) are kept where all of
@@ -651,7 +666,10 @@ class ShellRfT3 final : public ElementKernel {
           if (in.commit) block_angles_[b]->elapsed += in.dt;
         }
       }
-      corner_forces(n, ld, mf, in.patch_slot.data(), out.node_force.data());
+      if (const std::uint16_t* cs = corner_slots(in, b, in.range.end))
+        corner_forces_compact(n, ld, mf, cs, out.node_force.data());
+      else
+        corner_forces(n, ld, mf, in.patch_slot.data(), out.node_force.data());
       energy += lane_dot(n, area0_.data() + b, energy_e);
       dt_min = smallest_step(n, dte, in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b, dt_min);
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
@@ -1142,28 +1160,23 @@ class ShellRfT3 final : public ElementKernel {
     f(nf, fnode, fnode + nf, fnode + 2 * nf, fnode + 3 * nf, bh.ftheta0.data(), nown);
   }
 
-  // The angle changes of the hinges of block [b, end), kept for the block
-  // (BlockAngles) from pass 0 to pass 3 with the ghost hinges' gradients:
-  // its interior hinges (those owned by its elements, then those owned by
-  // an element of an earlier block), then one entry per element and edge
-  // without a neighbour (the ghost hinge's angle, zero at a free edge).
-  BlockAngles& block_angles(int b, int end, const BlockHinges& bh) {
-    const int n = end - b;
+  // The angle changes of the hinges of block [b, end) into dth (at most
+  // 3 (end - b) entries, read by pass 0 only): its interior hinges (those
+  // owned by its elements, then those owned by an element of an earlier
+  // block), then one entry per element and edge without a neighbour (the
+  // ghost hinge's angle, zero at a free edge). The ghost hinges' gradients
+  // are kept for pass 3 in the block's BlockAngles.
+  BlockAngles& block_angles(int b, int end, const BlockHinges& bh, double* dth) {
     const double* x = part_->x.data();
     static_assert(sizeof(Vec3) == 3 * sizeof(double));
     const int h0 = hstart_[b], nown = hstart_[end] - h0;
     const int nforeign = bh.nforeign;
     const int nh = nown + nforeign;
     std::unique_ptr<BlockAngles>& slot = block_angles_[b];
-    if (!slot || slot->cap < nh + bh.nbound) {
-      slot = std::make_unique<BlockAngles>();
-      slot->cap = nh + bh.nbound;
-      const std::size_t m = static_cast<std::size_t>(slot->cap);
-      slot->dth.resize(m);
-      slot->ghost_grad.resize(36 * static_cast<std::size_t>(n));
-    }
+    const std::size_t ng = static_cast<std::size_t>(gstart_[end] - gstart_[b]);
+    if (!slot) slot = std::make_unique<BlockAngles>();
     BlockAngles& ba = *slot;
-    double* dth = ba.dth.data();
+    if (ba.ghost_grad.size() < 12 * ng) ba.ghost_grad.resize(12 * ng);
     double beyond = 0.0;
     hinge_lists(b, end, bh, [&](int h, const int* c, const int* p, const int* q, const int* o, const double* t0, int j0) {
       beyond = std::max(beyond, hinge_angle_block(h, c, p, q, o, x, t0, dth + j0));
@@ -1174,12 +1187,12 @@ class ShellRfT3 final : public ElementKernel {
         dth[j] = hinge_angle(x, hc_[h] / 3, hp_[h] / 3, hq_[h] / 3, ho_[h] / 3) - htheta0_[h];
       }
     // Ghost hinges (clamped and symmetry edges), one by one.
-    double* ggrad = ba.ghost_grad.data();  // per element and edge of the block: d theta / dx on (c, p, q)
+    double* ggrad = ba.ghost_grad.data();  // per ghost hinge of the block: d theta / dx on (c, p, q)
     std::fill(dth + nh, dth + nh + bh.nbound, 0.0);
     for (int g = gstart_[b]; g < gstart_[end]; ++g) {
       const int e = gedge_[g] / 3, k = gedge_[g] % 3;
       const int* t = &part_->triangles[3 * e];
-      Vec3* gr = reinterpret_cast<Vec3*>(&ggrad[36 * (e - b) + 12 * k]);
+      Vec3* gr = reinterpret_cast<Vec3*>(&ggrad[12 * static_cast<std::size_t>(g - gstart_[b])]);
       dth[bh.loc[3 * (e - b) + k]] =
           clamped_[3 * e + k] == 1
               ? 2 * ghost_angle(x, t[k], t[(k + 1) % 3], t[(k + 2) % 3], load3(n0_.data(), e), -1, gr)
@@ -1194,9 +1207,10 @@ class ShellRfT3 final : public ElementKernel {
   // an edge is then s = q - rho' (rho' the neighbour's of the same edge).
   void slope_angles(const ElementForceInput& in, int b, int end) {
     const BlockHinges& bh = block_hinges(b, end);
-    const BlockAngles& ba = block_angles(b, end, bh);
+    double* dth = block_scratch(end - b).dth.data();  // stays in the thread's cache
+    block_angles(b, end, bh, dth);
     const StepValues sv = step_values(in);
-    slope_block(end - b, gld_, bh.loc_k.data(), ba.dth.data(), lmap_.data() + b, acoef_.data() + b, sv.ld, sv.eq,
+    slope_block(end - b, gld_, bh.loc_k.data(), dth, lmap_.data() + b, acoef_.data() + b, sv.ld, sv.eq,
                 sv.rho);
   }
 
@@ -1286,7 +1300,7 @@ class ShellRfT3 final : public ElementKernel {
     const double* hgrad = ba.ghost_grad.data();
     for (int g = gstart_[b]; g < gstart_[end]; ++g) {
       const int e = gedge_[g] / 3, k = gedge_[g] % 3, q = e - b;
-      const Vec3* gr = reinterpret_cast<const Vec3*>(&hgrad[36 * q + 12 * k]);
+      const Vec3* gr = reinterpret_cast<const Vec3*>(&hgrad[12 * static_cast<std::size_t>(g - gstart_[b])]);
       const double m = (clamped_[3 * e + k] == 1 ? 2.0 : 1.0) * ba.ghost_m[3 * q + k];
       for (int j = 0; j < 3; ++j) {
         const int a = (k + j) % 3;
@@ -1363,6 +1377,28 @@ class ShellRfT3 final : public ElementKernel {
   large_vector<double> etemp_;
   std::vector<std::uint64_t> etemp_version_;
   std::vector<int> etemp_end_;
+  // The node slots of the corners of range [b, end) (the first three of
+  // each element's ElementForceInput::patch_slot, the same at every call
+  // for a range) in 16 bits, 3 per element: a quarter of the bytes the
+  // force scatter reads. Built at the range's first evaluation; null where
+  // a slot does not fit in 16 bits.
+  large_vector<std::uint16_t> cslot_;
+  std::vector<int> cslot_end_;
+  std::vector<char> cslot_fit_;
+  const std::uint16_t* corner_slots(const ElementForceInput& in, int b, int end) {
+    if (cslot_end_[b] != end) {
+      bool fit = true;
+      for (int q = 0; q < end - b; ++q)
+        for (int a = 0; a < 3; ++a) {
+          const int v = in.patch_slot[6 * q + a];
+          fit = fit && v >= 0 && v <= 0xffff;
+          cslot_[3 * static_cast<std::size_t>(b + q) + a] = static_cast<std::uint16_t>(fit ? v : 0);
+        }
+      cslot_fit_[b] = fit;
+      cslot_end_[b] = end;
+    }
+    return cslot_fit_[b] ? cslot_.data() + 3 * static_cast<std::size_t>(b) : nullptr;
+  }
   bool temperatures_kept(const ElementForceInput& in, int b, int end) const {
     return in.temperature_version != 0 && etemp_version_[b] == in.temperature_version && etemp_end_[b] == end;
   }

@@ -37,8 +37,9 @@ struct ElementRange {
 
 struct ElementForceInput {
   // The kernel splits a part into the same ranges at every call (they
-  // depend on the part only), so an element may keep data per range and
-  // hand its laws the same state span for the same points every time.
+  // depend on the part only), with the same patch_slot for a range, so an
+  // element may keep data per range (a copy of its slots, say) and hand
+  // its laws the same state span for the same points every time.
   ElementRange range;
   double dt = 0.0;                          // s, step of the laws' history (viscoelasticity)
   std::span<const double> node_temperature; // per node (mean through the thickness), degC
