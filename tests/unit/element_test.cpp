@@ -357,6 +357,30 @@ TEST(ShellRfT3, ForcesGoToTheirSlotsWhateverTheSlotNumbers) {
   EXPECT_EQ(e[0], e[1]);
 }
 
+// The hinges a range's elements own keep their node offsets in 16 bits
+// where they span less than 2^16 (several ranges of a large patch), and in
+// int otherwise (one range over 22 000 nodes): the same forces.
+TEST(ShellRfT3, HingeNodeOffsetsOfSixteenBitsGiveTheSameBits) {
+  Patch p(0.5, true, {200, 110}, true, false, 0.01);
+  ASSERT_GT(3 * p.mesh.num_nodes(), 0xffff);
+  for (int i = 0; i < p.mesh.num_nodes(); ++i) {
+    const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
+    p.x[3 * i] = 1.01 * X;
+    p.x[3 * i + 2] = 2.0 * X * X + 1.5 * X * Y - 3.0 * Y * Y + 1e-6 * std::sin(11 * i);
+  }
+  std::vector<double> f[2];
+  double e[2];
+  for (const int i : {0, 1}) {
+    p.blocks = i == 0 ? 1 : 16;
+    e[i] = p.evaluate(f[i]);
+  }
+  double fmax = 0;
+  for (const double v : f[0]) fmax = std::max(fmax, std::abs(v));
+  EXPECT_GT(fmax, 0.0);
+  EXPECT_EQ(f[0], f[1]);
+  EXPECT_NEAR(e[0], e[1], 1e-13 * e[0]);  // summed per range: the order of the sum differs
+}
+
 // A law (membrane, or bending with `as`) that returns no stress and records
 // the strains it is given (of its last call), and the element temperatures
 // and the history steps (of every call since they were last cleared, block

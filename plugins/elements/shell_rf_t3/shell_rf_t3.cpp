@@ -151,10 +151,11 @@ struct HingeGeometry {
 // node). Where the angle is beyond atan2_small's range, dtheta[j] is NaN
 // (the caller evaluates it with the library); returns 1 if some is, 0
 // otherwise.
-TS_VECTOR_CLONES
-double hinge_angle_block(int h, const int* __restrict ic, const int* __restrict ip, const int* __restrict iq,
-                         const int* __restrict io, const double* __restrict x, const double* __restrict theta0,
-                         double* __restrict dtheta) {
+template <class I>
+[[gnu::always_inline]] inline double hinge_angle_body(int h, const I* __restrict ic, const I* __restrict ip,
+                                                      const I* __restrict iq, const I* __restrict io,
+                                                      const double* __restrict x, const double* __restrict theta0,
+                                                      double* __restrict dtheta) {
   double beyond = 0.0;
 #pragma omp simd reduction(max : beyond)
   for (int j = 0; j < h; ++j) {
@@ -168,6 +169,18 @@ double hinge_angle_block(int h, const int* __restrict ic, const int* __restrict 
     beyond = in_range ? beyond : 1.0;
   }
   return beyond;
+}
+TS_VECTOR_CLONES
+double hinge_angle_block(int h, const int* ic, const int* ip, const int* iq, const int* io, const double* x,
+                         const double* theta0, double* dtheta) {
+  return hinge_angle_body(h, ic, ip, iq, io, x, theta0, dtheta);
+}
+// The same with 16-bit node offsets (from x, which points at the offset
+// they are relative to).
+TS_VECTOR_CLONES
+double hinge_angle_block16(int h, const std::uint16_t* ic, const std::uint16_t* ip, const std::uint16_t* iq,
+                           const std::uint16_t* io, const double* x, const double* theta0, double* dtheta) {
+  return hinge_angle_body(h, ic, ip, iq, io, x, theta0, dtheta);
 }
 
 typedef double V4d __attribute__((vector_size(32)));
@@ -205,6 +218,37 @@ double smallest_step(int n, const double* __restrict dte, const double* __restri
     for (int q = 0; q < n; ++q) lo = dte[q] < lo ? dte[q] : lo;
   }
   return lo;
+}
+
+// The bending steps d2[q] c of n elements: lowers dte[q] to them and
+// returns the smallest of them times scale[q] (where scale is not null).
+TS_VECTOR_CLONES
+double bending_steps(int n, const double* __restrict d2, double c, const double* __restrict scale,
+                     double* __restrict dte) {
+  double lo = std::numeric_limits<double>::infinity();
+  if (scale) {
+#pragma omp simd reduction(min : lo)
+    for (int q = 0; q < n; ++q) {
+      const double dtb = d2[q] * c, v = dtb * scale[q];
+      lo = v < lo ? v : lo;
+      dte[q] = dtb < dte[q] ? dtb : dte[q];
+    }
+  } else {
+#pragma omp simd reduction(min : lo)
+    for (int q = 0; q < n; ++q) {
+      const double dtb = d2[q] * c;
+      lo = dtb < lo ? dtb : lo;
+      dte[q] = dtb < dte[q] ? dtb : dte[q];
+    }
+  }
+  return lo;
+}
+
+// a[q] += b[q] for q < n.
+TS_VECTOR_CLONES
+void add_into(int n, double* __restrict a, const double* __restrict b) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) a[q] += b[q];
 }
 
 // Lowers lo and raises hi to the smallest and largest of v[0, n).
@@ -637,8 +681,8 @@ class ShellRfT3 final : public ElementKernel {
         blk.energy = std::span<double>(k == 0 ? energy_e : sc.energy_tmp.data(), n);
         if (auto s = laws_[k]->evaluate(blk); !s) return s;
         if (k == 0) continue;
-        for (int q = 0; q < 3 * n; ++q) S[q] += sc.law_stress[q];
-        for (int q = 0; q < n; ++q) energy_e[q] += sc.energy_tmp[q];
+        add_into(3 * n, S, sc.law_stress.data());
+        add_into(n, energy_e, sc.energy_tmp.data());
       }
       if (laws_.empty()) {
         std::fill(S, S + 3 * n, 0.0);
@@ -861,6 +905,7 @@ class ShellRfT3 final : public ElementKernel {
       }
     }
     hstart_[ne] = static_cast<int>(hc_.size());
+    for (auto* a16 : {&hc16_, &hp16_, &hq16_, &ho16_}) a16->assign(hc_.size(), 0);
     // Ghost hinges (clamped and symmetry edges) by element: those of the
     // elements of [b, end) are gedge_[gstart_[b] .. gstart_[end]) (3 e + k).
     gstart_.assign(ne + 1, 0);
@@ -1097,6 +1142,10 @@ class ShellRfT3 final : public ElementKernel {
   // the same time never share it, and a range with other bounds rebuilds it.
   struct BlockHinges {
     int end = -1, nforeign = 0;
+    // Where the node offsets of the hinges the block's elements own span
+    // less than 2^16: the smallest of them, and hc16_ ... ho16_ hold them
+    // relative to it; -1 otherwise.
+    int base16 = -1;
     int nbound = 0;  // edges without a neighbour (their entries follow the hinges')
     // Per element and edge of the block: the edge's entry in the angle
     // changes (see bending_forces), edge k of the block's element q at
@@ -1132,6 +1181,20 @@ class ShellRfT3 final : public ElementKernel {
           bh->fhinge.push_back(h);
         }
       }
+    if (nown > 0) {
+      int lo = hc_[h0], hi = hc_[h0];
+      for (const auto* a : {&hc_, &hp_, &hq_, &ho_})
+        for (int h = h0; h < h0 + nown; ++h) lo = std::min(lo, (*a)[h]), hi = std::max(hi, (*a)[h]);
+      if (hi - lo <= 0xffff) {
+        bh->base16 = lo;
+        for (int h = h0; h < h0 + nown; ++h) {
+          hc16_[h] = static_cast<std::uint16_t>(hc_[h] - lo);
+          hp16_[h] = static_cast<std::uint16_t>(hp_[h] - lo);
+          hq16_[h] = static_cast<std::uint16_t>(hq_[h] - lo);
+          ho16_[h] = static_cast<std::uint16_t>(ho_[h] - lo);
+        }
+      }
+    }
     const int nh = nown + bh->nforeign;
     for (int e = b; e < end; ++e)
       for (int k = 0; k < 3; ++k)
@@ -1149,15 +1212,20 @@ class ShellRfT3 final : public ElementKernel {
 
   // The interior hinges of block [b, end) as two lists: those its elements
   // own, then those owned by an element of an earlier block. Calls f(h, c,
-  // p, q, o, theta0, j0) for each: h hinges with node offsets c[j] ...
-  // o[j] and initial angles theta0[j], entries j0 .. j0 + h - 1 of the
-  // block's hinges.
+  // p, q, o, theta0, j0, base) for each: h hinges with node offsets base +
+  // c[j] ... base + o[j] (c ... o of int, or of 16 bits where
+  // BlockHinges::base16 allows) and initial angles theta0[j], entries j0 ..
+  // j0 + h - 1 of the block's hinges.
   template <class F>
   void hinge_lists(int b, int end, const BlockHinges& bh, F&& f) const {
     const int h0 = hstart_[b], nown = hstart_[end] - h0, nf = bh.nforeign;
     const int* fnode = bh.fnode.data();
-    f(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, htheta0_.data() + h0, 0);
-    f(nf, fnode, fnode + nf, fnode + 2 * nf, fnode + 3 * nf, bh.ftheta0.data(), nown);
+    if (bh.base16 >= 0)
+      f(nown, hc16_.data() + h0, hp16_.data() + h0, hq16_.data() + h0, ho16_.data() + h0, htheta0_.data() + h0, 0,
+        bh.base16);
+    else
+      f(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, htheta0_.data() + h0, 0, 0);
+    f(nf, fnode, fnode + nf, fnode + 2 * nf, fnode + 3 * nf, bh.ftheta0.data(), nown, 0);
   }
 
   // The angle changes of the hinges of block [b, end) into dth (at most
@@ -1178,8 +1246,12 @@ class ShellRfT3 final : public ElementKernel {
     BlockAngles& ba = *slot;
     if (ba.ghost_grad.size() < 12 * ng) ba.ghost_grad.resize(12 * ng);
     double beyond = 0.0;
-    hinge_lists(b, end, bh, [&](int h, const int* c, const int* p, const int* q, const int* o, const double* t0, int j0) {
-      beyond = std::max(beyond, hinge_angle_block(h, c, p, q, o, x, t0, dth + j0));
+    hinge_lists(b, end, bh, [&](int h, const auto* c, const auto* p, const auto* q, const auto* o, const double* t0,
+                                int j0, int base) {
+      if constexpr (sizeof(*c) == 2)
+        beyond = std::max(beyond, hinge_angle_block16(h, c, p, q, o, x + base, t0, dth + j0));
+      else
+        beyond = std::max(beyond, hinge_angle_block(h, c, p, q, o, x + base, t0, dth + j0));
     });
     for (int j = 0; j < (beyond != 0.0 ? nh : 0); ++j)
       if (dth[j] != dth[j]) {  // NaN: beyond the approximation's range, the library's atan2
@@ -1287,13 +1359,7 @@ class ShellRfT3 final : public ElementKernel {
       // smallest initial height over the element's interior edges.
       const double dtb_scale = 0.5 * std::sqrt(areal_mass_ / rmax);
       const double* scale = in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b;
-      double bdt = std::numeric_limits<double>::infinity();
-      for (int q = 0; q < n; ++q) {
-        const double dtb = dmin2_[b + q] * dtb_scale;
-        bdt = std::min(bdt, scale ? dtb * scale[q] : dtb);
-        dte[q] = std::min(dte[q], dtb);
-      }
-      out.bending_dt = bdt;
+      out.bending_dt = bending_steps(n, dmin2_.data() + b, dtb_scale, scale, dte);
     }
     // Ghost hinges: gradient on the element's corners (c, p, q) = (k, k + 1,
     // k + 2); a clamp's theta is 2 x the rotation.
@@ -1428,6 +1494,7 @@ class ShellRfT3 final : public ElementKernel {
   // an element's interior edges.
   std::vector<int> hstart_, hid_, gstart_, gedge_;
   large_vector<int> hc_, hp_, hq_, ho_;
+  large_vector<std::uint16_t> hc16_, hp16_, hq16_, ho16_;  // see BlockHinges::base16
   large_vector<double> htheta0_, dmin2_;
   std::vector<std::unique_ptr<BlockHinges>> block_hinges_;  // by the block's first element
   std::vector<std::unique_ptr<BlockAngles>> block_angles_;  // likewise
