@@ -46,6 +46,7 @@ struct MechPart {
   // The arrays every step streams through: on huge pages where the system
   // offers them (sdk/memory.hpp).
   sdk::large_vector<double> v, f_int, elem_sqrt_scale, node_temperature;
+  bool scaled = false;  // some elem_sqrt_scale is not 1 (else the elements get no step factors)
   std::vector<double> mass, mass_node_physical, elem_dt, elem_scale, stress;
   // Half of the next step's internal, external, damping and contact works,
   // known at this step (see integrate_body).
@@ -624,6 +625,7 @@ void Simulation::build_mechanics() {
     m->elem_dt.assign(ne, 0.0);
     m->elem_scale.assign(ne, 1.0);
     m->elem_sqrt_scale.assign(ne, 1.0);
+    m->scaled = false;
     m->stress.assign(3 * ne, 0.0);
     m->curvature.assign(3 * ne, 0.0);
     m->node_temperature.assign(nn, def.initial_temperature);
@@ -794,6 +796,7 @@ void Simulation::build_mechanics() {
       }
       m.elem_scale[e] = scale;
       m.elem_sqrt_scale[e] = std::sqrt(scale);
+      m.scaled = m.scaled || m.elem_sqrt_scale[e] != 1.0;
       const int* t = &st.mesh.triangles[3 * e];
       const Vec3 a = sdk::load3(st.x0.data(), t[0]), b = sdk::load3(st.x0.data(), t[1]), c = sdk::load3(st.x0.data(), t[2]);
       const double me = rho_h * 0.5 * sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a)));
@@ -970,7 +973,7 @@ void Simulation::element_block(std::size_t p, int b, int pass, bool interleaved)
                                        6 * static_cast<std::size_t>(in.range.end - in.range.begin));
   in.pass = pass;
   in.fields_due = fields_due_;
-  in.dt_scale = m.elem_sqrt_scale;
+  if (m.scaled) in.dt_scale = m.elem_sqrt_scale;  // factors of 1 change no step: none
   in.temperature_version = temperature_version_;
   in.bending_weight = bending_weight_;
   if (interleaved && m.pass_window > 0) {

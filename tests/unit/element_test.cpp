@@ -124,6 +124,10 @@ struct Patch {
   double bending_weight = 1.0;            // ElementForceInput::bending_weight
   double dt = 0.0;                        // ElementForceInput::dt
   int slot_offset = 0;  // added to every slot (node i's forces at slot i + slot_offset)
+  std::vector<double> dt_scale;  // ElementForceInput::dt_scale (empty: none)
+  // The smallest ElementForceOutput::stable_dt and bending_dt of the ranges
+  // (of the last evaluation).
+  double stable_dt = 0, bending_dt = 0;
   // Node forces and energy of all elements.
   double evaluate(std::vector<double>& nf) {
     nf.assign(3 * (mesh.num_nodes() + static_cast<std::size_t>(slot_offset)), 0.0);
@@ -131,6 +135,7 @@ struct Patch {
     for (int& s : slots) s += s >= 0 ? slot_offset : 0;
     const int ne = mesh.num_elements();
     double energy = 0;
+    stable_dt = bending_dt = std::numeric_limits<double>::infinity();
     const int passes = element->passes();
     for (int pass = 0; pass < passes; ++pass)
       for (int k = 0; k < blocks; ++k) {
@@ -150,6 +155,7 @@ struct Patch {
         in.commit = commit;
         in.bending_weight = bending_weight;
         in.dt = dt;
+        in.dt_scale = dt_scale;
         in.pass = pass;
         in.patch_slot = std::span<const int>(slots).subspan(6 * in.range.begin, 6 * (in.range.end - in.range.begin));
         sdk::ElementForceOutput out;
@@ -157,6 +163,10 @@ struct Patch {
         EXPECT_TRUE(element->internal_forces(in, out).ok);
         EXPECT_EQ(out.failed_element, -1);
         energy += out.energy;
+        if (pass == passes - 1) {
+          stable_dt = std::min(stable_dt, out.stable_dt);
+          bending_dt = std::min(bending_dt, out.bending_dt);
+        }
       }
     nf.erase(nf.begin(), nf.begin() + 3 * static_cast<std::ptrdiff_t>(slot_offset));
     return energy;
@@ -355,6 +365,28 @@ TEST(ShellRfT3, ForcesGoToTheirSlotsWhateverTheSlotNumbers) {
   EXPECT_GT(fmax, 0.0);
   EXPECT_EQ(f[0], f[1]);
   EXPECT_EQ(e[0], e[1]);
+}
+
+// Without step factors the element takes a range's smallest bending step
+// from its smallest d^2 instead of from every element's step: the same
+// stable steps as with factors of 1 (which take every element's), bit for
+// bit.
+TEST(ShellRfT3, StableStepsWithoutFactorsAreThoseWithFactorsOfOne) {
+  Patch p(0.5, true, {24, 20});
+  for (int i = 0; i < p.mesh.num_nodes(); ++i) p.x[3 * i] = 1.01 * p.mesh.x[3 * i];
+  p.blocks = 3;
+  std::vector<double> f;
+  p.evaluate(f);
+  const double dt_none = p.stable_dt, bdt_none = p.bending_dt;
+  p.dt_scale.assign(p.mesh.num_elements(), 1.0);
+  p.evaluate(f);
+  EXPECT_TRUE(std::isfinite(bdt_none));
+  EXPECT_GT(bdt_none, 0.0);
+  EXPECT_EQ(dt_none, p.stable_dt);
+  EXPECT_EQ(bdt_none, p.bending_dt);
+  // The bending step is the smaller one here (elements of about 0.5 mm),
+  // so the shortcut decides the stable step.
+  EXPECT_EQ(dt_none, bdt_none);
 }
 
 // The hinges a range's elements own keep their node offsets in 16 bits

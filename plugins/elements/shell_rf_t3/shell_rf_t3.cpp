@@ -595,6 +595,8 @@ class ShellRfT3 final : public ElementKernel {
       etemp_end_.assign(ne + 1, -1);
       cslot_.assign(3 * static_cast<std::size_t>(ne), 0);
       cslot_end_.assign(ne + 1, -1);
+      d2min_.assign(ne + 1, 0.0);
+      d2min_end_.assign(ne + 1, -1);
       cslot_fit_.assign(ne + 1, 0);
       states_.clear();
       for (const auto* l : laws_) states_.emplace_back(static_cast<std::size_t>(l->state_size()) * ne, 0.0);
@@ -712,7 +714,7 @@ class ShellRfT3 final : public ElementKernel {
         const StepValues sv = step_values(in);
         membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, sv.hm,
                                sv.nidx, gld_, sv.hm_all, sv.ld, mf, dte);
-        energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out);
+        energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out, dt_min);
       } else {
         membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
         if (bending_ && block_angles_[b]) {
@@ -1356,10 +1358,12 @@ class ShellRfT3 final : public ElementKernel {
   // forces to the membrane forces mf (laid out as membrane_block writes
   // them, leading dimension ld): the ghost hinges' forces into mf; returns
   // the bending energy (from pass 1) and lowers the elements' stable steps
-  // (sc.energy_tmp) with the bending ones; [t_lo, t_hi] is the block's
-  // temperature range.
+  // (sc.energy_tmp) with the bending ones, or, where the kernel gives no
+  // step factors and asks for no element steps, lowers dt_floor (the
+  // block's stable step so far) with the block's smallest bending step;
+  // [t_lo, t_hi] is the block's temperature range.
   double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
-                        double* mf, int ld, ElementForceOutput& out) {
+                        double* mf, int ld, ElementForceOutput& out, double& dt_floor) {
     const int n = end - b;
     const BlockAngles& ba = *block_angles_[b];  // from passes 0 to 2
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
@@ -1368,8 +1372,17 @@ class ShellRfT3 final : public ElementKernel {
       // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative), d the
       // smallest initial height over the element's interior edges.
       const double dtb_scale = 0.5 * std::sqrt(areal_mass_ / rmax);
-      const double* scale = in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b;
-      out.bending_dt = bending_steps(n, dmin2_.data() + b, dtb_scale, scale, dte);
+      if (in.dt_scale.empty() && out.element_dt.empty()) {
+        // Without step factors the smallest bending step of the block is
+        // its smallest d^2 times dtb_scale (a product with a positive
+        // factor keeps the order, rounding included): the same bits as the
+        // smallest of the elements' steps, without reading them.
+        out.bending_dt = smallest_dmin2(b, end) * dtb_scale;
+        dt_floor = std::min(dt_floor, out.bending_dt);
+      } else {
+        const double* scale = in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b;
+        out.bending_dt = bending_steps(n, dmin2_.data() + b, dtb_scale, scale, dte);
+      }
     }
     // Ghost hinges: gradient on the element's corners (c, p, q) = (k, k + 1,
     // k + 2); a clamp's theta is 2 x the rotation.
@@ -1458,6 +1471,18 @@ class ShellRfT3 final : public ElementKernel {
   // for a range) in 16 bits, 3 per element: a quarter of the bytes the
   // force scatter reads. Built at the range's first evaluation; null where
   // a slot does not fit in 16 bits.
+  // The smallest dmin2_ of range [b, end), formed at its first evaluation.
+  std::vector<double> d2min_;
+  std::vector<int> d2min_end_;
+  double smallest_dmin2(int b, int end) {
+    if (d2min_end_[b] != end) {
+      double lo = std::numeric_limits<double>::infinity();
+      for (int e = b; e < end; ++e) lo = std::min(lo, dmin2_[e]);
+      d2min_[b] = lo;
+      d2min_end_[b] = end;
+    }
+    return d2min_[b];
+  }
   large_vector<std::uint16_t> cslot_;
   std::vector<int> cslot_end_;
   std::vector<char> cslot_fit_;
