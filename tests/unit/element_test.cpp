@@ -389,10 +389,11 @@ TEST(ShellRfT3, StableStepsWithoutFactorsAreThoseWithFactorsOfOne) {
   EXPECT_EQ(dt_none, bdt_none);
 }
 
-// The hinges a range's elements own keep their node offsets in 16 bits
-// where they span less than 2^16 (several ranges of a large patch), and in
-// int otherwise (one range over 22 000 nodes): the same forces.
-TEST(ShellRfT3, HingeNodeOffsetsOfSixteenBitsGiveTheSameBits) {
+// A range keeps the node offsets of its elements and of the hinges they
+// own, and its entries of the angle changes, in 16 bits where they span
+// less than 2^16 (several ranges of a large patch), and in int otherwise
+// (one range over 22 000 nodes and 44 000 elements): the same forces.
+TEST(ShellRfT3, SixteenBitOffsetsGiveTheSameBits) {
   Patch p(0.5, true, {200, 110}, true, false, 0.01);
   ASSERT_GT(3 * p.mesh.num_nodes(), 0xffff);
   for (int i = 0; i < p.mesh.num_nodes(); ++i) {

@@ -277,18 +277,18 @@ void value_range(int n, const double* __restrict v, double& lo, double& hi) {
 // Strains of n elements: F e1 = sum_a x_a g1_a and F e2 = sum_a x_a g2_a
 // (component d of element q at ff[d ld + q] and ff[(3 + d) ld + q];
 // g1_a of element q at g[a gld + q], g2_a at g[(3 + a) gld + q], the
-// offset 3 i of its node a in x at off[a gld + q]) and
+// offset 3 i of its node a in x at off[a ols + q]) and
 // C = (F e1 . F e1, F e2 . F e2, F e1 . F e2) at C[3 q ..]. Returns 1 if
 // some element has det C <= 1e-12 or not a number (collapsed or inverted),
 // 0 otherwise. One vector pass, the operations of math.hpp's add, scale
 // and dot in their order.
 TS_VECTOR_CLONES
-double strain_block(int n, int ld, const int* __restrict off, const double* __restrict x, const double* __restrict g,
-                    int gld, double* __restrict ff, double* __restrict C) {
+double strain_block(int n, int ld, const int* __restrict off, int ols, const double* __restrict x,
+                    const double* __restrict g, int gld, double* __restrict ff, double* __restrict C) {
   double bad = 0.0;
 #pragma omp simd reduction(max : bad)
   for (int q = 0; q < n; ++q) {
-    const int i0 = off[q], i1 = off[gld + q], i2 = off[2 * gld + q];
+    const int i0 = off[q], i1 = off[ols + q], i2 = off[2 * ols + q];
     const double ga = g[q], gb = g[gld + q], gc = g[2 * gld + q];
     const double ha = g[3 * gld + q], hb = g[4 * gld + q], hc = g[5 * gld + q];
     const double x0 = x[i0], x1 = x[i0 + 1], x2 = x[i0 + 2];
@@ -420,15 +420,16 @@ void membrane_bending_block(int n, int ld, const double* C, const double* ff, co
 }
 
 // Per element q of a block and edge k (values of the block's elements
-// from their first one): theta_k = dth[loc[k n + q]], rho = L theta (entry
+// from their first one): theta_k = dth[loc[k ls + q]], rho = L theta (entry
 // (k, i) of element q's L at L[(3 k + i) ld + q]), eq = rho + a theta (a_k
 // at a[k ld + q]; rho_k and eq_k at rho[k sld + q] and eq[k sld + q]).
 TS_VECTOR_CLONES
-void slope_block(int n, int ld, const int* __restrict loc, const double* __restrict dth, const float* __restrict L,
-                 const float* __restrict a, int sld, double* __restrict eq, double* __restrict rho) {
+void slope_block(int n, int ls, int ld, const int* __restrict loc, const double* __restrict dth,
+                 const float* __restrict L, const float* __restrict a, int sld, double* __restrict eq,
+                 double* __restrict rho) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
-    const double t0 = dth[loc[q]], t1 = dth[loc[n + q]], t2 = dth[loc[2 * n + q]];
+    const double t0 = dth[loc[q]], t1 = dth[loc[ls + q]], t2 = dth[loc[2 * ls + q]];
     const float* l = L + q;
     const double r0 = l[0] * t0 + l[ld] * t1 + l[2 * ld] * t2, r1 = l[3 * ld] * t0 + l[4 * ld] * t1 + l[5 * ld] * t2,
                  r2 = l[6 * ld] * t0 + l[7 * ld] * t1 + l[8 * ld] * t2;
@@ -596,6 +597,9 @@ class ShellRfT3 final : public ElementKernel {
       cslot_.assign(3 * static_cast<std::size_t>(ne), 0);
       cslot_end_.assign(ne + 1, -1);
       d2min_.assign(ne + 1, 0.0);
+      off16_.assign(off_.size(), 0);
+      off16_end_.assign(ne + 1, -1);
+      off16_base_.assign(ne + 1, -1);
       d2min_end_.assign(ne + 1, -1);
       cslot_fit_.assign(ne + 1, 0);
       states_.clear();
@@ -662,7 +666,7 @@ class ShellRfT3 final : public ElementKernel {
         element_temperature_block(n, &part_->triangles[3 * b], in.node_temperature.data(), etemp_.data() + b);
         keep_temperatures(in, b, in.range.end);
       }
-      if (strain_block(n, ld, off_.data() + b, x, g_.data() + b, mld_, ff, C) != 0.0)
+      if (strains(b, in.range.end, ld, x, ff, C) != 0.0)
         for (int q = 0; q < n; ++q) {
           const double* c = C + 3 * q;
           if (!(c[0] * c[1] - c[2] * c[2] > 1e-12)) {
@@ -1161,8 +1165,10 @@ class ShellRfT3 final : public ElementKernel {
     int nbound = 0;  // edges without a neighbour (their entries follow the hinges')
     // Per element and edge of the block: the edge's entry in the angle
     // changes (see bending_forces), edge k of the block's element q at
-    // loc[3 q + k], and again at loc_k[k n + q] (n elements) for slope_block.
+    // loc[3 q + k], and again for slope_block at loc_k[k n + q] (n
+    // elements), in 16 bits (loc_k16) where 3 n entries fit.
     std::vector<int> loc, loc_k;
+    std::vector<std::uint16_t> loc_k16;
     // The hinges owned by an element of an earlier block: node offsets c,
     // p, q, o (nforeign each), initial angles and hinge numbers.
     std::vector<int> fnode, fhinge;
@@ -1211,9 +1217,15 @@ class ShellRfT3 final : public ElementKernel {
     for (int e = b; e < end; ++e)
       for (int k = 0; k < 3; ++k)
         if (hid_[3 * e + k] < 0) bh->loc[3 * (e - b) + k] = nh + bh->nbound++;
-    bh->loc_k.resize(3 * n);
-    for (int q = 0; q < n; ++q)
-      for (int k = 0; k < 3; ++k) bh->loc_k[k * n + q] = bh->loc[3 * q + k];
+    if (3 * n - 1 <= 0xffff) {
+      bh->loc_k16.resize(3 * n);
+      for (int q = 0; q < n; ++q)
+        for (int k = 0; k < 3; ++k) bh->loc_k16[k * n + q] = static_cast<std::uint16_t>(bh->loc[3 * q + k]);
+    } else {
+      bh->loc_k.resize(3 * n);
+      for (int q = 0; q < n; ++q)
+        for (int k = 0; k < 3; ++k) bh->loc_k[k * n + q] = bh->loc[3 * q + k];
+    }
     bh->fnode = fc;
     bh->fnode.insert(bh->fnode.end(), fp.begin(), fp.end());
     bh->fnode.insert(bh->fnode.end(), fq.begin(), fq.end());
@@ -1294,8 +1306,19 @@ class ShellRfT3 final : public ElementKernel {
     double* dth = block_scratch(end - b).dth.data();  // stays in the thread's cache
     block_angles(b, end, bh, dth);
     const StepValues sv = step_values(in);
-    slope_block(end - b, gld_, bh.loc_k.data(), dth, lmap_.data() + b, acoef_.data() + b, sv.ld, sv.eq,
-                sv.rho);
+    const int n = end - b;
+    if (bh.loc_k16.empty()) {
+      slope_block(n, n, gld_, bh.loc_k.data(), dth, lmap_.data() + b, acoef_.data() + b, sv.ld, sv.eq, sv.rho);
+      return;
+    }
+    // 16-bit entries, widened into int in pieces (see hinge_angle_block16)
+    constexpr int kPiece = 256;
+    alignas(64) int w[3 * kPiece];
+    for (int j = 0; j < n; j += kPiece) {
+      const int m = std::min(kPiece, n - j);
+      for (int k = 0; k < 3; ++k) widen(m, bh.loc_k16.data() + k * n + j, w + k * kPiece);
+      slope_block(m, kPiece, gld_, w, dth, lmap_.data() + b + j, acoef_.data() + b + j, sv.ld, sv.eq + j, sv.rho + j);
+    }
   }
 
   // Pass 1: mid-edge slopes, curvatures, the law's moments and energies,
@@ -1466,6 +1489,37 @@ class ShellRfT3 final : public ElementKernel {
   large_vector<double> etemp_;
   std::vector<std::uint64_t> etemp_version_;
   std::vector<int> etemp_end_;
+  // strain_block over range [b, end) (ff with leading dimension ld), with
+  // the elements' node offsets relative to the smallest of them in 16 bits
+  // where they span less than 2^16 (off16_, formed at the range's first
+  // evaluation; widened into int in pieces, see hinge_angle_block16),
+  // otherwise from off_.
+  large_vector<std::uint16_t> off16_;
+  std::vector<int> off16_end_, off16_base_;
+  double strains(int b, int end, int ld, const double* x, double* ff, double* C) {
+    const int n = end - b;
+    if (off16_end_[b] != end) {
+      int lo = off_[b], hi = off_[b];
+      for (int a = 0; a < 3; ++a)
+        for (int e = b; e < end; ++e) lo = std::min(lo, off_[a * mld_ + e]), hi = std::max(hi, off_[a * mld_ + e]);
+      off16_base_[b] = hi - lo <= 0xffff ? lo : -1;
+      for (int a = 0; a < 3 && off16_base_[b] >= 0; ++a)
+        for (int e = b; e < end; ++e) off16_[a * static_cast<std::size_t>(mld_) + e] = static_cast<std::uint16_t>(off_[a * mld_ + e] - lo);
+      off16_end_[b] = end;
+    }
+    const int base = off16_base_[b];
+    if (base < 0) return strain_block(n, ld, off_.data() + b, mld_, x, g_.data() + b, mld_, ff, C);
+    constexpr int kPiece = 256;
+    alignas(64) int w[3 * kPiece];
+    double bad = 0.0;
+    for (int j = 0; j < n; j += kPiece) {
+      const int m = std::min(kPiece, n - j);
+      for (int a = 0; a < 3; ++a) widen(m, off16_.data() + a * static_cast<std::size_t>(mld_) + b + j, w + a * kPiece);
+      bad = std::max(bad, strain_block(m, ld, w, kPiece, x + base, g_.data() + b + j, mld_, ff + j, C + 3 * j));
+    }
+    return bad;
+  }
+
   // The node slots of the corners of range [b, end) (the first three of
   // each element's ElementForceInput::patch_slot, the same at every call
   // for a range) in 16 bits, 3 per element: a quarter of the bytes the
