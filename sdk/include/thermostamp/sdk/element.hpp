@@ -68,7 +68,8 @@ struct ElementForceInput {
   // Optional, one per element of the part (indexed by element number, not
   // from range.begin): a factor on each element's stable step (the
   // kernel's mass scaling); ElementForceOutput::stable_dt is the smallest
-  // scaled step of the range. Empty: factor 1.
+  // scaled step of the range. Empty: factor 1 (the kernel leaves it empty
+  // where no element's step is scaled).
   std::span<const double> dt_scale;
   // Optional: a number that changes whenever node_temperature changes and
   // never returns to an earlier value. Evaluations with the same nonzero
