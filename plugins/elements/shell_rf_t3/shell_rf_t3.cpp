@@ -594,14 +594,10 @@ class ShellRfT3 final : public ElementKernel {
       etemp_.assign(ne, 0.0);
       etemp_version_.assign(ne + 1, 0);
       etemp_end_.assign(ne + 1, -1);
-      cslot_.assign(3 * static_cast<std::size_t>(ne), 0);
-      cslot_end_.assign(ne + 1, -1);
       d2min_.assign(ne + 1, 0.0);
-      off16_.assign(off_.size(), 0);
-      off16_end_.assign(ne + 1, -1);
-      off16_base_.assign(ne + 1, -1);
       d2min_end_.assign(ne + 1, -1);
-      cslot_fit_.assign(ne + 1, 0);
+      range_index_.clear();
+      range_index_.resize(ne + 1);
       states_.clear();
       for (const auto* l : laws_) states_.emplace_back(static_cast<std::size_t>(l->state_size()) * ne, 0.0);
       // The laws' caches (MaterialLaw::cache_size()) are kept where all of
@@ -666,7 +662,8 @@ class ShellRfT3 final : public ElementKernel {
         element_temperature_block(n, &part_->triangles[3 * b], in.node_temperature.data(), etemp_.data() + b);
         keep_temperatures(in, b, in.range.end);
       }
-      if (strains(b, in.range.end, ld, x, ff, C) != 0.0)
+      const RangeIndex& ri = range_index(in, b, in.range.end);
+      if (strains(ri, b, in.range.end, ld, x, ff, C) != 0.0)
         for (int q = 0; q < n; ++q) {
           const double* c = C + 3 * q;
           if (!(c[0] * c[1] - c[2] * c[2] > 1e-12)) {
@@ -726,8 +723,8 @@ class ShellRfT3 final : public ElementKernel {
           if (in.commit) block_angles_[b]->elapsed += in.dt;
         }
       }
-      if (const std::uint16_t* cs = corner_slots(in, b, in.range.end))
-        corner_forces_compact(n, ld, mf, cs, out.node_force.data());
+      if (!ri.cslot.empty())
+        corner_forces_compact(n, ld, mf, ri.cslot.data(), out.node_force.data());
       else
         corner_forces(n, ld, mf, in.patch_slot.data(), out.node_force.data());
       energy += lane_dot(n, area0_.data() + b, energy_e);
@@ -921,7 +918,6 @@ class ShellRfT3 final : public ElementKernel {
       }
     }
     hstart_[ne] = static_cast<int>(hc_.size());
-    for (auto* a16 : {&hc16_, &hp16_, &hq16_, &ho16_}) a16->assign(hc_.size(), 0);
     // Ghost hinges (clamped and symmetry edges) by element: those of the
     // elements of [b, end) are gedge_[gstart_[b] .. gstart_[end]) (3 e + k).
     gstart_.assign(ne + 1, 0);
@@ -1159,9 +1155,10 @@ class ShellRfT3 final : public ElementKernel {
   struct BlockHinges {
     int end = -1, nforeign = 0;
     // Where the node offsets of the hinges the block's elements own span
-    // less than 2^16: the smallest of them, and hc16_ ... ho16_ hold them
-    // relative to it; -1 otherwise.
+    // less than 2^16: the smallest of them, and h16 holds them relative to
+    // it (the nown c, then p, q and o); -1 otherwise.
     int base16 = -1;
+    std::vector<std::uint16_t> h16;
     int nbound = 0;  // edges without a neighbour (their entries follow the hinges')
     // Per element and edge of the block: the edge's entry in the angle
     // changes (see bending_forces), edge k of the block's element q at
@@ -1205,11 +1202,11 @@ class ShellRfT3 final : public ElementKernel {
         for (int h = h0; h < h0 + nown; ++h) lo = std::min(lo, (*a)[h]), hi = std::max(hi, (*a)[h]);
       if (hi - lo <= 0xffff) {
         bh->base16 = lo;
-        for (int h = h0; h < h0 + nown; ++h) {
-          hc16_[h] = static_cast<std::uint16_t>(hc_[h] - lo);
-          hp16_[h] = static_cast<std::uint16_t>(hp_[h] - lo);
-          hq16_[h] = static_cast<std::uint16_t>(hq_[h] - lo);
-          ho16_[h] = static_cast<std::uint16_t>(ho_[h] - lo);
+        bh->h16.resize(4 * static_cast<std::size_t>(nown));
+        int r = 0;
+        for (const auto* a : {&hc_, &hp_, &hq_, &ho_}) {
+          for (int h = h0; h < h0 + nown; ++h) bh->h16[r * nown + (h - h0)] = static_cast<std::uint16_t>((*a)[h] - lo);
+          ++r;
         }
       }
     }
@@ -1245,8 +1242,8 @@ class ShellRfT3 final : public ElementKernel {
     const int h0 = hstart_[b], nown = hstart_[end] - h0, nf = bh.nforeign;
     const int* fnode = bh.fnode.data();
     if (bh.base16 >= 0)
-      f(nown, hc16_.data() + h0, hp16_.data() + h0, hq16_.data() + h0, ho16_.data() + h0, htheta0_.data() + h0, 0,
-        bh.base16);
+      f(nown, bh.h16.data(), bh.h16.data() + nown, bh.h16.data() + 2 * nown, bh.h16.data() + 3 * nown,
+        htheta0_.data() + h0, 0, bh.base16);
     else
       f(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, htheta0_.data() + h0, 0, 0);
     f(nf, fnode, fnode + nf, fnode + 2 * nf, fnode + 3 * nf, bh.ftheta0.data(), nown, 0);
@@ -1489,42 +1486,63 @@ class ShellRfT3 final : public ElementKernel {
   large_vector<double> etemp_;
   std::vector<std::uint64_t> etemp_version_;
   std::vector<int> etemp_end_;
-  // strain_block over range [b, end) (ff with leading dimension ld), with
-  // the elements' node offsets relative to the smallest of them in 16 bits
-  // where they span less than 2^16 (off16_, formed at the range's first
-  // evaluation; widened into int in pieces, see hinge_angle_block16),
-  // otherwise from off_.
-  large_vector<std::uint16_t> off16_;
-  std::vector<int> off16_end_, off16_base_;
-  double strains(int b, int end, int ld, const double* x, double* ff, double* C) {
+  // Per range [b, end), formed at its first evaluation and kept in the
+  // range's own object (slot b; a range with other bounds forms it again),
+  // in 16 bits where they fit: the elements' node offsets relative to the
+  // smallest of them (off16, row a of element q at a n + q; off_base -1
+  // where they span 2^16 or more), and the node slots of the corners (the
+  // first three of each element's ElementForceInput::patch_slot, the same
+  // at every call for a range; cslot[3 q + a], empty where some slot does
+  // not fit): a quarter of the bytes of the kernel's slots.
+  struct RangeIndex {
+    int end = -1, off_base = -1;
+    std::vector<std::uint16_t> off16, cslot;
+  };
+  std::vector<std::unique_ptr<RangeIndex>> range_index_;
+  const RangeIndex& range_index(const ElementForceInput& in, int b, int end) {
+    std::unique_ptr<RangeIndex>& slot = range_index_[b];
+    if (slot && slot->end == end) return *slot;
+    auto ri = std::make_unique<RangeIndex>();
     const int n = end - b;
-    if (off16_end_[b] != end) {
-      int lo = off_[b], hi = off_[b];
+    ri->end = end;
+    int lo = off_[b], hi = off_[b];
+    for (int a = 0; a < 3; ++a)
+      for (int e = b; e < end; ++e) lo = std::min(lo, off_[a * mld_ + e]), hi = std::max(hi, off_[a * mld_ + e]);
+    if (hi - lo <= 0xffff) {
+      ri->off_base = lo;
+      ri->off16.resize(3 * static_cast<std::size_t>(n));
       for (int a = 0; a < 3; ++a)
-        for (int e = b; e < end; ++e) lo = std::min(lo, off_[a * mld_ + e]), hi = std::max(hi, off_[a * mld_ + e]);
-      off16_base_[b] = hi - lo <= 0xffff ? lo : -1;
-      for (int a = 0; a < 3 && off16_base_[b] >= 0; ++a)
-        for (int e = b; e < end; ++e) off16_[a * static_cast<std::size_t>(mld_) + e] = static_cast<std::uint16_t>(off_[a * mld_ + e] - lo);
-      off16_end_[b] = end;
+        for (int q = 0; q < n; ++q) ri->off16[a * n + q] = static_cast<std::uint16_t>(off_[a * mld_ + b + q] - lo);
     }
-    const int base = off16_base_[b];
-    if (base < 0) return strain_block(n, ld, off_.data() + b, mld_, x, g_.data() + b, mld_, ff, C);
+    bool fit = true;
+    for (int q = 0; q < n && fit; ++q)
+      for (int a = 0; a < 3; ++a) fit = fit && in.patch_slot[6 * q + a] >= 0 && in.patch_slot[6 * q + a] <= 0xffff;
+    if (fit) {
+      ri->cslot.resize(3 * static_cast<std::size_t>(n));
+      for (int q = 0; q < n; ++q)
+        for (int a = 0; a < 3; ++a) ri->cslot[3 * q + a] = static_cast<std::uint16_t>(in.patch_slot[6 * q + a]);
+    }
+    slot = std::move(ri);
+    return *slot;
+  }
+
+  // strain_block over range [b, end) (ff with leading dimension ld), from
+  // the range's 16-bit node offsets (widened into int in pieces, see
+  // hinge_angle_block16) where it has them, otherwise from off_.
+  double strains(const RangeIndex& ri, int b, int end, int ld, const double* x, double* ff, double* C) {
+    const int n = end - b;
+    if (ri.off_base < 0) return strain_block(n, ld, off_.data() + b, mld_, x, g_.data() + b, mld_, ff, C);
     constexpr int kPiece = 256;
     alignas(64) int w[3 * kPiece];
     double bad = 0.0;
     for (int j = 0; j < n; j += kPiece) {
       const int m = std::min(kPiece, n - j);
-      for (int a = 0; a < 3; ++a) widen(m, off16_.data() + a * static_cast<std::size_t>(mld_) + b + j, w + a * kPiece);
-      bad = std::max(bad, strain_block(m, ld, w, kPiece, x + base, g_.data() + b + j, mld_, ff + j, C + 3 * j));
+      for (int a = 0; a < 3; ++a) widen(m, ri.off16.data() + a * n + j, w + a * kPiece);
+      bad = std::max(bad, strain_block(m, ld, w, kPiece, x + ri.off_base, g_.data() + b + j, mld_, ff + j, C + 3 * j));
     }
     return bad;
   }
 
-  // The node slots of the corners of range [b, end) (the first three of
-  // each element's ElementForceInput::patch_slot, the same at every call
-  // for a range) in 16 bits, 3 per element: a quarter of the bytes the
-  // force scatter reads. Built at the range's first evaluation; null where
-  // a slot does not fit in 16 bits.
   // The smallest dmin2_ of range [b, end), formed at its first evaluation.
   std::vector<double> d2min_;
   std::vector<int> d2min_end_;
@@ -1536,23 +1554,6 @@ class ShellRfT3 final : public ElementKernel {
       d2min_end_[b] = end;
     }
     return d2min_[b];
-  }
-  large_vector<std::uint16_t> cslot_;
-  std::vector<int> cslot_end_;
-  std::vector<char> cslot_fit_;
-  const std::uint16_t* corner_slots(const ElementForceInput& in, int b, int end) {
-    if (cslot_end_[b] != end) {
-      bool fit = true;
-      for (int q = 0; q < end - b; ++q)
-        for (int a = 0; a < 3; ++a) {
-          const int v = in.patch_slot[6 * q + a];
-          fit = fit && v >= 0 && v <= 0xffff;
-          cslot_[3 * static_cast<std::size_t>(b + q) + a] = static_cast<std::uint16_t>(fit ? v : 0);
-        }
-      cslot_fit_[b] = fit;
-      cslot_end_[b] = end;
-    }
-    return cslot_fit_[b] ? cslot_.data() + 3 * static_cast<std::size_t>(b) : nullptr;
   }
   bool temperatures_kept(const ElementForceInput& in, int b, int end) const {
     return in.temperature_version != 0 && etemp_version_[b] == in.temperature_version && etemp_end_[b] == end;
@@ -1583,7 +1584,6 @@ class ShellRfT3 final : public ElementKernel {
   // an element's interior edges.
   std::vector<int> hstart_, hid_, gstart_, gedge_;
   large_vector<int> hc_, hp_, hq_, ho_;
-  large_vector<std::uint16_t> hc16_, hp16_, hq16_, ho16_;  // see BlockHinges::base16
   large_vector<double> htheta0_, dmin2_;
   std::vector<std::unique_ptr<BlockHinges>> block_hinges_;  // by the block's first element
   std::vector<std::unique_ptr<BlockAngles>> block_angles_;  // likewise
