@@ -169,26 +169,31 @@ double hinge_angle_block(int h, const int* __restrict ic, const int* __restrict 
   }
   return beyond;
 }
-// The same with 16-bit node offsets (from x, which points at the offset
-// they are relative to): widened in pieces of 256 hinges into int, which
-// the compiler's vector code loads as cheaply as ever.
+// Indices kept in 16 bits are widened into int in pieces of kWidenPiece
+// before a vector pass reads them: the compiler's vector code loads
+// through int indices as cheaply as ever, through 16-bit ones with extra
+// shuffles.
+inline constexpr int kWidenPiece = 256;
 TS_VECTOR_CLONES
 void widen(int n, const std::uint16_t* __restrict a, int* __restrict b) {
 #pragma omp simd
   for (int j = 0; j < n; ++j) b[j] = a[j];
 }
-double hinge_angle_block16(int h, const std::uint16_t* ic, const std::uint16_t* ip, const std::uint16_t* iq,
-                           const std::uint16_t* io, const double* x, const double* theta0, double* dtheta) {
-  constexpr int kPiece = 256;
-  alignas(64) int w[4][kPiece];
+// Rows r < rows of 16-bit values (row r at src + r stride), entries j ..
+// j + m - 1, into w (row r at w + r kWidenPiece).
+void widen_rows(int rows, const std::uint16_t* src, int stride, int j, int m, int* w) {
+  for (int r = 0; r < rows; ++r) widen(m, src + static_cast<std::size_t>(r) * stride + j, w + r * kWidenPiece);
+}
+// hinge_angle_block with 16-bit node offsets (from x, which points at the
+// offset they are relative to): row r of h16 (c, p, q, o) at h16 + r h.
+double hinge_angle_block16(int h, const std::uint16_t* h16, const double* x, const double* theta0, double* dtheta) {
+  alignas(64) int w[4 * kWidenPiece];
   double beyond = 0.0;
-  for (int j = 0; j < h; j += kPiece) {
-    const int m = std::min(kPiece, h - j);
-    widen(m, ic + j, w[0]);
-    widen(m, ip + j, w[1]);
-    widen(m, iq + j, w[2]);
-    widen(m, io + j, w[3]);
-    beyond = std::max(beyond, hinge_angle_block(m, w[0], w[1], w[2], w[3], x, theta0 + j, dtheta + j));
+  for (int j = 0; j < h; j += kWidenPiece) {
+    const int m = std::min(kWidenPiece, h - j);
+    widen_rows(4, h16, h, j, m, w);
+    beyond = std::max(beyond, hinge_angle_block(m, w, w + kWidenPiece, w + 2 * kWidenPiece, w + 3 * kWidenPiece, x,
+                                                theta0 + j, dtheta + j));
   }
   return beyond;
 }
@@ -514,22 +519,14 @@ void hinge_moment_block(int n, int ld, const float* __restrict L, const float* _
 }
 
 // Adds the forces of n elements, component d of corner a of element q at
-// mf[(3 a + d) ld + q], into their corners' node slots (slot[6 q + a]).
-void corner_forces(int n, int ld, const double* __restrict mf, const int* __restrict slot, double* __restrict nf) {
+// mf[(3 a + d) ld + q], into their corners' node slots (slot[kStride q +
+// a]: the kernel's patch_slot, int and 6 per element, or a range's 16-bit
+// copy, 3 per element).
+template <int kStride, class I>
+void corner_forces(int n, int ld, const double* __restrict mf, const I* __restrict slot, double* __restrict nf) {
   for (int q = 0; q < n; ++q)
     for (int a = 0; a < 3; ++a) {
-      double* f = nf + 3 * slot[6 * q + a];
-      for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * ld + q];
-    }
-}
-
-// As corner_forces, with the slots of the corners at slot[3 q + a] in 16
-// bits (ShellRfT3::corner_slots).
-void corner_forces_compact(int n, int ld, const double* __restrict mf, const std::uint16_t* __restrict slot,
-                           double* __restrict nf) {
-  for (int q = 0; q < n; ++q)
-    for (int a = 0; a < 3; ++a) {
-      double* f = nf + 3 * static_cast<int>(slot[3 * q + a]);
+      double* f = nf + 3 * static_cast<int>(slot[kStride * q + a]);
       for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * ld + q];
     }
 }
@@ -594,8 +591,6 @@ class ShellRfT3 final : public ElementKernel {
       etemp_.assign(ne, 0.0);
       etemp_version_.assign(ne + 1, 0);
       etemp_end_.assign(ne + 1, -1);
-      d2min_.assign(ne + 1, 0.0);
-      d2min_end_.assign(ne + 1, -1);
       range_index_.clear();
       range_index_.resize(ne + 1);
       states_.clear();
@@ -715,7 +710,7 @@ class ShellRfT3 final : public ElementKernel {
         const StepValues sv = step_values(in);
         membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, sv.hm,
                                sv.nidx, gld_, sv.hm_all, sv.ld, mf, dte);
-        energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, out, dt_min);
+        energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, ri, out, dt_min);
       } else {
         membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
         if (bending_ && block_angles_[b]) {
@@ -724,9 +719,9 @@ class ShellRfT3 final : public ElementKernel {
         }
       }
       if (!ri.cslot.empty())
-        corner_forces_compact(n, ld, mf, ri.cslot.data(), out.node_force.data());
+        corner_forces<3>(n, ld, mf, ri.cslot.data(), out.node_force.data());
       else
-        corner_forces(n, ld, mf, in.patch_slot.data(), out.node_force.data());
+        corner_forces<6>(n, ld, mf, in.patch_slot.data(), out.node_force.data());
       energy += lane_dot(n, area0_.data() + b, energy_e);
       dt_min = smallest_step(n, dte, in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b, dt_min);
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
@@ -1147,6 +1142,20 @@ class ShellRfT3 final : public ElementKernel {
     return Status::success();
   }
 
+  // Per range [b, end), formed at its first evaluation and kept in the
+  // range's own object (slot b; a range with other bounds forms it again),
+  // in 16 bits where they fit: the elements' node offsets relative to the
+  // smallest of them (off16, row a of element q at a n + q; off_base -1
+  // where they span 2^16 or more), and the node slots of the corners (the
+  // first three of each element's ElementForceInput::patch_slot, the same
+  // at every call for a range; cslot[3 q + a], empty where some slot does
+  // not fit): a quarter of the bytes of the kernel's slots.
+  struct RangeIndex {
+    int end = -1, off_base = -1;
+    std::vector<std::uint16_t> off16, cslot;
+    double d2min = 0;  // with bending: the smallest dmin2_ of the range
+  };
+
   // What the bending passes need of the hinges of a block [b, end) that depends
   // only on the mesh and the block's bounds; built at the block's first
   // evaluation and kept (the kernel's blocks do not change during a run).
@@ -1233,20 +1242,20 @@ class ShellRfT3 final : public ElementKernel {
 
   // The interior hinges of block [b, end) as two lists: those its elements
   // own, then those owned by an element of an earlier block. Calls f(h, c,
-  // p, q, o, theta0, j0, base) for each: h hinges with node offsets base +
-  // c[j] ... base + o[j] (c ... o of int, or of 16 bits where
-  // BlockHinges::base16 allows) and initial angles theta0[j], entries j0 ..
-  // j0 + h - 1 of the block's hinges.
-  template <class F>
-  void hinge_lists(int b, int end, const BlockHinges& bh, F&& f) const {
+  // p, q, o, theta0, j0) for each list of int node offsets: h hinges with
+  // node offsets c[j] ... o[j] and initial angles theta0[j], entries j0 ..
+  // j0 + h - 1 of the block's hinges; for the own hinges where
+  // BlockHinges::base16 allows, f16(h, h16, theta0, j0, base) instead, the
+  // offsets base + h16[r h + j] (rows r = c, p, q, o).
+  template <class F, class F16>
+  void hinge_lists(int b, int end, const BlockHinges& bh, F&& f, F16&& f16) const {
     const int h0 = hstart_[b], nown = hstart_[end] - h0, nf = bh.nforeign;
     const int* fnode = bh.fnode.data();
     if (bh.base16 >= 0)
-      f(nown, bh.h16.data(), bh.h16.data() + nown, bh.h16.data() + 2 * nown, bh.h16.data() + 3 * nown,
-        htheta0_.data() + h0, 0, bh.base16);
+      f16(nown, bh.h16.data(), htheta0_.data() + h0, 0, bh.base16);
     else
-      f(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, htheta0_.data() + h0, 0, 0);
-    f(nf, fnode, fnode + nf, fnode + 2 * nf, fnode + 3 * nf, bh.ftheta0.data(), nown, 0);
+      f(nown, hc_.data() + h0, hp_.data() + h0, hq_.data() + h0, ho_.data() + h0, htheta0_.data() + h0, 0);
+    f(nf, fnode, fnode + nf, fnode + 2 * nf, fnode + 3 * nf, bh.ftheta0.data(), nown);
   }
 
   // The angle changes of the hinges of block [b, end) into dth (at most
@@ -1267,13 +1276,14 @@ class ShellRfT3 final : public ElementKernel {
     BlockAngles& ba = *slot;
     if (ba.ghost_grad.size() < 12 * ng) ba.ghost_grad.resize(12 * ng);
     double beyond = 0.0;
-    hinge_lists(b, end, bh, [&](int h, const auto* c, const auto* p, const auto* q, const auto* o, const double* t0,
-                                int j0, int base) {
-      if constexpr (sizeof(*c) == 2)
-        beyond = std::max(beyond, hinge_angle_block16(h, c, p, q, o, x + base, t0, dth + j0));
-      else
-        beyond = std::max(beyond, hinge_angle_block(h, c, p, q, o, x + base, t0, dth + j0));
-    });
+    hinge_lists(
+        b, end, bh,
+        [&](int h, const int* c, const int* p, const int* q, const int* o, const double* t0, int j0) {
+          beyond = std::max(beyond, hinge_angle_block(h, c, p, q, o, x, t0, dth + j0));
+        },
+        [&](int h, const std::uint16_t* h16, const double* t0, int j0, int base) {
+          beyond = std::max(beyond, hinge_angle_block16(h, h16, x + base, t0, dth + j0));
+        });
     for (int j = 0; j < (beyond != 0.0 ? nh : 0); ++j)
       if (dth[j] != dth[j]) {  // NaN: beyond the approximation's range, the library's atan2
         const int h = j < nown ? h0 + j : bh.fhinge[j - nown];
@@ -1308,13 +1318,12 @@ class ShellRfT3 final : public ElementKernel {
       slope_block(n, n, gld_, bh.loc_k.data(), dth, lmap_.data() + b, acoef_.data() + b, sv.ld, sv.eq, sv.rho);
       return;
     }
-    // 16-bit entries, widened into int in pieces (see hinge_angle_block16)
-    constexpr int kPiece = 256;
-    alignas(64) int w[3 * kPiece];
-    for (int j = 0; j < n; j += kPiece) {
-      const int m = std::min(kPiece, n - j);
-      for (int k = 0; k < 3; ++k) widen(m, bh.loc_k16.data() + k * n + j, w + k * kPiece);
-      slope_block(m, kPiece, gld_, w, dth, lmap_.data() + b + j, acoef_.data() + b + j, sv.ld, sv.eq + j, sv.rho + j);
+    alignas(64) int w[3 * kWidenPiece];  // the 16-bit entries widened (see kWidenPiece)
+    for (int j = 0; j < n; j += kWidenPiece) {
+      const int m = std::min(kWidenPiece, n - j);
+      widen_rows(3, bh.loc_k16.data(), n, j, m, w);
+      slope_block(m, kWidenPiece, gld_, w, dth, lmap_.data() + b + j, acoef_.data() + b + j, sv.ld, sv.eq + j,
+                  sv.rho + j);
     }
   }
 
@@ -1383,7 +1392,7 @@ class ShellRfT3 final : public ElementKernel {
   // block's stable step so far) with the block's smallest bending step;
   // [t_lo, t_hi] is the block's temperature range.
   double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
-                        double* mf, int ld, ElementForceOutput& out, double& dt_floor) {
+                        double* mf, int ld, const RangeIndex& ri, ElementForceOutput& out, double& dt_floor) {
     const int n = end - b;
     const BlockAngles& ba = *block_angles_[b];  // from passes 0 to 2
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
@@ -1397,7 +1406,7 @@ class ShellRfT3 final : public ElementKernel {
         // its smallest d^2 times dtb_scale (a product with a positive
         // factor keeps the order, rounding included): the same bits as the
         // smallest of the elements' steps, without reading them.
-        out.bending_dt = smallest_dmin2(b, end) * dtb_scale;
+        out.bending_dt = ri.d2min * dtb_scale;
         dt_floor = std::min(dt_floor, out.bending_dt);
       } else {
         const double* scale = in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b;
@@ -1486,18 +1495,7 @@ class ShellRfT3 final : public ElementKernel {
   large_vector<double> etemp_;
   std::vector<std::uint64_t> etemp_version_;
   std::vector<int> etemp_end_;
-  // Per range [b, end), formed at its first evaluation and kept in the
-  // range's own object (slot b; a range with other bounds forms it again),
-  // in 16 bits where they fit: the elements' node offsets relative to the
-  // smallest of them (off16, row a of element q at a n + q; off_base -1
-  // where they span 2^16 or more), and the node slots of the corners (the
-  // first three of each element's ElementForceInput::patch_slot, the same
-  // at every call for a range; cslot[3 q + a], empty where some slot does
-  // not fit): a quarter of the bytes of the kernel's slots.
-  struct RangeIndex {
-    int end = -1, off_base = -1;
-    std::vector<std::uint16_t> off16, cslot;
-  };
+  // The ranges' RangeIndex (see there), by the range's first element.
   std::vector<std::unique_ptr<RangeIndex>> range_index_;
   const RangeIndex& range_index(const ElementForceInput& in, int b, int end) {
     std::unique_ptr<RangeIndex>& slot = range_index_[b];
@@ -1522,39 +1520,29 @@ class ShellRfT3 final : public ElementKernel {
       for (int q = 0; q < n; ++q)
         for (int a = 0; a < 3; ++a) ri->cslot[3 * q + a] = static_cast<std::uint16_t>(in.patch_slot[6 * q + a]);
     }
+    if (bending_)
+      ri->d2min = *std::min_element(dmin2_.begin() + b, dmin2_.begin() + end);
     slot = std::move(ri);
     return *slot;
   }
 
   // strain_block over range [b, end) (ff with leading dimension ld), from
   // the range's 16-bit node offsets (widened into int in pieces, see
-  // hinge_angle_block16) where it has them, otherwise from off_.
+  // kWidenPiece) where it has them, otherwise from off_.
   double strains(const RangeIndex& ri, int b, int end, int ld, const double* x, double* ff, double* C) {
     const int n = end - b;
     if (ri.off_base < 0) return strain_block(n, ld, off_.data() + b, mld_, x, g_.data() + b, mld_, ff, C);
-    constexpr int kPiece = 256;
-    alignas(64) int w[3 * kPiece];
+    alignas(64) int w[3 * kWidenPiece];
     double bad = 0.0;
-    for (int j = 0; j < n; j += kPiece) {
-      const int m = std::min(kPiece, n - j);
-      for (int a = 0; a < 3; ++a) widen(m, ri.off16.data() + a * n + j, w + a * kPiece);
-      bad = std::max(bad, strain_block(m, ld, w, kPiece, x + ri.off_base, g_.data() + b + j, mld_, ff + j, C + 3 * j));
+    for (int j = 0; j < n; j += kWidenPiece) {
+      const int m = std::min(kWidenPiece, n - j);
+      widen_rows(3, ri.off16.data(), n, j, m, w);
+      bad = std::max(bad, strain_block(m, ld, w, kWidenPiece, x + ri.off_base, g_.data() + b + j, mld_, ff + j,
+                                       C + 3 * j));
     }
     return bad;
   }
 
-  // The smallest dmin2_ of range [b, end), formed at its first evaluation.
-  std::vector<double> d2min_;
-  std::vector<int> d2min_end_;
-  double smallest_dmin2(int b, int end) {
-    if (d2min_end_[b] != end) {
-      double lo = std::numeric_limits<double>::infinity();
-      for (int e = b; e < end; ++e) lo = std::min(lo, dmin2_[e]);
-      d2min_[b] = lo;
-      d2min_end_[b] = end;
-    }
-    return d2min_[b];
-  }
   bool temperatures_kept(const ElementForceInput& in, int b, int end) const {
     return in.temperature_version != 0 && etemp_version_[b] == in.temperature_version && etemp_end_[b] == end;
   }
