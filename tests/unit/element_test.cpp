@@ -389,6 +389,32 @@ TEST(ShellRfT3, StableStepsWithoutFactorsAreThoseWithFactorsOfOne) {
   EXPECT_EQ(dt_none, bdt_none);
 }
 
+// Without step factors (and without per-element steps asked for) the
+// membrane pass keeps only the smallest det C / max Q of a range and takes
+// one square root: the same stable step as with factors of 1, which form
+// every element's step, bit for bit. Coarse patches, so that the membrane
+// step decides also where there is bending.
+TEST(ShellRfT3, MembraneStepsWithoutFactorsAreThoseWithFactorsOfOne) {
+  for (const bool bending : {false, true}) {
+    Patch p(0.5, bending, {5, 3});
+    for (int i = 0; i < p.mesh.num_nodes(); ++i) {
+      p.x[3 * i] = 1.01 * p.mesh.x[3 * i] + 0.002 * p.mesh.x[3 * i + 1];
+      p.x[3 * i + 2] = 0.3 * p.mesh.x[3 * i] * p.mesh.x[3 * i];
+    }
+    p.blocks = 2;
+    std::vector<double> f;
+    p.evaluate(f);
+    const double dt_none = p.stable_dt;
+    p.dt_scale.assign(p.mesh.num_elements(), 1.0);
+    p.evaluate(f);
+    EXPECT_TRUE(std::isfinite(dt_none) && dt_none > 0) << "bending " << bending;
+    EXPECT_EQ(dt_none, p.stable_dt) << "bending " << bending;
+    if (bending) {
+      EXPECT_LT(dt_none, p.bending_dt);  // the membrane step decides
+    }
+  }
+}
+
 // A range keeps the node offsets of its elements and of the hinges they
 // own, and its entries of the angle changes, in 16 bits where they span
 // less than 2^16 (several ranges of a large patch), and in int otherwise

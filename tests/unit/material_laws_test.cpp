@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <random>
@@ -150,6 +151,52 @@ TEST(MaterialLaws, UdBlockMatchesPointwiseInvariants) {
   }
   EXPECT_LT(worst, 2e-15);
   std::printf("ud_hyperelastic block against pointwise invariants: largest relative difference %.3g\n", worst);
+}
+
+// Without shear coefficients (all +0, the UD card's case: viscoelastic_shear
+// carries the shear) ud_hyperelastic leaves the shear terms out. Each of
+// them is a signed zero there, so the stresses and energies must be the
+// same bits, signs of zeros included, as with the terms: k_sh = (0, 0, -0)
+// keeps them (a -0 coefficient) and gives the same values. Points in and
+// beyond the series' range, at rest, and with C12 = +0 or -0 under
+// transverse strain (where a left-out term would change the sign of a zero).
+TEST(MaterialLaws, UdWithoutShearGivesTheSameBits) {
+  Law without("ud_hyperelastic", {{"k_fibre", 5.0e6}, {"p_ct", 50.0}, {"k_sh", {0.0, 0.0, 0.0}}});
+  Law with("ud_hyperelastic", {{"k_fibre", 5.0e6}, {"p_ct", 50.0}, {"k_sh", {0.0, 0.0, -0.0}}});
+  ASSERT_TRUE(without.status.ok);
+  ASSERT_TRUE(with.status.ok);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int n = 211;
+  std::vector<double> C(3 * n), T(n, 280.0);
+  for (int q = 0; q < n; ++q) {
+    sdk::Sym2 c;
+    if (q % 7 == 0) {
+      c = {1.0, 1.0, 0.0};  // at rest
+    } else if (q % 7 == 1) {
+      c = {1.0 + 0.001 * u(rng), 1.0 + 0.004 * std::abs(u(rng)) + 1e-4, q % 2 ? 0.0 : -0.0};  // C12 = +-0
+    } else {
+      const double s = q % 3 == 0 ? 0.2 : 0.002;  // in and beyond the series' range
+      c = cauchy_green(1 + s * u(rng), s * u(rng), s * u(rng), 1 + s * u(rng));
+    }
+    for (int k = 0; k < 3; ++k) C[3 * q + k] = c[k];
+  }
+  std::vector<double> Sa(3 * n), Wa(n), Sb(3 * n), Wb(n);
+  ASSERT_TRUE(without.law->evaluate(block_of(C, T, Sa, Wa)).ok);
+  ASSERT_TRUE(with.law->evaluate(block_of(C, T, Sb, Wb)).ok);
+  int differ = 0, zeros = 0;
+  for (int i = 0; i < 3 * n; ++i) differ += std::memcmp(&Sa[i], &Sb[i], sizeof(double)) != 0;
+  for (int q = 0; q < n; ++q) differ += std::memcmp(&Wa[q], &Wb[q], sizeof(double)) != 0;
+  EXPECT_EQ(differ, 0);
+  // With C12 = +0 under transverse strain, S12's own term is -0 and the
+  // shear term +0: their sum is +0.
+  for (int q = 1; q < n; q += 7)
+    if (!std::signbit(C[3 * q + 2])) {
+      EXPECT_EQ(Sa[3 * q + 2], 0.0);
+      EXPECT_FALSE(std::signbit(Sa[3 * q + 2])) << "point " << q;
+      ++zeros;
+    }
+  EXPECT_GT(zeros, 10);
 }
 
 // Shear stress history of the viscoelastic law for F = [[1, gamma(t)], [0, 1]].

@@ -355,14 +355,21 @@ void element_temperature_block(int n, const int* __restrict tri, const double* _
 // R g = (g2, -g1), and n = N / sqrt(det C) with N = F e1 x F e2, so the
 // forces on corners k, k + 2 and k + 1 are m_k sqrt(Q_k) N / det C,
 // m_k P_k N / (sqrt(Q_k) det C) and minus their sum.
-template <bool kBend>
-[[gnu::always_inline]] inline void membrane_body(int n, int ld, const double* __restrict C, const double* __restrict ff,
+//
+// With kSteps the elements' steps go to dte[q] and the result is infinite;
+// without, nothing is written to dte and the result is the smallest step,
+// taken from the smallest det C / max_a Q_a (the square root and the
+// product with inv_c, rounding included, keep the order: the same bits as
+// the smallest of the elements' steps, with one square root per block).
+template <bool kBend, bool kSteps>
+[[gnu::always_inline]] inline double membrane_body(int n, int ld, const double* __restrict C, const double* __restrict ff,
                                                  const double* __restrict S, const double* __restrict area,
                                                  const double* __restrict g, int gld, double cmul,
                                                  const double* __restrict hm, const int* __restrict nidx, int nld,
                                                  const double* __restrict hm_all, int hld, double* __restrict mf,
                                                  double* __restrict dte) {
-#pragma omp simd
+  double rmin = std::numeric_limits<double>::infinity();
+#pragma omp simd reduction(min : rmin)
   for (int q = 0; q < n; ++q) {
     const double f10 = ff[q], f11 = ff[ld + q], f12 = ff[2 * ld + q];
     const double f20 = ff[3 * ld + q], f21 = ff[4 * ld + q], f22 = ff[5 * ld + q];
@@ -404,24 +411,30 @@ template <bool kBend>
     double qmax = Q0;
     qmax = qmax < Q1 ? Q1 : qmax;
     qmax = qmax < Q2 ? Q2 : qmax;
-    const double h = std::sqrt(detc / qmax);
-    dte[q] = h * cmul;
+    const double r = detc / qmax;
+    if (kSteps) dte[q] = std::sqrt(r) * cmul;
+    rmin = r < rmin ? r : rmin;
   }
+  return kSteps ? std::numeric_limits<double>::infinity() : std::sqrt(rmin) * cmul;
 }
+// The membrane forces and steps (see membrane_body; dte null: the
+// smallest step only).
 TS_VECTOR_CLONES
-void membrane_block(int n, int ld, const double* C, const double* ff, const double* S, const double* area,
-                    const double* g, int gld, double inv_c, bool has_stiffness, double* mf, double* dte) {
+double membrane_block(int n, int ld, const double* C, const double* ff, const double* S, const double* area,
+                      const double* g, int gld, double inv_c, bool has_stiffness, double* mf, double* dte) {
   // h > 0 (det C > 1e-12 here): h times infinity is infinity.
   const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
-  membrane_body<false>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, 0, nullptr, 0, mf, dte);
+  if (!dte) return membrane_body<false, false>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, 0, nullptr, 0, mf, dte);
+  return membrane_body<false, true>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, 0, nullptr, 0, mf, dte);
 }
 // The membrane and bending forces (see membrane_body).
 TS_VECTOR_CLONES
-void membrane_bending_block(int n, int ld, const double* C, const double* ff, const double* S, const double* area,
-                            const double* g, int gld, double inv_c, bool has_stiffness, const double* hm,
-                            const int* nidx, int nld, const double* hm_all, int hld, double* mf, double* dte) {
+double membrane_bending_block(int n, int ld, const double* C, const double* ff, const double* S, const double* area,
+                              const double* g, int gld, double inv_c, bool has_stiffness, const double* hm,
+                              const int* nidx, int nld, const double* hm_all, int hld, double* mf, double* dte) {
   const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
-  membrane_body<true>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte);
+  if (!dte) return membrane_body<true, false>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte);
+  return membrane_body<true, true>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte);
 }
 
 // Per element q of a block and edge k (values of the block's elements
@@ -704,15 +717,18 @@ class ShellRfT3 final : public ElementKernel {
       for (const auto* l : laws_) kmax += std::max(l->max_stiffness(t_lo), l->max_stiffness(t_hi));
       const double inv_c = kmax > 0 ? 1.0 / std::sqrt(kmax / areal_mass_) : 0.0;
       double energy = 0, dt_min = std::numeric_limits<double>::infinity();
-      double* dte = sc.energy_tmp.data();  // free again after the laws
+      // The elements' own steps are formed only where they are scaled or
+      // asked for; otherwise the passes give the block's smallest.
+      const bool steps = !in.dt_scale.empty() || !out.element_dt.empty();
+      double* dte = steps ? sc.energy_tmp.data() : nullptr;  // free again after the laws
       double* mf = sc.mf.data();
       if (bend) {  // the membrane forces with the bending ones
         const StepValues sv = step_values(in);
-        membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, sv.hm,
-                               sv.nidx, gld_, sv.hm_all, sv.ld, mf, dte);
+        dt_min = membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0,
+                                        sv.hm, sv.nidx, gld_, sv.hm_all, sv.ld, mf, dte);
         energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, ri, out, dt_min);
       } else {
-        membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
+        dt_min = membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
         if (bending_ && block_angles_[b]) {
           energy += block_angles_[b]->bending_energy;  // of the last one with bending
           if (in.commit) block_angles_[b]->elapsed += in.dt;
@@ -723,7 +739,7 @@ class ShellRfT3 final : public ElementKernel {
       else
         corner_forces<6>(n, ld, mf, in.patch_slot.data(), out.node_force.data());
       energy += lane_dot(n, area0_.data() + b, energy_e);
-      dt_min = smallest_step(n, dte, in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b, dt_min);
+      if (steps) dt_min = smallest_step(n, dte, in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b, dt_min);
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
       if (in.commit && keep_old_)
         std::copy(C, C + 3 * n, strain_old_.begin() + 3 * b);
@@ -1596,7 +1612,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.5.3";
+  d.version = "0.5.4";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1604,4 +1620,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.5.3", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.5.4", register_all)

@@ -3,6 +3,7 @@
 // in-plane shear (Bigot et al. 2022). L2 = n x L1. Energy per unit initial
 // area (J/m^2), stiffnesses in N/m. A temperature-dependent, viscoelastic
 // shear is added by listing `viscoelastic_shear` next to this law.
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -44,7 +45,10 @@ inline double log1p_series(double x) {
 // logarithms by their series (vector loops; the result is right where
 // C11 - 1 and det C / C11 - 1 are within 1e-2, and *in_range says whether
 // they are), else as log_near_one() (the library's beyond that range).
-template <bool kSeries>
+// Without kShear (k_sh all +0) the shear terms are left out: each of them
+// is then a zero, -0 in S11 and S22 and in S12 a zero of the sign of C12,
+// which the sums below keep (the same bits as with them).
+template <bool kSeries, bool kShear = true>
 [[gnu::always_inline]] inline void ud_point(const double* __restrict C, double kf, double pct, double k1, double k2,
                                             double k3, double* __restrict S, double* __restrict W, double* in_range) {
   const double a = C[0], b = C[1], c = C[2];
@@ -59,9 +63,17 @@ template <bool kSeries>
     e1 = 0.5 * log_near_one(a);
     lt = 0.5 * log_near_one(i3 / a);
   }
+  const double fe = 2 * (2 * kf * e1), fl = 2 * (2 * pct * lt);
+  if (!kShear) {
+    S[0] = fe * (0.5 * inv_a) + fl * (0.5 * (b * inv_3 - inv_a));
+    S[1] = fl * (0.5 * (a * inv_3));
+    S[2] = fl * (0.5 * (-c * inv_3)) + c * 0.0;
+    *W = kf * e1 * e1 + pct * lt * lt + 0.0;  // + w_sh, which is +0
+    return;
+  }
   const double inv_r = 1.0 / std::sqrt(a * b), sh = c * inv_r, x2 = sh * sh;
   const double wsh = x2 * (k1 + x2 * (k2 + x2 * k3)), dwsh = sh * (2 * k1 + x2 * (4 * k2 + x2 * 6 * k3));
-  const double fe = 2 * (2 * kf * e1), fl = 2 * (2 * pct * lt), fs = 2 * dwsh;
+  const double fs = 2 * dwsh;
   S[0] = fe * (0.5 * inv_a) + fl * (0.5 * (b * inv_3 - inv_a)) + fs * (-0.5 * sh * inv_a);
   S[1] = fl * (0.5 * (a * inv_3)) + fs * (-0.5 * sh * (a * inv_r * inv_r));
   S[2] = fl * (0.5 * (-c * inv_3)) + fs * (0.5 * inv_r);
@@ -70,16 +82,27 @@ template <bool kSeries>
 
 // The law over n points by the series; redo[q] = 1 where C11 - 1 or
 // det C / C11 - 1 is beyond the series' range.
-TS_VECTOR_CLONES
-void ud_block(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh, double* __restrict S,
-              double* __restrict W, double* __restrict redo) {
+template <bool kShear>
+[[gnu::always_inline]] inline void ud_body(std::size_t n, const double* __restrict C, double kf, double pct,
+                                           const double* ksh, double* __restrict S, double* __restrict W,
+                                           double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
 #pragma omp simd
   for (std::size_t q = 0; q < n; ++q) {
     double in_range;
-    ud_point<true>(C + 3 * q, kf, pct, k1, k2, k3, S + 3 * q, W + q, &in_range);
+    ud_point<true, kShear>(C + 3 * q, kf, pct, k1, k2, k3, S + 3 * q, W + q, &in_range);
     redo[q] = 1.0 - in_range;
   }
+}
+TS_VECTOR_CLONES
+void ud_block(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh, double* __restrict S,
+              double* __restrict W, double* __restrict redo) {
+  ud_body<true>(n, C, kf, pct, ksh, S, W, redo);
+}
+TS_VECTOR_CLONES
+void ud_block_no_shear(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
+                       double* __restrict S, double* __restrict W, double* __restrict redo) {
+  ud_body<false>(n, C, kf, pct, ksh, S, W, redo);
 }
 
 class UdHyperelastic final : public MaterialLaw {
@@ -90,6 +113,8 @@ class UdHyperelastic final : public MaterialLaw {
       p_ct_ = p.real("p_ct");
       const auto& ks = p.list("k_sh");
       for (int i = 0; i < 3; ++i) k_sh_[i] = ks[i];
+      // The shear terms are left out where they are all +0 (see ud_point).
+      shear_ = !std::all_of(k_sh_, k_sh_ + 3, [](double k) { return k == 0.0 && !std::signbit(k); });
       return Status::success();
     });
   }
@@ -101,16 +126,21 @@ class UdHyperelastic final : public MaterialLaw {
     Scratch& sc = scratch(b.n);
     double* redo = sc.redo.data();
     double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
-    ud_block(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), W, redo);
-    for (std::size_t q = 0; q < b.n; ++q)
-      if (redo[q] != 0)
+    (shear_ ? ud_block : ud_block_no_shear)(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), W, redo);
+    for (std::size_t q = 0; q < b.n; ++q) {
+      if (redo[q] == 0) continue;
+      if (shear_)
         ud_point<false>(&b.strain[3 * q], k_fibre_, p_ct_, k_sh_[0], k_sh_[1], k_sh_[2], &b.stress[3 * q], &W[q], nullptr);
+      else
+        ud_point<false, false>(&b.strain[3 * q], k_fibre_, p_ct_, 0.0, 0.0, 0.0, &b.stress[3 * q], &W[q], nullptr);
+    }
     return Status::success();
   }
   double max_stiffness(double) const override { return 2 * std::max(k_fibre_, p_ct_); }
 
  private:
   double k_fibre_ = 0, p_ct_ = 0, k_sh_[3] = {0, 0, 0};
+  bool shear_ = false;
 };
 
 MaterialLaw* create() { return new UdHyperelastic(); }
@@ -119,7 +149,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "ud_hyperelastic";
-  d.version = "1.0.3";
+  d.version = "1.0.4";
   d.summary = "UD membrane: fibre elongation, transverse elongation I_lt = 1/2 ln(I3/I41), optional elastic shear";
   const ParamSpec ksh = list_param("k_sh", "[0, 0, 0]", "N/m",
                                    "elastic shear coefficients of w_sh = sum k_sh^i I_sh^(2i) (zero when viscoelastic_shear carries the shear)", 3);
@@ -131,4 +161,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.0.3", register_all)
+THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.0.4", register_all)
