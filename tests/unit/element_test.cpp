@@ -345,7 +345,10 @@ TEST(ShellRfT3, RingOfBlockBuffersGivesTheSameBits) {
 }
 
 // The element keeps the node slots of its corners in 16 bits where they
-// fit and uses the kernel's slots where they do not: the same forces.
+// fit, summing each node's corner forces in registers (node_forces), and
+// adds them corner by corner into the kernel's slots where they do not:
+// the same forces, bit for bit (the sums in the same order). Reversing
+// the order of a node's corners fails this.
 TEST(ShellRfT3, ForcesGoToTheirSlotsWhateverTheSlotNumbers) {
   std::vector<double> f[2];
   double e[2];

@@ -41,6 +41,7 @@
 // share of dW/dtheta of its hinges (which reads the neighbours' dW/ds);
 // membrane and bending forces (which read the neighbours' shares).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -544,6 +545,59 @@ void corner_forces(int n, int ld, const double* __restrict mf, const I* __restri
     }
 }
 
+// The same sums as corner_forces, node by node: node slot slots[i] adds,
+// in this order, the corner forces at mf[e], mf[e + ld], mf[e + 2 ld] for
+// the k entries e = ent[k i + j], j < k, which list its corners by
+// ascending element, as corner_forces visits them: the same sums in the
+// same order, the same bits. Each node's sum stays in registers instead of
+// going through memory once per corner (where consecutive elements share
+// a node, each addition then waits for the one before).
+template <int K>
+void node_forces_fixed(int count, int ld, const double* __restrict mf, const std::uint16_t* __restrict slots,
+                       const std::uint16_t* __restrict ent, double* __restrict nf) {
+  for (int i = 0; i < count; ++i) {
+    double* f = nf + 3 * static_cast<int>(slots[i]);
+    double f0 = f[0], f1 = f[1], f2 = f[2];
+    const std::uint16_t* e = ent + K * i;
+    for (int j = 0; j < K; ++j) {
+      const double* m = mf + e[j];
+      f0 += m[0];
+      f1 += m[ld];
+      f2 += m[2 * ld];
+    }
+    f[0] = f0;
+    f[1] = f1;
+    f[2] = f2;
+  }
+}
+void node_forces(int k, int count, int ld, const double* mf, const std::uint16_t* slots, const std::uint16_t* ent,
+                 double* nf) {
+  switch (k) {
+    case 1: return node_forces_fixed<1>(count, ld, mf, slots, ent, nf);
+    case 2: return node_forces_fixed<2>(count, ld, mf, slots, ent, nf);
+    case 3: return node_forces_fixed<3>(count, ld, mf, slots, ent, nf);
+    case 4: return node_forces_fixed<4>(count, ld, mf, slots, ent, nf);
+    case 5: return node_forces_fixed<5>(count, ld, mf, slots, ent, nf);
+    case 6: return node_forces_fixed<6>(count, ld, mf, slots, ent, nf);
+    case 7: return node_forces_fixed<7>(count, ld, mf, slots, ent, nf);
+    case 8: return node_forces_fixed<8>(count, ld, mf, slots, ent, nf);
+    default: break;
+  }
+  for (int i = 0; i < count; ++i) {
+    double* f = nf + 3 * static_cast<int>(slots[i]);
+    double f0 = f[0], f1 = f[1], f2 = f[2];
+    for (int j = 0; j < k; ++j) {
+      const double* m = mf + ent[static_cast<std::size_t>(k) * i + j];
+      f0 += m[0];
+      f1 += m[ld];
+      f2 += m[2 * ld];
+    }
+    f[0] = f0;
+    f[1] = f1;
+    f[2] = f2;
+  }
+}
+
 // Largest entry of an element's map L from angle changes to the slopes of
 // its own quadratic; a patch whose map is larger (nearly on a conic) uses
 // its neighbours' quadratics instead.
@@ -734,7 +788,14 @@ class ShellRfT3 final : public ElementKernel {
           if (in.commit) block_angles_[b]->elapsed += in.dt;
         }
       }
-      if (!ri.cslot.empty())
+      if (!ri.ngroup.empty()) {
+        const std::uint16_t *slots = ri.nslot.data(), *ent = ri.nent.data();
+        for (const auto& [k, count] : ri.ngroup) {
+          node_forces(k, count, ld, mf, slots, ent, out.node_force.data());
+          slots += count;
+          ent += static_cast<std::size_t>(k) * count;
+        }
+      } else if (!ri.cslot.empty())
         corner_forces<3>(n, ld, mf, ri.cslot.data(), out.node_force.data());
       else
         corner_forces<6>(n, ld, mf, in.patch_slot.data(), out.node_force.data());
@@ -1165,10 +1226,16 @@ class ShellRfT3 final : public ElementKernel {
   // where they span 2^16 or more), and the node slots of the corners (the
   // first three of each element's ElementForceInput::patch_slot, the same
   // at every call for a range; cslot[3 q + a], empty where some slot does
-  // not fit): a quarter of the bytes of the kernel's slots.
+  // not fit): a quarter of the bytes of the kernel's slots. Where the
+  // corners' entries in the block's corner forces (3 a ld + q, ld =
+  // padded_ld(n)) fit in 16 bits as well, the corners are kept by node
+  // instead, for node_forces: the nodes with k corners in the range form
+  // group (k, count), their slots nslot and their corners' entries nent
+  // (k per node, by ascending element), group after group.
   struct RangeIndex {
     int end = -1, off_base = -1;
-    std::vector<std::uint16_t> off16, cslot;
+    std::vector<std::uint16_t> off16, cslot, nslot, nent;
+    std::vector<std::array<int, 2>> ngroup;
     double d2min = 0;  // with bending: the smallest dmin2_ of the range
   };
 
@@ -1531,7 +1598,32 @@ class ShellRfT3 final : public ElementKernel {
     bool fit = true;
     for (int q = 0; q < n && fit; ++q)
       for (int a = 0; a < 3; ++a) fit = fit && in.patch_slot[6 * q + a] >= 0 && in.patch_slot[6 * q + a] <= 0xffff;
-    if (fit) {
+    if (fit && 7 * padded_ld(n) <= 0x10000) {
+      // By node: corners by ascending element, nodes grouped by their count.
+      const int ld = padded_ld(n);
+      int nslots = 0;
+      for (int q = 0; q < n; ++q)
+        for (int a = 0; a < 3; ++a) nslots = std::max(nslots, in.patch_slot[6 * q + a] + 1);
+      std::vector<int> count(nslots, 0), first(nslots + 1, 0);
+      for (int q = 0; q < n; ++q)
+        for (int a = 0; a < 3; ++a) ++count[in.patch_slot[6 * q + a]];
+      for (int v = 0; v < nslots; ++v) first[v + 1] = first[v] + count[v];
+      std::vector<std::uint16_t> by_node(first[nslots]);
+      std::vector<int> fill(first.begin(), first.end() - 1);
+      for (int q = 0; q < n; ++q)
+        for (int a = 0; a < 3; ++a) by_node[fill[in.patch_slot[6 * q + a]]++] = static_cast<std::uint16_t>(3 * a * ld + q);
+      const int kmax = nslots > 0 ? *std::max_element(count.begin(), count.end()) : 0;
+      for (int k = 1; k <= kmax; ++k) {
+        int c = 0;
+        for (int v = 0; v < nslots; ++v) {
+          if (count[v] != k) continue;
+          ++c;
+          ri->nslot.push_back(static_cast<std::uint16_t>(v));
+          ri->nent.insert(ri->nent.end(), by_node.begin() + first[v], by_node.begin() + first[v + 1]);
+        }
+        if (c > 0) ri->ngroup.push_back({k, c});
+      }
+    } else if (fit) {
       ri->cslot.resize(3 * static_cast<std::size_t>(n));
       for (int q = 0; q < n; ++q)
         for (int a = 0; a < 3; ++a) ri->cslot[3 * q + a] = static_cast<std::uint16_t>(in.patch_slot[6 * q + a]);
