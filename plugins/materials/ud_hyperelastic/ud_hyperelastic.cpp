@@ -82,27 +82,31 @@ template <bool kSeries, bool kShear = true>
 
 // The law over n points by the series; redo[q] = 1 where C11 - 1 or
 // det C / C11 - 1 is beyond the series' range.
+// Returns 1 if some point is to be evaluated again, 0 otherwise.
 template <bool kShear>
-[[gnu::always_inline]] inline void ud_body(std::size_t n, const double* __restrict C, double kf, double pct,
-                                           const double* ksh, double* __restrict S, double* __restrict W,
-                                           double* __restrict redo) {
+[[gnu::always_inline]] inline double ud_body(std::size_t n, const double* __restrict C, double kf, double pct,
+                                             const double* ksh, double* __restrict S, double* __restrict W,
+                                             double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
-#pragma omp simd
+  double any = 0.0;
+#pragma omp simd reduction(max : any)
   for (std::size_t q = 0; q < n; ++q) {
     double in_range;
     ud_point<true, kShear>(C + 3 * q, kf, pct, k1, k2, k3, S + 3 * q, W + q, &in_range);
     redo[q] = 1.0 - in_range;
+    any = in_range != 0.0 ? any : 1.0;
   }
+  return any;
 }
 TS_VECTOR_CLONES
-void ud_block(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh, double* __restrict S,
-              double* __restrict W, double* __restrict redo) {
-  ud_body<true>(n, C, kf, pct, ksh, S, W, redo);
+double ud_block(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
+                double* __restrict S, double* __restrict W, double* __restrict redo) {
+  return ud_body<true>(n, C, kf, pct, ksh, S, W, redo);
 }
 TS_VECTOR_CLONES
-void ud_block_no_shear(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
-                       double* __restrict S, double* __restrict W, double* __restrict redo) {
-  ud_body<false>(n, C, kf, pct, ksh, S, W, redo);
+double ud_block_no_shear(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
+                         double* __restrict S, double* __restrict W, double* __restrict redo) {
+  return ud_body<false>(n, C, kf, pct, ksh, S, W, redo);
 }
 
 class UdHyperelastic final : public MaterialLaw {
@@ -126,7 +130,9 @@ class UdHyperelastic final : public MaterialLaw {
     Scratch& sc = scratch(b.n);
     double* redo = sc.redo.data();
     double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
-    (shear_ ? ud_block : ud_block_no_shear)(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), W, redo);
+    if ((shear_ ? ud_block : ud_block_no_shear)(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), W,
+                                                redo) == 0.0)
+      return Status::success();
     for (std::size_t q = 0; q < b.n; ++q) {
       if (redo[q] == 0) continue;
       if (shear_)

@@ -188,7 +188,7 @@ template <int NB>
 // p.ramp (computed once for a block at one temperature) and no point is
 // to be redone. Inlined into each vector clone below.
 template <int NB, bool kUd, bool kGiven = false>
-[[gnu::always_inline]] inline void visco_point(std::size_t q, std::size_t ld, const double* __restrict C,
+[[gnu::always_inline]] inline double visco_point(std::size_t q, std::size_t ld, const double* __restrict C,
                                                const double* __restrict dir2, const Parameters<NB>& p, double dt,
                                                double k1, double k2, double k3, double* __restrict state,
                                                double* __restrict S, double* __restrict W, double* __restrict redo) {
@@ -231,21 +231,25 @@ template <int NB, bool kUd, bool kGiven = false>
   S[3 * q + 1] = o1;
   S[3 * q + 2] = o2;
   W[q] = ss.w;
+  return rq;
 }
 // The law over n points, the parameters evaluated at each point's
-// temperature.
+// temperature. Returns 1 if some point is to be evaluated again, else 0.
 template <int NB, bool kUd>
-[[gnu::always_inline]] inline void visco_body(std::size_t n, const double* __restrict C,
+[[gnu::always_inline]] inline double visco_body(std::size_t n, const double* __restrict C,
                                               const double* __restrict dir2, const double* __restrict temp, double dt,
                                               const double* ksh, const double* lines, double* __restrict state,
                                               double* __restrict S, double* __restrict W, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
   const Lines<NB> l(lines);
-#pragma omp simd
+  double any = 0.0;
+#pragma omp simd reduction(max : any)
   for (std::size_t q = 0; q < n; ++q) {
     const Parameters<NB> p = parameters<NB>(l, temp[q]);
-    visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+    const double rq = visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+    any = rq > any ? rq : any;
   }
+  return any;
 }
 
 // The per-point parameters kept in MaterialBlock::cache, one value after
@@ -270,12 +274,13 @@ template <int NB>
   }
 }
 template <int NB, bool kUd>
-[[gnu::always_inline]] inline void cached_body(std::size_t n, const double* __restrict C,
+[[gnu::always_inline]] inline double cached_body(std::size_t n, const double* __restrict C,
                                                const double* __restrict dir2, const double* __restrict cache,
                                                double dt, const double* ksh, double* __restrict state,
                                                double* __restrict S, double* __restrict W, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
-#pragma omp simd
+  double any = 0.0;
+#pragma omp simd reduction(max : any)
   for (std::size_t q = 0; q < n; ++q) {
     Parameters<NB> p;
     p.omega = cache[n + q];
@@ -284,8 +289,19 @@ template <int NB, bool kUd>
       p.g[i] = cache[(3 + i) * n + q];
       p.inv_tau[i] = cache[(3 + NB + i) * n + q];
     }
-    visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+    const double rq = visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+    any = rq > any ? rq : any;
   }
+  return any;
+}
+// Whether all n temperatures are temp[0] (one vector pass).
+TS_VECTOR_CLONES
+bool all_the_same(std::size_t n, const double* __restrict temp) {
+  const double t0 = temp[0];
+  double differ = 0;
+#pragma omp simd reduction(max : differ)
+  for (std::size_t q = 0; q < n; ++q) differ = temp[q] == t0 ? differ : 1.0;
+  return differ == 0;
 }
 // Whether the cache's temperatures are those of temp (NaN at the start: no).
 TS_VECTOR_CLONES
@@ -303,14 +319,14 @@ bool same_temperatures(std::size_t n, const double* __restrict temp, const doubl
 #define TS_VISCO_TABLE(f) \
   { {nullptr, f##V1, f##V2, f##V3, f##V4}, {nullptr, f##U1, f##U2, f##U3, f##U4} }
 #define TS_VISCO_BLOCK(NB, V, UD)                                                                                \
-  TS_VECTOR_CLONES void visco_block##V##NB(std::size_t n, const double* C, const double* dir2, const double* temp, \
-                                           double dt, const double* ksh, const double* lines, double* state,      \
-                                           double* S, double* W, double* redo) {                                  \
-    visco_body<NB, UD>(n, C, dir2, temp, dt, ksh, lines, state, S, W, redo);                                     \
+  TS_VECTOR_CLONES double visco_block##V##NB(std::size_t n, const double* C, const double* dir2, const double* temp, \
+                                             double dt, const double* ksh, const double* lines, double* state,      \
+                                             double* S, double* W, double* redo) {                                  \
+    return visco_body<NB, UD>(n, C, dir2, temp, dt, ksh, lines, state, S, W, redo);                                \
   }
 TS_VISCO_VARIANTS(TS_VISCO_BLOCK)
 #undef TS_VISCO_BLOCK
-using ViscoBlock = void (*)(std::size_t, const double*, const double*, const double*, double, const double*,
+using ViscoBlock = double (*)(std::size_t, const double*, const double*, const double*, double, const double*,
                             const double*, double*, double*, double*, double*);
 constexpr ViscoBlock kViscoBlock[2][kVectorBranches + 1] = TS_VISCO_TABLE(visco_block);
 #define TS_VISCO_PARAMETERS(NB)                                                                      \
@@ -324,17 +340,17 @@ TS_VISCO_PARAMETERS(3)
 TS_VISCO_PARAMETERS(4)
 #undef TS_VISCO_PARAMETERS
 #define TS_VISCO_CACHED(NB, V, UD)                                                                          \
-  TS_VECTOR_CLONES void visco_cached##V##NB(std::size_t n, const double* C, const double* dir2,             \
-                                            const double* cache, double dt, const double* ksh, double* state, \
-                                            double* S, double* W, double* redo) {                            \
-    cached_body<NB, UD>(n, C, dir2, cache, dt, ksh, state, S, W, redo);                                     \
+  TS_VECTOR_CLONES double visco_cached##V##NB(std::size_t n, const double* C, const double* dir2,             \
+                                              const double* cache, double dt, const double* ksh, double* state, \
+                                              double* S, double* W, double* redo) {                            \
+    return cached_body<NB, UD>(n, C, dir2, cache, dt, ksh, state, S, W, redo);                                \
   }
 TS_VISCO_VARIANTS(TS_VISCO_CACHED)
 #undef TS_VISCO_CACHED
 using ViscoParameters = void (*)(std::size_t, const double*, const double*, double*);
 constexpr ViscoParameters kViscoParameters[kVectorBranches + 1] = {nullptr, visco_parameters1, visco_parameters2,
                                                                    visco_parameters3, visco_parameters4};
-using ViscoCached = void (*)(std::size_t, const double*, const double*, const double*, double, const double*,
+using ViscoCached = double (*)(std::size_t, const double*, const double*, const double*, double, const double*,
                              double*, double*, double*, double*);
 constexpr ViscoCached kViscoCached[2][kVectorBranches + 1] = TS_VISCO_TABLE(visco_cached);
 
@@ -449,8 +465,8 @@ class ViscoelasticShear final : public MaterialLaw {
 
   Status evaluate(const MaterialBlock& b) const override {
     if (b.n == 0) return Status::success();
-    bool uniform = true;  // one temperature for the whole block (an isothermal run)
-    for (std::size_t q = 1; q < b.n && uniform; ++q) uniform = b.temperature[q] == b.temperature[0];
+    // One temperature for the whole block (an isothermal run)?
+    const bool uniform = all_the_same(b.n, b.temperature.data());
     if (n_ < 1 || n_ > kVectorBranches) {
       double g[16], decay[16], ramp[16], omega = 0;
       if (uniform) factors(b.temperature[0], b.dt, &omega, g, decay, ramp);
@@ -480,15 +496,17 @@ class ViscoelasticShear final : public MaterialLaw {
     // when the temperatures changed), for the points whose dt / tau_i are
     // in the factors' series range; the other points are evaluated one by
     // one. All give the same bits.
+    double any = 0.0;  // some point to evaluate again
     if (b.cache.size() == static_cast<std::size_t>(cache_size()) * b.n) {
       if (!same_temperatures(b.n, b.temperature.data(), b.cache.data()))
         kViscoParameters[n_](b.n, b.temperature.data(), lines_.data(), b.cache.data());
-      kViscoCached[ud][n_](b.n, b.strain.data(), dir2, b.cache.data(), b.dt, k_sh_, b.state.data(), b.stress.data(), W,
-                       sc.redo.data());
+      any = kViscoCached[ud][n_](b.n, b.strain.data(), dir2, b.cache.data(), b.dt, k_sh_, b.state.data(),
+                                 b.stress.data(), W, sc.redo.data());
     } else {
-      kViscoBlock[ud][n_](b.n, b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_, lines_.data(), b.state.data(),
-                      b.stress.data(), W, sc.redo.data());
+      any = kViscoBlock[ud][n_](b.n, b.strain.data(), dir2, b.temperature.data(), b.dt, k_sh_, lines_.data(),
+                                b.state.data(), b.stress.data(), W, sc.redo.data());
     }
+    if (any == 0.0) return Status::success();
     for (std::size_t q = 0; q < b.n; ++q)
       if (sc.redo[q] != 0) point(b, q);
     return Status::success();
@@ -564,7 +582,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.2.1";
+  d.version = "1.2.2";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
@@ -587,4 +605,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.2.1", register_all)
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.2.2", register_all)
