@@ -363,12 +363,13 @@ void element_temperature_block(int n, const int* __restrict tri, const double* _
 // product with inv_c, rounding included, keep the order: the same bits as
 // the smallest of the elements' steps, with one square root per block).
 template <bool kBend, bool kSteps>
-[[gnu::always_inline]] inline double membrane_body(int n, int ld, const double* __restrict C, const double* __restrict ff,
-                                                 const double* __restrict S, const double* __restrict area,
-                                                 const double* __restrict g, int gld, double cmul,
-                                                 const double* __restrict hm, const int* __restrict nidx, int nld,
-                                                 const double* __restrict hm_all, int hld, double* __restrict mf,
-                                                 double* __restrict dte) {
+[[gnu::always_inline]] inline double membrane_body(int n, int ld, const double* __restrict C,
+                                                   const double* __restrict ff, const double* __restrict S,
+                                                   const double* __restrict area, const double* __restrict g, int gld,
+                                                   double cmul, const double* __restrict hm,
+                                                   const int* __restrict nidx, int nld,
+                                                   const double* __restrict hm_all, int hld, double* __restrict mf,
+                                                   double* __restrict dte) {
   double rmin = std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(min : rmin)
   for (int q = 0; q < n; ++q) {
@@ -425,7 +426,8 @@ double membrane_block(int n, int ld, const double* C, const double* ff, const do
                       const double* g, int gld, double inv_c, bool has_stiffness, double* mf, double* dte) {
   // h > 0 (det C > 1e-12 here): h times infinity is infinity.
   const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
-  if (!dte) return membrane_body<false, false>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, 0, nullptr, 0, mf, dte);
+  if (!dte)
+    return membrane_body<false, false>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, 0, nullptr, 0, mf, dte);
   return membrane_body<false, true>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, 0, nullptr, 0, mf, dte);
 }
 // The membrane and bending forces (see membrane_body).
@@ -434,7 +436,8 @@ double membrane_bending_block(int n, int ld, const double* C, const double* ff, 
                               const double* g, int gld, double inv_c, bool has_stiffness, const double* hm,
                               const int* nidx, int nld, const double* hm_all, int hld, double* mf, double* dte) {
   const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
-  if (!dte) return membrane_body<true, false>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte);
+  if (!dte)
+    return membrane_body<true, false>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte);
   return membrane_body<true, true>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte);
 }
 
@@ -552,14 +555,16 @@ void corner_forces(int n, int ld, const double* __restrict mf, const I* __restri
 // same order, the same bits. Each node's sum stays in registers instead of
 // going through memory once per corner (where consecutive elements share
 // a node, each addition then waits for the one before).
+// K > 0: k = K corners per node, known to the compiler (0: k as given).
 template <int K>
-void node_forces_fixed(int count, int ld, const double* __restrict mf, const std::uint16_t* __restrict slots,
-                       const std::uint16_t* __restrict ent, double* __restrict nf) {
+void node_forces_of(int k, int count, int ld, const double* __restrict mf, const std::uint16_t* __restrict slots,
+                    const std::uint16_t* __restrict ent, double* __restrict nf) {
+  const int kk = K > 0 ? K : k;
   for (int i = 0; i < count; ++i) {
     double* f = nf + 3 * static_cast<int>(slots[i]);
     double f0 = f[0], f1 = f[1], f2 = f[2];
-    const std::uint16_t* e = ent + K * i;
-    for (int j = 0; j < K; ++j) {
+    const std::uint16_t* e = ent + static_cast<std::size_t>(kk) * i;
+    for (int j = 0; j < kk; ++j) {
       const double* m = mf + e[j];
       f0 += m[0];
       f1 += m[ld];
@@ -573,28 +578,15 @@ void node_forces_fixed(int count, int ld, const double* __restrict mf, const std
 void node_forces(int k, int count, int ld, const double* mf, const std::uint16_t* slots, const std::uint16_t* ent,
                  double* nf) {
   switch (k) {
-    case 1: return node_forces_fixed<1>(count, ld, mf, slots, ent, nf);
-    case 2: return node_forces_fixed<2>(count, ld, mf, slots, ent, nf);
-    case 3: return node_forces_fixed<3>(count, ld, mf, slots, ent, nf);
-    case 4: return node_forces_fixed<4>(count, ld, mf, slots, ent, nf);
-    case 5: return node_forces_fixed<5>(count, ld, mf, slots, ent, nf);
-    case 6: return node_forces_fixed<6>(count, ld, mf, slots, ent, nf);
-    case 7: return node_forces_fixed<7>(count, ld, mf, slots, ent, nf);
-    case 8: return node_forces_fixed<8>(count, ld, mf, slots, ent, nf);
-    default: break;
-  }
-  for (int i = 0; i < count; ++i) {
-    double* f = nf + 3 * static_cast<int>(slots[i]);
-    double f0 = f[0], f1 = f[1], f2 = f[2];
-    for (int j = 0; j < k; ++j) {
-      const double* m = mf + ent[static_cast<std::size_t>(k) * i + j];
-      f0 += m[0];
-      f1 += m[ld];
-      f2 += m[2 * ld];
-    }
-    f[0] = f0;
-    f[1] = f1;
-    f[2] = f2;
+    case 1: return node_forces_of<1>(k, count, ld, mf, slots, ent, nf);
+    case 2: return node_forces_of<2>(k, count, ld, mf, slots, ent, nf);
+    case 3: return node_forces_of<3>(k, count, ld, mf, slots, ent, nf);
+    case 4: return node_forces_of<4>(k, count, ld, mf, slots, ent, nf);
+    case 5: return node_forces_of<5>(k, count, ld, mf, slots, ent, nf);
+    case 6: return node_forces_of<6>(k, count, ld, mf, slots, ent, nf);
+    case 7: return node_forces_of<7>(k, count, ld, mf, slots, ent, nf);
+    case 8: return node_forces_of<8>(k, count, ld, mf, slots, ent, nf);
+    default: return node_forces_of<0>(k, count, ld, mf, slots, ent, nf);
   }
 }
 
@@ -1225,13 +1217,14 @@ class ShellRfT3 final : public ElementKernel {
   // smallest of them (off16, row a of element q at a n + q; off_base -1
   // where they span 2^16 or more), and the node slots of the corners (the
   // first three of each element's ElementForceInput::patch_slot, the same
-  // at every call for a range; cslot[3 q + a], empty where some slot does
-  // not fit): a quarter of the bytes of the kernel's slots. Where the
-  // corners' entries in the block's corner forces (3 a ld + q, ld =
-  // padded_ld(n)) fit in 16 bits as well, the corners are kept by node
-  // instead, for node_forces: the nodes with k corners in the range form
-  // group (k, count), their slots nslot and their corners' entries nent
-  // (k per node, by ascending element), group after group.
+  // at every call for a range). Where the corners' entries in the block's
+  // corner forces (3 a ld + q, ld = padded_ld(n)) fit in 16 bits as well,
+  // the corners are kept by node, for node_forces: the nodes with k
+  // corners in the range form group (k, count), their slots nslot and
+  // their corners' entries nent (k per node, by ascending element), group
+  // after group. Otherwise by corner, for corner_forces: cslot[3 q + a]
+  // (a quarter of the bytes of the kernel's slots). Both are empty where
+  // some slot does not fit in 16 bits.
   struct RangeIndex {
     int end = -1, off_base = -1;
     std::vector<std::uint16_t> off16, cslot, nslot, nent;
@@ -1611,7 +1604,8 @@ class ShellRfT3 final : public ElementKernel {
       std::vector<std::uint16_t> by_node(first[nslots]);
       std::vector<int> fill(first.begin(), first.end() - 1);
       for (int q = 0; q < n; ++q)
-        for (int a = 0; a < 3; ++a) by_node[fill[in.patch_slot[6 * q + a]]++] = static_cast<std::uint16_t>(3 * a * ld + q);
+        for (int a = 0; a < 3; ++a)
+          by_node[fill[in.patch_slot[6 * q + a]]++] = static_cast<std::uint16_t>(3 * a * ld + q);
       const int kmax = nslots > 0 ? *std::max_element(count.begin(), count.end()) : 0;
       for (int k = 1; k <= kmax; ++k) {
         int c = 0;
