@@ -536,14 +536,12 @@ void hinge_moment_block(int n, int ld, const float* __restrict L, const float* _
 }
 
 // Adds the forces of n elements, component d of corner a of element q at
-// mf[(3 a + d) ld + q], into their corners' node slots (slot[kStride q +
-// a]: the kernel's patch_slot, int and 6 per element, or a range's 16-bit
-// copy, 3 per element).
-template <int kStride, class I>
-void corner_forces(int n, int ld, const double* __restrict mf, const I* __restrict slot, double* __restrict nf) {
+// mf[(3 a + d) ld + q], into their corners' node slots (slot[6 q + a], the
+// kernel's patch_slot).
+void corner_forces(int n, int ld, const double* __restrict mf, const int* __restrict slot, double* __restrict nf) {
   for (int q = 0; q < n; ++q)
     for (int a = 0; a < 3; ++a) {
-      double* f = nf + 3 * static_cast<int>(slot[kStride * q + a]);
+      double* f = nf + 3 * slot[6 * q + a];
       for (int d = 0; d < 3; ++d) f[d] += mf[(3 * a + d) * ld + q];
     }
 }
@@ -772,7 +770,7 @@ class ShellRfT3 final : public ElementKernel {
         const StepValues sv = step_values(in);
         dt_min = membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0,
                                         sv.hm, sv.nidx, gld_, sv.hm_all, sv.ld, mf, dte);
-        energy += bending_forces(in, b, in.range.end, sc, t_lo, t_hi, mf, ld, ri, out, dt_min);
+        energy += bending_forces(in, b, in.range.end, dte, t_lo, t_hi, mf, ld, ri, out, dt_min);
       } else {
         dt_min = membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
         if (bending_ && block_angles_[b]) {
@@ -787,10 +785,9 @@ class ShellRfT3 final : public ElementKernel {
           slots += count;
           ent += static_cast<std::size_t>(k) * count;
         }
-      } else if (!ri.cslot.empty())
-        corner_forces<3>(n, ld, mf, ri.cslot.data(), out.node_force.data());
-      else
-        corner_forces<6>(n, ld, mf, in.patch_slot.data(), out.node_force.data());
+      } else {
+        corner_forces(n, ld, mf, in.patch_slot.data(), out.node_force.data());
+      }
       energy += lane_dot(n, area0_.data() + b, energy_e);
       if (steps) dt_min = smallest_step(n, dte, in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b, dt_min);
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
@@ -1215,19 +1212,17 @@ class ShellRfT3 final : public ElementKernel {
   // range's own object (slot b; a range with other bounds forms it again),
   // in 16 bits where they fit: the elements' node offsets relative to the
   // smallest of them (off16, row a of element q at a n + q; off_base -1
-  // where they span 2^16 or more), and the node slots of the corners (the
+  // where they span 2^16 or more), and the corners by node (from the
   // first three of each element's ElementForceInput::patch_slot, the same
-  // at every call for a range). Where the corners' entries in the block's
-  // corner forces (3 a ld + q, ld = padded_ld(n)) fit in 16 bits as well,
-  // the corners are kept by node, for node_forces: the nodes with k
-  // corners in the range form group (k, count), their slots nslot and
-  // their corners' entries nent (k per node, by ascending element), group
-  // after group. Otherwise by corner, for corner_forces: cslot[3 q + a]
-  // (a quarter of the bytes of the kernel's slots). Both are empty where
-  // some slot does not fit in 16 bits.
+  // at every call for a range), for node_forces: the nodes with k corners
+  // in the range form group (k, count), their slots nslot and their
+  // corners' entries nent in the block's corner forces (3 a ld + q, ld =
+  // padded_ld(n); k per node, by ascending element), group after group.
+  // Empty where a slot or an entry does not fit in 16 bits: the corners
+  // are then added one by one into the kernel's slots (corner_forces).
   struct RangeIndex {
     int end = -1, off_base = -1;
-    std::vector<std::uint16_t> off16, cslot, nslot, nent;
+    std::vector<std::uint16_t> off16, nslot, nent;
     std::vector<std::array<int, 2>> ngroup;
     double d2min = 0;  // with bending: the smallest dmin2_ of the range
   };
@@ -1463,21 +1458,20 @@ class ShellRfT3 final : public ElementKernel {
   // forces to the membrane forces mf (laid out as membrane_block writes
   // them, leading dimension ld): the ghost hinges' forces into mf; returns
   // the bending energy (from pass 1) and lowers the elements' stable steps
-  // (sc.energy_tmp) with the bending ones, or, where the kernel gives no
-  // step factors and asks for no element steps, lowers dt_floor (the
-  // block's stable step so far) with the block's smallest bending step;
-  // [t_lo, t_hi] is the block's temperature range.
-  double bending_forces(const ElementForceInput& in, int b, int end, BlockScratch& sc, double t_lo, double t_hi,
+  // dte (the membrane's) with the bending ones, or, where dte is null (the
+  // elements' own steps are not formed: see internal_forces), lowers
+  // dt_floor (the block's stable step so far) with the block's smallest
+  // bending step; [t_lo, t_hi] is the block's temperature range.
+  double bending_forces(const ElementForceInput& in, int b, int end, double* dte, double t_lo, double t_hi,
                         double* mf, int ld, const RangeIndex& ri, ElementForceOutput& out, double& dt_floor) {
     const int n = end - b;
     const BlockAngles& ba = *block_angles_[b];  // from passes 0 to 2
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
-    double* dte = sc.energy_tmp.data();  // the membrane's stable steps of the block's elements
     if (rmax > 0) {
       // Bending waves: dt ~ d^2 sqrt(rho h / R) / 2 (conservative), d the
       // smallest initial height over the element's interior edges.
       const double dtb_scale = 0.5 * std::sqrt(areal_mass_ / rmax);
-      if (in.dt_scale.empty() && out.element_dt.empty()) {
+      if (!dte) {
         // Without step factors the smallest bending step of the block is
         // its smallest d^2 times dtb_scale (a product with a positive
         // factor keeps the order, rounding included): the same bits as the
@@ -1617,10 +1611,6 @@ class ShellRfT3 final : public ElementKernel {
         }
         if (c > 0) ri->ngroup.push_back({k, c});
       }
-    } else if (fit) {
-      ri->cslot.resize(3 * static_cast<std::size_t>(n));
-      for (int q = 0; q < n; ++q)
-        for (int a = 0; a < 3; ++a) ri->cslot[3 * q + a] = static_cast<std::uint16_t>(in.patch_slot[6 * q + a]);
     }
     if (bending_)
       ri->d2min = *std::min_element(dmin2_.begin() + b, dmin2_.begin() + end);

@@ -133,13 +133,11 @@ class UdHyperelastic final : public MaterialLaw {
     if ((shear_ ? ud_block : ud_block_no_shear)(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), W,
                                                 redo) == 0.0)
       return Status::success();
-    for (std::size_t q = 0; q < b.n; ++q) {
-      if (redo[q] == 0) continue;
-      if (shear_)
+    // (With k_sh all +0 the full form gives the same bits as the one
+    // without shear terms: see ud_point.)
+    for (std::size_t q = 0; q < b.n; ++q)
+      if (redo[q] != 0)
         ud_point<false>(&b.strain[3 * q], k_fibre_, p_ct_, k_sh_[0], k_sh_[1], k_sh_[2], &b.stress[3 * q], &W[q], nullptr);
-      else
-        ud_point<false, false>(&b.strain[3 * q], k_fibre_, p_ct_, 0.0, 0.0, 0.0, &b.stress[3 * q], &W[q], nullptr);
-    }
     return Status::success();
   }
   double max_stiffness(double) const override { return 2 * std::max(k_fibre_, p_ct_); }
