@@ -698,9 +698,9 @@ TEST(Cli, MechanicsUnusableStepIsAnInputError) {
       {"dt_safety", [](json& j) { j["solvers"]["mechanics"]["dt_safety"] = 1e-30; }, "error: /solvers/mechanics/dt_safety: the mechanical step"},
       {"holder_mass", [](json& j) { j["tools"][2]["motion"]["mass"] = 1e-30; }, "error: /tools/2/motion/mass: the mechanical step"},
       {"holder_penalty", [](json& j) { j["interactions"][1]["penalty"] = 1e30; }, "error: /tools/2/motion/mass: the mechanical step"},
-      // Elements of 1e-31 m: their shape-function gradients and positions
-      // lose every digit of C = F^T F to round-off.
-      {"degenerate_mesh", [](json& j) { j["parts"][0]["mesh"]["size"] = {1e-30, 1e-30}; j["parts"][0]["mesh"]["divisions"] = {15, 15}; }, "error: /parts/0/mesh: element"},
+      // Slivers of 1e-3 x 1e-20 m: their shape-function gradients (1e20 / m
+      // across) lose every digit of C = F^T F to round-off.
+      {"degenerate_mesh", [](json& j) { j["parts"][0]["mesh"]["size"] = {0.015, 1.5e-19}; j["parts"][0]["mesh"]["divisions"] = {15, 15}; }, "error: /parts/0/mesh: element"},
   };
   for (const auto& c : cases) {
     const auto dir = temp_dir("unusable_" + c.name);

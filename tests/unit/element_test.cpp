@@ -124,6 +124,9 @@ struct Patch {
   double bending_weight = 1.0;            // ElementForceInput::bending_weight
   double dt = 0.0;                        // ElementForceInput::dt
   int slot_offset = 0;  // added to every slot (node i's forces at slot i + slot_offset)
+  // Each corner its own slot (corner a of element e at slot 3 e + a): the
+  // forces of every element apart, instead of the nodes' sums.
+  bool corner_slots = false;
   std::vector<double> dt_scale;  // ElementForceInput::dt_scale (empty: none)
   // The smallest ElementForceOutput::stable_dt and bending_dt of the ranges
   // (of the last evaluation).
@@ -132,6 +135,11 @@ struct Patch {
   double evaluate(std::vector<double>& nf) {
     nf.assign(3 * (mesh.num_nodes() + static_cast<std::size_t>(slot_offset)), 0.0);
     std::vector<int> slots = patch();
+    if (corner_slots) {
+      nf.assign(9 * static_cast<std::size_t>(mesh.num_elements()), 0.0);
+      for (int e = 0; e < mesh.num_elements(); ++e)
+        for (int a = 0; a < 3; ++a) slots[6 * e + a] = 3 * e + a;
+    }
     for (int& s : slots) s += s >= 0 ? slot_offset : 0;
     const int ne = mesh.num_elements();
     double energy = 0;
@@ -368,6 +376,63 @@ TEST(ShellRfT3, ForcesGoToTheirSlotsWhateverTheSlotNumbers) {
   EXPECT_GT(fmax, 0.0);
   EXPECT_EQ(f[0], f[1]);
   EXPECT_EQ(e[0], e[1]);
+}
+
+// F comes from the positions relative to an element's first corner, and
+// the three corners' gradients sum to zero exactly: moving a deformed,
+// bent patch by a rigid translation (exact here: positions on a grid of
+// 2^-24 m, a shift of whole metres) leaves every force bit for bit as it
+// was, membrane and bending.
+TEST(ShellRfT3, TranslationLeavesTheForcesAsTheyAre) {
+  Patch p(0.5, true, {6, 5});
+  for (int n = 0; n < p.mesh.num_nodes(); ++n) {
+    const double X = p.mesh.x[3 * n], Y = p.mesh.x[3 * n + 1];
+    const double u[3] = {1.01 * X - 0.02 * Y, Y + 0.015 * X, 2.0 * X * X + 1.5 * X * Y - 3.0 * Y * Y};
+    for (int d = 0; d < 3; ++d) p.x[3 * n + d] = std::ldexp(std::round(std::ldexp(u[d], 24)), -24);
+  }
+  std::vector<double> f0, f1;
+  const double e0 = p.evaluate(f0);
+  for (int n = 0; n < p.mesh.num_nodes(); ++n) {
+    p.x[3 * n] += 3.0;
+    p.x[3 * n + 1] -= 1024.0;
+    p.x[3 * n + 2] += 17.0;
+  }
+  const double e1 = p.evaluate(f1);
+  double fmax = 0;
+  for (const double v : f0) fmax = std::max(fmax, std::abs(v));
+  EXPECT_GT(fmax, 0.0);
+  EXPECT_EQ(f0, f1);
+  EXPECT_EQ(e0, e1);
+}
+
+// Each element's corner 0 takes minus the sum of the other two corners'
+// forces: f_0 + (f_1 + f_2) is zero to the last bit for every element,
+// membrane and bending across element edges, so the elements add no net
+// force of round-off. (The hinges against a held edge's ghost add their
+// forces apart, with their own round-off: the patch's edges are free here.)
+TEST(ShellRfT3, EachElementsForcesSumToZero) {
+  for (const bool bending : {false, true}) {
+    Patch p(0.5, bending, {6, 5});
+    std::fill(p.edges.begin(), p.edges.end(), sdk::kEdgeFree);
+    p.configure_with(p.laws);
+    for (int n = 0; n < p.mesh.num_nodes(); ++n) {
+      const double X = p.mesh.x[3 * n], Y = p.mesh.x[3 * n + 1];
+      p.x[3 * n] = 1.01 * X - 0.02 * Y;
+      p.x[3 * n + 1] = Y + 0.015 * X;
+      p.x[3 * n + 2] = 2.0 * X * X + 1.5 * X * Y - 3.0 * Y * Y;
+    }
+    p.corner_slots = true;
+    std::vector<double> f;
+    p.evaluate(f);
+    int nonzero = 0;
+    for (int e = 0; e < p.mesh.num_elements(); ++e)
+      for (int d = 0; d < 3; ++d) {
+        const double* c = &f[9 * e + d];
+        nonzero += c[0] != 0.0 && c[3] != 0.0 && c[6] != 0.0;
+        EXPECT_EQ(c[0] + (c[3] + c[6]), 0.0) << "element " << e << " component " << d << " bending " << bending;
+      }
+    EXPECT_EQ(nonzero, 3 * p.mesh.num_elements()) << "bending " << bending;
+  }
 }
 
 // Without step factors the element takes a range's smallest bending step

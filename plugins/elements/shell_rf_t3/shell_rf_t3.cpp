@@ -160,9 +160,8 @@ double hinge_angle_block(int h, const int* __restrict ic, const int* __restrict 
 #pragma omp simd reduction(max : beyond)
   for (int j = 0; j < h; ++j) {
     const HingeGeometry g = hinge_geometry(x, ic[j], ip[j], iq[j], io[j]);
-    const double m0 = g.nn1 * g.ne2 - g.nn2 * g.ne1, m1 = g.nn2 * g.ne0 - g.nn0 * g.ne2,
-                 m2 = g.nn0 * g.ne1 - g.nn1 * g.ne0;  // Nn x Ne
-    const double y = m0 * g.e0 + m1 * g.e1 + m2 * g.e2, xx = g.len * (g.ne0 * g.nn0 + g.ne1 * g.nn1 + g.ne2 * g.nn2);
+    const double y = g.len * (g.o0 * g.ne0 + g.o1 * g.ne1 + g.o2 * g.ne2),
+                 xx = g.ne0 * g.nn0 + g.ne1 * g.nn1 + g.ne2 * g.nn2;
     const double d = atan2_small_approx(y, xx) - theta0[j];
     const bool in_range = (xx > 0) & (std::abs(y) <= 0.66 * xx);
     dtheta[j] = in_range ? d : std::numeric_limits<double>::quiet_NaN();
@@ -280,14 +279,16 @@ void value_range(int n, const double* __restrict v, double& lo, double& hi) {
   hi = b;
 }
 
-// Strains of n elements: F e1 = sum_a x_a g1_a and F e2 = sum_a x_a g2_a
+// Strains of n elements: F e1 = sum_a x_a g1_a and F e2 = sum_a x_a g2_a,
+// formed as F e1 = (x_1 - x_0) g1_1 + (x_2 - x_0) g1_2 (the gradients of a
+// corner sum to zero: g_0 = -(g_1 + g_2)), so that the terms are of the
+// element's size whatever the distance of the part from the origin
 // (component d of element q at ff[d ld + q] and ff[(3 + d) ld + q];
-// g1_a of element q at g[a gld + q], g2_a at g[(3 + a) gld + q], the
+// g1_1, g1_2, g2_1, g2_2 of element q at g[r gld + q], r = 0 .. 3, the
 // offset 3 i of its node a in x at off[a ols + q]) and
 // C = (F e1 . F e1, F e2 . F e2, F e1 . F e2) at C[3 q ..]. Returns 1 if
 // some element has det C <= 1e-12 or not a number (collapsed or inverted),
-// 0 otherwise. One vector pass, the operations of math.hpp's add, scale
-// and dot in their order.
+// 0 otherwise. One vector pass; fields() forms F the same way.
 TS_VECTOR_CLONES
 double strain_block(int n, int ld, const int* __restrict off, int ols, const double* __restrict x,
                     const double* __restrict g, int gld, double* __restrict ff, double* __restrict C) {
@@ -295,15 +296,12 @@ double strain_block(int n, int ld, const int* __restrict off, int ols, const dou
 #pragma omp simd reduction(max : bad)
   for (int q = 0; q < n; ++q) {
     const int i0 = off[q], i1 = off[ols + q], i2 = off[2 * ols + q];
-    const double ga = g[q], gb = g[gld + q], gc = g[2 * gld + q];
-    const double ha = g[3 * gld + q], hb = g[4 * gld + q], hc = g[5 * gld + q];
+    const double gb = g[q], gc = g[gld + q], hb = g[2 * gld + q], hc = g[3 * gld + q];
     const double x0 = x[i0], x1 = x[i0 + 1], x2 = x[i0 + 2];
-    const double y0 = x[i1], y1 = x[i1 + 1], y2 = x[i1 + 2];
-    const double z0 = x[i2], z1 = x[i2 + 1], z2 = x[i2 + 2];
-    const double f10 = ((0.0 + x0 * ga) + y0 * gb) + z0 * gc, f11 = ((0.0 + x1 * ga) + y1 * gb) + z1 * gc,
-                 f12 = ((0.0 + x2 * ga) + y2 * gb) + z2 * gc;
-    const double f20 = ((0.0 + x0 * ha) + y0 * hb) + z0 * hc, f21 = ((0.0 + x1 * ha) + y1 * hb) + z1 * hc,
-                 f22 = ((0.0 + x2 * ha) + y2 * hb) + z2 * hc;
+    const double y0 = x[i1] - x0, y1 = x[i1 + 1] - x1, y2 = x[i1 + 2] - x2;
+    const double z0 = x[i2] - x0, z1 = x[i2 + 1] - x1, z2 = x[i2 + 2] - x2;
+    const double f10 = y0 * gb + z0 * gc, f11 = y1 * gb + z1 * gc, f12 = y2 * gb + z2 * gc;
+    const double f20 = y0 * hb + z0 * hc, f21 = y1 * hb + z1 * hc, f22 = y2 * hb + z2 * hc;
     ff[q] = f10, ff[ld + q] = f11, ff[2 * ld + q] = f12;
     ff[3 * ld + q] = f20, ff[4 * ld + q] = f21, ff[5 * ld + q] = f22;
     const double c0 = f10 * f10 + f11 * f11 + f12 * f12;
@@ -335,7 +333,8 @@ void element_temperature_block(int n, const int* __restrict tri, const double* _
 // Membrane forces of n elements (F e1, F e2 of element q at ff[d ld + q],
 // ff[(3 + d) ld + q]), f_a = A0 (c1 F e1 + c2 F e2) with c1 = S11 g1_a +
 // S12 g2_a, c2 = S12 g1_a + S22 g2_a (component d of node a of element q
-// at mf[(3 a + d) ld + q]; g1_a, g2_a as strain_block reads them), and
+// at mf[(3 a + d) ld + q]; g1_a, g2_a of corners 1 and 2 as strain_block
+// reads them, those of corner 0 minus their sums), and
 // each element's stable step: smallest height
 // (2 area / longest edge) times inv_c (infinite when has_stiffness is
 // false). The height comes from C (C[3 q ..], Voigt): the current edge
@@ -377,13 +376,13 @@ template <bool kBend, bool kSteps>
     const double f20 = ff[3 * ld + q], f21 = ff[4 * ld + q], f22 = ff[5 * ld + q];
     const double S11 = S[3 * q], S22 = S[3 * q + 1], S12 = S[3 * q + 2], A0 = area[q];
     const double C11 = C[3 * q], C22 = C[3 * q + 1], C12 = C[3 * q + 2];
-    const double a0 = g[q], a1 = g[gld + q], a2 = g[2 * gld + q];
-    const double b0 = g[3 * gld + q], b1 = g[4 * gld + q], b2 = g[5 * gld + q];
+    const double a1 = g[q], a2 = g[gld + q], b1 = g[2 * gld + q], b2 = g[3 * gld + q];
+    const double a0 = -(a1 + a2), b0 = -(b1 + b2);
     const double Q0 = C11 * b0 * b0 - 2 * C12 * a0 * b0 + C22 * a0 * a0;
     const double Q1 = C11 * b1 * b1 - 2 * C12 * a1 * b1 + C22 * a1 * a1;
     const double Q2 = C11 * b2 * b2 - 2 * C12 * a2 * b2 + C22 * a2 * a2;
     const double detc = C11 * C22 - C12 * C12;
-    double w0 = 0, w1 = 0, w2 = 0;  // the bending forces on the corners along N
+    double w1 = 0, w2 = 0;  // the bending forces on corners 1 and 2 along N (corner 0: minus their sum)
     if (kBend) {
       const double m0 = hm[q] + hm_all[nidx[q]], m1 = hm[hld + q] + hm_all[nidx[nld + q]],
                    m2 = hm[2 * hld + q] + hm_all[nidx[2 * nld + q]];
@@ -397,19 +396,29 @@ template <bool kBend, bool kSteps>
       const double t0 = m0 * (id * (r1 * r2)), t1 = m1 * (id * (r0 * r2)), t2 = m2 * (id * (r0 * r1));
       // edge k: corner k t_k Q_k, corner k + 2 t_k P_k, corner k + 1 minus both
       const double u0 = t0 * Q0, v0 = t0 * P0, u1 = t1 * Q1, v1 = t1 * P1, u2 = t2 * Q2, v2 = t2 * P2;
-      w0 = (u0 + v1) - (u2 + v2);
       w1 = (u1 + v2) - (u0 + v0);
       w2 = (u2 + v0) - (u1 + v1);
     }
     const double N0 = f11 * f22 - f12 * f21, N1 = f12 * f20 - f10 * f22, N2 = f10 * f21 - f11 * f20;
-    for (int a = 0; a < 3; ++a) {
-      const double ga = g[a * gld + q], gb = g[(3 + a) * gld + q];
+    // Corners 1 and 2; corner 0 takes minus their sum (the membrane
+    // gradients and the bending weights w_k sum to zero), so that the
+    // element's forces add up to zero to the last bit.
+    double sum0 = 0, sum1 = 0, sum2 = 0;
+    for (int a = 1; a < 3; ++a) {
+      const double ga = a == 1 ? a1 : a2, gb = a == 1 ? b1 : b2;
       const double c1 = A0 * (S11 * ga + S12 * gb), c2 = A0 * (S12 * ga + S22 * gb);
-      const double w = a == 0 ? w0 : a == 1 ? w1 : w2;
-      mf[(3 * a) * ld + q] = kBend ? (c1 * f10 + c2 * f20) + w * N0 : c1 * f10 + c2 * f20;
-      mf[(3 * a + 1) * ld + q] = kBend ? (c1 * f11 + c2 * f21) + w * N1 : c1 * f11 + c2 * f21;
-      mf[(3 * a + 2) * ld + q] = kBend ? (c1 * f12 + c2 * f22) + w * N2 : c1 * f12 + c2 * f22;
+      const double w = a == 1 ? w1 : w2;
+      const double m0 = kBend ? (c1 * f10 + c2 * f20) + w * N0 : c1 * f10 + c2 * f20;
+      const double m1 = kBend ? (c1 * f11 + c2 * f21) + w * N1 : c1 * f11 + c2 * f21;
+      const double m2 = kBend ? (c1 * f12 + c2 * f22) + w * N2 : c1 * f12 + c2 * f22;
+      mf[(3 * a) * ld + q] = m0;
+      mf[(3 * a + 1) * ld + q] = m1;
+      mf[(3 * a + 2) * ld + q] = m2;
+      sum0 += m0, sum1 += m1, sum2 += m2;
     }
+    mf[q] = -sum0;
+    mf[ld + q] = -sum1;
+    mf[2 * ld + q] = -sum2;
     double qmax = Q0;
     qmax = qmax < Q1 ? Q1 : qmax;
     qmax = qmax < Q2 ? Q2 : qmax;
@@ -604,7 +613,7 @@ class ShellRfT3 final : public ElementKernel {
       areal_mass_ = s.density * part_->thickness;
       const int ne = part_->num_elements;
       mld_ = padded_ld(ne);
-      g_.assign(6 * static_cast<std::size_t>(mld_), 0.0);
+      g_.assign(4 * static_cast<std::size_t>(mld_), 0.0);
       off_.assign(3 * static_cast<std::size_t>(mld_), 0);
       for (int e = 0; e < ne; ++e)
         for (int a = 0; a < 3; ++a) off_[a * mld_ + e] = 3 * part_->triangles[3 * e + a];
@@ -626,11 +635,12 @@ class ShellRfT3 final : public ElementKernel {
           e1_[3 * e + d] = f[d];
           e2_[3 * e + d] = m[d];
         }
-        // grad0 N_a = n x (X_c - X_b) / (2 A0), components on (f, m).
-        for (int a = 0; a < 3; ++a) {
+        // grad0 N_a = n x (X_c - X_b) / (2 A0), components on (f, m), of
+        // corners 1 and 2 (corner 0's is minus their sum).
+        for (int a = 1; a < 3; ++a) {
           const Vec3 g = scale(cross(n, sub(X[(a + 2) % 3], X[(a + 1) % 3])), 1.0 / two_a);
-          g_[a * mld_ + e] = dot(g, f);
-          g_[(3 + a) * mld_ + e] = dot(g, m);
+          g_[(a - 1) * mld_ + e] = dot(g, f);
+          g_[(a + 1) * mld_ + e] = dot(g, m);
         }
       }
       if (bending_) {
@@ -804,12 +814,10 @@ class ShellRfT3 final : public ElementKernel {
     for (int e = 0; e < ne; ++e) {
       // F e1 and F e2, as internal_forces forms them (shear angle, fibre).
       const int* t = &part_->triangles[3 * e];
-      Vec3 f1{0, 0, 0}, f2{0, 0, 0};
-      for (int a = 0; a < 3; ++a) {
-        const Vec3 xa = load3(part_->x.data(), t[a]);
-        f1 = add(f1, scale(xa, g_[a * mld_ + e]));
-        f2 = add(f2, scale(xa, g_[(3 + a) * mld_ + e]));
-      }
+      const Vec3 x0 = load3(part_->x.data(), t[0]);
+      const Vec3 d1 = sub(load3(part_->x.data(), t[1]), x0), d2 = sub(load3(part_->x.data(), t[2]), x0);
+      const Vec3 f1 = add(scale(d1, g_[e]), scale(d2, g_[mld_ + e]));
+      const Vec3 f2 = add(scale(d1, g_[2 * mld_ + e]), scale(d2, g_[3 * mld_ + e]));
       if (!out.shear_angle.empty()) {  // gamma = asin(I_sh), I_sh = C12 / sqrt(C11 C22)
         const double ish = dot(f1, f2) / std::sqrt(dot(f1, f1) * dot(f2, f2));
         out.shear_angle[e] = std::asin(std::clamp(ish, -1.0, 1.0)) * 180.0 / M_PI;
@@ -839,8 +847,11 @@ class ShellRfT3 final : public ElementKernel {
     // both counter-clockwise; |N| = len * height of c (of o) over the edge.
     const Vec3 Ne = cross(edge, cp);
     const Vec3 Nn = cross(op, edge);
-    // atan2 is invariant to scaling both arguments by |Ne| |Nn| len.
-    return atan2_small(dot(cross(Nn, Ne), edge), len * dot(Ne, Nn));
+    // (Nn x Ne) . edge = |Ne| |Nn| len sin theta and Ne . Nn = |Ne| |Nn|
+    // cos theta; (Nn x Ne) = (op . Ne) edge (as Nn = op x edge and
+    // Ne = edge x cp), and atan2 is invariant to scaling both arguments by
+    // len > 0.
+    return atan2_small(len * dot(op, Ne), dot(Ne, Nn));
   }
 
   // Hinge angle between element (c, p, q) and a ghost neighbour across its
@@ -1672,7 +1683,9 @@ class ShellRfT3 final : public ElementKernel {
   double areal_mass_ = 0;
   bool keep_old_ = true;
   // g_: the initial shape-function gradients grad0 N_a on the material
-  // frame (f, m): g1_a of element e at a mld_ + e, g2_a at (3 + a) mld_ + e.
+  // frame (f, m) of corners a = 1, 2: g1_a of element e at (a - 1) mld_ + e,
+  // g2_a at (a + 1) mld_ + e (corner 0's: minus the sums, so that the three
+  // sum to zero exactly and a translation leaves F as it is).
   // off_: the offset 3 i in x of node a of element e at a mld_ + e.
   int mld_ = 0;
   large_vector<int> off_;
@@ -1688,7 +1701,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.5.4";
+  d.version = "0.6.0";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1696,4 +1709,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.5.4", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.6.0", register_all)
