@@ -87,8 +87,10 @@ void PluginRegistry::load_library(const std::filesystem::path& file) {
                            "): rebuild the plugin against this SDK");
   }
   current_library_ = path;
+  current_library_version_ = entry->library_version ? entry->library_version : "";
   entry->register_all(*this);
   current_library_.clear();
+  current_library_version_.clear();
   keep_alive().push_back(std::move(lib));
 }
 
@@ -109,7 +111,7 @@ void PluginRegistry::add(const sdk::Descriptor& d, void* create) {
                       records_[key].library + "'");
     return;
   }
-  records_[key] = PluginRecord{d, create, current_library_};
+  records_[key] = PluginRecord{d, create, current_library_, current_library_version_};
   order_.push_back(key);
 }
 

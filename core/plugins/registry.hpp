@@ -20,6 +20,7 @@ struct PluginRecord {
   sdk::Descriptor descriptor;
   void* create = nullptr;  // factory, cast by kind
   std::string library;     // file it came from
+  std::string library_version;  // the version the library declares (THERMOSTAMP_PLUGIN)
 };
 
 class PluginRegistry final : public sdk::Registrar {
@@ -58,6 +59,7 @@ class PluginRegistry final : public sdk::Registrar {
   std::vector<std::string> used_;
   std::vector<std::string> errors_;
   std::string current_library_;
+  std::string current_library_version_;
 };
 
 // Validates a JSON object against a descriptor: unknown keys (with "did you

@@ -56,5 +56,18 @@ TEST(Registry, FindsInTreePluginsAndListsValidNames) {
   }
 }
 
+// Each of the project's plugin libraries holds one plugin, and the version
+// its descriptor shows (`thermostamp plugins`, the job reference) is the
+// version the library declares.
+TEST(Registry, EachPluginShowsItsLibrarysVersion) {
+  PluginRegistry r;
+  r.load_all();
+  EXPECT_TRUE(r.load_errors().empty());
+  const auto all = r.all();
+  EXPECT_GE(all.size(), 9u);
+  for (const PluginRecord* rec : all)
+    EXPECT_EQ(rec->descriptor.version, rec->library_version) << rec->descriptor.name << " from " << rec->library;
+}
+
 }  // namespace
 }  // namespace ts

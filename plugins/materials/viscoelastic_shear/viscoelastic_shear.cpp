@@ -71,10 +71,11 @@ struct ShearStress {
   const double i41 = C0 * 1.0 + C1 * 0.0 + 2 * C2 * 0.0;
   const double i42 = C0 * l22_0 + C1 * l22_1 + 2 * C2 * l22_2;
   const double i412 = C0 * l12_0 + C1 * l12_1 + 2 * C2 * l12_2;
-  const double r = std::sqrt(i41 * i42), sh = i412 / r;
-  const double dsh0 = l12_0 / r - 0.5 * sh * (1.0 / i41 + l22_0 / i42);
-  const double dsh1 = l12_1 / r - 0.5 * sh * (0.0 / i41 + l22_1 / i42);
-  const double dsh2 = l12_2 / r - 0.5 * sh * (0.0 / i41 + l22_2 / i42);
+  const double pp = i41 * i42, inv = 1.0 / pp, ir = std::sqrt(pp) * inv, sh = i412 * ir;
+  const double a41 = i42 * inv, a42 = i41 * inv;  // 1 / I41, 1 / I42
+  const double dsh0 = l12_0 * ir - 0.5 * sh * (1.0 * a41 + l22_0 * a42);
+  const double dsh1 = l12_1 * ir - 0.5 * sh * (0.0 * a41 + l22_1 * a42);
+  const double dsh2 = l12_2 * ir - 0.5 * sh * (0.0 * a41 + l22_2 * a42);
   return shear_polynomial(sh, dsh0, dsh1, dsh2, k1, k2, k3, omega);
 }
 
@@ -82,15 +83,15 @@ struct ShearStress {
 // l12 = (0, 0, 1/2). Every product with those zeros is a signed zero that
 // the sums and differences of shear_stress() drop without a trace (C11,
 // C22 > 0 and all values finite), so i41 = C0, i42 = C1, i412 = C2 and the
-// terms below are the same bits, with 4 divisions instead of 10 and no
-// direction read.
+// terms below are the same bits, without the products by 0 and 1 and
+// without a direction read.
 [[gnu::always_inline]] inline ShearStress ud_shear_stress(double C0, double C1, double C2, double k1, double k2,
                                                           double k3, double omega) {
   const double i41 = C0, i42 = C1, i412 = C2;
-  const double r = std::sqrt(i41 * i42), sh = i412 / r;
-  const double dsh0 = 0.0 - 0.5 * sh * (1.0 / i41);
-  const double dsh1 = 0.0 - 0.5 * sh * (1.0 / i42);
-  const double dsh2 = 0.5 / r;
+  const double pp = i41 * i42, inv = 1.0 / pp, ir = std::sqrt(pp) * inv, sh = i412 * ir;
+  const double dsh0 = 0.0 - 0.5 * sh * (i42 * inv);
+  const double dsh1 = 0.0 - 0.5 * sh * (i41 * inv);
+  const double dsh2 = 0.5 * ir;
   return shear_polynomial(sh, dsh0, dsh1, dsh2, k1, k2, k3, omega);
 }
 // The shear stress at point q: UD (kUd, no directions) or with the weft
@@ -582,7 +583,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.2.2";
+  d.version = "1.3.0";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
@@ -605,4 +606,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.2.2", register_all)
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.3.0", register_all)

@@ -53,7 +53,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "woven_hyperelastic";
-  d.version = "1.0.1";
+  d.version = "1.1.0";
   d.summary = "Woven membrane: warp and weft elongation (log strain) and in-plane shear, by invariants";
   const ParamSpec ksh = list_param("k_sh", "[0, 0, 0]", "N/m",
                                    "shear coefficients k_sh^1..3 of w_sh = sum k_sh^i I_sh^(2i), I_sh = sin(gamma)", 3);
@@ -65,4 +65,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_woven_hyperelastic", "1.0.1", register_all)
+THERMOSTAMP_PLUGIN("material_woven_hyperelastic", "1.1.0", register_all)

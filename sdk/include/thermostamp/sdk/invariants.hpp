@@ -68,9 +68,10 @@ inline Invariants invariants(const Sym2& C, const FibreFrame& f = {}, unsigned w
     for (int k = 0; k < 3; ++k) v.de2[k] = l22[k] / (2 * v.i42);
   }
   if (which & kSh) {
-    const double r = std::sqrt(v.i41 * v.i42);
-    v.sh = v.i412 / r;
-    for (int k = 0; k < 3; ++k) v.dsh[k] = l12[k] / r - 0.5 * v.sh * (l11[k] / v.i41 + l22[k] / v.i42);
+    // One division: 1 / r = sqrt(I41 I42) / (I41 I42), 1 / I41 = I42 / (I41 I42).
+    const double p = v.i41 * v.i42, inv = 1.0 / p, ir = std::sqrt(p) * inv;
+    v.sh = v.i412 * ir;
+    for (int k = 0; k < 3; ++k) v.dsh[k] = l12[k] * ir - 0.5 * v.sh * (l11[k] * (v.i42 * inv) + l22[k] * (v.i41 * inv));
   }
   if (which & kLt) {
     v.lt = 0.5 * log_near_one(v.i3 / v.i41);
