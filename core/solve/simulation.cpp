@@ -776,8 +776,8 @@ void Simulation::build_mechanics() {
         if (mech_[p]->block_error[b].empty() && mech_[p]->block_fail[b] >= 0)
           throw JobError(parts_[p]->def->pointer + "/mesh",
                          "element " + std::to_string(mech_[p]->block_fail[b]) + " of part '" + parts_[p]->def->name +
-                             "' is degenerate in the initial mesh (zero area, or too small for the precision of its "
-                             "coordinates)");
+                             "' is degenerate in the initial mesh (zero area, a sliver beyond the precision of its "
+                             "coordinates, or sizes beyond the range of numbers)");
     throw;
   }
   want_element_dt_ = false;

@@ -324,8 +324,8 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
         a = std::min(a, mx_[9 * e + 3 * k + d]);
         b = std::max(b, mx_[9 * e + 3 * k + d]);
       }
-      range[e][d] = std::clamp(static_cast<int>((a - glo_[d]) / cell_), 0, gn_[d] - 1);
-      range[e][3 + d] = std::clamp(static_cast<int>((b - glo_[d]) / cell_), 0, gn_[d] - 1);
+      range[e][d] = sdk::bucket_index(a, glo_[d], cell_, gn_[d]);
+      range[e][3 + d] = sdk::bucket_index(b, glo_[d], cell_, gn_[d]);
     }
     for (int i = range[e][0]; i <= range[e][3]; ++i)
       for (int j = range[e][1]; j <= range[e][4]; ++j)

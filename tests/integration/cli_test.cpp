@@ -701,6 +701,9 @@ TEST(Cli, MechanicsUnusableStepIsAnInputError) {
       // Slivers of 1e-3 x 1e-20 m: their shape-function gradients (1e20 / m
       // across) lose every digit of C = F^T F to round-off.
       {"degenerate_mesh", [](json& j) { j["parts"][0]["mesh"]["size"] = {0.015, 1.5e-19}; j["parts"][0]["mesh"]["divisions"] = {15, 15}; }, "error: /parts/0/mesh: element"},
+      // Elements of 1e299 m: their areas overflow (the contact search's
+      // grid over them once failed to allocate, mid-run).
+      {"huge_mesh", [](json& j) { j["parts"][0]["mesh"]["size"] = {1e300, 1e300}; }, "error: /parts/0/mesh: element"},
   };
   for (const auto& c : cases) {
     const auto dir = temp_dir("unusable_" + c.name);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -60,6 +61,28 @@ sdk::ThermalContactMap ply_links(const PluginRecord& r, const ShellMesh& a, cons
 // of b's triangles within 1e-12 m (round-off is about 1e-18 m here; a
 // search that skips the closest triangle misses by 1e-6 m or more). Nodes
 // beyond reach get no link.
+// The bucket grid of the contact searches: a box or cell beyond the range
+// of doubles gives one cell (it gave a NaN cell count, a failed allocation),
+// and a coordinate far outside the grid or NaN maps to a border cell
+// without an int conversion out of range.
+TEST(BucketGrid, NonFiniteBoxesAndFarPointsStayInTheGrid) {
+  int n[3] = {0, 0, 0};
+  const double inf = std::numeric_limits<double>::infinity();
+  // hi - lo overflows in the first box
+  for (const auto& hi : {sdk::Vec3{1e308, 1e308, 0}, sdk::Vec3{inf, 1, 1}, sdk::Vec3{std::nan(""), 1, 1}}) {
+    const double cell = sdk::bucket_grid({-1e308, -1e308, 0}, hi, 1e-3, n);
+    EXPECT_EQ(n[0] * n[1] * n[2], 1);
+    EXPECT_EQ(cell, inf);
+    EXPECT_EQ(sdk::bucket_index(1e300, -1e300, cell, n[0]), 0);
+  }
+  const double cell = sdk::bucket_grid({0, 0, 0}, {1, 1, 1}, 0.1, n);
+  EXPECT_GT(n[0], 1);
+  EXPECT_EQ(sdk::bucket_index(1e300, 0, cell, n[0]), n[0] - 1);
+  EXPECT_EQ(sdk::bucket_index(-1e300, 0, cell, n[0]), 0);
+  EXPECT_EQ(sdk::bucket_index(std::nan(""), 0, cell, n[0]), 0);
+  EXPECT_EQ(sdk::bucket_index(0.55, 0, cell, n[0]), static_cast<int>(0.55 / cell));
+}
+
 TEST(PlyPlySearch, TargetsAreTheClosestPointsOfTheOtherPly) {
   PluginRegistry registry;
   const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");

@@ -222,7 +222,7 @@ class Candidates {
       }
     int n[3];
     const double cell = sdk::bucket_grid(lo, hi, std::max(h + 2 * inflate, 1e-12), n);
-    auto cell_of = [&](double v, int d) { return std::clamp(static_cast<int>((v - lo[d]) / cell), 0, n[d] - 1); };
+    auto cell_of = [&](double v, int d) { return sdk::bucket_index(v, lo[d], cell, n[d]); };
     const std::size_t ncell = static_cast<std::size_t>(n[0]) * n[1] * n[2];
     start_.assign(ncell + 1, 0);
     std::vector<int> range(6 * static_cast<std::size_t>(b.num_elements));
@@ -954,7 +954,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.6.0";
+  d.version = "0.6.1";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces";
   d.params = {
@@ -998,4 +998,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.6.0", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.6.1", ts::contact::register_all)

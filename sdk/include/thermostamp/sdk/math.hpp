@@ -18,6 +18,7 @@
 #include <array>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ts::sdk {
 
@@ -43,8 +44,16 @@ inline Vec3 load3(const double* p, int i) { return {p[3 * i], p[3 * i + 1], p[3 
 
 // Cubic cells of a bucket grid over the box [lo, hi]: starts from `cell`
 // and grows it by half until the grid has at most max_cells cells; writes
-// the cells per axis to n and returns the cell size.
+// the cells per axis to n and returns the cell size. A box or cell that
+// is not finite (positions beyond the range of doubles) gets one cell of
+// infinite size.
 inline double bucket_grid(const Vec3& lo, const Vec3& hi, double cell, int n[3], long long max_cells = 4'000'000) {
+  bool finite = std::isfinite(cell) && cell > 0;
+  for (int d = 0; d < 3; ++d) finite = finite && std::isfinite(hi[d] - lo[d]);
+  if (!finite) {
+    n[0] = n[1] = n[2] = 1;
+    return std::numeric_limits<double>::infinity();
+  }
   for (;;) {
     double cells = 1;  // a double: three counts of up to 1e9 overflow a long long
     for (int d = 0; d < 3; ++d) {
@@ -55,6 +64,15 @@ inline double bucket_grid(const Vec3& lo, const Vec3& hi, double cell, int n[3],
     if (cells <= static_cast<double>(max_cells)) return cell;
     cell *= 1.5;
   }
+}
+
+// The cell along one axis of a bucket grid (origin lo, cells of size
+// `cell`, n of them) that holds coordinate v, clamped to [0, n - 1] as a
+// double, so that a point far outside (or NaN) never reaches the int
+// conversion out of its range.
+inline int bucket_index(double v, double lo, double cell, int n) {
+  const double t = (v - lo) / cell, top = n - 1;
+  return static_cast<int>(!(t >= 0) ? 0.0 : t > top ? top : t);
 }
 
 // atan2(y, x). For x > 0 and |y| <= 0.66 x (|angle| < 33.4 degrees: the
