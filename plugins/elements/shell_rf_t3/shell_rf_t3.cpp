@@ -280,8 +280,8 @@ void value_range(int n, const double* __restrict v, double& lo, double& hi) {
 }
 
 // Strains of n elements: F e1 = sum_a x_a g1_a and F e2 = sum_a x_a g2_a,
-// formed as F e1 = (x_1 - x_0) g1_1 + (x_2 - x_0) g1_2 (the gradients of a
-// corner sum to zero: g_0 = -(g_1 + g_2)), so that the terms are of the
+// formed as F e1 = (x_1 - x_0) g1_1 + (x_2 - x_0) g1_2 (the three corners'
+// gradients sum to zero: g_0 = -(g_1 + g_2)), so that the terms are of the
 // element's size whatever the distance of the part from the origin
 // (component d of element q at ff[d ld + q] and ff[(3 + d) ld + q];
 // g1_1, g1_2, g2_1, g2_2 of element q at g[r gld + q], r = 0 .. 3, the
@@ -1685,7 +1685,8 @@ class ShellRfT3 final : public ElementKernel {
   // g_: the initial shape-function gradients grad0 N_a on the material
   // frame (f, m) of corners a = 1, 2: g1_a of element e at (a - 1) mld_ + e,
   // g2_a at (a + 1) mld_ + e (corner 0's: minus the sums, so that the three
-  // sum to zero exactly and a translation leaves F as it is).
+  // sum to zero exactly and F depends on the positions relative to corner 0
+  // only).
   // off_: the offset 3 i in x of node a of element e at a mld_ + e.
   int mld_ = 0;
   large_vector<int> off_;
