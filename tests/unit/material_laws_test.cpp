@@ -153,6 +153,46 @@ TEST(MaterialLaws, UdBlockMatchesPointwiseInvariants) {
   std::printf("ud_hyperelastic block against pointwise invariants: largest relative difference %.3g\n", worst);
 }
 
+// Points whose strains are beyond the first vector pass's series (C11 - 1
+// or det C / C11 - 1 beyond 1e-2, common across the fibres in forming) are
+// evaluated again in a second vector pass, with ln(1 + x) within 0.25 by
+// log1p_wide, and beyond that with the library's logarithm. The energies
+// of points on both sides of 0.25 against long-double logarithms of the
+// same arguments: within 6 units in the last place (w = k_f I_e1^2 +
+// p_ct I_lt^2, each logarithm within a unit, then squares, products and a
+// sum; the library's logarithm everywhere gives 5.3e-16 here, log1p_wide
+// 4.1e-16, a wrong coefficient of its series 5e-14).
+TEST(MaterialLaws, UdWideStrainsMatchLongDoubleLogarithms) {
+  const double kf = 5.0e6, pct = 50.0;
+  Law l("ud_hyperelastic", {{"k_fibre", kf}, {"p_ct", pct}});
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  const int n = 400;
+  std::vector<double> C(3 * n), S(3 * n), W(n), T(n, 280.0);
+  for (int q = 0; q < n; ++q) {
+    // C11 = 1 + xa, det C / C11 = 1 + xt, C12 small: one of xa, xt at
+    // most 1e-2 in every fourth point
+    const double xa = q % 4 == 0 ? 0.005 * u(rng) : u(rng), xt = u(rng), c = 0.01 * u(rng);
+    const double a = 1 + xa, b = (1 + xt) + c * c / a;
+    C[3 * q] = a, C[3 * q + 1] = b, C[3 * q + 2] = c;
+  }
+  ASSERT_TRUE(l.law->evaluate(block_of(C, T, S, W)).ok);
+  double worst = 0;
+  int wide = 0;
+  for (int q = 0; q < n; ++q) {
+    const double a = C[3 * q], b = C[3 * q + 1], c = C[3 * q + 2];
+    const double i3 = a * b - c * c, y = i3 / a;  // the arguments as the law forms them
+    const long double e1 = 0.5L * logl(a), lt = 0.5L * logl(y);
+    const long double w = kf * e1 * e1 + pct * lt * lt;
+    worst = std::max(worst, static_cast<double>(fabsl(W[q] - w) / w));
+    wide += std::abs(a - 1) < 0.25 && std::abs(a - 1) >= 1e-2;
+  }
+  EXPECT_GT(wide, n / 2);
+  EXPECT_LT(worst, 6 * 1.1102230246251565e-16);
+  std::printf("ud_hyperelastic beyond 1e-2: largest relative difference of w from long-double logarithms %.3g "
+              "(%d points)\n", worst, n);
+}
+
 // Without shear coefficients (all +0, the UD card's case: viscoelastic_shear
 // carries the shear) ud_hyperelastic leaves the shear terms out. Each of
 // them is a signed zero there, so the stresses and energies must be the

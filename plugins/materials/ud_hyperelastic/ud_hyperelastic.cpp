@@ -16,16 +16,24 @@ namespace {
 using namespace ts::sdk;
 
 // Per-thread buffers of a block: points to evaluate again, energies when
-// the caller wants none.
+// the caller wants none; the points of the wide pass (their indices, C,
+// S, W, and which of them are beyond its range too).
 struct Scratch {
   std::vector<double> redo;  // 0 or 1 (a double: a narrower type would widen the vector loops)
   std::vector<double> energy;
+  std::vector<int> idx;
+  std::vector<double> wc, ws, ww, wredo;
 };
 Scratch& scratch(std::size_t n) {
   thread_local Scratch s;
   if (s.redo.size() < n) {
     s.redo.resize(n);
     s.energy.resize(n);
+    s.idx.resize(n);
+    s.wc.resize(3 * n);
+    s.ws.resize(3 * n);
+    s.ww.resize(n);
+    s.wredo.resize(n);
   }
   return s;
 }
@@ -36,29 +44,52 @@ inline double log1p_series(double x) {
   return x * (1 - x * (1.0 / 2 - x * (1.0 / 3 - x * (1.0 / 4 - x * (1.0 / 5 - x * (1.0 / 6 - x * (1.0 / 7 - x * (1.0 / 8))))))));
 }
 
+// The range of log1p_wide: |x| < kWideRange.
+constexpr double kWideRange = 0.25;
+// ln(1 + f) for |f| < kWideRange, as the library's logarithm does it
+// (fdlibm): with s = f / (2 + f), ln(1 + f) = 2 atanh(s) = 2 s + s R,
+// R = 2/3 s^2 + 2/5 s^4 + ..., and 2 s = f - s f, so
+// ln(1 + f) = f - (f^2 / 2 - s (f^2 / 2 + R)). The exact f leads and the
+// rounding of the rest counts at most |f| / 4 as much: within 0.7 units in
+// the last place of the exact value over the range (20 million points;
+// the library's own: 0.52). R by its series to s^18 (|s| < 1/7: the first
+// term left out is below 1e-18 of the result).
+inline double log1p_wide(double f) {
+  const double s = f / (2.0 + f), z = s * s, hfsq = 0.5 * f * f;
+  const double q = 2.0 / 11 + z * (2.0 / 13 + z * (2.0 / 15 + z * (2.0 / 17 + z * (2.0 / 19))));
+  const double R = z * (2.0 / 3 + z * (2.0 / 5 + z * (2.0 / 7 + z * (2.0 / 9 + z * q))));
+  return f - (hfsq - s * (hfsq + R));
+}
+
 // The law at one point, L1 = (1, 0), L2 = (0, 1): I_e1 = 1/2 ln C11,
 // I_lt = 1/2 ln(det C / C11), I_sh = C12 / sqrt(C11 C22),
 //   S = 2 [2 k_f I_e1 dI_e1/dC + 2 p_ct I_lt dI_lt/dC + w_sh' dI_sh/dC],
 //   dI_e1/dC = (1 / 2 C11, 0, 0), dI_lt/dC = 1/2 (C22 / I3 - 1 / C11, C11 / I3, -C12 / I3),
 //   dI_sh/dC = (-I_sh / 2 C11, -I_sh / 2 C22, 1 / 2 sqrt(C11 C22)),
-// with C^-1 as C22 / I3 = C22 (1 / I3) (one division). kSeries: the
-// logarithms by their series (vector loops; the result is right where
+// with C^-1 as C22 / I3 = C22 (1 / I3) (one division). The logarithms
+// (kLog): kSmall, by log1p_series (vector loops; the result is right where
 // C11 - 1 and det C / C11 - 1 are within 1e-2, and *in_range says whether
-// they are), else as log_near_one() (the library's beyond that range).
+// they are); kWide, by log1p_wide (within kWideRange, likewise); kLibrary,
+// as log_near_one() (the library's beyond 1e-2).
 // Without kShear (k_sh all +0) the shear terms are left out: each of them
 // is then a zero, -0 in S11 and S22 and in S12 a zero of the sign of C12,
 // which the sums below keep (the same bits as with them).
-template <bool kSeries, bool kShear = true>
+enum LogForm { kLibrary, kSmall, kWide };
+template <LogForm kLog, bool kShear = true>
 [[gnu::always_inline]] inline void ud_point(const double* __restrict C, double kf, double pct, double k1, double k2,
                                             double k3, double* __restrict S, double* __restrict W, double* in_range) {
   const double a = C[0], b = C[1], c = C[2];
   const double inv_a = 1.0 / a, i3 = a * b - c * c, inv_3 = 1.0 / i3;
   const double xa = a - 1.0, xt = i3 / a - 1.0;  // as the SDK forms I3 / I41
   double e1, lt;
-  if (kSeries) {
+  if (kLog == kSmall) {
     *in_range = (std::abs(xa) < 1e-2) & (std::abs(xt) < 1e-2) ? 1.0 : 0.0;
     e1 = 0.5 * log1p_series(xa);
     lt = 0.5 * log1p_series(xt);
+  } else if (kLog == kWide) {
+    *in_range = (std::abs(xa) < kWideRange) & (std::abs(xt) < kWideRange) ? 1.0 : 0.0;
+    e1 = 0.5 * log1p_wide(xa);
+    lt = 0.5 * log1p_wide(xt);
   } else {
     e1 = 0.5 * log_near_one(a);
     lt = 0.5 * log_near_one(i3 / a);
@@ -80,10 +111,10 @@ template <bool kSeries, bool kShear = true>
   *W = kf * e1 * e1 + pct * lt * lt + wsh;
 }
 
-// The law over n points by the series; redo[q] = 1 where C11 - 1 or
-// det C / C11 - 1 is beyond the series' range.
+// The law over n points by the series (kLog kSmall or kWide); redo[q] = 1
+// where C11 - 1 or det C / C11 - 1 is beyond the series' range.
 // Returns 1 if some point is to be evaluated again, 0 otherwise.
-template <bool kShear>
+template <LogForm kLog, bool kShear>
 [[gnu::always_inline]] inline double ud_body(std::size_t n, const double* __restrict C, double kf, double pct,
                                              const double* ksh, double* __restrict S, double* __restrict W,
                                              double* __restrict redo) {
@@ -92,7 +123,7 @@ template <bool kShear>
 #pragma omp simd reduction(max : any)
   for (std::size_t q = 0; q < n; ++q) {
     double in_range;
-    ud_point<true, kShear>(C + 3 * q, kf, pct, k1, k2, k3, S + 3 * q, W + q, &in_range);
+    ud_point<kLog, kShear>(C + 3 * q, kf, pct, k1, k2, k3, S + 3 * q, W + q, &in_range);
     redo[q] = 1.0 - in_range;
     any = in_range != 0.0 ? any : 1.0;
   }
@@ -101,12 +132,33 @@ template <bool kShear>
 TS_VECTOR_CLONES
 double ud_block(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
                 double* __restrict S, double* __restrict W, double* __restrict redo) {
-  return ud_body<true>(n, C, kf, pct, ksh, S, W, redo);
+  return ud_body<kSmall, true>(n, C, kf, pct, ksh, S, W, redo);
 }
 TS_VECTOR_CLONES
 double ud_block_no_shear(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
                          double* __restrict S, double* __restrict W, double* __restrict redo) {
-  return ud_body<false>(n, C, kf, pct, ksh, S, W, redo);
+  return ud_body<kSmall, false>(n, C, kf, pct, ksh, S, W, redo);
+}
+// The same by log1p_wide, for the points beyond log1p_series' range.
+TS_VECTOR_CLONES
+double ud_block_wide(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
+                     double* __restrict S, double* __restrict W, double* __restrict redo) {
+  return ud_body<kWide, true>(n, C, kf, pct, ksh, S, W, redo);
+}
+TS_VECTOR_CLONES
+double ud_block_wide_no_shear(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
+                              double* __restrict S, double* __restrict W, double* __restrict redo) {
+  return ud_body<kWide, false>(n, C, kf, pct, ksh, S, W, redo);
+}
+// The indices q < n with redo[q] != 0, in order, to idx (branch-free);
+// returns their count.
+std::size_t redo_points(std::size_t n, const double* __restrict redo, int* __restrict idx) {
+  std::size_t m = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    idx[m] = static_cast<int>(q);
+    m += redo[q] != 0 ? 1 : 0;
+  }
+  return m;
 }
 
 class UdHyperelastic final : public MaterialLaw {
@@ -126,18 +178,35 @@ class UdHyperelastic final : public MaterialLaw {
   bool uses_strain_old() const override { return false; }
   Status evaluate(const MaterialBlock& b) const override {
     // Vector pass over the block; the points whose logarithms fall outside
-    // the series' range are evaluated again one by one with the library's.
+    // the series' range (strains beyond about 0.5 %, common across the
+    // fibres in forming) are gathered and evaluated again in a second
+    // vector pass by log1p_wide, and those beyond its range too one by one
+    // with the library's logarithm.
     Scratch& sc = scratch(b.n);
     double* redo = sc.redo.data();
     double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
     if ((shear_ ? ud_block : ud_block_no_shear)(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), W,
                                                 redo) == 0.0)
       return Status::success();
-    // (With k_sh all +0 the full form gives the same bits as the one
-    // without shear terms: see ud_point.)
-    for (std::size_t q = 0; q < b.n; ++q)
-      if (redo[q] != 0)
-        ud_point<false>(&b.strain[3 * q], k_fibre_, p_ct_, k_sh_[0], k_sh_[1], k_sh_[2], &b.stress[3 * q], &W[q], nullptr);
+    const std::size_t m = redo_points(b.n, redo, sc.idx.data());
+    const int* idx = sc.idx.data();
+    double *wc = sc.wc.data(), *ws = sc.ws.data(), *ww = sc.ww.data(), *wredo = sc.wredo.data();
+    for (std::size_t j = 0; j < m; ++j)
+      for (int k = 0; k < 3; ++k) wc[3 * j + k] = b.strain[3 * idx[j] + k];
+    const double beyond =
+        (shear_ ? ud_block_wide : ud_block_wide_no_shear)(m, wc, k_fibre_, p_ct_, k_sh_, ws, ww, wredo);
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t q = idx[j];
+      if (beyond != 0.0 && wredo[j] != 0) {
+        // (With k_sh all +0 the full form gives the same bits as the one
+        // without shear terms: see ud_point.)
+        ud_point<kLibrary>(&b.strain[3 * q], k_fibre_, p_ct_, k_sh_[0], k_sh_[1], k_sh_[2], &b.stress[3 * q], &W[q],
+                           nullptr);
+        continue;
+      }
+      for (int k = 0; k < 3; ++k) b.stress[3 * q + k] = ws[3 * j + k];
+      W[q] = ww[j];
+    }
     return Status::success();
   }
   double max_stiffness(double) const override { return 2 * std::max(k_fibre_, p_ct_); }
@@ -153,7 +222,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "ud_hyperelastic";
-  d.version = "1.0.4";
+  d.version = "1.1.0";
   d.summary = "UD membrane: fibre elongation, transverse elongation I_lt = 1/2 ln(I3/I41), optional elastic shear";
   const ParamSpec ksh = list_param("k_sh", "[0, 0, 0]", "N/m",
                                    "elastic shear coefficients of w_sh = sum k_sh^i I_sh^(2i) (zero when viscoelastic_shear carries the shear)", 3);
@@ -165,4 +234,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.0.4", register_all)
+THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.1.0", register_all)
