@@ -129,27 +129,20 @@ template <LogForm kLog, bool kShear>
   }
   return any;
 }
-TS_VECTOR_CLONES
-double ud_block(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
-                double* __restrict S, double* __restrict W, double* __restrict redo) {
-  return ud_body<kSmall, true>(n, C, kf, pct, ksh, S, W, redo);
-}
-TS_VECTOR_CLONES
-double ud_block_no_shear(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
-                         double* __restrict S, double* __restrict W, double* __restrict redo) {
-  return ud_body<kSmall, false>(n, C, kf, pct, ksh, S, W, redo);
-}
-// The same by log1p_wide, for the points beyond log1p_series' range.
-TS_VECTOR_CLONES
-double ud_block_wide(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
-                     double* __restrict S, double* __restrict W, double* __restrict redo) {
-  return ud_body<kWide, true>(n, C, kf, pct, ksh, S, W, redo);
-}
-TS_VECTOR_CLONES
-double ud_block_wide_no_shear(std::size_t n, const double* __restrict C, double kf, double pct, const double* ksh,
-                              double* __restrict S, double* __restrict W, double* __restrict redo) {
-  return ud_body<kWide, false>(n, C, kf, pct, ksh, S, W, redo);
-}
+// The vector passes, by series (kSmall) and for the points beyond its
+// range (kWide), with and without the shear terms: kUdBlock[wide][shear].
+#define TS_UD_BLOCK(NAME, LOG, SHEAR)                                                                              \
+  TS_VECTOR_CLONES double NAME(std::size_t n, const double* C, double kf, double pct, const double* ksh, double* S, \
+                               double* W, double* redo) {                                                        \
+    return ud_body<LOG, SHEAR>(n, C, kf, pct, ksh, S, W, redo);                                                  \
+  }
+TS_UD_BLOCK(ud_block, kSmall, true)
+TS_UD_BLOCK(ud_block_no_shear, kSmall, false)
+TS_UD_BLOCK(ud_block_wide, kWide, true)
+TS_UD_BLOCK(ud_block_wide_no_shear, kWide, false)
+#undef TS_UD_BLOCK
+using UdBlock = double (*)(std::size_t, const double*, double, double, const double*, double*, double*, double*);
+constexpr UdBlock kUdBlock[2][2] = {{ud_block_no_shear, ud_block}, {ud_block_wide_no_shear, ud_block_wide}};
 // The indices q < n with redo[q] != 0, in order, to idx (branch-free);
 // returns their count.
 std::size_t redo_points(std::size_t n, const double* __restrict redo, int* __restrict idx) {
@@ -185,16 +178,14 @@ class UdHyperelastic final : public MaterialLaw {
     Scratch& sc = scratch(b.n);
     double* redo = sc.redo.data();
     double* W = b.energy.empty() ? sc.energy.data() : b.energy.data();
-    if ((shear_ ? ud_block : ud_block_no_shear)(b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), W,
-                                                redo) == 0.0)
+    if (kUdBlock[0][shear_](b.n, b.strain.data(), k_fibre_, p_ct_, k_sh_, b.stress.data(), W, redo) == 0.0)
       return Status::success();
     const std::size_t m = redo_points(b.n, redo, sc.idx.data());
     const int* idx = sc.idx.data();
     double *wc = sc.wc.data(), *ws = sc.ws.data(), *ww = sc.ww.data(), *wredo = sc.wredo.data();
     for (std::size_t j = 0; j < m; ++j)
       for (int k = 0; k < 3; ++k) wc[3 * j + k] = b.strain[3 * idx[j] + k];
-    const double beyond =
-        (shear_ ? ud_block_wide : ud_block_wide_no_shear)(m, wc, k_fibre_, p_ct_, k_sh_, ws, ww, wredo);
+    const double beyond = kUdBlock[1][shear_](m, wc, k_fibre_, p_ct_, k_sh_, ws, ww, wredo);
     for (std::size_t j = 0; j < m; ++j) {
       const std::size_t q = idx[j];
       if (beyond != 0.0 && wredo[j] != 0) {
