@@ -471,12 +471,8 @@ void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double*
       nout[2] = 1;
       return;
     }
-    // Clamped as doubles: a point far away (or NaN) never reaches the int
-    // conversion out of its range.
-    const double top = gn_[d] - 1;
-    auto cell = [top](double v) { return static_cast<int>(!(v >= 0) ? 0.0 : v > top ? top : v); };
-    c0[d] = cell(std::floor(lo));
-    c1[d] = cell(std::floor(hi));
+    c0[d] = sdk::bucket_cell(std::floor(lo), gn_[d]);
+    c1[d] = sdk::bucket_cell(std::floor(hi), gn_[d]);
   }
   double best = reach * reach;
   int best_e = -1;

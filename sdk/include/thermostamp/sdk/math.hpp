@@ -66,14 +66,17 @@ inline double bucket_grid(const Vec3& lo, const Vec3& hi, double cell, int n[3],
   }
 }
 
-// The cell along one axis of a bucket grid (origin lo, cells of size
-// `cell`, n of them) that holds coordinate v, clamped to [0, n - 1] as a
-// double, so that a point far outside (or NaN) never reaches the int
-// conversion out of its range.
-inline int bucket_index(double v, double lo, double cell, int n) {
-  const double t = (v - lo) / cell, top = n - 1;
+// Cell coordinate t (in cells from the grid's origin) as the index of one
+// of n cells along an axis, clamped to [0, n - 1] as a double, so that a
+// point far outside (or NaN) never reaches the int conversion out of its
+// range.
+inline int bucket_cell(double t, int n) {
+  const double top = n - 1;
   return static_cast<int>(!(t >= 0) ? 0.0 : t > top ? top : t);
 }
+// The cell along one axis of a bucket grid (origin lo, cells of size
+// `cell`, n of them) that holds coordinate v.
+inline int bucket_index(double v, double lo, double cell, int n) { return bucket_cell((v - lo) / cell, n); }
 
 // atan2(y, x). For x > 0 and |y| <= 0.66 x (|angle| < 33.4 degrees: the
 // small angles between neighbouring elements of a shell) by the rational
