@@ -20,13 +20,16 @@
 namespace {
 
 constexpr const char* kUsage = R"(usage:
-  thermostamp run JOB.json [--out DIR] [--threads N] [--set PATH=VALUE ...] [--quiet]
+  thermostamp run JOB.json [--out DIR] [--threads N] [--set PATH=VALUE ...] [--quiet] [--keep-subnormals]
   thermostamp validate JOB.json [--set PATH=VALUE ...]
   thermostamp plugins [--json | --markdown]
   thermostamp schema                 # JSON Schema of job files, from the plugins found
-  thermostamp study STUDY.json [--out DIR] [--threads N] [--quiet]
+  thermostamp study STUDY.json [--out DIR] [--threads N] [--quiet] [--keep-subnormals]
   thermostamp report DIR
   thermostamp --version
+
+--keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
+subnormals instead of flushing them to zero during the run (the default)
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -43,7 +46,7 @@ struct Args {
   std::vector<std::string> sets;
   std::string out;
   int threads = 0;
-  bool quiet = false, json = false, markdown = false;
+  bool quiet = false, json = false, markdown = false, keep_subnormals = false;
 };
 
 Args parse(int argc, char** argv) {
@@ -74,6 +77,8 @@ Args parse(int argc, char** argv) {
       }
     } else if (s == "--quiet") {
       a.quiet = true;
+    } else if (s == "--keep-subnormals") {
+      a.keep_subnormals = true;
     } else if (s == "--json") {
       a.json = true;
     } else if (s == "--markdown") {
@@ -122,6 +127,7 @@ int cmd_run(const Args& a, bool validate_only) {
   opt.out_dir = a.out.empty() ? std::filesystem::path("results") / job.name : std::filesystem::path(a.out);
   opt.threads = a.threads;
   opt.quiet = a.quiet;
+  opt.flush_subnormals = !a.keep_subnormals;
   std::filesystem::create_directories(opt.out_dir);
   ts::log_to_file(opt.out_dir / "log.txt");
   ts::logger("job")->info("thermostamp {} running {} -> {}", ts::kVersion, job.file.string(), opt.out_dir.string());
@@ -190,7 +196,7 @@ int main(int argc, char** argv) {
     if (a.command == "study") {
       if (a.positional.size() != 1) throw UsageError("expected one study file");
       ts::log_to_terminal(a.quiet);
-      return ts::cli::run_study(a.positional[0], a.out, a.threads, a.quiet);
+      return ts::cli::run_study(a.positional[0], a.out, a.threads, a.quiet, !a.keep_subnormals);
     }
     if (a.command == "report") {
       if (a.positional.size() != 1) throw UsageError("expected one output folder");

@@ -109,7 +109,8 @@ std::string key_of(const ProbeSample& s) {
 
 }  // namespace
 
-int run_study(const std::filesystem::path& study_file, const std::filesystem::path& out_arg, int threads, bool quiet) {
+int run_study(const std::filesystem::path& study_file, const std::filesystem::path& out_arg, int threads, bool quiet,
+              bool flush_subnormals) {
   install_stop_handlers();
   const json doc = read_job_document(study_file);
   ObjectReader top(doc, "");
@@ -204,6 +205,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     opt.out_dir = out / all[i].label;
     opt.threads = threads;
     opt.quiet = true;
+    opt.flush_subnormals = flush_subnormals;
     std::filesystem::create_directories(opt.out_dir);
     log_to_file(opt.out_dir / "log.txt");
     if (!quiet) std::cerr << "study: running " << all[i].label << "\n";

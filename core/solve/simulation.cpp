@@ -30,6 +30,7 @@
 #include "io/results_writer.hpp"
 #include "solve/interrupt.hpp"
 #include "solve/tools.hpp"
+#include "solve/subnormals.hpp"
 #include "version.hpp"
 
 namespace ts {
@@ -1816,6 +1817,7 @@ RunResult Simulation::run(const RunOptions& opt) {
 #else
   const int threads = 1;
 #endif
+  const SubnormalsFlushed flushed(opt.flush_subnormals);  // on every thread of the run, until it returns
   auto log = logger("solve");
   std::unique_ptr<ResultsWriter> writer;
   std::ofstream probes_csv;
@@ -2337,6 +2339,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     summary["status"] = result.ok ? "completed" : result.interrupted ? "interrupted" : "failed";
     summary["version"] = kVersion;
     summary["threads"] = threads;
+    summary["subnormals"] = flushed.active() ? "flushed to zero" : "kept";
     summary["wall_time_s"] = result.wall_time_s;
     summary["simulated_time_s"] = t;
     summary["steps"] = {{"mechanics", mech_steps}, {"thermal", steps}};

@@ -26,6 +26,7 @@ struct RunOptions {
   int threads = 0;        // 0: OpenMP default
   bool quiet = false;
   bool write_files = true;
+  bool flush_subnormals = true;  // subnormal numbers flushed to zero during the run (solve/subnormals.hpp)
 };
 
 struct ProbeSample {

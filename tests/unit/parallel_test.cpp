@@ -10,6 +10,8 @@
 #include <thermostamp/sdk/memory.hpp>
 #include <thermostamp/sdk/parallel.hpp>
 
+#include "solve/subnormals.hpp"
+
 namespace ts::test {
 namespace {
 
@@ -107,6 +109,60 @@ TEST(SdkMemory, LargeVectorsAlignToHugePagesAndKeepTheirContents) {
   small.clear();
   small.shrink_to_fit();
   EXPECT_TRUE(small.empty());
+}
+
+// What one thread computes with subnormal numbers: a product whose exact
+// value is subnormal (flushed: 0) and the smallest subnormal as an operand
+// (read as zero: its double is 0).
+struct SubnormalProbe {
+  bool flushed = false;
+  double product = -1, doubled = -1;
+};
+SubnormalProbe probe_subnormals() {
+  volatile double a = 1e-300, b = 1e-10, tiny = 4.9406564584124654e-324;
+  SubnormalProbe p;
+  p.flushed = subnormals_flushed_here();
+  p.product = a * b;
+  p.doubled = tiny * 2.0;
+  return p;
+}
+
+// Simulation::run flushes subnormals to zero on every thread of the run
+// (solve/subnormals.hpp) and leaves the threads as it found them: checked
+// with the guard it uses, on a team of two threads, and with a guard asked
+// not to flush.
+TEST_F(SdkParallel, SubnormalsFlushedOnEveryThreadAndRestoredAfter) {
+  const SubnormalProbe before = probe_subnormals();
+  ASSERT_FALSE(before.flushed) << "the test process starts with IEEE subnormals";
+  EXPECT_GT(before.product, 0.0);
+  EXPECT_EQ(before.doubled, 2 * 4.9406564584124654e-324);
+  std::vector<SubnormalProbe> seen(2);
+  {
+    const SubnormalsFlushed guard(true);
+#if defined(__x86_64__) || defined(__aarch64__)
+    EXPECT_TRUE(guard.active());
+#endif
+    if (guard.active()) {
+#pragma omp parallel num_threads(2)
+      seen[omp_get_thread_num()] = probe_subnormals();
+      for (int t = 0; t < 2; ++t) {
+        EXPECT_TRUE(seen[t].flushed) << t;
+        EXPECT_EQ(seen[t].product, 0.0) << t;
+        EXPECT_EQ(seen[t].doubled, 0.0) << t;
+      }
+    }
+  }
+#pragma omp parallel num_threads(2)
+  seen[omp_get_thread_num()] = probe_subnormals();
+  for (int t = 0; t < 2; ++t) {
+    EXPECT_FALSE(seen[t].flushed) << t;
+    EXPECT_EQ(seen[t].product, before.product) << t;
+  }
+  {
+    const SubnormalsFlushed kept(false);
+    EXPECT_FALSE(kept.active());
+    EXPECT_FALSE(probe_subnormals().flushed);
+  }
 }
 
 }  // namespace
