@@ -7,10 +7,10 @@
 // 2.2e-308, the smallest normal double. Arithmetic on such subnormal
 // values takes the processor's slow path: on the mechanics benchmark's
 // plate with its pulled edge rising (bending waves), one thread spends
-// about a fifth more time per element-cycle with subnormals kept. Flushing
-// them to zero changes no value above 2.2e-308 (so no physical result),
-// and it is the same on every thread, so results stay identical for any
-// thread count.
+// about 15 % more time per element-cycle with subnormals kept. Flushing
+// replaces only values below 2.2e-308 by zero (on that plate the energies
+// at the end are the same bits either way), and it is the same on every
+// thread, so results stay identical for any thread count.
 //
 // SubnormalsFlushed sets the mode on the calling thread and on every thread
 // of the OpenMP team (the threads of later parallel regions: the runtime
