@@ -895,24 +895,22 @@ class ShellRfT3 final : public ElementKernel {
       grad[2] = add(grad[2], scale(w, 2 * n[a] / len));
       grad[1] = sub(grad[1], scale(w, 2 * n[a] / len));
     } else if (grad) {
-      // Chain rule through N = (Q - P) x (C - P) and e = (Q - P) / |Q - P|.
+      // Clamp (g = n0 fixed): d theta = (z dy - y dz) / (y^2 + z^2) with
+      // dy = dn . (e x g) + (g x n) . de and dz = dn . g, where for a flat
+      // triangle dn = -sum_k (n . dx_k) grad N_k, and de = (I - e e^T)
+      // (dQ - dP) / |Q - P|, so that (g x n) . de = w . (dQ - dP) / |Q - P|
+      // with w = g x n - y e.
       const double r2 = y * y + z * z;
-      for (int v = 0; v < 3; ++v) grad[v] = {0, 0, 0};
-      for (int d = 0; d < 3; ++d) {
-        Vec3 u{0, 0, 0};
-        u[d] = 1.0;
-        const Vec3 dN[3] = {cross(sub(Q, P), u), add(scale(cross(u, sub(C, P)), -1.0), scale(cross(sub(Q, P), u), -1.0)),
-                            cross(u, sub(C, P))};
-        const Vec3 dE[3] = {{0, 0, 0}, scale(u, -1.0), u};
-        for (int v = 0; v < 3; ++v) {
-          const Vec3 dn = scale(sub(dN[v], scale(n, dot(n, dN[v]))), 1.0 / nlen);
-          const Vec3 de = scale(sub(dE[v], scale(eh, dot(eh, dE[v]))), 1.0 / len);
-          const Vec3 dg = ghost(dn, true);
-          const double dy = dot(add(cross(dg, n), cross(g, dn)), eh) + dot(cross(g, n), de);
-          const double dz = dot(dn, g) + dot(n, dg);
-          grad[v][d] = (z * dy - y * dz) / r2;
-        }
+      const Vec3 exg = cross(eh, g);
+      const Vec3 xs[3] = {C, P, Q};
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 gk = scale(cross(n, sub(xs[(k + 2) % 3], xs[(k + 1) % 3])), 1.0 / nlen);  // grad N_k
+        grad[k] = scale(n, (y * dot(gk, g) - z * dot(gk, exg)) / r2);
       }
+      const Vec3 w = sub(cross(g, n), scale(eh, y));
+      const Vec3 we = scale(w, z / (len * r2));
+      grad[2] = add(grad[2], we);
+      grad[1] = sub(grad[1], we);
     }
     return theta;
   }
@@ -1702,7 +1700,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.6.0";
+  d.version = "0.6.1";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1710,4 +1708,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.6.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.6.1", register_all)
