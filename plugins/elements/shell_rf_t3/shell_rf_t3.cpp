@@ -866,13 +866,11 @@ class ShellRfT3 final : public ElementKernel {
     const Vec3 N = cross(sub(Q, P), sub(C, P));
     const double nlen = norm(N);
     const Vec3 n = scale(N, 1.0 / nlen);
-    auto ghost = [&](const Vec3& v, bool derivative) -> Vec3 {
-      if (mirror_axis < 0) return derivative ? Vec3{0, 0, 0} : n0;
-      Vec3 r = v;
-      r[mirror_axis] = -r[mirror_axis];
-      return r;
-    };
-    const Vec3 g = ghost(n, false);
+    Vec3 g = n0;  // the ghost's normal: fixed (clamp) or n mirrored
+    if (mirror_axis >= 0) {
+      g = n;
+      g[mirror_axis] = -g[mirror_axis];
+    }
     const double y = dot(cross(g, n), eh), z = dot(n, g);
     const double theta = atan2_small(y, z);
     if (grad && mirror_axis >= 0) {
