@@ -1835,12 +1835,12 @@ RunResult Simulation::run(const RunOptions& opt) {
   }
   if (job_.thermal)
     log->info("job '{}': {} part(s), {} tool(s), splitter '{}', thermal step {:.4g} s (stable {:.4g} s, "
-              "accurate {:.4g} s), {} thread(s)",
+              "accurate {:.4g} s), {} thread(s), subnormals {}",
               job_.name, parts_.size(), tools_.size(), job_.thermal->splitter, thermal_dt_, thermal_stable_dt_,
-              thermal_accurate_dt_, threads);
+              thermal_accurate_dt_, threads, flushed.active() ? "flushed to zero" : "kept");
   else
-    log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s)", job_.name, parts_.size(), tools_.size(),
-              threads);
+    log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s), subnormals {}", job_.name, parts_.size(),
+              tools_.size(), threads, flushed.active() ? "flushed to zero" : "kept");
   for (std::size_t p = 0; p < mech_.size(); ++p)
     log->info("part '{}': mass {:.6g} kg, added by mass scaling {:.6g} kg ({:.3g} %)", parts_[p]->def->name,
               mech_[p]->mass_physical, mech_[p]->mass_added, 100 * mech_[p]->mass_added / mech_[p]->mass_physical);

@@ -575,6 +575,11 @@ TEST(Cli, KeepSubnormalsChangesNothingAboveThem) {
   }
   EXPECT_EQ(s["flushed1"]["subnormals"], "flushed to zero");
   EXPECT_EQ(s["kept1"]["subnormals"], "kept");
+  for (const std::string v : {"flushed1", "kept1"}) {  // the log says it too
+    std::stringstream log;
+    log << std::ifstream(dir / v / "log.txt").rdbuf();
+    EXPECT_NE(log.str().find(v[0] == 'k' ? "subnormals kept" : "subnormals flushed to zero"), std::string::npos) << v;
+  }
   EXPECT_EQ(s["flushed1"]["energy"], s["flushed2"]["energy"]) << "identical for 1 and 2 threads";
   EXPECT_EQ(s["flushed1"]["steps"], s["kept1"]["steps"]);
   for (const char* k : {"internal", "kinetic", "external_work"}) {
