@@ -1837,10 +1837,10 @@ RunResult Simulation::run(const RunOptions& opt) {
     log->info("job '{}': {} part(s), {} tool(s), splitter '{}', thermal step {:.4g} s (stable {:.4g} s, "
               "accurate {:.4g} s), {} thread(s), subnormals {}",
               job_.name, parts_.size(), tools_.size(), job_.thermal->splitter, thermal_dt_, thermal_stable_dt_,
-              thermal_accurate_dt_, threads, flushed.active() ? "flushed to zero" : "kept");
+              thermal_accurate_dt_, threads, flushed.mode());
   else
     log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s), subnormals {}", job_.name, parts_.size(),
-              tools_.size(), threads, flushed.active() ? "flushed to zero" : "kept");
+              tools_.size(), threads, flushed.mode());
   for (std::size_t p = 0; p < mech_.size(); ++p)
     log->info("part '{}': mass {:.6g} kg, added by mass scaling {:.6g} kg ({:.3g} %)", parts_[p]->def->name,
               mech_[p]->mass_physical, mech_[p]->mass_added, 100 * mech_[p]->mass_added / mech_[p]->mass_physical);
@@ -2339,7 +2339,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     summary["status"] = result.ok ? "completed" : result.interrupted ? "interrupted" : "failed";
     summary["version"] = kVersion;
     summary["threads"] = threads;
-    summary["subnormals"] = flushed.active() ? "flushed to zero" : "kept";
+    summary["subnormals"] = flushed.mode();
     summary["wall_time_s"] = result.wall_time_s;
     summary["simulated_time_s"] = t;
     summary["steps"] = {{"mechanics", mech_steps}, {"thermal", steps}};

@@ -30,6 +30,8 @@ class SubnormalsFlushed {
   // Whether this guard flushes (false where asked not to, or where the
   // processor has no such mode here).
   bool active() const { return active_; }
+  // The mode in words, as summary.json and the log give it.
+  const char* mode() const { return active_ ? "flushed to zero" : "kept"; }
 
  private:
   bool active_ = false;

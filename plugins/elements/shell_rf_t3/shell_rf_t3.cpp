@@ -873,11 +873,19 @@ class ShellRfT3 final : public ElementKernel {
     }
     const double y = dot(cross(g, n), eh), z = dot(n, g);
     const double theta = atan2_small(y, z);
-    if (grad && mirror_axis >= 0) {
+    if (!grad) return theta;
+    // The gradient, for either ghost: for a flat triangle dn = -sum_k
+    // (n . dx_k) grad N_k, and de = (I - e e^T)(dQ - dP) / |Q - P|, so it is
+    // s_k n on corner k, plus wq on Q and minus wq on P.
+    const Vec3 xs[3] = {C, P, Q};
+    Vec3 gk[3];  // grad N_k
+    for (int k = 0; k < 3; ++k) gk[k] = scale(cross(n, sub(xs[(k + 2) % 3], xs[(k + 1) % 3])), 1.0 / nlen);
+    double s[3];
+    Vec3 wq;
+    if (mirror_axis >= 0) {
       // Mirror ghost (edge in the symmetry plane, e_a its normal): with
       // m = n x e, theta = 2 atan2(-n_a, m_a), d theta = 2 (-m_a dn_a +
-      // n_a dm_a). For a flat triangle dn = -sum_k (n . dx_k) grad N_k, and
-      // dm = dn x e + n x de, de = (I - e e^T)(dQ - dP) / |Q - P|.
+      // n_a dm_a), dm = dn x e + n x de.
       const int a = mirror_axis;
       const Vec3 m = cross(n, eh);
       Vec3 ea{0, 0, 0};
@@ -885,31 +893,20 @@ class ShellRfT3 final : public ElementKernel {
       const Vec3 exa = cross(eh, ea);
       Vec3 w = cross(ea, n);
       w = sub(w, scale(eh, dot(w, eh)));
-      const Vec3 xs[3] = {C, P, Q};
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 gk = scale(cross(n, sub(xs[(k + 2) % 3], xs[(k + 1) % 3])), 1.0 / nlen);  // grad N_k
-        grad[k] = scale(n, 2 * (m[a] * gk[a] - n[a] * dot(gk, exa)));
-      }
-      grad[2] = add(grad[2], scale(w, 2 * n[a] / len));
-      grad[1] = sub(grad[1], scale(w, 2 * n[a] / len));
-    } else if (grad) {
+      for (int k = 0; k < 3; ++k) s[k] = 2 * (m[a] * gk[k][a] - n[a] * dot(gk[k], exa));
+      wq = scale(w, 2 * n[a] / len);
+    } else {
       // Clamp (g = n0 fixed): d theta = (z dy - y dz) / (y^2 + z^2) with
-      // dy = dn . (e x g) + (g x n) . de and dz = dn . g, where for a flat
-      // triangle dn = -sum_k (n . dx_k) grad N_k, and de = (I - e e^T)
-      // (dQ - dP) / |Q - P|, so that (g x n) . de = w . (dQ - dP) / |Q - P|
-      // with w = g x n - y e.
+      // dy = dn . (e x g) + (g x n) . de and dz = dn . g, where
+      // (g x n) . de = w . (dQ - dP) / |Q - P| with w = g x n - y e.
       const double r2 = y * y + z * z;
       const Vec3 exg = cross(eh, g);
-      const Vec3 xs[3] = {C, P, Q};
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 gk = scale(cross(n, sub(xs[(k + 2) % 3], xs[(k + 1) % 3])), 1.0 / nlen);  // grad N_k
-        grad[k] = scale(n, (y * dot(gk, g) - z * dot(gk, exg)) / r2);
-      }
-      const Vec3 w = sub(cross(g, n), scale(eh, y));
-      const Vec3 we = scale(w, z / (len * r2));
-      grad[2] = add(grad[2], we);
-      grad[1] = sub(grad[1], we);
+      for (int k = 0; k < 3; ++k) s[k] = (y * dot(gk[k], g) - z * dot(gk[k], exg)) / r2;
+      wq = scale(sub(cross(g, n), scale(eh, y)), z / (len * r2));
     }
+    for (int k = 0; k < 3; ++k) grad[k] = scale(n, s[k]);
+    grad[2] = add(grad[2], wq);
+    grad[1] = sub(grad[1], wq);
     return theta;
   }
 
