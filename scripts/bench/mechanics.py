@@ -31,6 +31,7 @@ Usage: scripts/bench/mechanics.py [--quick] [--reps N] [--bending-subcycles K]
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -130,9 +131,9 @@ def main():
                         bare[b] = min(bare.get(b, here[b]), here[b])
                     # this run scaled by its own -O2 yardstick
                     scaled.append(s["wall_time_s"] / (ne * s["steps"]["mechanics"]) * 1e9 * 27.0 / here["plain"])
-                    series[n] = sorted(scaled)
                 if th not in best or s["wall_time_s"] < best[th]["wall_time_s"]:
                     best[th] = s
+        series[n] = sorted(scaled)
         same = all(e == energies[0] for e in energies)
         for th in (1, 2):
             s = best[th]
@@ -151,8 +152,8 @@ def main():
     print("|---|---|---|---|---|---|")
     for n in sizes:
         v = series[n]
-        med = v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
-        print("| %d | %d | %.1f | %.1f | %.1f | %d |" % (2 * n * n, len(v), med, v[0], v[-1], sum(x < 60 for x in v)))
+        print("| %d | %d | %.1f | %.1f | %.1f | %d |" % (2 * n * n, len(v), statistics.median(v), v[0], v[-1],
+                                                        sum(x < 60 for x in v)))
 
 
 if __name__ == "__main__":
