@@ -1,5 +1,6 @@
 #include "solve/simulation.hpp"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -1799,6 +1800,16 @@ struct Progress {
   }
 };
 
+// The peak resident memory of the process so far (MB), 0 where the system
+// does not say (Linux reports ru_maxrss in KiB).
+double peak_resident_mb() {
+#if defined(__linux__)
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) == 0) return static_cast<double>(u.ru_maxrss) * 1024.0 / 1e6;
+#endif
+  return 0.0;
+}
+
 std::string csv_number(double v) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.10g", v);
@@ -2300,6 +2311,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   result.ok = failure.empty();
   result.error = failure;
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  result.peak_memory_mb = peak_resident_mb();
   result.simulated_time_s = t;
   result.thermal_steps = steps;
   result.thermal_dt = thermal_dt_;
@@ -2341,6 +2353,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     summary["threads"] = threads;
     summary["subnormals"] = flushed.mode();
     summary["wall_time_s"] = result.wall_time_s;
+    summary["peak_memory_MB"] = result.peak_memory_mb > 0 ? json(result.peak_memory_mb) : json(nullptr);
     summary["simulated_time_s"] = t;
     summary["steps"] = {{"mechanics", mech_steps}, {"thermal", steps}};
     summary["dt"] = {{"mechanics", job_.mechanics ? json(mech_dt) : json(nullptr)},
@@ -2457,8 +2470,8 @@ RunResult Simulation::run(const RunOptions& opt) {
   }
   if (result.ok) {
     log->info("completed: {} thermal steps in {:.3g} s wall; heat into the plies {:.6g} J, stored change {:.6g} J "
-              "(balance error {:.2e})",
-              steps, result.wall_time_s, heat_in, stored_change, result.heat_balance_error);
+              "(balance error {:.2e}); peak memory {:.0f} MB",
+              steps, result.wall_time_s, heat_in, stored_change, result.heat_balance_error, result.peak_memory_mb);
   } else if (result.interrupted) {
     log->warn("{}", failure);
   } else {

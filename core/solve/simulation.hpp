@@ -54,6 +54,10 @@ struct RunResult {
   int interrupted = 0;  // the signal that stopped the run early (see solve/interrupt.hpp), 0 if none
   std::string error;
   double wall_time_s = 0;
+  // The process's peak resident memory at the end of the run (MB; 0 where
+  // the system does not report it). Over the process's life: in a study,
+  // the largest of the runs so far.
+  double peak_memory_mb = 0;
   double simulated_time_s = 0;
   long long thermal_steps = 0;
   double thermal_dt = 0;
