@@ -56,7 +56,7 @@ std::vector<T> read_dataset(hid_t file, const std::string& name) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.13.3 (plugin SDK 0.13.3, ABI 13)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.13.4 (plugin SDK 0.13.4, ABI 13)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {

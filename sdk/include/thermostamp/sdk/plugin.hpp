@@ -23,7 +23,7 @@ namespace ts::sdk {
 
 // Bump when any type of this SDK changes layout or meaning.
 inline constexpr int kAbiVersion = 13;
-inline constexpr const char* kSdkVersion = "0.13.3";
+inline constexpr const char* kSdkVersion = "0.13.4";
 
 enum class PluginKind { Element, Material, Thermal, Contact };
 
