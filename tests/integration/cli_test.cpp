@@ -542,11 +542,28 @@ TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
   EXPECT_GT(held, 0);
 }
 
-// Subnormal numbers are flushed to zero during a run unless
-// --keep-subnormals asks otherwise, and nothing above them changes: a plate
-// held at one edge whose other edge is pulled and lifted, so that bending
-// waves run into the plate at rest (where the values ahead of the fronts
-// pass through the subnormal range), on one and two threads.
+// A square UD ply (the shipped card at 280 degC, isothermal) of side size
+// in divisions x divisions cells, its edge x = size moved at velocity, held
+// at x = 0 where held; output every interval up to end.
+json pulled_ud_plate(const std::string& name, double size, int divisions, const json& fibre, const json& velocity,
+                     bool held, double end, double interval) {
+  json constraints = json::array();
+  if (held)
+    constraints.push_back({{"type", "fix"}, {"part", "ply"}, {"box", {{-1e-9, -1, -1}, {1e-9, 1, 1}}},
+                           {"dofs", {"x", "y", "z"}}});
+  constraints.push_back({{"type", "velocity"}, {"part", "ply"}, {"box", {{size - 1e-9, -1, -1}, {size + 1e-9, 1, 1}}},
+                         {"velocity", velocity}});
+  return {{"format", "thermostamp-job/1"}, {"name", name}, {"time", {{"end", end}}},
+          {"materials", {{"ud", read_job_document(source_dir() / "share" / "materials" / "pa66_cf_ud.json")}}},
+          {"parts", json::array({{{"name", "ply"}, {"thickness", 0.0005}, {"material", "ud"},
+                                  {"fibre_direction", fibre}, {"initial_temperature", 280.0},
+                                  {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}},
+                                            {"size", {size, size}}, {"divisions", {divisions, divisions}}}}}})},
+          {"constraints", constraints},
+          {"solvers", {{"mechanics", {{"dt_safety", 0.8}}}, {"thermal", nullptr}}},
+          {"output", {{"interval", interval}, {"fields", {"displacement"}}}}};
+}
+
 // summary.json and the log give the process's peak resident memory. A plate
 // of 80 000 elements (two steps) needs more than one of 1 152 by at least
 // its arrays: shell_rf_t3 alone keeps over 150 bytes per element (the
@@ -554,20 +571,8 @@ TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
 // hinges, the laws' state), and far less than 20 kB per element.
 TEST(Cli, SummaryGivesThePeakMemory) {
   const auto dir = temp_dir("peak_memory");
-  json card = read_job_document(source_dir() / "share" / "materials" / "pa66_cf_ud.json");
-  auto job = [&](int divisions) {
-    const double size = 1e-3 * divisions;  // cells of 1 mm
-    return json{{"format", "thermostamp-job/1"}, {"name", "plate"}, {"time", {{"end", 3e-7}}},
-                {"materials", {{"ud", card}}},
-                {"parts", json::array({{{"name", "ply"}, {"thickness", 0.0005}, {"material", "ud"},
-                                        {"fibre_direction", {1, 0, 0}}, {"initial_temperature", 280.0},
-                                        {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}},
-                                                  {"size", {size, size}}, {"divisions", {divisions, divisions}}}}}})},
-                {"constraints", json::array({{{"type", "velocity"}, {"part", "ply"},
-                                              {"box", {{size - 1e-9, -1, -1}, {size + 1e-9, 1, 1}}},
-                                              {"velocity", {1.0, 0, 0}}}})},
-                {"solvers", {{"mechanics", {{"dt_safety", 0.8}}}, {"thermal", nullptr}}},
-                {"output", {{"interval", 3e-7}, {"fields", {"displacement"}}}}};
+  auto job = [](int divisions) {  // cells of 1 mm
+    return pulled_ud_plate("plate", 1e-3 * divisions, divisions, {1, 0, 0}, {1.0, 0, 0}, false, 3e-7, 3e-7);
   };
   std::map<int, double> peak;
   for (const int d : {24, 200}) {
@@ -590,23 +595,14 @@ TEST(Cli, SummaryGivesThePeakMemory) {
   EXPECT_LT(peak[200], elements * 20e3 / 1e6);
 }
 
+// Subnormal numbers are flushed to zero during a run unless
+// --keep-subnormals asks otherwise, and nothing above them changes: a plate
+// held at one edge whose other edge is pulled and lifted, so that bending
+// waves run into the plate at rest (where the values ahead of the fronts
+// pass through the subnormal range), on one and two threads.
 TEST(Cli, KeepSubnormalsChangesNothingAboveThem) {
   const auto dir = temp_dir("subnormals");
-  const double size = 0.024;
-  json card = read_job_document(source_dir() / "share" / "materials" / "pa66_cf_ud.json");
-  json j = {{"format", "thermostamp-job/1"}, {"name", "waves"}, {"time", {{"end", 4e-5}}},
-            {"materials", {{"ud", card}}},
-            {"parts", json::array({{{"name", "ply"}, {"thickness", 0.0005}, {"material", "ud"},
-                                    {"fibre_direction", {1, 1, 0}}, {"initial_temperature", 280.0},
-                                    {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}},
-                                              {"size", {size, size}}, {"divisions", {24, 24}}}}}})},
-            {"constraints", json::array({{{"type", "fix"}, {"part", "ply"}, {"box", {{-1e-9, -1, -1}, {1e-9, 1, 1}}},
-                                          {"dofs", {"x", "y", "z"}}},
-                                         {{"type", "velocity"}, {"part", "ply"},
-                                          {"box", {{size - 1e-9, -1, -1}, {size + 1e-9, 1, 1}}},
-                                          {"velocity", {1.0, 0, 0.5}}}})},
-            {"solvers", {{"mechanics", {{"dt_safety", 0.8}}}, {"thermal", nullptr}}},
-            {"output", {{"interval", 2e-5}, {"fields", {"displacement"}}}}};
+  const json j = pulled_ud_plate("waves", 0.024, 24, {1, 1, 0}, {1.0, 0, 0.5}, true, 4e-5, 2e-5);
   std::ofstream(dir / "job.json") << j.dump(2);
   std::map<std::string, json> s;
   for (const std::string v : {"flushed1", "flushed2", "kept1"}) {
