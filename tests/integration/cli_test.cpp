@@ -39,20 +39,6 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 
 std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 
-// Dataset `name` of an open results file, its rows one after the other.
-template <class T>
-std::vector<T> read_dataset(hid_t file, const std::string& name) {
-  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
-  const hid_t space = H5Dget_space(set);
-  hsize_t dims[2] = {0, 1};
-  H5Sget_simple_extent_dims(space, dims, nullptr);
-  std::vector<T> v(dims[0] * (H5Sget_simple_extent_ndims(space) > 1 ? dims[1] : 1));
-  H5Dread(set, std::is_same_v<T, int> ? H5T_NATIVE_INT : H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
-  H5Sclose(space);
-  H5Dclose(set);
-  return v;
-}
-
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);

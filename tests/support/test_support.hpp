@@ -3,7 +3,10 @@
 // read probe samples, run the command line.
 #include <filesystem>
 #include <string>
+#include <type_traits>
 #include <vector>
+
+#include <hdf5.h>
 
 #include <thermostamp/sdk/views.hpp>
 
@@ -29,6 +32,20 @@ struct JobRun {
 
 // Runs the job in-process (no files unless out is given).
 JobRun run_json(const json& doc, int threads = 0, const std::filesystem::path& out = {});
+
+// Dataset `name` of an open results file, its rows one after the other.
+template <class T>
+std::vector<T> read_dataset(hid_t file, const std::string& name) {
+  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+  const hid_t space = H5Dget_space(set);
+  hsize_t dims[2] = {0, 1};
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  std::vector<T> v(dims[0] * (H5Sget_simple_extent_ndims(space) > 1 ? dims[1] : 1));
+  H5Dread(set, std::is_same_v<T, int> ? H5T_NATIVE_INT : H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+  H5Sclose(space);
+  H5Dclose(set);
+  return v;
+}
 
 struct CommandResult {
   int exit_code = -1;
