@@ -98,6 +98,9 @@ struct PartState {
   const PartDef* def = nullptr;
   ShellMesh mesh;
   std::vector<double> x0, fibre, area, normals, displacement, shear_angle, contact_status;
+  // Per node, Pa: the largest contact pressure on its faces at the last
+  // contact force evaluation (only where a field or probe asks for it).
+  std::vector<double> contact_pressure;
   sdk::large_vector<double> x;  // positions (m), on huge pages where offered (sdk/memory.hpp)
   int nz = 1;
   std::vector<double> T, cap, mean, top, bottom;
@@ -300,6 +303,11 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), re
   for (const auto& p : job_.plugin_paths) registry_.add_search_dir(p);
   if (!job_.thermal && !job_.mechanics)
     throw JobError("/solvers", "nothing to run: set solvers.thermal (a thermal splitter such as \"adi\")");
+  want_pressure_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "contact_pressure") !=
+                   job_.output.fields.end();
+  for (const auto& pr : job_.output.probes)
+    want_pressure_ = want_pressure_ || std::find(pr.quantities.begin(), pr.quantities.end(), "contact_pressure") !=
+                                           pr.quantities.end();
   build_parts();
   build_tools();
   build_thermal();
@@ -362,6 +370,7 @@ void Simulation::build_parts() {
     st->displacement.assign(3 * nn, 0.0);
     st->shear_angle.assign(ne, 0.0);
     st->contact_status.assign(nn, 0.0);
+    if (want_pressure_) st->contact_pressure.assign(nn, 0.0);
     for (auto* v : {&st->h_bottom, &st->t_bottom, &st->h_top, &st->t_top}) v->assign(nn, 0.0);
     parts_.push_back(std::move(st));
   }
@@ -1433,13 +1442,20 @@ void Simulation::build_contact_tasks() {
       contact_tasks_.push_back(std::move(task));
     }
   }
+  pressure_groups_.assign(want_pressure_ ? np : 0, {});
+  pressure_sum_.assign(want_pressure_ ? np : 0, {});
   for (std::size_t k = 0; k < contact_tasks_.size(); ++k) {
     ContactTask& task = contact_tasks_[k];
     task.tool_force.assign(3 * tools_.size(), 0.0);
     task.force.assign(np, {});
     task.status.assign(job_.thermal ? 0 : np, {});
+    task.pressure.assign(want_pressure_ ? np : 0, {});
     task.force[task.owner] = mech_[task.owner]->f_con;
     if (!job_.thermal) task.status[task.owner] = parts_[task.owner]->contact_status;
+    if (want_pressure_) {
+      task.own_pressure.assign(static_cast<std::size_t>(parts_[task.owner]->mesh.num_nodes()), 0.0);
+      task.pressure[task.owner] = task.own_pressure;
+    }
     if (task.other >= 0 && task.other != task.owner) {
       const std::size_t nn = static_cast<std::size_t>(parts_[task.other]->mesh.num_nodes());
       task.cross.assign(3 * nn, 0.0);
@@ -1448,7 +1464,27 @@ void Simulation::build_contact_tasks() {
         task.cross_status.assign(nn, 0.0);
         task.status[task.other] = task.cross_status;
       }
+      if (want_pressure_) {
+        task.cross_pressure.assign(nn, 0.0);
+        task.pressure[task.other] = task.cross_pressure;
+      }
       cross_into_[task.other].push_back(static_cast<int>(k));
+    }
+  }
+  if (want_pressure_) {
+    // Group the arrays by part and pair (the tasks of a pair are adjacent).
+    for (std::size_t p = 0; p < np; ++p) {
+      int last = -1;
+      for (const ContactTask& task : contact_tasks_) {
+        const std::vector<double>* a = task.owner == static_cast<int>(p)   ? &task.own_pressure
+                                       : task.other == static_cast<int>(p) ? &task.cross_pressure
+                                                                           : nullptr;
+        if (!a || a->empty()) continue;
+        if (task.contact != last) pressure_groups_[p].emplace_back();
+        last = task.contact;
+        pressure_groups_[p].back().push_back(a);
+      }
+      pressure_sum_[p].assign(static_cast<std::size_t>(parts_[p]->mesh.num_nodes()), 0.0);
     }
   }
   ContactSpans& cs = contact_spans_;
@@ -1494,6 +1530,8 @@ void Simulation::start_part_contact(int part) {
 void Simulation::run_contact_task(ContactTask& task, double t, double dt) {
   std::fill(task.cross.begin(), task.cross.end(), 0.0);
   std::fill(task.cross_status.begin(), task.cross_status.end(), 0.0);
+  std::fill(task.own_pressure.begin(), task.own_pressure.end(), 0.0);
+  std::fill(task.cross_pressure.begin(), task.cross_pressure.end(), 0.0);
   std::fill(task.tool_force.begin(), task.tool_force.end(), 0.0);
   sdk::ContactForceInput in;
   in.parts = part_views_;
@@ -1512,6 +1550,7 @@ void Simulation::run_contact_task(ContactTask& task, double t, double dt) {
   out.force = task.force;
   out.tool_force = task.tool_force;
   out.status = task.status;
+  out.pressure = task.pressure;
   if (auto s = contacts_[task.contact]->contact_forces(in, out); !s)
     throw RunError("contact handler of " + job_.contacts[task.contact].pointer + " at t = " + fmt_g(t) +
                    " s: " + s.message);
@@ -1532,6 +1571,22 @@ void Simulation::merge_part_contact(int part) {
       std::vector<double>& st = parts_[part]->contact_status;
       for (std::size_t i = 0; i < st.size(); ++i) st[i] = std::max(st[i], task.cross_status[i]);
     }
+  }
+  combine_pressure(part);
+}
+
+// The part's contact pressure from the contact tasks' arrays: per node, the
+// largest over the pairs of what each pair's tasks added.
+void Simulation::combine_pressure(int part) {
+  if (part >= static_cast<int>(pressure_groups_.size())) return;
+  std::vector<double>& p = parts_[part]->contact_pressure;
+  std::vector<double>& sum = pressure_sum_[part];
+  std::fill(p.begin(), p.end(), 0.0);
+  for (const auto& group : pressure_groups_[part]) {
+    std::copy(group[0]->begin(), group[0]->end(), sum.begin());
+    for (std::size_t g = 1; g < group.size(); ++g)
+      for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += (*group[g])[i];
+    for (std::size_t i = 0; i < p.size(); ++i) p[i] = std::max(p[i], sum[i]);
   }
 }
 
@@ -1922,6 +1977,8 @@ RunResult Simulation::run(const RunOptions& opt) {
           fields[p].push_back({"fibre_direction", st.fibre.data(), 3, true});
         } else if (f == "contact_status") {
           fields[p].push_back({"contact_status", st.contact_status.data()});
+        } else if (f == "contact_pressure") {
+          fields[p].push_back({"contact_pressure", st.contact_pressure.data()});
         } else if ((f == "membrane_stress" || f == "curvature") && p < mech_.size()) {
           // Material-frame components [11, 22, 12] per element, as vectors.
           fields[p].push_back({f, f == "membrane_stress" ? mech_[p]->stress.data() : mech_[p]->curvature.data(), 3,
@@ -1965,6 +2022,8 @@ RunResult Simulation::run(const RunOptions& opt) {
             m /= (nz - 1);
           }
           s.values.push_back(m);
+        } else if (quantity == "contact_pressure") {
+          s.values.push_back(st.contact_pressure[i]);
         } else if (quantity.rfind("displacement_", 0) == 0) {
           const int d = quantity.back() - 'x';
           s.values.push_back(st.x[3 * i + d] - st.x0[3 * i + d]);

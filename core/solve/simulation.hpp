@@ -141,6 +141,13 @@ class Simulation {
   // (ElementForceInput::fields_due).
   bool fields_due_ = true;
   bool want_element_dt_ = false;  // the elements' own stable steps, for the mass scaling at set-up
+  // A frame field or a probe asks for the contact pressure (PartState::contact_pressure).
+  bool want_pressure_ = false;
+  // Per part, per contact pair touching it: the tasks' arrays of its
+  // pressure (summed within a pair, the largest over the pairs shown).
+  std::vector<std::vector<std::vector<const std::vector<double>*>>> pressure_groups_;
+  std::vector<std::vector<double>> pressure_sum_;  // per part, scratch
+  void combine_pressure(int part);
   // Raised whenever the node temperatures the elements see change
   // (ElementForceInput::temperature_version; 0 before the first).
   std::uint64_t temperature_version_ = 0;
@@ -219,9 +226,12 @@ class Simulation {
     int contact = 0, side = -1;
     int owner = 0, other = -1;     // parts (-1: a tool)
     std::vector<double> cross;     // 3 per node of `other`
-    std::vector<double> cross_status;  // per node of `other` (isothermal runs)
-    std::vector<double> tool_force;    // 3 per tool
-    std::vector<std::span<double>> force, status;  // per part, the views given to the handler
+    std::vector<double> cross_status;    // per node of `other` (isothermal runs)
+    // What the handler adds to the contact pressure of `owner` and `other`
+    // (where PartState::contact_pressure is written).
+    std::vector<double> own_pressure, cross_pressure;
+    std::vector<double> tool_force;      // 3 per tool
+    std::vector<std::span<double>> force, status, pressure;  // per part, the views given to the handler
     double energy = 0;
     long long active = 0;
     std::exception_ptr error;

@@ -149,6 +149,33 @@ def plot_maps(folder, out):
             ax.set_ylabel("y (mm)")
             fig.colorbar(pc, ax=ax, label="degrees", shrink=0.8)
             made.append(save(fig, out, "shear_%s.png" % part, dpi=110, tight=False))
+        for part in f["parts"]:
+            g = last[part]
+            if "contact_pressure" not in g:
+                continue
+            tri = f["parts"][part]["triangles"][()]
+            xyz = g["nodes"][()]
+            vals = g["contact_pressure"][()] * 1e-3
+            if not vals.max() > 0:
+                continue
+            # Log scale over three decades (a holder's pressure can be 50
+            # times the punch's); a triangle with a node out of contact grey.
+            top = vals.max()
+            face = vals[tri].min(axis=1)
+            cmap = plt.get_cmap("viridis").copy()
+            cmap.set_under("lightgrey")
+            norm = matplotlib.colors.LogNorm(vmin=1e-3 * top, vmax=top)
+            fig, ax = plt.subplots(figsize=(5.2, 4.4))
+            for mxy, mtri, v in mirrored(xyz[:, :2], tri, np.where(face > 0, vals[tri].mean(axis=1), 0.0), True):
+                pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.maximum(v, 1e-6 * top),
+                                  norm=norm, cmap=cmap)
+            ax.set_aspect("equal")
+            ax.set_title("%s: contact pressure (larger face), t = %.3g s\nmax %.3g kPa; grey: no contact"
+                         % (part, time, top), fontsize=9)
+            ax.set_xlabel("x (mm)")
+            ax.set_ylabel("y (mm)")
+            fig.colorbar(pc, ax=ax, label="kPa", shrink=0.8)
+            made.append(save(fig, out, "pressure_%s.png" % part, dpi=110, tight=False))
     return made
 
 

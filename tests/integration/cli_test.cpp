@@ -42,7 +42,7 @@ std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.13.4 (plugin SDK 0.13.4, ABI 13)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.14.0 (plugin SDK 0.14.0, ABI 14)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {

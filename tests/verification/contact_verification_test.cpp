@@ -4,7 +4,8 @@
 // - sliding and sticking under tilted gravity (Coulomb),
 // - a ply dropped on a plane (no energy created by contact),
 // - two plies pressed by a cold tool (heat through the interface),
-// - the faces that exchange heat when a ply is flipped or approaches from below.
+// - the faces that exchange heat when a ply is flipped or approaches from below,
+// - the contact pressure on a pressed ply and through a stack of two plies.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -70,8 +71,18 @@ TEST(Contact, PlyPressedBetweenTwoPlanes) {
                        {{"type", "contact"}, {"between", {"holder", "ply"}}}};
   j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
   j["solvers"]["mechanics"]["damping"] = 2000.0;
+  j["output"]["probes"] = {{{"name", "centre"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
+                            {"quantities", {"contact_pressure"}}, {"interval", 0.01}},
+                           {{"name", "corner"}, {"part", "ply"}, {"at", {0, 0, 0}},
+                            {"quantities", {"contact_pressure"}}, {"interval", 0.01}}};
   const JobRun r = run_json(j);
   ASSERT_TRUE(r.result.ok) << r.result.error;
+  // Both faces carry F / A at rest, at the centre and at a corner alike
+  // (the pressure is per unit area, whatever a node's share of the area).
+  const double p_centre = r.sample(0, "contact_pressure", 0.01)->values[0];
+  const double p_corner = r.sample(1, "contact_pressure", 0.01)->values[0];
+  EXPECT_NEAR(p_centre / pressure, 1.0, 0.01);
+  EXPECT_NEAR(p_corner / pressure, 1.0, 0.01);
   const double die_fz = tool_value(r.result, 0, 2, true), holder_fz = tool_value(r.result, 1, 2, true);
   const double delta = 0.5 * -tool_value(r.result, 1, 2, false);  // holder travel = both penetrations
   const double expected = F / (penalty * area);
@@ -80,8 +91,9 @@ TEST(Contact, PlyPressedBetweenTwoPlanes) {
   EXPECT_NEAR(delta / expected, 1.0, 0.02);
   EXPECT_LT(delta / kH, 0.01);
   std::printf("pressed ply: F %.4g N, die %.5g N, holder %.5g N, penetration %.4g m = %.3f %% of h "
-              "(F/(kA) = %.4g m), %lld steps\n",
-              F, -die_fz, holder_fz, delta, 100 * delta / kH, expected, r.result.mechanical_steps);
+              "(F/(kA) = %.4g m), contact pressure centre %.6g Pa, corner %.6g Pa (F/A %.6g Pa), %lld steps\n",
+              F, -die_fz, holder_fz, delta, 100 * delta / kH, expected, p_centre, p_corner, pressure,
+              r.result.mechanical_steps);
 }
 
 // A plane punch driven down at constant speed v from 3 mm above a ply that
@@ -367,6 +379,52 @@ TEST(Contact, RegularisedFrictionStackComesToRest) {
   std::printf("regularised friction stack: die %.5g N, kinetic %.3g J (product form %.3g J), balance %.2e\n",
               -tool_value(r.result, 0, 2, true), r.result.energy.kinetic_half, r.result.energy.kinetic,
               r.result.energy.balance_error);
+}
+
+// Two plies pressed between a die and a force-controlled holder. Each
+// ply/ply pass carries half the penalty, so the interface's pressure at a
+// node is the full penalty times its penetration; at rest every face of
+// the stack carries F / A. Required: the contact pressure within 1 % of
+// F / A at the centre and a corner of both plies; zero when the holder is
+// lifted off instead (the field shows the last step's contact, not the
+// largest so far).
+TEST(Contact, PressureThroughAStack) {
+  const double pressure = 0.2e6, area = kSide * kSide, F = pressure * area, t_end = 0.01;
+  json j = base_job(t_end);
+  j["parts"] = {ply("low", 0.5 * kH), ply("up", 1.5 * kH)};
+  j["tools"] = {plane("die", 0.0, 1), plane("holder", 2 * kH, -1)};
+  j["tools"][1]["motion"] = {{"force", {0, 0, -F}}, {"mass", 0.1}, {"damping", 2000.0}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "low"}}},
+                       {{"type", "contact"}, {"between", {"holder", "up"}}},
+                       {{"type", "contact"}, {"between", {"up", "low"}}}};
+  j["constraints"] = {{{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+  j["solvers"]["mechanics"]["damping"] = 2000.0;
+  j["output"]["fields"] = {"displacement", "contact_pressure"};
+  j["output"]["probes"] = json::array();
+  for (const char* part : {"low", "up"})
+    for (const double at : {kSide / 2, 0.0})
+      j["output"]["probes"].push_back({{"name", std::string(part) + (at > 0 ? "_centre" : "_corner")},
+                                       {"part", part},
+                                       {"at", {at, at, 0}},
+                                       {"quantities", {"contact_pressure"}},
+                                       {"interval", t_end}});
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  EXPECT_NEAR(-tool_value(r.result, 0, 2, true) / F, 1.0, 0.01);
+  double p[4];
+  for (int q = 0; q < 4; ++q) {
+    p[q] = r.sample(q, "contact_pressure", t_end)->values[0];
+    EXPECT_NEAR(p[q] / pressure, 1.0, 0.01) << "probe " << q;
+  }
+  std::printf("stack of two plies, F/A %.6g Pa: contact pressure lower ply centre %.6g, corner %.6g, "
+              "upper ply centre %.6g, corner %.6g Pa\n",
+              pressure, p[0], p[1], p[2], p[3]);
+
+  // The holder pulled up and away: no contact, no pressure.
+  j["tools"][1]["motion"] = {{"velocity", {0, 0, 1.0}}};
+  const JobRun lifted = run_json(j);
+  ASSERT_TRUE(lifted.result.ok) << lifted.result.error;
+  EXPECT_EQ(lifted.sample(2, "contact_pressure", t_end)->values[0], 0.0);
 }
 
 }  // namespace ts::test

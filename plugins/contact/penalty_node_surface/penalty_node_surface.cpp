@@ -350,8 +350,9 @@ struct Pass {
   std::vector<double> geo_b;  // surface_geometry of b, kGeo per element
   Candidates cand;
   // Per node of a, written by the node's loop, read by the fixed-order sums:
-  // its force (3), its spring energy, its target (element, 3 weights).
-  std::vector<double> scratch, energy, target;
+  // its force (3), its spring energy, its target (element, 3 weights), its
+  // penetration (where it has a target).
+  std::vector<double> scratch, energy, target, pen;
   // With search_interval > 1: the triangle of b that the last full search
   // found for each node of a (-1: none within reach), the passes since
   // that search (counting it), and the passes it covers (search_limit()).
@@ -764,11 +765,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     }
     // Fixed-order sums: the same results for any thread count.
     auto f = out.force[a.index];
+    const std::span<double> pressure = out.pressure.empty() ? std::span<double>() : out.pressure[a.index];
     for (int i = 0; i < a.num_nodes; ++i) {
       if (!(energy[i] > 0)) continue;
       ++out.active;
       out.energy += energy[i];
       if (!out.status.empty()) out.status[a.index][i] = std::max(out.status[a.index][i], 1.0);
+      if (!pressure.empty()) pressure[i] += penalty_ * (h2 - dist_[i]);
       for (int d = 0; d < 3; ++d) {
         f[3 * i + d] += scratch[3 * i + d];
         out.tool_force[3 * tool.index + d] -= scratch[3 * i + d];
@@ -816,9 +819,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     std::vector<double>& scratch = ps.scratch;
     std::vector<double>& energy = ps.energy;
     std::vector<double>& target = ps.target;
+    std::vector<double>& pen_of = ps.pen;
     scratch.resize(3 * static_cast<std::size_t>(a.num_nodes));
     energy.resize(a.num_nodes);
     target.resize(4 * static_cast<std::size_t>(a.num_nodes));
+    pen_of.resize(a.num_nodes);
     // Between full searches only the kept triangles are read.
     if (full) {
       surface_geometry(b, ps.geo_b);
@@ -875,6 +880,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       energy[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, sdk::scale(ne, ps.side[i]),
                               vrel, in.dt, &scratch[3 * static_cast<std::size_t>(i)]);
       tg[0] = pr.element;
+      pen_of[i] = pen;
       tg[1] = pr.w[0];
       tg[2] = pr.w[1];
       tg[3] = pr.w[2];
@@ -896,12 +902,21 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     }
     auto fa = out.force[a.index];
     auto fb = out.force[b.index];
+    // The pressure of the elastic normal force on the node and, through the
+    // weights, on the target's nodes (each pass carries half the penalty).
+    const std::span<double> pa = out.pressure.empty() ? std::span<double>() : out.pressure[a.index];
+    const std::span<double> pb = out.pressure.empty() ? std::span<double>() : out.pressure[b.index];
+    const auto area_b = in.node_area[b.index];
     for (int i = 0; i < a.num_nodes; ++i) {
       const double* tg = &target[4 * static_cast<std::size_t>(i)];
       if (tg[0] < 0) continue;
       ++out.active;
       out.energy += energy[i];
       const int* t = &b.triangles[3 * static_cast<int>(tg[0])];
+      const double fn = scale * penalty_ * area[i] * pen_of[i];
+      if (!pa.empty()) pa[i] += scale * penalty_ * pen_of[i];
+      if (!pb.empty())
+        for (int j = 0; j < 3; ++j) pb[t[j]] += tg[1 + j] * fn / area_b[t[j]];
       if (!out.status.empty()) {
         out.status[a.index][i] = 2.0;
         for (int j = 0; j < 3; ++j)
@@ -954,9 +969,9 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.6.1";
+  d.version = "0.7.0";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
-              "touching faces";
+              "touching faces; gives the contact pressure as penalty x penetration";
   d.params = {
       sdk::real_param("penalty", "1.0e11", "Pa/m",
                       "contact pressure per unit penetration; the default keeps the penetration under 1 % of a "
@@ -998,4 +1013,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.6.1", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.7.0", ts::contact::register_all)

@@ -69,6 +69,16 @@ struct ContactForceOutput {
   std::span<const std::span<double>> force;  // per part, 3 * num_nodes (accumulate)
   std::span<double> tool_force;              // 3 * num_tools (accumulate)
   std::span<const std::span<double>> status; // per part, num_nodes: set to 1 (tool) or 2 (ply) where in contact
+  // Per part, num_nodes, or empty (then not wanted): add, at every node of
+  // either body, the normal force this pair puts on the node divided by the
+  // node's area (node_area), Pa: the pressure on the node's face that
+  // touches the pair's other body. Forces spread over a target's nodes count
+  // there too. The kernel sums what the calls of one pair add (both sides)
+  // and shows per node the largest over its pairs, so that a node pressed
+  // on both faces shows the larger of the two. A penalty handler gives its
+  // springs' elastic force (penalty x penetration per unit area), without
+  // the damper.
+  std::span<const std::span<double>> pressure;
   double energy = 0.0;
   long long active = 0;  // nodes in contact
 };
