@@ -1530,8 +1530,6 @@ void Simulation::start_part_contact(int part) {
 void Simulation::run_contact_task(ContactTask& task, double t, double dt) {
   std::fill(task.cross.begin(), task.cross.end(), 0.0);
   std::fill(task.cross_status.begin(), task.cross_status.end(), 0.0);
-  std::fill(task.own_pressure.begin(), task.own_pressure.end(), 0.0);
-  std::fill(task.cross_pressure.begin(), task.cross_pressure.end(), 0.0);
   std::fill(task.tool_force.begin(), task.tool_force.end(), 0.0);
   sdk::ContactForceInput in;
   in.parts = part_views_;
@@ -1550,7 +1548,11 @@ void Simulation::run_contact_task(ContactTask& task, double t, double dt) {
   out.force = task.force;
   out.tool_force = task.tool_force;
   out.status = task.status;
-  out.pressure = task.pressure;
+  if (pressure_due_) {
+    std::fill(task.own_pressure.begin(), task.own_pressure.end(), 0.0);
+    std::fill(task.cross_pressure.begin(), task.cross_pressure.end(), 0.0);
+    out.pressure = task.pressure;
+  }
   if (auto s = contacts_[task.contact]->contact_forces(in, out); !s)
     throw RunError("contact handler of " + job_.contacts[task.contact].pointer + " at t = " + fmt_g(t) +
                    " s: " + s.message);
@@ -1572,21 +1574,22 @@ void Simulation::merge_part_contact(int part) {
       for (std::size_t i = 0; i < st.size(); ++i) st[i] = std::max(st[i], task.cross_status[i]);
     }
   }
-  combine_pressure(part);
 }
 
-// The part's contact pressure from the contact tasks' arrays: per node, the
-// largest over the pairs of what each pair's tasks added.
-void Simulation::combine_pressure(int part) {
-  if (part >= static_cast<int>(pressure_groups_.size())) return;
-  std::vector<double>& p = parts_[part]->contact_pressure;
-  std::vector<double>& sum = pressure_sum_[part];
-  std::fill(p.begin(), p.end(), 0.0);
-  for (const auto& group : pressure_groups_[part]) {
-    std::copy(group[0]->begin(), group[0]->end(), sum.begin());
-    for (std::size_t g = 1; g < group.size(); ++g)
-      for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += (*group[g])[i];
-    for (std::size_t i = 0; i < p.size(); ++i) p[i] = std::max(p[i], sum[i]);
+// The parts' contact pressure from the contact tasks' arrays of the last
+// evaluation with pressure_due_: per node, the largest over the pairs of
+// what each pair's tasks added.
+void Simulation::update_contact_pressure() {
+  for (std::size_t part = 0; part < pressure_groups_.size(); ++part) {
+    std::vector<double>& p = parts_[part]->contact_pressure;
+    std::vector<double>& sum = pressure_sum_[part];
+    std::fill(p.begin(), p.end(), 0.0);
+    for (const auto& group : pressure_groups_[part]) {
+      std::copy(group[0]->begin(), group[0]->end(), sum.begin());
+      for (std::size_t g = 1; g < group.size(); ++g)
+        for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += (*group[g])[i];
+      for (std::size_t i = 0; i < p.size(); ++i) p[i] = std::max(p[i], sum[i]);
+    }
   }
 }
 
@@ -1727,7 +1730,10 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   return dt;
 }
 
+// The mechanical fields that frames and probes show: the elements' (shear
+// angle, stresses, curvatures, fibres) and the contact pressure.
 void Simulation::update_element_fields() {
+  update_contact_pressure();
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
@@ -2173,6 +2179,11 @@ RunResult Simulation::run(const RunOptions& opt) {
       // The stresses and curvatures are asked of the elements only for the
       // frames that show them, and for the last frame of an interrupted run.
       const auto& out_fields = job_.output.fields;
+      std::vector<char> probe_pressure(job_.output.probes.size(), 0);
+      for (std::size_t q = 0; q < probe_pressure.size(); ++q) {
+        const auto& qs = job_.output.probes[q].quantities;
+        probe_pressure[q] = std::find(qs.begin(), qs.end(), "contact_pressure") != qs.end();
+      }
       const bool frames_need_fields =
           std::find(out_fields.begin(), out_fields.end(), "membrane_stress") != out_fields.end() ||
           std::find(out_fields.begin(), out_fields.end(), "curvature") != out_fields.end();
@@ -2200,6 +2211,11 @@ RunResult Simulation::run(const RunOptions& opt) {
         // step). A stop request seen here ends the loop after this step.
         const int stop_seen = stop_requested();
         fields_due_ = frames_need_fields && (t >= next_frame - eps_t || stop_seen != 0);
+        if (want_pressure_) {
+          pressure_due_ = t >= next_frame - eps_t || stop_seen != 0;
+          for (std::size_t q = 0; q < next_probe.size(); ++q)
+            pressure_due_ = pressure_due_ || (probe_pressure[q] && (t >= next_probe[q] - eps_t || next_probe[q] <= 0));
+        }
         stable = forces_and_stable_dt(t, dt);
         audit.contact_stored = contact_energy_;
         if (job_.thermal) {

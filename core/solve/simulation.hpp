@@ -141,13 +141,16 @@ class Simulation {
   // (ElementForceInput::fields_due).
   bool fields_due_ = true;
   bool want_element_dt_ = false;  // the elements' own stable steps, for the mass scaling at set-up
-  // A frame field or a probe asks for the contact pressure (PartState::contact_pressure).
-  bool want_pressure_ = false;
+  // A frame field or a probe asks for the contact pressure
+  // (PartState::contact_pressure), and a frame or such a probe follows the
+  // next contact force evaluation: only then do the handlers get arrays
+  // for it (ContactForceOutput::pressure).
+  bool want_pressure_ = false, pressure_due_ = true;
   // Per part, per contact pair touching it: the tasks' arrays of its
   // pressure (summed within a pair, the largest over the pairs shown).
   std::vector<std::vector<std::vector<const std::vector<double>*>>> pressure_groups_;
   std::vector<std::vector<double>> pressure_sum_;  // per part, scratch
-  void combine_pressure(int part);
+  void update_contact_pressure();
   // Raised whenever the node temperatures the elements see change
   // (ElementForceInput::temperature_version; 0 before the first).
   std::uint64_t temperature_version_ = 0;
