@@ -114,14 +114,22 @@ TEST(Contact, ApproachingToolIsFoundOnTime) {
   j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"penalty", penalty}},
                        {{"type", "contact"}, {"between", {"punch", "ply"}}, {"penalty", penalty}}};
   j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+  // The contact pressure sampled during the squeeze, between two frames
+  // (every t_end / 4): penalty v (t - t_hit) / 2 at the sample's own time.
+  j["output"]["probes"] = {{{"name", "centre"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
+                            {"quantities", {"contact_pressure"}}, {"interval", 1e-4}}};
   const JobRun r = run_json(j);
   ASSERT_TRUE(r.result.ok) << r.result.error;
   const double expected = penalty * area * v * squeeze_time / 2;
   const double punch_fz = tool_value(r.result, 1, 2, true), die_fz = tool_value(r.result, 0, 2, true);
   EXPECT_NEAR(punch_fz / expected, 1.0, 0.01);
   EXPECT_NEAR(-die_fz / expected, 1.0, 0.01);
-  std::printf("approaching punch: F %.5g N (punch) / %.5g N (die) for %.5g N, %lld steps\n", punch_fz, -die_fz,
-              expected, r.result.mechanical_steps);
+  const ProbeSample* mid = r.sample(0, "contact_pressure", t_hit + 0.5 * squeeze_time);
+  const double p_mid = penalty * v * (mid->time - t_hit) / 2;
+  EXPECT_NEAR(mid->values[0] / p_mid, 1.0, 0.01);
+  std::printf("approaching punch: F %.5g N (punch) / %.5g N (die) for %.5g N, %lld steps; contact pressure at "
+              "t_hit + %.4g s %.5g Pa for %.5g Pa\n",
+              punch_fz, -die_fz, expected, r.result.mechanical_steps, mid->time - t_hit, mid->values[0], p_mid);
 }
 
 // A ply on a plane under gravity tilted by alpha (the plane stays z = 0):
