@@ -1569,17 +1569,20 @@ void Simulation::merge_part_contact(int part) {
     const ContactTask& task = contact_tasks_[k];
     const std::vector<double>& cross = task.published ? task.cross_out : task.cross;
     for (std::size_t i = 0; i < f.size(); ++i) f[i] += cross[i];
-    if (!task.cross_status.empty()) {
-      std::vector<double>& st = parts_[part]->contact_status;
-      for (std::size_t i = 0; i < st.size(); ++i) st[i] = std::max(st[i], task.cross_status[i]);
-    }
   }
 }
 
-// The parts' contact pressure from the contact tasks' arrays of the last
-// evaluation with pressure_due_: per node, the largest over the pairs of
-// what each pair's tasks added.
-void Simulation::update_contact_pressure() {
+// The contact fields of the last contact force evaluation. Isothermal:
+// the status the tasks gave the nodes of their pair's other part (the
+// tasks wrote their own part's directly). The parts' contact pressure from
+// the tasks' arrays of the last evaluation with pressure_due_: per node,
+// the largest over the pairs of what each pair's tasks added.
+void Simulation::update_contact_fields() {
+  for (const ContactTask& task : contact_tasks_) {
+    if (task.cross_status.empty()) continue;
+    std::vector<double>& st = parts_[task.other]->contact_status;
+    for (std::size_t i = 0; i < st.size(); ++i) st[i] = std::max(st[i], task.cross_status[i]);
+  }
   for (std::size_t part = 0; part < pressure_groups_.size(); ++part) {
     std::vector<double>& p = parts_[part]->contact_pressure;
     std::vector<double>& sum = pressure_sum_[part];
@@ -1731,9 +1734,9 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
 }
 
 // The mechanical fields that frames and probes show: the elements' (shear
-// angle, stresses, curvatures, fibres) and the contact pressure.
+// angle, stresses, curvatures, fibres) and the contact fields.
 void Simulation::update_element_fields() {
-  update_contact_pressure();
+  update_contact_fields();
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];

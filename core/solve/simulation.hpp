@@ -150,7 +150,7 @@ class Simulation {
   // pressure (summed within a pair, the largest over the pairs shown).
   std::vector<std::vector<std::vector<const std::vector<double>*>>> pressure_groups_;
   std::vector<std::vector<double>> pressure_sum_;  // per part, scratch
-  void update_contact_pressure();
+  void update_contact_fields();
   // Raised whenever the node temperatures the elements see change
   // (ElementForceInput::temperature_version; 0 before the first).
   std::uint64_t temperature_version_ = 0;

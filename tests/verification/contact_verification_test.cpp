@@ -368,6 +368,39 @@ TEST(Contact, PartialHolderOnTwoPliesStaysAtRest) {
               -tool_value(r.result, 0, 2, true), F, r.result.energy.kinetic, r.result.energy.balance_error);
 }
 
+// The frames' contact fields of that stack (isothermal: the status is the
+// mechanical contact's): every node that a contact presses is marked in
+// contact, also a node pressed only as a target of the other ply's nodes
+// (the fold under the disk edge). Required: no node with a contact
+// pressure above zero and a status of 0, in every frame.
+TEST(Contact, PressedNodesAreMarkedInContact) {
+  const double F = 40.0, t_end = 0.02;
+  json j = disk_on_two_plies(F, t_end);
+  j["output"]["fields"] = {"contact_status", "contact_pressure"};
+  const auto out = temp_dir("pressed_nodes_marked");
+  const JobRun r = run_json(j, 0, out);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const hid_t file = H5Fopen((out / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  int pressed = 0, unmarked = 0;
+  for (int k = 1; k <= 4; ++k) {
+    char frame[32];
+    std::snprintf(frame, sizeof frame, "frames/%06d/", k);
+    for (const char* ply : {"low", "up"}) {
+      const auto status = read_dataset<double>(file, std::string(frame) + ply + "/contact_status");
+      const auto p = read_dataset<double>(file, std::string(frame) + ply + "/contact_pressure");
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        pressed += p[i] > 0;
+        unmarked += p[i] > 0 && status[i] == 0;
+      }
+    }
+  }
+  H5Fclose(file);
+  EXPECT_GT(pressed, 0);
+  EXPECT_EQ(unmarked, 0);
+  std::printf("disk on two plies, 4 frames: %d pressed nodes, %d of them not marked in contact\n", pressed, unmarked);
+}
+
 // The same stack held by rate-regularised friction on every pair: the
 // stack must come to rest, not vibrate. Each contact's friction force is
 // capped so that it cannot reverse the slip within a step; at the full
