@@ -94,6 +94,15 @@ def mirrored(xy, tri, values, per_element):
     return out
 
 
+def finish_map(fig, ax, pc, title, label):
+    """Title, axes in mm and colour bar of one ply's map."""
+    ax.set_aspect("equal")
+    ax.set_title(title, fontsize=9)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    fig.colorbar(pc, ax=ax, label=label, shrink=0.8)
+
+
 def plot_maps(folder, out):
     try:
         import h5py
@@ -142,12 +151,8 @@ def plot_maps(folder, out):
                 sign = 1.0 if k in (0, 3) or len(copies) == 1 else -1.0
                 pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=sign * v, vmin=-lim, vmax=lim,
                                   cmap="coolwarm")
-            ax.set_aspect("equal")
-            ax.set_title("%s: shear angle, t = %.3g s\nmin %.1f, max %.1f deg" % (part, time, vals.min(), vals.max()),
-                         fontsize=9)
-            ax.set_xlabel("x (mm)")
-            ax.set_ylabel("y (mm)")
-            fig.colorbar(pc, ax=ax, label="degrees", shrink=0.8)
+            finish_map(fig, ax, pc, "%s: shear angle, t = %.3g s\nmin %.1f, max %.1f deg"
+                       % (part, time, vals.min(), vals.max()), "degrees")
             made.append(save(fig, out, "shear_%s.png" % part, dpi=110, tight=False))
         for part in f["parts"]:
             g = last[part]
@@ -169,12 +174,8 @@ def plot_maps(folder, out):
             for mxy, mtri, v in mirrored(xyz[:, :2], tri, np.where(face > 0, vals[tri].mean(axis=1), 0.0), True):
                 pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.maximum(v, 1e-6 * top),
                                   norm=norm, cmap=cmap)
-            ax.set_aspect("equal")
-            ax.set_title("%s: contact pressure (larger face), t = %.3g s\nmax %.3g kPa; grey: no contact"
-                         % (part, time, top), fontsize=9)
-            ax.set_xlabel("x (mm)")
-            ax.set_ylabel("y (mm)")
-            fig.colorbar(pc, ax=ax, label="kPa", shrink=0.8)
+            finish_map(fig, ax, pc, "%s: contact pressure (larger face), t = %.3g s\nmax %.3g kPa; grey: no contact"
+                       % (part, time, top), "kPa")
             made.append(save(fig, out, "pressure_%s.png" % part, dpi=110, tight=False))
     return made
 

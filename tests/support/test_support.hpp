@@ -47,6 +47,16 @@ std::vector<T> read_dataset(hid_t file, const std::string& name) {
   return v;
 }
 
+// The number of frames in an open results file (-1 without a frames group).
+inline int frame_count(hid_t file) {
+  const hid_t frames = H5Gopen2(file, "frames", H5P_DEFAULT);
+  if (frames < 0) return -1;
+  hsize_t n = 0;
+  H5Gget_num_objs(frames, &n);
+  H5Gclose(frames);
+  return static_cast<int>(n);
+}
+
 struct CommandResult {
   int exit_code = -1;
   std::string out, err;
