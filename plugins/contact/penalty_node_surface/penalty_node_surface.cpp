@@ -916,7 +916,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const double fn = scale * penalty_ * area[i] * pen_of[i];
       if (!pa.empty()) pa[i] += scale * penalty_ * pen_of[i];
       if (!pb.empty())
-        for (int j = 0; j < 3; ++j) pb[t[j]] += tg[1 + j] * fn / area_b[t[j]];
+        for (int j = 0; j < 3; ++j)
+          if (area_b[t[j]] > 0) pb[t[j]] += tg[1 + j] * fn / area_b[t[j]];
       if (!out.status.empty()) {
         out.status[a.index][i] = 2.0;
         for (int j = 0; j < 3; ++j)
