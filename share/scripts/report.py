@@ -103,6 +103,39 @@ def finish_map(fig, ax, pc, title, label):
     fig.colorbar(pc, ax=ax, label=label, shrink=0.8)
 
 
+def shear_map(out, part, time, tri, xyz, vals):
+    """The shear angle of one ply (per element, degrees)."""
+    lim = max(abs(vals.min()), abs(vals.max()), 1e-9)
+    fig, ax = plt.subplots(figsize=(5.2, 4.4))
+    copies = mirrored(xyz[:, :2], tri, vals, True)
+    for k, (mxy, mtri, v) in enumerate(copies):
+        # mirroring about one axis reverses the sign of the shear angle
+        sign = 1.0 if k in (0, 3) or len(copies) == 1 else -1.0
+        pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=sign * v, vmin=-lim, vmax=lim,
+                          cmap="coolwarm")
+    finish_map(fig, ax, pc, "%s: shear angle, t = %.3g s\nmin %.1f, max %.1f deg" % (part, time, vals.min(), vals.max()),
+               "degrees")
+    return save(fig, out, "shear_%s.png" % part, dpi=110, tight=False)
+
+
+def pressure_map(out, part, time, tri, xyz, vals):
+    """The contact pressure of one ply (per node, kPa, some above zero): a log
+    scale over three decades (a holder's pressure can be 50 times the
+    punch's), grey where a triangle has a node out of contact."""
+    top = vals.max()
+    face = vals[tri].min(axis=1)
+    cmap = plt.get_cmap("viridis").copy()
+    cmap.set_under("lightgrey")
+    norm = matplotlib.colors.LogNorm(vmin=1e-3 * top, vmax=top)
+    fig, ax = plt.subplots(figsize=(5.2, 4.4))
+    for mxy, mtri, v in mirrored(xyz[:, :2], tri, np.where(face > 0, vals[tri].mean(axis=1), 0.0), True):
+        pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.maximum(v, 1e-6 * top), norm=norm,
+                          cmap=cmap)
+    finish_map(fig, ax, pc, "%s: contact pressure (larger face), t = %.3g s\nmax %.3g kPa; grey: no contact"
+               % (part, time, top), "kPa")
+    return save(fig, out, "pressure_%s.png" % part, dpi=110, tight=False)
+
+
 def plot_maps(folder, out):
     try:
         import h5py
@@ -138,45 +171,12 @@ def plot_maps(folder, out):
             made.append(save(fig, out, "map_%s.png" % part, dpi=110, tight=False))
         for part in f["parts"]:
             g = last[part]
-            if "shear_angle" not in g:
-                continue
             tri = f["parts"][part]["triangles"][()]
             xyz = g["nodes"][()]
-            vals = g["shear_angle"][()]
-            lim = max(abs(vals.min()), abs(vals.max()), 1e-9)
-            fig, ax = plt.subplots(figsize=(5.2, 4.4))
-            copies = mirrored(xyz[:, :2], tri, vals, True)
-            for k, (mxy, mtri, v) in enumerate(copies):
-                # mirroring about one axis reverses the sign of the shear angle
-                sign = 1.0 if k in (0, 3) or len(copies) == 1 else -1.0
-                pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=sign * v, vmin=-lim, vmax=lim,
-                                  cmap="coolwarm")
-            finish_map(fig, ax, pc, "%s: shear angle, t = %.3g s\nmin %.1f, max %.1f deg"
-                       % (part, time, vals.min(), vals.max()), "degrees")
-            made.append(save(fig, out, "shear_%s.png" % part, dpi=110, tight=False))
-        for part in f["parts"]:
-            g = last[part]
-            if "contact_pressure" not in g:
-                continue
-            tri = f["parts"][part]["triangles"][()]
-            xyz = g["nodes"][()]
-            vals = g["contact_pressure"][()] * 1e-3
-            if not vals.max() > 0:
-                continue
-            # Log scale over three decades (a holder's pressure can be 50
-            # times the punch's); a triangle with a node out of contact grey.
-            top = vals.max()
-            face = vals[tri].min(axis=1)
-            cmap = plt.get_cmap("viridis").copy()
-            cmap.set_under("lightgrey")
-            norm = matplotlib.colors.LogNorm(vmin=1e-3 * top, vmax=top)
-            fig, ax = plt.subplots(figsize=(5.2, 4.4))
-            for mxy, mtri, v in mirrored(xyz[:, :2], tri, np.where(face > 0, vals[tri].mean(axis=1), 0.0), True):
-                pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.maximum(v, 1e-6 * top),
-                                  norm=norm, cmap=cmap)
-            finish_map(fig, ax, pc, "%s: contact pressure (larger face), t = %.3g s\nmax %.3g kPa; grey: no contact"
-                       % (part, time, top), "kPa")
-            made.append(save(fig, out, "pressure_%s.png" % part, dpi=110, tight=False))
+            if "shear_angle" in g:
+                made.append(shear_map(out, part, time, tri, xyz, g["shear_angle"][()]))
+            if "contact_pressure" in g and g["contact_pressure"][()].max() > 0:
+                made.append(pressure_map(out, part, time, tri, xyz, g["contact_pressure"][()] * 1e-3))
     return made
 
 
