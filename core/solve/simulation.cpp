@@ -305,9 +305,11 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), re
     throw JobError("/solvers", "nothing to run: set solvers.thermal (a thermal splitter such as \"adi\")");
   want_pressure_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "contact_pressure") !=
                    job_.output.fields.end();
-  for (const auto& pr : job_.output.probes)
-    want_pressure_ = want_pressure_ || std::find(pr.quantities.begin(), pr.quantities.end(), "contact_pressure") !=
-                                           pr.quantities.end();
+  for (const auto& pr : job_.output.probes) {
+    probe_pressure_.push_back(std::find(pr.quantities.begin(), pr.quantities.end(), "contact_pressure") !=
+                              pr.quantities.end());
+    want_pressure_ = want_pressure_ || probe_pressure_.back();
+  }
   build_parts();
   build_tools();
   build_thermal();
@@ -1442,8 +1444,9 @@ void Simulation::build_contact_tasks() {
       contact_tasks_.push_back(std::move(task));
     }
   }
-  pressure_groups_.assign(want_pressure_ ? np : 0, {});
   pressure_sum_.assign(want_pressure_ ? np : 0, {});
+  for (std::size_t p = 0; p < pressure_sum_.size(); ++p)
+    pressure_sum_[p].assign(static_cast<std::size_t>(parts_[p]->mesh.num_nodes()), 0.0);
   for (std::size_t k = 0; k < contact_tasks_.size(); ++k) {
     ContactTask& task = contact_tasks_[k];
     task.tool_force.assign(3 * tools_.size(), 0.0);
@@ -1469,22 +1472,6 @@ void Simulation::build_contact_tasks() {
         task.pressure[task.other] = task.cross_pressure;
       }
       cross_into_[task.other].push_back(static_cast<int>(k));
-    }
-  }
-  if (want_pressure_) {
-    // Group the arrays by part and pair (the tasks of a pair are adjacent).
-    for (std::size_t p = 0; p < np; ++p) {
-      int last = -1;
-      for (const ContactTask& task : contact_tasks_) {
-        const std::vector<double>* a = task.owner == static_cast<int>(p)   ? &task.own_pressure
-                                       : task.other == static_cast<int>(p) ? &task.cross_pressure
-                                                                           : nullptr;
-        if (!a || a->empty()) continue;
-        if (task.contact != last) pressure_groups_[p].emplace_back();
-        last = task.contact;
-        pressure_groups_[p].back().push_back(a);
-      }
-      pressure_sum_[p].assign(static_cast<std::size_t>(parts_[p]->mesh.num_nodes()), 0.0);
     }
   }
   ContactSpans& cs = contact_spans_;
@@ -1583,15 +1570,25 @@ void Simulation::update_contact_fields() {
     std::vector<double>& st = parts_[task.other]->contact_status;
     for (std::size_t i = 0; i < st.size(); ++i) st[i] = std::max(st[i], task.cross_status[i]);
   }
-  for (std::size_t part = 0; part < pressure_groups_.size(); ++part) {
+  for (std::size_t part = 0; part < pressure_sum_.size(); ++part) {
     std::vector<double>& p = parts_[part]->contact_pressure;
     std::vector<double>& sum = pressure_sum_[part];
     std::fill(p.begin(), p.end(), 0.0);
-    for (const auto& group : pressure_groups_[part]) {
-      std::copy(group[0]->begin(), group[0]->end(), sum.begin());
-      for (std::size_t g = 1; g < group.size(); ++g)
-        for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += (*group[g])[i];
-      for (std::size_t i = 0; i < p.size(); ++i) p[i] = std::max(p[i], sum[i]);
+    // The tasks of one pair (its sides) are adjacent.
+    for (std::size_t k = 0; k < contact_tasks_.size();) {
+      const int pair = contact_tasks_[k].contact;
+      bool touches = false;
+      std::fill(sum.begin(), sum.end(), 0.0);
+      for (; k < contact_tasks_.size() && contact_tasks_[k].contact == pair; ++k) {
+        const ContactTask& task = contact_tasks_[k];
+        const bool own = task.owner == static_cast<int>(part);
+        if (!own && task.other != static_cast<int>(part)) continue;
+        const std::vector<double>& a = own ? task.own_pressure : task.cross_pressure;
+        touches = true;
+        for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += a[i];
+      }
+      if (touches)
+        for (std::size_t i = 0; i < p.size(); ++i) p[i] = std::max(p[i], sum[i]);
     }
   }
 }
@@ -2182,11 +2179,6 @@ RunResult Simulation::run(const RunOptions& opt) {
       // The stresses and curvatures are asked of the elements only for the
       // frames that show them, and for the last frame of an interrupted run.
       const auto& out_fields = job_.output.fields;
-      std::vector<char> probe_pressure(job_.output.probes.size(), 0);
-      for (std::size_t q = 0; q < probe_pressure.size(); ++q) {
-        const auto& qs = job_.output.probes[q].quantities;
-        probe_pressure[q] = std::find(qs.begin(), qs.end(), "contact_pressure") != qs.end();
-      }
       const bool frames_need_fields =
           std::find(out_fields.begin(), out_fields.end(), "membrane_stress") != out_fields.end() ||
           std::find(out_fields.begin(), out_fields.end(), "curvature") != out_fields.end();
@@ -2217,7 +2209,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         if (want_pressure_) {
           pressure_due_ = t >= next_frame - eps_t || stop_seen != 0;
           for (std::size_t q = 0; q < next_probe.size(); ++q)
-            pressure_due_ = pressure_due_ || (probe_pressure[q] && (t >= next_probe[q] - eps_t || next_probe[q] <= 0));
+            pressure_due_ = pressure_due_ || (probe_pressure_[q] && (t >= next_probe[q] - eps_t || next_probe[q] <= 0));
         }
         stable = forces_and_stable_dt(t, dt);
         audit.contact_stored = contact_energy_;

@@ -146,10 +146,8 @@ class Simulation {
   // next contact force evaluation: only then do the handlers get arrays
   // for it (ContactForceOutput::pressure).
   bool want_pressure_ = false, pressure_due_ = true;
-  // Per part, per contact pair touching it: the tasks' arrays of its
-  // pressure (summed within a pair, the largest over the pairs shown).
-  std::vector<std::vector<std::vector<const std::vector<double>*>>> pressure_groups_;
-  std::vector<std::vector<double>> pressure_sum_;  // per part, scratch
+  std::vector<char> probe_pressure_;               // per probe: it records contact_pressure
+  std::vector<std::vector<double>> pressure_sum_;  // per part, scratch of update_contact_fields()
   void update_contact_fields();
   // Raised whenever the node temperatures the elements see change
   // (ElementForceInput::temperature_version; 0 before the first).

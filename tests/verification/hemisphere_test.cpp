@@ -84,20 +84,12 @@ TEST(Hemisphere, ThermalPrintsReachTheLowerPlyThroughTheUpperOne) {
     double pressed[2];
     for (int q = 0; q < 2; ++q) {
       const std::string ply = q == 0 ? "ply_top" : "ply_bottom";
-      const std::vector<int> tri = read_dataset<int>(file, "parts/" + ply + "/triangles");
-      const std::vector<double> x0 = read_dataset<double>(file, "frames/000000/" + ply + "/nodes");
+      ShellMesh initial;  // the node areas the contact divides by
+      initial.triangles = read_dataset<int>(file, "parts/" + ply + "/triangles");
+      initial.x = read_dataset<double>(file, "frames/000000/" + ply + "/nodes");
+      const std::vector<double> area = node_areas(initial);
       const std::vector<double> x = read_dataset<double>(file, last + ply + "/nodes");
       const std::vector<double> p = read_dataset<double>(file, last + ply + "/contact_pressure");
-      std::vector<double> area(p.size(), 0.0);
-      for (std::size_t e = 0; 3 * e < tri.size(); ++e) {
-        double u[3], v[3];
-        for (int d = 0; d < 3; ++d) {
-          u[d] = x0[3 * tri[3 * e + 1] + d] - x0[3 * tri[3 * e] + d];
-          v[d] = x0[3 * tri[3 * e + 2] + d] - x0[3 * tri[3 * e] + d];
-        }
-        const double a = 0.5 * std::hypot(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]);
-        for (int k = 0; k < 3; ++k) area[tri[3 * e + k]] += a / 3;
-      }
       pressed[q] = 0;
       for (std::size_t i = 0; i < p.size(); ++i)
         if (x[3 * i + 2] > -0.002) pressed[q] += p[i] * area[i];
