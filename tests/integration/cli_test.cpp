@@ -42,7 +42,7 @@ std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.14.0 (plugin SDK 0.14.0, ABI 14)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.15.0 (plugin SDK 0.15.0, ABI 15)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {
@@ -917,11 +917,15 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   json typo = read_job_document(source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json");
   typo["parts"][0]["thicknes"] = 0.001;
   std::ofstream(dir / "typo.json") << typo.dump();
+  json with_checkpoints = read_job_document(source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json");
+  with_checkpoints["output"]["checkpoint_interval"] = 1.0;
+  std::ofstream(dir / "checkpoints.json") << with_checkpoints.dump();
   const std::string py = "/usr/bin/python3 '" + (dir / "check.py").string() + "' '" + (dir / "schema.json").string() + "' ";
   std::string good;
   for (const char* f : {"share/jobs/two_ply_thermal_demo.json", "share/jobs/ud_strip_tension.json",
                         "share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += "'" + (source_dir() / f).string() + "' ";
+  good += "'" + (dir / "checkpoints.json").string() + "' ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + "'" + (dir / "typo.json").string() + "' >/dev/null").c_str()), 0);
 }

@@ -284,6 +284,21 @@ class Candidates {
     return {node_elems_.data() + node_start_[i], node_elems_.data() + node_start_[i + 1]};
   }
   long long builds() const { return builds_; }
+  // Checkpoints: the positions of the last build and its lists.
+  void save(sdk::StateWriter& out) const {
+    out.put_vector(xa_);
+    out.put_vector(xb_);
+    out.put_vector(start_);
+    out.put_vector(elems_);
+    out.put_vector(node_start_);
+    out.put_vector(node_elems_);
+    out.put(margin_);
+    out.put(builds_);
+  }
+  bool load(sdk::StateReader& in) {
+    return in.get_vector(xa_) && in.get_vector(xb_) && in.get_vector(start_) && in.get_vector(elems_) &&
+           in.get_vector(node_start_) && in.get_vector(node_elems_) && in.get(margin_) && in.get(builds_);
+  }
 
  private:
   static double dist2(const double* p, const double* q) {
@@ -478,6 +493,47 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // Ply/ply: the two passes (nodes of each ply against the other's surface)
   // share nothing they write, so the kernel may run them at the same time.
   int sides() const override { return pair_.second.type == sdk::BodyRef::Type::Part ? 2 : 1; }
+
+  // Checkpoints: per search direction the tracked sides, the tangential
+  // springs, the candidate lists and the kept targets between full
+  // searches; the tool queries' distances and where they were asked.
+  sdk::Status save_state(sdk::StateWriter& out) const override {
+    for (const Pass& ps : pass_) {
+      out.put_vector(ps.side);
+      out.put_vector(ps.ft);
+      ps.cand.save(out);
+      out.put_vector(ps.kept);
+      out.put(ps.calls);
+      out.put(ps.limit);
+      out.put_vector(ps.kept_list);
+      out.put_vector(ps.slot);
+      out.put_vector(ps.used);
+      out.put_vector(ps.geo_kept);
+      out.put_vector(ps.geo_b);
+    }
+    out.put_vector(nn_a_);
+    out.put_vector(dist_);
+    out.put_vector(tn_);
+    out.put_vector(xq_);
+    out.put_vector(sq_);
+    out.put(tool_path_);
+    out.put(tool_u_);
+    return sdk::Status::success();
+  }
+  sdk::Status load_state(sdk::StateReader& in) override {
+    bool ok = true;
+    for (Pass& ps : pass_) {
+      const std::size_t nside = ps.side.size(), nft = ps.ft.size();
+      ok = ok && in.get_vector(ps.side) && in.get_vector(ps.ft) && ps.side.size() == nside && ps.ft.size() == nft &&
+           ps.cand.load(in) && in.get_vector(ps.kept) && in.get(ps.calls) && in.get(ps.limit) &&
+           in.get_vector(ps.kept_list) && in.get_vector(ps.slot) && in.get_vector(ps.used) &&
+           in.get_vector(ps.geo_kept) && in.get_vector(ps.geo_b);
+    }
+    ok = ok && in.get_vector(nn_a_) && in.get_vector(dist_) && in.get_vector(tn_) && in.get_vector(xq_) &&
+         in.get_vector(sq_) && in.get(tool_path_) && in.get(tool_u_);
+    if (!ok) return sdk::Status::failure("penalty_node_surface: the checkpoint does not fit this pair");
+    return sdk::Status::success();
+  }
 
  private:
   // Distances and normals of a's nodes to the tool, for the nodes that can
@@ -970,7 +1026,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.7.0";
+  d.version = "0.8.0";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces; gives the contact pressure as penalty x penetration";
   d.params = {
@@ -1014,4 +1070,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.7.0", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.8.0", ts::contact::register_all)

@@ -834,6 +834,48 @@ class ShellRfT3 final : public ElementKernel {
     return Status::success();
   }
 
+  // What a step leaves for the next: the laws' history and previous
+  // strains, the bending's (curvatures, history), the stresses and
+  // curvatures fields() shows, and per block the time since its last
+  // evaluation with bending and that evaluation's energy.
+  Status save_state(StateWriter& out) const override {
+    out.put_vector(strain_old_);
+    out.put_vector(stress_);
+    out.put(static_cast<std::uint64_t>(states_.size()));
+    for (const auto& s : states_) out.put_vector(s);
+    out.put_vector(curv_);
+    out.put_vector(curv_old_);
+    out.put_vector(bstate_);
+    std::vector<double> blocks;  // (first element, elapsed, bending energy) per block evaluated so far
+    for (std::size_t b = 0; b < block_angles_.size(); ++b)
+      if (block_angles_[b])
+        blocks.insert(blocks.end(), {static_cast<double>(b), block_angles_[b]->elapsed, block_angles_[b]->bending_energy});
+    out.put_vector(blocks);
+    return Status::success();
+  }
+  Status load_state(StateReader& in) override {
+    const auto mismatch = [] { return Status::failure("shell_rf_t3: the checkpoint does not fit this part"); };
+    std::uint64_t nlaws = 0;
+    if (!in.get_array(std::span<double>(strain_old_)) || !in.get_array(std::span<double>(stress_)) ||
+        !in.get(nlaws) || nlaws != states_.size())
+      return mismatch();
+    for (auto& s : states_)
+      if (!in.get_array(std::span<double>(s))) return mismatch();
+    std::vector<double> blocks;
+    if (!in.get_array(std::span<double>(curv_)) || !in.get_array(std::span<double>(curv_old_)) ||
+        !in.get_array(std::span<double>(bstate_)) || !in.get_vector(blocks) || blocks.size() % 3 != 0)
+      return mismatch();
+    for (std::size_t k = 0; k < blocks.size(); k += 3) {
+      const double b = blocks[k];
+      if (!(b >= 0 && b < static_cast<double>(block_angles_.size()))) return mismatch();
+      auto& slot = block_angles_[static_cast<std::size_t>(b)];
+      if (!slot) slot = std::make_unique<BlockAngles>();
+      slot->elapsed = blocks[k + 1];
+      slot->bending_energy = blocks[k + 2];
+    }
+    return Status::success();
+  }
+
  private:
   // Bending angle of hinge k of element e at positions x (edge nodes p, q in
   // the element's counter-clockwise order, c opposite in e, o in the
@@ -1695,7 +1737,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.6.1";
+  d.version = "0.7.0";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1703,4 +1745,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.6.1", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.7.0", register_all)

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "parameters.hpp"
+#include "state.hpp"
 #include "status.hpp"
 #include "thermal.hpp"
 #include "views.hpp"
@@ -110,6 +111,14 @@ class ContactHandler {
                                 std::span<const std::span<double>> /*stiffness*/) {
     return Status::success();
   }
+  // Checkpoints (state.hpp): whatever the handler carries from one call to
+  // the next and its results depend on (tangential springs of stuck nodes,
+  // the sides nodes are tracked on, search lists that are kept over several
+  // steps). save_state is called between steps; load_state on a handler
+  // configured by the same job, before its first call after configure. The
+  // defaults: nothing to carry.
+  virtual Status save_state(StateWriter& /*out*/) const { return Status::success(); }
+  virtual Status load_state(StateReader& /*in*/) { return Status::success(); }
 };
 
 }  // namespace ts::sdk

@@ -7,6 +7,7 @@
 
 #include "material.hpp"
 #include "parameters.hpp"
+#include "state.hpp"
 #include "status.hpp"
 #include "views.hpp"
 
@@ -146,6 +147,14 @@ class ElementKernel {
   // of the part (on one thread it does, so that a range's values are still
   // in cache for its next pass); the results must not depend on that order.
   virtual int pass_reach() const { return -1; }
+  // Checkpoints (state.hpp): whatever the element carries from one force
+  // evaluation to the next beyond the kernel's arrays, above all its laws'
+  // history (MaterialLaw::state_size) and the previous strains. save_state
+  // is called between steps; load_state on an element configured by the
+  // same job, before its first evaluation, with what save_state wrote. The
+  // defaults: nothing to carry.
+  virtual Status save_state(StateWriter& /*out*/) const { return Status::success(); }
+  virtual Status load_state(StateReader& /*in*/) { return Status::success(); }
 };
 
 }  // namespace ts::sdk

@@ -6,6 +6,7 @@
 #include <span>
 
 #include "parameters.hpp"
+#include "state.hpp"
 #include "status.hpp"
 #include "views.hpp"
 
@@ -72,6 +73,12 @@ class ThermalSplitter {
   // Advances every part's temperature from t to t + in.dt, in place.
   virtual Status advance(const ThermalStepInput& in, std::span<const std::span<double>> temperature,
                          ThermalStepReport* report) = 0;
+  // Checkpoints (state.hpp): whatever the splitter carries from one step to
+  // the next beyond the kernel's temperatures and its results depend on.
+  // Work arrays and factorisations it forms again from its inputs need not
+  // be carried. The defaults: nothing to carry.
+  virtual Status save_state(StateWriter& /*out*/) const { return Status::success(); }
+  virtual Status load_state(StateReader& /*in*/) { return Status::success(); }
 };
 
 }  // namespace ts::sdk
