@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,7 @@ namespace {
 
 constexpr const char* kUsage = R"(usage:
   thermostamp run JOB.json [--out DIR] [--threads N] [--set PATH=VALUE ...] [--quiet] [--keep-subnormals]
+                  [--restart]
   thermostamp validate JOB.json [--set PATH=VALUE ...]
   thermostamp plugins [--json | --markdown]
   thermostamp schema                 # JSON Schema of job files, from the plugins found
@@ -30,10 +32,14 @@ constexpr const char* kUsage = R"(usage:
 
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
 subnormals instead of flushing them to zero during the run (the default)
+--restart: continue the run from the checkpoint in its output folder
+(checkpoint.bin, written when a run is interrupted and every
+output.checkpoint_interval), with the same job and --set values; the frames
+and time series up to the checkpoint are kept
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
-last frame and summary.json; a second signal ends it at once)
+last frame, a checkpoint and summary.json; a second signal ends it at once)
 )";
 
 struct UsageError : std::runtime_error {
@@ -46,7 +52,7 @@ struct Args {
   std::vector<std::string> sets;
   std::string out;
   int threads = 0;
-  bool quiet = false, json = false, markdown = false, keep_subnormals = false;
+  bool quiet = false, json = false, markdown = false, keep_subnormals = false, restart = false;
 };
 
 Args parse(int argc, char** argv) {
@@ -77,6 +83,8 @@ Args parse(int argc, char** argv) {
       }
     } else if (s == "--quiet") {
       a.quiet = true;
+    } else if (s == "--restart") {
+      a.restart = true;
     } else if (s == "--keep-subnormals") {
       a.keep_subnormals = true;
     } else if (s == "--json") {
@@ -128,8 +136,23 @@ int cmd_run(const Args& a, bool validate_only) {
   opt.threads = a.threads;
   opt.quiet = a.quiet;
   opt.flush_subnormals = !a.keep_subnormals;
+  // --restart: the run continues from the checkpoint in its output folder
+  // (checked before anything runs: a checkpoint of another job is refused).
+  std::optional<ts::Checkpoint> checkpoint;
+  double restart_t = 0;
+  if (a.restart) {
+    try {
+      checkpoint = ts::read_checkpoint(opt.out_dir / ts::kCheckpointFile);
+    } catch (const std::exception& e) {
+      throw ts::JobError("", std::string("--restart: ") + e.what());
+    }
+    restart_t = sim.check_restart(*checkpoint);
+    opt.restart = &*checkpoint;
+  }
   std::filesystem::create_directories(opt.out_dir);
-  ts::log_to_file(opt.out_dir / "log.txt");
+  ts::log_to_file(opt.out_dir / "log.txt", a.restart);
+  if (a.restart)
+    ts::logger("job")->info("restart from {} (t = {:.6g} s)", (opt.out_dir / ts::kCheckpointFile).string(), restart_t);
   ts::logger("job")->info("thermostamp {} running {} -> {}", ts::kVersion, job.file.string(), opt.out_dir.string());
   for (const auto& s : a.sets) ts::logger("job")->info("override: {}", s);
   const ts::RunResult r = sim.run(opt);

@@ -38,9 +38,9 @@ void log_to_terminal(bool quiet) {
   if (!sinks.empty()) sinks.front()->set_level(quiet ? spdlog::level::warn : spdlog::level::info);
 }
 
-void log_to_file(const std::filesystem::path& file) {
+void log_to_file(const std::filesystem::path& file, bool append) {
   log_close_file();
-  auto f = std::make_shared<spdlog::sinks::basic_file_sink_mt>(file.string(), true);
+  auto f = std::make_shared<spdlog::sinks::basic_file_sink_mt>(file.string(), !append);
   f->set_pattern("%Y-%m-%d %H:%M:%S.%e [%n] [%l] %v");
   f->set_level(spdlog::level::debug);
   file_sink() = f;

@@ -10,7 +10,7 @@ namespace ts {
 
 std::shared_ptr<spdlog::logger> logger(const std::string& module);
 void log_to_terminal(bool quiet);
-void log_to_file(const std::filesystem::path& file);
+void log_to_file(const std::filesystem::path& file, bool append = false);
 void log_close_file();
 
 }  // namespace ts

@@ -72,6 +72,35 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
   H5Fflush(file_, H5F_SCOPE_GLOBAL);
 }
 
+ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts,
+                             const std::vector<double>& kept_times, const std::vector<std::vector<FrameField>>& fields)
+    : dir_(dir), parts_(std::move(parts)) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const std::string path = (dir_ / "results.h5").string();
+  if (!std::filesystem::exists(path)) throw std::runtime_error("no " + path + " of the run to continue");
+  file_ = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  if (file_ < 0) throw std::runtime_error("cannot open " + path);
+  const hid_t frames_g = H5Gopen2(file_, "frames", H5P_DEFAULT);
+  if (frames_g < 0) throw std::runtime_error(path + " has no frames");
+  const int kept = static_cast<int>(kept_times.size());
+  for (int k = 0; k < kept; ++k)
+    if (H5Lexists(frames_g, frame_name(k).c_str(), H5P_DEFAULT) <= 0) {
+      H5Gclose(frames_g);
+      throw std::runtime_error(path + " holds " + std::to_string(k) + " frames, the checkpoint " +
+                               std::to_string(kept) + ": not the results of the run that wrote it");
+    }
+  for (int k = kept; H5Lexists(frames_g, frame_name(k).c_str(), H5P_DEFAULT) > 0; ++k)
+    H5Ldelete(frames_g, frame_name(k).c_str(), H5P_DEFAULT);
+  H5Gclose(frames_g);
+  H5Fflush(file_, H5F_SCOPE_GLOBAL);
+  times_ = kept_times;
+  std::vector<std::vector<FrameField>> kinds = fields;
+  for (auto& v : kinds)
+    for (auto& f : v) f.data = nullptr;
+  frame_fields_.assign(times_.size(), kinds);
+  write_xdmf();
+}
+
 ResultsWriter::~ResultsWriter() {
   if (file_ >= 0) H5Fclose(file_);
 }

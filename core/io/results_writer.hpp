@@ -28,6 +28,13 @@ struct FrameField {
 class ResultsWriter {
  public:
   ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts);
+  // A restarted run (io/checkpoint.hpp): opens the results.h5 of the run in
+  // dir, keeps its first frames (their times given, every frame with the
+  // fields of `fields`: names and kinds), removes the frames after them and
+  // rewrites results.xdmf. Throws std::runtime_error when the file is not
+  // there or holds fewer frames.
+  ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts, const std::vector<double>& kept_times,
+                const std::vector<std::vector<FrameField>>& fields);
   ~ResultsWriter();
   ResultsWriter(const ResultsWriter&) = delete;
   ResultsWriter& operator=(const ResultsWriter&) = delete;

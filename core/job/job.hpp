@@ -145,6 +145,7 @@ struct ConstraintDef {
 
 struct OutputDef {
   double interval = 0;
+  double checkpoint_interval = 0;  // s of simulated time between checkpoints, 0: only when interrupted
   std::vector<std::string> fields;
   std::vector<ProbeDef> probes;
 };

@@ -201,7 +201,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
          {{"type", "object"},
           {"properties", {{"mechanics", {{"type", {"object", "null"}}}}, {"thermal", {{"anyOf", thermal_or_null}}}}},
           {"additionalProperties", false}}},
-        {"output", {{"type", "object"}, {"properties", {{"interval", {{"type", "number"}, {"exclusiveMinimum", 0}}}, {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}}, {"probes", {{"type", "array"}}}}}, {"additionalProperties", false}}}}},
+        {"output", {{"type", "object"}, {"properties", {{"interval", {{"type", "number"}, {"exclusiveMinimum", 0}}}, {"checkpoint_interval", {{"type", "number"}, {"minimum", 0}}}, {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}}, {"probes", {{"type", "array"}}}}}, {"additionalProperties", false}}}}},
       {"additionalProperties", false},
       {"$defs", defs}};
   return schema;

@@ -13,6 +13,7 @@
 #include <iomanip>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <thread>
 #ifdef _OPENMP
@@ -1828,6 +1829,174 @@ void Simulation::check_field(double time, long long step) {
   }
 }
 
+// The job document a checkpoint must match: the run's, without the
+// checkpoint interval (which a restart may change).
+static json restart_document(const json& doc) {
+  json d = doc;
+  if (d.contains("output") && d["output"].is_object()) d["output"].erase("checkpoint_interval");
+  return d;
+}
+
+double Simulation::check_restart(const Checkpoint& c) const {
+  const std::string what = "--restart: ";
+  try {
+    const auto& job = c.section("job");
+    if (json::parse(job.begin(), job.end()) != restart_document(job_.document))
+      throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
+                                "needs the job of the run it continues (output.checkpoint_interval may differ)");
+    sdk::StateReader r(c.section("run"));
+    double t = 0, t_end = 0;
+    if (!r.get(t) || !r.get(t_end)) throw JobError("", what + "the checkpoint's run section is truncated");
+    return t;
+  } catch (const JobError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw JobError("", what + e.what());
+  }
+}
+
+void Simulation::save_state(Checkpoint& c) const {
+  sdk::StateWriter w;
+  w.put(last_mech_dt_);
+  w.put(bending_weight_);
+  w.put(bending_left_);
+  w.put(bending_largest_);
+  w.put(bending_evaluations_);
+  w.put(last_stable_);
+  w.put(seen_min_);
+  w.put(seen_max_);
+  w.put_vector(tool_force_);
+  w.put_vector(tool_heat_);
+  w.put_vector(link_heat_);
+  w.put(contact_energy_);
+  w.put(contact_active_);
+  std::vector<char> warned;
+  for (const auto& u : law_uses_) warned.push_back(u.warned ? 1 : 0);
+  w.put_vector(warned);
+  for (const auto& st : parts_) {
+    w.put_vector(st->x);
+    w.put_vector(st->T);
+    w.put_vector(st->contact_status);
+    w.put_vector(st->contact_pressure);
+    w.put_vector(st->shear_angle);
+  }
+  for (const auto& m : mech_) {
+    w.put_vector(m->v);
+    w.put_vector(m->f_int);
+    w.put_vector(m->f_con);
+    w.put(m->pending_work);
+    w.put_vector(m->block_dt);
+    w.put_vector(m->block_bdt);
+    w.put(m->bend_dt);
+    w.put_vector(m->stress);
+    w.put_vector(m->curvature);
+  }
+  for (const ContactTask& task : contact_tasks_) {
+    w.put_vector(task.published ? task.cross_out : task.cross);
+    w.put_vector(task.cross_status);
+    w.put_vector(task.tool_force);
+    w.put_vector(task.own_pressure);
+    w.put_vector(task.cross_pressure);
+    w.put(task.energy);
+    w.put(task.active);
+  }
+  for (const auto& tool : tools_) {
+    w.put(tool->displacement());
+    w.put(tool->velocity());
+  }
+  c.add("kernel", std::move(w.bytes()));
+  auto plugin = [&](const std::string& name, auto&& save) {
+    sdk::StateWriter pw;
+    if (auto st = save(pw); !st) throw RunError("checkpoint of " + name + ": " + st.message);
+    c.add(name, std::move(pw.bytes()));
+  };
+  for (std::size_t p = 0; p < mech_.size(); ++p)
+    plugin("element/" + parts_[p]->def->name, [&](sdk::StateWriter& pw) { return mech_[p]->element->save_state(pw); });
+  for (std::size_t k = 0; k < contacts_.size(); ++k)
+    plugin("contact" + job_.contacts[k].pointer, [&](sdk::StateWriter& pw) { return contacts_[k]->save_state(pw); });
+  if (splitter_) plugin("thermal", [&](sdk::StateWriter& pw) { return splitter_->save_state(pw); });
+}
+
+void Simulation::load_state(const Checkpoint& c) {
+  sdk::StateReader r(c.section("kernel"));
+  auto fail = [](const std::string& what) {
+    throw JobError("", "--restart: the checkpoint does not fit this job (" + what + ")");
+  };
+  auto array = [&](auto& v, const std::string& what) {
+    using T = typename std::remove_reference_t<decltype(v)>::value_type;
+    if (!r.get_array(std::span<T>(v.data(), v.size()))) fail(what);
+  };
+  r.get(last_mech_dt_);
+  r.get(bending_weight_);
+  r.get(bending_left_);
+  r.get(bending_largest_);
+  r.get(bending_evaluations_);
+  r.get(last_stable_);
+  r.get(seen_min_);
+  r.get(seen_max_);
+  array(tool_force_, "tools");
+  array(tool_heat_, "tools");
+  r.get_vector(link_heat_);
+  r.get(contact_energy_);
+  r.get(contact_active_);
+  std::vector<char> warned;
+  r.get_vector(warned);
+  if (warned.size() != law_uses_.size()) fail("material laws");
+  for (std::size_t k = 0; k < warned.size(); ++k) law_uses_[k].warned = warned[k] != 0;
+  for (auto& st : parts_) {
+    array(st->x, "nodes of part '" + st->def->name + "'");
+    array(st->T, "temperatures of part '" + st->def->name + "'");
+    array(st->contact_status, "part " + st->def->name);
+    array(st->contact_pressure, "part " + st->def->name);
+    array(st->shear_angle, "part " + st->def->name);
+  }
+  for (auto& m : mech_) {
+    array(m->v, "velocities");
+    array(m->f_int, "forces");
+    array(m->f_con, "forces");
+    r.get(m->pending_work);
+    array(m->block_dt, "element blocks");
+    array(m->block_bdt, "element blocks");
+    r.get(m->bend_dt);
+    array(m->stress, "elements");
+    array(m->curvature, "elements");
+  }
+  for (ContactTask& task : contact_tasks_) {
+    task.published = false;
+    array(task.cross, "contacts");
+    array(task.cross_status, "contacts");
+    array(task.tool_force, "contacts");
+    array(task.own_pressure, "contacts");
+    array(task.cross_pressure, "contacts");
+    r.get(task.energy);
+    r.get(task.active);
+  }
+  for (auto& tool : tools_) {
+    std::array<double, 3> u{}, v{};
+    r.get(u);
+    r.get(v);
+    tool->set_motion_state(u, v);
+  }
+  if (!r.done()) fail("kernel state");
+  auto plugin = [&](const std::string& name, auto&& load) {
+    std::vector<unsigned char> none;
+    const auto& bytes = [&]() -> const std::vector<unsigned char>& {
+      for (const auto& sct : c.sections)
+        if (sct.first == name) return sct.second;
+      fail("no section " + name);
+      return none;
+    }();
+    sdk::StateReader pr(bytes);
+    if (auto st = load(pr); !st) fail(name + ": " + st.message);
+    if (!pr.done()) fail(name);
+  };
+  for (std::size_t p = 0; p < mech_.size(); ++p)
+    plugin("element/" + parts_[p]->def->name, [&](sdk::StateReader& pr) { return mech_[p]->element->load_state(pr); });
+  for (std::size_t k = 0; k < contacts_.size(); ++k)
+    plugin("contact" + job_.contacts[k].pointer, [&](sdk::StateReader& pr) { return contacts_[k]->load_state(pr); });
+  if (splitter_) plugin("thermal", [&](sdk::StateReader& pr) { return splitter_->load_state(pr); });
+}
+
 namespace {
 
 struct Progress {
@@ -1891,6 +2060,90 @@ RunResult Simulation::run(const RunOptions& opt) {
 #endif
   const SubnormalsFlushed flushed(opt.flush_subnormals);  // on every thread of the run, until it returns
   auto log = logger("solve");
+  // The fields of a frame, per part (the same in every frame of a run).
+  auto frame_fields = [&] {
+    std::vector<std::vector<FrameField>> fields(parts_.size());
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      PartState& st = *parts_[p];
+      for (const auto& f : job_.output.fields) {
+        if (f == "temperature") {
+          fields[p].push_back({"temperature", st.T.data(), 1, false, true});
+          fields[p].push_back({"temperature_mean", st.mean.data()});
+          fields[p].push_back({"temperature_top", st.top.data()});
+          fields[p].push_back({"temperature_bottom", st.bottom.data()});
+        } else if (f == "temperature_mean") {
+          fields[p].push_back({"temperature_mean", st.mean.data()});
+        } else if (f == "temperature_top") {
+          fields[p].push_back({"temperature_top", st.top.data()});
+        } else if (f == "temperature_bottom") {
+          fields[p].push_back({"temperature_bottom", st.bottom.data()});
+        } else if (f == "displacement") {
+          fields[p].push_back({"displacement", st.displacement.data(), 3});
+        } else if (f == "velocity" && p < mech_.size()) {
+          // Half-step velocity v^{n-1/2} of the step that ended at the frame.
+          fields[p].push_back({"velocity", mech_[p]->v.data(), 3});
+        } else if (f == "shear_angle") {
+          fields[p].push_back({"shear_angle", st.shear_angle.data(), 1, true});
+        } else if (f == "fibre_direction") {
+          fields[p].push_back({"fibre_direction", st.fibre.data(), 3, true});
+        } else if (f == "contact_status") {
+          fields[p].push_back({"contact_status", st.contact_status.data()});
+        } else if (f == "contact_pressure") {
+          fields[p].push_back({"contact_pressure", st.contact_pressure.data()});
+        } else if ((f == "membrane_stress" || f == "curvature") && p < mech_.size()) {
+          // Material-frame components [11, 22, 12] per element, as vectors.
+          fields[p].push_back({f, f == "membrane_stress" ? mech_[p]->stress.data() : mech_[p]->curvature.data(), 3,
+                               true});
+        }
+      }
+      // No field twice (e.g. "temperature" and "temperature_mean").
+      auto& v = fields[p];
+      std::vector<FrameField> unique;
+      for (const auto& ff : v)
+        if (std::none_of(unique.begin(), unique.end(), [&](const FrameField& u) { return u.name == ff.name; }))
+          unique.push_back(ff);
+      v = std::move(unique);
+    }
+    return fields;
+  };
+
+  // A restart: the loop's state as the checkpoint left it (read below,
+  // after the locals it restores), the frames it kept and the lengths of
+  // the time series files then.
+  std::optional<sdk::StateReader> resume;
+  std::vector<double> frame_times;  // of the frames written (for checkpoints)
+  std::uint64_t csv_size[3] = {0, 0, 0};  // probes.csv, energy.csv, tools.csv
+  if (opt.restart) {
+    resume.emplace(opt.restart->section("run"));
+    double tc = 0, te = 0;
+    resume->get(tc);
+    resume->get(te);
+    resume->get_vector(frame_times);
+    for (auto& n : csv_size) resume->get(n);
+    // Everything checked before any file is touched.
+    const char* names[3] = {"probes.csv", "energy.csv", "tools.csv"};
+    const bool used[3] = {true, job_.mechanics, !job_.tools.empty()};
+    for (int k = 0; k < 3; ++k) {
+      const auto path = opt.out_dir / names[k];
+      if (opt.write_files && used[k] &&
+          (!std::filesystem::exists(path) || std::filesystem::file_size(path) < csv_size[k]))
+        throw JobError("", "--restart: " + path.string() + " is missing or shorter than at the checkpoint");
+    }
+    if (opt.write_files && !std::filesystem::exists(opt.out_dir / "results.h5"))
+      throw JobError("", "--restart: no " + (opt.out_dir / "results.h5").string() + " of the run to continue");
+  }
+  // A time series file: new with its header, or on a restart the run's
+  // file cut back to its length at the checkpoint and continued.
+  auto open_series = [&](std::ofstream& out, const char* name, int k, const std::string& header) {
+    const auto path = opt.out_dir / name;
+    if (opt.restart) {  // checked above
+      std::filesystem::resize_file(path, csv_size[k]);
+      out.open(path, std::ios::app);
+    } else {
+      out.open(path);
+      out << header;
+    }
+  };
   std::unique_ptr<ResultsWriter> writer;
   std::ofstream probes_csv;
   if (opt.write_files) {
@@ -1901,9 +2154,14 @@ RunResult Simulation::run(const RunOptions& opt) {
     for (const auto& st : parts_)
       wparts.push_back({st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(), &st->mesh.triangles,
                         st->def->thickness, st->nz, layers});
-    writer = std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts));
-    probes_csv.open(opt.out_dir / "probes.csv");
-    probes_csv << "probe,quantity,time,z,value\n";
+    try {
+      writer = opt.restart ? std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), frame_times, frame_fields())
+                           : std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts));
+    } catch (const std::runtime_error& e) {
+      if (opt.restart) throw JobError("", std::string("--restart: ") + e.what());
+      throw;
+    }
+    open_series(probes_csv, "probes.csv", 0, "probe,quantity,time,z,value\n");
   }
   if (job_.thermal)
     log->info("job '{}': {} part(s), {} tool(s), splitter '{}', thermal step {:.4g} s (stable {:.4g} s, "
@@ -1955,51 +2213,12 @@ RunResult Simulation::run(const RunOptions& opt) {
     if (!writer) return;
     update_derived();
     std::vector<const double*> xs, ns;
-    std::vector<std::vector<FrameField>> fields(parts_.size());
-    for (std::size_t p = 0; p < parts_.size(); ++p) {
-      PartState& st = *parts_[p];
-      xs.push_back(st.x.data());
-      ns.push_back(st.normals.data());
-      for (const auto& f : job_.output.fields) {
-        if (f == "temperature") {
-          fields[p].push_back({"temperature", st.T.data(), 1, false, true});
-          fields[p].push_back({"temperature_mean", st.mean.data()});
-          fields[p].push_back({"temperature_top", st.top.data()});
-          fields[p].push_back({"temperature_bottom", st.bottom.data()});
-        } else if (f == "temperature_mean") {
-          fields[p].push_back({"temperature_mean", st.mean.data()});
-        } else if (f == "temperature_top") {
-          fields[p].push_back({"temperature_top", st.top.data()});
-        } else if (f == "temperature_bottom") {
-          fields[p].push_back({"temperature_bottom", st.bottom.data()});
-        } else if (f == "displacement") {
-          fields[p].push_back({"displacement", st.displacement.data(), 3});
-        } else if (f == "velocity" && p < mech_.size()) {
-          // Half-step velocity v^{n-1/2} of the step that ended at the frame.
-          fields[p].push_back({"velocity", mech_[p]->v.data(), 3});
-        } else if (f == "shear_angle") {
-          fields[p].push_back({"shear_angle", st.shear_angle.data(), 1, true});
-        } else if (f == "fibre_direction") {
-          fields[p].push_back({"fibre_direction", st.fibre.data(), 3, true});
-        } else if (f == "contact_status") {
-          fields[p].push_back({"contact_status", st.contact_status.data()});
-        } else if (f == "contact_pressure") {
-          fields[p].push_back({"contact_pressure", st.contact_pressure.data()});
-        } else if ((f == "membrane_stress" || f == "curvature") && p < mech_.size()) {
-          // Material-frame components [11, 22, 12] per element, as vectors.
-          fields[p].push_back({f, f == "membrane_stress" ? mech_[p]->stress.data() : mech_[p]->curvature.data(), 3,
-                               true});
-        }
-      }
-      // No field twice (e.g. "temperature" and "temperature_mean").
-      auto& v = fields[p];
-      std::vector<FrameField> unique;
-      for (const auto& ff : v)
-        if (std::none_of(unique.begin(), unique.end(), [&](const FrameField& u) { return u.name == ff.name; }))
-          unique.push_back(ff);
-      v = std::move(unique);
+    for (auto& st : parts_) {
+      xs.push_back(st->x.data());
+      ns.push_back(st->normals.data());
     }
-    writer->write_frame(t, xs, ns, fields);
+    writer->write_frame(t, xs, ns, frame_fields());
+    frame_times.push_back(t);
   };
 
   auto sample_probes = [&](double t, std::size_t only = static_cast<std::size_t>(-1)) {
@@ -2053,7 +2272,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   const double interval = job_.output.interval;
   double t = 0;
   long long steps = 0;
-  const double stored0 = stored_heat();
+  double stored0 = stored_heat();
   std::vector<double> stored0_part;
   for (std::size_t p = 0; p < parts_.size(); ++p) stored0_part.push_back(stored_heat(static_cast<int>(p)));
   link_heat_.assign(parts_.size(), 0.0);
@@ -2112,14 +2331,12 @@ RunResult Simulation::run(const RunOptions& opt) {
     for (const char* q : {"_ux", "_uy", "_uz", "_fx", "_fy", "_fz", "_heat_J"}) tool_cols.push_back(td.name + q);
   std::ofstream energy_csv, tools_csv;
   if (opt.write_files && job_.mechanics) {
-    energy_csv.open(opt.out_dir / "energy.csv");
-    for (std::size_t c = 0; c < energy_cols.size(); ++c) energy_csv << (c ? "," : "") << energy_cols[c];
-    energy_csv << "\n";
+    std::string header;
+    for (std::size_t c = 0; c < energy_cols.size(); ++c) header += (c ? "," : "") + energy_cols[c];
+    open_series(energy_csv, "energy.csv", 1, header + "\n");
   }
-  if (opt.write_files && !job_.tools.empty()) {
-    tools_csv.open(opt.out_dir / "tools.csv");
-    tools_csv << "time,tool,ux,uy,uz,fx,fy,fz,heat_J\n";
-  }
+  if (opt.write_files && !job_.tools.empty())
+    open_series(tools_csv, "tools.csv", 2, "time,tool,ux,uy,uz,fx,fy,fz,heat_J\n");
   auto sample_tools = [&](double t) {
     tool_rows.push_back(t);
     for (std::size_t q = 0; q < tools_.size(); ++q) {
@@ -2140,21 +2357,139 @@ RunResult Simulation::run(const RunOptions& opt) {
   double frame_t = 0;   // time of the last frame written
   seen_min_ = std::numeric_limits<double>::infinity();
   seen_max_ = -seen_min_;
+  // The mechanics loop's own state (explicit dynamics; the thermal
+  // splitter advances every `subcycle` mechanical steps over the time
+  // elapsed since its last step).
+  double t_thermal = 0;
+  long long since_thermal = 0;
+  int subcycle = job_.thermal ? job_.thermal->subcycle : 0;
+  double stable = 0;
+  double next_sample = 0, audit_scale = 0, supplied_max = 0;
+  // What a failed audit blames: an unstable step, or a start with loaded
+  // contact springs, whose release at once the audit cannot follow.
+  std::string unstable = "the run is unstable (step too large?)";
+  // Checkpoints: the run's state after a step (the loop's, the kernel's,
+  // the plugins'), with the frames and the time series so far.
+  const double checkpoint_iv = job_.output.checkpoint_interval;
+  double next_checkpoint = checkpoint_iv > 0 ? checkpoint_iv : std::numeric_limits<double>::infinity();
+  double restarted_from = -1;  // s, a restart's checkpoint time
+  auto save_checkpoint = [&] {
+    if (!writer) return;
+    const auto tc = Clock::now();
+    Checkpoint c;
+    const std::string doc = restart_document(job_.document).dump();
+    c.add("job", std::vector<unsigned char>(doc.begin(), doc.end()));
+    sdk::StateWriter w;
+    w.put(t);
+    w.put(t_end);
+    w.put_vector(frame_times);
+    for (std::ofstream* f : {&probes_csv, &energy_csv, &tools_csv}) {
+      f->flush();
+      w.put(static_cast<std::uint64_t>(f->is_open() ? static_cast<std::uint64_t>(f->tellp()) : 0));
+    }
+    w.put(steps);
+    w.put(mech_steps);
+    w.put(mech_dt);
+    w.put(frame_index);
+    w.put(frame_t);
+    w.put_vector(next_probe);
+    w.put(heat_in);
+    w.put(substeps_max);
+    w.put(limited_total);
+    w.put(stored0);
+    w.put_vector(stored0_part);
+    w.put_vector(energy_rows);
+    w.put_vector(tool_rows);
+    w.put(audit.kinetic);
+    w.put(audit.internal);
+    w.put(audit.external);
+    w.put(audit.damping);
+    w.put(audit.balance_error);
+    w.put(audit.contact);
+    w.put(audit.contact_stored);
+    w.put(audit.kinetic_half);
+    w.put_vector(audit.reactions);
+    w.put(t_thermal);
+    w.put(since_thermal);
+    w.put(subcycle);
+    w.put(stable);
+    w.put(next_sample);
+    w.put(audit_scale);
+    w.put(supplied_max);
+    w.put(next_checkpoint);
+    w.put_vector(unstable);
+    c.add("run", std::move(w.bytes()));
+    save_state(c);
+    write_checkpoint(opt.out_dir / kCheckpointFile, c);
+    timing_[kTimeOutput] += seconds_since(tc);
+    log->info("checkpoint at t = {:.6g} s (mechanical step {}, thermal step {}): {}", t, mech_steps, steps,
+              (opt.out_dir / kCheckpointFile).string());
+  };
   try {
-    check_field(0.0, 0);
-    write_frame(0.0);
-    if (!tools_.empty()) sample_tools(0.0);
-    sample_probes(0.0);
+    if (resume) {
+      sdk::StateReader& r = *resume;
+      r.get(steps);
+      r.get(mech_steps);
+      r.get(mech_dt);
+      r.get(frame_index);
+      r.get(frame_t);
+      r.get_array(std::span<double>(next_probe));
+      r.get(heat_in);
+      r.get(substeps_max);
+      r.get(limited_total);
+      double stored0_then = 0;
+      r.get(stored0_then);
+      r.get_array(std::span<double>(stored0_part));
+      r.get_vector(energy_rows);
+      r.get_vector(tool_rows);
+      r.get(audit.kinetic);
+      r.get(audit.internal);
+      r.get(audit.external);
+      r.get(audit.damping);
+      r.get(audit.balance_error);
+      r.get(audit.contact);
+      r.get(audit.contact_stored);
+      r.get(audit.kinetic_half);
+      r.get_vector(audit.reactions);
+      r.get(t_thermal);
+      r.get(since_thermal);
+      r.get(subcycle);
+      r.get(stable);
+      r.get(next_sample);
+      r.get(audit_scale);
+      r.get(supplied_max);
+      r.get(next_checkpoint);
+      r.get_vector(unstable);
+      if (!r.done()) throw JobError("", "--restart: the checkpoint does not fit this job (run state)");
+      stored0 = stored0_then;
+      sdk::StateReader head(opt.restart->section("run"));
+      head.get(t);
+      restarted_from = t;
+      if (checkpoint_iv > 0) {  // the interval of this run, from the checkpoint on
+        next_checkpoint = 0;
+        advance_past(next_checkpoint, checkpoint_iv, t + eps_t);
+      } else {
+        next_checkpoint = std::numeric_limits<double>::infinity();
+      }
+      load_state(*opt.restart);
+      // The temperatures the elements see, as at the checkpoint (formed
+      // from the temperatures at the last thermal step, which are those of
+      // the checkpoint).
+      if (job_.mechanics) update_node_temperature();
+      log->info("restarted from the checkpoint at t = {:.6g} s (mechanical step {}, thermal step {}, {} frame(s) kept)",
+                t, mech_steps, steps, frame_times.size());
+    } else {
+      check_field(0.0, 0);
+      write_frame(0.0);
+      if (!tools_.empty()) sample_tools(0.0);
+      sample_probes(0.0);
+    }
     if (job_.mechanics) {
-      // Explicit dynamics; the thermal splitter advances every `subcycle`
-      // mechanical steps over the time elapsed since its last step.
       const MechanicsDef& md = job_.mechanics_settings;
-      double t_thermal = 0;
-      long long since_thermal = 0;
-      int subcycle = job_.thermal ? job_.thermal->subcycle : 0;
+      if (!resume) {
       update_node_temperature();
       check_law_ranges(0.0);
-      double stable = mechanics_stable_dt();
+      stable = mechanics_stable_dt();
       compute_contact_forces(0.0, 0.0);
       finish_contact_forces();
       // Overlaps below 1e-6 of a ply's thickness (round-off where a ply
@@ -2164,9 +2499,6 @@ RunResult Simulation::run(const RunOptions& opt) {
         for (double k : mech_[p]->k_contact) k_max = std::max(k_max, k);
         h_min = std::min(h_min, parts_[p]->def->thickness);
       }
-      // What a failed audit below blames: an unstable step, or a start with
-      // loaded contact springs, whose release at once the audit cannot follow.
-      std::string unstable = "the run is unstable (step too large?)";
       if (contact_energy_ > 0.5 * k_max * (1e-6 * h_min) * (1e-6 * h_min)) {
         unstable += ", or it started with " + fmt_g(contact_energy_, 3) +
                     " J in the contact springs (a ply inside a tool or another ply at t = 0)";
@@ -2175,7 +2507,7 @@ RunResult Simulation::run(const RunOptions& opt) {
                   contact_energy_, contact_active_);
       }
       if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
-      double next_sample = 0, audit_scale = 0, supplied_max = 0;
+      }
       // The stresses and curvatures are asked of the elements only for the
       // frames that show them, and for the last frame of an interrupted run.
       const auto& out_fields = job_.output.fields;
@@ -2299,6 +2631,10 @@ RunResult Simulation::run(const RunOptions& opt) {
           ++frame_index;
           frame_t = t;
         }
+        if (t < t_end - eps_t && (stop_seen != 0 || t >= next_checkpoint - eps_t)) {
+          save_checkpoint();
+          if (checkpoint_iv > 0) advance_past(next_checkpoint, checkpoint_iv, t + eps_t);
+        }
         progress.update(t, mech_steps);
         if ((stop_signal = stop_seen) != 0) break;
       }
@@ -2341,8 +2677,13 @@ RunResult Simulation::run(const RunOptions& opt) {
           ++frame_index;
           frame_t = t;
         }
+        const int stop_seen = stop_requested();
+        if (t < t_end - eps_t && (stop_seen != 0 || t >= next_checkpoint - eps_t)) {
+          save_checkpoint();
+          if (checkpoint_iv > 0) advance_past(next_checkpoint, checkpoint_iv, t + eps_t);
+        }
         progress.update(t, steps);
-        if ((stop_signal = stop_requested()) != 0) break;
+        if ((stop_signal = stop_seen) != 0) break;
       }
     }
     if (stop_signal != 0 && t > frame_t) {  // interrupted: the state reached, as a last frame
@@ -2425,6 +2766,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     summary["wall_time_s"] = result.wall_time_s;
     summary["peak_memory_MB"] = result.peak_memory_mb > 0 ? json(result.peak_memory_mb) : json(nullptr);
     summary["simulated_time_s"] = t;
+    summary["restarted_from_s"] = restarted_from >= 0 ? json(restarted_from) : json(nullptr);
     summary["steps"] = {{"mechanics", mech_steps}, {"thermal", steps}};
     summary["dt"] = {{"mechanics", job_.mechanics ? json(mech_dt) : json(nullptr)},
                      {"thermal", job_.thermal ? json(thermal_dt_) : json(nullptr)}};

@@ -15,6 +15,7 @@
 
 #include <thermostamp/sdk/plugin.hpp>
 
+#include "io/checkpoint.hpp"
 #include "job/job.hpp"
 #include "mesh/shell_mesh.hpp"
 #include "plugins/registry.hpp"
@@ -27,6 +28,10 @@ struct RunOptions {
   bool quiet = false;
   bool write_files = true;
   bool flush_subnormals = true;  // subnormal numbers flushed to zero during the run (solve/subnormals.hpp)
+  // Continue the run whose checkpoint this is (io/checkpoint.hpp; checked
+  // with Simulation::check_restart) in out_dir, which holds that run's
+  // output: its frames and time series up to the checkpoint are kept.
+  const Checkpoint* restart = nullptr;
 };
 
 struct ProbeSample {
@@ -67,7 +72,7 @@ struct RunResult {
   std::vector<double> part_shear_min_deg, part_shear_max_deg;  // per part, mechanics only: shear angle range at the end
   double temperature_min = 0, temperature_max = 0;  // over every value and every step
   long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
-  std::vector<ProbeSample> probes;
+  std::vector<ProbeSample> probes;  // a restarted run: the samples after the checkpoint (probes.csv has all)
   long long mechanical_steps = 0;
   double mechanical_dt = 0;  // last step
   // With bending_subcycles > 1: the evaluations that carried the bending,
@@ -106,6 +111,10 @@ class Simulation {
   int values_per_node(int part) const;
   // Initial mid-surface coordinates of a part, 3 per node.
   std::span<const double> initial_coordinates(int part) const;
+  // Throws JobError (one line) where a checkpoint cannot continue this job:
+  // written by another job (output.checkpoint_interval aside) or by a run
+  // that had finished. Returns the time it was written at (s).
+  double check_restart(const Checkpoint& c) const;
 
  private:
   void build_parts();
@@ -134,6 +143,10 @@ class Simulation {
   void update_element_fields();
   void assemble_faces();
   void check_field(double time, long long step);
+  // The kernel's and the plugins' state between two steps, for checkpoints
+  // (sections "kernel" and "plugin/..."; run() adds its loop's state).
+  void save_state(Checkpoint& c) const;
+  void load_state(const Checkpoint& c);
   double seen_min_ = 0, seen_max_ = 0;
   double last_mech_dt_ = 0;
   // Whether the element fields that only output frames show (stresses,

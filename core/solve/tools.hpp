@@ -41,6 +41,11 @@ class RigidTool {
   void advance(double t, double dt, double dt_avg, const std::array<double, 3>& reaction);
   // Prescribed displacement at time t (velocity and table motions).
   std::array<double, 3> prescribed(double t) const;
+  // Checkpoints: the displacement and velocity (all the state a tool has).
+  void set_motion_state(const std::array<double, 3>& u, const std::array<double, 3>& v) {
+    u_ = u;
+    v_ = v;
+  }
 
  private:
   void query_revolved_run(std::size_t n, const double* points, double* distance, double* normal) const;

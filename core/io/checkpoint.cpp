@@ -1,0 +1,88 @@
+#include "io/checkpoint.hpp"
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+
+#include <thermostamp/sdk/plugin.hpp>
+
+namespace ts {
+
+namespace {
+constexpr char kMagic[] = "THERMOSTAMP-CHECKPOINT\n";
+constexpr std::uint32_t kFormat = 1;
+
+template <class T>
+void put(std::ofstream& out, const T& v) {
+  out.write(reinterpret_cast<const char*>(&v), sizeof v);
+}
+void put_bytes(std::ofstream& out, const void* data, std::size_t n) {
+  put(out, static_cast<std::uint64_t>(n));
+  out.write(static_cast<const char*>(data), static_cast<std::streamsize>(n));
+}
+}  // namespace
+
+const std::vector<unsigned char>& Checkpoint::section(const std::string& name) const {
+  for (const auto& s : sections)
+    if (s.first == name) return s.second;
+  throw std::runtime_error("the checkpoint has no section '" + name + "'");
+}
+
+void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
+  auto tmp = file;
+  tmp += ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write " + tmp.string());
+    out.write(kMagic, sizeof kMagic - 1);
+    put(out, kFormat);
+    put(out, static_cast<std::int32_t>(sdk::kAbiVersion));
+    put(out, static_cast<std::uint64_t>(c.sections.size()));
+    for (const auto& [name, bytes] : c.sections) {
+      put_bytes(out, name.data(), name.size());
+      put_bytes(out, bytes.data(), bytes.size());
+    }
+    out.flush();
+    if (!out) throw std::runtime_error("cannot write " + tmp.string() + " (disk full?)");
+  }
+  std::filesystem::rename(tmp, file);
+}
+
+Checkpoint read_checkpoint(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error("no checkpoint " + file.string() + " (a run writes one when it is interrupted or "
+                                    "at output.checkpoint_interval)");
+  const std::string what = file.string() + " is not a ThermoStamp checkpoint";
+  char magic[sizeof kMagic - 1];
+  if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof magic) != 0) throw std::runtime_error(what);
+  std::uint32_t format = 0;
+  std::int32_t abi = 0;
+  std::uint64_t count = 0;
+  in.read(reinterpret_cast<char*>(&format), sizeof format);
+  in.read(reinterpret_cast<char*>(&abi), sizeof abi);
+  in.read(reinterpret_cast<char*>(&count), sizeof count);
+  if (!in || format != kFormat) throw std::runtime_error(what + " of this version (format " + std::to_string(format) + ")");
+  if (abi != sdk::kAbiVersion)
+    throw std::runtime_error(file.string() + " was written with plugin ABI " + std::to_string(abi) + ", this build has " +
+                             std::to_string(sdk::kAbiVersion) + ": restart it with the version that wrote it");
+  const auto size = std::filesystem::file_size(file);
+  auto get_bytes = [&](auto& v) {
+    std::uint64_t n = 0;
+    if (!in.read(reinterpret_cast<char*>(&n), sizeof n) || n > size) throw std::runtime_error(file.string() + " is truncated");
+    v.resize(n);
+    if (!in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n)))
+      throw std::runtime_error(file.string() + " is truncated");
+  };
+  Checkpoint c;
+  for (std::uint64_t k = 0; k < count; ++k) {
+    std::string name;
+    std::vector<unsigned char> bytes;
+    get_bytes(name);
+    get_bytes(bytes);
+    c.add(std::move(name), std::move(bytes));
+  }
+  return c;
+}
+
+}  // namespace ts

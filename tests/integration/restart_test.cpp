@@ -1,0 +1,257 @@
+// Checkpoints and `thermostamp run --restart`: a run continued from a
+// checkpoint gives, bit for bit, the output of the run that was never
+// stopped (every time series, every frame, the summary's audits), on any
+// thread count; a checkpoint that cannot continue the job is refused
+// before anything is touched.
+#include <gtest/gtest.h>
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <csignal>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "solve/interrupt.hpp"
+#include "test_support.hpp"
+
+namespace ts::test {
+namespace {
+
+std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+std::string file_text(const std::filesystem::path& p) {
+  std::stringstream s;
+  s << std::ifstream(p, std::ios::binary).rdbuf();
+  return s.str();
+}
+
+// Every dataset of a results file (path -> values as doubles) and every
+// frame's time.
+std::map<std::string, std::vector<double>> results_contents(const std::filesystem::path& file) {
+  std::map<std::string, std::vector<double>> out;
+  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) return out;
+  struct Ctx {
+    hid_t file;
+    std::map<std::string, std::vector<double>>* out;
+  } ctx{f, &out};
+  H5Ovisit(
+      f, H5_INDEX_NAME, H5_ITER_INC,
+      [](hid_t, const char* name, const H5O_info_t* info, void* data) -> herr_t {
+        auto& c = *static_cast<Ctx*>(data);
+        if (info->type == H5O_TYPE_DATASET) {
+          const hid_t set = H5Dopen2(c.file, name, H5P_DEFAULT);
+          const hid_t type = H5Dget_type(set);
+          const bool ints = H5Tget_class(type) == H5T_INTEGER;
+          H5Tclose(type);
+          H5Dclose(set);
+          if (ints) {
+            const auto v = read_dataset<int>(c.file, name);
+            (*c.out)[name].assign(v.begin(), v.end());
+          } else {
+            (*c.out)[name] = read_dataset<double>(c.file, name);
+          }
+        } else if (info->type == H5O_TYPE_GROUP && H5Aexists_by_name(c.file, name, "time", H5P_DEFAULT) > 0) {
+          double t = 0;
+          const hid_t at = H5Aopen_by_name(c.file, name, "time", H5P_DEFAULT, H5P_DEFAULT);
+          H5Aread(at, H5T_NATIVE_DOUBLE, &t);
+          H5Aclose(at);
+          (*c.out)[std::string(name) + "@time"] = {t};
+        }
+        return 0;
+      },
+      &ctx);
+  H5Fclose(f);
+  return out;
+}
+
+// The summary without what depends on the machine and the thread count.
+json comparable_summary(const std::filesystem::path& dir) {
+  json s = json::parse(std::ifstream(dir / "summary.json"));
+  for (const char* k : {"wall_time_s", "peak_memory_MB", "timing_s", "threads", "contact_beside_elements",
+                        "contact_schedule_share", "restarted_from_s"})
+    s.erase(k);
+  return s;
+}
+
+// `b` holds what `a` holds, bit for bit.
+void expect_same_output(const std::filesystem::path& a, const std::filesystem::path& b, const std::string& label) {
+  for (const char* f : {"probes.csv", "energy.csv", "tools.csv", "results.xdmf"}) {
+    ASSERT_EQ(std::filesystem::exists(a / f), std::filesystem::exists(b / f)) << label << ": " << f;
+    if (std::filesystem::exists(a / f)) {
+      EXPECT_TRUE(file_text(a / f) == file_text(b / f)) << label << ": " << f;
+    }
+  }
+  const auto ra = results_contents(a / "results.h5"), rb = results_contents(b / "results.h5");
+  ASSERT_GT(ra.size(), 3u) << label;
+  ASSERT_EQ(ra.size(), rb.size()) << label;
+  int differing = 0;
+  for (const auto& [name, v] : ra) {
+    const auto it = rb.find(name);
+    ASSERT_NE(it, rb.end()) << label << ": " << name;
+    if (v != it->second) {
+      ++differing;
+      ADD_FAILURE() << label << ": " << name << " differs";
+    }
+    if (differing > 5) break;
+  }
+  EXPECT_EQ(comparable_summary(a), comparable_summary(b)) << label;
+}
+
+std::filesystem::path write_job(const std::filesystem::path& dir, const json& j) {
+  std::ofstream(dir / "job.json") << j.dump(2);
+  return dir / "job.json";
+}
+
+CommandResult run_cli(const std::filesystem::path& job, const std::filesystem::path& out, int threads,
+                      const std::string& extra = "") {
+  return thermostamp("run " + q(job) + " --out " + q(out) + " --quiet --threads " + std::to_string(threads) + " " +
+                     extra);
+}
+
+// The coarse hemisphere (10 x 10 cells per ply, mass scaling to 1e-4 s),
+// 1 s of stroke, frames every 0.25 s.
+json coarse_hemisphere(const std::string& file) {
+  json j = read_job_document(source_dir() / "share" / "jobs" / file);
+  j["time"]["end"] = 1.0;
+  j["output"]["interval"] = 0.25;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {10, 10};
+  j["solvers"]["mechanics"]["mass_scaling"]["target_dt"] = 1e-4;
+  return j;
+}
+
+// Runs `j` without stop on 2 threads, and again with a checkpoint every
+// `interval` s; continues a copy of the second from its last checkpoint on
+// one thread, and expects the first's output.
+void check_restart(const std::string& label, json j, double interval) {
+  const auto dir = temp_dir("restart_" + label);
+  const auto job = write_job(dir, j);
+  ASSERT_EQ(run_cli(job, dir / "full", 2).exit_code, 0) << label;
+  EXPECT_FALSE(std::filesystem::exists(dir / "full" / "checkpoint.bin")) << label << ": none without an interval";
+  const auto with = dir / "with";
+  const auto r = run_cli(job, with, 2, "--set output.checkpoint_interval=" + std::to_string(interval));
+  ASSERT_EQ(r.exit_code, 0) << label << ": " << r.err;
+  ASSERT_TRUE(std::filesystem::exists(with / "checkpoint.bin")) << label;
+  // Writing checkpoints changes nothing.
+  expect_same_output(dir / "full", with, label + " with checkpoints");
+  const auto cont = dir / "continued";
+  std::filesystem::copy(with, cont, std::filesystem::copy_options::recursive);
+  const auto c = run_cli(job, cont, 1, "--restart");
+  ASSERT_EQ(c.exit_code, 0) << label << ": " << c.err;
+  const json s = json::parse(std::ifstream(cont / "summary.json"));
+  ASSERT_TRUE(s["restarted_from_s"].is_number()) << label;
+  EXPECT_GT(s["restarted_from_s"].get<double>(), 0.5 * j["time"]["end"].get<double>()) << label;
+  EXPECT_LT(s["restarted_from_s"].get<double>(), j["time"]["end"].get<double>()) << label;
+  expect_same_output(dir / "full", cont, label + " continued");
+}
+
+}  // namespace
+
+// The hemisphere scene (UD laws with viscoelastic history, bending every
+// few steps, tools under force and motion control, four contact pairs with
+// rate friction and a ply/ply search every 64th step, adi), from a
+// checkpoint at 0.6 s.
+TEST(Restart, HemisphereContinuesBitForBit) { check_restart("hemisphere", coarse_hemisphere("hemisphere_ud_2ply.json"), 0.6); }
+
+// Isothermal, with elastic-slip friction (tangential springs that carry
+// over from step to step) and the search every step.
+TEST(Restart, StickingFrictionContinuesBitForBit) {
+  json j = coarse_hemisphere("hemisphere_ud_2ply_isothermal.json");
+  for (auto& c : j["interactions"])
+    if (c.value("type", "") == "contact") c["slip_velocity"] = 0.0;
+  check_restart("sticking", j, 0.45);
+}
+
+// Thermal only: two plies in contact, the 3D reference splitter and adi
+// with in-plane conduction per layer.
+TEST(Restart, ThermalSplittersContinueBitForBit) {
+  json j = read_job_document(source_dir() / "share" / "verification" / "patch_contact.json");
+  j["solvers"]["thermal"]["splitter"] = "layered3d";
+  check_restart("layered3d", j, 1.5);
+  j["solvers"]["thermal"]["splitter"] = "adi";
+  j["solvers"]["thermal"]["in_plane"] = "layers";
+  check_restart("adi_layers", j, 1.5);
+}
+
+// A run stopped by SIGTERM (here after its first step) leaves a checkpoint;
+// the restart drops the frame the stop wrote and continues as if there had
+// been no stop.
+TEST(Restart, AfterAStopRequest) {
+  const auto dir = temp_dir("restart_stop");
+  json j = coarse_hemisphere("hemisphere_ud_2ply.json");
+  j["time"]["end"] = 0.3;
+  j["output"]["interval"] = 0.1;
+  const auto job = write_job(dir, j);
+  ASSERT_EQ(run_cli(job, dir / "full", 1).exit_code, 0);
+  const auto out = dir / "stopped";
+  request_stop(SIGTERM);
+  const JobRun stopped = run_json(j, 2, out);
+  clear_stop();
+  ASSERT_EQ(stopped.result.interrupted, SIGTERM);
+  const json s0 = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s0["status"], "interrupted");
+  EXPECT_EQ(s0["frames"], 2) << "the initial frame and the one at the stop";
+  ASSERT_TRUE(std::filesystem::exists(out / "checkpoint.bin"));
+  const auto c = run_cli(job, out, 2, "--restart");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  expect_same_output(dir / "full", out, "after a stop");
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["status"], "completed");
+  EXPECT_EQ(s["frames"], 4);
+  EXPECT_DOUBLE_EQ(s["restarted_from_s"].get<double>(), s0["simulated_time_s"].get<double>());
+}
+
+// What cannot be continued is refused with one line and exit 2, and the
+// output folder is left as it was.
+TEST(Restart, RefusesWhatItCannotContinue) {
+  const auto dir = temp_dir("restart_refused");
+  json j = coarse_hemisphere("hemisphere_ud_2ply.json");
+  j["time"]["end"] = 0.2;
+  j["output"]["interval"] = 0.1;
+  j["output"]["checkpoint_interval"] = 0.15;
+  const auto job = write_job(dir, j);
+  const auto out = dir / "out";
+  ASSERT_EQ(run_cli(job, out, 2).exit_code, 0);
+  const std::string probes = file_text(out / "probes.csv"), energy = file_text(out / "energy.csv");
+  const auto h5 = std::filesystem::file_size(out / "results.h5");
+  auto unchanged = [&](const std::string& label) {
+    EXPECT_EQ(file_text(out / "probes.csv"), probes) << label;
+    EXPECT_EQ(file_text(out / "energy.csv"), energy) << label;
+    EXPECT_EQ(std::filesystem::file_size(out / "results.h5"), h5) << label;
+  };
+  auto refused = [&](const CommandResult& r, const std::string& words, const std::string& label) {
+    EXPECT_EQ(r.exit_code, 2) << label;
+    EXPECT_NE(r.err.find("--restart: "), std::string::npos) << label << ": " << r.err;
+    EXPECT_NE(r.err.find(words), std::string::npos) << label << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << label << ": one line: " << r.err;
+    unchanged(label);
+  };
+  // Another job (another end time).
+  refused(run_cli(job, out, 1, "--restart --set time.end=0.3"), "written by another job", "other job");
+  // No checkpoint in the folder.
+  refused(run_cli(job, dir / "elsewhere", 1, "--restart"), "no checkpoint", "no checkpoint");
+  // A damaged checkpoint.
+  const std::string ck = file_text(out / "checkpoint.bin");
+  std::ofstream(out / "checkpoint.bin", std::ios::binary) << ck.substr(0, ck.size() / 2);
+  refused(run_cli(job, out, 1, "--restart"), "truncated", "truncated");
+  std::ofstream(out / "checkpoint.bin", std::ios::binary) << "not a checkpoint";
+  refused(run_cli(job, out, 1, "--restart"), "not a ThermoStamp checkpoint", "not a checkpoint");
+  // A time series shorter than at the checkpoint (another run's folder).
+  std::ofstream(out / "checkpoint.bin", std::ios::binary) << ck;
+  std::ofstream(out / "energy.csv") << "time\n";
+  const auto r = run_cli(job, out, 1, "--restart");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("energy.csv is missing or shorter than at the checkpoint"), std::string::npos) << r.err;
+  EXPECT_EQ(file_text(out / "probes.csv"), probes) << "nothing cut before the check";
+  EXPECT_EQ(std::filesystem::file_size(out / "results.h5"), h5);
+  // The checkpoint interval is checked like every other value.
+  const auto bad = thermostamp("validate " + q(job) + " --set output.checkpoint_interval=-1");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("/output/checkpoint_interval"), std::string::npos) << bad.err;
+}
+
+}  // namespace ts::test
