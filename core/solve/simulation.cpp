@@ -16,6 +16,7 @@
 #include <optional>
 #include <sstream>
 #include <thread>
+#include <type_traits>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -1855,55 +1856,45 @@ double Simulation::check_restart(const Checkpoint& c) const {
   }
 }
 
-void Simulation::save_state(Checkpoint& c) const {
-  sdk::StateWriter w;
-  w.put(last_mech_dt_);
-  w.put(bending_weight_);
-  w.put(bending_left_);
-  w.put(bending_largest_);
-  w.put(bending_evaluations_);
-  w.put(last_stable_);
-  w.put(seen_min_);
-  w.put(seen_max_);
-  w.put_vector(tool_force_);
-  w.put_vector(tool_heat_);
-  w.put_vector(link_heat_);
-  w.put(contact_energy_);
-  w.put(contact_active_);
+// The kernel's state between two steps, written (sdk::StateWriter) or read
+// back (sdk::StateReader) by the same list; false where a read failed.
+template <class A>
+bool Simulation::state_io(A& a) {
+  constexpr bool saving = std::is_same_v<A, sdk::StateWriter>;
+  bool ok = a.io(last_mech_dt_) && a.io(bending_weight_) && a.io(bending_left_) && a.io(bending_largest_) &&
+            a.io(bending_evaluations_) && a.io(last_stable_) && a.io(seen_min_) && a.io(seen_max_) &&
+            a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) && a.io(contact_energy_) &&
+            a.io(contact_active_);
   std::vector<char> warned;
   for (const auto& u : law_uses_) warned.push_back(u.warned ? 1 : 0);
-  w.put_vector(warned);
-  for (const auto& st : parts_) {
-    w.put_vector(st->x);
-    w.put_vector(st->T);
-    w.put_vector(st->contact_status);
-    w.put_vector(st->contact_pressure);
-    w.put_vector(st->shear_angle);
+  ok = ok && a.io_array(warned);
+  for (std::size_t k = 0; k < warned.size(); ++k) law_uses_[k].warned = warned[k] != 0;
+  for (auto& st : parts_)
+    ok = ok && a.io_array(st->x) && a.io_array(st->T) && a.io_array(st->contact_status) &&
+         a.io_array(st->contact_pressure) && a.io_array(st->shear_angle);
+  for (auto& m : mech_)
+    ok = ok && a.io_array(m->v) && a.io_array(m->f_int) && a.io_array(m->f_con) && a.io(m->pending_work) &&
+         a.io_array(m->block_dt) && a.io_array(m->block_bdt) && a.io(m->bend_dt) && a.io_array(m->stress) &&
+         a.io_array(m->curvature);
+  for (ContactTask& task : contact_tasks_) {
+    // A task's forces on the other part are in cross_out where it handed
+    // them over (published); a continued run reads them from cross.
+    ok = ok && a.io_array(saving && task.published ? task.cross_out : task.cross);
+    if (!saving) task.published = false;
+    ok = ok && a.io_array(task.cross_status) && a.io_array(task.tool_force) && a.io_array(task.own_pressure) &&
+         a.io_array(task.cross_pressure) && a.io(task.energy) && a.io(task.active);
   }
-  for (const auto& m : mech_) {
-    w.put_vector(m->v);
-    w.put_vector(m->f_int);
-    w.put_vector(m->f_con);
-    w.put(m->pending_work);
-    w.put_vector(m->block_dt);
-    w.put_vector(m->block_bdt);
-    w.put(m->bend_dt);
-    w.put_vector(m->stress);
-    w.put_vector(m->curvature);
+  for (auto& tool : tools_) {
+    std::array<double, 3> u = tool->displacement(), v = tool->velocity();
+    ok = ok && a.io(u) && a.io(v);
+    if (!saving) tool->set_motion_state(u, v);
   }
-  for (const ContactTask& task : contact_tasks_) {
-    w.put_vector(task.published ? task.cross_out : task.cross);
-    w.put_vector(task.cross_status);
-    w.put_vector(task.tool_force);
-    w.put_vector(task.own_pressure);
-    w.put_vector(task.cross_pressure);
-    w.put(task.energy);
-    w.put(task.active);
-  }
-  for (const auto& tool : tools_) {
-    w.put(tool->displacement());
-    w.put(tool->velocity());
-  }
+  return ok;
+}
+
+void Simulation::save_state(Checkpoint& c) {
+  sdk::StateWriter w;
+  state_io(w);
   c.add("kernel", std::move(w.bytes()));
   auto plugin = [&](const std::string& name, auto&& save) {
     sdk::StateWriter pw;
@@ -1918,75 +1909,15 @@ void Simulation::save_state(Checkpoint& c) const {
 }
 
 void Simulation::load_state(const Checkpoint& c) {
-  sdk::StateReader r(c.section("kernel"));
   auto fail = [](const std::string& what) {
     throw JobError("", "--restart: the checkpoint does not fit this job (" + what + ")");
   };
-  auto array = [&](auto& v, const std::string& what) {
-    using T = typename std::remove_reference_t<decltype(v)>::value_type;
-    if (!r.get_array(std::span<T>(v.data(), v.size()))) fail(what);
-  };
-  r.get(last_mech_dt_);
-  r.get(bending_weight_);
-  r.get(bending_left_);
-  r.get(bending_largest_);
-  r.get(bending_evaluations_);
-  r.get(last_stable_);
-  r.get(seen_min_);
-  r.get(seen_max_);
-  array(tool_force_, "tools");
-  array(tool_heat_, "tools");
-  r.get_vector(link_heat_);
-  r.get(contact_energy_);
-  r.get(contact_active_);
-  std::vector<char> warned;
-  r.get_vector(warned);
-  if (warned.size() != law_uses_.size()) fail("material laws");
-  for (std::size_t k = 0; k < warned.size(); ++k) law_uses_[k].warned = warned[k] != 0;
-  for (auto& st : parts_) {
-    array(st->x, "nodes of part '" + st->def->name + "'");
-    array(st->T, "temperatures of part '" + st->def->name + "'");
-    array(st->contact_status, "part " + st->def->name);
-    array(st->contact_pressure, "part " + st->def->name);
-    array(st->shear_angle, "part " + st->def->name);
-  }
-  for (auto& m : mech_) {
-    array(m->v, "velocities");
-    array(m->f_int, "forces");
-    array(m->f_con, "forces");
-    r.get(m->pending_work);
-    array(m->block_dt, "element blocks");
-    array(m->block_bdt, "element blocks");
-    r.get(m->bend_dt);
-    array(m->stress, "elements");
-    array(m->curvature, "elements");
-  }
-  for (ContactTask& task : contact_tasks_) {
-    task.published = false;
-    array(task.cross, "contacts");
-    array(task.cross_status, "contacts");
-    array(task.tool_force, "contacts");
-    array(task.own_pressure, "contacts");
-    array(task.cross_pressure, "contacts");
-    r.get(task.energy);
-    r.get(task.active);
-  }
-  for (auto& tool : tools_) {
-    std::array<double, 3> u{}, v{};
-    r.get(u);
-    r.get(v);
-    tool->set_motion_state(u, v);
-  }
-  if (!r.done()) fail("kernel state");
+  sdk::StateReader r(c.section("kernel"));
+  if (!state_io(r) || !r.done()) fail("kernel state");
   auto plugin = [&](const std::string& name, auto&& load) {
-    std::vector<unsigned char> none;
-    const auto& bytes = [&]() -> const std::vector<unsigned char>& {
-      for (const auto& sct : c.sections)
-        if (sct.first == name) return sct.second;
-      fail("no section " + name);
-      return none;
-    }();
-    sdk::StateReader pr(bytes);
+    const auto it = std::find_if(c.sections.begin(), c.sections.end(), [&](const auto& sct) { return sct.first == name; });
+    if (it == c.sections.end()) fail("no section " + name);
+    sdk::StateReader pr(it->second);
     if (auto st = load(pr); !st) fail(name + ": " + st.message);
     if (!pr.done()) fail(name);
   };
@@ -2373,6 +2304,17 @@ RunResult Simulation::run(const RunOptions& opt) {
   const double checkpoint_iv = job_.output.checkpoint_interval;
   double next_checkpoint = checkpoint_iv > 0 ? checkpoint_iv : std::numeric_limits<double>::infinity();
   double restarted_from = -1;  // s, a restart's checkpoint time
+  // The loop's state, written or read back by the same list.
+  auto run_io = [&](auto& a) {
+    return a.io(steps) && a.io(mech_steps) && a.io(mech_dt) && a.io(frame_index) && a.io(frame_t) &&
+           a.io_array(next_probe) && a.io(heat_in) && a.io(substeps_max) && a.io(limited_total) && a.io(stored0) &&
+           a.io_array(stored0_part) && a.io_vector(energy_rows) && a.io_vector(tool_rows) && a.io(audit.kinetic) &&
+           a.io(audit.internal) && a.io(audit.external) && a.io(audit.damping) && a.io(audit.balance_error) &&
+           a.io(audit.contact) && a.io(audit.contact_stored) && a.io(audit.kinetic_half) &&
+           a.io_vector(audit.reactions) && a.io(t_thermal) && a.io(since_thermal) && a.io(subcycle) &&
+           a.io(stable) && a.io(next_sample) && a.io(audit_scale) && a.io(supplied_max) && a.io(next_checkpoint) &&
+           a.io_vector(unstable);
+  };
   auto save_checkpoint = [&] {
     if (!writer) return;
     const auto tc = Clock::now();
@@ -2387,37 +2329,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       f->flush();
       w.put(static_cast<std::uint64_t>(f->is_open() ? static_cast<std::uint64_t>(f->tellp()) : 0));
     }
-    w.put(steps);
-    w.put(mech_steps);
-    w.put(mech_dt);
-    w.put(frame_index);
-    w.put(frame_t);
-    w.put_vector(next_probe);
-    w.put(heat_in);
-    w.put(substeps_max);
-    w.put(limited_total);
-    w.put(stored0);
-    w.put_vector(stored0_part);
-    w.put_vector(energy_rows);
-    w.put_vector(tool_rows);
-    w.put(audit.kinetic);
-    w.put(audit.internal);
-    w.put(audit.external);
-    w.put(audit.damping);
-    w.put(audit.balance_error);
-    w.put(audit.contact);
-    w.put(audit.contact_stored);
-    w.put(audit.kinetic_half);
-    w.put_vector(audit.reactions);
-    w.put(t_thermal);
-    w.put(since_thermal);
-    w.put(subcycle);
-    w.put(stable);
-    w.put(next_sample);
-    w.put(audit_scale);
-    w.put(supplied_max);
-    w.put(next_checkpoint);
-    w.put_vector(unstable);
+    run_io(w);
     c.add("run", std::move(w.bytes()));
     save_state(c);
     write_checkpoint(opt.out_dir / kCheckpointFile, c);
@@ -2428,40 +2340,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   try {
     if (resume) {
       sdk::StateReader& r = *resume;
-      r.get(steps);
-      r.get(mech_steps);
-      r.get(mech_dt);
-      r.get(frame_index);
-      r.get(frame_t);
-      r.get_array(std::span<double>(next_probe));
-      r.get(heat_in);
-      r.get(substeps_max);
-      r.get(limited_total);
-      double stored0_then = 0;
-      r.get(stored0_then);
-      r.get_array(std::span<double>(stored0_part));
-      r.get_vector(energy_rows);
-      r.get_vector(tool_rows);
-      r.get(audit.kinetic);
-      r.get(audit.internal);
-      r.get(audit.external);
-      r.get(audit.damping);
-      r.get(audit.balance_error);
-      r.get(audit.contact);
-      r.get(audit.contact_stored);
-      r.get(audit.kinetic_half);
-      r.get_vector(audit.reactions);
-      r.get(t_thermal);
-      r.get(since_thermal);
-      r.get(subcycle);
-      r.get(stable);
-      r.get(next_sample);
-      r.get(audit_scale);
-      r.get(supplied_max);
-      r.get(next_checkpoint);
-      r.get_vector(unstable);
-      if (!r.done()) throw JobError("", "--restart: the checkpoint does not fit this job (run state)");
-      stored0 = stored0_then;
+      if (!run_io(r) || !r.done()) throw JobError("", "--restart: the checkpoint does not fit this job (run state)");
       sdk::StateReader head(opt.restart->section("run"));
       head.get(t);
       restarted_from = t;

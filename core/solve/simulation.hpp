@@ -145,8 +145,10 @@ class Simulation {
   void check_field(double time, long long step);
   // The kernel's and the plugins' state between two steps, for checkpoints
   // (sections "kernel" and "plugin/..."; run() adds its loop's state).
-  void save_state(Checkpoint& c) const;
+  void save_state(Checkpoint& c);
   void load_state(const Checkpoint& c);
+  template <class A>
+  bool state_io(A& a);
   double seen_min_ = 0, seen_max_ = 0;
   double last_mech_dt_ = 0;
   // Whether the element fields that only output frames show (stresses,

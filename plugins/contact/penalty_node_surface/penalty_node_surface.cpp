@@ -284,20 +284,12 @@ class Candidates {
     return {node_elems_.data() + node_start_[i], node_elems_.data() + node_start_[i + 1]};
   }
   long long builds() const { return builds_; }
-  // Checkpoints: the positions of the last build and its lists.
-  void save(sdk::StateWriter& out) const {
-    out.put_vector(xa_);
-    out.put_vector(xb_);
-    out.put_vector(start_);
-    out.put_vector(elems_);
-    out.put_vector(node_start_);
-    out.put_vector(node_elems_);
-    out.put(margin_);
-    out.put(builds_);
-  }
-  bool load(sdk::StateReader& in) {
-    return in.get_vector(xa_) && in.get_vector(xb_) && in.get_vector(start_) && in.get_vector(elems_) &&
-           in.get_vector(node_start_) && in.get_vector(node_elems_) && in.get(margin_) && in.get(builds_);
+  // Checkpoints: the positions of the last build and its lists (written
+  // or read back by the same list, sdk/state.hpp).
+  template <class A>
+  bool state_io(A& a) {
+    return a.io_vector(xa_) && a.io_vector(xb_) && a.io_vector(start_) && a.io_vector(elems_) &&
+           a.io_vector(node_start_) && a.io_vector(node_elems_) && a.io(margin_) && a.io(builds_);
   }
 
  private:
@@ -498,40 +490,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // springs, the candidate lists and the kept targets between full
   // searches; the tool queries' distances and where they were asked.
   sdk::Status save_state(sdk::StateWriter& out) const override {
-    for (const Pass& ps : pass_) {
-      out.put_vector(ps.side);
-      out.put_vector(ps.ft);
-      ps.cand.save(out);
-      out.put_vector(ps.kept);
-      out.put(ps.calls);
-      out.put(ps.limit);
-      out.put_vector(ps.kept_list);
-      out.put_vector(ps.slot);
-      out.put_vector(ps.used);
-      out.put_vector(ps.geo_kept);
-      out.put_vector(ps.geo_b);
-    }
-    out.put_vector(nn_a_);
-    out.put_vector(dist_);
-    out.put_vector(tn_);
-    out.put_vector(xq_);
-    out.put_vector(sq_);
-    out.put(tool_path_);
-    out.put(tool_u_);
+    const_cast<PenaltyNodeSurface*>(this)->state_io(out);  // writing changes nothing
     return sdk::Status::success();
   }
   sdk::Status load_state(sdk::StateReader& in) override {
-    bool ok = true;
-    for (Pass& ps : pass_) {
-      const std::size_t nside = ps.side.size(), nft = ps.ft.size();
-      ok = ok && in.get_vector(ps.side) && in.get_vector(ps.ft) && ps.side.size() == nside && ps.ft.size() == nft &&
-           ps.cand.load(in) && in.get_vector(ps.kept) && in.get(ps.calls) && in.get(ps.limit) &&
-           in.get_vector(ps.kept_list) && in.get_vector(ps.slot) && in.get_vector(ps.used) &&
-           in.get_vector(ps.geo_kept) && in.get_vector(ps.geo_b);
-    }
-    ok = ok && in.get_vector(nn_a_) && in.get_vector(dist_) && in.get_vector(tn_) && in.get_vector(xq_) &&
-         in.get_vector(sq_) && in.get(tool_path_) && in.get(tool_u_);
-    if (!ok) return sdk::Status::failure("penalty_node_surface: the checkpoint does not fit this pair");
+    if (!state_io(in)) return sdk::Status::failure("penalty_node_surface: the checkpoint does not fit this pair");
     return sdk::Status::success();
   }
 
@@ -590,6 +553,17 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       }
       i = j + 1;  // node j (if any) is skipped
     }
+  }
+
+  template <class A>
+  bool state_io(A& a) {
+    bool ok = true;
+    for (Pass& ps : pass_)
+      ok = ok && a.io_array(ps.side) && a.io_array(ps.ft) && ps.cand.state_io(a) && a.io_vector(ps.kept) &&
+           a.io(ps.calls) && a.io(ps.limit) && a.io_vector(ps.kept_list) && a.io_vector(ps.slot) &&
+           a.io_vector(ps.used) && a.io_vector(ps.geo_kept) && a.io_vector(ps.geo_b);
+    return ok && a.io_vector(nn_a_) && a.io_vector(dist_) && a.io_vector(tn_) && a.io_vector(xq_) &&
+           a.io_vector(sq_) && a.io(tool_path_) && a.io(tool_u_);
   }
 
   // Rebuilds ps's candidate lists if a node has moved too far since the

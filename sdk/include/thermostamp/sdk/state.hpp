@@ -40,6 +40,24 @@ class StateWriter {
   void put_vector(const V& v) {
     put_array(std::span<const typename V::value_type>(v.data(), v.size()));
   }
+  // The calls a StateReader answers with the same names (io, io_array,
+  // io_vector), so that a plugin may list its values once, in a function
+  // template called with either.
+  template <class T>
+  bool io(const T& value) {
+    put(value);
+    return true;
+  }
+  template <class V>
+  bool io_array(const V& v) {
+    put_vector(v);
+    return true;
+  }
+  template <class V>
+  bool io_vector(const V& v) {
+    put_vector(v);
+    return true;
+  }
   const std::vector<unsigned char>& bytes() const { return bytes_; }
   std::vector<unsigned char>& bytes() { return bytes_; }
 
@@ -80,6 +98,20 @@ class StateReader {
     std::memcpy(v.data(), bytes_.data() + pos_, n * sizeof(T));
     pos_ += n * sizeof(T);
     return true;
+  }
+  // The names of StateWriter's: io reads a value, io_array an array into
+  // a container of the length it has, io_vector one of any length.
+  template <class T>
+  bool io(T& value) {
+    return get(value);
+  }
+  template <class V>
+  bool io_array(V& v) {
+    return get_array(std::span<typename V::value_type>(v.data(), v.size()));
+  }
+  template <class V>
+  bool io_vector(V& v) {
+    return get_vector(v);
   }
   bool ok() const { return ok_; }
   // Everything read, nothing left over.
