@@ -2365,27 +2365,27 @@ RunResult Simulation::run(const RunOptions& opt) {
     }
     if (job_.mechanics) {
       const MechanicsDef& md = job_.mechanics_settings;
-      if (!resume) {
-      update_node_temperature();
-      check_law_ranges(0.0);
-      stable = mechanics_stable_dt();
-      compute_contact_forces(0.0, 0.0);
-      finish_contact_forces();
-      // Overlaps below 1e-6 of a ply's thickness (round-off where a ply
-      // starts exactly on a tool) are not worth a warning.
-      double k_max = 0, h_min = std::numeric_limits<double>::infinity();
-      for (std::size_t p = 0; p < parts_.size(); ++p) {
-        for (double k : mech_[p]->k_contact) k_max = std::max(k_max, k);
-        h_min = std::min(h_min, parts_[p]->def->thickness);
-      }
-      if (contact_energy_ > 0.5 * k_max * (1e-6 * h_min) * (1e-6 * h_min)) {
-        unstable += ", or it started with " + fmt_g(contact_energy_, 3) +
-                    " J in the contact springs (a ply inside a tool or another ply at t = 0)";
-        log->warn("contact springs hold {:.4g} J at t = 0 on {} node(s): a ply starts inside a tool or another ply "
-                  "(check the tools' positions and the side their profile faces)",
-                  contact_energy_, contact_active_);
-      }
-      if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
+      if (!resume) {  // the forces and stable step at t = 0 (a restart has them from its checkpoint)
+        update_node_temperature();
+        check_law_ranges(0.0);
+        stable = mechanics_stable_dt();
+        compute_contact_forces(0.0, 0.0);
+        finish_contact_forces();
+        // Overlaps below 1e-6 of a ply's thickness (round-off where a ply
+        // starts exactly on a tool) are not worth a warning.
+        double k_max = 0, h_min = std::numeric_limits<double>::infinity();
+        for (std::size_t p = 0; p < parts_.size(); ++p) {
+          for (double k : mech_[p]->k_contact) k_max = std::max(k_max, k);
+          h_min = std::min(h_min, parts_[p]->def->thickness);
+        }
+        if (contact_energy_ > 0.5 * k_max * (1e-6 * h_min) * (1e-6 * h_min)) {
+          unstable += ", or it started with " + fmt_g(contact_energy_, 3) +
+                      " J in the contact springs (a ply inside a tool or another ply at t = 0)";
+          log->warn("contact springs hold {:.4g} J at t = 0 on {} node(s): a ply starts inside a tool or another ply "
+                    "(check the tools' positions and the side their profile faces)",
+                    contact_energy_, contact_active_);
+        }
+        if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
       }
       // The stresses and curvatures are asked of the elements only for the
       // frames that show them, and for the last frame of an interrupted run.
