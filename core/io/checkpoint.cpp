@@ -71,7 +71,7 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
     std::uint64_t n = 0;
     if (!in.read(reinterpret_cast<char*>(&n), sizeof n) || n > size) throw std::runtime_error(file.string() + " is truncated");
     v.resize(n);
-    if (!in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n)))
+    if (n > 0 && !in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n)))
       throw std::runtime_error(file.string() + " is truncated");
   };
   Checkpoint c;

@@ -33,6 +33,7 @@ class StateWriter {
   void put_array(std::span<const T> values) {
     static_assert(std::is_trivially_copyable_v<T>);
     put(static_cast<std::uint64_t>(values.size()));
+    if (values.empty()) return;
     const auto* p = reinterpret_cast<const unsigned char*>(values.data());
     bytes_.insert(bytes_.end(), p, p + values.size() * sizeof(T));
   }
@@ -84,7 +85,7 @@ class StateReader {
   bool get_array(std::span<T> values) {
     std::uint64_t n = 0;
     if (!get(n) || n != values.size() || bytes_.size() - pos_ < n * sizeof(T)) return ok_ = false;
-    std::memcpy(values.data(), bytes_.data() + pos_, n * sizeof(T));
+    if (n > 0) std::memcpy(values.data(), bytes_.data() + pos_, n * sizeof(T));
     pos_ += n * sizeof(T);
     return true;
   }
@@ -95,7 +96,7 @@ class StateReader {
     using T = typename V::value_type;
     if (!get(n) || (bytes_.size() - pos_) / sizeof(T) < n) return ok_ = false;
     v.resize(n);
-    std::memcpy(v.data(), bytes_.data() + pos_, n * sizeof(T));
+    if (n > 0) std::memcpy(v.data(), bytes_.data() + pos_, n * sizeof(T));
     pos_ += n * sizeof(T);
     return true;
   }
