@@ -2079,6 +2079,9 @@ RunResult Simulation::run(const RunOptions& opt) {
   std::ofstream probes_csv;
   if (opt.write_files) {
     std::filesystem::create_directories(opt.out_dir);
+    // A new run replaces the folder's results: a checkpoint of an earlier
+    // run there no longer fits them.
+    if (!opt.restart) std::filesystem::remove(opt.out_dir / kCheckpointFile);
     std::vector<WriterPart> wparts;
     const bool layers = std::find(job_.output.fields.begin(), job_.output.fields.end(), "temperature") !=
                         job_.output.fields.end();

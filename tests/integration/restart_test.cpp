@@ -248,6 +248,11 @@ TEST(Restart, RefusesWhatItCannotContinue) {
   EXPECT_NE(r.err.find("energy.csv is missing or shorter than at the checkpoint"), std::string::npos) << r.err;
   EXPECT_EQ(file_text(out / "probes.csv"), probes) << "nothing cut before the check";
   EXPECT_EQ(std::filesystem::file_size(out / "results.h5"), h5);
+  // A new run in the folder removes the checkpoint of the earlier one.
+  std::ofstream(out / "checkpoint.bin", std::ios::binary) << ck;
+  j["output"].erase("checkpoint_interval");
+  ASSERT_EQ(run_cli(write_job(dir, j), out, 2).exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(out / "checkpoint.bin"));
   // The checkpoint interval is checked like every other value.
   const auto bad = thermostamp("validate " + q(job) + " --set output.checkpoint_interval=-1");
   EXPECT_EQ(bad.exit_code, 2);
