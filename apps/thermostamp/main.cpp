@@ -22,7 +22,7 @@ namespace {
 
 constexpr const char* kUsage = R"(usage:
   thermostamp run JOB.json [--out DIR] [--threads N] [--set PATH=VALUE ...] [--quiet] [--keep-subnormals]
-                  [--restart]
+                  [--restart] [--checkpoint-minutes M]
   thermostamp validate JOB.json [--set PATH=VALUE ...]
   thermostamp plugins [--json | --markdown]
   thermostamp schema                 # JSON Schema of job files, from the plugins found
@@ -36,6 +36,8 @@ subnormals instead of flushing them to zero during the run (the default)
 (checkpoint.bin, written when a run is interrupted and every
 output.checkpoint_interval), with the same job and --set values; the frames
 and time series up to the checkpoint are kept
+--checkpoint-minutes M: also write a checkpoint after every M minutes of
+wall time (against machines that go down without a signal)
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -53,6 +55,7 @@ struct Args {
   std::string out;
   int threads = 0;
   bool quiet = false, json = false, markdown = false, keep_subnormals = false, restart = false;
+  double checkpoint_minutes = 0;
 };
 
 Args parse(int argc, char** argv) {
@@ -80,6 +83,16 @@ Args parse(int argc, char** argv) {
         if (used != t.size() || a.threads < 1) throw std::invalid_argument(t);
       } catch (const std::exception&) {
         throw UsageError("--threads expects a positive integer, found '" + t + "'");
+      }
+    } else if (s == "--checkpoint-minutes") {
+      const std::string t = value(s);
+      try {
+        std::size_t used = 0;
+        a.checkpoint_minutes = std::stod(t, &used);
+        if (used != t.size() || !(a.checkpoint_minutes > 0) || !std::isfinite(a.checkpoint_minutes))
+          throw std::invalid_argument(t);
+      } catch (const std::exception&) {
+        throw UsageError("--checkpoint-minutes expects a positive number, found '" + t + "'");
       }
     } else if (s == "--quiet") {
       a.quiet = true;
@@ -136,6 +149,7 @@ int cmd_run(const Args& a, bool validate_only) {
   opt.threads = a.threads;
   opt.quiet = a.quiet;
   opt.flush_subnormals = !a.keep_subnormals;
+  opt.checkpoint_wall_s = 60 * a.checkpoint_minutes;
   // --restart: the run continues from the checkpoint in its output folder
   // (checked before anything runs: a checkpoint of another job is refused).
   std::optional<ts::Checkpoint> checkpoint;

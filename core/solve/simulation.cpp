@@ -2307,6 +2307,14 @@ RunResult Simulation::run(const RunOptions& opt) {
   const double checkpoint_iv = job_.output.checkpoint_interval;
   double next_checkpoint = checkpoint_iv > 0 ? checkpoint_iv : std::numeric_limits<double>::infinity();
   double restarted_from = -1;  // s, a restart's checkpoint time
+  auto last_checkpoint_wall = Clock::now();
+  // A checkpoint after this step: asked for by a stop, or due by simulated
+  // or wall time (never at the end).
+  auto checkpoint_due = [&](int stop_seen) {
+    return t < t_end - eps_t &&
+           (stop_seen != 0 || t >= next_checkpoint - eps_t ||
+            (opt.checkpoint_wall_s > 0 && seconds_since(last_checkpoint_wall) >= opt.checkpoint_wall_s));
+  };
   // The loop's state, written or read back by the same list.
   auto run_io = [&](auto& a) {
     return a.io(steps) && a.io(mech_steps) && a.io(mech_dt) && a.io(frame_index) && a.io(frame_t) &&
@@ -2337,6 +2345,8 @@ RunResult Simulation::run(const RunOptions& opt) {
     save_state(c);
     write_checkpoint(opt.out_dir / kCheckpointFile, c);
     timing_[kTimeOutput] += seconds_since(tc);
+    last_checkpoint_wall = Clock::now();
+    if (checkpoint_iv > 0 && t >= next_checkpoint - eps_t) advance_past(next_checkpoint, checkpoint_iv, t + eps_t);
     log->info("checkpoint at t = {:.6g} s (mechanical step {}, thermal step {}): {}", t, mech_steps, steps,
               (opt.out_dir / kCheckpointFile).string());
   };
@@ -2513,10 +2523,7 @@ RunResult Simulation::run(const RunOptions& opt) {
           ++frame_index;
           frame_t = t;
         }
-        if (t < t_end - eps_t && (stop_seen != 0 || t >= next_checkpoint - eps_t)) {
-          save_checkpoint();
-          if (checkpoint_iv > 0) advance_past(next_checkpoint, checkpoint_iv, t + eps_t);
-        }
+        if (checkpoint_due(stop_seen)) save_checkpoint();
         progress.update(t, mech_steps);
         if ((stop_signal = stop_seen) != 0) break;
       }
@@ -2560,10 +2567,7 @@ RunResult Simulation::run(const RunOptions& opt) {
           frame_t = t;
         }
         const int stop_seen = stop_requested();
-        if (t < t_end - eps_t && (stop_seen != 0 || t >= next_checkpoint - eps_t)) {
-          save_checkpoint();
-          if (checkpoint_iv > 0) advance_past(next_checkpoint, checkpoint_iv, t + eps_t);
-        }
+        if (checkpoint_due(stop_seen)) save_checkpoint();
         progress.update(t, steps);
         if ((stop_signal = stop_seen) != 0) break;
       }

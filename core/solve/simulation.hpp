@@ -32,6 +32,9 @@ struct RunOptions {
   // with Simulation::check_restart) in out_dir, which holds that run's
   // output: its frames and time series up to the checkpoint are kept.
   const Checkpoint* restart = nullptr;
+  // Also write a checkpoint whenever this much wall time (s) has passed
+  // since the run's start or its last checkpoint; 0: not by wall time.
+  double checkpoint_wall_s = 0;
 };
 
 struct ProbeSample {
