@@ -114,13 +114,14 @@ CommandResult run_cli(const std::filesystem::path& job, const std::filesystem::p
 }
 
 // The coarse hemisphere (10 x 10 cells per ply, mass scaling to 1e-4 s),
-// 1 s of stroke, frames every 0.25 s.
+// 1 s of stroke, frames every 0.25 s with every mechanical field.
 json coarse_hemisphere(const std::string& file) {
   json j = read_job_document(source_dir() / "share" / "jobs" / file);
   j["time"]["end"] = 1.0;
   j["output"]["interval"] = 0.25;
   for (auto& p : j["parts"]) p["mesh"]["divisions"] = {10, 10};
   j["solvers"]["mechanics"]["mass_scaling"]["target_dt"] = 1e-4;
+  for (const char* f : {"velocity", "membrane_stress", "curvature", "contact_pressure"}) j["output"]["fields"].push_back(f);
   return j;
 }
 

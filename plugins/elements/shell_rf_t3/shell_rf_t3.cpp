@@ -690,11 +690,20 @@ class ShellRfT3 final : public ElementKernel {
       // Bending in this evaluation (ElementForceInput::bending_weight): 0
       // skips its passes, w > 0 scales its forces by w.
       const bool bend = bending_ && in.bending_weight > 0;
+      // An evaluation without bending that a frame follows (fields_due)
+      // still forms the curvatures of its positions for fields(): passes 0
+      // and 1 up to the curvatures, with no moments, history or forces.
+      const bool curvatures_only = bending_ && !bend && in.fields_due;
       if (bending_ && in.pass == 0) {
-        if (bend) slope_angles(in, in.range.begin, in.range.end);
+        if (bend || curvatures_only) slope_angles(in, in.range.begin, in.range.end);
         return Status::success();
       }
       if (bending_ && in.pass == 1) {
+        if (curvatures_only) {
+          const StepValues sv = step_values(in);
+          curvature_only_block(in.range.end - in.range.begin, gld_, cs_.data() + in.range.begin, sv.nidx, sv.ld,
+                               sv.eq, sv.rho_all, curv_.data() + 3 * static_cast<std::size_t>(in.range.begin));
+        }
         if (!bend) return Status::success();
         if (auto st = slope_moments(in, in.range.begin, in.range.end); !st) return st;
         if (in.bending_weight != 1.0) {  // dW/ds times w: every hinge moment and bending force follows
