@@ -33,9 +33,10 @@ constexpr const char* kUsage = R"(usage:
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
 subnormals instead of flushing them to zero during the run (the default)
 --restart: continue the run from the checkpoint in its output folder
-(checkpoint.bin, written when a run is interrupted and every
-output.checkpoint_interval), with the same job and --set values; the frames
-and time series up to the checkpoint are kept
+(checkpoint.bin, written when a run is interrupted, every
+output.checkpoint_interval and every --checkpoint-minutes), with the same
+job and --set values; the frames and time series up to the checkpoint are
+kept
 --checkpoint-minutes M: also write a checkpoint after every M minutes of
 wall time (against machines that go down without a signal)
 

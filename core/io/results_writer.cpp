@@ -80,15 +80,19 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
   if (!std::filesystem::exists(path)) throw std::runtime_error("no " + path + " of the run to continue");
   file_ = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   if (file_ < 0) throw std::runtime_error("cannot open " + path);
+  auto refuse = [&](hid_t group, const std::string& why) {  // the file as it was, closed
+    if (group >= 0) H5Gclose(group);
+    H5Fclose(file_);
+    file_ = -1;
+    throw std::runtime_error(why);
+  };
   const hid_t frames_g = H5Gopen2(file_, "frames", H5P_DEFAULT);
-  if (frames_g < 0) throw std::runtime_error(path + " has no frames");
+  if (frames_g < 0) refuse(-1, path + " has no frames");
   const int kept = static_cast<int>(kept_times.size());
   for (int k = 0; k < kept; ++k)
-    if (H5Lexists(frames_g, frame_name(k).c_str(), H5P_DEFAULT) <= 0) {
-      H5Gclose(frames_g);
-      throw std::runtime_error(path + " holds " + std::to_string(k) + " frames, the checkpoint " +
-                               std::to_string(kept) + ": not the results of the run that wrote it");
-    }
+    if (H5Lexists(frames_g, frame_name(k).c_str(), H5P_DEFAULT) <= 0)
+      refuse(frames_g, path + " holds " + std::to_string(k) + " frames, the checkpoint " + std::to_string(kept) +
+                           ": not the results of the run that wrote it");
   for (int k = kept; H5Lexists(frames_g, frame_name(k).c_str(), H5P_DEFAULT) > 0; ++k)
     H5Ldelete(frames_g, frame_name(k).c_str(), H5P_DEFAULT);
   H5Gclose(frames_g);

@@ -268,6 +268,22 @@ TEST(Restart, RefusesWhatItCannotContinue) {
   EXPECT_NE(r.err.find("energy.csv is missing or shorter than at the checkpoint"), std::string::npos) << r.err;
   EXPECT_EQ(file_text(out / "probes.csv"), probes) << "nothing cut before the check";
   EXPECT_EQ(std::filesystem::file_size(out / "results.h5"), h5);
+  // A results file with fewer frames than the checkpoint kept (another
+  // run's): refused, the file left as it was.
+  std::ofstream(out / "energy.csv", std::ios::binary) << energy;
+  std::filesystem::copy_file(out / "results.h5", dir / "results.h5");
+  {
+    const hid_t f = H5Fopen((out / "results.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    H5Ldelete(f, "frames/000001", H5P_DEFAULT);
+    H5Fclose(f);
+  }
+  const auto frames_before = results_contents(out / "results.h5");
+  const auto fewer = run_cli(job, out, 1, "--restart");
+  EXPECT_EQ(fewer.exit_code, 2);
+  EXPECT_NE(fewer.err.find("not the results of the run that wrote it"), std::string::npos) << fewer.err;
+  EXPECT_EQ(results_contents(out / "results.h5"), frames_before);
+  std::filesystem::copy_file(dir / "results.h5", out / "results.h5", std::filesystem::copy_options::overwrite_existing);
   // A new run in the folder removes the checkpoint of the earlier one.
   std::ofstream(out / "checkpoint.bin", std::ios::binary) << ck;
   j["output"].erase("checkpoint_interval");
