@@ -23,9 +23,14 @@ void put_bytes(std::ofstream& out, const void* data, std::size_t n) {
 }
 }  // namespace
 
-const std::vector<unsigned char>& Checkpoint::section(const std::string& name) const {
+const std::vector<unsigned char>* Checkpoint::find(const std::string& name) const {
   for (const auto& s : sections)
-    if (s.first == name) return s.second;
+    if (s.first == name) return &s.second;
+  return nullptr;
+}
+
+const std::vector<unsigned char>& Checkpoint::section(const std::string& name) const {
+  if (const auto* s = find(name)) return *s;
   throw std::runtime_error("the checkpoint has no section '" + name + "'");
 }
 

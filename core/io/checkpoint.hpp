@@ -20,6 +20,8 @@ namespace ts {
 struct Checkpoint {
   std::vector<std::pair<std::string, std::vector<unsigned char>>> sections;
   void add(std::string name, std::vector<unsigned char> bytes) { sections.emplace_back(std::move(name), std::move(bytes)); }
+  // The section of that name, null when absent.
+  const std::vector<unsigned char>* find(const std::string& name) const;
   // The section of that name; throws std::runtime_error naming it when absent.
   const std::vector<unsigned char>& section(const std::string& name) const;
 };

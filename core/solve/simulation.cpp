@@ -1846,8 +1846,8 @@ double Simulation::check_restart(const Checkpoint& c) const {
       throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
                                 "needs the job of the run it continues (output.checkpoint_interval may differ)");
     sdk::StateReader r(c.section("run"));
-    double t = 0, t_end = 0;
-    if (!r.get(t) || !r.get(t_end)) throw JobError("", what + "the checkpoint's run section is truncated");
+    double t = 0;
+    if (!r.get(t)) throw JobError("", what + "the checkpoint's run section is truncated");
     return t;
   } catch (const JobError&) {
     throw;
@@ -1915,9 +1915,9 @@ void Simulation::load_state(const Checkpoint& c) {
   sdk::StateReader r(c.section("kernel"));
   if (!state_io(r) || !r.done()) fail("kernel state");
   auto plugin = [&](const std::string& name, auto&& load) {
-    const auto it = std::find_if(c.sections.begin(), c.sections.end(), [&](const auto& sct) { return sct.first == name; });
-    if (it == c.sections.end()) fail("no section " + name);
-    sdk::StateReader pr(it->second);
+    const std::vector<unsigned char>* bytes = c.find(name);
+    if (!bytes) fail("no section " + name);
+    sdk::StateReader pr(*bytes);
     if (auto st = load(pr); !st) fail(name + ": " + st.message);
     if (!pr.done()) fail(name);
   };
@@ -2042,13 +2042,12 @@ RunResult Simulation::run(const RunOptions& opt) {
   // after the locals it restores), the frames it kept and the lengths of
   // the time series files then.
   std::optional<sdk::StateReader> resume;
+  double resume_t = 0;  // s, the checkpoint's time
   std::vector<double> frame_times;  // of the frames written (for checkpoints)
   std::uint64_t csv_size[3] = {0, 0, 0};  // probes.csv, energy.csv, tools.csv
   if (opt.restart) {
     resume.emplace(opt.restart->section("run"));
-    double tc = 0, te = 0;
-    resume->get(tc);
-    resume->get(te);
+    resume->get(resume_t);
     resume->get_vector(frame_times);
     for (auto& n : csv_size) resume->get(n);
     // Everything checked before any file is touched.
@@ -2334,7 +2333,6 @@ RunResult Simulation::run(const RunOptions& opt) {
     c.add("job", std::vector<unsigned char>(doc.begin(), doc.end()));
     sdk::StateWriter w;
     w.put(t);
-    w.put(t_end);
     w.put_vector(frame_times);
     for (std::ofstream* f : {&probes_csv, &energy_csv, &tools_csv}) {
       f->flush();
@@ -2354,8 +2352,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     if (resume) {
       sdk::StateReader& r = *resume;
       if (!run_io(r) || !r.done()) throw JobError("", "--restart: the checkpoint does not fit this job (run state)");
-      sdk::StateReader head(opt.restart->section("run"));
-      head.get(t);
+      t = resume_t;
       restarted_from = t;
       if (checkpoint_iv > 0) {  // the interval of this run, from the checkpoint on
         next_checkpoint = 0;

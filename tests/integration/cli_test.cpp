@@ -37,8 +37,6 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
   return dir / "job.json";
 }
 
-std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
-
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);

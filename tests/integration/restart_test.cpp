@@ -21,8 +21,6 @@
 namespace ts::test {
 namespace {
 
-std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
-
 std::string file_text(const std::filesystem::path& p) {
   std::stringstream s;
   s << std::ifstream(p, std::ios::binary).rdbuf();

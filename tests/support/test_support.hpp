@@ -61,6 +61,8 @@ struct CommandResult {
   int exit_code = -1;
   std::string out, err;
 };
+// A path quoted for the shell.
+inline std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 // Runs the thermostamp executable with arguments (shell-quoted by the caller).
 CommandResult thermostamp(const std::string& args);
 std::filesystem::path binary_dir();

@@ -64,7 +64,9 @@ struct ElementForceInput {
   // an element may skip storing values that only fields() reports: its
   // stresses and curvatures then stay those of the last evaluation with
   // fields_due (shear angle and fibre direction come from the positions
-  // and are always current).
+  // and are always current). An evaluation with fields_due and a
+  // bending_weight of 0 still forms the curvatures of its positions for
+  // fields(), without the bending's forces or history.
   bool fields_due = true;
   // Optional, one per element of the part (indexed by element number, not
   // from range.begin): a factor on each element's stable step (the
