@@ -40,10 +40,24 @@ namespace ts {
 
 using sdk::Vec3;
 
+namespace {
+// The smallest and largest E11 (the strain along the initial fibre
+// direction) of a part's elements, from their strains [E11, E22, E12].
+std::pair<double, double> fibre_strain_range(const std::vector<double>& strain) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t i = 0; i < strain.size(); i += 3) {
+    lo = std::min(lo, strain[i]);
+    hi = std::max(hi, strain[i]);
+  }
+  return {lo, hi};
+}
+}  // namespace
+
 struct MechPart {
   std::unique_ptr<sdk::ElementKernel> element;
   std::vector<const sdk::MaterialLaw*> membrane;
   std::vector<double> curvature;
+  std::vector<double> strain;  // Green-Lagrange membrane strain, 3 per element (ElementFields::strain)
   std::vector<double> load;  // applied nodal forces at full value (N), 3 per node
   sdk::large_vector<double> f_con;  // contact forces (N)
   std::vector<double> k_contact;     // contact stiffness bound (N/m)
@@ -643,6 +657,7 @@ void Simulation::build_mechanics() {
     m->scaled = false;
     m->stress.assign(3 * ne, 0.0);
     m->curvature.assign(3 * ne, 0.0);
+    m->strain.assign(3 * ne, 0.0);
     m->node_temperature.assign(nn, def.initial_temperature);
     // The 6-node patches: own nodes, then the node opposite each edge in
     // the neighbour (-1 at a boundary edge).
@@ -1743,6 +1758,7 @@ void Simulation::update_element_fields() {
     f.shear_angle = st.shear_angle;
     f.stress = m.stress;
     f.curvature = m.curvature;
+    f.strain = m.strain;
     f.fibre = st.fibre;
     m.element->fields(f);
   }
@@ -1875,7 +1891,7 @@ bool Simulation::state_io(A& a) {
   for (auto& m : mech_)
     ok = ok && a.io_array(m->v) && a.io_array(m->f_int) && a.io_array(m->f_con) && a.io(m->pending_work) &&
          a.io_array(m->block_dt) && a.io_array(m->block_bdt) && a.io(m->bend_dt) && a.io_array(m->stress) &&
-         a.io_array(m->curvature);
+         a.io_array(m->curvature) && a.io_array(m->strain);
   for (ContactTask& task : contact_tasks_) {
     // A task's forces on the other part are in cross_out where it handed
     // them over (published); a continued run reads them from cross.
@@ -2021,10 +2037,13 @@ RunResult Simulation::run(const RunOptions& opt) {
           fields[p].push_back({"contact_status", st.contact_status.data()});
         } else if (f == "contact_pressure") {
           fields[p].push_back({"contact_pressure", st.contact_pressure.data()});
-        } else if ((f == "membrane_stress" || f == "curvature") && p < mech_.size()) {
+        } else if ((f == "membrane_stress" || f == "curvature" || f == "membrane_strain") && p < mech_.size()) {
           // Material-frame components [11, 22, 12] per element, as vectors.
-          fields[p].push_back({f, f == "membrane_stress" ? mech_[p]->stress.data() : mech_[p]->curvature.data(), 3,
-                               true});
+          fields[p].push_back({f,
+                               f == "membrane_stress" ? mech_[p]->stress.data()
+                               : f == "curvature"     ? mech_[p]->curvature.data()
+                                                      : mech_[p]->strain.data(),
+                               3, true});
         }
       }
       // No field twice (e.g. "temperature" and "temperature_mean").
@@ -2185,6 +2204,11 @@ RunResult Simulation::run(const RunOptions& opt) {
         } else if (quantity.rfind("displacement_", 0) == 0) {
           const int d = quantity.back() - 'x';
           s.values.push_back(st.x[3 * i + d] - st.x0[3 * i + d]);
+        } else if (quantity == "fibre_strain") {  // E11: mean of the elements around the node (0 without mechanics)
+          double a = 0;
+          if (static_cast<std::size_t>(pr.part) < mech_.size())
+            for (int e : probe_elements_[q]) a += mech_[pr.part]->strain[3 * static_cast<std::size_t>(e)];
+          s.values.push_back(probe_elements_[q].empty() ? 0.0 : a / probe_elements_[q].size());
         } else {  // shear_angle: mean of the elements around the node (0 without mechanics)
           double a = 0;
           for (int e : probe_elements_[q]) a += st.shear_angle[e];
@@ -2618,6 +2642,9 @@ RunResult Simulation::run(const RunOptions& opt) {
       const auto [smn, smx] = std::minmax_element(sa.begin(), sa.end());
       result.part_shear_min_deg.push_back(*smn);
       result.part_shear_max_deg.push_back(*smx);
+      const auto [fmn, fmx] = fibre_strain_range(mech_[p]->strain);
+      result.part_fibre_strain_min.push_back(fmn);
+      result.part_fibre_strain_max.push_back(fmx);
     }
   }
   result.stored_change = stored_change;
@@ -2726,6 +2753,9 @@ RunResult Simulation::run(const RunOptions& opt) {
         const auto [smn, smx] = std::minmax_element(st->shear_angle.begin(), st->shear_angle.end());
         plies.back()["shear_angle_min_deg"] = *smn;
         plies.back()["shear_angle_max_deg"] = *smx;
+        const auto [fmn, fmx] = fibre_strain_range(mech_[plies.size() - 1]->strain);
+        plies.back()["fibre_strain_min"] = fmn;
+        plies.back()["fibre_strain_max"] = fmx;
       }
     }
     summary["parts"] = plies;
@@ -2756,11 +2786,15 @@ RunResult Simulation::run(const RunOptions& opt) {
       else
         log->warn("kinetic/internal energy {:.2g} % at the end (above 5 %){}", 100 * ratio, hint);
     }
-    for (const auto& st : parts_) {
-      const auto [mn, mx] = std::minmax_element(st->T.begin(), st->T.end());
-      const auto [smn, smx] = std::minmax_element(st->shear_angle.begin(), st->shear_angle.end());
-      log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg", st->def->name, *mn,
-                *mx, st->shear_angle.empty() ? 0.0 : *smn, st->shear_angle.empty() ? 0.0 : *smx);
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      const PartState& st = *parts_[p];
+      const auto [mn, mx] = std::minmax_element(st.T.begin(), st.T.end());
+      const auto [smn, smx] = std::minmax_element(st.shear_angle.begin(), st.shear_angle.end());
+      const auto [fmn, fmx] = fibre_strain_range(mech_[p]->strain);
+      log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg, fibre strain {:.3g} "
+                "to {:.3g}",
+                st.def->name, *mn, *mx, st.shear_angle.empty() ? 0.0 : *smn, st.shear_angle.empty() ? 0.0 : *smx, fmn,
+                fmx);
     }
   }
   if (result.ok) {

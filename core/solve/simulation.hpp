@@ -73,6 +73,8 @@ struct RunResult {
   std::vector<double> part_heat_change;  // per part: stored heat change (J)
   std::vector<double> part_link_heat;    // per part: heat received through ply/ply contact (J)
   std::vector<double> part_shear_min_deg, part_shear_max_deg;  // per part, mechanics only: shear angle range at the end
+  // per part, mechanics only: the range of E11 (membrane strain along the initial fibre direction) at the end
+  std::vector<double> part_fibre_strain_min, part_fibre_strain_max;
   double temperature_min = 0, temperature_max = 0;  // over every value and every step
   long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
   std::vector<ProbeSample> probes;  // a restarted run: the samples after the checkpoint (probes.csv has all)

@@ -8,6 +8,8 @@ Writes into DIR/figures/:
                        deformed shape (top view), last frame; a quarter
                        model is mirrored into the full part
   shear_<part>.png     shear angle of each ply (degrees), last frame
+  fibre_strain_<part>.png  strain along the fibres (E11 of membrane_strain,
+                       %) of each ply, last frame, where the frames have it
   tool_forces.png      force on each moving tool against its travel
                        (punch force against stroke), and heat per tool
   energy.png           energy audit against time
@@ -118,6 +120,19 @@ def shear_map(out, part, time, tri, xyz, vals):
     return save(fig, out, "shear_%s.png" % part, dpi=110, tight=False)
 
 
+def fibre_strain_map(out, part, time, tri, xyz, vals):
+    """E11 of one ply (per element, in %): the strain along the initial fibre
+    direction; negative (blue) where the fibres are compressed."""
+    lim = max(abs(vals.min()), abs(vals.max()), 1e-12)
+    fig, ax = plt.subplots(figsize=(5.2, 4.4))
+    # E11 is the same seen in a mirror image (the fibres map onto themselves)
+    for mxy, mtri, v in mirrored(xyz[:, :2], tri, vals, True):
+        pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=v, vmin=-lim, vmax=lim, cmap="coolwarm")
+    finish_map(fig, ax, pc, "%s: fibre strain E11, t = %.3g s\nmin %.3g, max %.3g %%" % (part, time, vals.min(),
+                                                                                       vals.max()), "%")
+    return save(fig, out, "fibre_strain_%s.png" % part, dpi=110, tight=False)
+
+
 def pressure_map(out, part, time, tri, xyz, vals):
     """The contact pressure of one ply (per node, kPa, some above zero): a log
     scale over three decades (a holder's pressure can be 50 times the
@@ -175,6 +190,8 @@ def plot_maps(folder, out):
             xyz = g["nodes"][()]
             if "shear_angle" in g:
                 made.append(shear_map(out, part, time, tri, xyz, g["shear_angle"][()]))
+            if "membrane_strain" in g:
+                made.append(fibre_strain_map(out, part, time, tri, xyz, 100 * g["membrane_strain"][()][:, 0]))
             if "contact_pressure" in g and g["contact_pressure"][()].max() > 0:
                 made.append(pressure_map(out, part, time, tri, xyz, g["contact_pressure"][()] * 1e-3))
     return made

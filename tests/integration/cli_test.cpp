@@ -40,7 +40,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.15.0 (plugin SDK 0.15.0, ABI 15)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.16.0 (plugin SDK 0.16.0, ABI 16)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {
@@ -862,7 +862,8 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   const std::vector<std::string> figures = {
       "profile_pole_top.png", "profile_pole_bottom.png", "profile_flank_top.png", "profile_flank_bottom.png",
       "probes_mean.png",      "map_ply_top.png",         "map_ply_bottom.png",    "shear_ply_top.png",
-      "shear_ply_bottom.png", "tool_forces.png",         "energy.png"};
+      "shear_ply_bottom.png", "fibre_strain_ply_top.png", "fibre_strain_ply_bottom.png", "tool_forces.png",
+      "energy.png"};
   for (const auto& f : figures) {
     std::ifstream png(out / "figures" / f, std::ios::binary);
     char magic[4] = {0, 0, 0, 0};

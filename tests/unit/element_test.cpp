@@ -241,6 +241,62 @@ TEST(ShellRfT3, PatchTestHomogeneousDeformation) {
   }
 }
 
+// The strain field (ElementFields::strain) of a homogeneous deformation
+// F, followed by a rigid rotation and translation in space: in every
+// element of the irregular patch E = (F^T F - I) / 2 written in the
+// material frame (a = the fibre at 0.5 rad, b = z x a), the same for every
+// rotation (the strain does not see rigid motions). Tolerance 1e-12
+// absolute (strains of order 0.1 from differences of positions of order
+// 0.01 m: round-off of order 1e-15). Also: the shear angle of the same
+// fields is asin(C_ab / sqrt(C_aa C_bb)).
+TEST(ShellRfT3, StrainIsHalfOfCMinusIdentityInTheMaterialFrame) {
+  const double th = 0.5;
+  Patch p(th);
+  const double F[3][3] = {{1.08, 0.05, 0}, {-0.02, 0.97, 0}, {0, 0, 1}};
+  const double a[2] = {std::cos(th), std::sin(th)}, b[2] = {-std::sin(th), std::cos(th)};
+  // C = F^T F (in-plane), then its components in (a, b).
+  double C[2][2];
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j) C[i][j] = F[0][i] * F[0][j] + F[1][i] * F[1][j] + F[2][i] * F[2][j];
+  auto cab = [&](const double* u, const double* v) {
+    double s = 0;
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j) s += u[i] * C[i][j] * v[j];
+    return s;
+  };
+  const double expected[3] = {0.5 * (cab(a, a) - 1), 0.5 * (cab(b, b) - 1), 0.5 * cab(a, b)};
+  const double gamma = std::asin(cab(a, b) / std::sqrt(cab(a, a) * cab(b, b))) * 180 / M_PI;
+  ASSERT_GT(std::abs(expected[2]), 0.01);  // a case with shear, stretch and compression
+  ASSERT_GT(expected[0], 0.01);
+  ASSERT_LT(expected[1], -0.01);
+  for (double angle : {0.0, 0.7, 2.5}) {
+    // x = R F X + t, R about the axis (1, 2, 2) / 3
+    const double u[3] = {1.0 / 3, 2.0 / 3, 2.0 / 3}, c = std::cos(angle), s = std::sin(angle);
+    double R[3][3], RF[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        R[i][j] = (i == j ? c : 0.0) + (1 - c) * u[i] * u[j] +
+                  s * (i == j ? 0.0 : ((j - i + 3) % 3 == 1 ? -u[3 - i - j] : u[3 - i - j]));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) RF[i][j] = R[i][0] * F[0][j] + R[i][1] * F[1][j] + R[i][2] * F[2][j];
+    const double t[3] = {0.3, -0.1, 0.05};
+    p.map(RF, t);
+    p.forces();
+    const int ne = p.mesh.num_elements();
+    std::vector<double> strain(3 * ne, 0.0), shear(ne, 0.0);
+    sdk::ElementFields f;
+    f.strain = strain;
+    f.shear_angle = shear;
+    p.element->fields(f);
+    for (int e = 0; e < ne; ++e) {
+      for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(strain[3 * e + k], expected[k], 1e-12) << "element " << e << ", component " << k << ", rotation "
+                                                           << angle;
+      EXPECT_NEAR(shear[e], gamma, 1e-10) << "element " << e;
+    }
+  }
+}
+
 // The membrane stable step of every element is its smallest current height
 // (2 A / longest edge, from the current positions) times sqrt(rho_A /
 // k_max), on an irregular patch moved to random, non-homogeneous positions

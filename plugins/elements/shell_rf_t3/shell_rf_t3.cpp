@@ -821,15 +821,21 @@ class ShellRfT3 final : public ElementKernel {
   Status fields(ElementFields& out) const override {
     const int ne = part_->num_elements;
     for (int e = 0; e < ne; ++e) {
-      // F e1 and F e2, as internal_forces forms them (shear angle, fibre).
+      // F e1 and F e2, as internal_forces forms them (shear angle, strain, fibre).
       const int* t = &part_->triangles[3 * e];
       const Vec3 x0 = load3(part_->x.data(), t[0]);
       const Vec3 d1 = sub(load3(part_->x.data(), t[1]), x0), d2 = sub(load3(part_->x.data(), t[2]), x0);
       const Vec3 f1 = add(scale(d1, g_[e]), scale(d2, g_[mld_ + e]));
       const Vec3 f2 = add(scale(d1, g_[2 * mld_ + e]), scale(d2, g_[3 * mld_ + e]));
+      const double c11 = dot(f1, f1), c22 = dot(f2, f2), c12 = dot(f1, f2);
       if (!out.shear_angle.empty()) {  // gamma = asin(I_sh), I_sh = C12 / sqrt(C11 C22)
-        const double ish = dot(f1, f2) / std::sqrt(dot(f1, f1) * dot(f2, f2));
+        const double ish = c12 / std::sqrt(c11 * c22);
         out.shear_angle[e] = std::asin(std::clamp(ish, -1.0, 1.0)) * 180.0 / M_PI;
+      }
+      if (!out.strain.empty()) {  // E = (C - I) / 2
+        out.strain[3 * e] = 0.5 * (c11 - 1.0);
+        out.strain[3 * e + 1] = 0.5 * (c22 - 1.0);
+        out.strain[3 * e + 2] = 0.5 * c12;
       }
       if (!out.stress.empty())
         for (int k = 0; k < 3; ++k) out.stress[3 * e + k] = stress_[3 * e + k];
@@ -1746,7 +1752,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.7.0";
+  d.version = "0.8.0";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1754,4 +1760,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.7.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.8.0", register_all)

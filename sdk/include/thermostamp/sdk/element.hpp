@@ -129,6 +129,10 @@ struct ElementFields {
   std::span<double> stress;       // 3 per element, S (N/m) in the material frame
   std::span<double> fibre;        // 3 per element, current fibre direction
   std::span<double> curvature;    // 3 per element, bending curvature (1/m) in the material frame
+  // 3 per element, the Green-Lagrange membrane strain E = (C - I) / 2 in the
+  // material frame, [E11, E22, E12] (tensor components, dimensionless; E11
+  // along the initial fibre direction): the strain conjugate to `stress`.
+  std::span<double> strain;
 };
 
 class ElementKernel {
