@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -39,7 +40,48 @@ std::string frame_name(int k) {
   return buf;
 }
 int extruded_levels(int nz) { return nz > 1 ? nz : 2; }
+
+// A string attribute of an object (a dataset or group).
+void write_text_attribute(hid_t obj, const char* name, const std::string& text) {
+  const hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, text.size() + 1);
+  const hid_t space = H5Screate(H5S_SCALAR);
+  const hid_t at = H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+  H5Awrite(at, type, text.c_str());
+  H5Aclose(at);
+  H5Sclose(space);
+  H5Tclose(type);
+}
+// Writes the attribute "units" of dataset `name` of loc.
+void write_units(hid_t loc, const std::string& name, const std::string& units) {
+  const hid_t ds = H5Dopen2(loc, name.c_str(), H5P_DEFAULT);
+  write_text_attribute(ds, "units", units);
+  H5Dclose(ds);
+}
 }  // namespace
+
+std::string field_units(const std::string& name) {
+  if (name.rfind("temperature", 0) == 0) return "degC";
+  if (name == "nodes" || name == "layer_nodes" || name == "displacement") return "m";
+  if (name == "velocity") return "m/s";
+  if (name == "shear_angle") return "deg";
+  if (name == "contact_pressure") return "Pa";
+  if (name == "membrane_stress") return "N/m";
+  if (name == "curvature") return "1/m";
+  return "1";  // fibre_direction, contact_status, membrane_strain
+}
+
+std::string series_column_units(const std::string& column) {
+  auto ends = [&](const char* e) {
+    const std::size_t n = std::strlen(e);
+    return column.size() >= n && column.compare(column.size() - n, n, e) == 0;
+  };
+  if (column == "time") return "s";
+  if (column == "balance_error") return "1";
+  if (column.rfind("reaction", 0) == 0 || ends("_fx") || ends("_fy") || ends("_fz")) return "N";
+  if (ends("_ux") || ends("_uy") || ends("_uz")) return "m";
+  return "J";  // the energies and works, the tools' heat
+}
 
 ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts)
     : dir_(dir), parts_(std::move(parts)) {
@@ -126,6 +168,7 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
     const WriterPart& wp = parts_[p];
     const hid_t pg = make_group(fg, wp.name);
     write_dataset(pg, "nodes", x[p], wp.num_nodes, 3);
+    write_units(pg, "nodes", field_units("nodes"));
     const int nl = extruded_levels(wp.nz);
     if (wp.layers) {
     std::vector<double> layer_nodes(static_cast<std::size_t>(3) * wp.num_nodes * nl);
@@ -136,6 +179,7 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
           layer_nodes[3 * (static_cast<std::size_t>(i) * nl + l) + d] = x[p][3 * i + d] + z * normals[p][3 * i + d];
       }
     write_dataset(pg, "layer_nodes", layer_nodes.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 3);
+    write_units(pg, "layer_nodes", field_units("layer_nodes"));
     }
     for (const auto& f : fields[p]) {
       if (f.on_layers) {
@@ -148,6 +192,7 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
         const hsize_t rows = f.on_cells ? wp.num_elements : wp.num_nodes;
         write_dataset(pg, f.name, f.data, rows, f.components);
       }
+      write_units(pg, f.name, field_units(f.name));
     }
     H5Gclose(pg);
   }
@@ -169,18 +214,16 @@ void ResultsWriter::write_series(const std::string& name, const std::vector<std:
   if (H5Lexists(g, name.c_str(), H5P_DEFAULT) > 0) H5Ldelete(g, name.c_str(), H5P_DEFAULT);
   const hsize_t cols = columns.size(), nrows = cols ? rows.size() / cols : 0;
   write_dataset(g, name, rows.data(), nrows, cols);
-  // Column names as one attribute: "time,kinetic,...".
-  std::string joined;
-  for (std::size_t i = 0; i < columns.size(); ++i) joined += (i ? "," : "") + columns[i];
+  // Column names and their units as attributes: "time,kinetic,..." and
+  // "s,J,...".
+  std::string joined, units;
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    joined += (i ? "," : "") + columns[i];
+    units += (i ? "," : "") + series_column_units(columns[i]);
+  }
   const hid_t ds = H5Dopen2(g, name.c_str(), H5P_DEFAULT);
-  const hid_t type = H5Tcopy(H5T_C_S1);
-  H5Tset_size(type, joined.size() + 1);
-  const hid_t space = H5Screate(H5S_SCALAR);
-  const hid_t at = H5Acreate2(ds, "columns", type, space, H5P_DEFAULT, H5P_DEFAULT);
-  H5Awrite(at, type, joined.c_str());
-  H5Aclose(at);
-  H5Sclose(space);
-  H5Tclose(type);
+  write_text_attribute(ds, "columns", joined);
+  write_text_attribute(ds, "units", units);
   H5Dclose(ds);
   H5Gclose(g);
   H5Fflush(file_, H5F_SCOPE_GLOBAL);

@@ -17,6 +17,14 @@ struct WriterPart {
   bool layers = true;  // write the extruded through-thickness mesh
 };
 
+// The units of a frame's dataset (a field, "nodes" or "layer_nodes"), as
+// its attribute "units" gives them: "degC", "m", "m/s", "deg", "Pa", "N/m",
+// "1/m", or "1" for dimensionless values.
+std::string field_units(const std::string& name);
+// The units of a series' column (the energy and tool tables), as the
+// series' attribute "units" lists them beside "columns".
+std::string series_column_units(const std::string& column);
+
 struct FrameField {
   std::string name;
   const double* data = nullptr;

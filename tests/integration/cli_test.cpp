@@ -844,6 +844,63 @@ TEST(Cli, MechanicsUnusableStepIsAnInputError) {
   EXPECT_EQ(rows, s["steps"]["mechanics"].get<int>() + 1) << "t = 0 and after every step";
 }
 
+// Every dataset of a frame carries its units (attribute "units", the user
+// guide's table), and each series the units of its columns beside their
+// names: the hemisphere scene, coarse and short, with every field.
+TEST(Output, DatasetsCarryTheirUnits) {
+  const auto dir = temp_dir("units");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = 0.002;
+  j["output"]["interval"] = 0.001;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  j["output"]["fields"] = known_fields();
+  const JobRun run = run_json(j, 1, dir);
+  ASSERT_TRUE(run.result.ok) << run.result.error;
+  const std::map<std::string, std::string> expected = {
+      {"nodes", "m"},          {"layer_nodes", "m"},         {"temperature", "degC"},
+      {"temperature_mean", "degC"}, {"temperature_top", "degC"}, {"temperature_bottom", "degC"},
+      {"displacement", "m"},   {"velocity", "m/s"},          {"shear_angle", "deg"},
+      {"fibre_direction", "1"}, {"contact_status", "1"},     {"contact_pressure", "Pa"},
+      {"membrane_stress", "N/m"}, {"membrane_strain", "1"},  {"curvature", "1/m"}};
+  const hid_t file = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  auto text = [&](const std::string& object, const char* name) {
+    const hid_t at = H5Aopen_by_name(file, object.c_str(), name, H5P_DEFAULT, H5P_DEFAULT);
+    if (at < 0) return std::string("(none)");
+    const hid_t type = H5Aget_type(at);
+    std::string v(H5Tget_size(type), '\0');
+    H5Aread(at, type, v.data());
+    H5Tclose(type);
+    H5Aclose(at);
+    return std::string(v.c_str());
+  };
+  for (const std::string part : {"ply_top", "ply_bottom"}) {
+    for (const auto& [name, units] : expected)
+      EXPECT_EQ(text("frames/000002/" + part + "/" + name, "units"), units) << part << " " << name;
+  }
+  auto split = [](const std::string& v) {
+    std::vector<std::string> out;
+    std::stringstream ss(v);
+    for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
+    return out;
+  };
+  const auto ecols = split(text("series/energy", "columns")), eunits = split(text("series/energy", "units"));
+  ASSERT_EQ(ecols.size(), eunits.size());
+  ASSERT_GT(ecols.size(), 9u);
+  for (std::size_t c = 0; c < ecols.size(); ++c) {
+    const std::string& n = ecols[c];
+    const std::string want = n == "time" ? "s" : n == "balance_error" ? "1" : n.rfind("reaction", 0) == 0 ? "N" : "J";
+    EXPECT_EQ(eunits[c], want) << n;
+  }
+  const auto tcols = split(text("series/tools", "columns")), tunits = split(text("series/tools", "units"));
+  ASSERT_EQ(tcols.size(), tunits.size());
+  ASSERT_EQ(tcols.size(), 1 + 7 * j["tools"].size());
+  for (std::size_t c = 1; c < tcols.size(); ++c)
+    EXPECT_EQ(tunits[c], std::vector<std::string>({"m", "m", "m", "N", "N", "N", "J"})[(c - 1) % 7]) << tcols[c];
+  EXPECT_EQ(tunits[0], "s");
+  H5Fclose(file);
+}
+
 // `thermostamp report DIR`: the figures of a run (the hemisphere scene,
 // coarse and short); a results file cut short is named in one line while
 // the other files' figures are still made; a folder without results.
