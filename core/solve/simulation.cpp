@@ -2062,6 +2062,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   // the time series files then.
   std::optional<sdk::StateReader> resume;
   double resume_t = 0;  // s, the checkpoint's time
+  double wall_before = 0;  // s, a restart: the wall time of the run up to its checkpoint (all its earlier parts)
   std::vector<double> frame_times;  // of the frames written (for checkpoints)
   std::uint64_t csv_size[3] = {0, 0, 0};  // probes.csv, energy.csv, tools.csv
   if (opt.restart) {
@@ -2069,6 +2070,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     resume->get(resume_t);
     resume->get_vector(frame_times);
     for (auto& n : csv_size) resume->get(n);
+    resume->get(wall_before);
     // Everything checked before any file is touched.
     const char* names[3] = {"probes.csv", "energy.csv", "tools.csv"};
     const bool used[3] = {true, job_.mechanics, !job_.tools.empty()};
@@ -2338,6 +2340,48 @@ RunResult Simulation::run(const RunOptions& opt) {
            (stop_seen != 0 || t >= next_checkpoint - eps_t ||
             (opt.checkpoint_wall_s > 0 && seconds_since(last_checkpoint_wall) >= opt.checkpoint_wall_s));
   };
+  // The probe samples so far (RunResult::probes), as flat arrays (a reader
+  // checks each array's length against what is left of the checkpoint).
+  auto probes_io = [&](auto& a) {
+    constexpr bool reading = std::is_same_v<std::decay_t<decltype(a)>, sdk::StateReader>;
+    const auto& known = known_probe_quantities();
+    std::vector<int> id, quantity;
+    std::vector<double> time, z, values;
+    std::vector<std::uint64_t> nz, nv;
+    for (const ProbeSample& ps : result.probes) {  // none when reading
+      id.push_back(ps.probe);
+      quantity.push_back(static_cast<int>(std::find(known.begin(), known.end(), ps.quantity) - known.begin()));
+      time.push_back(ps.time);
+      nz.push_back(ps.z.size());
+      nv.push_back(ps.values.size());
+      z.insert(z.end(), ps.z.begin(), ps.z.end());
+      values.insert(values.end(), ps.values.begin(), ps.values.end());
+    }
+    if (!(a.io_vector(id) && a.io_vector(quantity) && a.io_vector(time) && a.io_vector(nz) && a.io_vector(nv) &&
+          a.io_vector(z) && a.io_vector(values)))
+      return false;
+    if constexpr (reading) {
+      const std::size_t n = id.size();
+      if (quantity.size() != n || time.size() != n || nz.size() != n || nv.size() != n) return false;
+      std::vector<ProbeSample> read(n);
+      std::size_t iz = 0, iv = 0;
+      for (std::size_t k = 0; k < n; ++k) {
+        if (quantity[k] < 0 || static_cast<std::size_t>(quantity[k]) >= known.size() || nz[k] > z.size() - iz ||
+            nv[k] > values.size() - iv)
+          return false;
+        read[k].probe = id[k];
+        read[k].quantity = known[quantity[k]];
+        read[k].time = time[k];
+        read[k].z.assign(z.begin() + iz, z.begin() + iz + nz[k]);
+        read[k].values.assign(values.begin() + iv, values.begin() + iv + nv[k]);
+        iz += nz[k];
+        iv += nv[k];
+      }
+      if (iz != z.size() || iv != values.size()) return false;
+      result.probes = std::move(read);
+    }
+    return true;
+  };
   // The loop's state, written or read back by the same list.
   auto run_io = [&](auto& a) {
     return a.io(steps) && a.io(mech_steps) && a.io(mech_dt) && a.io(frame_index) && a.io(frame_t) &&
@@ -2347,7 +2391,7 @@ RunResult Simulation::run(const RunOptions& opt) {
            a.io(audit.contact) && a.io(audit.contact_stored) && a.io(audit.kinetic_half) &&
            a.io_vector(audit.reactions) && a.io(t_thermal) && a.io(since_thermal) && a.io(subcycle) &&
            a.io(stable) && a.io(next_sample) && a.io(audit_scale) && a.io(supplied_max) && a.io(next_checkpoint) &&
-           a.io_vector(unstable);
+           a.io_vector(unstable) && probes_io(a);
   };
   auto save_checkpoint = [&] {
     if (!writer) return;
@@ -2362,6 +2406,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       f->flush();
       w.put(static_cast<std::uint64_t>(f->is_open() ? static_cast<std::uint64_t>(f->tellp()) : 0));
     }
+    w.put(wall_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count());
     run_io(w);
     c.add("run", std::move(w.bytes()));
     save_state(c);
@@ -2629,6 +2674,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   result.ok = failure.empty();
   result.error = failure;
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  result.wall_time_before_s = wall_before;
   result.peak_memory_mb = peak_resident_mb();
   result.simulated_time_s = t;
   result.thermal_steps = steps;
@@ -2674,6 +2720,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     summary["threads"] = threads;
     summary["subnormals"] = flushed.mode();
     summary["wall_time_s"] = result.wall_time_s;
+    summary["wall_time_total_s"] = result.wall_time_before_s + result.wall_time_s;
     summary["peak_memory_MB"] = result.peak_memory_mb > 0 ? json(result.peak_memory_mb) : json(nullptr);
     summary["simulated_time_s"] = t;
     summary["restarted_from_s"] = restarted_from >= 0 ? json(restarted_from) : json(nullptr);

@@ -61,7 +61,10 @@ struct RunResult {
   bool ok = true;     // false: the run failed (error says why) or was interrupted
   int interrupted = 0;  // the signal that stopped the run early (see solve/interrupt.hpp), 0 if none
   std::string error;
-  double wall_time_s = 0;
+  double wall_time_s = 0;  // s, of this run (a restarted run: of its continued part)
+  // s, a restarted run: the wall time of the run up to its checkpoint (over
+  // all its earlier parts); 0 for a run from the start.
+  double wall_time_before_s = 0;
   // The process's peak resident memory at the end of the run (MB; 0 where
   // the system does not report it). Over the process's life: in a study,
   // the largest of the runs so far.
@@ -77,7 +80,7 @@ struct RunResult {
   std::vector<double> part_fibre_strain_min, part_fibre_strain_max;
   double temperature_min = 0, temperature_max = 0;  // over every value and every step
   long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
-  std::vector<ProbeSample> probes;  // a restarted run: the samples after the checkpoint (probes.csv has all)
+  std::vector<ProbeSample> probes;  // every sample (a restarted run: those before its checkpoint too)
   long long mechanical_steps = 0;
   double mechanical_dt = 0;  // last step
   // With bending_subcycles > 1: the evaluations that carried the bending,

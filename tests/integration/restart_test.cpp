@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "io/checkpoint.hpp"
+#include "plugins/registry.hpp"
 #include "solve/interrupt.hpp"
 #include "test_support.hpp"
 
@@ -70,8 +72,8 @@ std::map<std::string, std::vector<double>> results_contents(const std::filesyste
 // The summary without what depends on the machine and the thread count.
 json comparable_summary(const std::filesystem::path& dir) {
   json s = json::parse(std::ifstream(dir / "summary.json"));
-  for (const char* k : {"wall_time_s", "peak_memory_MB", "timing_s", "threads", "contact_beside_elements",
-                        "contact_schedule_share", "restarted_from_s"})
+  for (const char* k : {"wall_time_s", "wall_time_total_s", "peak_memory_MB", "timing_s", "threads",
+                        "contact_beside_elements", "contact_schedule_share", "restarted_from_s"})
     s.erase(k);
   return s;
 }
@@ -221,6 +223,39 @@ TEST(Restart, AfterAStopRequest) {
   EXPECT_EQ(s["status"], "completed");
   EXPECT_EQ(s["frames"], 4);
   EXPECT_DOUBLE_EQ(s["restarted_from_s"].get<double>(), s0["simulated_time_s"].get<double>());
+  // The summary's total wall time adds the part before the checkpoint.
+  EXPECT_GT(s["wall_time_total_s"].get<double>(), s["wall_time_s"].get<double>());
+
+  // In the process: the continued run's RunResult holds every probe sample,
+  // those before its checkpoint too, as the run never stopped (bit for bit),
+  // and the wall time before the checkpoint.
+  const JobRun full = run_json(j, 1);
+  const auto out2 = dir / "stopped2";
+  request_stop(SIGTERM);
+  ASSERT_EQ(run_json(j, 1, out2).result.interrupted, SIGTERM);
+  clear_stop();
+  const Checkpoint c2 = read_checkpoint(out2 / kCheckpointFile);
+  const Job job2 = parse_job(j, source_dir() / "tests" / "inline.json");
+  PluginRegistry registry;
+  Simulation sim(job2, registry);
+  sim.check_restart(c2);
+  RunOptions opt;
+  opt.threads = 2;
+  opt.quiet = true;
+  opt.out_dir = out2;
+  opt.restart = &c2;
+  const RunResult continued = sim.run(opt);
+  ASSERT_TRUE(continued.ok) << continued.error;
+  EXPECT_GT(continued.wall_time_before_s, 0.0);
+  EXPECT_EQ(full.result.wall_time_before_s, 0.0);
+  ASSERT_EQ(continued.probes.size(), full.result.probes.size());
+  ASSERT_GT(full.result.probes.size(), 10u);
+  for (std::size_t k = 0; k < full.result.probes.size(); ++k) {
+    const ProbeSample &a = full.result.probes[k], &b = continued.probes[k];
+    EXPECT_TRUE(a.probe == b.probe && a.time == b.time && a.quantity == b.quantity && a.z == b.z &&
+                a.values == b.values)
+        << "probe sample " << k << " (" << a.quantity << " at t = " << a.time << ")";
+  }
 }
 
 // What cannot be continued is refused with one line and exit 2, and the
