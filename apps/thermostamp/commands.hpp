@@ -5,9 +5,13 @@
 namespace ts::cli {
 
 // Runs a study file (thermostamp-study/1); returns the exit status.
-// flush_subnormals: RunOptions::flush_subnormals of every run.
+// flush_subnormals: RunOptions::flush_subnormals of every run;
+// checkpoint_wall_s: RunOptions::checkpoint_wall_s of every run. restart:
+// continue the study in its output folder from its state file
+// (study_state.json): the runs it completed are not run again, a run
+// stopped with a checkpoint continues from it.
 int run_study(const std::filesystem::path& study, const std::filesystem::path& out, int threads, bool quiet,
-              bool flush_subnormals);
+              bool flush_subnormals, bool restart = false, double checkpoint_wall_s = 0);
 // Runs the plotting script on an output folder; returns its exit status.
 int run_report(const std::filesystem::path& dir);
 std::filesystem::path share_dir();

@@ -27,6 +27,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp plugins [--json | --markdown]
   thermostamp schema                 # JSON Schema of job files, from the plugins found
   thermostamp study STUDY.json [--out DIR] [--threads N] [--quiet] [--keep-subnormals]
+                  [--restart] [--checkpoint-minutes M]
   thermostamp report DIR
   thermostamp --version
 
@@ -36,7 +37,8 @@ subnormals instead of flushing them to zero during the run (the default)
 (checkpoint.bin, written when a run is interrupted, every
 output.checkpoint_interval and every --checkpoint-minutes), with the same
 job and --set values; the frames and time series up to the checkpoint are
-kept
+kept; with study: continue the study in its output folder (study_state.json),
+its completed runs not run again, a stopped one from its checkpoint
 --checkpoint-minutes M: also write a checkpoint after every M minutes of
 wall time (against machines that go down without a signal)
 
@@ -234,7 +236,8 @@ int main(int argc, char** argv) {
     if (a.command == "study") {
       if (a.positional.size() != 1) throw UsageError("expected one study file");
       ts::log_to_terminal(a.quiet);
-      return ts::cli::run_study(a.positional[0], a.out, a.threads, a.quiet, !a.keep_subnormals);
+      return ts::cli::run_study(a.positional[0], a.out, a.threads, a.quiet, !a.keep_subnormals, a.restart,
+                                60 * a.checkpoint_minutes);
     }
     if (a.command == "report") {
       if (a.positional.size() != 1) throw UsageError("expected one output folder");

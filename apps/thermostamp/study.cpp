@@ -4,11 +4,13 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include <boost/dll/runtime_symbol_info.hpp>
 
 #include "commands.hpp"
+#include "io/checkpoint.hpp"
 #include "io/logging.hpp"
 #include "job/job.hpp"
 #include "plugins/registry.hpp"
@@ -101,6 +103,48 @@ ProbeSample slab_robin_sample(const Job& j, const ProbeSample& s) {
   return r;
 }
 
+// The study's state file (in its output folder): what a study stopped
+// before its end needs to go on with `--restart`.
+constexpr const char* kStudyStateFile = "study_state.json";
+constexpr const char* kStudyStateFormat = "thermostamp-study-state/1";
+
+// What the study keeps of a run: its samples of the error's quantity
+// (exact: JSON numbers round-trip), its wall time and thermal steps.
+json run_record(const RunResult& r, const std::string& quantity, int completed) {
+  json samples = json::array();
+  for (const auto& s : r.probes)
+    if (s.quantity == quantity) samples.push_back({s.probe, s.time, s.z, s.values});
+  return {{"completed", completed}, {"wall_time_s", r.wall_time_s}, {"thermal_steps", r.thermal_steps},
+          {"thermal_dt", r.thermal_dt}, {"samples", samples}};
+}
+RunResult from_record(const json& rec, const std::string& quantity) {
+  RunResult r;
+  r.wall_time_s = rec.at("wall_time_s").get<double>();
+  r.thermal_steps = rec.at("thermal_steps").get<long long>();
+  r.thermal_dt = rec.at("thermal_dt").get<double>();
+  for (const auto& s : rec.at("samples")) {
+    ProbeSample p;
+    p.probe = s.at(0).get<int>();
+    p.time = s.at(1).get<double>();
+    p.quantity = quantity;
+    p.z = s.at(2).get<std::vector<double>>();
+    p.values = s.at(3).get<std::vector<double>>();
+    r.probes.push_back(std::move(p));
+  }
+  return r;
+}
+// Written to a temporary name, then renamed: a study stopped while writing
+// it keeps the state before.
+void write_state(const std::filesystem::path& out, const json& state) {
+  const auto path = out / kStudyStateFile, tmp = out / (std::string(kStudyStateFile) + ".tmp");
+  {
+    std::ofstream f(tmp);
+    f << state.dump() << '\n';
+    if (!f) throw std::runtime_error("cannot write " + tmp.string());
+  }
+  std::filesystem::rename(tmp, path);
+}
+
 std::string key_of(const ProbeSample& s) {
   std::ostringstream k;
   k << s.probe << "|" << s.quantity << "|" << std::llround(s.time * 1e9);
@@ -110,7 +154,7 @@ std::string key_of(const ProbeSample& s) {
 }  // namespace
 
 int run_study(const std::filesystem::path& study_file, const std::filesystem::path& out_arg, int threads, bool quiet,
-              bool flush_subnormals) {
+              bool flush_subnormals, bool restart, double checkpoint_wall_s) {
   install_stop_handlers();
   const json doc = read_job_document(study_file);
   ObjectReader top(doc, "");
@@ -189,7 +233,29 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   const std::string study_name = doc.contains("name") && doc["name"].is_string() ? doc["name"].get<std::string>()
                                                                                   : study_file.stem().string();
   const std::filesystem::path out = out_arg.empty() ? std::filesystem::path("results") / study_name : out_arg;
+  // The state of a study stopped before its end: a restart goes on from it
+  // (the same study file and job document, checked), a new study replaces it.
+  json state = {{"format", kStudyStateFormat}, {"study", doc}, {"job", base_doc}, {"runs", json::object()}};
+  if (restart) {
+    const auto path = out / kStudyStateFile;
+    if (!std::filesystem::exists(path))
+      throw JobError("", "--restart: no study to continue in " + out.string() + " (no " + kStudyStateFile + ")");
+    json saved;
+    try {
+      saved = json::parse(std::ifstream(path));
+    } catch (const std::exception& e) {
+      throw JobError("", "--restart: " + path.string() + " is not a study state: " + e.what());
+    }
+    if (!saved.is_object() || saved.value("format", "") != kStudyStateFormat || !saved.contains("runs") ||
+        !saved["runs"].is_object())
+      throw JobError("", "--restart: " + path.string() + " is not a study state of this version");
+    if (saved["study"] != doc || saved["job"] != base_doc)
+      throw JobError("", "--restart: the study file or its job changed since " + path.string() +
+                             " was written; run the study anew (without --restart)");
+    state["runs"] = saved["runs"];
+  }
   std::filesystem::create_directories(out);
+  if (!restart) std::filesystem::remove(out / kStudyStateFile);
 
   if (!analytic.empty())
     for (std::size_t i = 1; i < jobs.size(); ++i) check_slab_robin(jobs[i], "/variants/" + std::to_string(i - 1));
@@ -200,31 +266,81 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       results.emplace_back();
       continue;
     }
-    Simulation sim(jobs[i], registry);
+    const std::string& label = all[i].label;
+    const int need = i == 0 ? 1 : repeat;  // the reference's runs are not timed against others
+    const json* done = state["runs"].contains(label) ? &state["runs"][label] : nullptr;
+    int completed = done ? done->at("completed").get<int>() : 0;
+    if (completed >= need) {  // a restart: run to the end before
+      if (!quiet) std::cerr << "study: " << label << " completed before the restart\n";
+      results.push_back(from_record(*done, quantity));
+      continue;
+    }
     RunOptions opt;
-    opt.out_dir = out / all[i].label;
+    opt.out_dir = out / label;
     opt.threads = threads;
     opt.quiet = true;
     opt.flush_subnormals = flush_subnormals;
+    opt.checkpoint_wall_s = checkpoint_wall_s;
     std::filesystem::create_directories(opt.out_dir);
-    log_to_file(opt.out_dir / "log.txt");
-    if (!quiet) std::cerr << "study: running " << all[i].label << "\n";
-    results.push_back(sim.run(opt));
-    log_close_file();
-    for (int k = 1; k < repeat && i > 0 && results.back().ok; ++k) {
+    // The status of a run that did not complete: 128 + the signal that
+    // stopped it, or 3; the study state keeps the runs completed so far.
+    auto stopped = [&](const RunResult& r) {
+      if (r.interrupted) {
+        std::cerr << "study variant '" << label << "' " << r.error << "\n";
+        if (!quiet)
+          std::cerr << "study: continue it with thermostamp study " << study_file.string() << " --out " << out.string()
+                    << " --restart\n";
+        return 128 + r.interrupted;
+      }
+      std::cerr << "error: run failed: study variant '" << label << "': " << r.error << "\n";
+      return 3;
+    };
+    if (completed == 0) {
+      // A restart continues the run from its checkpoint where it has one.
+      std::optional<Checkpoint> checkpoint;
+      if (restart && std::filesystem::exists(opt.out_dir / kCheckpointFile)) {
+        try {
+          checkpoint = read_checkpoint(opt.out_dir / kCheckpointFile);
+        } catch (const std::exception& e) {
+          throw JobError("", "--restart: study variant '" + label + "': " + e.what());
+        }
+      }
+      Simulation sim(jobs[i], registry);
+      double from = 0;
+      if (checkpoint) {
+        from = sim.check_restart(*checkpoint);
+        opt.restart = &*checkpoint;
+      }
+      log_to_file(opt.out_dir / "log.txt", checkpoint.has_value());
+      if (!quiet) {
+        if (checkpoint)
+          std::cerr << "study: continuing " << label << " from its checkpoint at t = " << from << " s\n";
+        else
+          std::cerr << "study: running " << label << "\n";
+      }
+      RunResult r = sim.run(opt);
+      log_close_file();
+      opt.restart = nullptr;
+      if (!r.ok) return stopped(r);
+      // A continued run's time: both parts (each with its own set-up).
+      r.wall_time_s += r.wall_time_before_s;
+      state["runs"][label] = run_record(r, quantity, completed = 1);
+      write_state(out, state);
+      results.push_back(std::move(r));
+    } else {  // a restart between the repeats
+      results.push_back(from_record(*done, quantity));
+    }
+    for (; completed < need; ++completed) {
+      if (!quiet) std::cerr << "study: running " << label << " again (" << completed + 1 << " of " << need << ")\n";
       Simulation again(jobs[i], registry);
       log_to_file(opt.out_dir / "log.txt");
       const RunResult r = again.run(opt);  // the same files again: output time counts alike
       log_close_file();
-      if (r.ok) results.back().wall_time_s = std::min(results.back().wall_time_s, r.wall_time_s);
-    }
-    if (results.back().interrupted) {
-      std::cerr << "study variant '" << all[i].label << "' " << results.back().error << "\n";
-      return 128 + results.back().interrupted;
-    }
-    if (!results.back().ok) {
-      std::cerr << "error: run failed: study variant '" << all[i].label << "': " << results.back().error << "\n";
-      return 3;
+      if (!r.ok) return stopped(r);
+      results.back().wall_time_s = std::min(results.back().wall_time_s, r.wall_time_s);
+      state["runs"][label]["completed"] = completed + 1;
+      state["runs"][label]["wall_time_s"] = results.back().wall_time_s;
+      write_state(out, state);
     }
   }
   // Errors against the reference at common probe samples.

@@ -333,4 +333,78 @@ TEST(Restart, RefusesWhatItCannotContinue) {
   EXPECT_NE(bad.err.find("/output/checkpoint_interval"), std::string::npos) << bad.err;
 }
 
+// `thermostamp study --restart`: a study stopped by SIGTERM in the middle of
+// a variant's run goes on from where it stopped: the reference, completed
+// before, is not run again, the stopped run continues from its checkpoint,
+// and the table is the uninterrupted study's (but for the wall times). A
+// second restart of the completed study runs nothing and gives the same
+// table byte for byte; a folder without a study state, or a study changed
+// since, is refused.
+TEST(Restart, StudyContinuesWhereItStopped) {
+  const auto dir = temp_dir("restart_study");
+  json j = coarse_hemisphere("hemisphere_ud_2ply.json");
+  j["time"]["end"] = 0.6;
+  write_job(dir, j);
+  json st = {{"format", "thermostamp-study/1"},
+             {"job", "job.json"},
+             {"reference", {{"set", json::object()}}},
+             {"repeat", 2},
+             {"variants",
+              {{{"label", "shell2d"}, {"set", {{"solvers.thermal.splitter", "shell2d"}}}},
+               {{"label", "adi-4"}, {"set", {{"parts.*.thickness_layers", 4}}}}}}};
+  std::ofstream(dir / "study.json") << st.dump(2);
+  const std::string study = "study " + q(dir / "study.json") + " --threads 2 --out ";
+  ASSERT_EQ(thermostamp(study + q(dir / "full") + " --quiet").exit_code, 0);
+  // The study in the background, stopped once its first variant has begun.
+  const auto out = dir / "stopped";
+  const std::string script = "( " + (binary_dir() / "bin" / "thermostamp").string() + " " + study + q(out) +
+                             " --quiet >/dev/null 2>&1 ) & pid=$!; for i in $(seq 1 6000); do [ -f " +
+                             q(out / "shell2d" / "probes.csv") + " ] && break; sleep 0.01; done; kill -TERM $pid; wait $pid";
+  const int rc = std::system(("bash -c " + q(script)).c_str());
+  ASSERT_TRUE(WIFEXITED(rc));
+  ASSERT_EQ(WEXITSTATUS(rc), 128 + SIGTERM);
+  const json state = json::parse(std::ifstream(out / "study_state.json"));
+  EXPECT_EQ(state["runs"]["reference"]["completed"], 1);
+  EXPECT_FALSE(state["runs"].contains("shell2d"));
+  ASSERT_TRUE(std::filesystem::exists(out / "shell2d" / "checkpoint.bin"));
+  const auto c = thermostamp(study + q(out) + " --restart");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ(c.err.find("study: running reference"), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("study: reference completed before the restart"), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("study: continuing shell2d from its checkpoint at t = "), std::string::npos) << c.err;
+  auto table = [](const std::filesystem::path& csv, bool with_times) {
+    std::vector<std::string> rows;
+    std::ifstream in(csv);
+    for (std::string line; std::getline(in, line);) {
+      if (!with_times) {  // the second column, wall_time_s, left out
+        const auto a = line.find(','), b = line.find(',', a + 1);
+        line.erase(a, b - a);
+      }
+      rows.push_back(line);
+    }
+    return rows;
+  };
+  const auto full = table(dir / "full" / "study.csv", false);
+  ASSERT_EQ(full.size(), 4u);
+  EXPECT_EQ(table(out / "study.csv", false), full);
+  EXPECT_TRUE(file_text(dir / "full" / "shell2d" / "probes.csv") == file_text(out / "shell2d" / "probes.csv"));
+  // Completed: a restart runs nothing and writes the same table.
+  const auto before = table(out / "study.csv", true);
+  const auto again = thermostamp(study + q(out) + " --restart");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.err.find("study: running"), std::string::npos) << again.err;
+  EXPECT_EQ(table(out / "study.csv", true), before);
+  // Refused: no state in the folder; a study changed since.
+  const auto none = thermostamp(study + q(dir / "elsewhere") + " --restart");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("error: --restart: no study to continue in"), std::string::npos) << none.err;
+  st["variants"][1]["set"]["parts.*.thickness_layers"] = 6;
+  std::ofstream(dir / "study.json") << st.dump(2);
+  const auto changed = thermostamp(study + q(out) + " --restart");
+  EXPECT_EQ(changed.exit_code, 2);
+  EXPECT_NE(changed.err.find("error: --restart: the study file or its job changed since"), std::string::npos)
+      << changed.err;
+  EXPECT_EQ(table(out / "study.csv", true), before);
+}
+
 }  // namespace ts::test
