@@ -255,7 +255,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     state["runs"] = saved["runs"];
   }
   std::filesystem::create_directories(out);
-  if (!restart) std::filesystem::remove(out / kStudyStateFile);
+  if (!restart) write_state(out, state);  // from the start: a stop in the first run can continue too
 
   if (!analytic.empty())
     for (std::size_t i = 1; i < jobs.size(); ++i) check_slab_robin(jobs[i], "/variants/" + std::to_string(i - 1));

@@ -355,14 +355,17 @@ TEST(Restart, StudyContinuesWhereItStopped) {
   std::ofstream(dir / "study.json") << st.dump(2);
   const std::string study = "study " + q(dir / "study.json") + " --threads 2 --out ";
   ASSERT_EQ(thermostamp(study + q(dir / "full") + " --quiet").exit_code, 0);
-  // The study in the background, stopped once its first variant has begun.
+  // The study in the background, stopped once the run in folder `run` has
+  // begun; returns the study's exit status.
+  auto stop_study_in = [&](const std::filesystem::path& out, const std::string& run) {
+    const std::string script = "( " + (binary_dir() / "bin" / "thermostamp").string() + " " + study + q(out) +
+                               " --quiet >/dev/null 2>&1 ) & pid=$!; for i in $(seq 1 6000); do [ -f " +
+                               q(out / run / "probes.csv") + " ] && break; sleep 0.01; done; kill -TERM $pid; wait $pid";
+    const int rc = std::system(("bash -c " + q(script)).c_str());
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+  };
   const auto out = dir / "stopped";
-  const std::string script = "( " + (binary_dir() / "bin" / "thermostamp").string() + " " + study + q(out) +
-                             " --quiet >/dev/null 2>&1 ) & pid=$!; for i in $(seq 1 6000); do [ -f " +
-                             q(out / "shell2d" / "probes.csv") + " ] && break; sleep 0.01; done; kill -TERM $pid; wait $pid";
-  const int rc = std::system(("bash -c " + q(script)).c_str());
-  ASSERT_TRUE(WIFEXITED(rc));
-  ASSERT_EQ(WEXITSTATUS(rc), 128 + SIGTERM);
+  ASSERT_EQ(stop_study_in(out, "shell2d"), 128 + SIGTERM);
   const json state = json::parse(std::ifstream(out / "study_state.json"));
   EXPECT_EQ(state["runs"]["reference"]["completed"], 1);
   EXPECT_FALSE(state["runs"].contains("shell2d"));
@@ -388,6 +391,14 @@ TEST(Restart, StudyContinuesWhereItStopped) {
   ASSERT_EQ(full.size(), 4u);
   EXPECT_EQ(table(out / "study.csv", false), full);
   EXPECT_TRUE(file_text(dir / "full" / "shell2d" / "probes.csv") == file_text(out / "shell2d" / "probes.csv"));
+  // Stopped in its first run, the reference: it continues from its checkpoint.
+  const auto first = dir / "stopped_first";
+  ASSERT_EQ(stop_study_in(first, "reference"), 128 + SIGTERM);
+  ASSERT_TRUE(std::filesystem::exists(first / "reference" / "checkpoint.bin"));
+  const auto cf = thermostamp(study + q(first) + " --restart");
+  ASSERT_EQ(cf.exit_code, 0) << cf.err;
+  EXPECT_NE(cf.err.find("study: continuing reference from its checkpoint at t = "), std::string::npos) << cf.err;
+  EXPECT_EQ(table(first / "study.csv", false), full);
   // Completed: a restart runs nothing and writes the same table.
   const auto before = table(out / "study.csv", true);
   const auto again = thermostamp(study + q(out) + " --restart");
