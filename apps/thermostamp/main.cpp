@@ -9,6 +9,7 @@
 #include <boost/dll/runtime_symbol_info.hpp>
 
 #include "commands.hpp"
+#include "io/compare.hpp"
 #include "io/logging.hpp"
 #include "job/job.hpp"
 #include "plugins/describe.hpp"
@@ -29,6 +30,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp study STUDY.json [--out DIR] [--threads N] [--quiet] [--keep-subnormals]
                   [--restart] [--checkpoint-minutes M]
   thermostamp report DIR
+  thermostamp compare DIR_A DIR_B [--json]   # how far two runs' results are apart
   thermostamp --version
 
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
@@ -41,6 +43,10 @@ kept; with study: continue the study in its output folder (study_state.json),
 its completed runs not run again, a stopped one from its checkpoint
 --checkpoint-minutes M: also write a checkpoint after every M minutes of
 wall time (against machines that go down without a signal)
+
+compare: the largest differences of the probe samples and frame fields at
+the same times and the summaries' figures that differ; exit status 0 when
+every value compared is equal, 1 when some differ
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -238,6 +244,21 @@ int main(int argc, char** argv) {
       ts::log_to_terminal(a.quiet);
       return ts::cli::run_study(a.positional[0], a.out, a.threads, a.quiet, !a.keep_subnormals, a.restart,
                                 60 * a.checkpoint_minutes);
+    }
+    if (a.command == "compare") {
+      if (a.positional.size() != 2) throw UsageError("expected two output folders");
+      ts::Comparison c;
+      try {
+        c = ts::compare_outputs(a.positional[0], a.positional[1]);
+      } catch (const std::exception& e) {
+        std::cerr << "error: compare: " << e.what() << "\n";
+        return 2;
+      }
+      if (a.json)
+        std::cout << c.to_json().dump(2) << "\n";
+      else
+        std::cout << c.to_text(a.positional[0], a.positional[1]);
+      return c.identical ? 0 : 1;
     }
     if (a.command == "report") {
       if (a.positional.size() != 1) throw UsageError("expected one output folder");

@@ -16,6 +16,7 @@
 
 #include <csignal>
 
+#include "io/compare.hpp"
 #include "job/job.hpp"
 #include "solve/interrupt.hpp"
 #include "test_support.hpp"
@@ -899,6 +900,100 @@ TEST(Output, DatasetsCarryTheirUnits) {
     EXPECT_EQ(tunits[c], std::vector<std::string>({"m", "m", "m", "N", "N", "N", "J"})[(c - 1) % 7]) << tcols[c];
   EXPECT_EQ(tunits[0], "s");
   H5Fclose(file);
+}
+
+// `thermostamp compare A B`: a run against itself is identical (exit 0);
+// two runs that differ (adi against shell2d on the coarse hemisphere) give,
+// for a probe, a field and a summary figure, the largest differences that
+// the test takes from the files itself (exit 1); layered fields of other
+// layer counts are named as not compared; a folder without output is
+// refused (exit 2).
+TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
+  const auto dir = temp_dir("compare");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = 0.3;
+  j["output"]["interval"] = 0.1;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {6, 6};
+  ASSERT_TRUE(run_json(j, 1, dir / "adi").result.ok);
+  j["solvers"]["thermal"]["splitter"] = "shell2d";
+  ASSERT_TRUE(run_json(j, 1, dir / "shell2d").result.ok);
+
+  const Comparison same = compare_outputs(dir / "adi", dir / "adi");
+  EXPECT_TRUE(same.identical);
+  EXPECT_EQ(same.notes.size(), 0u);
+  EXPECT_GT(same.fields.size(), 10u);
+  for (const auto& d : same.fields) EXPECT_EQ(d.max_abs, 0.0) << d.what;
+  EXPECT_EQ(thermostamp("compare " + q(dir / "adi") + " " + q(dir / "adi")).exit_code, 0);
+
+  const Comparison c = compare_outputs(dir / "adi", dir / "shell2d");
+  EXPECT_FALSE(c.identical);
+  auto find = [](const std::vector<Difference>& v, const std::string& what) -> const Difference* {
+    for (const auto& d : v)
+      if (d.what == what) return &d;
+    return nullptr;
+  };
+  // The probe: sample k of A against sample k of B (the two runs' steps
+  // differ a little, so the times too; the same count of samples).
+  auto probe_values = [](const std::filesystem::path& csv, const std::string& probe, const std::string& quantity) {
+    std::vector<double> v;
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line))
+      if (line.rfind(probe + "," + quantity + ",", 0) == 0) v.push_back(std::stod(line.substr(line.rfind(',') + 1)));
+    return v;
+  };
+  const auto pa = probe_values(dir / "adi" / "probes.csv", "pole_top", "temperature_mean"),
+             pb = probe_values(dir / "shell2d" / "probes.csv", "pole_top", "temperature_mean");
+  ASSERT_EQ(pa.size(), pb.size());
+  ASSERT_GT(pa.size(), 3u);
+  double probe_max = 0;
+  for (std::size_t k = 0; k < pa.size(); ++k) probe_max = std::max(probe_max, std::abs(pa[k] - pb[k]));
+  const Difference* dp = find(c.probes, "pole_top temperature_mean");
+  ASSERT_NE(dp, nullptr);
+  EXPECT_GT(probe_max, 0.1);
+  EXPECT_EQ(dp->max_abs, probe_max);
+  EXPECT_EQ(dp->units, "degC");
+  EXPECT_EQ(dp->values, static_cast<long long>(pa.size()));
+  // The field: every frame's temperature_mean of the upper ply.
+  double field_max = 0;
+  const hid_t fa = H5Fopen((dir / "adi" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t fb = H5Fopen((dir / "shell2d" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_EQ(frame_count(fa), 4);
+  ASSERT_EQ(frame_count(fb), 4);
+  for (int k = 0; k < 4; ++k) {
+    char name[64];
+    std::snprintf(name, sizeof name, "frames/%06d/ply_top/temperature_mean", k);
+    const auto va = read_dataset<double>(fa, name), vb = read_dataset<double>(fb, name);
+    ASSERT_EQ(va.size(), vb.size());
+    for (std::size_t i = 0; i < va.size(); ++i) field_max = std::max(field_max, std::abs(va[i] - vb[i]));
+  }
+  H5Fclose(fa);
+  H5Fclose(fb);
+  const Difference* df = find(c.fields, "ply_top/temperature_mean");
+  ASSERT_NE(df, nullptr);
+  EXPECT_GT(field_max, 0.1);
+  EXPECT_EQ(df->max_abs, field_max);
+  const Difference* dl = find(c.fields, "ply_top/temperature");
+  ASSERT_NE(dl, nullptr);
+  EXPECT_NE(dl->note.find("not compared"), std::string::npos);
+  // A summary figure.
+  const json sa = json::parse(std::ifstream(dir / "adi" / "summary.json")),
+             sb = json::parse(std::ifstream(dir / "shell2d" / "summary.json"));
+  const Difference* ds = find(c.summary, "heat/faces_in_J");
+  ASSERT_NE(ds, nullptr);
+  EXPECT_EQ(ds->a, sa["heat"]["faces_in_J"].get<double>());
+  EXPECT_EQ(ds->b, sb["heat"]["faces_in_J"].get<double>());
+  EXPECT_EQ(find(c.summary, "wall_time_s"), nullptr);
+  ASSERT_NE(find(c.summary, "reactions_N/constraints/0/force/0"), nullptr);
+
+  const auto cli = thermostamp("compare " + q(dir / "adi") + " " + q(dir / "shell2d") + " --json");
+  EXPECT_EQ(cli.exit_code, 1);
+  EXPECT_EQ(json::parse(cli.out)["identical"], false);
+  const auto none = thermostamp("compare " + q(dir / "adi") + " " + q(dir / "nowhere"));
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_EQ(none.err.rfind("error: compare: '", 0), 0u) << none.err;
+  EXPECT_EQ(std::count(none.err.begin(), none.err.end(), '\n'), 1) << none.err;
 }
 
 // `thermostamp report DIR`: the figures of a run (the hemisphere scene,

@@ -1,0 +1,435 @@
+#include "io/compare.hpp"
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "io/results_writer.hpp"
+
+namespace ts {
+
+using json = nlohmann::json;
+
+namespace {
+
+// The units of a probe quantity.
+std::string probe_units(const std::string& quantity) {
+  if (quantity.rfind("temperature", 0) == 0) return "degC";
+  if (quantity.rfind("displacement", 0) == 0) return "m";
+  if (quantity == "shear_angle") return "deg";
+  if (quantity == "contact_pressure") return "Pa";
+  return "1";
+}
+
+// One probe's samples of one quantity: time -> (z, value) rows.
+struct Series {
+  std::vector<double> times;
+  std::vector<std::vector<double>> z, values;
+};
+using ProbeTable = std::map<std::pair<std::string, std::string>, Series>;  // (probe, quantity)
+
+// probes.csv (probe,quantity,time,z,value); an empty table where the file
+// is missing. Rows of one sample are consecutive.
+ProbeTable read_probes(const std::filesystem::path& file, bool& found) {
+  ProbeTable t;
+  std::ifstream in(file);
+  found = static_cast<bool>(in);
+  std::string line;
+  if (!found || !std::getline(in, line)) return t;  // the header
+  while (std::getline(in, line)) {
+    std::string cell[5];
+    std::stringstream ss(line);
+    for (auto& c : cell) std::getline(ss, c, ',');
+    if (cell[0].empty() || cell[2].empty() || cell[4].empty()) continue;
+    Series& s = t[{cell[0], cell[1]}];
+    const double time = std::stod(cell[2]);
+    if (s.times.empty() || s.times.back() != time) {
+      s.times.push_back(time);
+      s.z.emplace_back();
+      s.values.emplace_back();
+    }
+    if (!cell[3].empty()) s.z.back().push_back(std::stod(cell[3]));
+    s.values.back().push_back(std::stod(cell[4]));
+  }
+  return t;
+}
+
+// Value of a profile (z, v) at z0: linear between its points, constant
+// beyond them; its value where it has one.
+double profile_at(const std::vector<double>& z, const std::vector<double>& v, double z0) {
+  if (v.size() == 1 || z.size() != v.size()) return v[0];
+  if (z0 <= z.front()) return v.front();
+  if (z0 >= z.back()) return v.back();
+  const std::size_t k = static_cast<std::size_t>(std::upper_bound(z.begin(), z.end(), z0) - z.begin());
+  const double a = (z0 - z[k - 1]) / (z[k] - z[k - 1]);
+  return (1 - a) * v[k - 1] + a * v[k];
+}
+
+// For each time of a, the index of b's nearest time if it lies within a
+// quarter of a's smallest spacing of its neighbours (-1 otherwise).
+std::vector<int> match_times(const std::vector<double>& a, const std::vector<double>& b, double& offset) {
+  std::vector<int> m(a.size(), -1);
+  double spacing = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 1; k < a.size(); ++k) spacing = std::min(spacing, a[k] - a[k - 1]);
+  const double tol = std::isfinite(spacing) ? 0.25 * spacing : 1e-9 * std::max(1.0, std::abs(a.empty() ? 0 : a[0]));
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    const auto it = std::lower_bound(b.begin(), b.end(), a[k]);
+    int best = -1;
+    double d = std::numeric_limits<double>::infinity();
+    for (auto j : {it - b.begin() - 1, it - b.begin()})
+      if (j >= 0 && j < static_cast<std::ptrdiff_t>(b.size()) && std::abs(b[j] - a[k]) < d) {
+        d = std::abs(b[j] - a[k]);
+        best = static_cast<int>(j);
+      }
+    if (best >= 0 && d <= tol) {
+      m[k] = best;
+      offset = std::max(offset, d);
+    }
+  }
+  return m;
+}
+
+// Records |a - b| of one value in d (a NaN difference, once seen, stays).
+void take(Difference& d, double a, double b, double time) {
+  const double diff = std::abs(a - b);
+  if (d.values == 0 || diff > d.max_abs || (std::isnan(diff) && !std::isnan(d.max_abs))) {
+    d.max_abs = diff;
+    d.at_time = time;
+  }
+  d.scale = std::max(d.scale, std::abs(a));
+  ++d.values;
+}
+
+// HDF5 without its error printing (an absent or truncated file is reported
+// as a note).
+struct QuietHdf5 {
+  H5E_auto2_t func = nullptr;
+  void* data = nullptr;
+  QuietHdf5() {
+    H5Eget_auto2(H5E_DEFAULT, &func, &data);
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  }
+  ~QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, func, data); }
+};
+
+struct Frames {
+  std::vector<double> times;
+  std::vector<std::string> names;  // group names, by time
+};
+Frames read_frames(hid_t file) {
+  Frames f;
+  const hid_t g = H5Gopen2(file, "frames", H5P_DEFAULT);
+  if (g < 0) return f;
+  hsize_t n = 0;
+  H5Gget_num_objs(g, &n);
+  for (hsize_t k = 0; k < n; ++k) {
+    char name[64];
+    std::snprintf(name, sizeof name, "%06d", static_cast<int>(k));
+    if (H5Aexists_by_name(g, name, "time", H5P_DEFAULT) <= 0) continue;
+    double t = 0;
+    const hid_t at = H5Aopen_by_name(g, name, "time", H5P_DEFAULT, H5P_DEFAULT);
+    H5Aread(at, H5T_NATIVE_DOUBLE, &t);
+    H5Aclose(at);
+    f.times.push_back(t);
+    f.names.push_back(name);
+  }
+  H5Gclose(g);
+  return f;
+}
+
+// The names of the members of group `path` (empty where there is none).
+std::vector<std::string> members(hid_t file, const std::string& path) {
+  std::vector<std::string> out;
+  if (H5Lexists(file, path.c_str(), H5P_DEFAULT) <= 0) return out;
+  const hid_t g = H5Gopen2(file, path.c_str(), H5P_DEFAULT);
+  if (g < 0) return out;
+  hsize_t n = 0;
+  H5Gget_num_objs(g, &n);
+  for (hsize_t k = 0; k < n; ++k) {
+    char name[256];
+    if (H5Gget_objname_by_idx(g, k, name, sizeof name) > 0) out.push_back(name);
+  }
+  H5Gclose(g);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// A dataset of doubles and its shape (empty where it cannot be read).
+std::vector<double> read_values(hid_t file, const std::string& path, std::vector<hsize_t>& shape) {
+  shape.clear();
+  const hid_t set = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+  if (set < 0) return {};
+  const hid_t space = H5Dget_space(set);
+  const int rank = H5Sget_simple_extent_ndims(space);
+  hsize_t dims[2] = {0, 1};
+  if (rank >= 1 && rank <= 2) H5Sget_simple_extent_dims(space, dims, nullptr);
+  std::vector<double> v;
+  if (rank >= 1 && rank <= 2) {
+    shape.assign(dims, dims + rank);
+    v.resize(dims[0] * (rank > 1 ? dims[1] : 1));
+    if (H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) < 0) {
+      v.clear();
+      shape.clear();
+    }
+  }
+  H5Sclose(space);
+  H5Dclose(set);
+  return v;
+}
+
+// The numbers of a summary, by path (array entries named by their "name"
+// or "constraint" where they have one), without what depends on the
+// machine rather than on the run's results.
+void flatten(const json& j, const std::string& path, std::map<std::string, double>& out) {
+  static const char* skip[] = {"wall_time_s", "wall_time_total_s", "peak_memory_MB", "timing_s", "threads",
+                               "contact_beside_elements", "contact_schedule_share", "restarted_from_s"};
+  if (j.is_number()) {
+    out[path] = j.get<double>();
+  } else if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      if (path.empty() && std::find(std::begin(skip), std::end(skip), it.key()) != std::end(skip)) continue;
+      flatten(it.value(), path.empty() ? it.key() : path + "/" + it.key(), out);
+    }
+  } else if (j.is_array()) {
+    for (std::size_t k = 0; k < j.size(); ++k) {
+      std::string key = std::to_string(k);
+      if (j[k].is_object() && j[k].contains("name") && j[k]["name"].is_string()) key = j[k]["name"];
+      if (j[k].is_object() && j[k].contains("constraint") && j[k]["constraint"].is_string()) key = j[k]["constraint"];
+      flatten(j[k], path + (key.rfind('/', 0) == 0 ? "" : "/") + key, out);
+    }
+  }
+}
+
+std::string fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+}  // namespace
+
+Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem::path& b) {
+  for (const auto& d : {a, b}) {
+    if (!std::filesystem::is_directory(d)) throw std::runtime_error("'" + d.string() + "' is not a folder");
+    if (!std::filesystem::exists(d / "summary.json") && !std::filesystem::exists(d / "probes.csv") &&
+        !std::filesystem::exists(d / "results.h5"))
+      throw std::runtime_error("'" + d.string() + "' holds no output of a run (summary.json, probes.csv, results.h5)");
+  }
+  Comparison c;
+  auto note = [&](const std::string& n) {
+    c.notes.push_back(n);
+    c.identical = false;
+  };
+
+  // Probes.
+  bool found_a = false, found_b = false;
+  const ProbeTable pa = read_probes(a / "probes.csv", found_a), pb = read_probes(b / "probes.csv", found_b);
+  if (found_a != found_b) note("probes.csv only in " + (found_a ? a : b).string());
+  for (const auto& [key, sa] : pa) {
+    const auto it = pb.find(key);
+    Difference d;
+    d.what = key.first + " " + key.second;
+    d.units = probe_units(key.second);
+    if (it == pb.end()) {
+      d.note = "only in A";
+      c.identical = false;
+      c.probes.push_back(d);
+      continue;
+    }
+    const Series& sb = it->second;
+    const std::vector<int> m = match_times(sa.times, sb.times, c.largest_time_offset);
+    int unmatched = 0;
+    for (std::size_t k = 0; k < m.size(); ++k) {
+      if (m[k] < 0) {
+        ++unmatched;
+        continue;
+      }
+      const auto& za = sa.z[k];
+      const auto& va = sa.values[k];
+      const auto& zb = sb.z[m[k]];
+      const auto& vb = sb.values[m[k]];
+      // B's profile at A's points where the two differ (other layer counts)
+      const bool same_points = za == zb && va.size() == vb.size();
+      for (std::size_t i = 0; i < va.size(); ++i)
+        take(d, va[i], same_points ? vb[i] : profile_at(zb, vb, za.empty() ? 0.0 : za[i]), sa.times[k]);
+      if (!same_points) d.note = "B's profile interpolated at A's points";
+    }
+    if (unmatched > 0 || sa.times.size() != sb.times.size()) {
+      d.note += std::string(d.note.empty() ? "" : "; ") + std::to_string(unmatched) + " of A's " +
+                std::to_string(sa.times.size()) + " samples without one of B's at their time (B has " +
+                std::to_string(sb.times.size()) + ")";
+      c.identical = false;
+    }
+    if (d.max_abs != 0 || std::isnan(d.max_abs) || !d.note.empty()) c.identical = false;
+    c.probes.push_back(d);
+  }
+  for (const auto& [key, sb] : pb)
+    if (!pa.count(key)) {
+      Difference d;
+      d.what = key.first + " " + key.second;
+      d.units = probe_units(key.second);
+      d.note = "only in B";
+      c.identical = false;
+      c.probes.push_back(d);
+    }
+
+  // Fields of the frames at the same times.
+  {
+    QuietHdf5 quiet;
+    const bool ha = std::filesystem::exists(a / "results.h5"), hb = std::filesystem::exists(b / "results.h5");
+    if (ha != hb) note("results.h5 only in " + (ha ? a : b).string());
+    const hid_t fa = ha ? H5Fopen((a / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT) : -1;
+    const hid_t fb = hb ? H5Fopen((b / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT) : -1;
+    if (ha && fa < 0) note((a / "results.h5").string() + " cannot be read");
+    if (hb && fb < 0) note((b / "results.h5").string() + " cannot be read");
+    if (fa >= 0 && fb >= 0) {
+      const Frames ra = read_frames(fa), rb = read_frames(fb);
+      const std::vector<int> m = match_times(ra.times, rb.times, c.largest_time_offset);
+      const long long matched = std::count_if(m.begin(), m.end(), [](int k) { return k >= 0; });
+      if (matched < static_cast<long long>(ra.times.size()) || ra.times.size() != rb.times.size())
+        note(std::to_string(matched) + " of A's " + std::to_string(ra.times.size()) +
+             " frames matched by time with B's " + std::to_string(rb.times.size()));
+      std::map<std::string, Difference> by_name;  // "part/field"
+      std::vector<std::string> order;
+      for (std::size_t k = 0; k < m.size(); ++k) {
+        if (m[k] < 0) continue;
+        const std::string ga = "frames/" + ra.names[k], gb = "frames/" + rb.names[m[k]];
+        for (const auto& part : members(fa, ga)) {
+          const auto parts_b = members(fb, gb);
+          if (!std::binary_search(parts_b.begin(), parts_b.end(), part)) continue;
+          const auto fields_b = members(fb, gb + "/" + part);
+          for (const auto& field : members(fa, ga + "/" + part)) {
+            const std::string key = part + "/" + field;
+            if (!by_name.count(key)) {
+              order.push_back(key);
+              by_name[key].what = key;
+              by_name[key].units = field_units(field);
+            }
+            Difference& d = by_name[key];
+            if (!std::binary_search(fields_b.begin(), fields_b.end(), field)) {
+              d.note = "only in A";
+              continue;
+            }
+            std::vector<hsize_t> sha, shb;
+            const auto va = read_values(fa, ga + "/" + key, sha), vb = read_values(fb, gb + "/" + key, shb);
+            if (sha != shb || va.empty()) {
+              d.note = "other shapes (other meshes or layers): not compared";
+              continue;
+            }
+            for (std::size_t i = 0; i < va.size(); ++i) take(d, va[i], vb[i], ra.times[k]);
+          }
+        }
+      }
+      for (const auto& key : order) {
+        const Difference& d = by_name[key];
+        if (d.max_abs != 0 || std::isnan(d.max_abs) || !d.note.empty()) c.identical = false;
+        c.fields.push_back(d);
+      }
+    }
+    if (fa >= 0) H5Fclose(fa);
+    if (fb >= 0) H5Fclose(fb);
+  }
+
+  // The summaries' figures.
+  const bool sa = std::filesystem::exists(a / "summary.json"), sb = std::filesystem::exists(b / "summary.json");
+  if (sa != sb) note("summary.json only in " + (sa ? a : b).string());
+  if (sa && sb) {
+    std::map<std::string, double> na, nb;
+    try {
+      flatten(json::parse(std::ifstream(a / "summary.json")), "", na);
+      flatten(json::parse(std::ifstream(b / "summary.json")), "", nb);
+    } catch (const std::exception& e) {
+      note(std::string("a summary.json cannot be read: ") + e.what());
+    }
+    for (const auto& [path, va] : na) {
+      const auto it = nb.find(path);
+      if (it == nb.end()) {
+        note("summary " + path + " only in A");
+        continue;
+      }
+      if (va == it->second) continue;
+      Difference d;
+      d.what = path;
+      d.a = va;
+      d.b = it->second;
+      d.max_abs = std::abs(va - it->second);
+      d.scale = std::abs(va);
+      d.values = 1;
+      c.summary.push_back(d);
+      c.identical = false;
+    }
+    for (const auto& [path, vb] : nb)
+      if (!na.count(path)) note("summary " + path + " only in B");
+  }
+  return c;
+}
+
+json Comparison::to_json() const {
+  auto list = [](const std::vector<Difference>& v, bool figures) {
+    json out = json::array();
+    for (const auto& d : v) {
+      json e = {{"what", d.what}, {"max_abs", std::isnan(d.max_abs) ? json(nullptr) : json(d.max_abs)}};
+      if (figures) {
+        e["a"] = d.a;
+        e["b"] = d.b;
+      } else {
+        e["units"] = d.units;
+        e["scale"] = d.scale;
+        e["at_time_s"] = d.at_time;
+        e["values"] = d.values;
+      }
+      if (!d.note.empty()) e["note"] = d.note;
+      out.push_back(e);
+    }
+    return out;
+  };
+  return {{"identical", identical},
+          {"probes", list(probes, false)},
+          {"fields", list(fields, false)},
+          {"summary", list(summary, true)},
+          {"largest_time_offset_s", largest_time_offset},
+          {"notes", notes}};
+}
+
+std::string Comparison::to_text(const std::filesystem::path& a, const std::filesystem::path& b) const {
+  std::ostringstream o;
+  o << "A: " << a.string() << "\nB: " << b.string() << "\n";
+  auto section = [&](const char* title, const std::vector<Difference>& v) {
+    if (v.empty()) return;
+    o << "\n" << title << "\n";
+    for (const auto& d : v) {
+      o << "  " << d.what << ": ";
+      if (d.values == 0 && !d.note.empty()) {
+        o << d.note << "\n";
+        continue;
+      }
+      const std::string units = d.units.empty() || d.units == "1" ? "" : " " + d.units;
+      if (d.max_abs == 0)
+        o << "equal (" << d.values << " values, largest |A| " << fmt(d.scale) << units << ")";
+      else
+        o << "largest |A - B| " << fmt(d.max_abs) << units << " at t = " << fmt(d.at_time) << " s (largest |A| "
+          << fmt(d.scale) << units << ", " << d.values << " values)";
+      if (!d.note.empty()) o << "; " << d.note;
+      o << "\n";
+    }
+  };
+  section("probes (samples at the same times):", probes);
+  section("fields (frames at the same times):", fields);
+  if (!summary.empty()) {
+    o << "\nsummary (the figures that differ: A, B, |A - B|):\n";
+    for (const auto& d : summary) o << "  " << d.what << ": " << fmt(d.a) << ", " << fmt(d.b) << ", " << fmt(d.max_abs) << "\n";
+  }
+  if (largest_time_offset > 0)
+    o << "\nsamples and frames matched by time up to " << fmt(largest_time_offset) << " s apart\n";
+  for (const auto& n : notes) o << "note: " << n << "\n";
+  o << "\n" << (identical ? "identical: every value compared is equal" : "not identical") << "\n";
+  return o.str();
+}
+
+}  // namespace ts

@@ -1,0 +1,43 @@
+#pragma once
+// `thermostamp compare A B`: how far the results of two output folders are
+// apart: the probe samples (probes.csv), the fields of the frames
+// (results.h5) and the summaries' figures (summary.json), each as the
+// largest absolute difference over what the two folders share.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace ts {
+
+struct Difference {
+  std::string what;    // "pole_top temperature_profile", "ply_top/temperature_mean", "energy/balance_error"
+  std::string units;   // of the values ("degC", "m", ...; "" where unknown)
+  double max_abs = 0;  // the largest |A - B|
+  double scale = 0;    // the largest |A| over the values compared (to judge max_abs against)
+  double at_time = 0;  // s, A's time of the sample or frame with the largest difference
+  long long values = 0;  // values compared
+  double a = 0, b = 0;   // summary figures: the two values
+  std::string note;      // why it was not compared, if it was not
+};
+
+struct Comparison {
+  std::vector<Difference> probes, fields, summary;
+  // Samples and frames are matched by time: the largest offset between the
+  // times of matched samples or frames (s), and what was left unmatched.
+  double largest_time_offset = 0;
+  std::vector<std::string> notes;
+  // Every value compared is equal, and the folders hold the same probes,
+  // frames and fields.
+  bool identical = true;
+  nlohmann::json to_json() const;
+  std::string to_text(const std::filesystem::path& a, const std::filesystem::path& b) const;
+};
+
+// Compares the output folders a and b (of `thermostamp run`). Throws
+// std::runtime_error when a folder does not exist or holds none of
+// summary.json, probes.csv and results.h5.
+Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem::path& b);
+
+}  // namespace ts
