@@ -845,15 +845,22 @@ TEST(Cli, MechanicsUnusableStepIsAnInputError) {
   EXPECT_EQ(rows, s["steps"]["mechanics"].get<int>() + 1) << "t = 0 and after every step";
 }
 
+// The hemisphere job, coarse (cells x cells per quarter ply) and short:
+// t_end and the frame interval in s.
+json short_hemisphere(double t_end, double interval, int cells) {
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = t_end;
+  j["output"]["interval"] = interval;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {cells, cells};
+  return j;
+}
+
 // Every dataset of a frame carries its units (attribute "units", the user
 // guide's table), and each series the units of its columns beside their
 // names: the hemisphere scene, coarse and short, with every field.
 TEST(Output, DatasetsCarryTheirUnits) {
   const auto dir = temp_dir("units");
-  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
-  j["time"]["end"] = 0.002;
-  j["output"]["interval"] = 0.001;
-  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  json j = short_hemisphere(0.002, 0.001, 4);
   j["output"]["fields"] = known_fields();
   const JobRun run = run_json(j, 1, dir);
   ASSERT_TRUE(run.result.ok) << run.result.error;
@@ -910,10 +917,7 @@ TEST(Output, DatasetsCarryTheirUnits) {
 // refused (exit 2).
 TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
   const auto dir = temp_dir("compare");
-  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
-  j["time"]["end"] = 0.3;
-  j["output"]["interval"] = 0.1;
-  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {6, 6};
+  json j = short_hemisphere(0.3, 0.1, 6);
   ASSERT_TRUE(run_json(j, 1, dir / "adi").result.ok);
   j["solvers"]["thermal"]["splitter"] = "shell2d";
   ASSERT_TRUE(run_json(j, 1, dir / "shell2d").result.ok);
@@ -1001,11 +1005,8 @@ TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
 // the other files' figures are still made; a folder without results.
 TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   const auto dir = temp_dir("report");
-  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
-  j["time"]["end"] = 0.01;
-  j["output"]["interval"] = 0.005;
+  json j = short_hemisphere(0.01, 0.005, 4);
   for (auto& p : j["output"]["probes"]) p["interval"] = 0.0025;
-  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
   std::ofstream(dir / "job.json") << j.dump(2);
   const auto out = dir / "out";
   ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet").exit_code, 0);
