@@ -42,20 +42,27 @@ ProbeTable read_probes(const std::filesystem::path& file, bool& found) {
   found = static_cast<bool>(in);
   std::string line;
   if (!found || !std::getline(in, line)) return t;  // the header
-  while (std::getline(in, line)) {
+  for (int row = 2; std::getline(in, line); ++row) {
     std::string cell[5];
     std::stringstream ss(line);
     for (auto& c : cell) std::getline(ss, c, ',');
     if (cell[0].empty() || cell[2].empty() || cell[4].empty()) continue;
+    auto number = [&](const std::string& v) {
+      try {
+        return std::stod(v);
+      } catch (const std::exception&) {
+        throw std::runtime_error(file.string() + " line " + std::to_string(row) + ": '" + v + "' is not a number");
+      }
+    };
     Series& s = t[{cell[0], cell[1]}];
-    const double time = std::stod(cell[2]);
+    const double time = number(cell[2]);
     if (s.times.empty() || s.times.back() != time) {
       s.times.push_back(time);
       s.z.emplace_back();
       s.values.emplace_back();
     }
-    if (!cell[3].empty()) s.z.back().push_back(std::stod(cell[3]));
-    s.values.back().push_back(std::stod(cell[4]));
+    if (!cell[3].empty()) s.z.back().push_back(number(cell[3]));
+    s.values.back().push_back(number(cell[4]));
   }
   return t;
 }

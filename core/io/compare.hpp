@@ -37,7 +37,8 @@ struct Comparison {
 
 // Compares the output folders a and b (of `thermostamp run`). Throws
 // std::runtime_error when a folder does not exist or holds none of
-// summary.json, probes.csv and results.h5.
+// summary.json, probes.csv and results.h5, or when a probes.csv holds
+// something other than numbers where they belong.
 Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem::path& b);
 
 }  // namespace ts
