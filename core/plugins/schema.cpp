@@ -181,6 +181,17 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                      {"additionalProperties", false}};
   json interaction_kinds = contact;
   interaction_kinds.push_back(heat_exchange);
+  // A probe of output.probes (job.cpp reads the same keys).
+  const json probe = {
+      {"type", "object"},
+      {"properties",
+       {{"name", {{"type", "string"}}},
+        {"part", {{"type", "string"}}},
+        {"at", {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 3}, {"maxItems", 3}}},
+        {"quantities", {{"type", "array"}, {"items", {{"enum", known_probe_quantities()}}}}},
+        {"interval", {{"type", "number"}, {"minimum", 0}}}}},
+      {"required", {"name", "part", "at"}},
+      {"additionalProperties", false}};
   const json schema = {
       {"$schema", "https://json-schema.org/draft/2020-12/schema"},
       {"title", "ThermoStamp job (thermostamp-job/1)"},
@@ -201,7 +212,14 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
          {{"type", "object"},
           {"properties", {{"mechanics", {{"type", {"object", "null"}}}}, {"thermal", {{"anyOf", thermal_or_null}}}}},
           {"additionalProperties", false}}},
-        {"output", {{"type", "object"}, {"properties", {{"interval", {{"type", "number"}, {"exclusiveMinimum", 0}}}, {"checkpoint_interval", {{"type", "number"}, {"minimum", 0}}}, {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}}, {"probes", {{"type", "array"}}}}}, {"additionalProperties", false}}}}},
+        {"output",
+         {{"type", "object"},
+          {"properties",
+           {{"interval", {{"type", "number"}, {"exclusiveMinimum", 0}}},
+            {"checkpoint_interval", {{"type", "number"}, {"minimum", 0}}},
+            {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}},
+            {"probes", {{"type", "array"}, {"items", probe}}}}},
+          {"additionalProperties", false}}}}},
       {"additionalProperties", false},
       {"$defs", defs}};
   return schema;

@@ -1090,8 +1090,8 @@ TEST(Cli, MechanicsBadMaterialParameter) {
 namespace ts::test {
 namespace {
 
-// `thermostamp schema` describes every shipped job, and rejects a typo
-// (validated with Debian's python3-jsonschema).
+// `thermostamp schema` describes every shipped job, and rejects a typo and
+// an unknown probe quantity (validated with Debian's python3-jsonschema).
 TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   const auto dir = temp_dir("schema");
   const auto r = thermostamp("schema");
@@ -1108,14 +1108,20 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   json with_checkpoints = read_job_document(source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json");
   with_checkpoints["output"]["checkpoint_interval"] = 1.0;
   std::ofstream(dir / "checkpoints.json") << with_checkpoints.dump();
+  // A probe with a quantity the kernel does not know.
+  json probe = with_checkpoints;
+  probe["output"]["probes"][0]["quantities"] = {"temperature_mean", "fibre_strian"};
+  std::ofstream(dir / "probe.json") << probe.dump();
   const std::string py = "/usr/bin/python3 '" + (dir / "check.py").string() + "' '" + (dir / "schema.json").string() + "' ";
   std::string good;
-  for (const char* f : {"share/jobs/two_ply_thermal_demo.json", "share/jobs/ud_strip_tension.json",
-                        "share/verification/patch_contact.json", "share/verification/slab_robin.json"})
-    good += "'" + (source_dir() / f).string() + "' ";
-  good += "'" + (dir / "checkpoints.json").string() + "' ";
+  for (const auto& e : std::filesystem::directory_iterator(source_dir() / "share" / "jobs"))
+    good += q(e.path()) + " ";
+  for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
+    good += q(source_dir() / f) + " ";
+  good += q(dir / "checkpoints.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
-  EXPECT_NE(std::system((py + "'" + (dir / "typo.json").string() + "' >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "typo.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "probe.json") + " >/dev/null").c_str()), 0);
 }
 
 }  // namespace
