@@ -79,12 +79,16 @@ double profile_at(const std::vector<double>& z, const std::vector<double>& v, do
 }
 
 // For each time of a, the index of b's nearest time if it lies within a
-// quarter of a's smallest spacing of its neighbours (-1 otherwise).
+// quarter of the median spacing of a's times (-1 otherwise; the median, as
+// a first sample after t = 0 or a last one at the end may come close to
+// its neighbour).
 std::vector<int> match_times(const std::vector<double>& a, const std::vector<double>& b, double& offset) {
   std::vector<int> m(a.size(), -1);
-  double spacing = std::numeric_limits<double>::infinity();
-  for (std::size_t k = 1; k < a.size(); ++k) spacing = std::min(spacing, a[k] - a[k - 1]);
-  const double tol = std::isfinite(spacing) ? 0.25 * spacing : 1e-9 * std::max(1.0, std::abs(a.empty() ? 0 : a[0]));
+  std::vector<double> gaps;
+  for (std::size_t k = 1; k < a.size(); ++k) gaps.push_back(a[k] - a[k - 1]);
+  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+  const double tol = gaps.empty() ? 1e-9 * std::max(1.0, std::abs(a.empty() ? 0 : a[0]))
+                                  : 0.25 * gaps[gaps.size() / 2];
   for (std::size_t k = 0; k < a.size(); ++k) {
     const auto it = std::lower_bound(b.begin(), b.end(), a[k]);
     int best = -1;
@@ -111,6 +115,44 @@ void take(Difference& d, double a, double b, double time) {
   }
   d.scale = std::max(d.scale, std::abs(a));
   ++d.values;
+}
+
+// A time series table (energy.csv: time and numbers; tools.csv: time, the
+// tool's name, numbers): by key (the tool; "" for energy.csv) its times
+// and rows.
+struct Table {
+  std::vector<std::string> columns;  // the numeric ones after the time
+  std::map<std::string, std::pair<std::vector<double>, std::vector<std::vector<double>>>> by_key;
+};
+Table read_table(const std::filesystem::path& file, bool keyed, bool& found) {
+  Table t;
+  std::ifstream in(file);
+  found = static_cast<bool>(in);
+  std::string line;
+  if (!found || !std::getline(in, line)) return t;
+  std::vector<std::string> head;
+  std::stringstream hs(line);
+  for (std::string c; std::getline(hs, c, ',');) head.push_back(c);
+  t.columns.assign(head.begin() + std::min<std::size_t>(head.size(), keyed ? 2 : 1), head.end());
+  for (int row = 2; std::getline(in, line); ++row) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    const std::size_t first = keyed ? 2 : 1;
+    if (cells.size() != first + t.columns.size()) continue;  // a row cut short
+    std::vector<double> v;
+    double time = 0;
+    try {
+      time = std::stod(cells[0]);
+      for (std::size_t k = first; k < cells.size(); ++k) v.push_back(std::stod(cells[k]));
+    } catch (const std::exception&) {
+      throw std::runtime_error(file.string() + " line " + std::to_string(row) + " holds something other than numbers");
+    }
+    auto& [times, rows] = t.by_key[keyed ? cells[1] : ""];
+    times.push_back(time);
+    rows.push_back(std::move(v));
+  }
+  return t;
 }
 
 // HDF5 without its error printing (an absent or truncated file is reported
@@ -343,6 +385,40 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
     if (fb >= 0) H5Fclose(fb);
   }
 
+  // The energy and tool histories.
+  for (const auto& [file, keyed] : {std::pair<const char*, bool>{"energy.csv", false}, {"tools.csv", true}}) {
+    bool in_a = false, in_b = false;
+    const Table ta = read_table(a / file, keyed, in_a), tb = read_table(b / file, keyed, in_b);
+    if (in_a != in_b) note(std::string(file) + " only in " + (in_a ? a : b).string());
+    if (!in_a || !in_b) continue;
+    for (const auto& [key, sa_rows] : ta.by_key) {
+      const auto it = tb.by_key.find(key);
+      if (it == tb.by_key.end()) {
+        note(std::string(file) + ": '" + key + "' only in A");
+        continue;
+      }
+      const auto& [times_a, rows_a] = sa_rows;
+      const auto& [times_b, rows_b] = it->second;
+      const std::vector<int> m = match_times(times_a, times_b, c.largest_time_offset);
+      const long long matched = std::count_if(m.begin(), m.end(), [](int k) { return k >= 0; });
+      if (matched < static_cast<long long>(times_a.size()) || times_a.size() != times_b.size())
+        note(std::string(file) + (key.empty() ? "" : " " + key) + ": " + std::to_string(matched) + " of A's " +
+             std::to_string(times_a.size()) + " rows matched by time with B's " + std::to_string(times_b.size()));
+      for (std::size_t col = 0; col < ta.columns.size(); ++col) {
+        const auto jb = std::find(tb.columns.begin(), tb.columns.end(), ta.columns[col]);
+        if (jb == tb.columns.end()) continue;
+        const std::size_t colb = static_cast<std::size_t>(jb - tb.columns.begin());
+        Difference d;
+        d.what = std::string(file) + " " + (key.empty() ? "" : key + " ") + ta.columns[col];
+        d.units = series_column_units((keyed ? "tool_" : "") + ta.columns[col]);
+        for (std::size_t k = 0; k < m.size(); ++k)
+          if (m[k] >= 0) take(d, rows_a[k][col], rows_b[m[k]][colb], times_a[k]);
+        if (d.max_abs != 0 || std::isnan(d.max_abs)) c.identical = false;
+        c.series.push_back(d);
+      }
+    }
+  }
+
   // The summaries' figures.
   const bool sa = std::filesystem::exists(a / "summary.json"), sb = std::filesystem::exists(b / "summary.json");
   if (sa != sb) note("summary.json only in " + (sa ? a : b).string());
@@ -399,6 +475,7 @@ json Comparison::to_json() const {
   return {{"identical", identical},
           {"probes", list(probes, false)},
           {"fields", list(fields, false)},
+          {"series", list(series, false)},
           {"summary", list(summary, true)},
           {"largest_time_offset_s", largest_time_offset},
           {"notes", notes}};
@@ -428,6 +505,7 @@ std::string Comparison::to_text(const std::filesystem::path& a, const std::files
   };
   section("probes (samples at the same times):", probes);
   section("fields (frames at the same times):", fields);
+  section("histories (rows at the same times):", series);
   if (!summary.empty()) {
     o << "\nsummary (the figures that differ: A, B, |A - B|):\n";
     for (const auto& d : summary) o << "  " << d.what << ": " << fmt(d.a) << ", " << fmt(d.b) << ", " << fmt(d.max_abs) << "\n";

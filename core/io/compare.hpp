@@ -1,8 +1,9 @@
 #pragma once
 // `thermostamp compare A B`: how far the results of two output folders are
 // apart: the probe samples (probes.csv), the fields of the frames
-// (results.h5) and the summaries' figures (summary.json), each as the
-// largest absolute difference over what the two folders share.
+// (results.h5), the energy and tool histories (energy.csv, tools.csv) and
+// the summaries' figures (summary.json), each as the largest absolute
+// difference over what the two folders share.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -23,7 +24,8 @@ struct Difference {
 };
 
 struct Comparison {
-  std::vector<Difference> probes, fields, summary;
+  // series: the columns of energy.csv and tools.csv (by tool).
+  std::vector<Difference> probes, fields, series, summary;
   // Samples and frames are matched by time: the largest offset between the
   // times of matched samples or frames (s), and what was left unmatched.
   double largest_time_offset = 0;

@@ -911,8 +911,8 @@ TEST(Output, DatasetsCarryTheirUnits) {
 
 // `thermostamp compare A B`: a run against itself is identical (exit 0);
 // two runs that differ (adi against shell2d on the coarse hemisphere) give,
-// for a probe, a field and a summary figure, the largest differences that
-// the test takes from the files itself (exit 1); layered fields of other
+// for a probe, a field, a tool's force history and a summary figure, the
+// largest differences that the test takes from the files itself (exit 1); layered fields of other
 // layer counts are named as not compared; a folder without output is
 // refused (exit 2).
 TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
@@ -981,6 +981,35 @@ TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
   const Difference* dl = find(c.fields, "ply_top/temperature");
   ASSERT_NE(dl, nullptr);
   EXPECT_NE(dl->note.find("not compared"), std::string::npos);
+  // A tool's force history: row k of A against row k of B (the same
+  // sampling times but for the steps).
+  auto punch_fz = [](const std::filesystem::path& csv) {
+    std::vector<double> v;
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line))
+      if (line.find(",punch,") != std::string::npos) {
+        std::stringstream ss(line);
+        std::vector<std::string> cells;
+        for (std::string cell; std::getline(ss, cell, ',');) cells.push_back(cell);
+        v.push_back(std::stod(cells.at(7)));  // time,tool,ux,uy,uz,fx,fy,fz,heat_J
+      }
+    return v;
+  };
+  const auto ta = punch_fz(dir / "adi" / "tools.csv"), tb = punch_fz(dir / "shell2d" / "tools.csv");
+  ASSERT_EQ(ta.size(), tb.size());
+  ASSERT_GT(ta.size(), 100u);
+  double force_max = 0;
+  for (std::size_t k = 0; k < ta.size(); ++k) force_max = std::max(force_max, std::abs(ta[k] - tb[k]));
+  const Difference* dt = find(c.series, "tools.csv punch fz");
+  ASSERT_NE(dt, nullptr);
+  EXPECT_GT(force_max, 0.0);
+  EXPECT_EQ(dt->max_abs, force_max);
+  EXPECT_EQ(dt->values, static_cast<long long>(ta.size()));
+  EXPECT_EQ(dt->units, "N");
+  ASSERT_NE(find(c.series, "energy.csv internal"), nullptr);
+  EXPECT_EQ(find(c.series, "energy.csv internal")->units, "J");
   // A summary figure.
   const json sa = json::parse(std::ifstream(dir / "adi" / "summary.json")),
              sb = json::parse(std::ifstream(dir / "shell2d" / "summary.json"));
