@@ -18,13 +18,9 @@ using json = nlohmann::json;
 
 namespace {
 
-// The units of a probe quantity.
+// The units of a probe quantity: those of the field it samples.
 std::string probe_units(const std::string& quantity) {
-  if (quantity.rfind("temperature", 0) == 0) return "degC";
-  if (quantity.rfind("displacement", 0) == 0) return "m";
-  if (quantity == "shear_angle") return "deg";
-  if (quantity == "contact_pressure") return "Pa";
-  return "1";
+  return field_units(quantity.rfind("displacement_", 0) == 0 ? "displacement" : quantity);
 }
 
 // One probe's samples of one quantity: time -> (z, value) rows.
