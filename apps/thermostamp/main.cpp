@@ -30,7 +30,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp study STUDY.json [--out DIR] [--threads N] [--quiet] [--keep-subnormals]
                   [--restart] [--checkpoint-minutes M]
   thermostamp report DIR
-  thermostamp compare DIR_A DIR_B [--json]   # how far two runs' results are apart
+  thermostamp compare DIR_A DIR_B [--json] [--rtol R]   # how far two runs' results are apart
   thermostamp --version
 
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
@@ -44,9 +44,11 @@ its completed runs not run again, a stopped one from its checkpoint
 --checkpoint-minutes M: also write a checkpoint after every M minutes of
 wall time (against machines that go down without a signal)
 
-compare: the largest differences of the probe samples and frame fields at
-the same times and the summaries' figures that differ; exit status 0 when
-every value compared is equal, 1 when some differ
+compare: the largest differences of the probe samples, frame fields and
+histories at the same times and the summaries' figures that differ; exit
+status 0 when every value compared is equal (with --rtol R: when each
+quantity's largest difference is at most R times its largest value in A),
+1 otherwise
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -65,6 +67,7 @@ struct Args {
   int threads = 0;
   bool quiet = false, json = false, markdown = false, keep_subnormals = false, restart = false;
   double checkpoint_minutes = 0;
+  double rtol = -1;  // compare: the relative tolerance (-1: exact)
 };
 
 Args parse(int argc, char** argv) {
@@ -92,6 +95,15 @@ Args parse(int argc, char** argv) {
         if (used != t.size() || a.threads < 1) throw std::invalid_argument(t);
       } catch (const std::exception&) {
         throw UsageError("--threads expects a positive integer, found '" + t + "'");
+      }
+    } else if (s == "--rtol") {
+      const std::string t = value(s);
+      try {
+        std::size_t used = 0;
+        a.rtol = std::stod(t, &used);
+        if (used != t.size() || !(a.rtol >= 0) || !std::isfinite(a.rtol)) throw std::invalid_argument(t);
+      } catch (const std::exception&) {
+        throw UsageError("--rtol expects a number of at least 0, found '" + t + "'");
       }
     } else if (s == "--checkpoint-minutes") {
       const std::string t = value(s);
@@ -254,11 +266,18 @@ int main(int argc, char** argv) {
         std::cerr << "error: compare: " << e.what() << "\n";
         return 2;
       }
-      if (a.json)
-        std::cout << c.to_json().dump(2) << "\n";
-      else
+      const bool pass = a.rtol >= 0 ? c.within(a.rtol) : c.identical;
+      if (a.json) {
+        ts::json j = c.to_json();
+        if (a.rtol >= 0) j["within_rtol"] = {{"rtol", a.rtol}, {"within", pass}};
+        std::cout << j.dump(2) << "\n";
+      } else {
         std::cout << c.to_text(a.positional[0], a.positional[1]);
-      return c.identical ? 0 : 1;
+        if (a.rtol >= 0)
+          std::cout << (pass ? "within" : "not within") << " --rtol " << a.rtol
+                    << (c.matched ? "" : " (the folders do not hold the same quantities and times)") << "\n";
+      }
+      return pass ? 0 : 1;
     }
     if (a.command == "report") {
       if (a.positional.size() != 1) throw UsageError("expected one output folder");

@@ -267,9 +267,11 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
       throw std::runtime_error("'" + d.string() + "' holds no output of a run (summary.json, probes.csv, results.h5)");
   }
   Comparison c;
+  // Something one folder has and the other has not (or cannot be read).
+  auto unmatched = [&] { c.identical = c.matched = false; };
   auto note = [&](const std::string& n) {
     c.notes.push_back(n);
-    c.identical = false;
+    unmatched();
   };
 
   // Probes.
@@ -283,16 +285,16 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
     d.units = probe_units(key.second);
     if (it == pb.end()) {
       d.note = "only in A";
-      c.identical = false;
+      unmatched();
       c.probes.push_back(d);
       continue;
     }
     const Series& sb = it->second;
     const std::vector<int> m = match_times(sa.times, sb.times, c.largest_time_offset);
-    int unmatched = 0;
+    int alone = 0;  // A's samples without one of B's
     for (std::size_t k = 0; k < m.size(); ++k) {
       if (m[k] < 0) {
-        ++unmatched;
+        ++alone;
         continue;
       }
       const auto& za = sa.z[k];
@@ -305,11 +307,11 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
         take(d, va[i], same_points ? vb[i] : profile_at(zb, vb, za.empty() ? 0.0 : za[i]), sa.times[k]);
       if (!same_points) d.note = "B's profile interpolated at A's points";
     }
-    if (unmatched > 0 || sa.times.size() != sb.times.size()) {
-      d.note += std::string(d.note.empty() ? "" : "; ") + std::to_string(unmatched) + " of A's " +
+    if (alone > 0 || sa.times.size() != sb.times.size()) {
+      d.note += std::string(d.note.empty() ? "" : "; ") + std::to_string(alone) + " of A's " +
                 std::to_string(sa.times.size()) + " samples without one of B's at their time (B has " +
                 std::to_string(sb.times.size()) + ")";
-      c.identical = false;
+      unmatched();
     }
     if (d.max_abs != 0 || std::isnan(d.max_abs) || !d.note.empty()) c.identical = false;
     c.probes.push_back(d);
@@ -320,7 +322,7 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
       d.what = key.first + " " + key.second;
       d.units = probe_units(key.second);
       d.note = "only in B";
-      c.identical = false;
+      unmatched();
       c.probes.push_back(d);
     }
 
@@ -359,12 +361,14 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
             Difference& d = by_name[key];
             if (!std::binary_search(fields_b.begin(), fields_b.end(), field)) {
               d.note = "only in A";
+              unmatched();
               continue;
             }
             std::vector<hsize_t> sha, shb;
             const auto va = read_values(fa, ga + "/" + key, sha), vb = read_values(fb, gb + "/" + key, shb);
             if (sha != shb || va.empty()) {
               d.note = "other shapes (other meshes or layers): not compared";
+              unmatched();
               continue;
             }
             for (std::size_t i = 0; i < va.size(); ++i) take(d, va[i], vb[i], ra.times[k]);
@@ -449,6 +453,25 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
   return c;
 }
 
+double Comparison::largest_relative(std::string* where) const {
+  double worst = 0;
+  for (const auto* v : {&probes, &fields, &series, &summary})
+    for (const Difference& d : *v) {
+      if (d.values == 0) continue;
+      const double r = std::isnan(d.max_abs) ? std::numeric_limits<double>::infinity()
+                       : d.max_abs == 0     ? 0.0
+                       : d.scale > 0        ? d.max_abs / d.scale
+                                            : std::numeric_limits<double>::infinity();
+      if (r > worst) {
+        worst = r;
+        if (where) *where = d.what;
+      }
+    }
+  return worst;
+}
+
+bool Comparison::within(double rtol) const { return matched && largest_relative() <= rtol; }
+
 json Comparison::to_json() const {
   auto list = [](const std::vector<Difference>& v, bool figures) {
     json out = json::array();
@@ -468,7 +491,12 @@ json Comparison::to_json() const {
     }
     return out;
   };
+  std::string where;
+  const double rel = largest_relative(&where);
   return {{"identical", identical},
+          {"matched", matched},
+          {"largest_relative", std::isfinite(rel) ? json(rel) : json(nullptr)},
+          {"largest_relative_in", where},
           {"probes", list(probes, false)},
           {"fields", list(fields, false)},
           {"series", list(series, false)},
@@ -509,6 +537,11 @@ std::string Comparison::to_text(const std::filesystem::path& a, const std::files
   if (largest_time_offset > 0)
     o << "\nsamples and frames matched by time up to " << fmt(largest_time_offset) << " s apart\n";
   for (const auto& n : notes) o << "note: " << n << "\n";
+  std::string where;
+  const double rel = largest_relative(&where);
+  if (!identical && rel > 0)
+    o << "\nlargest relative difference (|A - B| over the largest |A| of its quantity): " << fmt(rel) << ", " << where
+      << "\n";
   o << "\n" << (identical ? "identical: every value compared is equal" : "not identical") << "\n";
   return o.str();
 }

@@ -33,6 +33,17 @@ struct Comparison {
   // Every value compared is equal, and the folders hold the same probes,
   // frames and fields.
   bool identical = true;
+  // The folders hold the same probes, frames, fields, rows and figures,
+  // each with a counterpart in the other at its time (the values may
+  // differ; a profile of another layer count counts as matched).
+  bool matched = true;
+  // The largest max_abs / scale over every quantity compared (infinite
+  // where A's values are all zero and B's are not, or a difference is not a
+  // number); where: that quantity's name.
+  double largest_relative(std::string* where = nullptr) const;
+  // matched, and every quantity's largest difference at most rtol times
+  // its largest |A|.
+  bool within(double rtol) const;
   nlohmann::json to_json() const;
   std::string to_text(const std::filesystem::path& a, const std::filesystem::path& b) const;
 };

@@ -912,7 +912,9 @@ TEST(Output, DatasetsCarryTheirUnits) {
 // `thermostamp compare A B`: a run against itself is identical (exit 0);
 // two runs that differ (adi against shell2d on the coarse hemisphere) give,
 // for a probe, a field, a tool's force history and a summary figure, the
-// largest differences that the test takes from the files itself (exit 1); layered fields of other
+// largest differences that the test takes from the files itself (exit 1);
+// with a tolerance (--rtol), a run that differs a little passes at its
+// largest relative difference and fails below it; layered fields of other
 // layer counts are named as not compared; a folder without output is
 // refused (exit 2).
 TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
@@ -1019,6 +1021,40 @@ TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
   const auto cli = thermostamp("compare " + q(dir / "adi") + " " + q(dir / "shell2d") + " --json");
   EXPECT_EQ(cli.exit_code, 1);
   EXPECT_EQ(json::parse(cli.out)["identical"], false);
+  // With another layer count the layered fields are not compared: the
+  // folders do not match, whatever the tolerance.
+  EXPECT_FALSE(c.matched);
+  EXPECT_FALSE(c.within(1e300));
+  // A run that differs a little (other damping), with the same quantities
+  // and times: within a tolerance at and above its largest relative
+  // difference, not below.
+  j["solvers"]["thermal"]["splitter"] = "adi";
+  j["solvers"]["mechanics"]["damping"] = 21.0;
+  ASSERT_TRUE(run_json(j, 1, dir / "damping").result.ok);
+  const Comparison near = compare_outputs(dir / "adi", dir / "damping");
+  EXPECT_TRUE(near.matched);
+  EXPECT_FALSE(near.identical);
+  std::string where;
+  const double rel = near.largest_relative(&where);
+  EXPECT_GT(rel, 0.0);
+  double largest = 0;
+  for (const auto* v : {&near.probes, &near.fields, &near.series, &near.summary})
+    for (const auto& d : *v)
+      if (d.values > 0 && d.max_abs > 0) largest = std::max(largest, d.scale > 0 ? d.max_abs / d.scale : 1e300);
+  EXPECT_EQ(rel, largest) << where;
+  EXPECT_TRUE(near.within(rel));
+  EXPECT_FALSE(near.within(0.5 * rel));
+  EXPECT_TRUE(same.within(0.0));
+  const std::string pair = "compare " + q(dir / "adi") + " " + q(dir / "damping");
+  auto number = [](double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return std::string(buf);
+  };
+  EXPECT_EQ(thermostamp(pair + " --rtol " + number(2 * rel)).exit_code, 0);
+  EXPECT_EQ(thermostamp(pair + " --rtol " + number(0.5 * rel)).exit_code, 1);
+  std::printf("other damping: largest relative difference %.3g (%s)\n", rel, where.c_str());
+  EXPECT_EQ(thermostamp(pair + " --rtol -1").exit_code, 2);
   const auto none = thermostamp("compare " + q(dir / "adi") + " " + q(dir / "nowhere"));
   EXPECT_EQ(none.exit_code, 2);
   EXPECT_EQ(none.err.rfind("error: compare: '", 0), 0u) << none.err;
