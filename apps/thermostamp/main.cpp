@@ -70,6 +70,19 @@ struct Args {
   double rtol = -1;  // compare: the relative tolerance (-1: exact)
 };
 
+// The finite number t of option opt, above 0 (or at least 0 with
+// zero_allowed); otherwise a usage error saying that opt expects `what`.
+double finite_number(const std::string& opt, const std::string& t, bool zero_allowed, const std::string& what) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(t, &used);
+    if (used != t.size() || !std::isfinite(v) || !(zero_allowed ? v >= 0 : v > 0)) throw std::invalid_argument(t);
+    return v;
+  } catch (const std::exception&) {
+    throw UsageError(opt + " expects " + what + ", found '" + t + "'");
+  }
+}
+
 Args parse(int argc, char** argv) {
   Args a;
   std::vector<std::string> v(argv + 1, argv + argc);
@@ -97,24 +110,9 @@ Args parse(int argc, char** argv) {
         throw UsageError("--threads expects a positive integer, found '" + t + "'");
       }
     } else if (s == "--rtol") {
-      const std::string t = value(s);
-      try {
-        std::size_t used = 0;
-        a.rtol = std::stod(t, &used);
-        if (used != t.size() || !(a.rtol >= 0) || !std::isfinite(a.rtol)) throw std::invalid_argument(t);
-      } catch (const std::exception&) {
-        throw UsageError("--rtol expects a number of at least 0, found '" + t + "'");
-      }
+      a.rtol = finite_number(s, value(s), true, "a number of at least 0");
     } else if (s == "--checkpoint-minutes") {
-      const std::string t = value(s);
-      try {
-        std::size_t used = 0;
-        a.checkpoint_minutes = std::stod(t, &used);
-        if (used != t.size() || !(a.checkpoint_minutes > 0) || !std::isfinite(a.checkpoint_minutes))
-          throw std::invalid_argument(t);
-      } catch (const std::exception&) {
-        throw UsageError("--checkpoint-minutes expects a positive number, found '" + t + "'");
-      }
+      a.checkpoint_minutes = finite_number(s, value(s), false, "a positive number");
     } else if (s == "--quiet") {
       a.quiet = true;
     } else if (s == "--restart") {

@@ -347,8 +347,8 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
       for (std::size_t k = 0; k < m.size(); ++k) {
         if (m[k] < 0) continue;
         const std::string ga = "frames/" + ra.names[k], gb = "frames/" + rb.names[m[k]];
+        const auto parts_b = members(fb, gb);
         for (const auto& part : members(fa, ga)) {
-          const auto parts_b = members(fb, gb);
           if (!std::binary_search(parts_b.begin(), parts_b.end(), part)) continue;
           const auto fields_b = members(fb, gb + "/" + part);
           for (const auto& field : members(fa, ga + "/" + part)) {

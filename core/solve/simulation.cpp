@@ -2800,9 +2800,8 @@ RunResult Simulation::run(const RunOptions& opt) {
         const auto [smn, smx] = std::minmax_element(st->shear_angle.begin(), st->shear_angle.end());
         plies.back()["shear_angle_min_deg"] = *smn;
         plies.back()["shear_angle_max_deg"] = *smx;
-        const auto [fmn, fmx] = fibre_strain_range(mech_[plies.size() - 1]->strain);
-        plies.back()["fibre_strain_min"] = fmn;
-        plies.back()["fibre_strain_max"] = fmx;
+        plies.back()["fibre_strain_min"] = result.part_fibre_strain_min[plies.size() - 1];
+        plies.back()["fibre_strain_max"] = result.part_fibre_strain_max[plies.size() - 1];
       }
     }
     summary["parts"] = plies;
@@ -2837,11 +2836,10 @@ RunResult Simulation::run(const RunOptions& opt) {
       const PartState& st = *parts_[p];
       const auto [mn, mx] = std::minmax_element(st.T.begin(), st.T.end());
       const auto [smn, smx] = std::minmax_element(st.shear_angle.begin(), st.shear_angle.end());
-      const auto [fmn, fmx] = fibre_strain_range(mech_[p]->strain);
       log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg, fibre strain {:.3g} "
                 "to {:.3g}",
-                st.def->name, *mn, *mx, st.shear_angle.empty() ? 0.0 : *smn, st.shear_angle.empty() ? 0.0 : *smx, fmn,
-                fmx);
+                st.def->name, *mn, *mx, st.shear_angle.empty() ? 0.0 : *smn, st.shear_angle.empty() ? 0.0 : *smx,
+                result.part_fibre_strain_min[p], result.part_fibre_strain_max[p]);
     }
   }
   if (result.ok) {
