@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include <boost/dll/runtime_symbol_info.hpp>
+#include <thermostamp/sdk/state.hpp>
 
 #include "commands.hpp"
 #include "io/checkpoint.hpp"
@@ -301,6 +302,10 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       if (restart && std::filesystem::exists(opt.out_dir / kCheckpointFile)) {
         try {
           checkpoint = read_checkpoint(opt.out_dir / kCheckpointFile);
+          // One at the run's end (output.checkpoint_at_end): the run completed
+          // but the study stopped before it recorded the run; it runs again.
+          sdk::StateReader at(checkpoint->section("run"));
+          if (double tc = 0; at.get(tc) && tc >= jobs[i].t_end * (1 - 1e-12)) checkpoint.reset();
         } catch (const std::exception& e) {
           throw JobError("", "--restart: study variant '" + label + "': " + e.what());
         }

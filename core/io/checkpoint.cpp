@@ -57,7 +57,7 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
 Checkpoint read_checkpoint(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw std::runtime_error("no checkpoint " + file.string() + " (a run writes one when it is interrupted, "
-                                    "at output.checkpoint_interval and at --checkpoint-minutes)");
+                                    "at output.checkpoint_interval, at --checkpoint-minutes and at its end)");
   const std::string what = file.string() + " is not a ThermoStamp checkpoint";
   char magic[sizeof kMagic - 1];
   if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof magic) != 0) throw std::runtime_error(what);

@@ -584,6 +584,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
                                            fmt_number(frames) + " frames over " + fmt_number(job.t_end) +
                                            " s (at most " + fmt_number(kMaxFrames) + ")");
     job.output.checkpoint_interval = r.real("checkpoint_interval", 0.0, 0.0);
+    job.output.checkpoint_at_end = r.boolean("checkpoint_at_end", true);
     job.output.fields = r.texts("fields", std::vector<std::string>{"temperature"});
     for (std::size_t i = 0; i < job.output.fields.size(); ++i) {
       const auto& f = job.output.fields[i];

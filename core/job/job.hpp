@@ -146,6 +146,7 @@ struct ConstraintDef {
 struct OutputDef {
   double interval = 0;
   double checkpoint_interval = 0;  // s of simulated time between checkpoints, 0: only when interrupted
+  bool checkpoint_at_end = true;    // a checkpoint at time.end too (from which a later time.end extends the run)
   std::vector<std::string> fields;
   std::vector<ProbeDef> probes;
 };

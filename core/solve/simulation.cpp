@@ -1846,24 +1846,63 @@ void Simulation::check_field(double time, long long step) {
   }
 }
 
-// The job document a checkpoint must match: the run's, without the
-// checkpoint interval (which a restart may change).
+// The job document a checkpoint stores: the run's, without the checkpoint
+// settings (which a restart may change).
 static json restart_document(const json& doc) {
   json d = doc;
-  if (d.contains("output") && d["output"].is_object()) d["output"].erase("checkpoint_interval");
+  if (d.contains("output") && d["output"].is_object()) {
+    d["output"].erase("checkpoint_interval");
+    d["output"].erase("checkpoint_at_end");
+  }
   return d;
+}
+
+// What a restart compares: the stored document without time.end (a restart
+// may move the end, to extend a finished run).
+static json restart_match(json d) {
+  if (d.contains("time") && d["time"].is_object()) d["time"].erase("end");
+  return d;
+}
+
+// time.end of the run that wrote a checkpoint (s), NaN where it lacks one.
+static double checkpoint_t_end(const Checkpoint& c) {
+  const auto& bytes = c.section("job");
+  const json d = json::parse(bytes.begin(), bytes.end());
+  if (d.contains("time") && d["time"].is_object() && d["time"].contains("end") && d["time"]["end"].is_number())
+    return d["time"]["end"].get<double>();
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+// The frame interval of the run that wrote a checkpoint (s): its
+// output.interval, by default its time.end.
+static double checkpoint_frame_interval(const Checkpoint& c) {
+  const auto& bytes = c.section("job");
+  const json d = json::parse(bytes.begin(), bytes.end());
+  if (d.contains("output") && d["output"].is_object() && d["output"].contains("interval") &&
+      d["output"]["interval"].is_number())
+    return d["output"]["interval"].get<double>();
+  return checkpoint_t_end(c);
 }
 
 double Simulation::check_restart(const Checkpoint& c) const {
   const std::string what = "--restart: ";
   try {
     const auto& job = c.section("job");
-    if (json::parse(job.begin(), job.end()) != restart_document(job_.document))
+    if (restart_match(json::parse(job.begin(), job.end())) != restart_match(restart_document(job_.document)))
       throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
-                                "needs the job of the run it continues (output.checkpoint_interval may differ)");
+                                "needs the job of the run it continues (time.end, output.checkpoint_interval and "
+                                "output.checkpoint_at_end may differ)");
     sdk::StateReader r(c.section("run"));
     double t = 0;
     if (!r.get(t)) throw JobError("", what + "the checkpoint's run section is truncated");
+    // The same margin as the run's end test (a billionth of a step or interval).
+    if (t >= job_.t_end * (1 - 1e-12)) {
+      const double was = checkpoint_t_end(c);
+      throw JobError("/time/end", what + "the checkpoint is at t = " + fmt_g(t, 9) + " s" +
+                                      (t >= was * (1 - 1e-12) ? ", the end of the run that wrote it" : "") +
+                                      ", not before time.end = " + fmt_g(job_.t_end, 9) +
+                                      " s; to extend the run, set a later time.end (--set time.end=...)");
+    }
     return t;
   } catch (const JobError&) {
     throw;
@@ -2333,12 +2372,21 @@ RunResult Simulation::run(const RunOptions& opt) {
   double next_checkpoint = checkpoint_iv > 0 ? checkpoint_iv : std::numeric_limits<double>::infinity();
   double restarted_from = -1;  // s, a restart's checkpoint time
   auto last_checkpoint_wall = Clock::now();
-  // A checkpoint after this step: asked for by a stop, or due by simulated
-  // or wall time (never at the end).
+  // The end checkpoint (output.checkpoint_at_end): the state before the
+  // first step that depends on time.end (the mechanical steps that land on
+  // it, a thermal step cut short by it), or the end state where none did.
+  // A later time.end continues from it as a run to that end would have.
+  bool landing_saved = false;
+  // A checkpoint after this step: the end checkpoint, asked for by a stop,
+  // or due by simulated or wall time. None after the end checkpoint, which
+  // stays the last (a run stopped in its last steps continues from it).
   auto checkpoint_due = [&](int stop_seen) {
-    return t < t_end - eps_t &&
-           (stop_seen != 0 || t >= next_checkpoint - eps_t ||
-            (opt.checkpoint_wall_s > 0 && seconds_since(last_checkpoint_wall) >= opt.checkpoint_wall_s));
+    const bool at_end = job_.output.checkpoint_at_end;
+    if (at_end && landing_saved) return false;
+    if (t >= t_end - eps_t) return at_end;
+    if (stop_seen != 0) return true;
+    return t >= next_checkpoint - eps_t ||
+           (opt.checkpoint_wall_s > 0 && seconds_since(last_checkpoint_wall) >= opt.checkpoint_wall_s);
   };
   // The probe samples so far (RunResult::probes), as flat arrays (a reader
   // checks each array's length against what is left of the checkpoint).
@@ -2393,7 +2441,7 @@ RunResult Simulation::run(const RunOptions& opt) {
            a.io(stable) && a.io(next_sample) && a.io(audit_scale) && a.io(supplied_max) && a.io(next_checkpoint) &&
            a.io_vector(unstable) && probes_io(a);
   };
-  auto save_checkpoint = [&] {
+  auto save_checkpoint = [&](const char* what = "") {
     if (!writer) return;
     const auto tc = Clock::now();
     Checkpoint c;
@@ -2414,7 +2462,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     timing_[kTimeOutput] += seconds_since(tc);
     last_checkpoint_wall = Clock::now();
     if (checkpoint_iv > 0 && t >= next_checkpoint - eps_t) advance_past(next_checkpoint, checkpoint_iv, t + eps_t);
-    log->info("checkpoint at t = {:.6g} s (mechanical step {}, thermal step {}): {}", t, mech_steps, steps,
+    log->info("checkpoint at t = {:.6g} s (mechanical step {}, thermal step {}{}): {}", t, mech_steps, steps, what,
               (opt.out_dir / kCheckpointFile).string());
   };
   try {
@@ -2423,6 +2471,16 @@ RunResult Simulation::run(const RunOptions& opt) {
       if (!run_io(r) || !r.done()) throw JobError("", "--restart: the checkpoint does not fit this job (run state)");
       t = resume_t;
       restarted_from = t;
+      // Another time.end (a run extended, or ended earlier): the energy
+      // and tool rows go on at this run's spacing, and where the frame
+      // interval is time.end's default, the frames at this run's interval.
+      if (const double was = checkpoint_t_end(*opt.restart); was != t_end) {
+        next_sample = 0;
+        advance_past(next_sample, t_end / 500, t + eps_t);
+        if (checkpoint_frame_interval(*opt.restart) != interval)
+          frame_index = static_cast<long long>(std::floor((t + eps_t) / interval)) + 1;
+        log->info("time.end {:.6g} s instead of the checkpointed run's {:.6g} s", t_end, was);
+      }
       if (checkpoint_iv > 0) {  // the interval of this run, from the checkpoint on
         next_checkpoint = 0;
         advance_past(next_checkpoint, checkpoint_iv, t + eps_t);
@@ -2444,6 +2502,9 @@ RunResult Simulation::run(const RunOptions& opt) {
     }
     if (job_.mechanics) {
       const MechanicsDef& md = job_.mechanics_settings;
+      // Continued in the steps that land on time.end: the end checkpoint
+      // is the one it continues from, or one written after it.
+      if (resume) landing_saved = t_end - t < 100 * md.dt_safety * stable;
       if (!resume) {  // the forces and stable step at t = 0 (a restart has them from its checkpoint)
         update_node_temperature();
         check_law_ranges(0.0);
@@ -2481,7 +2542,13 @@ RunResult Simulation::run(const RunOptions& opt) {
         // damping and contact forces.
         double dt = md.dt_safety * stable;
         const double remaining = t_end - t;
-        if (remaining < 100 * dt) dt = remaining / std::max(1.0, std::ceil(remaining / dt - 1e-9));
+        if (remaining < 100 * dt) {
+          if (!landing_saved) {
+            landing_saved = true;
+            if (job_.output.checkpoint_at_end) save_checkpoint(", before the steps that land on time.end");
+          }
+          dt = remaining / std::max(1.0, std::ceil(remaining / dt - 1e-9));
+        }
         // The stable step, not the last steps cut to land on t_end (those may
         // be as short as the time left).
         if (md.dt_safety * stable < 1e-14)
@@ -2595,11 +2662,18 @@ RunResult Simulation::run(const RunOptions& opt) {
       }
     } else {
     while (t < t_end - eps_t) {
-        double next_frame = std::min(t_end, frame_index * interval);
+        const double grid_frame = frame_index * interval;
+        double next_frame = std::min(t_end, grid_frame);
         double step = std::min(thermal_dt_, next_frame - t);
         for (std::size_t q = 0; q < next_probe.size(); ++q)
           if (job_.output.probes[q].interval > 0) step = std::min(step, next_probe[q] - t);
         if (step <= eps_t) step = std::min(thermal_dt_, t_end - t);
+        // The last step, where time.end is off the frame times: the end
+        // checkpoint is the state before it.
+        if (!landing_saved && t_end < grid_frame && t + step >= t_end - eps_t) {
+          landing_saved = true;
+          if (job_.output.checkpoint_at_end) save_checkpoint(", before the step that lands on time.end");
+        }
         in.dt = step;
         sdk::ThermalStepReport rep;
         if (auto s = splitter_->advance(in, Tspans, &rep); !s)

@@ -120,8 +120,8 @@ class Simulation {
   // Initial mid-surface coordinates of a part, 3 per node.
   std::span<const double> initial_coordinates(int part) const;
   // Throws JobError (one line) where a checkpoint cannot continue this job:
-  // written by another job (output.checkpoint_interval aside) or by a run
-  // that had finished. Returns the time it was written at (s).
+  // written by another job (time.end and the checkpoint settings aside), or
+  // not before this job's time.end. Returns the time it was written at (s).
   double check_restart(const Checkpoint& c) const;
 
  private:

@@ -41,7 +41,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.16.0 (plugin SDK 0.16.0, ABI 16)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.16.1 (plugin SDK 0.16.0, ABI 16)"), std::string::npos) << r.out;
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {

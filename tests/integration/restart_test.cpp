@@ -126,18 +126,19 @@ json coarse_hemisphere(const std::string& file) {
 }
 
 // Runs `j` without stop on 2 threads, and again with a checkpoint every
-// `interval` s; continues a copy of the second from its last checkpoint on
-// one thread, and expects the first's output. `how`: the options that ask
-// for checkpoints, by default every `interval` s of simulated time.
-// `where`, if given, receives the folder of the runs.
+// `interval` s (and none at the end); continues a copy of the second from
+// its last checkpoint on one thread, and expects the first's output. `how`:
+// the options that ask for checkpoints, by default every `interval` s of
+// simulated time. `where`, if given, receives the folder of the runs.
 void check_restart(const std::string& label, json j, double interval, std::string how = "",
                    std::filesystem::path* where = nullptr) {
   if (how.empty()) how = "--set output.checkpoint_interval=" + std::to_string(interval);
+  how += " --set output.checkpoint_at_end=false";
   const auto dir = temp_dir("restart_" + label);
   if (where) *where = dir;
   const auto job = write_job(dir, j);
   ASSERT_EQ(run_cli(job, dir / "full", 2).exit_code, 0) << label;
-  EXPECT_FALSE(std::filesystem::exists(dir / "full" / "checkpoint.bin")) << label << ": none without an interval";
+  EXPECT_TRUE(std::filesystem::exists(dir / "full" / "checkpoint.bin")) << label << ": the end checkpoint";
   const auto with = dir / "with";
   const auto r = run_cli(job, with, 2, how);
   ASSERT_EQ(r.exit_code, 0) << label << ": " << r.err;
@@ -266,6 +267,7 @@ TEST(Restart, RefusesWhatItCannotContinue) {
   j["time"]["end"] = 0.2;
   j["output"]["interval"] = 0.1;
   j["output"]["checkpoint_interval"] = 0.15;
+  j["output"]["checkpoint_at_end"] = false;
   const auto job = write_job(dir, j);
   const auto out = dir / "out";
   ASSERT_EQ(run_cli(job, out, 2).exit_code, 0);
@@ -283,8 +285,10 @@ TEST(Restart, RefusesWhatItCannotContinue) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << label << ": one line: " << r.err;
     unchanged(label);
   };
-  // Another job (another end time).
-  refused(run_cli(job, out, 1, "--restart --set time.end=0.3"), "written by another job", "other job");
+  // Another job (another frame interval).
+  refused(run_cli(job, out, 1, "--restart --set output.interval=0.05"), "written by another job", "other job");
+  // An end before the checkpoint.
+  refused(run_cli(job, out, 1, "--restart --set time.end=0.12"), "not before time.end = 0.12 s", "earlier end");
   // No checkpoint in the folder.
   refused(run_cli(job, dir / "elsewhere", 1, "--restart"), "no checkpoint", "no checkpoint");
   // A damaged checkpoint.
@@ -331,6 +335,108 @@ TEST(Restart, RefusesWhatItCannotContinue) {
   const auto bad = thermostamp("validate " + q(job) + " --set output.checkpoint_interval=-1");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("/output/checkpoint_interval"), std::string::npos) << bad.err;
+}
+
+// The lines of a CSV file (header aside) whose first column, the time, is
+// above `after`.
+std::vector<std::string> rows_after(const std::filesystem::path& csv, double after) {
+  std::vector<std::string> rows;
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line))
+    if (std::stod(line.substr(0, line.find(','))) > after) rows.push_back(line);
+  return rows;
+}
+
+// A finished run extended to a later time.end (`--restart --set
+// time.end=...`) continues from its end checkpoint, the state before the
+// first step that depended on its time.end (the mechanical steps that land
+// on it; a thermal step cut short by it), or its end state where none did.
+// So it gives, bit for bit, the run to the later end: every frame, every
+// probe sample, the summary's audits, and the energy and tool rows after the
+// checkpoint (those before it keep the first run's spacing, time.end / 500).
+TEST(Restart, ExtendsAFinishedRunAsARunToTheLaterEnd) {
+  const auto dir = temp_dir("restart_extend");
+  const auto job = write_job(dir, coarse_hemisphere("hemisphere_ud_2ply.json"));  // to 1 s
+  ASSERT_EQ(run_cli(job, dir / "direct", 2).exit_code, 0);
+  const auto out = dir / "extended";
+  ASSERT_EQ(run_cli(job, out, 2, "--set time.end=0.5").exit_code, 0);
+  const auto e = run_cli(job, out, 1, "--restart --set time.end=1");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["status"], "completed");
+  const double from = s["restarted_from_s"].get<double>();
+  EXPECT_LT(from, 0.5) << "the state before the last 100 steps of the first run";
+  EXPECT_GT(from, 0.4);
+  EXPECT_EQ(comparable_summary(dir / "direct"), comparable_summary(out));
+  for (const char* f : {"probes.csv", "results.xdmf"})
+    EXPECT_TRUE(file_text(dir / "direct" / f) == file_text(out / f)) << f;
+  auto frames = [](const std::filesystem::path& d) {
+    auto all = results_contents(d / "results.h5");
+    std::erase_if(all, [](const auto& kv) { return kv.first.rfind("series", 0) == 0; });
+    return all;
+  };
+  const auto fd = frames(dir / "direct");
+  ASSERT_GT(fd.size(), 20u);
+  EXPECT_TRUE(fd == frames(out)) << "the frames of the run to 1 s";
+  for (const char* f : {"energy.csv", "tools.csv"}) {
+    const auto rows = rows_after(dir / "direct" / f, from);
+    EXPECT_GT(rows.size(), 200u) << f;
+    EXPECT_EQ(rows_after(out / f, from), rows) << f;
+  }
+  // A run stopped in its last steps (here one of about 45 steps, all of
+  // them landing on its end) leaves the end checkpoint as it was, from which
+  // a later end gives the run to that end too.
+  json brief = coarse_hemisphere("hemisphere_ud_2ply.json");
+  brief["time"]["end"] = 0.004;
+  const auto stopped = dir / "stopped";
+  request_stop(SIGTERM);
+  const JobRun st = run_json(brief, 1, stopped);
+  clear_stop();
+  ASSERT_EQ(st.result.interrupted, SIGTERM);
+  EXPECT_GT(st.result.simulated_time_s, 0.0);
+  const auto sc = run_cli(job, stopped, 2, "--restart");
+  ASSERT_EQ(sc.exit_code, 0) << sc.err;
+  EXPECT_EQ(json::parse(std::ifstream(stopped / "summary.json"))["restarted_from_s"].get<double>(), 0.0);
+  EXPECT_TRUE(file_text(dir / "direct" / "probes.csv") == file_text(stopped / "probes.csv"));
+  EXPECT_TRUE(fd == frames(stopped)) << "the frames of the run to 1 s";
+  // The completed run continued to the same end runs its last steps again
+  // and leaves the same files.
+  const auto again = dir / "again";
+  std::filesystem::copy(dir / "direct", again, std::filesystem::copy_options::recursive);
+  const auto a = run_cli(job, again, 2, "--restart");
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  expect_same_output(dir / "direct", again, "the same end");
+
+  // Thermal only, frames every 1 s, probes every 0.1 s, to 4 s.
+  const auto tdir = temp_dir("restart_extend_thermal");
+  const auto tjob =
+      write_job(tdir, read_job_document(source_dir() / "share" / "verification" / "patch_contact.json"));
+  ASSERT_EQ(run_cli(tjob, tdir / "direct", 2).exit_code, 0);
+  // time.end off the frame and probe times: the checkpoint before the last step.
+  ASSERT_EQ(run_cli(tjob, tdir / "off", 2, "--set time.end=2.55").exit_code, 0);
+  const auto off = run_cli(tjob, tdir / "off", 1, "--restart");
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  const json so = json::parse(std::ifstream(tdir / "off" / "summary.json"));
+  EXPECT_LT(so["restarted_from_s"].get<double>(), 2.55);
+  expect_same_output(tdir / "direct", tdir / "off", "thermal, extended from 2.55 s");
+  // On a frame time: the end state; continued to the same end, refused.
+  ASSERT_EQ(run_cli(tjob, tdir / "on", 2, "--set time.end=2").exit_code, 0);
+  const std::string probes = file_text(tdir / "on" / "probes.csv");
+  const auto same = run_cli(tjob, tdir / "on", 1, "--restart --set time.end=2");
+  EXPECT_EQ(same.exit_code, 2);
+  EXPECT_NE(same.err.find("error: /time/end: --restart: the checkpoint is at t = 2 s, the end of the run that wrote "
+                          "it, not before time.end = 2 s; to extend the run, set a later time.end"),
+            std::string::npos)
+      << same.err;
+  EXPECT_EQ(std::count(same.err.begin(), same.err.end(), '\n'), 1) << same.err;
+  EXPECT_EQ(file_text(tdir / "on" / "probes.csv"), probes) << "nothing touched";
+  const auto on = run_cli(tjob, tdir / "on", 1, "--restart");
+  ASSERT_EQ(on.exit_code, 0) << on.err;
+  const json sn = json::parse(std::ifstream(tdir / "on" / "summary.json"));
+  EXPECT_EQ(sn["restarted_from_s"].get<double>(), 2.0);
+  expect_same_output(tdir / "direct", tdir / "on", "thermal, extended from 2 s");
 }
 
 // `thermostamp study --restart`: a study stopped by SIGTERM in the middle of
