@@ -11,6 +11,7 @@ namespace {
 // any run can take: refused at input (see the output section).
 constexpr double kMaxFrames = 1e6;
 constexpr double kMaxProbeSamples = 1e7;
+constexpr double kMaxSeriesRows = 1e6;  // energy.csv rows, kept in memory until the end
 }  // namespace
 
 bool RegionDef::contains(double x, double y) const {
@@ -585,6 +586,13 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
                                            " s (at most " + fmt_number(kMaxFrames) + ")");
     job.output.checkpoint_interval = r.real("checkpoint_interval", 0.0, 0.0);
     job.output.checkpoint_at_end = r.boolean("checkpoint_at_end", true);
+    job.output.series_interval = r.real("series_interval", 0.0, 0.0);
+    if (const double rows = job.t_end / job.output.series_interval;
+        job.output.series_interval > 0 && job.mechanics && rows > kMaxSeriesRows)
+      throw JobError(r.at("series_interval"), "an interval of " + fmt_number(job.output.series_interval) +
+                                                  " s would write " + fmt_number(rows) + " rows over " +
+                                                  fmt_number(job.t_end) + " s (at most " +
+                                                  fmt_number(kMaxSeriesRows) + ")");
     job.output.fields = r.texts("fields", std::vector<std::string>{"temperature"});
     for (std::size_t i = 0; i < job.output.fields.size(); ++i) {
       const auto& f = job.output.fields[i];

@@ -147,6 +147,7 @@ struct OutputDef {
   double interval = 0;
   double checkpoint_interval = 0;  // s of simulated time between checkpoints, 0: only when interrupted
   bool checkpoint_at_end = true;    // a checkpoint at time.end too (from which a later time.end extends the run)
+  double series_interval = 0;       // s between the rows of energy.csv and tools.csv, 0: time.end / 500
   std::vector<std::string> fields;
   std::vector<ProbeDef> probes;
 };

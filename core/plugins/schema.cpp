@@ -218,6 +218,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
            {{"interval", {{"type", "number"}, {"exclusiveMinimum", 0}}},
             {"checkpoint_interval", {{"type", "number"}, {"minimum", 0}}},
             {"checkpoint_at_end", {{"type", "boolean"}}},
+            {"series_interval", {{"type", "number"}, {"minimum", 0}}},
             {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}},
             {"probes", {{"type", "array"}, {"items", probe}}}}},
           {"additionalProperties", false}}}}},

@@ -2363,6 +2363,8 @@ RunResult Simulation::run(const RunOptions& opt) {
   int subcycle = job_.thermal ? job_.thermal->subcycle : 0;
   double stable = 0;
   double next_sample = 0, audit_scale = 0, supplied_max = 0;
+  // s between the rows of energy.csv and tools.csv
+  const double series_iv = job_.output.series_interval > 0 ? job_.output.series_interval : t_end / 500;
   // What a failed audit blames: an unstable step, or a start with loaded
   // contact springs, whose release at once the audit cannot follow.
   std::string unstable = "the run is unstable (step too large?)";
@@ -2471,12 +2473,14 @@ RunResult Simulation::run(const RunOptions& opt) {
       if (!run_io(r) || !r.done()) throw JobError("", "--restart: the checkpoint does not fit this job (run state)");
       t = resume_t;
       restarted_from = t;
-      // Another time.end (a run extended, or ended earlier): the energy
-      // and tool rows go on at this run's spacing, and where the frame
-      // interval is time.end's default, the frames at this run's interval.
+      // Another time.end (a run extended, or ended earlier): where the row
+      // and frame intervals are time.end's defaults, the energy and tool
+      // rows and the frames go on at this run's.
       if (const double was = checkpoint_t_end(*opt.restart); was != t_end) {
-        next_sample = 0;
-        advance_past(next_sample, t_end / 500, t + eps_t);
+        if (job_.output.series_interval <= 0) {
+          next_sample = 0;
+          advance_past(next_sample, series_iv, t + eps_t);
+        }
         if (checkpoint_frame_interval(*opt.restart) != interval)
           frame_index = static_cast<long long>(std::floor((t + eps_t) / interval)) + 1;
         log->info("time.end {:.6g} s instead of the checkpointed run's {:.6g} s", t_end, was);
@@ -2636,7 +2640,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             energy_csv << ',' << csv_number(audit.kinetic_half) << '\n';
           }
           if (!tools_.empty()) sample_tools(t);
-          next_sample += t_end / 500;
+          next_sample += series_iv;
         }
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
           const double iv = job_.output.probes[q].interval > 0 ? job_.output.probes[q].interval : interval;

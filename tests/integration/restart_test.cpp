@@ -409,6 +409,25 @@ TEST(Restart, ExtendsAFinishedRunAsARunToTheLaterEnd) {
   ASSERT_EQ(a.exit_code, 0) << a.err;
   expect_same_output(dir / "direct", again, "the same end");
 
+  // With output.series_interval the rows' spacing does not depend on
+  // time.end either: the extended run gives every file of the run to 1 s.
+  json rows = coarse_hemisphere("hemisphere_ud_2ply.json");
+  rows["output"]["series_interval"] = 0.002;
+  const auto rdir = temp_dir("restart_extend_rows");
+  const auto rjob = write_job(rdir, rows);
+  ASSERT_EQ(run_cli(rjob, rdir / "direct", 2).exit_code, 0);
+  ASSERT_EQ(run_cli(rjob, rdir / "extended", 2, "--set time.end=0.5").exit_code, 0);
+  const auto re = run_cli(rjob, rdir / "extended", 1, "--restart");
+  ASSERT_EQ(re.exit_code, 0) << re.err;
+  expect_same_output(rdir / "direct", rdir / "extended", "rows every 2 ms");
+  // One row at t = 0 and one at the first step at or after each multiple.
+  EXPECT_EQ(rows_after(rdir / "direct" / "energy.csv", -1).size(), 501u);
+  const auto many = thermostamp("validate " + q(rjob) + " --set output.series_interval=1e-7");
+  EXPECT_EQ(many.exit_code, 2);
+  EXPECT_NE(many.err.find("error: /output/series_interval: an interval of 1e-07 s would write 1e+07 rows"),
+            std::string::npos)
+      << many.err;
+
   // Thermal only, frames every 1 s, probes every 0.1 s, to 4 s.
   const auto tdir = temp_dir("restart_extend_thermal");
   const auto tjob =
