@@ -1864,24 +1864,21 @@ static json restart_match(json d) {
   return d;
 }
 
-// time.end of the run that wrote a checkpoint (s), NaN where it lacks one.
-static double checkpoint_t_end(const Checkpoint& c) {
+// The time.end and frame interval (its output.interval, by default its
+// time.end) of the run that wrote a checkpoint, s; NaN where absent.
+struct CheckpointTimes {
+  double t_end, interval;
+};
+static CheckpointTimes checkpoint_times(const Checkpoint& c) {
   const auto& bytes = c.section("job");
   const json d = json::parse(bytes.begin(), bytes.end());
-  if (d.contains("time") && d["time"].is_object() && d["time"].contains("end") && d["time"]["end"].is_number())
-    return d["time"]["end"].get<double>();
-  return std::numeric_limits<double>::quiet_NaN();
-}
-
-// The frame interval of the run that wrote a checkpoint (s): its
-// output.interval, by default its time.end.
-static double checkpoint_frame_interval(const Checkpoint& c) {
-  const auto& bytes = c.section("job");
-  const json d = json::parse(bytes.begin(), bytes.end());
-  if (d.contains("output") && d["output"].is_object() && d["output"].contains("interval") &&
-      d["output"]["interval"].is_number())
-    return d["output"]["interval"].get<double>();
-  return checkpoint_t_end(c);
+  auto number = [&](const char* section, const char* key) {
+    if (d.contains(section) && d[section].is_object() && d[section].contains(key) && d[section][key].is_number())
+      return d[section][key].get<double>();
+    return std::numeric_limits<double>::quiet_NaN();
+  };
+  const double t_end = number("time", "end"), interval = number("output", "interval");
+  return {t_end, std::isnan(interval) ? t_end : interval};
 }
 
 double Simulation::check_restart(const Checkpoint& c) const {
@@ -1897,7 +1894,7 @@ double Simulation::check_restart(const Checkpoint& c) const {
     if (!r.get(t)) throw JobError("", what + "the checkpoint's run section is truncated");
     // The same margin as the run's end test (a billionth of a step or interval).
     if (t >= job_.t_end * (1 - 1e-12)) {
-      const double was = checkpoint_t_end(c);
+      const double was = checkpoint_times(c).t_end;
       throw JobError("/time/end", what + "the checkpoint is at t = " + fmt_g(t, 9) + " s" +
                                       (t >= was * (1 - 1e-12) ? ", the end of the run that wrote it" : "") +
                                       ", not before time.end = " + fmt_g(job_.t_end, 9) +
@@ -2476,14 +2473,13 @@ RunResult Simulation::run(const RunOptions& opt) {
       // Another time.end (a run extended, or ended earlier): where the row
       // and frame intervals are time.end's defaults, the energy and tool
       // rows and the frames go on at this run's.
-      if (const double was = checkpoint_t_end(*opt.restart); was != t_end) {
+      if (const CheckpointTimes was = checkpoint_times(*opt.restart); was.t_end != t_end) {
         if (job_.output.series_interval <= 0) {
           next_sample = 0;
           advance_past(next_sample, series_iv, t + eps_t);
         }
-        if (checkpoint_frame_interval(*opt.restart) != interval)
-          frame_index = static_cast<long long>(std::floor((t + eps_t) / interval)) + 1;
-        log->info("time.end {:.6g} s instead of the checkpointed run's {:.6g} s", t_end, was);
+        if (was.interval != interval) frame_index = static_cast<long long>(std::floor((t + eps_t) / interval)) + 1;
+        log->info("time.end {:.6g} s instead of the checkpointed run's {:.6g} s", t_end, was.t_end);
       }
       if (checkpoint_iv > 0) {  // the interval of this run, from the checkpoint on
         next_checkpoint = 0;
