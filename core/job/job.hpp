@@ -155,7 +155,8 @@ struct OutputDef {
 struct Job {
   std::string name;
   std::filesystem::path file, base_dir;
-  json document;  // after --set overrides
+  json document;         // after --set overrides
+  json document_as_run;  // the same with its file paths made absolute (job.json of the output folder)
   double t_end = 0;
   std::vector<MaterialDef> materials;
   std::vector<PartDef> parts;

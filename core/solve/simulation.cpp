@@ -1884,8 +1884,12 @@ static CheckpointTimes checkpoint_times(const Checkpoint& c) {
 double Simulation::check_restart(const Checkpoint& c) const {
   const std::string what = "--restart: ";
   try {
+    // The job as run (file paths absolute; checkpoints of 0.16.0 hold the
+    // document as given): the job file or the output folder's job.json.
     const auto& job = c.section("job");
-    if (restart_match(json::parse(job.begin(), job.end())) != restart_match(restart_document(job_.document)))
+    const json stored = restart_match(json::parse(job.begin(), job.end()));
+    if (stored != restart_match(restart_document(job_.document_as_run)) &&
+        stored != restart_match(restart_document(job_.document)))
       throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
                                 "needs the job of the run it continues (time.end, output.checkpoint_interval and "
                                 "output.checkpoint_at_end may differ)");
@@ -2138,6 +2142,10 @@ RunResult Simulation::run(const RunOptions& opt) {
     // A new run replaces the folder's results: a checkpoint of an earlier
     // run there no longer fits them.
     if (!opt.restart) std::filesystem::remove(opt.out_dir / kCheckpointFile);
+    // The job as run (after --set, file paths absolute): `thermostamp run
+    // DIR/job.json` runs it again, from anywhere.
+    if (std::ofstream jf(opt.out_dir / "job.json"); !(jf << job_.document_as_run.dump(2) << '\n'))
+      throw RunError("cannot write " + (opt.out_dir / "job.json").string());
     std::vector<WriterPart> wparts;
     const bool layers = std::find(job_.output.fields.begin(), job_.output.fields.end(), "temperature") !=
                         job_.output.fields.end();
@@ -2444,7 +2452,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     if (!writer) return;
     const auto tc = Clock::now();
     Checkpoint c;
-    const std::string doc = restart_document(job_.document).dump();
+    const std::string doc = restart_document(job_.document_as_run).dump();
     c.add("job", std::vector<unsigned char>(doc.begin(), doc.end()));
     sdk::StateWriter w;
     w.put(t);
@@ -2789,6 +2797,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     update_derived();
     json summary;
     summary["job"] = job_.name;
+    summary["job_file"] = std::filesystem::absolute(job_.file).lexically_normal().string();
     summary["status"] = result.ok ? "completed" : result.interrupted ? "interrupted" : "failed";
     summary["version"] = kVersion;
     summary["threads"] = threads;

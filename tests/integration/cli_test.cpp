@@ -855,6 +855,49 @@ json short_hemisphere(double t_end, double interval, int cells) {
   return j;
 }
 
+// The output folder's job.json is the job as run: the --set values in it,
+// its file paths absolute. Run from another folder it gives the same
+// results, and a restart accepts it as the run's job.
+TEST(Output, JobAsRunRunsTheSameJobFromAnywhere) {
+  const auto job = small_job("job_as_run", [](json& j) {
+    j["tools"][0]["surface"] = {{"type", "mesh"}, {"file", "die.stl"}};
+  });
+  const auto dir = job.parent_path();
+  {
+    std::ofstream s(dir / "die.stl");  // the plane z = 0, normal +z, beyond the plies
+    s << "solid die\n";
+    for (const auto& tri : {std::array<double, 6>{-0.01, -0.01, 0.06, -0.01, 0.06, 0.06},
+                            std::array<double, 6>{-0.01, -0.01, 0.06, 0.06, -0.01, 0.06}}) {
+      s << " facet normal 0 0 1\n  outer loop\n";
+      for (int k = 0; k < 3; ++k) s << "   vertex " << tri[2 * k] << ' ' << tri[2 * k + 1] << " 0\n";
+      s << "  endloop\n endfacet\n";
+    }
+    s << "endsolid die\n";
+  }
+  const auto out = dir / "out";
+  const auto r = thermostamp("run " + q(job) + " --out " + q(out) + " --quiet --set output.interval=0.5");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json as_run = json::parse(std::ifstream(out / "job.json"));
+  EXPECT_EQ(as_run["output"]["interval"], 0.5);
+  const std::string stl = as_run["tools"][0]["surface"]["file"].get<std::string>();
+  EXPECT_TRUE(std::filesystem::path(stl).is_absolute()) << stl;
+  EXPECT_TRUE(std::filesystem::equivalent(stl, dir / "die.stl")) << stl;
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_TRUE(std::filesystem::equivalent(s["job_file"].get<std::string>(), job));
+  EXPECT_LT(s["tools"][0]["heat_to_plies_J"].get<double>(), -10.0) << "the die, read from its mesh, cools the plies";
+  // Beside the results, not the mesh: the relative path would not be found.
+  const auto again = dir / "again";
+  const auto a = thermostamp("run " + q(out / "job.json") + " --out " + q(again) + " --quiet");
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const auto c = thermostamp("compare " + q(out) + " " + q(again));
+  EXPECT_EQ(c.exit_code, 0) << c.out;
+  // The run extended with its job.json.
+  const auto e = thermostamp("run " + q(out / "job.json") + " --out " + q(out) + " --quiet --restart --set time.end=1.5");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_EQ(json::parse(std::ifstream(out / "summary.json"))["simulated_time_s"], 1.5);
+  EXPECT_EQ(json::parse(std::ifstream(out / "job.json"))["time"]["end"], 1.5);
+}
+
 // Every dataset of a frame carries its units (attribute "units", the user
 // guide's table), and each series the units of its columns beside their
 // names: the hemisphere scene, coarse and short, with every field.
