@@ -651,12 +651,17 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
   // output folder, it runs the same job from anywhere.
   json& run_doc = job.document_as_run;
   run_doc = doc;
-  auto absolute = [](const std::filesystem::path& p) { return std::filesystem::absolute(p).lexically_normal().string(); };
+  auto absolute = [](const std::filesystem::path& p) {
+    return std::filesystem::absolute(p).lexically_normal().string();
+  };
   for (std::size_t i = 0; i < job.parts.size(); ++i)
-    if (job.parts[i].mesh.kind == MeshDef::Kind::File) run_doc["parts"][i]["mesh"]["file"] = absolute(job.parts[i].mesh.file);
+    if (job.parts[i].mesh.kind == MeshDef::Kind::File)
+      run_doc["parts"][i]["mesh"]["file"] = absolute(job.parts[i].mesh.file);
   for (std::size_t i = 0; i < job.tools.size(); ++i)
-    if (!job.tools[i].surface.file.empty()) run_doc["tools"][i]["surface"]["file"] = absolute(job.tools[i].surface.file);
-  for (std::size_t i = 0; i < job.plugin_paths.size(); ++i) run_doc["plugin_paths"][i] = absolute(job.plugin_paths[i]);
+    if (!job.tools[i].surface.file.empty())
+      run_doc["tools"][i]["surface"]["file"] = absolute(job.tools[i].surface.file);
+  for (std::size_t i = 0; i < job.plugin_paths.size(); ++i)
+    run_doc["plugin_paths"][i] = absolute(job.plugin_paths[i]);
   return job;
 }
 

@@ -1885,7 +1885,7 @@ double Simulation::check_restart(const Checkpoint& c) const {
   const std::string what = "--restart: ";
   try {
     // The job as run (file paths absolute; checkpoints of 0.16.0 hold the
-    // document as given): the job file or the output folder's job.json.
+    // document as given): the job file or the output folder's job_as_run.json.
     const auto& job = c.section("job");
     const json stored = restart_match(json::parse(job.begin(), job.end()));
     if (stored != restart_match(restart_document(job_.document_as_run)) &&
@@ -2143,9 +2143,9 @@ RunResult Simulation::run(const RunOptions& opt) {
     // run there no longer fits them.
     if (!opt.restart) std::filesystem::remove(opt.out_dir / kCheckpointFile);
     // The job as run (after --set, file paths absolute): `thermostamp run
-    // DIR/job.json` runs it again, from anywhere.
-    if (std::ofstream jf(opt.out_dir / "job.json"); !(jf << job_.document_as_run.dump(2) << '\n'))
-      throw RunError("cannot write " + (opt.out_dir / "job.json").string());
+    // DIR/job_as_run.json` runs it again, from anywhere.
+    if (std::ofstream jf(opt.out_dir / "job_as_run.json"); !(jf << job_.document_as_run.dump(2) << '\n'))
+      throw RunError("cannot write " + (opt.out_dir / "job_as_run.json").string());
     std::vector<WriterPart> wparts;
     const bool layers = std::find(job_.output.fields.begin(), job_.output.fields.end(), "temperature") !=
                         job_.output.fields.end();

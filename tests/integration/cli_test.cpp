@@ -855,7 +855,7 @@ json short_hemisphere(double t_end, double interval, int cells) {
   return j;
 }
 
-// The output folder's job.json is the job as run: the --set values in it,
+// The output folder's job_as_run.json is the job as run: the --set values in it,
 // its file paths absolute. Run from another folder it gives the same
 // results, and a restart accepts it as the run's job.
 TEST(Output, JobAsRunRunsTheSameJobFromAnywhere) {
@@ -877,7 +877,7 @@ TEST(Output, JobAsRunRunsTheSameJobFromAnywhere) {
   const auto out = dir / "out";
   const auto r = thermostamp("run " + q(job) + " --out " + q(out) + " --quiet --set output.interval=0.5");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const json as_run = json::parse(std::ifstream(out / "job.json"));
+  const json as_run = json::parse(std::ifstream(out / "job_as_run.json"));
   EXPECT_EQ(as_run["output"]["interval"], 0.5);
   const std::string stl = as_run["tools"][0]["surface"]["file"].get<std::string>();
   EXPECT_TRUE(std::filesystem::path(stl).is_absolute()) << stl;
@@ -887,15 +887,22 @@ TEST(Output, JobAsRunRunsTheSameJobFromAnywhere) {
   EXPECT_LT(s["tools"][0]["heat_to_plies_J"].get<double>(), -10.0) << "the die, read from its mesh, cools the plies";
   // Beside the results, not the mesh: the relative path would not be found.
   const auto again = dir / "again";
-  const auto a = thermostamp("run " + q(out / "job.json") + " --out " + q(again) + " --quiet");
+  const auto a = thermostamp("run " + q(out / "job_as_run.json") + " --out " + q(again) + " --quiet");
   ASSERT_EQ(a.exit_code, 0) << a.err;
   const auto c = thermostamp("compare " + q(out) + " " + q(again));
   EXPECT_EQ(c.exit_code, 0) << c.out;
-  // The run extended with its job.json.
-  const auto e = thermostamp("run " + q(out / "job.json") + " --out " + q(out) + " --quiet --restart --set time.end=1.5");
+  // The run extended with its job_as_run.json.
+  const auto e = thermostamp("run " + q(out / "job_as_run.json") + " --out " + q(out) +
+                             " --quiet --restart --set time.end=1.5");
   ASSERT_EQ(e.exit_code, 0) << e.err;
   EXPECT_EQ(json::parse(std::ifstream(out / "summary.json"))["simulated_time_s"], 1.5);
-  EXPECT_EQ(json::parse(std::ifstream(out / "job.json"))["time"]["end"], 1.5);
+  EXPECT_EQ(json::parse(std::ifstream(out / "job_as_run.json"))["time"]["end"], 1.5);
+  // A run into the job file's own folder leaves the job file as it is.
+  std::stringstream before, after;
+  before << std::ifstream(job).rdbuf();
+  ASSERT_EQ(thermostamp("run " + q(job) + " --out " + q(dir) + " --quiet --set time.end=0.5").exit_code, 0);
+  after << std::ifstream(job).rdbuf();
+  EXPECT_EQ(after.str(), before.str());
 }
 
 // Every dataset of a frame carries its units (attribute "units", the user
