@@ -861,8 +861,21 @@ json short_hemisphere(double t_end, double interval, int cells) {
 TEST(Output, JobAsRunRunsTheSameJobFromAnywhere) {
   const auto job = small_job("job_as_run", [](json& j) {
     j["tools"][0]["surface"] = {{"type", "mesh"}, {"file", "die.stl"}};
+    j["parts"][0]["mesh"] = {{"file", "lower.msh"}};
   });
   const auto dir = job.parent_path();
+  {  // the lower ply's rectangle, 4 x 4 cells
+    std::ofstream m(dir / "lower.msh");
+    m << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n25\n";
+    for (int k = 0; k < 25; ++k) m << k + 1 << ' ' << 0.0125 * (k % 5) << ' ' << 0.0125 * (k / 5) << " 0.00025\n";
+    m << "$EndNodes\n$Elements\n32\n";
+    for (int c = 0; c < 16; ++c) {
+      const int a = c / 4 * 5 + c % 4 + 1, b = a + 1, d = a + 5, e = d + 1;
+      m << 2 * c + 1 << " 2 2 0 1 " << a << ' ' << b << ' ' << e << '\n'
+        << 2 * c + 2 << " 2 2 0 1 " << a << ' ' << e << ' ' << d << '\n';
+    }
+    m << "$EndElements\n";
+  }
   {
     std::ofstream s(dir / "die.stl");  // the plane z = 0, normal +z, beyond the plies
     s << "solid die\n";
@@ -882,6 +895,9 @@ TEST(Output, JobAsRunRunsTheSameJobFromAnywhere) {
   const std::string stl = as_run["tools"][0]["surface"]["file"].get<std::string>();
   EXPECT_TRUE(std::filesystem::path(stl).is_absolute()) << stl;
   EXPECT_TRUE(std::filesystem::equivalent(stl, dir / "die.stl")) << stl;
+  const std::string msh = as_run["parts"][0]["mesh"]["file"].get<std::string>();
+  EXPECT_TRUE(std::filesystem::path(msh).is_absolute()) << msh;
+  EXPECT_TRUE(std::filesystem::equivalent(msh, dir / "lower.msh")) << msh;
   const json s = json::parse(std::ifstream(out / "summary.json"));
   EXPECT_TRUE(std::filesystem::equivalent(s["job_file"].get<std::string>(), job));
   EXPECT_LT(s["tools"][0]["heat_to_plies_J"].get<double>(), -10.0) << "the die, read from its mesh, cools the plies";
