@@ -12,8 +12,9 @@ namespace ts::cli {
 // stopped with a checkpoint continues from it.
 int run_study(const std::filesystem::path& study, const std::filesystem::path& out, int threads, bool quiet,
               bool flush_subnormals, bool restart = false, double checkpoint_wall_s = 0);
-// Runs the plotting script on an output folder; returns its exit status.
-int run_report(const std::filesystem::path& dir);
+// Runs the plotting script on an output folder (and, when `against` is not
+// empty, draws the two runs on the same axes); returns its exit status.
+int run_report(const std::filesystem::path& dir, const std::filesystem::path& against = {});
 std::filesystem::path share_dir();
 
 }  // namespace ts::cli

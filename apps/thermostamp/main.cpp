@@ -29,7 +29,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp schema                 # JSON Schema of job files, from the plugins found
   thermostamp study STUDY.json [--out DIR] [--threads N] [--quiet] [--keep-subnormals]
                   [--restart] [--checkpoint-minutes M]
-  thermostamp report DIR
+  thermostamp report DIR [--against OTHER]   # PNG figures into DIR/figures (with OTHER: both runs on the same axes)
   thermostamp compare DIR_A DIR_B [--json] [--rtol R]   # how far two runs' results are apart
   thermostamp --version
 
@@ -69,6 +69,7 @@ struct Args {
   bool quiet = false, json = false, markdown = false, keep_subnormals = false, restart = false;
   double checkpoint_minutes = 0;
   double rtol = -1;  // compare: the relative tolerance (-1: exact)
+  std::string against;  // report: the other run's folder
 };
 
 // The finite number t of option opt, above 0 (or at least 0 with
@@ -110,6 +111,8 @@ Args parse(int argc, char** argv) {
       } catch (const std::exception&) {
         throw UsageError("--threads expects a positive integer, found '" + t + "'");
       }
+    } else if (s == "--against") {
+      a.against = value(s);
     } else if (s == "--rtol") {
       a.rtol = finite_number(s, value(s), true, "a number of at least 0");
     } else if (s == "--checkpoint-minutes") {
@@ -280,7 +283,7 @@ int main(int argc, char** argv) {
     }
     if (a.command == "report") {
       if (a.positional.size() != 1) throw UsageError("expected one output folder");
-      return ts::cli::run_report(a.positional[0]);
+      return ts::cli::run_report(a.positional[0], a.against);
     }
     throw UsageError("unknown command '" + a.command + "'");
   } catch (const UsageError& e) {

@@ -30,14 +30,17 @@ std::filesystem::path share_dir() {
   return THERMOSTAMP_SOURCE_SHARE_DIR;
 }
 
-int run_report(const std::filesystem::path& dir) {
-  if (!std::filesystem::is_directory(dir)) {
-    std::cerr << "error: '" << dir.string() << "' is not a folder\n";
-    return 2;
+int run_report(const std::filesystem::path& dir, const std::filesystem::path& against) {
+  for (const auto& d : {dir, against}) {
+    if (!d.empty() && !std::filesystem::is_directory(d)) {
+      std::cerr << "error: '" << d.string() << "' is not a folder\n";
+      return 2;
+    }
   }
   const auto script = share_dir() / "scripts" / "report.py";
   const std::string python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-  const std::string cmd = python + " '" + script.string() + "' '" + dir.string() + "'";
+  std::string cmd = python + " '" + script.string() + "' '" + dir.string() + "'";
+  if (!against.empty()) cmd += " --against '" + against.string() + "'";
   const int rc = std::system(cmd.c_str());
   return rc == 0 ? 0 : 3;
 }

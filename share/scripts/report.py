@@ -14,6 +14,18 @@ Writes into DIR/figures/:
                        (punch force against stroke), and heat per tool
   energy.png           energy audit against time
   study.png            error against wall time when DIR holds a study.csv
+
+With --against OTHER (thermostamp report DIR --against OTHER), also the
+two runs on the same axes, DIR solid and OTHER dashed, into
+DIR/figures/against/:
+  probes.png           every scalar probe quantity the two runs share,
+                       against time
+  profiles.png         the through-thickness temperature of every probe
+                       they share, at the start, the middle and the end
+                       of the shorter run
+  tools.png            force on each tool along z and heat per tool,
+                       against time
+  energy.png           internal, kinetic and contact energy against time
 """
 import csv
 import os
@@ -254,6 +266,103 @@ def plot_energy(folder, out):
     return [save(fig, out, "energy.png")]
 
 
+UNITS = {"temperature_mean": "degC", "displacement_x": "m", "displacement_y": "m", "displacement_z": "m",
+         "shear_angle": "deg", "fibre_strain": "", "contact_pressure": "Pa"}
+
+
+def grid(n, width=4.2, height=3.0):
+    """A figure with n subplots on up to three columns; the axes in a list."""
+    cols = min(3, max(n, 1))
+    rows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False)
+    axes = list(axes.flat)
+    for a in axes[n:]:
+        a.set_visible(False)
+    return fig, axes[:n]
+
+
+def against(folder, other, out):
+    """The figures of two runs on the same axes (folder solid, other dashed)."""
+    la, lb = os.path.basename(os.path.normpath(folder)), os.path.basename(os.path.normpath(other))
+    made = []
+
+    def both(name):
+        return os.path.exists(os.path.join(folder, name)) and os.path.exists(os.path.join(other, name))
+
+    if both("probes.csv"):
+        pa, pb = read_probes(os.path.join(folder, "probes.csv")), read_probes(os.path.join(other, "probes.csv"))
+        shared = sorted(k for k in pa if k in pb)
+        scalars = [k for k in shared if k[1] != "temperature_profile"]
+        if scalars:
+            fig, axes = grid(len(scalars))
+            for ax, (probe, quantity) in zip(axes, scalars):
+                for rows, ls, lab in ((pa[probe, quantity], "-", la), (pb[probe, quantity], "--", lb)):
+                    ax.plot([r[0] for r in rows], [r[2] for r in rows], ls, label=lab)
+                unit = UNITS.get(quantity, "")
+                ax.set_title("%s, %s" % (probe, quantity), fontsize=9)
+                ax.set_xlabel("time (s)")
+                ax.set_ylabel(quantity + (" (%s)" % unit if unit else ""))
+                ax.grid(alpha=0.3)
+                ax.legend(fontsize=7)
+            made.append(save(fig, out, "probes.png"))
+        profiles = [k for k in shared if k[1] == "temperature_profile"]
+        if profiles:
+            fig, axes = grid(len(profiles), 4.2, 3.6)
+            for ax, key in zip(axes, profiles):
+                ta, tb = sorted(set(r[0] for r in pa[key])), sorted(set(r[0] for r in pb[key]))
+                end = min(ta[-1], tb[-1])
+                for k, t in enumerate((0.0, end / 2, end)):
+                    for rows, times, ls, lab in ((pa[key], ta, "-", la), (pb[key], tb, "--", lb)):
+                        near = min(times, key=lambda x: abs(x - t))
+                        pts = sorted((r[1], r[2]) for r in rows if r[0] == near)
+                        ax.plot([p[1] for p in pts], [p[0] * 1e3 for p in pts], ls, color="C%d" % k,
+                                marker="." if len(pts) < 30 else None,
+                                label="%s, t = %.3g s" % (lab, near))
+                ax.set_title("profile, probe %s" % key[0], fontsize=9)
+                ax.set_xlabel("temperature (degC)")
+                ax.set_ylabel("z from mid-plane (mm)")
+                ax.grid(alpha=0.3)
+                ax.legend(fontsize=6)
+            made.append(save(fig, out, "profiles.png"))
+    if both("tools.csv"):
+        ra = list(csv.DictReader(open(os.path.join(folder, "tools.csv"))))
+        rb = list(csv.DictReader(open(os.path.join(other, "tools.csv"))))
+        names = [n for n in dict.fromkeys(r["tool"] for r in ra) if any(r["tool"] == n for r in rb)]
+        if names:
+            fig, axes = grid(2 * len(names))
+            for k, name in enumerate(names):
+                for rows, ls, lab in ((ra, "-", la), (rb, "--", lb)):
+                    rs = [r for r in rows if r["tool"] == name]
+                    t = [float(r["time"]) for r in rs]
+                    axes[2 * k].plot(t, [float(r["fz"]) for r in rs], ls, label=lab)
+                    axes[2 * k + 1].plot(t, [float(r["heat_J"]) for r in rs], ls, label=lab)
+                axes[2 * k].set_title("%s: force on the tool along z" % name, fontsize=9)
+                axes[2 * k].set_ylabel("fz (N)")
+                axes[2 * k + 1].set_title("%s: heat given to the plies" % name, fontsize=9)
+                axes[2 * k + 1].set_ylabel("heat (J)")
+            for ax in axes:
+                ax.set_xlabel("time (s)")
+                ax.grid(alpha=0.3)
+                ax.legend(fontsize=7)
+            made.append(save(fig, out, "tools.png"))
+    if both("energy.csv"):
+        ea = list(csv.DictReader(open(os.path.join(folder, "energy.csv"))))
+        eb = list(csv.DictReader(open(os.path.join(other, "energy.csv"))))
+        keys = [k for k in ("internal", "kinetic_half_step", "contact") if ea and eb and k in ea[0] and k in eb[0]]
+        if keys:
+            fig, axes = grid(len(keys))
+            for ax, key in zip(axes, keys):
+                for rows, ls, lab in ((ea, "-", la), (eb, "--", lb)):
+                    ax.plot([float(r["time"]) for r in rows], [float(r[key]) for r in rows], ls, label=lab)
+                ax.set_title(key, fontsize=9)
+                ax.set_xlabel("time (s)")
+                ax.set_ylabel("energy (J)")
+                ax.grid(alpha=0.3)
+                ax.legend(fontsize=7)
+            made.append(save(fig, out, "energy.png"))
+    return made
+
+
 def plot_study(folder, out):
     path = os.path.join(folder, "study.csv")
     rows = list(csv.DictReader(open(path)))
@@ -277,10 +386,15 @@ def plot_study(folder, out):
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.stderr.write("usage: report.py DIR\n")
+    args = sys.argv[1:]
+    other = None
+    if len(args) == 3 and args[1] == "--against":
+        other = args[2]
+        args = args[:1]
+    if len(args) != 1:
+        sys.stderr.write("usage: report.py DIR [--against OTHER]\n")
         return 2
-    folder = sys.argv[1]
+    folder = args[0]
     out = os.path.join(folder, "figures")
     os.makedirs(out, exist_ok=True)
     made, failed = [], 0
@@ -299,6 +413,22 @@ def main():
             sys.stderr.write("error: report: cannot plot %s: %s\n" % (os.path.join(folder, name), reason))
         finally:
             plt.close("all")
+    if other is not None:
+        apart = os.path.join(out, "against")
+        os.makedirs(apart, exist_ok=True)
+        try:
+            pair = against(folder, other, apart)
+        except Exception as e:  # noqa: BLE001 (any reader or plotting error)
+            pair = []
+            failed += 1
+            sys.stderr.write("error: report: cannot plot %s against %s: %s\n"
+                             % (folder, other, " ".join(str(e).split()) or type(e).__name__))
+        finally:
+            plt.close("all")
+        if not pair and not failed:
+            failed += 1
+            sys.stderr.write("error: report: %s and %s share no probe, tool or energy history\n" % (folder, other))
+        made += pair
     for m in made:
         print(m)
     if not made and not failed:

@@ -1166,6 +1166,38 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   EXPECT_EQ(none.err.rfind("error: report: nothing to plot in ", 0), 0u) << none.err;
 }
 
+// `thermostamp report A --against B`: the two runs on the same axes (here
+// adi against shell2d), beside A's own figures; another folder that is
+// not one, or that shares nothing with A, is named in one line.
+TEST(Cli, ReportDrawsTwoRunsOnTheSameAxes) {
+  const auto dir = temp_dir("report_against");
+  json j = short_hemisphere(0.01, 0.005, 4);
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const std::string run = "run " + q(dir / "job.json") + " --quiet --out ";
+  ASSERT_EQ(thermostamp(run + q(dir / "adi")).exit_code, 0);
+  ASSERT_EQ(thermostamp(run + q(dir / "shell2d") + " --set solvers.thermal.splitter=shell2d").exit_code, 0);
+  const auto r = thermostamp("report " + q(dir / "adi") + " --against " + q(dir / "shell2d"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"against/probes.png", "against/profiles.png", "against/tools.png", "against/energy.png",
+                        "shear_ply_top.png"}) {
+    std::ifstream png(dir / "adi" / "figures" / f, std::ios::binary);
+    char magic[4] = {0, 0, 0, 0};
+    png.read(magic, 4);
+    EXPECT_EQ(std::string(magic + 1, 3), "PNG") << f;
+  }
+  const auto none = thermostamp("report " + q(dir / "adi") + " --against " + q(dir / "nowhere"));
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_EQ(none.err, "error: '" + (dir / "nowhere").string() + "' is not a folder\n");
+  const auto empty = temp_dir("report_against_empty");
+  const auto nothing = thermostamp("report " + q(dir / "adi") + " --against " + q(empty));
+  EXPECT_EQ(nothing.exit_code, 3);
+  EXPECT_NE(nothing.err.find("error: report: " + (dir / "adi").string() + " and " + empty.string() +
+                             " share no probe, tool or energy history"),
+            std::string::npos)
+      << nothing.err;
+  EXPECT_EQ(std::count(nothing.err.begin(), nothing.err.end(), '\n'), 1) << nothing.err;
+}
+
 // A ply that starts half inside the die: the release of the loaded contact
 // springs breaks the energy audit, and the failure names that start, not
 // only an unstable step.
