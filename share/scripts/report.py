@@ -281,84 +281,77 @@ def grid(n, width=4.2, height=3.0):
     return fig, axes[:n]
 
 
+def finish(ax, title, xlabel, ylabel, legend_size=7):
+    """Title, axis labels, grid and legend of one of the paired plots."""
+    ax.set_title(title, fontsize=9)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=legend_size)
+
+
 def against(folder, other, out):
     """The figures of two runs on the same axes (folder solid, other dashed)."""
-    la, lb = os.path.basename(os.path.normpath(folder)), os.path.basename(os.path.normpath(other))
+    runs = ((folder, "-", os.path.basename(os.path.normpath(folder))),
+            (other, "--", os.path.basename(os.path.normpath(other))))
     made = []
 
     def both(name):
-        return os.path.exists(os.path.join(folder, name)) and os.path.exists(os.path.join(other, name))
+        return all(os.path.exists(os.path.join(d, name)) for d, _, _ in runs)
+
+    def table(d, name):
+        with open(os.path.join(d, name)) as f:
+            return list(csv.DictReader(f))
 
     if both("probes.csv"):
-        pa, pb = read_probes(os.path.join(folder, "probes.csv")), read_probes(os.path.join(other, "probes.csv"))
-        shared = sorted(k for k in pa if k in pb)
+        data = [read_probes(os.path.join(d, "probes.csv")) for d, _, _ in runs]
+        shared = sorted(k for k in data[0] if k in data[1])
         scalars = [k for k in shared if k[1] != "temperature_profile"]
         if scalars:
             fig, axes = grid(len(scalars))
-            for ax, (probe, quantity) in zip(axes, scalars):
-                for rows, ls, lab in ((pa[probe, quantity], "-", la), (pb[probe, quantity], "--", lb)):
+            for ax, key in zip(axes, scalars):
+                for rows, (_, ls, lab) in zip((data[0][key], data[1][key]), runs):
                     ax.plot([r[0] for r in rows], [r[2] for r in rows], ls, label=lab)
-                unit = UNITS.get(quantity, "")
-                ax.set_title("%s, %s" % (probe, quantity), fontsize=9)
-                ax.set_xlabel("time (s)")
-                ax.set_ylabel(quantity + (" (%s)" % unit if unit else ""))
-                ax.grid(alpha=0.3)
-                ax.legend(fontsize=7)
+                unit = UNITS.get(key[1], "")
+                finish(ax, "%s, %s" % key, "time (s)", key[1] + (" (%s)" % unit if unit else ""))
             made.append(save(fig, out, "probes.png"))
         profiles = [k for k in shared if k[1] == "temperature_profile"]
         if profiles:
             fig, axes = grid(len(profiles), 4.2, 3.6)
             for ax, key in zip(axes, profiles):
-                ta, tb = sorted(set(r[0] for r in pa[key])), sorted(set(r[0] for r in pb[key]))
-                end = min(ta[-1], tb[-1])
+                times = [sorted(set(r[0] for r in d[key])) for d in data]
+                end = min(times[0][-1], times[1][-1])
                 for k, t in enumerate((0.0, end / 2, end)):
-                    for rows, times, ls, lab in ((pa[key], ta, "-", la), (pb[key], tb, "--", lb)):
-                        near = min(times, key=lambda x: abs(x - t))
-                        pts = sorted((r[1], r[2]) for r in rows if r[0] == near)
+                    for d, ts, (_, ls, lab) in zip(data, times, runs):
+                        near = min(ts, key=lambda x: abs(x - t))
+                        pts = sorted((r[1], r[2]) for r in d[key] if r[0] == near)
                         ax.plot([p[1] for p in pts], [p[0] * 1e3 for p in pts], ls, color="C%d" % k,
-                                marker="." if len(pts) < 30 else None,
-                                label="%s, t = %.3g s" % (lab, near))
-                ax.set_title("profile, probe %s" % key[0], fontsize=9)
-                ax.set_xlabel("temperature (degC)")
-                ax.set_ylabel("z from mid-plane (mm)")
-                ax.grid(alpha=0.3)
-                ax.legend(fontsize=6)
+                                marker="." if len(pts) < 30 else None, label="%s, t = %.3g s" % (lab, near))
+                finish(ax, "profile, probe %s" % key[0], "temperature (degC)", "z from mid-plane (mm)", 6)
             made.append(save(fig, out, "profiles.png"))
     if both("tools.csv"):
-        ra = list(csv.DictReader(open(os.path.join(folder, "tools.csv"))))
-        rb = list(csv.DictReader(open(os.path.join(other, "tools.csv"))))
-        names = [n for n in dict.fromkeys(r["tool"] for r in ra) if any(r["tool"] == n for r in rb)]
+        tabs = [table(d, "tools.csv") for d, _, _ in runs]
+        names = [n for n in dict.fromkeys(r["tool"] for r in tabs[0]) if any(r["tool"] == n for r in tabs[1])]
         if names:
             fig, axes = grid(2 * len(names))
             for k, name in enumerate(names):
-                for rows, ls, lab in ((ra, "-", la), (rb, "--", lb)):
+                for rows, (_, ls, lab) in zip(tabs, runs):
                     rs = [r for r in rows if r["tool"] == name]
                     t = [float(r["time"]) for r in rs]
                     axes[2 * k].plot(t, [float(r["fz"]) for r in rs], ls, label=lab)
                     axes[2 * k + 1].plot(t, [float(r["heat_J"]) for r in rs], ls, label=lab)
-                axes[2 * k].set_title("%s: force on the tool along z" % name, fontsize=9)
-                axes[2 * k].set_ylabel("fz (N)")
-                axes[2 * k + 1].set_title("%s: heat given to the plies" % name, fontsize=9)
-                axes[2 * k + 1].set_ylabel("heat (J)")
-            for ax in axes:
-                ax.set_xlabel("time (s)")
-                ax.grid(alpha=0.3)
-                ax.legend(fontsize=7)
+                finish(axes[2 * k], "%s: force on the tool along z" % name, "time (s)", "fz (N)")
+                finish(axes[2 * k + 1], "%s: heat given to the plies" % name, "time (s)", "heat (J)")
             made.append(save(fig, out, "tools.png"))
     if both("energy.csv"):
-        ea = list(csv.DictReader(open(os.path.join(folder, "energy.csv"))))
-        eb = list(csv.DictReader(open(os.path.join(other, "energy.csv"))))
-        keys = [k for k in ("internal", "kinetic_half_step", "contact") if ea and eb and k in ea[0] and k in eb[0]]
+        tabs = [table(d, "energy.csv") for d, _, _ in runs]
+        keys = [k for k in ("internal", "kinetic_half_step", "contact") if all(t and k in t[0] for t in tabs)]
         if keys:
             fig, axes = grid(len(keys))
             for ax, key in zip(axes, keys):
-                for rows, ls, lab in ((ea, "-", la), (eb, "--", lb)):
+                for rows, (_, ls, lab) in zip(tabs, runs):
                     ax.plot([float(r["time"]) for r in rows], [float(r[key]) for r in rows], ls, label=lab)
-                ax.set_title(key, fontsize=9)
-                ax.set_xlabel("time (s)")
-                ax.set_ylabel("energy (J)")
-                ax.grid(alpha=0.3)
-                ax.legend(fontsize=7)
+                finish(ax, key, "time (s)", "energy (J)")
             made.append(save(fig, out, "energy.png"))
     return made
 
