@@ -1,7 +1,9 @@
 // thermostamp: the command line. See docs/user-guide.md.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -70,7 +72,22 @@ struct Args {
   double checkpoint_minutes = 0;
   double rtol = -1;  // compare: the relative tolerance (-1: exact)
   std::string against;  // report: the other run's folder
+  std::vector<std::string> options;  // the options given, as written (--set once)
 };
+
+// The options each command takes; any other is a usage error.
+const std::map<std::string, std::vector<std::string>>& command_options() {
+  static const std::map<std::string, std::vector<std::string>> m = {
+      {"run",
+       {"--out", "--threads", "--set", "--quiet", "--keep-subnormals", "--restart", "--checkpoint-minutes"}},
+      {"validate", {"--set"}},
+      {"plugins", {"--json", "--markdown"}},
+      {"schema", {}},
+      {"study", {"--out", "--threads", "--quiet", "--keep-subnormals", "--restart", "--checkpoint-minutes"}},
+      {"report", {"--against"}},
+      {"compare", {"--json", "--rtol"}}};
+  return m;
+}
 
 // The finite number t of option opt, above 0 (or at least 0 with
 // zero_allowed); otherwise a usage error saying that opt expects `what`.
@@ -131,7 +148,16 @@ Args parse(int argc, char** argv) {
       throw UsageError("unknown option '" + s + "'");
     } else {
       a.positional.push_back(s);
+      continue;
     }
+    a.options.push_back(s.rfind("--set=", 0) == 0 ? "--set" : s);
+  }
+  if (const auto it = command_options().find(a.command); it != command_options().end()) {
+    for (const auto& o : a.options)
+      if (std::find(it->second.begin(), it->second.end(), o) == it->second.end())
+        throw UsageError(o + " does not apply to '" + a.command + "'" +
+                         (it->second.empty() ? std::string(", which takes no option")
+                                             : "; its options: " + ts::join(it->second)));
   }
   return a;
 }

@@ -44,6 +44,31 @@ TEST(Cli, Version) {
   EXPECT_NE(r.out.find("thermostamp 0.16.1 (plugin SDK 0.16.0, ABI 16)"), std::string::npos) << r.out;
 }
 
+// A command line that cannot be read: exit status 2, one line naming what
+// is wrong, then the usage; an option of another command is one of them.
+TEST(Cli, UsageErrorsNameWhatIsWrong) {
+  const std::string job = q(demo_job());
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"", "error: no command given"},
+      {"rnu " + job, "error: unknown command 'rnu'"},
+      {"run " + job + " --frobnicate", "error: unknown option '--frobnicate'"},
+      {"run " + job + " --threads 0", "error: --threads expects a positive integer, found '0'"},
+      {"run " + job + " --out", "error: --out needs a value"},
+      {"validate " + job + " --against x", "error: --against does not apply to 'validate'; its options: --set"},
+      {"validate " + job + " --quiet", "error: --quiet does not apply to 'validate'; its options: --set"},
+      {"schema --json", "error: --json does not apply to 'schema', which takes no option"},
+      {"compare a b --rtol -1", "error: --rtol expects a number of at least 0, found '-1'"},
+      {"report a --set x=1", "error: --set does not apply to 'report'; its options: --against"},
+      {"study s.json --set=x=1", "error: --set does not apply to 'study'; its options: --out, --threads, --quiet, "
+                                 "--keep-subnormals, --restart, --checkpoint-minutes"}};
+  for (const auto& [args, message] : cases) {
+    const auto r = thermostamp(args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_EQ(r.err.substr(0, r.err.find('\n')), message) << args;
+    EXPECT_NE(r.err.find("usage:"), std::string::npos) << args;
+  }
+}
+
 TEST(Cli, PluginsListsEveryInTreePlugin) {
   const auto r = thermostamp("plugins");
   EXPECT_EQ(r.exit_code, 0);
