@@ -42,7 +42,7 @@ def plate_job(divisions, layers, splitter, steps, dt, linked=False):
         "materials": {"m": {"density": 1294.0, "specific_heat": 1775.0, "conductivity": [3.89, 0.31, 0.31]}},
         "parts": parts, "interactions": inter,
         "solvers": {"mechanics": None, "thermal": {"splitter": splitter, "through_thickness": "implicit", "dt": dt}},
-        "output": {"interval": steps * dt, "fields": ["temperature_mean"]},
+        "output": {"interval": steps * dt, "fields": ["temperature_mean"], "checkpoint_at_end": False},
     }
 
 
