@@ -230,6 +230,10 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     }
     try {
       jobs.push_back(parse_job(d, job_file));
+      // No end checkpoint unless the job asks for one: its write would count
+      // in the wall times the study compares.
+      if (!(d.contains("output") && d["output"].is_object() && d["output"].contains("checkpoint_at_end")))
+        jobs.back().output.checkpoint_at_end = false;
     } catch (const JobError& e) {
       throw JobError("", "study " + ptr + " gives an invalid job: " + std::string(e.what()));
     }

@@ -135,6 +135,12 @@ TEST(Cli, StudyWritesItsTable) {
   EXPECT_EQ(rows[3][0], "shell2d");
   EXPECT_LT(std::stod(rows[2][2]), 0.1 * std::stod(rows[3][2]));  // error_K
   EXPECT_GT(std::stod(rows[2][1]), 0.0);                           // wall_time_s
+  // Each run's folder has its job as run, and no end checkpoint (its write
+  // would count in the wall time).
+  for (const char* label : {"adi-8", "shell2d"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "out" / label / "job_as_run.json")) << label;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out" / label / "checkpoint.bin")) << label;
+  }
   st["repeat"] = 0;
   std::ofstream(dir / "bad.json") << st.dump(2);
   const auto bad = thermostamp("study " + q(dir / "bad.json") + " --out " + q(dir / "bad") + " --quiet");
