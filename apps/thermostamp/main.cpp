@@ -42,8 +42,9 @@ subnormals instead of flushing them to zero during the run (the default)
 output.checkpoint_interval, every --checkpoint-minutes and at the end), with
 the same job and --set values but for time.end: a later time.end extends a
 finished run as a run to it would have gone on; the frames and time series
-up to the checkpoint are kept; with study: continue the study in its output folder (study_state.json),
-its completed runs not run again, a stopped one from its checkpoint
+up to the checkpoint are kept; with study: continue the study in its output
+folder (study_state.json), its completed runs not run again, a stopped one
+from its checkpoint
 --checkpoint-minutes M: also write a checkpoint after every M minutes of
 wall time (against machines that go down without a signal)
 

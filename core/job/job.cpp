@@ -587,12 +587,10 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
     job.output.checkpoint_interval = r.real("checkpoint_interval", 0.0, 0.0);
     job.output.checkpoint_at_end = r.boolean("checkpoint_at_end", true);
     job.output.series_interval = r.real("series_interval", 0.0, 0.0);
-    if (const double rows = job.t_end / job.output.series_interval;
-        job.output.series_interval > 0 && job.mechanics && rows > kMaxSeriesRows)
-      throw JobError(r.at("series_interval"), "an interval of " + fmt_number(job.output.series_interval) +
-                                                  " s would write " + fmt_number(rows) + " rows over " +
-                                                  fmt_number(job.t_end) + " s (at most " +
-                                                  fmt_number(kMaxSeriesRows) + ")");
+    if (const double iv = job.output.series_interval; iv > 0 && job.mechanics && job.t_end / iv > kMaxSeriesRows)
+      throw JobError(r.at("series_interval"), "an interval of " + fmt_number(iv) + " s would write " +
+                                                  fmt_number(job.t_end / iv) + " rows over " + fmt_number(job.t_end) +
+                                                  " s (at most " + fmt_number(kMaxSeriesRows) + ")");
     job.output.fields = r.texts("fields", std::vector<std::string>{"temperature"});
     for (std::size_t i = 0; i < job.output.fields.size(); ++i) {
       const auto& f = job.output.fields[i];
