@@ -7,27 +7,44 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 namespace ts {
 
 namespace {
-void write_dataset(hid_t loc, const std::string& name, const double* data, hsize_t rows, hsize_t cols) {
+// A dataset of rows x cols values (a vector where cols is 1 and rank_2 is
+// false); with `level` > 0 and at least 256 values, stored as one chunk
+// through the shuffle and deflate filters (gzip at that level).
+template <class T>
+void write_dataset(hid_t loc, const std::string& name, const T* data, hsize_t rows, hsize_t cols, int level,
+                   bool rank_2) {
   hsize_t dims[2] = {rows, cols};
-  const hid_t space = H5Screate_simple(cols > 1 ? 2 : 1, dims, nullptr);
-  const hid_t ds = H5Dcreate2(loc, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (ds < 0) throw std::runtime_error("HDF5: cannot create dataset " + name);
-  H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+  const int rank = rank_2 || cols > 1 ? 2 : 1;
+  const hid_t space = H5Screate_simple(rank, dims, nullptr);
+  hid_t dcpl = H5P_DEFAULT;
+  if (level > 0 && rows * cols >= 256) {
+    dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, rank, dims);
+    H5Pset_shuffle(dcpl);
+    H5Pset_deflate(dcpl, static_cast<unsigned>(level));
+  }
+  const hid_t type = std::is_same_v<T, int> ? H5T_NATIVE_INT : H5T_NATIVE_DOUBLE;
+  const hid_t ds = H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  if (dcpl != H5P_DEFAULT) H5Pclose(dcpl);
+  if (ds < 0) {
+    H5Sclose(space);
+    throw std::runtime_error("HDF5: cannot create dataset " + name);
+  }
+  const herr_t written = H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
   H5Dclose(ds);
   H5Sclose(space);
+  if (written < 0) throw std::runtime_error("HDF5: cannot write dataset " + name);
 }
-void write_dataset(hid_t loc, const std::string& name, const int* data, hsize_t rows, hsize_t cols) {
-  hsize_t dims[2] = {rows, cols};
-  const hid_t space = H5Screate_simple(2, dims, nullptr);
-  const hid_t ds = H5Dcreate2(loc, name.c_str(), H5T_NATIVE_INT, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (ds < 0) throw std::runtime_error("HDF5: cannot create dataset " + name);
-  H5Dwrite(ds, H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
-  H5Dclose(ds);
-  H5Sclose(space);
+void write_dataset(hid_t loc, const std::string& name, const double* data, hsize_t rows, hsize_t cols, int level) {
+  write_dataset(loc, name, data, rows, cols, level, false);
+}
+void write_dataset(hid_t loc, const std::string& name, const int* data, hsize_t rows, hsize_t cols, int level) {
+  write_dataset(loc, name, data, rows, cols, level, true);
 }
 hid_t make_group(hid_t loc, const std::string& name) {
   const hid_t g = H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
@@ -83,16 +100,34 @@ std::string series_column_units(const std::string& column) {
   return "J";  // the energies and works, the tools' heat
 }
 
-ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts)
-    : dir_(dir), parts_(std::move(parts)) {
+void ResultsWriter::check_compression() const {
+  unsigned info = 0;
+  if (compression_ > 0 && (H5Zfilter_avail(H5Z_FILTER_DEFLATE) <= 0 || H5Zfilter_avail(H5Z_FILTER_SHUFFLE) <= 0 ||
+                           H5Zget_filter_info(H5Z_FILTER_DEFLATE, &info) < 0 ||
+                           !(info & H5Z_FILTER_CONFIG_ENCODE_ENABLED)))
+    throw std::runtime_error("this HDF5 library cannot compress (no deflate filter): set output.compression to 0");
+}
+
+ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts, int compression)
+    : dir_(dir), parts_(std::move(parts)), compression_(compression) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  check_compression();
   const std::string path = (dir_ / "results.h5").string();
-  file_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  // Compressed, the file takes the format of HDF5 1.10, whose index of a
+  // dataset stored as one chunk costs a few bytes instead of a B-tree of
+  // about 2 kB per dataset (read by HDF5 1.10 and later, as in ParaView).
+  hid_t fapl = H5P_DEFAULT;
+  if (compression_ > 0) {
+    fapl = H5Pcreate(H5P_FILE_ACCESS);
+    H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST);
+  }
+  file_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  if (fapl != H5P_DEFAULT) H5Pclose(fapl);
   if (file_ < 0) throw std::runtime_error("cannot create " + path);
   const hid_t g = make_group(file_, "parts");
   for (const auto& p : parts_) {
     const hid_t pg = make_group(g, p.name);
-    write_dataset(pg, "triangles", p.triangles->data(), p.num_elements, 3);
+    write_dataset(pg, "triangles", p.triangles->data(), p.num_elements, 3, compression_);
     if (!p.layers) {
       H5Gclose(pg);
       continue;
@@ -106,7 +141,7 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
         for (int a = 0; a < 3; ++a) wedges.push_back((*p.triangles)[3 * e + a] * nl + l);
         for (int a = 0; a < 3; ++a) wedges.push_back((*p.triangles)[3 * e + a] * nl + l + 1);
       }
-    write_dataset(pg, "wedges", wedges.data(), static_cast<hsize_t>(p.num_elements) * (nl - 1), 6);
+    write_dataset(pg, "wedges", wedges.data(), static_cast<hsize_t>(p.num_elements) * (nl - 1), 6, compression_);
     H5Gclose(pg);
   }
   H5Gclose(g);
@@ -115,12 +150,20 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
 }
 
 ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts,
-                             const std::vector<double>& kept_times, const std::vector<std::vector<FrameField>>& fields)
-    : dir_(dir), parts_(std::move(parts)) {
+                             const std::vector<double>& kept_times, const std::vector<std::vector<FrameField>>& fields,
+                             int compression)
+    : dir_(dir), parts_(std::move(parts)), compression_(compression) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  check_compression();
   const std::string path = (dir_ / "results.h5").string();
   if (!std::filesystem::exists(path)) throw std::runtime_error("no " + path + " of the run to continue");
-  file_ = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  hid_t fapl = H5P_DEFAULT;  // as a new file's (above), for the frames to come
+  if (compression_ > 0) {
+    fapl = H5Pcreate(H5P_FILE_ACCESS);
+    H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST);
+  }
+  file_ = H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl);
+  if (fapl != H5P_DEFAULT) H5Pclose(fapl);
   if (file_ < 0) throw std::runtime_error("cannot open " + path);
   auto refuse = [&](hid_t group, const std::string& why) {  // the file as it was, closed
     if (group >= 0) H5Gclose(group);
@@ -167,7 +210,7 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     const WriterPart& wp = parts_[p];
     const hid_t pg = make_group(fg, wp.name);
-    write_dataset(pg, "nodes", x[p], wp.num_nodes, 3);
+    write_dataset(pg, "nodes", x[p], wp.num_nodes, 3, compression_);
     write_units(pg, "nodes", field_units("nodes"));
     const int nl = extruded_levels(wp.nz);
     if (wp.layers) {
@@ -178,7 +221,7 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
         for (int d = 0; d < 3; ++d)
           layer_nodes[3 * (static_cast<std::size_t>(i) * nl + l) + d] = x[p][3 * i + d] + z * normals[p][3 * i + d];
       }
-    write_dataset(pg, "layer_nodes", layer_nodes.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 3);
+    write_dataset(pg, "layer_nodes", layer_nodes.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 3, compression_);
     write_units(pg, "layer_nodes", field_units("layer_nodes"));
     }
     for (const auto& f : fields[p]) {
@@ -187,10 +230,10 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
         std::vector<double> v(static_cast<std::size_t>(wp.num_nodes) * nl);
         for (int i = 0; i < wp.num_nodes; ++i)
           for (int l = 0; l < nl; ++l) v[static_cast<std::size_t>(i) * nl + l] = f.data[static_cast<std::size_t>(i) * wp.nz + (wp.nz > 1 ? l : 0)];
-        write_dataset(pg, f.name, v.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 1);
+        write_dataset(pg, f.name, v.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 1, compression_);
       } else {
         const hsize_t rows = f.on_cells ? wp.num_elements : wp.num_nodes;
-        write_dataset(pg, f.name, f.data, rows, f.components);
+        write_dataset(pg, f.name, f.data, rows, f.components, compression_);
       }
       write_units(pg, f.name, field_units(f.name));
     }
@@ -213,7 +256,7 @@ void ResultsWriter::write_series(const std::string& name, const std::vector<std:
   const hid_t g = H5Gopen2(file_, "series", H5P_DEFAULT);
   if (H5Lexists(g, name.c_str(), H5P_DEFAULT) > 0) H5Ldelete(g, name.c_str(), H5P_DEFAULT);
   const hsize_t cols = columns.size(), nrows = cols ? rows.size() / cols : 0;
-  write_dataset(g, name, rows.data(), nrows, cols);
+  write_dataset(g, name, rows.data(), nrows, cols, compression_);
   // Column names and their units as attributes: "time,kinetic,..." and
   // "s,J,...".
   std::string joined, units;

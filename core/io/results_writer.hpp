@@ -35,14 +35,16 @@ struct FrameField {
 
 class ResultsWriter {
  public:
-  ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts);
+  // compression: the gzip level (1-9, with the shuffle filter) of the
+  // datasets of at least 256 values, 0 for none.
+  ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts, int compression = 0);
   // A restarted run (io/checkpoint.hpp): opens the results.h5 of the run in
   // dir, keeps its first frames (their times given, every frame with the
   // fields of `fields`: names and kinds), removes the frames after them and
   // rewrites results.xdmf. Throws std::runtime_error when the file is not
   // there or holds fewer frames.
   ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts, const std::vector<double>& kept_times,
-                const std::vector<std::vector<FrameField>>& fields);
+                const std::vector<std::vector<FrameField>>& fields, int compression = 0);
   ~ResultsWriter();
   ResultsWriter(const ResultsWriter&) = delete;
   ResultsWriter& operator=(const ResultsWriter&) = delete;
@@ -58,8 +60,10 @@ class ResultsWriter {
 
  private:
   void write_xdmf() const;
+  void check_compression() const;  // throws std::runtime_error where the library lacks the filters
   std::filesystem::path dir_;
   std::vector<WriterPart> parts_;
+  int compression_ = 0;
   long long file_ = -1;
   std::vector<double> times_;
   std::vector<std::vector<std::vector<FrameField>>> frame_fields_;  // names/kinds only

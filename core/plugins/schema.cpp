@@ -219,6 +219,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
             {"checkpoint_interval", {{"type", "number"}, {"minimum", 0}}},
             {"checkpoint_at_end", {{"type", "boolean"}}},
             {"series_interval", {{"type", "number"}, {"minimum", 0}}},
+            {"compression", {{"type", "integer"}, {"minimum", 0}, {"maximum", 9}}},
             {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}},
             {"probes", {{"type", "array"}, {"items", probe}}}}},
           {"additionalProperties", false}}}}},

@@ -1847,12 +1847,13 @@ void Simulation::check_field(double time, long long step) {
 }
 
 // The job document a checkpoint stores: the run's, without the checkpoint
-// settings (which a restart may change).
+// settings and the compression of results.h5 (which a restart may change).
 static json restart_document(const json& doc) {
   json d = doc;
   if (d.contains("output") && d["output"].is_object()) {
     d["output"].erase("checkpoint_interval");
     d["output"].erase("checkpoint_at_end");
+    d["output"].erase("compression");
   }
   return d;
 }
@@ -1891,8 +1892,8 @@ double Simulation::check_restart(const Checkpoint& c) const {
     if (stored != restart_match(restart_document(job_.document_as_run)) &&
         stored != restart_match(restart_document(job_.document)))
       throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
-                                "needs the job of the run it continues (time.end, output.checkpoint_interval and "
-                                "output.checkpoint_at_end may differ)");
+                                "needs the job of the run it continues (time.end, output.checkpoint_interval, "
+                                "output.checkpoint_at_end and output.compression may differ)");
     sdk::StateReader r(c.section("run"));
     double t = 0;
     if (!r.get(t)) throw JobError("", what + "the checkpoint's run section is truncated");
@@ -2153,8 +2154,10 @@ RunResult Simulation::run(const RunOptions& opt) {
       wparts.push_back({st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(), &st->mesh.triangles,
                         st->def->thickness, st->nz, layers});
     try {
-      writer = opt.restart ? std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), frame_times, frame_fields())
-                           : std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts));
+      const int level = job_.output.compression;
+      writer = opt.restart
+                   ? std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), frame_times, frame_fields(), level)
+                   : std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), level);
     } catch (const std::runtime_error& e) {
       if (opt.restart) throw JobError("", std::string("--restart: ") + e.what());
       throw;

@@ -886,6 +886,44 @@ json short_hemisphere(double t_end, double interval, int cells) {
   return j;
 }
 
+// output.compression: results.h5's datasets through the shuffle and
+// deflate filters hold the same values (`thermostamp compare` finds every
+// value equal) in a smaller file, also where a restart adds the frames.
+TEST(Output, CompressedResultsHoldTheSameValues) {
+  const auto dir = temp_dir("compression");
+  json j = short_hemisphere(0.02, 0.005, 10);
+  j["output"]["fields"] = known_fields();
+  j["output"]["series_interval"] = 1e-4;
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const std::string run = "run " + q(dir / "job.json") + " --quiet --out ";
+  ASSERT_EQ(thermostamp(run + q(dir / "plain")).exit_code, 0);
+  // Compressed, to 0.01 s and then extended to 0.02 s.
+  const std::string zipped = run + q(dir / "zipped") + " --set output.compression=6";
+  ASSERT_EQ(thermostamp(zipped + " --set time.end=0.01").exit_code, 0);
+  const auto e = thermostamp(zipped + " --restart");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  const auto c = thermostamp("compare " + q(dir / "plain") + " " + q(dir / "zipped"));
+  EXPECT_EQ(c.exit_code, 0) << c.out;
+  EXPECT_NE(c.out.find("identical: every value compared is equal"), std::string::npos) << c.out;
+  // The filters on a field of the first frame and of the last (written
+  // after the restart); none on a dataset below 256 values (a frame's time
+  // is an attribute; the tool table of 3 tools is one).
+  const hid_t f = H5Fopen((dir / "zipped" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  for (const char* name : {"frames/000001/ply_top/temperature", "frames/000004/ply_top/membrane_stress"}) {
+    const hid_t ds = H5Dopen2(f, name, H5P_DEFAULT);
+    ASSERT_GE(ds, 0) << name;
+    const hid_t pl = H5Dget_create_plist(ds);
+    EXPECT_EQ(H5Pget_nfilters(pl), 2) << name << ": shuffle and deflate";
+    H5Pclose(pl);
+    H5Dclose(ds);
+  }
+  H5Fclose(f);
+  const double plain = static_cast<double>(std::filesystem::file_size(dir / "plain" / "results.h5"));
+  const double small = static_cast<double>(std::filesystem::file_size(dir / "zipped" / "results.h5"));
+  EXPECT_LT(small, 0.9 * plain) << small << " bytes against " << plain;
+}
+
 // The output folder's job_as_run.json is the job as run: the --set values in it,
 // its file paths absolute. Run from another folder it gives the same
 // results, and a restart accepts it as the run's job.
