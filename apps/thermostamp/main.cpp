@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -32,7 +33,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp study STUDY.json [--out DIR] [--threads N] [--quiet] [--keep-subnormals]
                   [--restart] [--checkpoint-minutes M]
   thermostamp report DIR [--against OTHER]   # PNG figures into DIR/figures (with OTHER: both runs on the same axes)
-  thermostamp compare DIR_A DIR_B [--json] [--rtol R]   # how far two runs' results are apart
+  thermostamp compare DIR_A DIR_B [--json] [--rtol R] [--from T]   # how far two runs' results are apart
   thermostamp --version
 
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
@@ -52,7 +53,8 @@ compare: the largest differences of the probe samples, frame fields and
 histories at the same times and the summaries' figures that differ; exit
 status 0 when every value compared is equal (with --rtol R: when each
 quantity's largest difference is at most R times its largest value in A),
-1 otherwise
+1 otherwise; --from T: only the samples, frames and rows at T s and later
+(an extended run against the run to its end: from its restarted_from_s)
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -73,6 +75,7 @@ struct Args {
   double checkpoint_minutes = 0;
   double rtol = -1;  // compare: the relative tolerance (-1: exact)
   std::string against;  // report: the other run's folder
+  double from = -std::numeric_limits<double>::infinity();  // compare: the first time compared (s)
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -86,7 +89,7 @@ const std::map<std::string, std::vector<std::string>>& command_options() {
       {"schema", {}},
       {"study", {"--out", "--threads", "--quiet", "--keep-subnormals", "--restart", "--checkpoint-minutes"}},
       {"report", {"--against"}},
-      {"compare", {"--json", "--rtol"}}};
+      {"compare", {"--json", "--rtol", "--from"}}};
   return m;
 }
 
@@ -131,6 +134,8 @@ Args parse(int argc, char** argv) {
       }
     } else if (s == "--against") {
       a.against = value(s);
+    } else if (s == "--from") {
+      a.from = finite_number(s, value(s), true, "a time of at least 0");
     } else if (s == "--rtol") {
       a.rtol = finite_number(s, value(s), true, "a number of at least 0");
     } else if (s == "--checkpoint-minutes") {
@@ -290,7 +295,7 @@ int main(int argc, char** argv) {
       if (a.positional.size() != 2) throw UsageError("expected two output folders");
       ts::Comparison c;
       try {
-        c = ts::compare_outputs(a.positional[0], a.positional[1]);
+        c = ts::compare_outputs(a.positional[0], a.positional[1], a.from);
       } catch (const std::exception& e) {
         std::cerr << "error: compare: " << e.what() << "\n";
         return 2;

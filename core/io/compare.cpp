@@ -102,6 +102,23 @@ std::vector<int> match_times(const std::vector<double>& a, const std::vector<dou
   return m;
 }
 
+// Drops the entries before `from` (s) of a time list and of the lists
+// beside it (one entry per time).
+template <class... Beside>
+void keep_from(double from, std::vector<double>& times, Beside&... beside) {
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    if (times[k] < from) continue;
+    if (kept != k) {  // (a vector moved onto itself would be left empty)
+      times[kept] = times[k];
+      ((beside[kept] = std::move(beside[k])), ...);
+    }
+    ++kept;
+  }
+  times.resize(kept);
+  (beside.resize(kept), ...);
+}
+
 // Records |a - b| of one value in d (a NaN difference, once seen, stays).
 void take(Difference& d, double a, double b, double time) {
   const double diff = std::abs(a - b);
@@ -259,7 +276,7 @@ std::string fmt(double v) {
 
 }  // namespace
 
-Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem::path& b) {
+Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem::path& b, double from) {
   for (const auto& d : {a, b}) {
     if (!std::filesystem::is_directory(d)) throw std::runtime_error("'" + d.string() + "' is not a folder");
     if (!std::filesystem::exists(d / "summary.json") && !std::filesystem::exists(d / "probes.csv") &&
@@ -276,7 +293,9 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
 
   // Probes.
   bool found_a = false, found_b = false;
-  const ProbeTable pa = read_probes(a / "probes.csv", found_a), pb = read_probes(b / "probes.csv", found_b);
+  ProbeTable pa = read_probes(a / "probes.csv", found_a), pb = read_probes(b / "probes.csv", found_b);
+  for (ProbeTable* t : {&pa, &pb})
+    for (auto& [key, series] : *t) keep_from(from, series.times, series.z, series.values);
   if (found_a != found_b) note("probes.csv only in " + (found_a ? a : b).string());
   for (const auto& [key, sa] : pa) {
     const auto it = pb.find(key);
@@ -336,7 +355,9 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
     if (ha && fa < 0) note((a / "results.h5").string() + " cannot be read");
     if (hb && fb < 0) note((b / "results.h5").string() + " cannot be read");
     if (fa >= 0 && fb >= 0) {
-      const Frames ra = read_frames(fa), rb = read_frames(fb);
+      Frames ra = read_frames(fa), rb = read_frames(fb);
+      keep_from(from, ra.times, ra.names);
+      keep_from(from, rb.times, rb.names);
       const std::vector<int> m = match_times(ra.times, rb.times, c.largest_time_offset);
       const long long matched = std::count_if(m.begin(), m.end(), [](int k) { return k >= 0; });
       if (matched < static_cast<long long>(ra.times.size()) || ra.times.size() != rb.times.size())
@@ -388,7 +409,9 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
   // The energy and tool histories.
   for (const auto& [file, keyed] : {std::pair<const char*, bool>{"energy.csv", false}, {"tools.csv", true}}) {
     bool in_a = false, in_b = false;
-    const Table ta = read_table(a / file, keyed, in_a), tb = read_table(b / file, keyed, in_b);
+    Table ta = read_table(a / file, keyed, in_a), tb = read_table(b / file, keyed, in_b);
+    for (Table* t : {&ta, &tb})
+      for (auto& [key, rows] : t->by_key) keep_from(from, rows.first, rows.second);
     if (in_a != in_b) note(std::string(file) + " only in " + (in_a ? a : b).string());
     if (!in_a || !in_b) continue;
     for (const auto& [key, sa_rows] : ta.by_key) {

@@ -5,6 +5,7 @@
 // the summaries' figures (summary.json), each as the largest absolute
 // difference over what the two folders share.
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -48,10 +49,12 @@ struct Comparison {
   std::string to_text(const std::filesystem::path& a, const std::filesystem::path& b) const;
 };
 
-// Compares the output folders a and b (of `thermostamp run`). Throws
+// Compares the output folders a and b (of `thermostamp run`), the samples,
+// frames and rows at times from `from` on (s; all by default). Throws
 // std::runtime_error when a folder does not exist or holds none of
 // summary.json, probes.csv and results.h5, or when a probes.csv holds
 // something other than numbers where they belong.
-Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem::path& b);
+Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem::path& b,
+                           double from = -std::numeric_limits<double>::infinity());
 
 }  // namespace ts

@@ -385,6 +385,16 @@ TEST(Restart, ExtendsAFinishedRunAsARunToTheLaterEnd) {
     EXPECT_GT(rows.size(), 200u) << f;
     EXPECT_EQ(rows_after(out / f, from), rows) << f;
   }
+  // `compare`: the rows before the checkpoint are at other times; from the
+  // checkpoint on, every value is equal.
+  const std::string cmp = "compare " + q(dir / "direct") + " " + q(out);
+  EXPECT_EQ(thermostamp(cmp).exit_code, 1);
+  std::ostringstream at;
+  at.precision(17);
+  at << from;
+  const auto later = thermostamp(cmp + " --from " + at.str());
+  EXPECT_EQ(later.exit_code, 0) << later.out;
+  EXPECT_NE(later.out.find("identical: every value compared is equal"), std::string::npos) << later.out;
   // A run stopped in its last steps (here one of about 45 steps, all of
   // them landing on its end) leaves the end checkpoint as it was, from which
   // a later end gives the run to that end too.
