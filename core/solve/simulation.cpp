@@ -2475,6 +2475,12 @@ RunResult Simulation::run(const RunOptions& opt) {
     log->info("checkpoint at t = {:.6g} s (mechanical step {}, thermal step {}{}): {}", t, mech_steps, steps, what,
               (opt.out_dir / kCheckpointFile).string());
   };
+  // The state before the first step that depends on time.end: the end
+  // checkpoint where the job asks for one.
+  auto end_checkpoint = [&](const char* what) {
+    landing_saved = true;
+    if (job_.output.checkpoint_at_end) save_checkpoint(what);
+  };
   try {
     if (resume) {
       sdk::StateReader& r = *resume;
@@ -2554,10 +2560,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         double dt = md.dt_safety * stable;
         const double remaining = t_end - t;
         if (remaining < 100 * dt) {
-          if (!landing_saved) {
-            landing_saved = true;
-            if (job_.output.checkpoint_at_end) save_checkpoint(", before the steps that land on time.end");
-          }
+          if (!landing_saved) end_checkpoint(", before the steps that land on time.end");
           dt = remaining / std::max(1.0, std::ceil(remaining / dt - 1e-9));
         }
         // The stable step, not the last steps cut to land on t_end (those may
@@ -2681,10 +2684,8 @@ RunResult Simulation::run(const RunOptions& opt) {
         if (step <= eps_t) step = std::min(thermal_dt_, t_end - t);
         // The last step, where time.end is off the frame times: the end
         // checkpoint is the state before it.
-        if (!landing_saved && t_end < grid_frame && t + step >= t_end - eps_t) {
-          landing_saved = true;
-          if (job_.output.checkpoint_at_end) save_checkpoint(", before the step that lands on time.end");
-        }
+        if (!landing_saved && t_end < grid_frame && t + step >= t_end - eps_t)
+          end_checkpoint(", before the step that lands on time.end");
         in.dt = step;
         sdk::ThermalStepReport rep;
         if (auto s = splitter_->advance(in, Tspans, &rep); !s)
@@ -2768,8 +2769,10 @@ RunResult Simulation::run(const RunOptions& opt) {
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     result.part_heat_change.push_back(stored_heat(static_cast<int>(p)) - stored0_part[p]);
     result.part_link_heat.push_back(link_heat_.size() > p ? link_heat_[p] : 0.0);
+    // With mechanics, one range per part (every part has elements, so its
+    // shear angles and strains are not empty).
     const auto& sa = parts_[p]->shear_angle;
-    if (job_.mechanics && !sa.empty()) {
+    if (job_.mechanics) {
       const auto [smn, smx] = std::minmax_element(sa.begin(), sa.end());
       result.part_shear_min_deg.push_back(*smn);
       result.part_shear_max_deg.push_back(*smx);
@@ -2874,7 +2877,8 @@ RunResult Simulation::run(const RunOptions& opt) {
                        {"faces_in_J", heat_in},
                        {"balance_error", result.heat_balance_error}};
     json plies = json::array();
-    for (const auto& st : parts_) {
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      const auto& st = parts_[p];
       const auto [mn, mx] = std::minmax_element(st->T.begin(), st->T.end());
       plies.push_back({{"name", st->def->name},
                        {"nodes", st->mesh.num_nodes()},
@@ -2882,12 +2886,11 @@ RunResult Simulation::run(const RunOptions& opt) {
                        {"values_per_node", st->nz},
                        {"temperature_min", *mn},
                        {"temperature_max", *mx}});
-      if (job_.mechanics && !st->shear_angle.empty()) {
-        const auto [smn, smx] = std::minmax_element(st->shear_angle.begin(), st->shear_angle.end());
-        plies.back()["shear_angle_min_deg"] = *smn;
-        plies.back()["shear_angle_max_deg"] = *smx;
-        plies.back()["fibre_strain_min"] = result.part_fibre_strain_min[plies.size() - 1];
-        plies.back()["fibre_strain_max"] = result.part_fibre_strain_max[plies.size() - 1];
+      if (job_.mechanics) {
+        plies.back()["shear_angle_min_deg"] = result.part_shear_min_deg[p];
+        plies.back()["shear_angle_max_deg"] = result.part_shear_max_deg[p];
+        plies.back()["fibre_strain_min"] = result.part_fibre_strain_min[p];
+        plies.back()["fibre_strain_max"] = result.part_fibre_strain_max[p];
       }
     }
     summary["parts"] = plies;
@@ -2921,10 +2924,9 @@ RunResult Simulation::run(const RunOptions& opt) {
     for (std::size_t p = 0; p < parts_.size(); ++p) {
       const PartState& st = *parts_[p];
       const auto [mn, mx] = std::minmax_element(st.T.begin(), st.T.end());
-      const auto [smn, smx] = std::minmax_element(st.shear_angle.begin(), st.shear_angle.end());
       log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg, fibre strain {:.3g} "
                 "to {:.3g}",
-                st.def->name, *mn, *mx, st.shear_angle.empty() ? 0.0 : *smn, st.shear_angle.empty() ? 0.0 : *smx,
+                st.def->name, *mn, *mx, result.part_shear_min_deg[p], result.part_shear_max_deg[p],
                 result.part_fibre_strain_min[p], result.part_fibre_strain_max[p]);
     }
   }
