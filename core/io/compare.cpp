@@ -130,9 +130,9 @@ void take(Difference& d, double a, double b, double time) {
   ++d.values;
 }
 
-// A time series table (energy.csv: time and numbers; tools.csv: time, the
-// tool's name, numbers): by key (the tool; "" for energy.csv) its times
-// and rows.
+// A time series table (energy.csv: time and numbers; tools.csv and
+// plies.csv: time, the tool's or ply's name, numbers): by key (the tool or
+// ply; "" for energy.csv) its times and rows.
 struct Table {
   std::vector<std::string> columns;  // the numeric ones after the time
   std::map<std::string, std::pair<std::vector<double>, std::vector<std::vector<double>>>> by_key;
@@ -406,8 +406,9 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
     if (fb >= 0) H5Fclose(fb);
   }
 
-  // The energy and tool histories.
-  for (const auto& [file, keyed] : {std::pair<const char*, bool>{"energy.csv", false}, {"tools.csv", true}}) {
+  // The energy, tool and ply histories.
+  for (const auto& [file, keyed] :
+       {std::pair<const char*, bool>{"energy.csv", false}, {"tools.csv", true}, {"plies.csv", true}}) {
     bool in_a = false, in_b = false;
     Table ta = read_table(a / file, keyed, in_a), tb = read_table(b / file, keyed, in_b);
     for (Table* t : {&ta, &tb})
@@ -433,7 +434,7 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
         const std::size_t colb = static_cast<std::size_t>(jb - tb.columns.begin());
         Difference d;
         d.what = std::string(file) + " " + (key.empty() ? "" : key + " ") + ta.columns[col];
-        d.units = series_column_units((keyed ? "tool_" : "") + ta.columns[col]);
+        d.units = series_column_units((keyed ? "key_" : "") + ta.columns[col]);
         for (std::size_t k = 0; k < m.size(); ++k)
           if (m[k] >= 0) take(d, rows_a[k][col], rows_b[m[k]][colb], times_a[k]);
         if (d.max_abs != 0 || std::isnan(d.max_abs)) c.identical = false;

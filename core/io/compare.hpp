@@ -1,9 +1,9 @@
 #pragma once
 // `thermostamp compare A B`: how far the results of two output folders are
 // apart: the probe samples (probes.csv), the fields of the frames
-// (results.h5), the energy and tool histories (energy.csv, tools.csv) and
-// the summaries' figures (summary.json), each as the largest absolute
-// difference over what the two folders share.
+// (results.h5), the energy, tool and ply histories (energy.csv, tools.csv,
+// plies.csv) and the summaries' figures (summary.json), each as the largest
+// absolute difference over what the two folders share.
 #include <filesystem>
 #include <limits>
 #include <string>
@@ -25,7 +25,7 @@ struct Difference {
 };
 
 struct Comparison {
-  // series: the columns of energy.csv and tools.csv (by tool).
+  // series: the columns of energy.csv, tools.csv (by tool) and plies.csv (by ply).
   std::vector<Difference> probes, fields, series, summary;
   // Samples and frames are matched by time: the largest offset between the
   // times of matched samples or frames (s), and what was left unmatched.

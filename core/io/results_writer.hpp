@@ -21,7 +21,7 @@ struct WriterPart {
 // its attribute "units" gives them: "degC", "m", "m/s", "deg", "Pa", "N/m",
 // "1/m", or "1" for dimensionless values.
 std::string field_units(const std::string& name);
-// The units of a series' column (the energy and tool tables), as the
+// The units of a series' column (the energy, tool and ply tables), as the
 // series' attribute "units" lists them beside "columns".
 std::string series_column_units(const std::string& column);
 

@@ -588,7 +588,10 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
     job.output.checkpoint_at_end = r.boolean("checkpoint_at_end", true);
     job.output.series_interval = r.real("series_interval", 0.0, 0.0);
     job.output.compression = static_cast<int>(r.integer("compression", 0, 0, 9));
-    if (const double iv = job.output.series_interval; iv > 0 && job.mechanics && job.t_end / iv > kMaxSeriesRows)
+    if (r.has("temperature_threshold"))
+      job.output.temperature_threshold = r.real("temperature_threshold", std::nullopt, -273.15, true);
+    if (const double iv = job.output.series_interval;
+        iv > 0 && (job.mechanics || job.thermal) && job.t_end / iv > kMaxSeriesRows)
       throw JobError(r.at("series_interval"), "an interval of " + fmt_number(iv) + " s would write " +
                                                   fmt_number(job.t_end / iv) + " rows over " + fmt_number(job.t_end) +
                                                   " s (at most " + fmt_number(kMaxSeriesRows) + ")");

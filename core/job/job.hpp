@@ -147,7 +147,10 @@ struct OutputDef {
   double interval = 0;
   double checkpoint_interval = 0;  // s of simulated time between checkpoints, 0: only when interrupted
   bool checkpoint_at_end = true;    // a checkpoint at time.end too (from which a later time.end extends the run)
-  double series_interval = 0;       // s between the rows of energy.csv and tools.csv, 0: time.end / 500
+  double series_interval = 0;       // s between the rows of energy.csv, tools.csv and plies.csv, 0: time.end / 500
+  // degC: plies.csv and the summary give each ply's share below it and the
+  // time its coldest value first went below it
+  std::optional<double> temperature_threshold;
   int compression = 0;              // gzip level of results.h5's datasets (with shuffle), 0: none
   std::vector<std::string> fields;
   std::vector<ProbeDef> probes;

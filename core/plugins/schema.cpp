@@ -220,6 +220,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
             {"checkpoint_at_end", {{"type", "boolean"}}},
             {"series_interval", {{"type", "number"}, {"minimum", 0}}},
             {"compression", {{"type", "integer"}, {"minimum", 0}, {"maximum", 9}}},
+            {"temperature_threshold", {{"type", "number"}, {"exclusiveMinimum", -273.15}}},
             {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}},
             {"probes", {{"type", "array"}, {"items", probe}}}}},
           {"additionalProperties", false}}}}},

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -124,6 +125,42 @@ struct PartState {
 };
 
 namespace {
+
+// A ply's coldest, mean (weighted by heat capacity) and hottest value
+// (degC), and the share of its heat capacity below the threshold (0
+// without one): by node, the part of the thickness below it with the
+// temperature linear between the values (a single value: all or nothing).
+std::array<double, 4> ply_temperature(const PartState& st, const std::optional<double>& threshold) {
+  const int nz = st.nz;
+  const std::size_t nn = static_cast<std::size_t>(st.mesh.num_nodes());
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, heat = 0, cap = 0, below = 0;
+  for (std::size_t i = 0; i < nn; ++i) {
+    const double* T = &st.T[i * nz];
+    const double* c = &st.cap[i * nz];
+    double column = 0, frac = 0;
+    for (int k = 0; k < nz; ++k) {
+      lo = std::min(lo, T[k]);
+      hi = std::max(hi, T[k]);
+      heat += c[k] * T[k];
+      column += c[k];
+    }
+    if (threshold) {
+      const double th = *threshold;
+      if (nz == 1) {
+        frac = T[0] < th ? 1.0 : 0.0;
+      } else {
+        for (int k = 0; k + 1 < nz; ++k) {
+          const double a = std::min(T[k], T[k + 1]), b = std::max(T[k], T[k + 1]);
+          frac += a >= th ? 0.0 : b <= th ? 1.0 : (th - a) / (b - a);
+        }
+        frac /= nz - 1;
+      }
+    }
+    cap += column;
+    below += column * frac;
+  }
+  return {lo, heat / cap, hi, below / cap};
+}
 using Clock = std::chrono::steady_clock;
 
 // One explicit step of n dofs (central differences, lumped mass): the new
@@ -1816,13 +1853,15 @@ std::span<const double> Simulation::temperature(int part) const { return parts_.
 int Simulation::values_per_node(int part) const { return parts_.at(part)->nz; }
 
 void Simulation::check_field(double time, long long step) {
-  for (const auto& st : parts_) {
+  const auto& threshold = job_.output.temperature_threshold;
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    const PartState* st = parts_[p].get();
     // Branch-free pass (vectorised): range, and whether every value is
     // finite; the slow search for the culprit runs only then.
     const double* T = st->T.data();
     const std::size_t n = st->T.size();
     // v - v is 0 for a finite value, NaN otherwise (in any summation order).
-    double lo = seen_min_, hi = seen_max_, z = 0;
+    double lo = std::numeric_limits<double>::infinity(), hi = seen_max_, z = 0;
 #pragma omp simd reduction(min : lo) reduction(max : hi) reduction(+ : z)
     for (std::size_t k = 0; k < n; ++k) {
       const double v = T[k];
@@ -1831,8 +1870,9 @@ void Simulation::check_field(double time, long long step) {
       z += v - v;
     }
     const bool bad = !(z == 0.0);
-    seen_min_ = lo;
+    seen_min_ = std::min(seen_min_, lo);
     seen_max_ = hi;
+    if (threshold && below_from_[p] < 0 && lo < *threshold) below_from_[p] = time;
     if (!bad) continue;
     for (std::size_t k = 0; k < n; ++k) {
       if (!std::isfinite(st->T[k])) {
@@ -1920,7 +1960,7 @@ bool Simulation::state_io(A& a) {
   constexpr bool saving = std::is_same_v<A, sdk::StateWriter>;
   bool ok = a.io(last_mech_dt_) && a.io(bending_weight_) && a.io(bending_left_) && a.io(bending_largest_) &&
             a.io(bending_evaluations_) && a.io(last_stable_) && a.io(seen_min_) && a.io(seen_max_) &&
-            a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) && a.io(contact_energy_) &&
+            a.io_array(below_from_) && a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) && a.io(contact_energy_) &&
             a.io(contact_active_);
   std::vector<char> warned;
   for (const auto& u : law_uses_) warned.push_back(u.warned ? 1 : 0);
@@ -2105,7 +2145,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   double resume_t = 0;  // s, the checkpoint's time
   double wall_before = 0;  // s, a restart: the wall time of the run up to its checkpoint (all its earlier parts)
   std::vector<double> frame_times;  // of the frames written (for checkpoints)
-  std::uint64_t csv_size[3] = {0, 0, 0};  // probes.csv, energy.csv, tools.csv
+  std::uint64_t csv_size[4] = {0, 0, 0, 0};  // probes.csv, energy.csv, tools.csv, plies.csv
   if (opt.restart) {
     resume.emplace(opt.restart->section("run"));
     resume->get(resume_t);
@@ -2113,9 +2153,9 @@ RunResult Simulation::run(const RunOptions& opt) {
     for (auto& n : csv_size) resume->get(n);
     resume->get(wall_before);
     // Everything checked before any file is touched.
-    const char* names[3] = {"probes.csv", "energy.csv", "tools.csv"};
-    const bool used[3] = {true, job_.mechanics, !job_.tools.empty()};
-    for (int k = 0; k < 3; ++k) {
+    const char* names[4] = {"probes.csv", "energy.csv", "tools.csv", "plies.csv"};
+    const bool used[4] = {true, job_.mechanics, !job_.tools.empty(), job_.thermal.has_value()};
+    for (int k = 0; k < 4; ++k) {
       const auto path = opt.out_dir / names[k];
       if (opt.write_files && used[k] &&
           (!std::filesystem::exists(path) || std::filesystem::file_size(path) < csv_size[k]))
@@ -2304,6 +2344,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   EnergyAudit audit;
   std::vector<double> energy_rows;  // the energy.csv table, also written to results.h5
   std::vector<double> tool_rows;    // the tools.csv table (wide), also written to results.h5
+  std::vector<double> ply_rows;     // the plies.csv table (wide), also written to results.h5
   long long mech_steps = 0;
   double mech_dt = 0;
   std::vector<std::string> energy_cols = {"time",    "kinetic", "internal",       "external_work",
@@ -2335,7 +2376,14 @@ RunResult Simulation::run(const RunOptions& opt) {
   std::vector<std::string> tool_cols = {"time"};
   for (const auto& td : job_.tools)
     for (const char* q : {"_ux", "_uy", "_uz", "_fx", "_fy", "_fz", "_heat_J"}) tool_cols.push_back(td.name + q);
-  std::ofstream energy_csv, tools_csv;
+  const auto& threshold = job_.output.temperature_threshold;
+  std::vector<std::string> ply_cols = {"time"};
+  for (const auto& st : parts_) {
+    for (const char* q : {"_temperature_min", "_temperature_mean", "_temperature_max"})
+      ply_cols.push_back(st->def->name + q);
+    if (threshold) ply_cols.push_back(st->def->name + "_fraction_below");
+  }
+  std::ofstream energy_csv, tools_csv, plies_csv;
   if (opt.write_files && job_.mechanics) {
     std::string header;
     for (std::size_t c = 0; c < energy_cols.size(); ++c) header += (c ? "," : "") + energy_cols[c];
@@ -2358,11 +2406,31 @@ RunResult Simulation::run(const RunOptions& opt) {
     }
     if (tools_csv.is_open()) tools_csv.flush();
   };
+  if (opt.write_files && job_.thermal)
+    open_series(plies_csv, "plies.csv", 3,
+                std::string("time,ply,temperature_min,temperature_mean,temperature_max") +
+                    (threshold ? ",fraction_below\n" : "\n"));
+  // Each ply's temperatures (ply_temperature), a row per ply.
+  auto sample_plies = [&](double t) {
+    ply_rows.push_back(t);
+    for (const auto& st : parts_) {
+      const std::array<double, 4> row = ply_temperature(*st, threshold);
+      const int n = threshold ? 4 : 3;
+      ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + n);
+      if (plies_csv.is_open()) {
+        plies_csv << csv_number(t) << ',' << st->def->name;
+        for (int k = 0; k < n; ++k) plies_csv << ',' << csv_number(row[k]);
+        plies_csv << '\n';
+      }
+    }
+    if (plies_csv.is_open()) plies_csv.flush();
+  };
   std::string failure;
   int stop_signal = 0;  // the signal of a stop request, once the loop has seen it
   double frame_t = 0;   // time of the last frame written
   seen_min_ = std::numeric_limits<double>::infinity();
   seen_max_ = -seen_min_;
+  below_from_.assign(parts_.size(), -1.0);
   // The mechanics loop's own state (explicit dynamics; the thermal
   // splitter advances every `subcycle` mechanical steps over the time
   // elapsed since its last step).
@@ -2444,7 +2512,8 @@ RunResult Simulation::run(const RunOptions& opt) {
   auto run_io = [&](auto& a) {
     return a.io(steps) && a.io(mech_steps) && a.io(mech_dt) && a.io(frame_index) && a.io(frame_t) &&
            a.io_array(next_probe) && a.io(heat_in) && a.io(substeps_max) && a.io(limited_total) && a.io(stored0) &&
-           a.io_array(stored0_part) && a.io_vector(energy_rows) && a.io_vector(tool_rows) && a.io(audit.kinetic) &&
+           a.io_array(stored0_part) && a.io_vector(energy_rows) && a.io_vector(tool_rows) && a.io_vector(ply_rows) &&
+           a.io(audit.kinetic) &&
            a.io(audit.internal) && a.io(audit.external) && a.io(audit.damping) && a.io(audit.balance_error) &&
            a.io(audit.contact) && a.io(audit.contact_stored) && a.io(audit.kinetic_half) &&
            a.io_vector(audit.reactions) && a.io(t_thermal) && a.io(since_thermal) && a.io(subcycle) &&
@@ -2460,7 +2529,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     sdk::StateWriter w;
     w.put(t);
     w.put_vector(frame_times);
-    for (std::ofstream* f : {&probes_csv, &energy_csv, &tools_csv}) {
+    for (std::ofstream* f : {&probes_csv, &energy_csv, &tools_csv, &plies_csv}) {
       f->flush();
       w.put(static_cast<std::uint64_t>(f->is_open() ? static_cast<std::uint64_t>(f->tellp()) : 0));
     }
@@ -2515,6 +2584,10 @@ RunResult Simulation::run(const RunOptions& opt) {
       check_field(0.0, 0);
       write_frame(0.0);
       if (!tools_.empty()) sample_tools(0.0);
+      if (job_.thermal) {
+        sample_plies(0.0);
+        if (!job_.mechanics) next_sample = series_iv;  // thermal-only: the next row after the first step past it
+      }
       sample_probes(0.0);
     }
     if (job_.mechanics) {
@@ -2650,6 +2723,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             energy_csv << ',' << csv_number(audit.kinetic_half) << '\n';
           }
           if (!tools_.empty()) sample_tools(t);
+          if (job_.thermal) sample_plies(t);
           next_sample += series_iv;
         }
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
@@ -2699,6 +2773,10 @@ RunResult Simulation::run(const RunOptions& opt) {
         limited_total += rep.limited;
         check_field(t, steps);
         if (std::abs(t - next_frame) <= eps_t) t = next_frame;
+        if (t >= next_sample - eps_t) {
+          sample_plies(t);
+          advance_past(next_sample, series_iv, t + eps_t);
+        }
         bool any_step_probe = false;
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
           const double iv = job_.output.probes[q].interval;
@@ -2729,6 +2807,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       if (job_.mechanics) update_element_fields();
       write_frame(t);
       if (!tools_.empty()) sample_tools(t);
+      if (job_.thermal && (ply_rows.empty() || ply_rows[ply_rows.size() - ply_cols.size()] < t)) sample_plies(t);
       for (std::size_t q = 0; q < next_probe.size(); ++q) {  // the probes not sampled at t yet
         const double pi = job_.output.probes[q].interval;
         const double iv = pi > 0 ? pi : job_.mechanics ? interval : 0.0;
@@ -2748,6 +2827,8 @@ RunResult Simulation::run(const RunOptions& opt) {
     writer->write_series("energy", energy_cols, energy_rows);
   if (writer && !tools_.empty() && tool_rows.size() % tool_cols.size() == 0 && !tool_rows.empty())
     writer->write_series("tools", tool_cols, tool_rows);
+  if (writer && job_.thermal && ply_rows.size() % ply_cols.size() == 0 && !ply_rows.empty())
+    writer->write_series("plies", ply_cols, ply_rows);
   const double stored_change = stored_heat() - stored0;
   const double scale = std::max({std::abs(stored_change), std::abs(heat_in), 1e-300});
   if (failure.empty() && stop_signal != 0) {
@@ -2798,6 +2879,15 @@ RunResult Simulation::run(const RunOptions& opt) {
   for (const auto& m : mech_) result.energy.added_mass_percent.push_back(100 * m->mass_added / m->mass_physical);
   result.temperature_min = seen_min_;
   result.temperature_max = seen_max_;
+  {
+    const std::size_t per = threshold ? 4 : 3, w = ply_cols.size();
+    for (std::size_t r = 0; r + w <= ply_rows.size(); r += w)
+      for (std::size_t p = 0; p < parts_.size(); ++p) {
+        const double* v = &ply_rows[r + 1 + per * p];
+        result.ply_history.push_back({static_cast<int>(p), ply_rows[r], v[0], v[1], v[2], threshold ? v[3] : 0.0});
+      }
+    if (threshold) result.part_below_threshold_from_s = below_from_;
+  }
 
   if (opt.write_files) {
     update_derived();
@@ -2886,6 +2976,13 @@ RunResult Simulation::run(const RunOptions& opt) {
                        {"values_per_node", st->nz},
                        {"temperature_min", *mn},
                        {"temperature_max", *mx}});
+      if (job_.thermal) {
+        const std::array<double, 4> now = ply_temperature(*st, threshold);
+        plies.back()["temperature_mean"] = now[1];
+        if (threshold) plies.back()["fraction_below_threshold"] = now[3];
+      }
+      if (threshold)
+        plies.back()["below_threshold_from_s"] = below_from_[p] >= 0 ? json(below_from_[p]) : json(nullptr);
       if (job_.mechanics) {
         plies.back()["shear_angle_min_deg"] = result.part_shear_min_deg[p];
         plies.back()["shear_angle_max_deg"] = result.part_shear_max_deg[p];
@@ -2928,6 +3025,21 @@ RunResult Simulation::run(const RunOptions& opt) {
                 "to {:.3g}",
                 st.def->name, *mn, *mx, result.part_shear_min_deg[p], result.part_shear_max_deg[p],
                 result.part_fibre_strain_min[p], result.part_fibre_strain_max[p]);
+    }
+  }
+  if (job_.thermal) {
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      const std::array<double, 4> now = ply_temperature(*parts_[p], threshold);
+      std::ostringstream line;
+      line << std::fixed << std::setprecision(2) << "part '" << parts_[p]->def->name << "': ";
+      if (!job_.mechanics) line << "temperature " << now[0] << " to " << now[2] << " degC, ";
+      line << "mean " << now[1] << " degC";
+      if (threshold && below_from_[p] >= 0)
+        line << ", below " << fmt_g(*threshold) << " degC from t = " << fmt_g(below_from_[p], 4) << " s, "
+             << std::setprecision(1) << 100 * now[3] << " % of it below at the end";
+      else if (threshold)
+        line << ", never below " << fmt_g(*threshold) << " degC";
+      log->info("{}", line.str());
     }
   }
   if (result.ok) {

@@ -79,6 +79,17 @@ struct RunResult {
   // per part, mechanics only: the range of E11 (membrane strain along the initial fibre direction) at the end
   std::vector<double> part_fibre_strain_min, part_fibre_strain_max;
   double temperature_min = 0, temperature_max = 0;  // over every value and every step
+  // The plies' temperature history (plies.csv): one row per sample, by part.
+  struct PlySample {
+    int part = 0;
+    double time = 0;
+    double min = 0, mean = 0, max = 0;  // degC; the mean weighted by heat capacity
+    double fraction_below = 0;          // of the heat capacity below output.temperature_threshold (0 without one)
+  };
+  std::vector<PlySample> ply_history;  // with thermal (a restarted run: those before its checkpoint too)
+  // per part, with output.temperature_threshold: the first time (s) a value
+  // of the ply was below it (checked at every thermal step; -1: never)
+  std::vector<double> part_below_threshold_from_s;
   long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
   std::vector<ProbeSample> probes;  // every sample (a restarted run: those before its checkpoint too)
   long long mechanical_steps = 0;
@@ -158,6 +169,7 @@ class Simulation {
   template <class A>
   bool state_io(A& a);
   double seen_min_ = 0, seen_max_ = 0;
+  std::vector<double> below_from_;  // per part: first time below output.temperature_threshold (s), -1: not yet
   double last_mech_dt_ = 0;
   // Whether the element fields that only output frames show (stresses,
   // curvatures) are written after the force evaluation being done

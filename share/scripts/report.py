@@ -12,6 +12,9 @@ Writes into DIR/figures/:
                        %) of each ply, last frame, where the frames have it
   tool_forces.png      force on each moving tool against its travel
                        (punch force against stroke), and heat per tool
+  plies.png            each ply's mean temperature against time, in a
+                       band from its coldest to its hottest value, and
+                       with output.temperature_threshold its share below it
   energy.png           energy audit against time
   study.png            error against wall time when DIR holds a study.csv
 
@@ -25,9 +28,11 @@ DIR/figures/against/:
                        of the shorter run
   tools.png            force on each tool along z and heat per tool,
                        against time
+  plies.png            each ply's mean temperature and coldest value
   energy.png           internal, kinetic and contact energy against time
 """
 import csv
+import json
 import os
 import sys
 
@@ -238,6 +243,54 @@ def plot_tools(folder, out):
     return [save(fig, out, "tool_forces.png")]
 
 
+def ply_rows(folder):
+    """plies.csv by ply (in the file's order): time and the columns as float arrays."""
+    rows = list(csv.DictReader(open(os.path.join(folder, "plies.csv"))))
+    names = list(dict.fromkeys(r["ply"] for r in rows))
+    return {n: {k: np.array([float(r[k]) for r in rows if r["ply"] == n]) for k in rows[0] if k != "ply"}
+            for n in names}
+
+
+def threshold_of(folder):
+    """The job's output.temperature_threshold (degC), from job_as_run.json; None without one."""
+    try:
+        return json.load(open(os.path.join(folder, "job_as_run.json")))["output"].get("temperature_threshold")
+    except (OSError, ValueError, KeyError, AttributeError):
+        return None
+
+
+def plot_plies(folder, out):
+    plies = ply_rows(folder)
+    if not plies:
+        return []
+    threshold = threshold_of(folder)
+    share = all("fraction_below" in v for v in plies.values())
+    fig, axes = plt.subplots(1, 2 if share else 1, figsize=(10 if share else 6, 4), squeeze=False)
+    a1 = axes[0][0]
+    for k, (name, v) in enumerate(plies.items()):
+        c = "C%d" % k
+        a1.fill_between(v["time"], v["temperature_min"], v["temperature_max"], color=c, alpha=0.2, lw=0)
+        a1.plot(v["time"], v["temperature_mean"], color=c, label="%s: mean, band from coldest to hottest" % name)
+    if threshold is not None:
+        a1.axhline(threshold, color="grey", ls="--", lw=1, label="threshold %g degC" % threshold)
+    a1.set_xlabel("time (s)")
+    a1.set_ylabel("temperature (degC)")
+    a1.set_title("temperature of each ply")
+    if share:
+        a2 = axes[0][1]
+        for k, (name, v) in enumerate(plies.items()):
+            a2.plot(v["time"], 100 * v["fraction_below"], color="C%d" % k, label=name)
+        a2.set_xlabel("time (s)")
+        a2.set_ylabel("% of the ply's heat capacity")
+        a2.set_title("share below %s degC" % ("the threshold" if threshold is None else "%g" % threshold))
+        a2.set_ylim(-2, 102)
+    for row in axes:
+        for a in row:
+            a.grid(alpha=0.3)
+            a.legend(fontsize=8)
+    return [save(fig, out, "plies.png")]
+
+
 def plot_energy(folder, out):
     rows = list(csv.DictReader(open(os.path.join(folder, "energy.csv"))))
     if not rows:
@@ -343,6 +396,19 @@ def against(folder, other, out):
                 finish(axes[2 * k], "%s: force on the tool along z" % name, "time (s)", "fz (N)")
                 finish(axes[2 * k + 1], "%s: heat given to the plies" % name, "time (s)", "heat (J)")
             made.append(save(fig, out, "tools.png"))
+    if both("plies.csv"):
+        tabs = [ply_rows(d) for d, _, _ in runs]
+        names = [n for n in tabs[0] if n in tabs[1]]
+        if names:
+            fig, axes = grid(2 * len(names))
+            for k, name in enumerate(names):
+                for plies, (_, ls, lab) in zip(tabs, runs):
+                    v = plies[name]
+                    axes[2 * k].plot(v["time"], v["temperature_mean"], ls, label=lab)
+                    axes[2 * k + 1].plot(v["time"], v["temperature_min"], ls, label=lab)
+                finish(axes[2 * k], "%s: mean temperature" % name, "time (s)", "temperature (degC)")
+                finish(axes[2 * k + 1], "%s: coldest value" % name, "time (s)", "temperature (degC)")
+            made.append(save(fig, out, "plies.png"))
     if both("energy.csv"):
         tabs = [table(d, "energy.csv") for d, _, _ in runs]
         keys = [k for k in ("internal", "kinetic_half_step", "contact") if all(t and k in t[0] for t in tabs)]
@@ -395,7 +461,7 @@ def main():
     # killed while writing it, a file edited by hand) is named in one line,
     # and the figures of the others are still made.
     for name, plot in (("study.csv", plot_study), ("probes.csv", plot_probes), ("results.h5", plot_maps),
-                       ("tools.csv", plot_tools), ("energy.csv", plot_energy)):
+                       ("tools.csv", plot_tools), ("plies.csv", plot_plies), ("energy.csv", plot_energy)):
         if not os.path.exists(os.path.join(folder, name)):
             continue
         try:
@@ -420,13 +486,13 @@ def main():
             plt.close("all")
         if not pair and not failed:
             failed += 1
-            sys.stderr.write("error: report: %s and %s share no probe, tool or energy history\n" % (folder, other))
+            sys.stderr.write("error: report: %s and %s share no probe, tool, ply or energy history\n" % (folder, other))
         made += pair
     for m in made:
         print(m)
     if not made and not failed:
-        sys.stderr.write("error: report: nothing to plot in %s (no study.csv, probes.csv, results.h5, tools.csv or "
-                         "energy.csv)\n" % folder)
+        sys.stderr.write("error: report: nothing to plot in %s (no study.csv, probes.csv, results.h5, tools.csv, "
+                         "plies.csv or energy.csv)\n" % folder)
         return 3
     return 3 if failed else 0
 

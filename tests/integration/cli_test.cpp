@@ -41,7 +41,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.16.1 (plugin SDK 0.16.0, ABI 16)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.16.2 (plugin SDK 0.16.0, ABI 16)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -205,6 +205,8 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"layers_beyond_long_long", [](json& j) { j["parts"][0]["thickness_layers"] = 1e30; }, "error: /parts/0/thickness_layers: must be <= 10000, found 1e+30"},
       {"frames_beyond_count", [](json& j) { j["output"]["interval"] = 1e-30; }, "error: /output/interval: an interval of 1e-30 s would write 1e+30 frames"},
       {"probe_samples_beyond_count", [](json& j) { j["output"]["probes"][0]["interval"] = 1e-30; }, "error: /output/probes/0/interval: an interval of 1e-30 s would take 1e+30 samples"},
+      {"threshold_below_absolute_zero", [](json& j) { j["output"]["temperature_threshold"] = -300; }, "error: /output/temperature_threshold: must be > -273.15, found -300"},
+      {"threshold_text", [](json& j) { j["output"]["temperature_threshold"] = "270"; }, "error: /output/temperature_threshold: expected a number, found a string"},
   };
   for (const auto& c : cases) {
     const auto job = small_job("bad_" + c.name, c.edit);
@@ -1041,7 +1043,40 @@ TEST(Output, DatasetsCarryTheirUnits) {
   for (std::size_t c = 1; c < tcols.size(); ++c)
     EXPECT_EQ(tunits[c], std::vector<std::string>({"m", "m", "m", "N", "N", "N", "J"})[(c - 1) % 7]) << tcols[c];
   EXPECT_EQ(tunits[0], "s");
+  // The plies' history (the job sets output.temperature_threshold): the same
+  // rows in plies.csv, in results.h5 and in the run's result.
+  const auto pcols = split(text("series/plies", "columns")), punits = split(text("series/plies", "units"));
+  ASSERT_EQ(pcols.size(), punits.size());
+  ASSERT_EQ(pcols.size(), 1 + 4 * j["parts"].size());
+  EXPECT_EQ(pcols[1], j["parts"][0]["name"].get<std::string>() + "_temperature_min");
+  for (std::size_t c = 1; c < pcols.size(); ++c)
+    EXPECT_EQ(punits[c], std::vector<std::string>({"degC", "degC", "degC", "1"})[(c - 1) % 4]) << pcols[c];
+  const auto series = read_dataset<double>(file, "series/plies");
   H5Fclose(file);
+  std::ifstream csv(dir / "plies.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "time,ply,temperature_min,temperature_mean,temperature_max,fraction_below");
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(csv, line)) rows.push_back(split(line));
+  ASSERT_EQ(rows.size(), run.result.ply_history.size());
+  ASSERT_EQ(series.size(), pcols.size() * rows.size() / 2);
+  ASSERT_GT(rows.size(), 10u);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const auto& s = run.result.ply_history[r];
+    ASSERT_EQ(rows[r].size(), 6u);
+    EXPECT_EQ(rows[r][1], j["parts"][s.part]["name"].get<std::string>());
+    EXPECT_NEAR(std::stod(rows[r][0]), s.time, 1e-9 * std::max(1.0, s.time));
+    const double* wide = &series[(r / 2) * pcols.size()];
+    EXPECT_EQ(wide[0], s.time);
+    const double values[4] = {s.min, s.mean, s.max, s.fraction_below};
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(wide[1 + 4 * s.part + k], values[k]) << r << " " << k;
+      EXPECT_NEAR(std::stod(rows[r][2 + k]), values[k], 1e-9 * std::max(1.0, std::abs(values[k]))) << r << " " << k;
+    }
+    EXPECT_LE(s.min, s.mean + 1e-9);  // the mean of equal values may differ from them by round-off
+    EXPECT_LE(s.mean, s.max + 1e-9);
+  }
 }
 
 // `thermostamp compare A B`: a run against itself is identical (exit 0);
@@ -1261,7 +1296,7 @@ TEST(Cli, ReportDrawsTwoRunsOnTheSameAxes) {
   const auto nothing = thermostamp("report " + q(dir / "adi") + " --against " + q(empty));
   EXPECT_EQ(nothing.exit_code, 3);
   EXPECT_NE(nothing.err.find("error: report: " + (dir / "adi").string() + " and " + empty.string() +
-                             " share no probe, tool or energy history"),
+                             " share no probe, tool, ply or energy history"),
             std::string::npos)
       << nothing.err;
   EXPECT_EQ(std::count(nothing.err.begin(), nothing.err.end(), '\n'), 1) << nothing.err;

@@ -80,7 +80,7 @@ json comparable_summary(const std::filesystem::path& dir) {
 
 // `b` holds what `a` holds, bit for bit.
 void expect_same_output(const std::filesystem::path& a, const std::filesystem::path& b, const std::string& label) {
-  for (const char* f : {"probes.csv", "energy.csv", "tools.csv", "results.xdmf"}) {
+  for (const char* f : {"probes.csv", "energy.csv", "tools.csv", "plies.csv", "results.xdmf"}) {
     ASSERT_EQ(std::filesystem::exists(a / f), std::filesystem::exists(b / f)) << label << ": " << f;
     if (std::filesystem::exists(a / f)) {
       EXPECT_TRUE(file_text(a / f) == file_text(b / f)) << label << ": " << f;
@@ -380,7 +380,7 @@ TEST(Restart, ExtendsAFinishedRunAsARunToTheLaterEnd) {
   const auto fd = frames(dir / "direct");
   ASSERT_GT(fd.size(), 20u);
   EXPECT_TRUE(fd == frames(out)) << "the frames of the run to 1 s";
-  for (const char* f : {"energy.csv", "tools.csv"}) {
+  for (const char* f : {"energy.csv", "tools.csv", "plies.csv"}) {
     const auto rows = rows_after(dir / "direct" / f, from);
     EXPECT_GT(rows.size(), 200u) << f;
     EXPECT_EQ(rows_after(out / f, from), rows) << f;
@@ -423,6 +423,7 @@ TEST(Restart, ExtendsAFinishedRunAsARunToTheLaterEnd) {
   // time.end either: the extended run gives every file of the run to 1 s.
   json rows = coarse_hemisphere("hemisphere_ud_2ply.json");
   rows["output"]["series_interval"] = 0.002;
+  rows["output"]["temperature_threshold"] = 290.0;
   const auto rdir = temp_dir("restart_extend_rows");
   const auto rjob = write_job(rdir, rows);
   ASSERT_EQ(run_cli(rjob, rdir / "direct", 2).exit_code, 0);
@@ -438,10 +439,13 @@ TEST(Restart, ExtendsAFinishedRunAsARunToTheLaterEnd) {
             std::string::npos)
       << many.err;
 
-  // Thermal only, frames every 1 s, probes every 0.1 s, to 4 s.
+  // Thermal only, frames every 1 s, probes every 0.1 s, ply rows every
+  // 0.05 s, to 4 s.
   const auto tdir = temp_dir("restart_extend_thermal");
-  const auto tjob =
-      write_job(tdir, read_job_document(source_dir() / "share" / "verification" / "patch_contact.json"));
+  json patch = read_job_document(source_dir() / "share" / "verification" / "patch_contact.json");
+  patch["output"]["series_interval"] = 0.05;
+  patch["output"]["temperature_threshold"] = 280.0;
+  const auto tjob = write_job(tdir, patch);
   ASSERT_EQ(run_cli(tjob, tdir / "direct", 2).exit_code, 0);
   // time.end off the frame and probe times: the checkpoint before the last step.
   ASSERT_EQ(run_cli(tjob, tdir / "off", 2, "--set time.end=2.55").exit_code, 0);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <unistd.h>
 
@@ -109,22 +110,45 @@ CommandResult thermostamp(const std::string& args) {
   return r;
 }
 
-double slab_robin_series(double x, double t, double L, double alpha, double Bi, double T0, double Tinf) {
-  double theta = 0;
-  const double pi = 3.14159265358979323846;
-  for (int n = 0; n < 400; ++n) {
-    // Root of f(l) = l tan l - Bi in (n pi, n pi + pi/2), by bisection.
-    double lo = n * pi + 1e-12, hi = n * pi + pi / 2 - 1e-12;
-    for (int it = 0; it < 200; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      if (mid * std::tan(mid) - Bi > 0) hi = mid;
-      else lo = mid;
+namespace {
+// The slab's eigen-series: the sum over n of c_n exp(-l_n^2 alpha t / L^2)
+// shape(l_n), with l_n tan l_n = Bi and c_n = 4 sin l_n / (2 l_n + sin 2 l_n).
+// The roots of the last Bi asked for are kept (callers evaluate the series
+// many times for one slab).
+template <class Shape>
+double slab_robin_sum(double t, double L, double alpha, double Bi, Shape shape) {
+  static double roots_bi = std::numeric_limits<double>::quiet_NaN();
+  static std::vector<double> roots;
+  if (!(Bi == roots_bi)) {
+    roots.clear();
+    const double pi = 3.14159265358979323846;
+    for (int n = 0; n < 400; ++n) {
+      // Root of f(l) = l tan l - Bi in (n pi, n pi + pi/2), by bisection.
+      double lo = n * pi + 1e-12, hi = n * pi + pi / 2 - 1e-12;
+      for (int it = 0; it < 200; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        if (mid * std::tan(mid) - Bi > 0) hi = mid;
+        else lo = mid;
+      }
+      roots.push_back(0.5 * (lo + hi));
     }
-    const double l = 0.5 * (lo + hi);
-    const double c = 4 * std::sin(l) / (2 * l + std::sin(2 * l));
-    theta += c * std::exp(-l * l * alpha * t / (L * L)) * std::cos(l * x / L);
+    roots_bi = Bi;
   }
-  return Tinf + (T0 - Tinf) * theta;
+  double theta = 0;
+  for (const double l : roots) {
+    const double c = 4 * std::sin(l) / (2 * l + std::sin(2 * l));
+    theta += c * std::exp(-l * l * alpha * t / (L * L)) * shape(l);
+  }
+  return theta;
+}
+}  // namespace
+
+double slab_robin_series(double x, double t, double L, double alpha, double Bi, double T0, double Tinf) {
+  return Tinf + (T0 - Tinf) * slab_robin_sum(t, L, alpha, Bi, [&](double l) { return std::cos(l * x / L); });
+}
+
+double slab_robin_mean(double t, double L, double alpha, double Bi, double T0, double Tinf) {
+  return Tinf + (T0 - Tinf) * slab_robin_sum(t, L, alpha, Bi, [](double l) { return std::sin(l) / l; });
 }
 
 }  // namespace ts::test

@@ -72,5 +72,7 @@ std::filesystem::path temp_dir(const std::string& name);
 // Plane wall, thickness L, insulated at x = 0, Robin (h, T_inf) at x = L,
 // initially T0: T(x, t) from the eigen-series (lambda tan lambda = Bi).
 double slab_robin_series(double x, double t, double L, double alpha, double Bi, double T0, double Tinf);
+// The same wall's mean temperature over its thickness.
+double slab_robin_mean(double t, double L, double alpha, double Bi, double T0, double Tinf);
 
 }  // namespace ts::test

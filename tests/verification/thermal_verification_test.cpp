@@ -88,6 +88,77 @@ TEST(EigenSeries, FirstOrderInTime) {
   EXPECT_GT(order2, 0.9);
 }
 
+// The ply history (plies.csv) of the Robin slab against the eigen-series:
+// the coldest value is the cooled face's, the hottest the adiabatic face's,
+// the mean the series' mean over the thickness; the share below 290 degC is
+// the depth (L - x*) / L of the point x* where the series crosses it; the
+// first time below it, where the cooled face crosses it. 32 layers,
+// backward Euler at 0.5 ms, rows every 20 ms to 2 s. Tolerances: the
+// face values carry the error of the profile, largest in the first
+// milliseconds, when the cooled layer is a few elements deep (0.047 K;
+// 0.2 K with 16 layers and 2 ms): 0.1 K. The mean follows the heat through
+// the face, which the scheme conserves (0.001 K): 0.005 K. The share below
+// is the crossing's depth, off by the profile's error over its gradient
+// (6e-4 of the thickness): 2e-3. The first time below is the end of the
+// step in which the face's value crossed: within two steps after the
+// series' time, never before it.
+TEST(PlyHistory, SlabAgainstEigenSeries) {
+  const double dt = 0.0005, threshold = 290.0, alpha = 0.31 / kRhoC, Bi = 1000.0 * kH / 0.31;
+  json j = robin_job("adi", "implicit", 32, dt);
+  j["output"]["temperature_threshold"] = threshold;
+  j["output"]["series_interval"] = 0.02;
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  auto T = [&](double x, double t) { return slab_robin_series(x, t, kH, alpha, Bi, 300.0, 260.0); };
+  // Where a decreasing function of s in [lo, hi] crosses the threshold, by bisection.
+  auto crossing = [&](double lo, double hi, auto f) {
+    for (int it = 0; it < 100; ++it) (f(0.5 * (lo + hi)) > threshold ? lo : hi) = 0.5 * (lo + hi);
+    return 0.5 * (lo + hi);
+  };
+  double e_min = 0, e_mean = 0, e_max = 0, e_frac = 0, frac_end = 0;
+  int rows = 0, partial = 0;
+  for (const auto& s : r.result.ply_history) {
+    ASSERT_EQ(s.part, 0);
+    ++rows;
+    if (s.time == 0) {
+      EXPECT_EQ(s.min, 300.0);
+      EXPECT_NEAR(s.mean, 300.0, 1e-12);
+      EXPECT_EQ(s.fraction_below, 0.0);
+      continue;
+    }
+    e_min = std::max(e_min, std::abs(s.min - T(kH, s.time)));
+    e_max = std::max(e_max, std::abs(s.max - T(0, s.time)));
+    e_mean = std::max(e_mean, std::abs(s.mean - slab_robin_mean(s.time, kH, alpha, Bi, 300.0, 260.0)));
+    double frac = 0;
+    if (T(0, s.time) <= threshold) frac = 1;
+    else if (T(kH, s.time) < threshold) frac = 1 - crossing(0, kH, [&](double x) { return T(x, s.time); }) / kH;
+    partial += frac > 0.05 && frac < 0.95;
+    e_frac = std::max(e_frac, std::abs(s.fraction_below - frac));
+    frac_end = frac;
+  }
+  const double first = crossing(0, 2, [&](double t) { return T(kH, std::max(t, 1e-9)); });
+  ASSERT_EQ(r.result.part_below_threshold_from_s.size(), 1u);
+  const double from = r.result.part_below_threshold_from_s[0];
+  std::printf("rows %d (%d with a front inside the ply): errors min %.3g K, mean %.3g K, max %.3g K, share below "
+              "%.3g; first below %.6g s (series %.6g s)\n",
+              rows, partial, e_min, e_mean, e_max, e_frac, from, first);
+  EXPECT_EQ(rows, 101);  // t = 0 and every 20 ms
+  EXPECT_GT(partial, 20) << "the front crosses the ply over many rows";
+  EXPECT_GT(frac_end, 0.5);
+  EXPECT_LT(e_min, 0.1);
+  EXPECT_LT(e_max, 0.1);
+  EXPECT_LT(e_mean, 0.005);
+  EXPECT_LT(e_frac, 2e-3);
+  EXPECT_GE(from, first);
+  EXPECT_LE(from, first + 2 * dt);
+  // The last row's mean is the heat audit's: (mean - T0) times the ply's
+  // heat capacity is the stored heat's change.
+  const auto& last = r.result.ply_history.back();
+  EXPECT_NEAR(last.time, 2.0, 1e-12);
+  const double capacity = kRhoC * 0.01 * 0.01 * kH;
+  EXPECT_NEAR((last.mean - 300.0) * capacity, r.result.part_heat_change[0], 1e-9 * std::abs(r.result.part_heat_change[0]));
+}
+
 // Independent reference for a stack of plies: lumped linear elements, 400
 // per ply, backward Euler with dt = 1e-4 s, interface conductance between
 // the facing end nodes of neighbouring plies. Bottom face Robin (h, 260),
@@ -347,6 +418,35 @@ TEST(Shell2d, LumpedCoolingMatchesClosedForm) {
       EXPECT_NEAR(r.sample(0, "temperature_profile", t)->values[0], 260.0 + 40.0 * factor, 1e-9) << scheme << " " << t;
     }
   }
+}
+
+// The ply history of the lumped body: one value per node, so the coldest,
+// mean and hottest values are T_n, and the share below 280 degC jumps from
+// 0 to 1 at the first step n with T_n below it, (1 + a)^-n < 1/2 with
+// backward Euler: n = 11 (t = 0.55 s) here. Round-off tolerances.
+TEST(PlyHistory, LumpedPlyCrossesAtTheClosedFormStep) {
+  json j = ply_job("shell2d", 4, 2.0, 0.1);
+  j["solvers"]["thermal"]["dt"] = 0.05;
+  j["interactions"] = {{{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", 1000.0}, {"ambient", 260.0}},
+                       {{"type", "heat_exchange"}, {"part", "ply"}, {"face", "bottom"}, {"h", 500.0}, {"ambient", 260.0}}};
+  j["output"]["temperature_threshold"] = 280.0;
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const double a = 1500.0 * 0.05 / (kRhoC * kH);
+  const int n_cross = static_cast<int>(std::floor(std::log(2.0) / std::log(1 + a))) + 1;
+  ASSERT_EQ(n_cross, 11);
+  // The default spacing (time.end / 500 = 4 ms) is below the step: a row per step.
+  ASSERT_EQ(r.result.ply_history.size(), 41u);
+  for (const auto& s : r.result.ply_history) {
+    const int n = static_cast<int>(std::round(s.time / 0.05));
+    const double Tn = 260.0 + 40.0 * std::pow(1 + a, -n);
+    EXPECT_NEAR(s.min, Tn, 1e-9) << s.time;
+    EXPECT_NEAR(s.mean, Tn, 1e-9) << s.time;
+    EXPECT_NEAR(s.max, Tn, 1e-9) << s.time;
+    EXPECT_EQ(s.fraction_below, n >= n_cross ? 1.0 : 0.0) << s.time;
+  }
+  ASSERT_EQ(r.result.part_below_threshold_from_s.size(), 1u);
+  EXPECT_NEAR(r.result.part_below_threshold_from_s[0], n_cross * 0.05, 1e-12);
 }
 
 }  // namespace
