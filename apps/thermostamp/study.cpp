@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -64,7 +65,8 @@ double interpolate(const ProbeSample& s, double z) {
 }
 
 // Plane wall insulated at the bottom face, Robin (h, T_inf) on the top
-// face, uniform T0: the eigen-series with lambda tan lambda = Bi.
+// face, uniform T0: the eigen-series with lambda tan lambda = Bi, at x from
+// the insulated face, or (x < 0) its mean over the thickness.
 double slab_robin(double x, double t, double L, double alpha, double Bi, double T0, double Tinf) {
   if (t <= 0) return T0;  // the truncated series is not the initial condition
   double theta = 0;
@@ -75,7 +77,8 @@ double slab_robin(double x, double t, double L, double alpha, double Bi, double 
       (mid * std::tan(mid) - Bi > 0 ? hi : lo) = mid;
     }
     const double l = 0.5 * (lo + hi);
-    theta += 4 * std::sin(l) / (2 * l + std::sin(2 * l)) * std::exp(-l * l * alpha * t / (L * L)) * std::cos(l * x / L);
+    const double shape = x < 0 ? std::sin(l) / l : std::cos(l * x / L);
+    theta += 4 * std::sin(l) / (2 * l + std::sin(2 * l)) * std::exp(-l * l * alpha * t / (L * L)) * shape;
   }
   return Tinf + (T0 - Tinf) * theta;
 }
@@ -89,22 +92,46 @@ void check_slab_robin(const Job& j, const std::string& ptr) {
                         "its whole top face");
 }
 
-// The analytic profile at the sample's time, on the variant's own z points
-// (or 17 points for a single-value variant).
-ProbeSample slab_robin_sample(const Job& j, const ProbeSample& s) {
+// The slab of a job that check_slab_robin accepted, at x from its
+// insulated face (x < 0: its mean) and time t.
+double slab_robin_of(const Job& j, double x, double t) {
   const PartDef& p = j.parts[0];
   const MaterialDef& m = j.materials[p.material];
   const HeatExchangeDef& hx = j.heat_exchanges[0];
   const double L = p.thickness, alpha = m.conductivity[2] / (m.density * m.specific_heat);
   const double Bi = hx.h * L / m.conductivity[2];
+  return slab_robin(x, t, L, alpha, Bi, p.initial_temperature, hx.ambient);
+}
+
+// The analytic profile at the sample's time, on the variant's own z points
+// (or 17 points for a single-value variant).
+ProbeSample slab_robin_sample(const Job& j, const ProbeSample& s) {
+  const double L = j.parts[0].thickness;
   ProbeSample r = s;
   if (r.z.size() < 2) {
     r.z.clear();
     for (int k = 0; k <= 16; ++k) r.z.push_back(-0.5 * L + L * k / 16);
   }
   r.values.clear();
-  for (double z : r.z) r.values.push_back(slab_robin(z + 0.5 * L, s.time, L, alpha, Bi, p.initial_temperature, hx.ambient));
+  for (double z : r.z) r.values.push_back(slab_robin_of(j, z + 0.5 * L, s.time));
   return r;
+}
+
+// A ply's mean temperature at time t from its history (rows in time
+// order), linear between the rows; NaN outside them.
+double mean_at(const std::vector<RunResult::PlySample>& history, int part, double t) {
+  const RunResult::PlySample* before = nullptr;
+  for (const auto& s : history) {
+    if (s.part != part) continue;
+    if (s.time == t) return s.mean;
+    if (s.time > t) {
+      if (!before) break;
+      const double a = (t - before->time) / (s.time - before->time);
+      return (1 - a) * before->mean + a * s.mean;
+    }
+    before = &s;
+  }
+  return std::numeric_limits<double>::quiet_NaN();
 }
 
 // The study's state file (in its output folder): what a study stopped
@@ -115,11 +142,12 @@ constexpr const char* kStudyStateFormat = "thermostamp-study-state/1";
 // What the study keeps of a run: its samples of the error's quantity
 // (exact: JSON numbers round-trip), its wall time and thermal steps.
 json run_record(const RunResult& r, const std::string& quantity, int completed) {
-  json samples = json::array();
+  json samples = json::array(), plies = json::array();
   for (const auto& s : r.probes)
     if (s.quantity == quantity) samples.push_back({s.probe, s.time, s.z, s.values});
+  for (const auto& s : r.ply_history) plies.push_back({s.part, s.time, s.mean});
   return {{"completed", completed}, {"wall_time_s", r.wall_time_s}, {"thermal_steps", r.thermal_steps},
-          {"thermal_dt", r.thermal_dt}, {"samples", samples}};
+          {"thermal_dt", r.thermal_dt}, {"samples", samples}, {"plies", plies}};
 }
 RunResult from_record(const json& rec, const std::string& quantity) {
   RunResult r;
@@ -135,6 +163,14 @@ RunResult from_record(const json& rec, const std::string& quantity) {
     p.values = s.at(3).get<std::vector<double>>();
     r.probes.push_back(std::move(p));
   }
+  if (const auto it = rec.find("plies"); it != rec.end())  // a study state written before 0.16.2 has none
+    for (const auto& s : *it) {
+      RunResult::PlySample p;
+      p.part = s.at(0).get<int>();
+      p.time = s.at(1).get<double>();
+      p.mean = s.at(2).get<double>();
+      r.ply_history.push_back(p);
+    }
   return r;
 }
 // Written to a temporary name, then renamed: a study stopped while writing
@@ -363,11 +399,39 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   std::ofstream csv(out / "study.csv");
   csv << "label,wall_time_s,error_K,norm,samples,thermal_steps,thermal_dt_s";
   for (const auto& p : probes) csv << ",error_" << p.name << "_K";
+  const auto& plies = jobs[0].parts;
+  for (const auto& p : plies) csv << ",error_" << p.name << "_mean_K";
   csv << "\n";
   csv << "reference," << results[0].wall_time_s << ",0," << norm << "," << ref.size() << ","
       << results[0].thermal_steps << "," << results[0].thermal_dt;
-  for (std::size_t k = 0; k < probes.size(); ++k) csv << ",0";
+  for (std::size_t k = 0; k < probes.size() + plies.size(); ++k) csv << ",0";
   csv << "\n";
+  // The error of a variant's mean temperature of ply p (the history of
+  // plies.csv) in the study's norm, at the reference's rows (the variant
+  // linear between its rows) or, against the analytic slab, at the
+  // variant's own rows; NaN where there is none to compare (a job without
+  // the thermal solver, other plies).
+  auto ply_mean_error = [&](std::size_t i, int p) {
+    double e_max = 0, e_sq = 0;
+    long long n = 0;
+    auto take = [&](double d) {
+      e_max = std::max(e_max, d);
+      e_sq += d * d;
+      ++n;
+    };
+    if (jobs[i].parts.size() != plies.size() || jobs[i].parts[p].name != plies[p].name)
+      return std::numeric_limits<double>::quiet_NaN();
+    for (const auto& s : (analytic.empty() ? results[0] : results[i]).ply_history) {
+      if (s.part != p) continue;
+      if (!analytic.empty()) {
+        take(std::abs(s.mean - slab_robin_of(jobs[i], -1, s.time)));
+      } else if (const double v = mean_at(results[i].ply_history, p, s.time); !std::isnan(v)) {
+        take(std::abs(v - s.mean));
+      }
+    }
+    if (n == 0) return std::numeric_limits<double>::quiet_NaN();
+    return norm == "max" ? e_max : std::sqrt(e_sq / n);
+  };
   for (std::size_t i = 1; i < all.size(); ++i) {
     double err_max = 0, err_sq = 0;
     long long count = 0;
@@ -414,6 +478,11 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
         << results[i].thermal_steps << "," << results[i].thermal_dt;
     for (std::size_t k = 0; k < probes.size(); ++k)
       csv << "," << (norm == "max" ? probe_max[k] : (probe_n[k] ? std::sqrt(probe_sq[k] / probe_n[k]) : 0.0));
+    for (std::size_t p = 0; p < plies.size(); ++p) {
+      const double e = ply_mean_error(i, static_cast<int>(p));
+      csv << ",";
+      if (!std::isnan(e)) csv << e;  // an empty cell where there is nothing to compare
+    }
     csv << "\n";
     if (!quiet)
       std::cout << all[i].label << ": error " << err << " K (" << norm << "), wall " << results[i].wall_time_s

@@ -135,6 +135,33 @@ TEST(Cli, StudyWritesItsTable) {
   EXPECT_EQ(rows[3][0], "shell2d");
   EXPECT_LT(std::stod(rows[2][2]), 0.1 * std::stod(rows[3][2]));  // error_K
   EXPECT_GT(std::stod(rows[2][1]), 0.0);                           // wall_time_s
+  // The error of the ply's mean temperature: the largest difference between
+  // the mean of each row of the variant's plies.csv and the slab's mean from
+  // the eigen-series (slab_robin.json: 0.5 mm, k 0.31, rho c 1294 x 1775,
+  // h 1000 on top, 300 -> 260 degC), to the table's 6 digits.
+  ASSERT_EQ(rows[0].size(), 9u);
+  EXPECT_EQ(rows[0][8], "error_ply_mean_K");
+  EXPECT_EQ(rows[1][8], "0");
+  for (std::size_t r : {2u, 3u}) {
+    std::ifstream plies(dir / "out" / rows[r][0] / "plies.csv");
+    std::string row;
+    std::getline(plies, row);
+    double largest = 0;
+    int n = 0;
+    while (std::getline(plies, row)) {
+      std::stringstream ss(row);
+      std::vector<std::string> c;
+      for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+      const double t = std::stod(c[0]), mean = std::stod(c[3]);
+      const double exact = t > 0 ? slab_robin_mean(t, 0.0005, 0.31 / (1294.0 * 1775.0), 1000.0 * 0.0005 / 0.31, 300.0, 260.0)
+                                 : 300.0;
+      largest = std::max(largest, std::abs(mean - exact));
+      ++n;
+    }
+    EXPECT_EQ(n, 181) << rows[r][0];  // t = 0 and one per thermal step (180 steps of 11.4 ms, above the 4 ms spacing)
+    EXPECT_NEAR(std::stod(rows[r][8]), largest, 1e-5 * largest + 1e-9) << rows[r][0];
+  }
+  EXPECT_LT(std::stod(rows[2][8]), 0.1 * std::stod(rows[3][8]));
   // Each run's folder has its job as run, and no end checkpoint (its write
   // would count in the wall time).
   for (const char* label : {"adi-8", "shell2d"}) {

@@ -528,6 +528,59 @@ TEST(Restart, StudyContinuesWhereItStopped) {
   };
   const auto full = table(dir / "full" / "study.csv", false);
   ASSERT_EQ(full.size(), 4u);
+  // The error of each ply's mean temperature: the largest difference, at the
+  // reference's rows, between its mean and the variant's, linear between the
+  // variant's rows (the steps, and so the rows' times, follow the
+  // temperature-dependent stiffness), to the table's 6 digits.
+  auto cells = [](const std::string& line) {
+    std::vector<std::string> c;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+    return c;
+  };
+  const auto head = cells(table(dir / "full" / "study.csv", true)[0]);
+  auto means = [&](const std::filesystem::path& csv) {
+    std::map<std::string, std::vector<std::pair<double, double>>> m;  // ply -> (time, mean)
+    const auto rows = table(csv, true);
+    for (std::size_t r = 1; r < rows.size(); ++r) {
+      const auto c = cells(rows[r]);
+      m[c[1]].emplace_back(std::stod(c[0]), std::stod(c[3]));
+    }
+    return m;
+  };
+  auto ref = means(dir / "full" / "reference" / "plies.csv");
+  for (const std::string label : {"shell2d", "adi-4"}) {
+    auto var = means(dir / "full" / label / "plies.csv");
+    std::vector<std::string> row;
+    for (const auto& line : table(dir / "full" / "study.csv", true))
+      if (line.rfind(label + ",", 0) == 0) row = cells(line);
+    ASSERT_EQ(row.size(), head.size()) << label;
+    for (const std::string ply : {"ply_top", "ply_bottom"}) {
+      double largest = 0;
+      const auto& v = var[ply];
+      int compared = 0;
+      for (const auto& [t, mean] : ref[ply]) {
+        for (std::size_t k = 0; k < v.size(); ++k) {
+          if (v[k].first < t) continue;
+          if (v[k].first == t) {
+            largest = std::max(largest, std::abs(v[k].second - mean));
+          } else if (k > 0) {
+            const double a = (t - v[k - 1].first) / (v[k].first - v[k - 1].first);
+            largest = std::max(largest, std::abs((1 - a) * v[k - 1].second + a * v[k].second - mean));
+          } else {
+            break;
+          }
+          ++compared;
+          break;
+        }
+      }
+      EXPECT_GT(compared, 400) << label << " " << ply;
+      const auto col = std::find(head.begin(), head.end(), "error_" + ply + "_mean_K") - head.begin();
+      ASSERT_LT(static_cast<std::size_t>(col), head.size()) << ply;
+      EXPECT_GT(largest, 0.0) << label << " " << ply;
+      EXPECT_NEAR(std::stod(row[col]), largest, 1e-5 * largest) << label << " " << ply;
+    }
+  }
   EXPECT_EQ(table(out / "study.csv", false), full);
   EXPECT_TRUE(file_text(dir / "full" / "shell2d" / "probes.csv") == file_text(out / "shell2d" / "probes.csv"));
   // Stopped in its first run, the reference: it continues from its checkpoint.
