@@ -17,6 +17,7 @@ Writes into DIR/figures/:
                        with output.temperature_threshold its share below it
   energy.png           energy audit against time
   study.png            error against wall time when DIR holds a study.csv
+                       (at the probes, and of each ply's mean temperature)
 
 With --against OTHER (thermostamp report DIR --against OTHER), also the
 two runs on the same axes, DIR solid and OTHER dashed, into
@@ -426,18 +427,35 @@ def plot_study(folder, out):
     path = os.path.join(folder, "study.csv")
     rows = list(csv.DictReader(open(path)))
     var = [r for r in rows if r["label"] != "reference"]
-    fig, ax = plt.subplots(figsize=(6, 4.5))
+    # The error of each ply's mean temperature (error_<ply>_mean_K), where the table has one.
+    means = [c for c in (rows[0].keys() if rows else []) if c.startswith("error_") and c.endswith("_mean_K")]
+    means = [c for c in means if any(r[c] for r in var)]
+    fig, axes = plt.subplots(1, 2 if means else 1, figsize=(11 if means else 6, 4.5), squeeze=False)
+    ax = axes[0][0]
     for r in var:
         t, e = float(r["wall_time_s"]), max(float(r["error_K"]), 1e-6)
         ax.loglog([t], [e], "o")
         ax.annotate(r["label"], (t, e), textcoords="offset points", xytext=(4, 4), fontsize=8)
-    ref = [r for r in rows if r["label"] == "reference"]
-    if ref:
-        ax.axvline(float(ref[0]["wall_time_s"]), color="grey", ls="--", lw=1, label="reference run time")
-        ax.legend(fontsize=8)
-    ax.set_xlabel("wall time (s)")
     ax.set_ylabel("error against reference (K, %s norm)" % (var[0]["norm"] if var else "max"))
-    ax.grid(alpha=0.3, which="both")
+    ax.set_title("at the probes")
+    if means:
+        a2 = axes[0][1]
+        for k, c in enumerate(means):
+            pts = [(float(r["wall_time_s"]), max(float(r[c]), 1e-6), r["label"]) for r in var if r[c]]
+            a2.loglog([p[0] for p in pts], [p[1] for p in pts], "o", color="C%d" % k,
+                      label=c[len("error_"):-len("_mean_K")])
+            for t, e, label in pts:
+                a2.annotate(label, (t, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        a2.set_ylabel("error of the ply's mean temperature (K)")
+        a2.set_title("each ply's mean")
+    ref = [r for r in rows if r["label"] == "reference"]
+    for a in axes[0]:
+        if ref:
+            a.axvline(float(ref[0]["wall_time_s"]), color="grey", ls="--", lw=1, label="reference run time")
+        a.set_xlabel("wall time (s)")
+        a.grid(alpha=0.3, which="both")
+        if a.get_legend_handles_labels()[0]:
+            a.legend(fontsize=8)
     fig.tight_layout()
     # study.png also lands next to study.csv, as the contract says
     fig.savefig(os.path.join(folder, "study.png"), dpi=120)
