@@ -2439,7 +2439,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   int subcycle = job_.thermal ? job_.thermal->subcycle : 0;
   double stable = 0;
   double next_sample = 0, audit_scale = 0, supplied_max = 0;
-  // s between the rows of energy.csv and tools.csv
+  // s between the rows of energy.csv, tools.csv and plies.csv
   const double series_iv = job_.output.series_interval > 0 ? job_.output.series_interval : t_end / 500;
   // What a failed audit blames: an unstable step, or a start with loaded
   // contact springs, whose release at once the audit cannot follow.
