@@ -117,21 +117,28 @@ ProbeSample slab_robin_sample(const Job& j, const ProbeSample& s) {
   return r;
 }
 
-// A ply's mean temperature at time t from its history (rows in time
-// order), linear between the rows; NaN outside them.
-double mean_at(const std::vector<RunResult::PlySample>& history, int part, double t) {
-  const RunResult::PlySample* before = nullptr;
-  for (const auto& s : history) {
-    if (s.part != part) continue;
-    if (s.time == t) return s.mean;
-    if (s.time > t) {
-      if (!before) break;
-      const double a = (t - before->time) / (s.time - before->time);
-      return (1 - a) * before->mean + a * s.mean;
+// A ply's history: the times and mean temperatures of its rows, in time order.
+struct PlyMeans {
+  std::vector<double> time, mean;
+};
+PlyMeans ply_means(const std::vector<RunResult::PlySample>& history, int part) {
+  PlyMeans m;
+  for (const auto& s : history)
+    if (s.part == part) {
+      m.time.push_back(s.time);
+      m.mean.push_back(s.mean);
     }
-    before = &s;
-  }
-  return std::numeric_limits<double>::quiet_NaN();
+  return m;
+}
+// The mean temperature at time t, linear between the rows; NaN outside them.
+double mean_at(const PlyMeans& m, double t) {
+  const auto it = std::lower_bound(m.time.begin(), m.time.end(), t);
+  if (it == m.time.end()) return std::numeric_limits<double>::quiet_NaN();
+  const std::size_t k = static_cast<std::size_t>(it - m.time.begin());
+  if (m.time[k] == t) return m.mean[k];
+  if (k == 0) return std::numeric_limits<double>::quiet_NaN();
+  const double a = (t - m.time[k - 1]) / (m.time[k] - m.time[k - 1]);
+  return (1 - a) * m.mean[k - 1] + a * m.mean[k];
 }
 
 // The study's state file (in its output folder): what a study stopped
@@ -421,11 +428,12 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     };
     if (jobs[i].parts.size() != plies.size() || jobs[i].parts[p].name != plies[p].name)
       return std::numeric_limits<double>::quiet_NaN();
+    const PlyMeans variant = ply_means(results[i].ply_history, p);
     for (const auto& s : (analytic.empty() ? results[0] : results[i]).ply_history) {
       if (s.part != p) continue;
       if (!analytic.empty()) {
         take(std::abs(s.mean - slab_robin_of(jobs[i], -1, s.time)));
-      } else if (const double v = mean_at(results[i].ply_history, p, s.time); !std::isnan(v)) {
+      } else if (const double v = mean_at(variant, s.time); !std::isnan(v)) {
         take(std::abs(v - s.mean));
       }
     }

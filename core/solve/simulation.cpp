@@ -1960,8 +1960,8 @@ bool Simulation::state_io(A& a) {
   constexpr bool saving = std::is_same_v<A, sdk::StateWriter>;
   bool ok = a.io(last_mech_dt_) && a.io(bending_weight_) && a.io(bending_left_) && a.io(bending_largest_) &&
             a.io(bending_evaluations_) && a.io(last_stable_) && a.io(seen_min_) && a.io(seen_max_) &&
-            a.io_array(below_from_) && a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) && a.io(contact_energy_) &&
-            a.io(contact_active_);
+            a.io_array(below_from_) && a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) &&
+            a.io(contact_energy_) && a.io(contact_active_);
   std::vector<char> warned;
   for (const auto& u : law_uses_) warned.push_back(u.warned ? 1 : 0);
   ok = ok && a.io_array(warned);
@@ -2513,8 +2513,8 @@ RunResult Simulation::run(const RunOptions& opt) {
     return a.io(steps) && a.io(mech_steps) && a.io(mech_dt) && a.io(frame_index) && a.io(frame_t) &&
            a.io_array(next_probe) && a.io(heat_in) && a.io(substeps_max) && a.io(limited_total) && a.io(stored0) &&
            a.io_array(stored0_part) && a.io_vector(energy_rows) && a.io_vector(tool_rows) && a.io_vector(ply_rows) &&
-           a.io(audit.kinetic) &&
-           a.io(audit.internal) && a.io(audit.external) && a.io(audit.damping) && a.io(audit.balance_error) &&
+           a.io(audit.kinetic) && a.io(audit.internal) && a.io(audit.external) && a.io(audit.damping) &&
+           a.io(audit.balance_error) &&
            a.io(audit.contact) && a.io(audit.contact_stored) && a.io(audit.kinetic_half) &&
            a.io_vector(audit.reactions) && a.io(t_thermal) && a.io(since_thermal) && a.io(subcycle) &&
            a.io(stable) && a.io(next_sample) && a.io(audit_scale) && a.io(supplied_max) && a.io(next_checkpoint) &&
@@ -2807,6 +2807,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       if (job_.mechanics) update_element_fields();
       write_frame(t);
       if (!tools_.empty()) sample_tools(t);
+      // (unless the stop came right after a row: the last row's time is t)
       if (job_.thermal && (ply_rows.empty() || ply_rows[ply_rows.size() - ply_cols.size()] < t)) sample_plies(t);
       for (std::size_t q = 0; q < next_probe.size(); ++q) {  // the probes not sampled at t yet
         const double pi = job_.output.probes[q].interval;
@@ -2879,6 +2880,10 @@ RunResult Simulation::run(const RunOptions& opt) {
   for (const auto& m : mech_) result.energy.added_mass_percent.push_back(100 * m->mass_added / m->mass_physical);
   result.temperature_min = seen_min_;
   result.temperature_max = seen_max_;
+  // Each ply's temperatures at the end (the summary and the log's last lines).
+  std::vector<std::array<double, 4>> ply_end;
+  if (job_.thermal)
+    for (const auto& st : parts_) ply_end.push_back(ply_temperature(*st, threshold));
   {
     const std::size_t per = threshold ? 4 : 3, w = ply_cols.size();
     for (std::size_t r = 0; r + w <= ply_rows.size(); r += w)
@@ -2977,9 +2982,8 @@ RunResult Simulation::run(const RunOptions& opt) {
                        {"temperature_min", *mn},
                        {"temperature_max", *mx}});
       if (job_.thermal) {
-        const std::array<double, 4> now = ply_temperature(*st, threshold);
-        plies.back()["temperature_mean"] = now[1];
-        if (threshold) plies.back()["fraction_below_threshold"] = now[3];
+        plies.back()["temperature_mean"] = ply_end[p][1];
+        if (threshold) plies.back()["fraction_below_threshold"] = ply_end[p][3];
       }
       if (threshold)
         plies.back()["below_threshold_from_s"] = below_from_[p] >= 0 ? json(below_from_[p]) : json(nullptr);
@@ -3029,7 +3033,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   }
   if (job_.thermal) {
     for (std::size_t p = 0; p < parts_.size(); ++p) {
-      const std::array<double, 4> now = ply_temperature(*parts_[p], threshold);
+      const std::array<double, 4>& now = ply_end[p];
       std::ostringstream line;
       line << std::fixed << std::setprecision(2) << "part '" << parts_[p]->def->name << "': ";
       if (!job_.mechanics) line << "temperature " << now[0] << " to " << now[2] << " degC, ";
