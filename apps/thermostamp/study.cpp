@@ -152,7 +152,8 @@ json run_record(const RunResult& r, const std::string& quantity, int completed) 
   json samples = json::array(), plies = json::array();
   for (const auto& s : r.probes)
     if (s.quantity == quantity) samples.push_back({s.probe, s.time, s.z, s.values});
-  for (const auto& s : r.ply_history) plies.push_back({s.part, s.time, s.mean});
+  if (r.thermal_dt > 0)  // (a run without the thermal solver has rows of its shear angles only)
+    for (const auto& s : r.ply_history) plies.push_back({s.part, s.time, s.mean});
   return {{"completed", completed}, {"wall_time_s", r.wall_time_s}, {"thermal_steps", r.thermal_steps},
           {"thermal_dt", r.thermal_dt}, {"samples", samples}, {"plies", plies}};
 }
@@ -426,7 +427,8 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       e_sq += d * d;
       ++n;
     };
-    if (jobs[i].parts.size() != plies.size() || jobs[i].parts[p].name != plies[p].name)
+    if (jobs[i].parts.size() != plies.size() || jobs[i].parts[p].name != plies[p].name ||
+        !(results[i].thermal_dt > 0) || (analytic.empty() && !(results[0].thermal_dt > 0)))
       return std::numeric_limits<double>::quiet_NaN();
     const PlyMeans variant = ply_means(results[i].ply_history, p);
     for (const auto& s : (analytic.empty() ? results[0] : results[i]).ply_history) {

@@ -94,7 +94,10 @@ std::string series_column_units(const std::string& column) {
     return column.size() >= n && column.compare(column.size() - n, n, e) == 0;
   };
   if (column == "time") return "s";
-  if (column == "balance_error" || ends("fraction_below")) return "1";
+  if (column == "balance_error" || ends("fraction_below") || ends("fraction_over_shear_limit") ||
+      ends("_fibre_strain_min") || ends("_fibre_strain_max"))
+    return "1";
+  if (ends("_shear_angle_min") || ends("_shear_angle_max")) return "deg";
   if (ends("_temperature_min") || ends("_temperature_mean") || ends("_temperature_max")) return "degC";
   if (column.rfind("reaction", 0) == 0 || ends("_fx") || ends("_fy") || ends("_fz")) return "N";
   if (ends("_ux") || ends("_uy") || ends("_uz")) return "m";

@@ -590,6 +590,15 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
     job.output.compression = static_cast<int>(r.integer("compression", 0, 0, 9));
     if (r.has("temperature_threshold"))
       job.output.temperature_threshold = r.real("temperature_threshold", std::nullopt, -273.15, true);
+    if (r.has("shear_angle_limit")) {
+      if (!job.mechanics)
+        throw JobError(r.at("shear_angle_limit"), "a shear angle limit needs the mechanics solver "
+                                                  "(solvers.mechanics is absent or null)");
+      job.output.shear_angle_limit = r.real("shear_angle_limit", std::nullopt, 0.0, true, 90.0);
+      if (*job.output.shear_angle_limit >= 90.0)
+        throw JobError(r.at("shear_angle_limit"), "must be < 90 (degrees), found " +
+                                                      fmt_number(*job.output.shear_angle_limit));
+    }
     if (const double iv = job.output.series_interval;
         iv > 0 && (job.mechanics || job.thermal) && job.t_end / iv > kMaxSeriesRows)
       throw JobError(r.at("series_interval"), "an interval of " + fmt_number(iv) + " s would write " +

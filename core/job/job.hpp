@@ -151,6 +151,10 @@ struct OutputDef {
   // degC: plies.csv and the summary give each ply's share below it and the
   // time its coldest value first went below it
   std::optional<double> temperature_threshold;
+  // degrees (0 to 90, mechanics): plies.csv and the summary give each ply's
+  // share of its area sheared beyond it and the first row at which some
+  // element was
+  std::optional<double> shear_angle_limit;
   int compression = 0;              // gzip level of results.h5's datasets (with shuffle), 0: none
   std::vector<std::string> fields;
   std::vector<ProbeDef> probes;

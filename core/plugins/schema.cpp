@@ -221,6 +221,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
             {"series_interval", {{"type", "number"}, {"minimum", 0}}},
             {"compression", {{"type", "integer"}, {"minimum", 0}, {"maximum", 9}}},
             {"temperature_threshold", {{"type", "number"}, {"exclusiveMinimum", -273.15}}},
+            {"shear_angle_limit", {{"type", "number"}, {"exclusiveMinimum", 0}, {"exclusiveMaximum", 90}}},
             {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}},
             {"probes", {{"type", "array"}, {"items", probe}}}}},
           {"additionalProperties", false}}}}},

@@ -1960,7 +1960,7 @@ bool Simulation::state_io(A& a) {
   constexpr bool saving = std::is_same_v<A, sdk::StateWriter>;
   bool ok = a.io(last_mech_dt_) && a.io(bending_weight_) && a.io(bending_left_) && a.io(bending_largest_) &&
             a.io(bending_evaluations_) && a.io(last_stable_) && a.io(seen_min_) && a.io(seen_max_) &&
-            a.io_array(below_from_) && a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) &&
+            a.io_array(below_from_) && a.io_array(over_from_) && a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) &&
             a.io(contact_energy_) && a.io(contact_active_);
   std::vector<char> warned;
   for (const auto& u : law_uses_) warned.push_back(u.warned ? 1 : 0);
@@ -2377,12 +2377,63 @@ RunResult Simulation::run(const RunOptions& opt) {
   for (const auto& td : job_.tools)
     for (const char* q : {"_ux", "_uy", "_uz", "_fx", "_fy", "_fz", "_heat_J"}) tool_cols.push_back(td.name + q);
   const auto& threshold = job_.output.temperature_threshold;
-  std::vector<std::string> ply_cols = {"time"};
-  for (const auto& st : parts_) {
-    for (const char* q : {"_temperature_min", "_temperature_mean", "_temperature_max"})
-      ply_cols.push_back(st->def->name + q);
-    if (threshold) ply_cols.push_back(st->def->name + "_fraction_below");
+  const auto& shear_limit = job_.output.shear_angle_limit;
+  // plies.csv: each ply's temperatures (with thermal) and its shear angles
+  // and fibre strains (with mechanics), a row per ply.
+  const bool ply_series = job_.thermal || job_.mechanics;
+  std::vector<std::string> ply_fields;
+  if (job_.thermal) {
+    ply_fields = {"temperature_min", "temperature_mean", "temperature_max"};
+    if (threshold) ply_fields.push_back("fraction_below");
   }
+  if (job_.mechanics) {
+    for (const char* q : {"shear_angle_min", "shear_angle_max", "fibre_strain_min", "fibre_strain_max"})
+      ply_fields.push_back(q);
+    if (shear_limit) ply_fields.push_back("fraction_over_shear_limit");
+  }
+  const std::size_t ply_per = ply_fields.size();
+  std::vector<std::string> ply_cols = {"time"};
+  for (const auto& st : parts_)
+    for (const auto& q : ply_fields) ply_cols.push_back(st->def->name + "_" + q);
+  // The elements' shear angles and strains at a row, and their initial
+  // areas (the weights of the share beyond the limit).
+  std::vector<std::vector<double>> row_shear(mech_.size()), row_strain(mech_.size()), elem_area(mech_.size());
+  for (std::size_t p = 0; p < mech_.size(); ++p) {
+    const PartState& st = *parts_[p];
+    const int ne = st.mesh.num_elements();
+    row_shear[p].assign(ne, 0.0);
+    row_strain[p].assign(3 * static_cast<std::size_t>(ne), 0.0);
+    elem_area[p].resize(ne);
+    for (int e = 0; e < ne; ++e) {
+      const int* tri = &st.mesh.triangles[3 * static_cast<std::size_t>(e)];
+      const double* a = &st.x0[3 * tri[0]];
+      const double* b = &st.x0[3 * tri[1]];
+      const double* c = &st.x0[3 * tri[2]];
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+      elem_area[p][e] = 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    }
+  }
+  // Part p's shear angle range, fibre strain range and share of its area
+  // beyond the shear limit at the current positions (ElementKernel::fields,
+  // as the frames show them); the first row beyond the limit is noted at t.
+  auto ply_mechanics = [&](std::size_t p, double t) -> std::array<double, 5> {
+    sdk::ElementFields f;
+    f.shear_angle = row_shear[p];
+    f.strain = row_strain[p];
+    if (auto s = mech_[p]->element->fields(f); !s)
+      throw RunError("element plugin of part '" + parts_[p]->def->name + "' failed at t = " + fmt_g(t) +
+                     " s: " + s.message);
+    const auto [smn, smx] = std::minmax_element(row_shear[p].begin(), row_shear[p].end());
+    const auto [fmn, fmx] = fibre_strain_range(row_strain[p]);
+    double over = 0, total = 0;
+    for (std::size_t e = 0; e < row_shear[p].size(); ++e) {
+      total += elem_area[p][e];
+      if (shear_limit && std::abs(row_shear[p][e]) > *shear_limit) over += elem_area[p][e];
+    }
+    if (shear_limit && over > 0 && over_from_[p] < 0) over_from_[p] = t;
+    return {*smn, *smx, fmn, fmx, over / total};
+  };
   std::ofstream energy_csv, tools_csv, plies_csv;
   if (opt.write_files && job_.mechanics) {
     std::string header;
@@ -2406,20 +2457,27 @@ RunResult Simulation::run(const RunOptions& opt) {
     }
     if (tools_csv.is_open()) tools_csv.flush();
   };
-  if (opt.write_files && job_.thermal)
-    open_series(plies_csv, "plies.csv", 3,
-                std::string("time,ply,temperature_min,temperature_mean,temperature_max") +
-                    (threshold ? ",fraction_below\n" : "\n"));
-  // Each ply's temperatures (ply_temperature), a row per ply.
+  if (opt.write_files && ply_series) {
+    std::string header = "time,ply";
+    for (const auto& q : ply_fields) header += "," + q;
+    open_series(plies_csv, "plies.csv", 3, header + "\n");
+  }
+  // Each ply's row (ply_temperature, ply_mechanics).
   auto sample_plies = [&](double t) {
     ply_rows.push_back(t);
-    for (const auto& st : parts_) {
-      const std::array<double, 4> row = ply_temperature(*st, threshold);
-      const int n = threshold ? 4 : 3;
-      ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + n);
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      const std::size_t at = ply_rows.size();
+      if (job_.thermal) {
+        const std::array<double, 4> row = ply_temperature(*parts_[p], threshold);
+        ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + (threshold ? 4 : 3));
+      }
+      if (job_.mechanics) {
+        const std::array<double, 5> row = ply_mechanics(p, t);
+        ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + (shear_limit ? 5 : 4));
+      }
       if (plies_csv.is_open()) {
-        plies_csv << csv_number(t) << ',' << st->def->name;
-        for (int k = 0; k < n; ++k) plies_csv << ',' << csv_number(row[k]);
+        plies_csv << csv_number(t) << ',' << parts_[p]->def->name;
+        for (std::size_t k = at; k < ply_rows.size(); ++k) plies_csv << ',' << csv_number(ply_rows[k]);
         plies_csv << '\n';
       }
     }
@@ -2431,6 +2489,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   seen_min_ = std::numeric_limits<double>::infinity();
   seen_max_ = -seen_min_;
   below_from_.assign(parts_.size(), -1.0);
+  over_from_.assign(parts_.size(), -1.0);
   // The mechanics loop's own state (explicit dynamics; the thermal
   // splitter advances every `subcycle` mechanical steps over the time
   // elapsed since its last step).
@@ -2584,10 +2643,8 @@ RunResult Simulation::run(const RunOptions& opt) {
       check_field(0.0, 0);
       write_frame(0.0);
       if (!tools_.empty()) sample_tools(0.0);
-      if (job_.thermal) {
-        sample_plies(0.0);
-        if (!job_.mechanics) next_sample = series_iv;  // thermal-only: the next row after the first step past it
-      }
+      sample_plies(0.0);
+      if (!job_.mechanics) next_sample = series_iv;  // thermal-only: the next row after the first step past it
       sample_probes(0.0);
     }
     if (job_.mechanics) {
@@ -2723,7 +2780,9 @@ RunResult Simulation::run(const RunOptions& opt) {
             energy_csv << ',' << csv_number(audit.kinetic_half) << '\n';
           }
           if (!tools_.empty()) sample_tools(t);
-          if (job_.thermal) sample_plies(t);
+          tc = Clock::now();
+          sample_plies(t);
+          timing_[kTimeOutput] += seconds_since(tc);
           next_sample += series_iv;
         }
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
@@ -2808,7 +2867,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       write_frame(t);
       if (!tools_.empty()) sample_tools(t);
       // (unless the stop came right after a row: the last row's time is t)
-      if (job_.thermal && (ply_rows.empty() || ply_rows[ply_rows.size() - ply_cols.size()] < t)) sample_plies(t);
+      if (ply_rows.empty() || ply_rows[ply_rows.size() - ply_cols.size()] < t) sample_plies(t);
       for (std::size_t q = 0; q < next_probe.size(); ++q) {  // the probes not sampled at t yet
         const double pi = job_.output.probes[q].interval;
         const double iv = pi > 0 ? pi : job_.mechanics ? interval : 0.0;
@@ -2828,7 +2887,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     writer->write_series("energy", energy_cols, energy_rows);
   if (writer && !tools_.empty() && tool_rows.size() % tool_cols.size() == 0 && !tool_rows.empty())
     writer->write_series("tools", tool_cols, tool_rows);
-  if (writer && job_.thermal && ply_rows.size() % ply_cols.size() == 0 && !ply_rows.empty())
+  if (writer && ply_series && ply_rows.size() % ply_cols.size() == 0 && !ply_rows.empty())
     writer->write_series("plies", ply_cols, ply_rows);
   const double stored_change = stored_heat() - stored0;
   const double scale = std::max({std::abs(stored_change), std::abs(heat_in), 1e-300});
@@ -2839,6 +2898,14 @@ RunResult Simulation::run(const RunOptions& opt) {
               "); the output folder holds the frames up to that time";
     result.interrupted = stop_signal;
   }
+  // Each ply's share beyond the shear limit at the end (where the run
+  // stopped; a first time beyond it found here is the end's).
+  std::vector<double> over_end(parts_.size(), 0.0);
+  if (shear_limit) try {
+      for (std::size_t p = 0; p < parts_.size(); ++p) over_end[p] = ply_mechanics(p, t)[4];
+    } catch (const RunError& e) {
+      if (failure.empty()) failure = e.what();
+    }
   result.ok = failure.empty();
   result.error = failure;
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -2885,13 +2952,31 @@ RunResult Simulation::run(const RunOptions& opt) {
   if (job_.thermal)
     for (const auto& st : parts_) ply_end.push_back(ply_temperature(*st, threshold));
   {
-    const std::size_t per = threshold ? 4 : 3, w = ply_cols.size();
+    const std::size_t w = ply_cols.size();
     for (std::size_t r = 0; r + w <= ply_rows.size(); r += w)
       for (std::size_t p = 0; p < parts_.size(); ++p) {
-        const double* v = &ply_rows[r + 1 + per * p];
-        result.ply_history.push_back({static_cast<int>(p), ply_rows[r], v[0], v[1], v[2], threshold ? v[3] : 0.0});
+        const double* v = &ply_rows[r + 1 + ply_per * p];
+        RunResult::PlySample s;
+        s.part = static_cast<int>(p);
+        s.time = ply_rows[r];
+        if (job_.thermal) {
+          s.min = v[0];
+          s.mean = v[1];
+          s.max = v[2];
+          s.fraction_below = threshold ? v[3] : 0.0;
+          v += threshold ? 4 : 3;
+        }
+        if (job_.mechanics) {
+          s.shear_min = v[0];
+          s.shear_max = v[1];
+          s.fibre_strain_min = v[2];
+          s.fibre_strain_max = v[3];
+          s.fraction_over_shear_limit = shear_limit ? v[4] : 0.0;
+        }
+        result.ply_history.push_back(s);
       }
     if (threshold) result.part_below_threshold_from_s = below_from_;
+    if (shear_limit) result.part_over_shear_limit_from_s = over_from_;
   }
 
   if (opt.write_files) {
@@ -2993,6 +3078,10 @@ RunResult Simulation::run(const RunOptions& opt) {
         plies.back()["fibre_strain_min"] = result.part_fibre_strain_min[p];
         plies.back()["fibre_strain_max"] = result.part_fibre_strain_max[p];
       }
+      if (shear_limit) {
+        plies.back()["fraction_over_shear_limit"] = over_end[p];
+        plies.back()["over_shear_limit_from_s"] = over_from_[p] >= 0 ? json(over_from_[p]) : json(nullptr);
+      }
     }
     summary["parts"] = plies;
     summary["frames"] = writer ? writer->frames() : 0;
@@ -3025,9 +3114,15 @@ RunResult Simulation::run(const RunOptions& opt) {
     for (std::size_t p = 0; p < parts_.size(); ++p) {
       const PartState& st = *parts_[p];
       const auto [mn, mx] = std::minmax_element(st.T.begin(), st.T.end());
-      log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg, fibre strain {:.3g} "
+      std::string over;
+      if (shear_limit && over_from_[p] >= 0)
+        over = fmt::format(", beyond {} deg from t = {} s, {:.1f} % of its area at the end", fmt_g(*shear_limit),
+                           fmt_g(over_from_[p], 4), 100 * over_end[p]);
+      else if (shear_limit)
+        over = fmt::format(", never beyond {} deg", fmt_g(*shear_limit));
+      log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg{}, fibre strain {:.3g} "
                 "to {:.3g}",
-                st.def->name, *mn, *mx, result.part_shear_min_deg[p], result.part_shear_max_deg[p],
+                st.def->name, *mn, *mx, result.part_shear_min_deg[p], result.part_shear_max_deg[p], over,
                 result.part_fibre_strain_min[p], result.part_fibre_strain_max[p]);
     }
   }

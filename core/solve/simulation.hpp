@@ -79,17 +79,25 @@ struct RunResult {
   // per part, mechanics only: the range of E11 (membrane strain along the initial fibre direction) at the end
   std::vector<double> part_fibre_strain_min, part_fibre_strain_max;
   double temperature_min = 0, temperature_max = 0;  // over every value and every step
-  // The plies' temperature history (plies.csv): one row per sample, by part.
+  // The plies' history (plies.csv): one row per sample, by part.
   struct PlySample {
     int part = 0;
     double time = 0;
+    // with thermal:
     double min = 0, mean = 0, max = 0;  // degC; the mean weighted by heat capacity
     double fraction_below = 0;          // of the heat capacity below output.temperature_threshold (0 without one)
+    // with mechanics:
+    double shear_min = 0, shear_max = 0;                // shear angle (degrees), over the elements
+    double fibre_strain_min = 0, fibre_strain_max = 0;  // E11, over the elements
+    double fraction_over_shear_limit = 0;  // of the initial area with |shear angle| > output.shear_angle_limit
   };
-  std::vector<PlySample> ply_history;  // with thermal (a restarted run: those before its checkpoint too)
+  std::vector<PlySample> ply_history;  // a restarted run: those before its checkpoint too
   // per part, with output.temperature_threshold: the first time (s) a value
   // of the ply was below it (checked at every thermal step; -1: never)
   std::vector<double> part_below_threshold_from_s;
+  // per part, with output.shear_angle_limit: the first row (s) at which an
+  // element of the ply was sheared beyond it (-1: never)
+  std::vector<double> part_over_shear_limit_from_s;
   long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
   std::vector<ProbeSample> probes;  // every sample (a restarted run: those before its checkpoint too)
   long long mechanical_steps = 0;
@@ -170,6 +178,7 @@ class Simulation {
   bool state_io(A& a);
   double seen_min_ = 0, seen_max_ = 0;
   std::vector<double> below_from_;  // per part: first time below output.temperature_threshold (s), -1: not yet
+  std::vector<double> over_from_;   // per part: first row beyond output.shear_angle_limit (s), -1: not yet
   double last_mech_dt_ = 0;
   // Whether the element fields that only output frames show (stresses,
   // curvatures) are written after the force evaluation being done

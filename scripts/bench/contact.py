@@ -38,7 +38,8 @@ def job(n, cycles):
         "solvers": {"mechanics": {"dt_safety": 0.8, "mass_scaling": {"target_dt": dt}, "gravity": [0, 0, -9.81],
                                   "contact_schedule": "in_turn"},
                     "thermal": None},
-        "output": {"interval": cycles * dt, "fields": ["displacement"], "checkpoint_at_end": False},
+        "output": {"interval": cycles * dt, "fields": ["displacement"], "checkpoint_at_end": False,
+                   "series_interval": cycles * dt},
     }
 
 

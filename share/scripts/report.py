@@ -14,7 +14,10 @@ Writes into DIR/figures/:
                        (punch force against stroke), and heat per tool
   plies.png            each ply's mean temperature against time, in a
                        band from its coldest to its hottest value, and
-                       with output.temperature_threshold its share below it
+                       with output.temperature_threshold its share below
+                       it; with the mechanics, the band of its elements'
+                       shear angles and, with output.shear_angle_limit,
+                       the share of its area sheared beyond the limit
   energy.png           energy audit against time
   study.png            error against wall time when DIR holds a study.csv
                        (at the probes, and of each ply's mean temperature)
@@ -29,7 +32,8 @@ DIR/figures/against/:
                        of the shorter run
   tools.png            force on each tool along z and heat per tool,
                        against time
-  plies.png            each ply's mean temperature and coldest value
+  plies.png            each ply's mean temperature, coldest value and
+                       largest shear angle (either sign), as the runs have
   energy.png           internal, kinetic and contact energy against time
 """
 import csv
@@ -252,43 +256,69 @@ def ply_rows(folder):
             for n in names}
 
 
-def threshold_of(folder):
-    """The job's output.temperature_threshold (degC), from job_as_run.json; None without one."""
+def output_settings(folder):
+    """The job's output section, from job_as_run.json ({} where it cannot be read)."""
     try:
-        return json.load(open(os.path.join(folder, "job_as_run.json")))["output"].get("temperature_threshold")
-    except (OSError, ValueError, KeyError, AttributeError):
-        return None
+        o = json.load(open(os.path.join(folder, "job_as_run.json")))["output"]
+        return o if isinstance(o, dict) else {}
+    except (OSError, ValueError, KeyError, TypeError):
+        return {}
 
 
 def plot_plies(folder, out):
     plies = ply_rows(folder)
     if not plies:
         return []
-    threshold = threshold_of(folder)
-    share = all("fraction_below" in v for v in plies.values())
-    fig, axes = plt.subplots(1, 2 if share else 1, figsize=(10 if share else 6, 4), squeeze=False)
-    a1 = axes[0][0]
-    for k, (name, v) in enumerate(plies.items()):
-        c = "C%d" % k
-        a1.fill_between(v["time"], v["temperature_min"], v["temperature_max"], color=c, alpha=0.2, lw=0)
-        a1.plot(v["time"], v["temperature_mean"], color=c, label="%s: mean, band from coldest to hottest" % name)
-    if threshold is not None:
-        a1.axhline(threshold, color="grey", ls="--", lw=1, label="threshold %g degC" % threshold)
-    a1.set_xlabel("time (s)")
-    a1.set_ylabel("temperature (degC)")
-    a1.set_title("temperature of each ply")
-    if share:
-        a2 = axes[0][1]
+    job = output_settings(folder)
+    threshold, limit = job.get("temperature_threshold"), job.get("shear_angle_limit")
+    panels = []
+    if all("temperature_mean" in v for v in plies.values()):
+        panels.append("temperature")
+        if all("fraction_below" in v for v in plies.values()):
+            panels.append("below")
+    if all("shear_angle_max" in v for v in plies.values()):
+        panels.append("shear")
+        if all("fraction_over_shear_limit" in v for v in plies.values()):
+            panels.append("over")
+    if not panels:
+        return []
+    fig, axes = grid(len(panels), 5.0, 4.0, 2 if len(panels) == 4 else 3)
+    for a, panel in zip(axes, panels):
         for k, (name, v) in enumerate(plies.items()):
-            a2.plot(v["time"], 100 * v["fraction_below"], color="C%d" % k, label=name)
-        a2.set_xlabel("time (s)")
-        a2.set_ylabel("% of the ply's heat capacity")
-        a2.set_title("share below %s degC" % ("the threshold" if threshold is None else "%g" % threshold))
-        a2.set_ylim(-2, 102)
-    for row in axes:
-        for a in row:
-            a.grid(alpha=0.3)
-            a.legend(fontsize=8)
+            c = "C%d" % k
+            if panel == "temperature":
+                a.fill_between(v["time"], v["temperature_min"], v["temperature_max"], color=c, alpha=0.2, lw=0)
+                a.plot(v["time"], v["temperature_mean"], color=c, label="%s: mean, band from coldest to hottest" % name)
+            elif panel == "shear":
+                a.fill_between(v["time"], v["shear_angle_min"], v["shear_angle_max"], color=c, alpha=0.2, lw=0)
+                a.plot(v["time"], v["shear_angle_max"], color=c, lw=1, label="%s: band from smallest to largest" % name)
+                a.plot(v["time"], v["shear_angle_min"], color=c, lw=1)
+            elif panel == "below":
+                a.plot(v["time"], 100 * v["fraction_below"], color=c, label=name)
+            else:
+                a.plot(v["time"], 100 * v["fraction_over_shear_limit"], color=c, label=name)
+        if panel == "temperature":
+            if threshold is not None:
+                a.axhline(threshold, color="grey", ls="--", lw=1, label="threshold %g degC" % threshold)
+            a.set_ylabel("temperature (degC)")
+            a.set_title("temperature of each ply")
+        elif panel == "shear":
+            if limit is not None:
+                for y in (limit, -limit):
+                    a.axhline(y, color="grey", ls="--", lw=1, label="limit +-%g deg" % limit if y > 0 else None)
+            a.set_ylabel("shear angle (deg)")
+            a.set_title("shear angle of each ply's elements")
+        elif panel == "below":
+            a.set_ylabel("% of the ply's heat capacity")
+            a.set_title("share below %s degC" % ("the threshold" if threshold is None else "%g" % threshold))
+            a.set_ylim(-2, 102)
+        else:
+            a.set_ylabel("% of the ply's initial area")
+            a.set_title("share sheared beyond %s deg" % ("the limit" if limit is None else "+-%g" % limit))
+            a.set_ylim(bottom=0)
+        a.set_xlabel("time (s)")
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8)
     return [save(fig, out, "plies.png")]
 
 
@@ -324,9 +354,9 @@ UNITS = {"temperature_mean": "degC", "displacement_x": "m", "displacement_y": "m
          "shear_angle": "deg", "fibre_strain": "", "contact_pressure": "Pa"}
 
 
-def grid(n, width=4.2, height=3.0):
-    """A figure with n subplots on up to three columns; the axes in a list."""
-    cols = min(3, max(n, 1))
+def grid(n, width=4.2, height=3.0, most=3):
+    """A figure with n subplots on up to `most` columns; the axes in a list."""
+    cols = min(most, max(n, 1))
     rows = (n + cols - 1) // cols
     fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False)
     axes = list(axes.flat)
@@ -400,15 +430,22 @@ def against(folder, other, out):
     if both("plies.csv"):
         tabs = [ply_rows(d) for d, _, _ in runs]
         names = [n for n in tabs[0] if n in tabs[1]]
-        if names:
-            fig, axes = grid(2 * len(names))
+        # (title, y label, the value from a ply's columns) where both runs have the columns
+        kinds = [(k, y, f) for k, y, f, col in (
+            ("mean temperature", "temperature (degC)", lambda v: v["temperature_mean"], "temperature_mean"),
+            ("coldest value", "temperature (degC)", lambda v: v["temperature_min"], "temperature_min"),
+            ("largest shear angle (either sign)", "|shear angle| (deg)",
+             lambda v: np.maximum(np.abs(v["shear_angle_min"]), np.abs(v["shear_angle_max"])), "shear_angle_max"))
+            if all(col in t[n] for t in tabs for n in names)]
+        if names and kinds:
+            fig, axes = grid(len(kinds) * len(names))
             for k, name in enumerate(names):
-                for plies, (_, ls, lab) in zip(tabs, runs):
-                    v = plies[name]
-                    axes[2 * k].plot(v["time"], v["temperature_mean"], ls, label=lab)
-                    axes[2 * k + 1].plot(v["time"], v["temperature_min"], ls, label=lab)
-                finish(axes[2 * k], "%s: mean temperature" % name, "time (s)", "temperature (degC)")
-                finish(axes[2 * k + 1], "%s: coldest value" % name, "time (s)", "temperature (degC)")
+                for j, (title, ylabel, value) in enumerate(kinds):
+                    ax = axes[len(kinds) * k + j]
+                    for plies, (_, ls, lab) in zip(tabs, runs):
+                        v = plies[name]
+                        ax.plot(v["time"], value(v), ls, label=lab)
+                    finish(ax, "%s: %s" % (name, title), "time (s)", ylabel)
             made.append(save(fig, out, "plies.png"))
     if both("energy.csv"):
         tabs = [table(d, "energy.csv") for d, _, _ in runs]

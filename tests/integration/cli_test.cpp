@@ -25,6 +25,9 @@ namespace ts::test {
 namespace {
 
 std::filesystem::path demo_job() { return source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json"; }
+json hemisphere_document() {
+  return read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+}
 
 // The demo job made small and short, written to a folder.
 std::filesystem::path small_job(const std::string& dir_name, const std::function<void(json&)>& edit = nullptr) {
@@ -41,7 +44,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.16.2 (plugin SDK 0.16.0, ABI 16)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.16.3 (plugin SDK 0.16.0, ABI 16)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -234,6 +237,9 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"probe_samples_beyond_count", [](json& j) { j["output"]["probes"][0]["interval"] = 1e-30; }, "error: /output/probes/0/interval: an interval of 1e-30 s would take 1e+30 samples"},
       {"threshold_below_absolute_zero", [](json& j) { j["output"]["temperature_threshold"] = -300; }, "error: /output/temperature_threshold: must be > -273.15, found -300"},
       {"threshold_text", [](json& j) { j["output"]["temperature_threshold"] = "270"; }, "error: /output/temperature_threshold: expected a number, found a string"},
+      {"shear_limit_without_mechanics", [](json& j) { j["output"]["shear_angle_limit"] = 30; }, "error: /output/shear_angle_limit: a shear angle limit needs the mechanics solver (solvers.mechanics is absent or null)"},
+      {"shear_limit_zero", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 0; }, "error: /output/shear_angle_limit: must be > 0, found 0"},
+      {"shear_limit_right_angle", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 90; }, "error: /output/shear_angle_limit: must be < 90 (degrees), found 90"},
   };
   for (const auto& c : cases) {
     const auto job = small_job("bad_" + c.name, c.edit);
@@ -1026,6 +1032,7 @@ TEST(Output, DatasetsCarryTheirUnits) {
   const auto dir = temp_dir("units");
   json j = short_hemisphere(0.002, 0.001, 4);
   j["output"]["fields"] = known_fields();
+  j["output"]["shear_angle_limit"] = 1e-5;  // degrees: some elements (up to 2.6e-5) are beyond it at the end
   const JobRun run = run_json(j, 1, dir);
   ASSERT_TRUE(run.result.ok) << run.result.error;
   const std::map<std::string, std::string> expected = {
@@ -1070,20 +1077,25 @@ TEST(Output, DatasetsCarryTheirUnits) {
   for (std::size_t c = 1; c < tcols.size(); ++c)
     EXPECT_EQ(tunits[c], std::vector<std::string>({"m", "m", "m", "N", "N", "N", "J"})[(c - 1) % 7]) << tcols[c];
   EXPECT_EQ(tunits[0], "s");
-  // The plies' history (the job sets output.temperature_threshold): the same
-  // rows in plies.csv, in results.h5 and in the run's result.
+  // The plies' history (the job sets output.temperature_threshold and
+  // output.shear_angle_limit): the same rows in plies.csv, in results.h5
+  // and in the run's result.
   const auto pcols = split(text("series/plies", "columns")), punits = split(text("series/plies", "units"));
   ASSERT_EQ(pcols.size(), punits.size());
-  ASSERT_EQ(pcols.size(), 1 + 4 * j["parts"].size());
+  ASSERT_EQ(pcols.size(), 1 + 9 * j["parts"].size());
   EXPECT_EQ(pcols[1], j["parts"][0]["name"].get<std::string>() + "_temperature_min");
+  EXPECT_EQ(pcols[9], j["parts"][0]["name"].get<std::string>() + "_fraction_over_shear_limit");
   for (std::size_t c = 1; c < pcols.size(); ++c)
-    EXPECT_EQ(punits[c], std::vector<std::string>({"degC", "degC", "degC", "1"})[(c - 1) % 4]) << pcols[c];
+    EXPECT_EQ(punits[c],
+              std::vector<std::string>({"degC", "degC", "degC", "1", "deg", "deg", "1", "1", "1"})[(c - 1) % 9])
+        << pcols[c];
   const auto series = read_dataset<double>(file, "series/plies");
   H5Fclose(file);
   std::ifstream csv(dir / "plies.csv");
   std::string line;
   std::getline(csv, line);
-  EXPECT_EQ(line, "time,ply,temperature_min,temperature_mean,temperature_max,fraction_below");
+  EXPECT_EQ(line, "time,ply,temperature_min,temperature_mean,temperature_max,fraction_below,shear_angle_min,"
+                  "shear_angle_max,fibre_strain_min,fibre_strain_max,fraction_over_shear_limit");
   std::vector<std::vector<std::string>> rows;
   while (std::getline(csv, line)) rows.push_back(split(line));
   ASSERT_EQ(rows.size(), run.result.ply_history.size());
@@ -1091,18 +1103,35 @@ TEST(Output, DatasetsCarryTheirUnits) {
   ASSERT_GT(rows.size(), 10u);
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const auto& s = run.result.ply_history[r];
-    ASSERT_EQ(rows[r].size(), 6u);
+    ASSERT_EQ(rows[r].size(), 11u);
     EXPECT_EQ(rows[r][1], j["parts"][s.part]["name"].get<std::string>());
     EXPECT_NEAR(std::stod(rows[r][0]), s.time, 1e-9 * std::max(1.0, s.time));
     const double* wide = &series[(r / 2) * pcols.size()];
     EXPECT_EQ(wide[0], s.time);
-    const double values[4] = {s.min, s.mean, s.max, s.fraction_below};
-    for (int k = 0; k < 4; ++k) {
-      EXPECT_EQ(wide[1 + 4 * s.part + k], values[k]) << r << " " << k;
+    const double values[9] = {s.min,       s.mean,      s.max,
+                              s.fraction_below, s.shear_min, s.shear_max,
+                              s.fibre_strain_min, s.fibre_strain_max, s.fraction_over_shear_limit};
+    for (int k = 0; k < 9; ++k) {
+      EXPECT_EQ(wide[1 + 9 * s.part + k], values[k]) << r << " " << k;
       EXPECT_NEAR(std::stod(rows[r][2 + k]), values[k], 1e-9 * std::max(1.0, std::abs(values[k]))) << r << " " << k;
     }
     EXPECT_LE(s.min, s.mean + 1e-9);  // the mean of equal values may differ from them by round-off
     EXPECT_LE(s.mean, s.max + 1e-9);
+    EXPECT_LE(s.shear_min, s.shear_max);
+    EXPECT_LE(s.fibre_strain_min, s.fibre_strain_max);
+  }
+  // The last rows against the run's end ranges (the last frame is at the end).
+  const auto& end = run.result.ply_history;
+  ASSERT_GE(end.size(), 2u);
+  for (std::size_t k = end.size() - 2; k < end.size(); ++k) {
+    const auto& s = end[k];
+    EXPECT_EQ(s.time, run.result.simulated_time_s);
+    EXPECT_EQ(s.shear_min, run.result.part_shear_min_deg[s.part]);
+    EXPECT_EQ(s.shear_max, run.result.part_shear_max_deg[s.part]);
+    EXPECT_EQ(s.fibre_strain_min, run.result.part_fibre_strain_min[s.part]);
+    EXPECT_EQ(s.fibre_strain_max, run.result.part_fibre_strain_max[s.part]);
+    EXPECT_GT(s.fraction_over_shear_limit, 0.0);
+    EXPECT_LT(s.fraction_over_shear_limit, 1.0);
   }
 }
 

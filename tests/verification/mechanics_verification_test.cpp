@@ -462,6 +462,85 @@ TEST(Strip, OffAxisHomogeneousUniaxialStress) {
   }
 }
 
+// plies.csv's shear columns against a prescribed simple shear in two bands:
+// every node driven at v = (vx(y), 0, 0), vx with slope r1 below y = 10 mm
+// and r2 above it, so that each element is in simple shear, F = [[1, r t],
+// [0, 1]] with r its band's rate, and with the fibres along x its shear
+// angle is exactly atan(r t) (I_sh = C12 / sqrt(C11 C22) = r t / sqrt(1 +
+// (r t)^2)) and E11 = 0. With r1 t_end = tan 20 deg and r2 t_end = -tan 40
+// deg and a limit of 30 deg, the upper band goes beyond the limit at t* =
+// t_end tan 30 / tan 40 and the lower never does. The lower band has four
+// rows of 2.5 mm cells, the upper two rows of 35 mm: the upper band is 7/8
+// of the area and 1/3 of the elements, so the share is that of the area
+// (a share by element, or of signed angles, would be 1/3 or 0). The
+// positions are sums of the steps times the driven velocities, so the
+// tolerances are round-off: 1e-9 deg, 1e-12 in strain and in the share.
+TEST(PlyHistory, ShearBandsAgainstPrescribedSimpleShear) {
+  constexpr double L = 0.04, T = 1.0, limit = 30.0, interval = 0.05, ys = 0.01, upper = 0.875;
+  constexpr int nx = 4;
+  const std::vector<double> rows_y = {0.0, 0.0025, 0.005, 0.0075, 0.01, 0.045, 0.08};
+  const double r1 = std::tan(20.0 * M_PI / 180) / T, r2 = -std::tan(40.0 * M_PI / 180) / T;
+  const auto dir = temp_dir("shear_bands");
+  {
+    const int ny = static_cast<int>(rows_y.size()) - 1;
+    std::ofstream m(dir / "bands.msh");
+    m << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << (nx + 1) * (ny + 1) << "\n";
+    for (int jy = 0; jy <= ny; ++jy)
+      for (int i = 0; i <= nx; ++i) m << jy * (nx + 1) + i + 1 << ' ' << L * i / nx << ' ' << rows_y[jy] << " 0\n";
+    m << "$EndNodes\n$Elements\n" << 2 * nx * ny << "\n";
+    int k = 0;
+    for (int jy = 0; jy < ny; ++jy)
+      for (int i = 0; i < nx; ++i) {
+        const int a = jy * (nx + 1) + i + 1, b = a + 1, c = a + nx + 2, d = a + nx + 1;
+        m << ++k << " 2 0 " << a << ' ' << b << ' ' << c << "\n";
+        m << ++k << " 2 0 " << a << ' ' << c << ' ' << d << "\n";
+      }
+    m << "$EndElements\n";
+  }
+  json j = strip_job(0.0, 0.0, T);
+  j["parts"][0]["mesh"] = {{"file", (dir / "bands.msh").string()}};
+  json cons = json::array();
+  for (const double y : rows_y) {
+    const double vx = y <= ys ? r1 * y : r1 * ys + r2 * (y - ys), e = 1e-7;
+    cons.push_back({{"type", "velocity"}, {"part", "strip"}, {"box", {{-1, y - e, -1}, {1, y + e, 1}}},
+                    {"velocity", {vx, 0.0, 0.0}}});
+  }
+  j["constraints"] = cons;
+  j["output"] = {{"interval", T / 4}, {"series_interval", interval}, {"shear_angle_limit", limit},
+                 {"fields", {"displacement", "shear_angle"}}};
+  const JobRun r = run_json(j, 0, dir);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const double deg = 180 / M_PI, t_star = T * std::tan(limit / deg) / std::tan(40.0 / deg);
+  const double dt = r.result.mechanical_dt;
+  double worst_angle = 0, worst_strain = 0, before = -1;
+  ASSERT_GT(r.result.ply_history.size(), 20u);
+  for (const auto& s : r.result.ply_history) {
+    const double lo = std::atan(r2 * s.time) * deg, hi = std::atan(r1 * s.time) * deg;
+    EXPECT_NEAR(s.shear_min, lo, 1e-9) << s.time;
+    EXPECT_NEAR(s.shear_max, hi, 1e-9) << s.time;
+    EXPECT_NEAR(s.fibre_strain_min, 0.0, 1e-12) << s.time;
+    EXPECT_NEAR(s.fibre_strain_max, 0.0, 1e-12) << s.time;
+    EXPECT_NEAR(s.fraction_over_shear_limit, s.time > t_star ? upper : 0.0, 1e-12) << s.time;
+    if (s.time < t_star) before = std::max(before, s.time);
+    worst_angle = std::max({worst_angle, std::abs(s.shear_min - lo), std::abs(s.shear_max - hi)});
+    worst_strain = std::max({worst_strain, std::abs(s.fibre_strain_min), std::abs(s.fibre_strain_max)});
+  }
+  // The first row beyond the limit: the first step at or after the next
+  // multiple of the series interval after t*.
+  ASSERT_EQ(r.result.part_over_shear_limit_from_s.size(), 1u);
+  const double from = r.result.part_over_shear_limit_from_s[0], due = std::ceil(t_star / interval) * interval;
+  EXPECT_GE(from, due - 1e-9);
+  EXPECT_LT(from, due + dt + 1e-9);
+  EXPECT_LT(before, t_star);
+  std::ifstream in(dir / "summary.json");
+  const json summary = json::parse(in);
+  EXPECT_NEAR(summary["parts"][0]["fraction_over_shear_limit"].get<double>(), upper, 1e-12);
+  EXPECT_EQ(summary["parts"][0]["over_shear_limit_from_s"].get<double>(), from);
+  std::printf("shear bands: angles within %.2e deg, E11 within %.2e; beyond %g deg first at the row of t = %.6g s "
+              "(t* = %.6g s)\n",
+              worst_angle, worst_strain, limit, from, t_star);
+}
+
 }  // namespace ts::test
 
 namespace ts::test {
