@@ -161,8 +161,19 @@ void check_restart(const std::string& label, json j, double interval, std::strin
 // The hemisphere scene (UD laws with viscoelastic history, bending every
 // few steps, tools under force and motion control, four contact pairs with
 // rate friction and a ply/ply search every 64th step, adi), from a
-// checkpoint at 0.6 s.
-TEST(Restart, HemisphereContinuesBitForBit) { check_restart("hemisphere", coarse_hemisphere("hemisphere_ud_2ply.json"), 0.6); }
+// checkpoint at 0.6 s; with a shear angle limit that elements pass before
+// the checkpoint (the first row beyond it comes from the checkpoint).
+TEST(Restart, HemisphereContinuesBitForBit) {
+  json j = coarse_hemisphere("hemisphere_ud_2ply.json");
+  j["output"]["shear_angle_limit"] = 0.3;
+  std::filesystem::path dir;
+  check_restart("hemisphere", j, 0.6, "", &dir);
+  const json s = json::parse(std::ifstream(dir / "continued" / "summary.json"));
+  for (const auto& p : s["parts"]) {
+    ASSERT_TRUE(p["over_shear_limit_from_s"].is_number()) << p.dump();
+    EXPECT_LT(p["over_shear_limit_from_s"].get<double>(), 0.6);
+  }
+}
 
 // Isothermal, with elastic-slip friction (tangential springs that carry
 // over from step to step) and the search every step.
@@ -424,6 +435,7 @@ TEST(Restart, ExtendsAFinishedRunAsARunToTheLaterEnd) {
   json rows = coarse_hemisphere("hemisphere_ud_2ply.json");
   rows["output"]["series_interval"] = 0.002;
   rows["output"]["temperature_threshold"] = 290.0;
+  rows["output"]["shear_angle_limit"] = 0.3;
   const auto rdir = temp_dir("restart_extend_rows");
   const auto rjob = write_job(rdir, rows);
   ASSERT_EQ(run_cli(rjob, rdir / "direct", 2).exit_code, 0);
