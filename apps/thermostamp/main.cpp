@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "io/compare.hpp"
+#include "io/export.hpp"
 #include "io/logging.hpp"
 #include "job/job.hpp"
 #include "plugins/describe.hpp"
@@ -34,6 +35,7 @@ constexpr const char* kUsage = R"(usage:
                   [--restart] [--checkpoint-minutes M]
   thermostamp report DIR [--against OTHER]   # PNG figures into DIR/figures (with OTHER: both runs on the same axes)
   thermostamp compare DIR_A DIR_B [--json] [--rtol R] [--from T]   # how far two runs' results are apart
+  thermostamp export DIR [--time T] [--out FOLDER]   # each ply of a frame as a Gmsh mesh with its fields
   thermostamp --version
 
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
@@ -56,6 +58,12 @@ quantity's largest difference is at most R times its largest value in A),
 1 otherwise; --from T: only the samples, frames and rows at T s and later
 (an extended run against the run to its end: from its restarted_from_s)
 
+export: writes FOLDER/<ply>.msh (default DIR/export) for each ply of the
+last frame (with --time T: the frame nearest to T), Gmsh 2.2 ASCII: the
+mid-surface at that frame's positions, the frame's node fields as $NodeData
+and its element fields (shear angle, fibre direction, stresses, strains,
+curvatures) as $ElementData; a mesh file a job can read
+
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
 last frame, a checkpoint and summary.json; a second signal ends it at once)
@@ -76,6 +84,7 @@ struct Args {
   double rtol = -1;  // compare: the relative tolerance (-1: exact)
   std::string against;  // report: the other run's folder
   double from = -std::numeric_limits<double>::infinity();  // compare: the first time compared (s)
+  std::optional<double> time;  // export: the frame's time (s; the last frame without it)
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -89,7 +98,8 @@ const std::map<std::string, std::vector<std::string>>& command_options() {
       {"schema", {}},
       {"study", {"--out", "--threads", "--quiet", "--keep-subnormals", "--restart", "--checkpoint-minutes"}},
       {"report", {"--against"}},
-      {"compare", {"--json", "--rtol", "--from"}}};
+      {"compare", {"--json", "--rtol", "--from"}},
+      {"export", {"--time", "--out"}}};
   return m;
 }
 
@@ -136,6 +146,8 @@ Args parse(int argc, char** argv) {
       a.against = value(s);
     } else if (s == "--from") {
       a.from = finite_number(s, value(s), true, "a time of at least 0");
+    } else if (s == "--time") {
+      a.time = finite_number(s, value(s), true, "a time of at least 0");
     } else if (s == "--rtol") {
       a.rtol = finite_number(s, value(s), true, "a number of at least 0");
     } else if (s == "--checkpoint-minutes") {
@@ -316,6 +328,30 @@ int main(int argc, char** argv) {
     if (a.command == "report") {
       if (a.positional.size() != 1) throw UsageError("expected one output folder");
       return ts::cli::run_report(a.positional[0], a.against);
+    }
+    if (a.command == "export") {
+      if (a.positional.size() != 1) throw UsageError("expected one output folder");
+      const std::filesystem::path dir = a.positional[0];
+      ts::ExportResult r;
+      try {
+        r = ts::export_gmsh(dir, a.time, a.out.empty() ? dir / "export" : std::filesystem::path(a.out));
+      } catch (const ts::ExportInputError& e) {
+        std::cerr << "error: export: " << e.what() << "\n";
+        return 2;
+      } catch (const std::exception& e) {
+        std::cerr << "error: export: " << e.what() << "\n";
+        return 3;
+      }
+      char at[120];
+      std::snprintf(at, sizeof at, "t = %.6g s (frames/%06d of results.h5, %d frames)", r.time, r.frame, r.frames);
+      for (const auto& p : r.plies) {
+        std::cout << p.file.string() << ": ply '" << p.name << "' at " << at << ", " << p.nodes << " nodes, "
+                  << p.triangles << " triangles; node data: "
+                  << (p.node_data.empty() ? std::string("none") : ts::join(p.node_data))
+                  << "; element data: " << (p.element_data.empty() ? std::string("none") : ts::join(p.element_data))
+                  << "\n";
+      }
+      return 0;
     }
     throw UsageError("unknown command '" + a.command + "'");
   } catch (const UsageError& e) {

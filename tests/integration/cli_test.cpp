@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <type_traits>
 #include <vector>
@@ -18,6 +19,7 @@
 
 #include "io/compare.hpp"
 #include "job/job.hpp"
+#include "mesh/shell_mesh.hpp"
 #include "solve/interrupt.hpp"
 #include "test_support.hpp"
 
@@ -919,6 +921,110 @@ json short_hemisphere(double t_end, double interval, int cells) {
   j["output"]["interval"] = interval;
   for (auto& p : j["parts"]) p["mesh"]["divisions"] = {cells, cells};
   return j;
+}
+
+// `thermostamp export`: each ply of a frame as a Gmsh 2.2 mesh, its nodes at
+// the frame's positions and the frame's fields as node and element data,
+// every value as results.h5 holds it (17 significant digits: the same
+// doubles); the mesh reader of the jobs reads it back, and a job can use it.
+TEST(Export, PliesOfAFrameAsGmshMeshes) {
+  const auto dir = temp_dir("export");
+  json j = short_hemisphere(0.02, 0.005, 6);
+  j["output"]["fields"] = known_fields();
+  std::ofstream(dir / "job.json") << j.dump(2);
+  ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "run")).exit_code, 0);
+  const auto r = thermostamp("export " + q(dir / "run") + " --time 0.011 --out " + q(dir / "formed"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(" s (frames/000002 of results.h5, 5 frames)"), std::string::npos) << r.out;
+  // The $NodeData / $ElementData blocks of a file: name -> (kind, components, values).
+  struct Data {
+    std::string kind;
+    int components = 0;
+    std::vector<double> values;
+  };
+  auto read_data = [](const std::filesystem::path& f) {
+    std::map<std::string, Data> out;
+    std::ifstream in(f);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line != "$NodeData" && line != "$ElementData") continue;
+      Data d;
+      d.kind = line.substr(1);
+      std::string name, skip;
+      int n_str = 0, n_real = 0, n_int = 0, step = 0, count = 0;
+      in >> n_str >> name >> n_real >> skip >> n_int >> step >> d.components >> count;
+      for (int i = 0; i < count; ++i) {
+        int id = 0;
+        in >> id;
+        EXPECT_EQ(id, i + 1);
+        for (int c = 0; c < d.components; ++c) {
+          double v = 0;
+          in >> v;
+          d.values.push_back(v);
+        }
+      }
+      out[name.substr(1, name.size() - 2)] = d;
+    }
+    return out;
+  };
+  const hid_t file = H5Fopen((dir / "run" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const std::set<std::string> on_elements = {"shear_angle", "fibre_direction", "membrane_stress", "membrane_strain",
+                                             "curvature"};
+  for (const auto& part : j["parts"]) {
+    const std::string name = part["name"];
+    const auto msh = dir / "formed" / (name + ".msh");
+    const ShellMesh m = read_gmsh(msh);
+    const std::string frame = "frames/000002/" + name + "/";
+    // The same triangles with the same corners at the same positions (the
+    // reader numbers the nodes in the order the triangles use them).
+    const auto x = read_dataset<double>(file, frame + "nodes");
+    const auto tri = read_dataset<int>(file, "parts/" + name + "/triangles");
+    ASSERT_EQ(m.triangles.size(), tri.size()) << name;
+    ASSERT_EQ(m.x.size(), x.size()) << name;
+    for (std::size_t k = 0; k < tri.size(); ++k)
+      for (int d = 0; d < 3; ++d)
+        ASSERT_EQ(m.x[3 * m.triangles[k] + d], x[3 * tri[k] + d]) << name << " corner " << k;
+    const auto data = read_data(msh);
+    for (const std::string& field : known_fields()) {
+      if (field == "temperature") {  // on the extruded mesh: its mean, top and bottom are fields of their own
+        EXPECT_EQ(data.count(field), 0u);
+        continue;
+      }
+      ASSERT_EQ(data.count(field), 1u) << name << " " << field;
+      const Data& d = data.at(field);
+      EXPECT_EQ(d.kind, on_elements.count(field) ? "ElementData" : "NodeData") << field;
+      const auto want = read_dataset<double>(file, frame + field);
+      EXPECT_EQ(static_cast<int>(want.size()) / d.components,
+                on_elements.count(field) ? m.num_elements() : m.num_nodes()) << field;
+      EXPECT_EQ(d.values, want) << name << " " << field;
+    }
+  }
+  H5Fclose(file);
+  // The exported mesh as a job's mesh.
+  json again = j;
+  again["parts"][0]["mesh"] = {{"file", (dir / "formed" / "ply_top.msh").string()}};
+  std::ofstream(dir / "again.json") << again.dump(2);
+  const auto v = thermostamp("validate " + q(dir / "again.json"));
+  EXPECT_EQ(v.exit_code, 0) << v.err;
+  // The last frame by default, into DIR/export.
+  const auto last = thermostamp("export " + q(dir / "run"));
+  EXPECT_EQ(last.exit_code, 0) << last.err;
+  EXPECT_NE(last.out.find(" s (frames/000004 of results.h5, 5 frames)"), std::string::npos) << last.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "run" / "export" / "ply_bottom.msh"));
+  // What cannot be exported: one line, exit status 2.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"export " + q(dir / "run") + " --time 0.5",
+       "error: export: no frame at t = 0.5 s: the 5 frames are from t = 0 to 0.02"},
+      {"export " + q(dir / "none"), "error: export: '" + (dir / "none").string() + "' is not a folder\n"},
+      {"export " + q(dir), "error: export: '" + dir.string() +
+                               "' holds no results.h5 (not the output folder of a run?)\n"},
+      {"export " + q(dir / "run") + " --time soon", "error: --time expects a time of at least 0, found 'soon'\n"}};
+  for (const auto& [args, message] : bad) {
+    const auto e = thermostamp(args);
+    EXPECT_EQ(e.exit_code, 2) << args;
+    EXPECT_EQ(e.err.substr(0, message.size()), message) << args;
+  }
 }
 
 // output.compression: results.h5's datasets through the shuffle and
