@@ -1400,6 +1400,7 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   const auto dir = temp_dir("report");
   json j = short_hemisphere(0.01, 0.005, 4);
   for (auto& p : j["output"]["probes"]) p["interval"] = 0.0025;
+  j["output"]["shear_angle_limit"] = 1e-5;
   std::ofstream(dir / "job.json") << j.dump(2);
   const auto out = dir / "out";
   ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet").exit_code, 0);
@@ -1409,7 +1410,7 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
       "profile_pole_top.png", "profile_pole_bottom.png", "profile_flank_top.png", "profile_flank_bottom.png",
       "probes_mean.png",      "map_ply_top.png",         "map_ply_bottom.png",    "shear_ply_top.png",
       "shear_ply_bottom.png", "fibre_strain_ply_top.png", "fibre_strain_ply_bottom.png", "tool_forces.png",
-      "energy.png"};
+      "plies.png",            "energy.png"};
   for (const auto& f : figures) {
     std::ifstream png(out / "figures" / f, std::ios::binary);
     char magic[4] = {0, 0, 0, 0};
@@ -1444,8 +1445,8 @@ TEST(Cli, ReportDrawsTwoRunsOnTheSameAxes) {
   ASSERT_EQ(thermostamp(run + q(dir / "shell2d") + " --set solvers.thermal.splitter=shell2d").exit_code, 0);
   const auto r = thermostamp("report " + q(dir / "adi") + " --against " + q(dir / "shell2d"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const char* f : {"against/probes.png", "against/profiles.png", "against/tools.png", "against/energy.png",
-                        "shear_ply_top.png"}) {
+  for (const char* f : {"against/probes.png", "against/profiles.png", "against/tools.png", "against/plies.png",
+                        "against/energy.png", "shear_ply_top.png", "plies.png"}) {
     std::ifstream png(dir / "adi" / "figures" / f, std::ios::binary);
     char magic[4] = {0, 0, 0, 0};
     png.read(magic, 4);
