@@ -1861,7 +1861,7 @@ void Simulation::check_field(double time, long long step) {
     const double* T = st->T.data();
     const std::size_t n = st->T.size();
     // v - v is 0 for a finite value, NaN otherwise (in any summation order).
-    double lo = std::numeric_limits<double>::infinity(), hi = seen_max_, z = 0;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo, z = 0;
 #pragma omp simd reduction(min : lo) reduction(max : hi) reduction(+ : z)
     for (std::size_t k = 0; k < n; ++k) {
       const double v = T[k];
@@ -1871,8 +1871,9 @@ void Simulation::check_field(double time, long long step) {
     }
     const bool bad = !(z == 0.0);
     seen_min_ = std::min(seen_min_, lo);
-    seen_max_ = hi;
+    seen_max_ = std::max(seen_max_, hi);
     if (threshold && below_from_[p] < 0 && lo < *threshold) below_from_[p] = time;
+    if (threshold && all_below_from_[p] < 0 && hi < *threshold) all_below_from_[p] = time;
     if (!bad) continue;
     for (std::size_t k = 0; k < n; ++k) {
       if (!std::isfinite(st->T[k])) {
@@ -1960,7 +1961,7 @@ bool Simulation::state_io(A& a) {
   constexpr bool saving = std::is_same_v<A, sdk::StateWriter>;
   bool ok = a.io(last_mech_dt_) && a.io(bending_weight_) && a.io(bending_left_) && a.io(bending_largest_) &&
             a.io(bending_evaluations_) && a.io(last_stable_) && a.io(seen_min_) && a.io(seen_max_) &&
-            a.io_array(below_from_) && a.io_array(over_from_) && a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) &&
+            a.io_array(below_from_) && a.io_array(all_below_from_) && a.io_array(over_from_) && a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) &&
             a.io(contact_energy_) && a.io(contact_active_);
   std::vector<char> warned;
   for (const auto& u : law_uses_) warned.push_back(u.warned ? 1 : 0);
@@ -2489,6 +2490,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   seen_min_ = std::numeric_limits<double>::infinity();
   seen_max_ = -seen_min_;
   below_from_.assign(parts_.size(), -1.0);
+  all_below_from_.assign(parts_.size(), -1.0);
   over_from_.assign(parts_.size(), -1.0);
   // The mechanics loop's own state (explicit dynamics; the thermal
   // splitter advances every `subcycle` mechanical steps over the time
@@ -2976,6 +2978,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         result.ply_history.push_back(s);
       }
     if (threshold) result.part_below_threshold_from_s = below_from_;
+    if (threshold) result.part_all_below_threshold_from_s = all_below_from_;
     if (shear_limit) result.part_over_shear_limit_from_s = over_from_;
   }
 
@@ -3070,8 +3073,11 @@ RunResult Simulation::run(const RunOptions& opt) {
         plies.back()["temperature_mean"] = ply_end[p][1];
         if (threshold) plies.back()["fraction_below_threshold"] = ply_end[p][3];
       }
-      if (threshold)
+      if (threshold) {
         plies.back()["below_threshold_from_s"] = below_from_[p] >= 0 ? json(below_from_[p]) : json(nullptr);
+        plies.back()["all_below_threshold_from_s"] =
+            all_below_from_[p] >= 0 ? json(all_below_from_[p]) : json(nullptr);
+      }
       if (job_.mechanics) {
         plies.back()["shear_angle_min_deg"] = result.part_shear_min_deg[p];
         plies.back()["shear_angle_max_deg"] = result.part_shear_max_deg[p];
@@ -3134,8 +3140,9 @@ RunResult Simulation::run(const RunOptions& opt) {
       if (!job_.mechanics) line << "temperature " << now[0] << " to " << now[2] << " degC, ";
       line << "mean " << now[1] << " degC";
       if (threshold && below_from_[p] >= 0)
-        line << ", below " << fmt_g(*threshold) << " degC from t = " << fmt_g(below_from_[p], 4) << " s, "
-             << std::setprecision(1) << 100 * now[3] << " % of it below at the end";
+        line << ", below " << fmt_g(*threshold) << " degC from t = " << fmt_g(below_from_[p], 4) << " s"
+             << (all_below_from_[p] >= 0 ? ", all of it from t = " + fmt_g(all_below_from_[p], 4) + " s" : "")
+             << ", " << std::setprecision(1) << 100 * now[3] << " % of it below at the end";
       else if (threshold)
         line << ", never below " << fmt_g(*threshold) << " degC";
       log->info("{}", line.str());

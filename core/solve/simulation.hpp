@@ -95,6 +95,9 @@ struct RunResult {
   // per part, with output.temperature_threshold: the first time (s) a value
   // of the ply was below it (checked at every thermal step; -1: never)
   std::vector<double> part_below_threshold_from_s;
+  // per part, with output.temperature_threshold: the first time (s) every
+  // value of the ply was below it (checked at every thermal step; -1: never)
+  std::vector<double> part_all_below_threshold_from_s;
   // per part, with output.shear_angle_limit: the first row (s) at which an
   // element of the ply was sheared beyond it (-1: never)
   std::vector<double> part_over_shear_limit_from_s;
@@ -178,6 +181,7 @@ class Simulation {
   bool state_io(A& a);
   double seen_min_ = 0, seen_max_ = 0;
   std::vector<double> below_from_;  // per part: first time below output.temperature_threshold (s), -1: not yet
+  std::vector<double> all_below_from_;  // per part: first time all of it was below the threshold (s), -1: not yet
   std::vector<double> over_from_;   // per part: first row beyond output.shear_angle_limit (s), -1: not yet
   double last_mech_dt_ = 0;
   // Whether the element fields that only output frames show (stresses,

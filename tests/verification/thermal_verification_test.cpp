@@ -137,11 +137,13 @@ TEST(PlyHistory, SlabAgainstEigenSeries) {
     frac_end = frac;
   }
   const double first = crossing(0, 2, [&](double t) { return T(kH, std::max(t, 1e-9)); });
+  const double all = crossing(0, 2, [&](double t) { return T(0, std::max(t, 1e-9)); });
   ASSERT_EQ(r.result.part_below_threshold_from_s.size(), 1u);
-  const double from = r.result.part_below_threshold_from_s[0];
+  ASSERT_EQ(r.result.part_all_below_threshold_from_s.size(), 1u);
+  const double from = r.result.part_below_threshold_from_s[0], all_from = r.result.part_all_below_threshold_from_s[0];
   std::printf("rows %d (%d with a front inside the ply): errors min %.3g K, mean %.3g K, max %.3g K, share below "
-              "%.3g; first below %.6g s (series %.6g s)\n",
-              rows, partial, e_min, e_mean, e_max, e_frac, from, first);
+              "%.3g; first below %.6g s (series %.6g s), all below %.6g s (series %.6g s)\n",
+              rows, partial, e_min, e_mean, e_max, e_frac, from, first, all_from, all);
   EXPECT_EQ(rows, 101);  // t = 0 and every 20 ms
   EXPECT_GT(partial, 20) << "the front crosses the ply over many rows";
   EXPECT_GT(frac_end, 0.5);
@@ -151,6 +153,10 @@ TEST(PlyHistory, SlabAgainstEigenSeries) {
   EXPECT_LT(e_frac, 2e-3);
   EXPECT_GE(from, first);
   EXPECT_LE(from, first + 2 * dt);
+  // Every value below: the adiabatic face's crossing, likewise.
+  EXPECT_LT(all, 2.0);
+  EXPECT_GE(all_from, all);
+  EXPECT_LE(all_from, all + 2 * dt);
   // The last row's mean is the heat audit's: (mean - T0) times the ply's
   // heat capacity is the stored heat's change.
   const auto& last = r.result.ply_history.back();
@@ -447,6 +453,8 @@ TEST(PlyHistory, LumpedPlyCrossesAtTheClosedFormStep) {
   }
   ASSERT_EQ(r.result.part_below_threshold_from_s.size(), 1u);
   EXPECT_NEAR(r.result.part_below_threshold_from_s[0], n_cross * 0.05, 1e-12);
+  ASSERT_EQ(r.result.part_all_below_threshold_from_s.size(), 1u);  // one value per node: the same step
+  EXPECT_NEAR(r.result.part_all_below_threshold_from_s[0], n_cross * 0.05, 1e-12);
 }
 
 }  // namespace
