@@ -287,14 +287,21 @@ void finalize_mesh(ShellMesh& m) {
     for (int e = 0; e < ne; ++e) flip(e);
 }
 
-std::vector<double> node_areas(const ShellMesh& m) {
-  std::vector<double> area(m.num_nodes(), 0.0);
+std::vector<double> element_areas(const ShellMesh& m) {
+  std::vector<double> area(m.num_elements());
   for (int e = 0; e < m.num_elements(); ++e) {
     const int* t = &m.triangles[3 * e];
     const Vec3 a = sdk::load3(m.x.data(), t[0]), b = sdk::load3(m.x.data(), t[1]), c = sdk::load3(m.x.data(), t[2]);
-    const double A = 0.5 * sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a)));
-    for (int k = 0; k < 3; ++k) area[t[k]] += A / 3.0;
+    area[e] = 0.5 * sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a)));
   }
+  return area;
+}
+
+std::vector<double> node_areas(const ShellMesh& m) {
+  std::vector<double> area(m.num_nodes(), 0.0);
+  const std::vector<double> A = element_areas(m);
+  for (int e = 0; e < m.num_elements(); ++e)
+    for (int k = 0; k < 3; ++k) area[m.triangles[3 * e + k]] += A[e] / 3.0;
   return area;
 }
 

@@ -29,6 +29,8 @@ ShellMesh read_gmsh(const std::filesystem::path& file);
 // is shared by more than two triangles.
 void finalize_mesh(ShellMesh& mesh);
 
+// Area of each triangle, m^2.
+std::vector<double> element_areas(const ShellMesh& mesh);
 // Lumped (one third of each adjacent triangle) area per node, m^2.
 std::vector<double> node_areas(const ShellMesh& mesh);
 

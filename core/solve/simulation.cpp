@@ -1961,8 +1961,9 @@ bool Simulation::state_io(A& a) {
   constexpr bool saving = std::is_same_v<A, sdk::StateWriter>;
   bool ok = a.io(last_mech_dt_) && a.io(bending_weight_) && a.io(bending_left_) && a.io(bending_largest_) &&
             a.io(bending_evaluations_) && a.io(last_stable_) && a.io(seen_min_) && a.io(seen_max_) &&
-            a.io_array(below_from_) && a.io_array(all_below_from_) && a.io_array(over_from_) && a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) &&
-            a.io(contact_energy_) && a.io(contact_active_);
+            a.io_array(below_from_) && a.io_array(all_below_from_) && a.io_array(over_from_) &&
+            a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) && a.io(contact_energy_) &&
+            a.io(contact_active_);
   std::vector<char> warned;
   for (const auto& u : law_uses_) warned.push_back(u.warned ? 1 : 0);
   ok = ok && a.io_array(warned);
@@ -2400,20 +2401,10 @@ RunResult Simulation::run(const RunOptions& opt) {
   // areas (the weights of the share beyond the limit).
   std::vector<std::vector<double>> row_shear(mech_.size()), row_strain(mech_.size()), elem_area(mech_.size());
   for (std::size_t p = 0; p < mech_.size(); ++p) {
-    const PartState& st = *parts_[p];
-    const int ne = st.mesh.num_elements();
+    const std::size_t ne = static_cast<std::size_t>(parts_[p]->mesh.num_elements());
     row_shear[p].assign(ne, 0.0);
-    row_strain[p].assign(3 * static_cast<std::size_t>(ne), 0.0);
-    elem_area[p].resize(ne);
-    for (int e = 0; e < ne; ++e) {
-      const int* tri = &st.mesh.triangles[3 * static_cast<std::size_t>(e)];
-      const double* a = &st.x0[3 * tri[0]];
-      const double* b = &st.x0[3 * tri[1]];
-      const double* c = &st.x0[3 * tri[2]];
-      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-      elem_area[p][e] = 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    }
+    row_strain[p].assign(3 * ne, 0.0);
+    elem_area[p] = element_areas(parts_[p]->mesh);
   }
   // Part p's shear angle range, fibre strain range and share of its area
   // beyond the shear limit at the current positions (ElementKernel::fields,
