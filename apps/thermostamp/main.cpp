@@ -335,12 +335,9 @@ int main(int argc, char** argv) {
       ts::ExportResult r;
       try {
         r = ts::export_gmsh(dir, a.time, a.out.empty() ? dir / "export" : std::filesystem::path(a.out));
-      } catch (const ts::ExportInputError& e) {
+      } catch (const std::exception& e) {  // 2: nothing to export as asked; 3: a file that cannot be read
         std::cerr << "error: export: " << e.what() << "\n";
-        return 2;
-      } catch (const std::exception& e) {
-        std::cerr << "error: export: " << e.what() << "\n";
-        return 3;
+        return dynamic_cast<const ts::ExportInputError*>(&e) ? 2 : 3;
       }
       char at[120];
       std::snprintf(at, sizeof at, "t = %.6g s (frames/%06d of results.h5, %d frames)", r.time, r.frame, r.frames);

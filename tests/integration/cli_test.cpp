@@ -1025,6 +1025,13 @@ TEST(Export, PliesOfAFrameAsGmshMeshes) {
     EXPECT_EQ(e.exit_code, 2) << args;
     EXPECT_EQ(e.err.substr(0, message.size()), message) << args;
   }
+  // A results file cut short (a machine that went down while writing it):
+  // one line, exit status 3.
+  std::filesystem::copy(dir / "run", dir / "cut", std::filesystem::copy_options::recursive);
+  std::filesystem::resize_file(dir / "cut" / "results.h5", 1000);
+  const auto cut = thermostamp("export " + q(dir / "cut"));
+  EXPECT_EQ(cut.exit_code, 3);
+  EXPECT_EQ(cut.err, "error: export: cannot read '" + (dir / "cut" / "results.h5").string() + "' (cut short?)\n");
 }
 
 // output.compression: results.h5's datasets through the shuffle and
