@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 namespace ts {
@@ -588,17 +589,45 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
     job.output.checkpoint_at_end = r.boolean("checkpoint_at_end", true);
     job.output.series_interval = r.real("series_interval", 0.0, 0.0);
     job.output.compression = static_cast<int>(r.integer("compression", 0, 0, 9));
-    if (r.has("temperature_threshold"))
-      job.output.temperature_threshold = r.real("temperature_threshold", std::nullopt, -273.15, true);
-    if (r.has("shear_angle_limit")) {
-      if (!job.mechanics)
-        throw JobError(r.at("shear_angle_limit"), "a shear angle limit needs the mechanics solver "
-                                                  "(solvers.mechanics is absent or null)");
-      job.output.shear_angle_limit = r.real("shear_angle_limit", std::nullopt, 0.0, true, 90.0);
-      if (*job.output.shear_angle_limit >= 90.0)
-        throw JobError(r.at("shear_angle_limit"), "must be < 90 (degrees), found " +
-                                                      fmt_number(*job.output.shear_angle_limit));
-    }
+    // A number for every ply, or an object of numbers by material (every
+    // material a part uses, no other), as a value per part; `check` throws
+    // for a value out of range (its message, at the value's pointer).
+    auto per_material = [&](const std::string& key, const std::function<std::string(double)>& check) {
+      std::vector<double> out;
+      const json* v = r.optional_raw(key);
+      if (!v) return out;
+      auto value = [&](const json& x, const std::string& ptr) {
+        const double d = as_real(x, ptr);
+        if (const std::string why = check(d); !why.empty()) throw JobError(ptr, why);
+        return d;
+      };
+      if (!v->is_object()) {
+        if (!v->is_number())
+          throw JobError(r.at(key), "expected a number or an object of numbers by material, found " +
+                                        json_type_name(*v));
+        out.assign(job.parts.size(), value(*v, r.at(key)));
+        return out;
+      }
+      for (const auto& [name, x] : v->items())
+        if (find_index(material_names, name) < 0)
+          throw JobError(pointer_append(r.at(key), name), unknown_name("material", name, material_names));
+      for (const auto& p : job.parts) {
+        const std::string& mat = job.materials[p.material].name;
+        if (!v->contains(mat))
+          throw JobError(r.at(key), "no value for material '" + mat + "' of part '" + p.name + "'");
+        out.push_back(value(v->at(mat), pointer_append(r.at(key), mat)));
+      }
+      return out;
+    };
+    job.output.temperature_threshold = per_material("temperature_threshold", [](double d) {
+      return d > -273.15 ? std::string() : "must be > -273.15, found " + fmt_number(d);
+    });
+    if (r.has("shear_angle_limit") && !job.mechanics)
+      throw JobError(r.at("shear_angle_limit"), "a shear angle limit needs the mechanics solver "
+                                                "(solvers.mechanics is absent or null)");
+    job.output.shear_angle_limit = per_material("shear_angle_limit", [](double d) {
+      return d > 0 && d < 90 ? std::string() : "must be > 0 and < 90 (degrees), found " + fmt_number(d);
+    });
     if (const double iv = job.output.series_interval;
         iv > 0 && (job.mechanics || job.thermal) && job.t_end / iv > kMaxSeriesRows)
       throw JobError(r.at("series_interval"), "an interval of " + fmt_number(iv) + " s would write " +

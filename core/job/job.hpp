@@ -148,13 +148,14 @@ struct OutputDef {
   double checkpoint_interval = 0;  // s of simulated time between checkpoints, 0: only when interrupted
   bool checkpoint_at_end = true;    // a checkpoint at time.end too (from which a later time.end extends the run)
   double series_interval = 0;       // s between the rows of energy.csv, tools.csv and plies.csv, 0: time.end / 500
-  // degC: plies.csv and the summary give each ply's share below it and the
-  // time its coldest value first went below it
-  std::optional<double> temperature_threshold;
-  // degrees (0 to 90, mechanics): plies.csv and the summary give each ply's
-  // share of its area sheared beyond it and the first row at which some
-  // element was
-  std::optional<double> shear_angle_limit;
+  // Per part (empty: none asked for). degC: plies.csv and the summary give
+  // each ply's share below it and the times its coldest and its hottest
+  // value first went below it. One number for every ply, or by material.
+  std::vector<double> temperature_threshold;
+  // Per part (empty: none). Degrees (0 to 90, mechanics): plies.csv and the
+  // summary give each ply's share of its area sheared beyond it and the
+  // first row at which some element was. One number, or by material.
+  std::vector<double> shear_angle_limit;
   int compression = 0;              // gzip level of results.h5's datasets (with shuffle), 0: none
   std::vector<std::string> fields;
   std::vector<ProbeDef> probes;

@@ -61,6 +61,11 @@ json plugin_schema(const PluginRecord& r, const json& extra) {
 
 json vec(int n) { return {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", n}, {"maxItems", n}}; }
 
+// A number for every ply, or an object of such numbers by material name.
+json by_material(const json& number) {
+  return {{"oneOf", {number, {{"type", "object"}, {"additionalProperties", number}}}}};
+}
+
 }  // namespace
 
 json job_schema(const std::vector<const PluginRecord*>& records) {
@@ -220,8 +225,8 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
             {"checkpoint_at_end", {{"type", "boolean"}}},
             {"series_interval", {{"type", "number"}, {"minimum", 0}}},
             {"compression", {{"type", "integer"}, {"minimum", 0}, {"maximum", 9}}},
-            {"temperature_threshold", {{"type", "number"}, {"exclusiveMinimum", -273.15}}},
-            {"shear_angle_limit", {{"type", "number"}, {"exclusiveMinimum", 0}, {"exclusiveMaximum", 90}}},
+            {"temperature_threshold", by_material({{"type", "number"}, {"exclusiveMinimum", -273.15}})},
+            {"shear_angle_limit", by_material({{"type", "number"}, {"exclusiveMinimum", 0}, {"exclusiveMaximum", 90}})},
             {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}},
             {"probes", {{"type", "array"}, {"items", probe}}}}},
           {"additionalProperties", false}}}}},

@@ -1853,7 +1853,7 @@ std::span<const double> Simulation::temperature(int part) const { return parts_.
 int Simulation::values_per_node(int part) const { return parts_.at(part)->nz; }
 
 void Simulation::check_field(double time, long long step) {
-  const auto& threshold = job_.output.temperature_threshold;
+  const auto& thresholds = job_.output.temperature_threshold;  // per part, empty: none
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     const PartState* st = parts_[p].get();
     // Branch-free pass (vectorised): range, and whether every value is
@@ -1872,8 +1872,8 @@ void Simulation::check_field(double time, long long step) {
     const bool bad = !(z == 0.0);
     seen_min_ = std::min(seen_min_, lo);
     seen_max_ = std::max(seen_max_, hi);
-    if (threshold && below_from_[p] < 0 && lo < *threshold) below_from_[p] = time;
-    if (threshold && all_below_from_[p] < 0 && hi < *threshold) all_below_from_[p] = time;
+    if (!thresholds.empty() && below_from_[p] < 0 && lo < thresholds[p]) below_from_[p] = time;
+    if (!thresholds.empty() && all_below_from_[p] < 0 && hi < thresholds[p]) all_below_from_[p] = time;
     if (!bad) continue;
     for (std::size_t k = 0; k < n; ++k) {
       if (!std::isfinite(st->T[k])) {
@@ -2378,8 +2378,11 @@ RunResult Simulation::run(const RunOptions& opt) {
   std::vector<std::string> tool_cols = {"time"};
   for (const auto& td : job_.tools)
     for (const char* q : {"_ux", "_uy", "_uz", "_fx", "_fy", "_fz", "_heat_J"}) tool_cols.push_back(td.name + q);
-  const auto& threshold = job_.output.temperature_threshold;
-  const auto& shear_limit = job_.output.shear_angle_limit;
+  // Per part (empty: none asked for).
+  const std::vector<double>& thresholds = job_.output.temperature_threshold;
+  const std::vector<double>& shear_limits = job_.output.shear_angle_limit;
+  const bool threshold = !thresholds.empty(), shear_limit = !shear_limits.empty();
+  auto threshold_of = [&](std::size_t p) { return threshold ? std::optional<double>(thresholds[p]) : std::nullopt; };
   // plies.csv: each ply's temperatures (with thermal) and its shear angles
   // and fibre strains (with mechanics), a row per ply.
   const bool ply_series = job_.thermal || job_.mechanics;
@@ -2421,7 +2424,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     double over = 0, total = 0;
     for (std::size_t e = 0; e < row_shear[p].size(); ++e) {
       total += elem_area[p][e];
-      if (shear_limit && std::abs(row_shear[p][e]) > *shear_limit) over += elem_area[p][e];
+      if (shear_limit && std::abs(row_shear[p][e]) > shear_limits[p]) over += elem_area[p][e];
     }
     if (shear_limit && over > 0 && over_from_[p] < 0) over_from_[p] = t;
     return {*smn, *smx, fmn, fmx, over / total};
@@ -2460,7 +2463,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     for (std::size_t p = 0; p < parts_.size(); ++p) {
       const std::size_t at = ply_rows.size();
       if (job_.thermal) {
-        const std::array<double, 4> row = ply_temperature(*parts_[p], threshold);
+        const std::array<double, 4> row = ply_temperature(*parts_[p], threshold_of(p));
         ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + (threshold ? 4 : 3));
       }
       if (job_.mechanics) {
@@ -2943,7 +2946,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   // Each ply's temperatures at the end (the summary and the log's last lines).
   std::vector<std::array<double, 4>> ply_end;
   if (job_.thermal)
-    for (const auto& st : parts_) ply_end.push_back(ply_temperature(*st, threshold));
+    for (std::size_t p = 0; p < parts_.size(); ++p) ply_end.push_back(ply_temperature(*parts_[p], threshold_of(p)));
   {
     const std::size_t w = ply_cols.size();
     for (std::size_t r = 0; r + w <= ply_rows.size(); r += w)
@@ -3065,6 +3068,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         if (threshold) plies.back()["fraction_below_threshold"] = ply_end[p][3];
       }
       if (threshold) {
+        plies.back()["temperature_threshold"] = thresholds[p];
         plies.back()["below_threshold_from_s"] = below_from_[p] >= 0 ? json(below_from_[p]) : json(nullptr);
         plies.back()["all_below_threshold_from_s"] =
             all_below_from_[p] >= 0 ? json(all_below_from_[p]) : json(nullptr);
@@ -3076,6 +3080,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         plies.back()["fibre_strain_max"] = result.part_fibre_strain_max[p];
       }
       if (shear_limit) {
+        plies.back()["shear_angle_limit"] = shear_limits[p];
         plies.back()["fraction_over_shear_limit"] = over_end[p];
         plies.back()["over_shear_limit_from_s"] = over_from_[p] >= 0 ? json(over_from_[p]) : json(nullptr);
       }
@@ -3113,10 +3118,10 @@ RunResult Simulation::run(const RunOptions& opt) {
       const auto [mn, mx] = std::minmax_element(st.T.begin(), st.T.end());
       std::string over;
       if (shear_limit && over_from_[p] >= 0)
-        over = fmt::format(", beyond {} deg from t = {} s, {:.1f} % of its area at the end", fmt_g(*shear_limit),
+        over = fmt::format(", beyond {} deg from t = {} s, {:.1f} % of its area at the end", fmt_g(shear_limits[p]),
                            fmt_g(over_from_[p], 4), 100 * over_end[p]);
       else if (shear_limit)
-        over = fmt::format(", never beyond {} deg", fmt_g(*shear_limit));
+        over = fmt::format(", never beyond {} deg", fmt_g(shear_limits[p]));
       log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg{}, fibre strain {:.3g} "
                 "to {:.3g}",
                 st.def->name, *mn, *mx, result.part_shear_min_deg[p], result.part_shear_max_deg[p], over,
@@ -3131,11 +3136,11 @@ RunResult Simulation::run(const RunOptions& opt) {
       if (!job_.mechanics) line << "temperature " << now[0] << " to " << now[2] << " degC, ";
       line << "mean " << now[1] << " degC";
       if (threshold && below_from_[p] >= 0)
-        line << ", below " << fmt_g(*threshold) << " degC from t = " << fmt_g(below_from_[p], 4) << " s"
+        line << ", below " << fmt_g(thresholds[p]) << " degC from t = " << fmt_g(below_from_[p], 4) << " s"
              << (all_below_from_[p] >= 0 ? ", all of it from t = " + fmt_g(all_below_from_[p], 4) + " s" : "")
              << ", " << std::setprecision(1) << 100 * now[3] << " % of it below at the end";
       else if (threshold)
-        line << ", never below " << fmt_g(*threshold) << " degC";
+        line << ", never below " << fmt_g(thresholds[p]) << " degC";
       log->info("{}", line.str());
     }
   }

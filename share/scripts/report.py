@@ -256,6 +256,19 @@ def ply_rows(folder):
             for n in names}
 
 
+def by_ply(folder, value):
+    """An output setting given as one number or as numbers by material, as {ply: number} (from job_as_run.json)."""
+    if value is None:
+        return {}
+    try:
+        parts = json.load(open(os.path.join(folder, "job_as_run.json")))["parts"]
+        if isinstance(value, dict):
+            return {p["name"]: value[p["material"]] for p in parts if p.get("material") in value}
+        return {p["name"]: value for p in parts}
+    except (OSError, ValueError, KeyError, TypeError):
+        return {}
+
+
 def output_settings(folder):
     """The job's output section, from job_as_run.json ({} where it cannot be read)."""
     try:
@@ -270,7 +283,11 @@ def plot_plies(folder, out):
     if not plies:
         return []
     job = output_settings(folder)
-    threshold, limit = job.get("temperature_threshold"), job.get("shear_angle_limit")
+    threshold = by_ply(folder, job.get("temperature_threshold"))
+    limit = by_ply(folder, job.get("shear_angle_limit"))
+    # one value for every ply: one line; otherwise a line per ply in its colour
+    common_t = len(set(threshold.values())) == 1 and len(threshold) == len(plies)
+    common_l = len(set(limit.values())) == 1 and len(limit) == len(plies)
     panels = []
     if all("temperature_mean" in v for v in plies.values()):
         panels.append("temperature")
@@ -298,23 +315,30 @@ def plot_plies(folder, out):
             else:
                 a.plot(v["time"], 100 * v["fraction_over_shear_limit"], color=c, label=name)
         if panel == "temperature":
-            if threshold is not None:
-                a.axhline(threshold, color="grey", ls="--", lw=1, label="threshold %g degC" % threshold)
+            for k, name in enumerate(plies):
+                if name in threshold and (not common_t or k == 0):
+                    a.axhline(threshold[name], color="grey" if common_t else "C%d" % k, ls="--", lw=1,
+                              label="threshold %g degC%s" % (threshold[name], "" if common_t else " (%s)" % name))
             a.set_ylabel("temperature (degC)")
             a.set_title("temperature of each ply")
         elif panel == "shear":
-            if limit is not None:
-                for y in (limit, -limit):
-                    a.axhline(y, color="grey", ls="--", lw=1, label="limit +-%g deg" % limit if y > 0 else None)
+            for k, name in enumerate(plies):
+                if name in limit and (not common_l or k == 0):
+                    for y in (limit[name], -limit[name]):
+                        a.axhline(y, color="grey" if common_l else "C%d" % k, ls="--", lw=1,
+                                  label=None if y < 0 else "limit +-%g deg%s" % (
+                                      limit[name], "" if common_l else " (%s)" % name))
             a.set_ylabel("shear angle (deg)")
             a.set_title("shear angle of each ply's elements")
         elif panel == "below":
             a.set_ylabel("% of the ply's heat capacity")
-            a.set_title("share below %s degC" % ("the threshold" if threshold is None else "%g" % threshold))
+            a.set_title("share below %s" % ("%g degC" % next(iter(threshold.values())) if common_t
+                                             else "each ply's threshold"))
             a.set_ylim(-2, 102)
         else:
             a.set_ylabel("% of the ply's initial area")
-            a.set_title("share sheared beyond %s deg" % ("the limit" if limit is None else "+-%g" % limit))
+            a.set_title("share sheared beyond %s" % ("+-%g deg" % next(iter(limit.values())) if common_l
+                                                      else "each ply's limit"))
             a.set_ylim(bottom=0)
         a.set_xlabel("time (s)")
         a.grid(alpha=0.3)

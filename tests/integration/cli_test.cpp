@@ -238,10 +238,14 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"frames_beyond_count", [](json& j) { j["output"]["interval"] = 1e-30; }, "error: /output/interval: an interval of 1e-30 s would write 1e+30 frames"},
       {"probe_samples_beyond_count", [](json& j) { j["output"]["probes"][0]["interval"] = 1e-30; }, "error: /output/probes/0/interval: an interval of 1e-30 s would take 1e+30 samples"},
       {"threshold_below_absolute_zero", [](json& j) { j["output"]["temperature_threshold"] = -300; }, "error: /output/temperature_threshold: must be > -273.15, found -300"},
-      {"threshold_text", [](json& j) { j["output"]["temperature_threshold"] = "270"; }, "error: /output/temperature_threshold: expected a number, found a string"},
+      {"threshold_text", [](json& j) { j["output"]["temperature_threshold"] = "270"; }, "error: /output/temperature_threshold: expected a number or an object of numbers by material, found a string"},
+      {"threshold_unknown_material", [](json& j) { j["output"]["temperature_threshold"] = {{"pa66_cf_ud", 270}, {"pa6", 250}}; }, "error: /output/temperature_threshold/pa6: unknown material 'pa6'"},
+      {"threshold_material_missing", [](json& j) { j["materials"]["other"] = j["materials"]["pa66_cf_ud"]; j["parts"][1]["material"] = "other"; j["output"]["temperature_threshold"] = {{"pa66_cf_ud", 270}}; }, "error: /output/temperature_threshold: no value for material 'other' of part 'ply_top'"},
+      {"threshold_material_below_absolute_zero", [](json& j) { j["output"]["temperature_threshold"] = {{"pa66_cf_ud", -300}}; }, "error: /output/temperature_threshold/pa66_cf_ud: must be > -273.15, found -300"},
+      {"threshold_material_text", [](json& j) { j["output"]["temperature_threshold"] = {{"pa66_cf_ud", "hot"}}; }, "error: /output/temperature_threshold/pa66_cf_ud: expected a number, found a string"},
       {"shear_limit_without_mechanics", [](json& j) { j["output"]["shear_angle_limit"] = 30; }, "error: /output/shear_angle_limit: a shear angle limit needs the mechanics solver (solvers.mechanics is absent or null)"},
-      {"shear_limit_zero", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 0; }, "error: /output/shear_angle_limit: must be > 0, found 0"},
-      {"shear_limit_right_angle", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 90; }, "error: /output/shear_angle_limit: must be < 90 (degrees), found 90"},
+      {"shear_limit_zero", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 0; }, "error: /output/shear_angle_limit: must be > 0 and < 90 (degrees), found 0"},
+      {"shear_limit_right_angle", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 90; }, "error: /output/shear_angle_limit: must be > 0 and < 90 (degrees), found 90"},
   };
   for (const auto& c : cases) {
     const auto job = small_job("bad_" + c.name, c.edit);
@@ -921,6 +925,49 @@ json short_hemisphere(double t_end, double interval, int cells) {
   j["output"]["interval"] = interval;
   for (auto& p : j["parts"]) p["mesh"]["divisions"] = {cells, cells};
   return j;
+}
+
+// output.temperature_threshold by material: each ply takes its material's
+// value, and its rows and times are those of a run with that value for
+// every ply (the temperatures do not depend on it: the same bits).
+TEST(Output, ThresholdsByMaterial) {
+  json j = read_job_document(demo_job());
+  j["time"]["end"] = 2.0;
+  j["output"]["interval"] = 0.5;
+  j["output"]["series_interval"] = 0.05;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {8, 8};
+  j["materials"]["upper"] = j["materials"]["pa66_cf_ud"];
+  j["parts"][1]["material"] = "upper";
+  const std::map<std::string, double> by_ply = {{"ply_bottom", 295.0}, {"ply_top", 298.0}};
+  j["output"]["temperature_threshold"] = {{"pa66_cf_ud", 295.0}, {"upper", 298.0}};
+  const auto dir = temp_dir("thresholds_by_material");
+  const JobRun both = run_json(j, 1, dir / "both");
+  ASSERT_TRUE(both.result.ok) << both.result.error;
+  const json summary = json::parse(std::ifstream(dir / "both" / "summary.json"));
+  for (int p = 0; p < 2; ++p) {
+    const std::string name = j["parts"][p]["name"];
+    EXPECT_EQ(summary["parts"][p]["name"], name);
+    EXPECT_EQ(summary["parts"][p]["temperature_threshold"].get<double>(), by_ply.at(name));
+    json one = j;
+    one["output"]["temperature_threshold"] = by_ply.at(name);
+    const JobRun single = run_json(one, 1);
+    ASSERT_TRUE(single.result.ok) << single.result.error;
+    EXPECT_EQ(both.result.part_below_threshold_from_s[p], single.result.part_below_threshold_from_s[p]) << name;
+    EXPECT_EQ(both.result.part_all_below_threshold_from_s[p], single.result.part_all_below_threshold_from_s[p])
+        << name;
+    EXPECT_GT(both.result.part_below_threshold_from_s[p], 0.0) << name;
+    ASSERT_EQ(both.result.ply_history.size(), single.result.ply_history.size());
+    int partial = 0;
+    for (std::size_t k = 0; k < both.result.ply_history.size(); ++k) {
+      const auto& a = both.result.ply_history[k];
+      if (a.part != p) continue;
+      EXPECT_EQ(a.fraction_below, single.result.ply_history[k].fraction_below) << name << " " << a.time;
+      partial += a.fraction_below > 0 && a.fraction_below < 1;
+    }
+    EXPECT_GT(partial, 0) << name << ": the share passes through values between 0 and 1";
+  }
+  // The two thresholds give the plies different first times.
+  EXPECT_NE(both.result.part_below_threshold_from_s[0], both.result.part_below_threshold_from_s[1]);
 }
 
 // `thermostamp export`: each ply of a frame as a Gmsh 2.2 mesh, its nodes at
