@@ -246,6 +246,7 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"shear_limit_without_mechanics", [](json& j) { j["output"]["shear_angle_limit"] = 30; }, "error: /output/shear_angle_limit: a shear angle limit needs the mechanics solver (solvers.mechanics is absent or null)"},
       {"shear_limit_zero", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 0; }, "error: /output/shear_angle_limit: must be > 0 and < 90 (degrees), found 0"},
       {"shear_limit_right_angle", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 90; }, "error: /output/shear_angle_limit: must be > 0 and < 90 (degrees), found 90"},
+      {"shear_limit_material_beyond", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = {{"pa66_cf_ud", 95}}; }, "error: /output/shear_angle_limit/pa66_cf_ud: must be > 0 and < 90 (degrees), found 95"},
   };
   for (const auto& c : cases) {
     const auto job = small_job("bad_" + c.name, c.edit);
@@ -1192,7 +1193,8 @@ TEST(Output, DatasetsCarryTheirUnits) {
   const auto dir = temp_dir("units");
   json j = short_hemisphere(0.002, 0.001, 4);
   j["output"]["fields"] = known_fields();
-  j["output"]["shear_angle_limit"] = 1e-5;  // degrees: some elements (up to 2.6e-5) are beyond it at the end
+  // degrees, by material (both plies' material): some elements (up to 2.6e-5) are beyond it at the end
+  j["output"]["shear_angle_limit"] = {{"pa66_cf_ud", 1e-5}};
   const JobRun run = run_json(j, 1, dir);
   ASSERT_TRUE(run.result.ok) << run.result.error;
   const std::map<std::string, std::string> expected = {
