@@ -2830,6 +2830,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         if (std::abs(t - next_frame) <= eps_t) t = next_frame;
         if (t >= next_sample - eps_t) {
           sample_plies(t);
+          if (!tools_.empty()) sample_tools(t);
           advance_past(next_sample, series_iv, t + eps_t);
         }
         bool any_step_probe = false;
@@ -2847,7 +2848,6 @@ RunResult Simulation::run(const RunOptions& opt) {
             if (job_.output.probes[q].interval <= 0) sample_probes(t, q);
         if (t >= next_frame - eps_t) {
           write_frame(t);
-          if (!tools_.empty()) sample_tools(t);
           ++frame_index;
           frame_t = t;
         }
@@ -2861,8 +2861,9 @@ RunResult Simulation::run(const RunOptions& opt) {
       const auto tc = Clock::now();
       if (job_.mechanics) update_element_fields();
       write_frame(t);
-      if (!tools_.empty()) sample_tools(t);
       // (unless the stop came right after a row: the last row's time is t)
+      if (!tools_.empty() && (tool_rows.empty() || tool_rows[tool_rows.size() - tool_cols.size()] < t))
+        sample_tools(t);
       if (ply_rows.empty() || ply_rows[ply_rows.size() - ply_cols.size()] < t) sample_plies(t);
       for (std::size_t q = 0; q < next_probe.size(); ++q) {  // the probes not sampled at t yet
         const double pi = job_.output.probes[q].interval;

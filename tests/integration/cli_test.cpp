@@ -971,6 +971,42 @@ TEST(Output, ThresholdsByMaterial) {
   EXPECT_NE(both.result.part_below_threshold_from_s[0], both.result.part_below_threshold_from_s[1]);
 }
 
+// A thermal-only run's tools.csv has its rows at those of plies.csv (t = 0
+// and every output.series_interval), the last one at the end with the
+// summary's heat.
+TEST(Output, ThermalOnlyToolRowsAtTheSeriesRows) {
+  json j = read_job_document(demo_job());
+  j["time"]["end"] = 2.0;
+  j["output"]["interval"] = 0.5;
+  j["output"]["series_interval"] = 0.05;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {8, 8};
+  const auto dir = temp_dir("thermal_tool_rows");
+  const JobRun r = run_json(j, 1, dir);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  auto column = [](const std::filesystem::path& f, int col, const std::string& key) {
+    std::ifstream in(f);
+    std::string line;
+    std::getline(in, line);
+    std::vector<double> out;
+    while (std::getline(in, line)) {
+      std::vector<std::string> v;
+      std::stringstream ss(line);
+      for (std::string item; std::getline(ss, item, ',');) v.push_back(item);
+      if (v.at(1) == key) out.push_back(std::stod(v.at(col)));
+    }
+    return out;
+  };
+  const auto tool_times = column(dir / "tools.csv", 0, "die");
+  const auto ply_times = column(dir / "plies.csv", 0, "ply_top");
+  EXPECT_EQ(tool_times.size(), 41u);  // t = 0, then the first thermal step at or after each multiple of 0.05 s
+  EXPECT_EQ(tool_times, ply_times);
+  const json summary = json::parse(std::ifstream(dir / "summary.json"));
+  ASSERT_EQ(summary["tools"][0]["name"], "die");
+  EXPECT_NEAR(tool_times.back(), 2.0, 1e-9);
+  EXPECT_NEAR(column(dir / "tools.csv", 8, "die").back(), summary["tools"][0]["heat_to_plies_J"].get<double>(),
+              1e-9 * std::abs(summary["tools"][0]["heat_to_plies_J"].get<double>()));
+}
+
 // `thermostamp export`: each ply of a frame as a Gmsh 2.2 mesh, its nodes at
 // the frame's positions and the frame's fields as node and element data,
 // every value as results.h5 holds it (17 significant digits: the same
