@@ -118,27 +118,34 @@ ProbeSample slab_robin_sample(const Job& j, const ProbeSample& s) {
 }
 
 // A ply's history: the times and mean temperatures of its rows, in time order.
-struct PlyMeans {
-  std::vector<double> time, mean;
+// What the study compares of a ply's rows: its mean temperature, and its
+// largest shear angle of either sign.
+double ply_mean(const RunResult::PlySample& s) { return s.mean; }
+double ply_shear(const RunResult::PlySample& s) { return std::max(std::abs(s.shear_min), std::abs(s.shear_max)); }
+using PlyValue = double (*)(const RunResult::PlySample&);
+
+// One ply's value by row (plies.csv).
+struct PlySeries {
+  std::vector<double> time, value;
 };
-PlyMeans ply_means(const std::vector<RunResult::PlySample>& history, int part) {
-  PlyMeans m;
+PlySeries ply_series(const std::vector<RunResult::PlySample>& history, int part, PlyValue value) {
+  PlySeries m;
   for (const auto& s : history)
     if (s.part == part) {
       m.time.push_back(s.time);
-      m.mean.push_back(s.mean);
+      m.value.push_back(value(s));
     }
   return m;
 }
-// The mean temperature at time t, linear between the rows; NaN outside them.
-double mean_at(const PlyMeans& m, double t) {
+// The value at time t, linear between the rows; NaN outside them.
+double value_at(const PlySeries& m, double t) {
   const auto it = std::lower_bound(m.time.begin(), m.time.end(), t);
   if (it == m.time.end()) return std::numeric_limits<double>::quiet_NaN();
   const std::size_t k = static_cast<std::size_t>(it - m.time.begin());
-  if (m.time[k] == t) return m.mean[k];
+  if (m.time[k] == t) return m.value[k];
   if (k == 0) return std::numeric_limits<double>::quiet_NaN();
   const double a = (t - m.time[k - 1]) / (m.time[k] - m.time[k - 1]);
-  return (1 - a) * m.mean[k - 1] + a * m.mean[k];
+  return (1 - a) * m.value[k - 1] + a * m.value[k];
 }
 
 // The study's state file (in its output folder): what a study stopped
@@ -147,21 +154,27 @@ constexpr const char* kStudyStateFile = "study_state.json";
 constexpr const char* kStudyStateFormat = "thermostamp-study-state/1";
 
 // What the study keeps of a run: its samples of the error's quantity
-// (exact: JSON numbers round-trip), its wall time and thermal steps.
+// (exact: JSON numbers round-trip), its wall time, thermal and mechanical
+// steps, and its plies' rows (mean temperature, shear angle range).
 json run_record(const RunResult& r, const std::string& quantity, int completed) {
   json samples = json::array(), plies = json::array();
   for (const auto& s : r.probes)
     if (s.quantity == quantity) samples.push_back({s.probe, s.time, s.z, s.values});
-  if (r.thermal_dt > 0)  // (a run without the thermal solver has rows of its shear angles only)
-    for (const auto& s : r.ply_history) plies.push_back({s.part, s.time, s.mean});
-  return {{"completed", completed}, {"wall_time_s", r.wall_time_s}, {"thermal_steps", r.thermal_steps},
-          {"thermal_dt", r.thermal_dt}, {"samples", samples}, {"plies", plies}};
+  for (const auto& s : r.ply_history) plies.push_back({s.part, s.time, s.mean, s.shear_min, s.shear_max});
+  return {{"completed", completed},
+          {"wall_time_s", r.wall_time_s},
+          {"thermal_steps", r.thermal_steps},
+          {"thermal_dt", r.thermal_dt},
+          {"mechanical_steps", r.mechanical_steps},
+          {"samples", samples},
+          {"plies", plies}};
 }
 RunResult from_record(const json& rec, const std::string& quantity) {
   RunResult r;
   r.wall_time_s = rec.at("wall_time_s").get<double>();
   r.thermal_steps = rec.at("thermal_steps").get<long long>();
   r.thermal_dt = rec.at("thermal_dt").get<double>();
+  r.mechanical_steps = rec.value("mechanical_steps", 0LL);  // (a study state written before 0.16.3 has none)
   for (const auto& s : rec.at("samples")) {
     ProbeSample p;
     p.probe = s.at(0).get<int>();
@@ -177,6 +190,10 @@ RunResult from_record(const json& rec, const std::string& quantity) {
       p.part = s.at(0).get<int>();
       p.time = s.at(1).get<double>();
       p.mean = s.at(2).get<double>();
+      if (s.size() >= 5) {
+        p.shear_min = s.at(3).get<double>();
+        p.shear_max = s.at(4).get<double>();
+      }
       r.ply_history.push_back(p);
     }
   return r;
@@ -409,17 +426,22 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   for (const auto& p : probes) csv << ",error_" << p.name << "_K";
   const auto& plies = jobs[0].parts;
   for (const auto& p : plies) csv << ",error_" << p.name << "_mean_K";
+  // With the mechanics in the reference run: each ply's largest shear angle.
+  const bool shear = analytic.empty() && results[0].mechanical_steps > 0;
+  if (shear)
+    for (const auto& p : plies) csv << ",error_" << p.name << "_shear_deg";
   csv << "\n";
   csv << "reference," << results[0].wall_time_s << ",0," << norm << "," << ref.size() << ","
       << results[0].thermal_steps << "," << results[0].thermal_dt;
-  for (std::size_t k = 0; k < probes.size() + plies.size(); ++k) csv << ",0";
+  for (std::size_t k = 0; k < probes.size() + plies.size() * (shear ? 2 : 1); ++k) csv << ",0";
   csv << "\n";
-  // The error of a variant's mean temperature of ply p (the history of
-  // plies.csv) in the study's norm, at the reference's rows (the variant
-  // linear between its rows) or, against the analytic slab, at the
-  // variant's own rows; NaN where there is none to compare (a job without
-  // the thermal solver, other plies).
-  auto ply_mean_error = [&](std::size_t i, int p) {
+  // The error of a variant's value of ply p (the history of plies.csv: its
+  // mean temperature, or its largest shear angle) in the study's norm, at
+  // the reference's rows (the variant linear between its rows) or, for the
+  // mean against the analytic slab, at the variant's own rows; NaN where
+  // there is none to compare (a job without the thermal solver, or without
+  // the mechanics, other plies).
+  auto ply_error = [&](std::size_t i, int p, PlyValue value) {
     double e_max = 0, e_sq = 0;
     long long n = 0;
     auto take = [&](double d) {
@@ -427,16 +449,18 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       e_sq += d * d;
       ++n;
     };
-    if (jobs[i].parts.size() != plies.size() || jobs[i].parts[p].name != plies[p].name ||
-        !(results[i].thermal_dt > 0) || (analytic.empty() && !(results[0].thermal_dt > 0)))
+    const bool mean = value == ply_mean;
+    auto has = [&](const RunResult& r) { return mean ? r.thermal_dt > 0 : r.mechanical_steps > 0; };
+    if (jobs[i].parts.size() != plies.size() || jobs[i].parts[p].name != plies[p].name || !has(results[i]) ||
+        (analytic.empty() && !has(results[0])) || (!analytic.empty() && !mean))
       return std::numeric_limits<double>::quiet_NaN();
-    const PlyMeans variant = ply_means(results[i].ply_history, p);
+    const PlySeries variant = ply_series(results[i].ply_history, p, value);
     for (const auto& s : (analytic.empty() ? results[0] : results[i]).ply_history) {
       if (s.part != p) continue;
       if (!analytic.empty()) {
         take(std::abs(s.mean - slab_robin_of(jobs[i], -1, s.time)));
-      } else if (const double v = mean_at(variant, s.time); !std::isnan(v)) {
-        take(std::abs(v - s.mean));
+      } else if (const double v = value_at(variant, s.time); !std::isnan(v)) {
+        take(std::abs(v - value(s)));
       }
     }
     if (n == 0) return std::numeric_limits<double>::quiet_NaN();
@@ -488,10 +512,13 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
         << results[i].thermal_steps << "," << results[i].thermal_dt;
     for (std::size_t k = 0; k < probes.size(); ++k)
       csv << "," << (norm == "max" ? probe_max[k] : (probe_n[k] ? std::sqrt(probe_sq[k] / probe_n[k]) : 0.0));
-    for (std::size_t p = 0; p < plies.size(); ++p) {
-      const double e = ply_mean_error(i, static_cast<int>(p));
-      csv << ",";
-      if (!std::isnan(e)) csv << e;  // an empty cell where there is nothing to compare
+    for (const PlyValue value : {ply_mean, ply_shear}) {
+      if (value == ply_shear && !shear) break;
+      for (std::size_t p = 0; p < plies.size(); ++p) {
+        const double e = ply_error(i, static_cast<int>(p), value);
+        csv << ",";
+        if (!std::isnan(e)) csv << e;  // an empty cell where there is nothing to compare
+      }
     }
     csv << "\n";
     if (!quiet)

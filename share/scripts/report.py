@@ -491,7 +491,11 @@ def plot_study(folder, out):
     # The error of each ply's mean temperature (error_<ply>_mean_K), where the table has one.
     means = [c for c in (rows[0].keys() if rows else []) if c.startswith("error_") and c.endswith("_mean_K")]
     means = [c for c in means if any(r[c] for r in var)]
-    fig, axes = plt.subplots(1, 2 if means else 1, figsize=(11 if means else 6, 4.5), squeeze=False)
+    # ... and of each ply's largest shear angle (error_<ply>_shear_deg), in a study with the mechanics.
+    shears = [c for c in (rows[0].keys() if rows else []) if c.startswith("error_") and c.endswith("_shear_deg")]
+    shears = [c for c in shears if any(r[c] for r in var)]
+    n = 1 + bool(means) + bool(shears)
+    fig, axes = plt.subplots(1, n, figsize=(5.5 * n, 4.5), squeeze=False)
     ax = axes[0][0]
     for r in var:
         t, e = float(r["wall_time_s"]), max(float(r["error_K"]), 1e-6)
@@ -509,6 +513,16 @@ def plot_study(folder, out):
                 a2.annotate(label, (t, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
         a2.set_ylabel("error of the ply's mean temperature (K)")
         a2.set_title("each ply's mean")
+    if shears:
+        a3 = axes[0][n - 1]
+        for k, c in enumerate(shears):
+            pts = [(float(r["wall_time_s"]), max(float(r[c]), 1e-6), r["label"]) for r in var if r[c]]
+            a3.loglog([p[0] for p in pts], [p[1] for p in pts], "o", color="C%d" % k,
+                      label=c[len("error_"):-len("_shear_deg")])
+            for t, e, label in pts:
+                a3.annotate(label, (t, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        a3.set_ylabel("error of the ply's largest shear angle (deg)")
+        a3.set_title("each ply's largest shear angle")
     ref = [r for r in rows if r["label"] == "reference"]
     for a in axes[0]:
         if ref and float(ref[0]["wall_time_s"]) > 0:  # an analytic reference takes no time

@@ -540,10 +540,11 @@ TEST(Restart, StudyContinuesWhereItStopped) {
   };
   const auto full = table(dir / "full" / "study.csv", false);
   ASSERT_EQ(full.size(), 4u);
-  // The error of each ply's mean temperature: the largest difference, at the
-  // reference's rows, between its mean and the variant's, linear between the
-  // variant's rows (the steps, and so the rows' times, follow the
-  // temperature-dependent stiffness), to the table's 6 digits.
+  // The error of each ply's mean temperature and of its largest shear angle
+  // (of either sign): the largest difference, at the reference's rows,
+  // between its value and the variant's, linear between the variant's rows
+  // (the steps, and so the rows' times, follow the temperature-dependent
+  // stiffness), to the table's 6 digits.
   auto cells = [](const std::string& line) {
     std::vector<std::string> c;
     std::stringstream ss(line);
@@ -551,18 +552,24 @@ TEST(Restart, StudyContinuesWhereItStopped) {
     return c;
   };
   const auto head = cells(table(dir / "full" / "study.csv", true)[0]);
-  auto means = [&](const std::filesystem::path& csv) {
-    std::map<std::string, std::vector<std::pair<double, double>>> m;  // ply -> (time, mean)
+  // ply -> (time, value) of plies.csv, the value the mean temperature or the largest |shear angle|
+  auto values = [&](const std::filesystem::path& csv, bool shear) {
+    std::map<std::string, std::vector<std::pair<double, double>>> m;
     const auto rows = table(csv, true);
+    const auto names = cells(rows[0]);
+    auto col = [&](const char* name) { return std::find(names.begin(), names.end(), name) - names.begin(); };
+    const auto mean = col("temperature_mean"), lo = col("shear_angle_min"), hi = col("shear_angle_max");
     for (std::size_t r = 1; r < rows.size(); ++r) {
       const auto c = cells(rows[r]);
-      m[c[1]].emplace_back(std::stod(c[0]), std::stod(c[3]));
+      m[c[1]].emplace_back(std::stod(c[0]), shear ? std::max(std::abs(std::stod(c[lo])), std::abs(std::stod(c[hi])))
+                                                  : std::stod(c[mean]));
     }
     return m;
   };
-  auto ref = means(dir / "full" / "reference" / "plies.csv");
+  for (const bool shear : {false, true})
   for (const std::string label : {"shell2d", "adi-4"}) {
-    auto var = means(dir / "full" / label / "plies.csv");
+    auto ref = values(dir / "full" / "reference" / "plies.csv", shear);
+    auto var = values(dir / "full" / label / "plies.csv", shear);
     std::vector<std::string> row;
     for (const auto& line : table(dir / "full" / "study.csv", true))
       if (line.rfind(label + ",", 0) == 0) row = cells(line);
@@ -587,10 +594,12 @@ TEST(Restart, StudyContinuesWhereItStopped) {
         }
       }
       EXPECT_GT(compared, 400) << label << " " << ply;
-      const auto col = std::find(head.begin(), head.end(), "error_" + ply + "_mean_K") - head.begin();
-      ASSERT_LT(static_cast<std::size_t>(col), head.size()) << ply;
-      EXPECT_GT(largest, 0.0) << label << " " << ply;
-      EXPECT_NEAR(std::stod(row[col]), largest, 1e-5 * largest) << label << " " << ply;
+      const std::string name = "error_" + ply + (shear ? "_shear_deg" : "_mean_K");
+      const auto col = std::find(head.begin(), head.end(), name) - head.begin();
+      ASSERT_LT(static_cast<std::size_t>(col), head.size()) << name;
+      EXPECT_GT(largest, 0.0) << label << " " << name;
+      EXPECT_NEAR(std::stod(row[col]), largest, 1e-5 * largest) << label << " " << name;
+      if (shear) std::printf("%s %s: %.6g deg\n", label.c_str(), name.c_str(), largest);
     }
   }
   EXPECT_EQ(table(out / "study.csv", false), full);
