@@ -99,12 +99,12 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
     if (!m) throw std::runtime_error("cannot write '" + ply.file.string() + "'");
     m << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n2 1 \"" << name << "\"\n$EndPhysicalNames\n";
     m << "$Nodes\n" << ply.nodes << '\n';
-    for (int i = 0; i < ply.nodes; ++i)
+    for (std::size_t i = 0; i < static_cast<std::size_t>(ply.nodes); ++i)
       m << i + 1 << ' ' << number(x[3 * i]) << ' ' << number(x[3 * i + 1]) << ' ' << number(x[3 * i + 2]) << '\n';
     m << "$EndNodes\n$Elements\n" << ply.triangles << '\n';
-    for (int e = 0; e < ply.triangles; ++e) {
+    for (std::size_t e = 0; e < static_cast<std::size_t>(ply.triangles); ++e) {
       m << e + 1 << " 2 2 1 1";
-      for (int c = 0; c < 3; ++c) m << ' ' << static_cast<long long>(tri[3 * e + c]) + 1;
+      for (std::size_t c = 0; c < 3; ++c) m << ' ' << static_cast<long long>(tri[3 * e + c]) + 1;
       m << '\n';
     }
     m << "$EndElements\n";
