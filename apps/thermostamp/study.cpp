@@ -117,14 +117,13 @@ ProbeSample slab_robin_sample(const Job& j, const ProbeSample& s) {
   return r;
 }
 
-// A ply's history: the times and mean temperatures of its rows, in time order.
 // What the study compares of a ply's rows: its mean temperature, and its
 // largest shear angle of either sign.
 double ply_mean(const RunResult::PlySample& s) { return s.mean; }
 double ply_shear(const RunResult::PlySample& s) { return std::max(std::abs(s.shear_min), std::abs(s.shear_max)); }
 using PlyValue = double (*)(const RunResult::PlySample&);
 
-// One ply's value by row (plies.csv).
+// One ply's value by row (plies.csv), in time order.
 struct PlySeries {
   std::vector<double> time, value;
 };
