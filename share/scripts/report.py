@@ -503,26 +503,22 @@ def plot_study(folder, out):
         ax.annotate(r["label"], (t, e), textcoords="offset points", xytext=(4, 4), fontsize=8)
     ax.set_ylabel("error against reference (K, %s norm)" % (var[0]["norm"] if var else "max"))
     ax.set_title("at the probes")
+    # each ply's error of one quantity (columns error_<ply><suffix>) against wall time
+    def per_ply(a, columns, suffix, ylabel, title):
+        for k, c in enumerate(columns):
+            pts = [(float(r["wall_time_s"]), max(float(r[c]), 1e-6), r["label"]) for r in var if r[c]]
+            a.loglog([p[0] for p in pts], [p[1] for p in pts], "o", color="C%d" % k,
+                     label=c[len("error_"):-len(suffix)])
+            for t, e, label in pts:
+                a.annotate(label, (t, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        a.set_ylabel(ylabel)
+        a.set_title(title)
+
     if means:
-        a2 = axes[0][1]
-        for k, c in enumerate(means):
-            pts = [(float(r["wall_time_s"]), max(float(r[c]), 1e-6), r["label"]) for r in var if r[c]]
-            a2.loglog([p[0] for p in pts], [p[1] for p in pts], "o", color="C%d" % k,
-                      label=c[len("error_"):-len("_mean_K")])
-            for t, e, label in pts:
-                a2.annotate(label, (t, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
-        a2.set_ylabel("error of the ply's mean temperature (K)")
-        a2.set_title("each ply's mean")
+        per_ply(axes[0][1], means, "_mean_K", "error of the ply's mean temperature (K)", "each ply's mean")
     if shears:
-        a3 = axes[0][n - 1]
-        for k, c in enumerate(shears):
-            pts = [(float(r["wall_time_s"]), max(float(r[c]), 1e-6), r["label"]) for r in var if r[c]]
-            a3.loglog([p[0] for p in pts], [p[1] for p in pts], "o", color="C%d" % k,
-                      label=c[len("error_"):-len("_shear_deg")])
-            for t, e, label in pts:
-                a3.annotate(label, (t, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
-        a3.set_ylabel("error of the ply's largest shear angle (deg)")
-        a3.set_title("each ply's largest shear angle")
+        per_ply(axes[0][n - 1], shears, "_shear_deg", "error of the ply's largest shear angle (deg)",
+                "each ply's largest shear angle")
     ref = [r for r in rows if r["label"] == "reference"]
     for a in axes[0]:
         if ref and float(ref[0]["wall_time_s"]) > 0:  # an analytic reference takes no time

@@ -928,15 +928,22 @@ json short_hemisphere(double t_end, double interval, int cells) {
   return j;
 }
 
-// output.temperature_threshold by material: each ply takes its material's
-// value, and its rows and times are those of a run with that value for
-// every ply (the temperatures do not depend on it: the same bits).
-TEST(Output, ThresholdsByMaterial) {
+// The thermal demo, 2 s on 8 x 8 cells per ply, frames every 0.5 s and
+// rows every 50 ms.
+json short_thermal_demo() {
   json j = read_job_document(demo_job());
   j["time"]["end"] = 2.0;
   j["output"]["interval"] = 0.5;
   j["output"]["series_interval"] = 0.05;
   for (auto& p : j["parts"]) p["mesh"]["divisions"] = {8, 8};
+  return j;
+}
+
+// output.temperature_threshold by material: each ply takes its material's
+// value, and its rows and times are those of a run with that value for
+// every ply (the temperatures do not depend on it: the same bits).
+TEST(Output, ThresholdsByMaterial) {
+  json j = short_thermal_demo();
   j["materials"]["upper"] = j["materials"]["pa66_cf_ud"];
   j["parts"][1]["material"] = "upper";
   const std::map<std::string, double> by_ply = {{"ply_bottom", 295.0}, {"ply_top", 298.0}};
@@ -975,11 +982,7 @@ TEST(Output, ThresholdsByMaterial) {
 // and every output.series_interval), the last one at the end with the
 // summary's heat.
 TEST(Output, ThermalOnlyToolRowsAtTheSeriesRows) {
-  json j = read_job_document(demo_job());
-  j["time"]["end"] = 2.0;
-  j["output"]["interval"] = 0.5;
-  j["output"]["series_interval"] = 0.05;
-  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {8, 8};
+  const json j = short_thermal_demo();
   const auto dir = temp_dir("thermal_tool_rows");
   const JobRun r = run_json(j, 1, dir);
   ASSERT_TRUE(r.result.ok) << r.result.error;
