@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "io/checkpoint.hpp"
+#include "io/compare.hpp"
 #include "io/logging.hpp"
 #include "job/job.hpp"
 #include "plugins/registry.hpp"
@@ -207,12 +208,6 @@ void write_state(const std::filesystem::path& out, const json& state) {
     if (!f) throw std::runtime_error("cannot write " + tmp.string());
   }
   std::filesystem::rename(tmp, path);
-}
-
-std::string key_of(const ProbeSample& s) {
-  std::ostringstream k;
-  k << s.probe << "|" << s.quantity << "|" << std::llround(s.time * 1e9);
-  return k.str();
 }
 
 }  // namespace
@@ -415,10 +410,9 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       write_state(out, state);
     }
   }
-  // Errors against the reference at common probe samples.
-  std::map<std::string, const ProbeSample*> ref;
-  for (const auto& s : results[0].probes)
-    if (s.quantity == quantity) ref[key_of(s)] = &s;
+  // Errors against the reference at its probe samples.
+  long long ref_samples = 0;
+  for (const auto& s : results[0].probes) ref_samples += s.quantity == quantity;
   const auto& probes = jobs[0].output.probes;
   std::ofstream csv(out / "study.csv");
   csv << "label,wall_time_s,error_K,norm,samples,thermal_steps,thermal_dt_s";
@@ -430,7 +424,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   if (shear)
     for (const auto& p : plies) csv << ",error_" << p.name << "_shear_deg";
   csv << "\n";
-  csv << "reference," << results[0].wall_time_s << ",0," << norm << "," << ref.size() << ","
+  csv << "reference," << results[0].wall_time_s << ",0," << norm << "," << ref_samples << ","
       << results[0].thermal_steps << "," << results[0].thermal_dt;
   for (std::size_t k = 0; k < probes.size() + plies.size() * (shear ? 2 : 1); ++k) csv << ",0";
   csv << "\n";
@@ -468,37 +462,50 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   for (std::size_t i = 1; i < all.size(); ++i) {
     double err_max = 0, err_sq = 0;
     long long count = 0;
+    double offset = 0;  // the largest time between the samples compared (s)
     std::vector<double> probe_max(probes.size(), 0.0), probe_sq(probes.size(), 0.0);
     std::vector<long long> probe_n(probes.size(), 0);
-    std::vector<ProbeSample> exact;
-    if (!analytic.empty()) {
-      exact.reserve(results[i].probes.size());
-      for (const auto& s : results[i].probes)
-        if (s.quantity == quantity) exact.push_back(slab_robin_sample(jobs[i], s));
-    }
-    std::size_t next_exact = 0;
-    for (const auto& s : results[i].probes) {
-      if (s.quantity != quantity) continue;
-      const ProbeSample* rp = nullptr;
-      if (!analytic.empty()) {
-        rp = &exact[next_exact++];
-      } else {
-        const auto it = ref.find(key_of(s));
-        if (it == ref.end()) continue;
-        rp = it->second;
+    // One value compared: the variant's v against w at probe `probe`.
+    auto take = [&](int probe, double v, double w) {
+      const double d = std::abs(v - w);
+      err_max = std::max(err_max, d);
+      err_sq += d * d;
+      ++count;
+      probe_max[probe] = std::max(probe_max[probe], d);
+      probe_sq[probe] += d * d;
+      ++probe_n[probe];
+    };
+    // A sample's value at the reference's through-thickness point k of r.
+    auto at = [](const ProbeSample& s, const ProbeSample& r, std::size_t k) {
+      return r.z.empty() ? s.values[0] : interpolate(s, r.z[k]);
+    };
+    if (!analytic.empty()) {  // each of the variant's samples against the series at its time
+      for (const auto& s : results[i].probes) {
+        if (s.quantity != quantity) continue;
+        const ProbeSample r = slab_robin_sample(jobs[i], s);
+        for (std::size_t k = 0; k < (r.z.empty() ? 1 : r.z.size()); ++k) take(s.probe, at(s, r, k), r.values[k]);
       }
-      const ProbeSample& r = *rp;
-      // The variant interpolated at the reference's through-thickness points.
-      const std::size_t n = r.z.empty() ? 1 : r.z.size();
-      for (std::size_t k = 0; k < n; ++k) {
-        const double v = r.z.empty() ? s.values[0] : interpolate(s, r.z[k]);
-        const double d = std::abs(v - r.values[k]);
-        err_max = std::max(err_max, d);
-        err_sq += d * d;
-        ++count;
-        probe_max[s.probe] = std::max(probe_max[s.probe], d);
-        probe_sq[s.probe] += d * d;
-        ++probe_n[s.probe];
+    } else {
+      // Each of the reference's samples against the variant's of the same
+      // time (match_times: the nearest, within a quarter of the spacing;
+      // with the mechanics the samples fall at the first step at or after
+      // each multiple of the interval, and the two runs' steps differ).
+      std::map<int, std::vector<const ProbeSample*>> ref_of, var_of;  // by probe, in time order
+      for (const auto& s : results[0].probes)
+        if (s.quantity == quantity) ref_of[s.probe].push_back(&s);
+      for (const auto& s : results[i].probes)
+        if (s.quantity == quantity) var_of[s.probe].push_back(&s);
+      for (const auto& [probe, rs] : ref_of) {
+        const auto& vs = var_of[probe];
+        std::vector<double> tr, tv;
+        for (const ProbeSample* s : rs) tr.push_back(s->time);
+        for (const ProbeSample* s : vs) tv.push_back(s->time);
+        const std::vector<int> m = match_times(tr, tv, offset);
+        for (std::size_t j = 0; j < rs.size(); ++j) {
+          if (m[j] < 0) continue;
+          const ProbeSample &r = *rs[j], &s = *vs[m[j]];
+          for (std::size_t k = 0; k < (r.z.empty() ? 1 : r.z.size()); ++k) take(probe, at(s, r, k), r.values[k]);
+        }
       }
     }
     if (count == 0) {
@@ -520,9 +527,12 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       }
     }
     csv << "\n";
-    if (!quiet)
+    if (!quiet) {
       std::cout << all[i].label << ": error " << err << " K (" << norm << "), wall " << results[i].wall_time_s
-                << " s\n";
+                << " s";
+      if (offset > 0) std::cout << ", samples paired up to " << offset << " s apart";
+      std::cout << "\n";
+    }
   }
   csv.close();
   run_report(out);

@@ -75,34 +75,6 @@ double profile_at(const std::vector<double>& z, const std::vector<double>& v, do
   return (1 - a) * v[k - 1] + a * v[k];
 }
 
-// For each time of a, the index of b's nearest time if it lies within a
-// quarter of the median spacing of a's times (-1 otherwise; the median, as
-// a first sample after t = 0 or a last one at the end may come close to
-// its neighbour).
-std::vector<int> match_times(const std::vector<double>& a, const std::vector<double>& b, double& offset) {
-  std::vector<int> m(a.size(), -1);
-  std::vector<double> gaps;
-  for (std::size_t k = 1; k < a.size(); ++k) gaps.push_back(a[k] - a[k - 1]);
-  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
-  const double tol = gaps.empty() ? 1e-9 * std::max(1.0, std::abs(a.empty() ? 0 : a[0]))
-                                  : 0.25 * gaps[gaps.size() / 2];
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    const auto it = std::lower_bound(b.begin(), b.end(), a[k]);
-    int best = -1;
-    double d = std::numeric_limits<double>::infinity();
-    for (auto j : {it - b.begin() - 1, it - b.begin()})
-      if (j >= 0 && j < static_cast<std::ptrdiff_t>(b.size()) && std::abs(b[j] - a[k]) < d) {
-        d = std::abs(b[j] - a[k]);
-        best = static_cast<int>(j);
-      }
-    if (best >= 0 && d <= tol) {
-      m[k] = best;
-      offset = std::max(offset, d);
-    }
-  }
-  return m;
-}
-
 // Drops the entries before `from` (s) of a time list and of the lists
 // beside it (one entry per time).
 template <class... Beside>
@@ -199,6 +171,30 @@ std::string fmt(double v) {
 }
 
 }  // namespace
+
+std::vector<int> match_times(const std::vector<double>& a, const std::vector<double>& b, double& offset) {
+  std::vector<int> m(a.size(), -1);
+  std::vector<double> gaps;
+  for (std::size_t k = 1; k < a.size(); ++k) gaps.push_back(a[k] - a[k - 1]);
+  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+  const double tol = gaps.empty() ? 1e-9 * std::max(1.0, std::abs(a.empty() ? 0 : a[0]))
+                                  : 0.25 * gaps[gaps.size() / 2];
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    const auto it = std::lower_bound(b.begin(), b.end(), a[k]);
+    int best = -1;
+    double d = std::numeric_limits<double>::infinity();
+    for (auto j : {it - b.begin() - 1, it - b.begin()})
+      if (j >= 0 && j < static_cast<std::ptrdiff_t>(b.size()) && std::abs(b[j] - a[k]) < d) {
+        d = std::abs(b[j] - a[k]);
+        best = static_cast<int>(j);
+      }
+    if (best >= 0 && d <= tol) {
+      m[k] = best;
+      offset = std::max(offset, d);
+    }
+  }
+  return m;
+}
 
 Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem::path& b, double from) {
   for (const auto& d : {a, b}) {

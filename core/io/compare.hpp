@@ -49,6 +49,15 @@ struct Comparison {
   std::string to_text(const std::filesystem::path& a, const std::filesystem::path& b) const;
 };
 
+// For each time of a (ascending), the index of b's (ascending) nearest time
+// if it lies within a quarter of the median spacing of a's times, -1
+// otherwise (the median, as a first sample after t = 0 or a last one at the
+// end may come close to its neighbour); raises `offset` to the largest
+// distance matched. With the mechanics, samples and rows fall at the first
+// step at or after each multiple of their interval, and two runs' steps
+// differ: this pairs the samples of the same multiple.
+std::vector<int> match_times(const std::vector<double>& a, const std::vector<double>& b, double& offset);
+
 // Compares the output folders a and b (of `thermostamp run`), the samples,
 // frames and rows at times from `from` on (s; all by default). Throws
 // std::runtime_error when a folder does not exist or holds none of

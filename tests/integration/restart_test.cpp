@@ -602,6 +602,54 @@ TEST(Restart, StudyContinuesWhereItStopped) {
       if (shear) std::printf("%s %s: %.6g deg\n", label.c_str(), name.c_str(), largest);
     }
   }
+  // The probe errors: every sample of the reference (13 times x 4 probes,
+  // 9 values through the thickness each) against the variant's sample of
+  // the same multiple of the probe interval (the steps, and so the sample
+  // times, differ by up to a step), the variant's profile linear between its
+  // values at the reference's heights: recomputed from probes.csv for the
+  // upper pole.
+  auto profiles = [&](const std::filesystem::path& csv) {
+    std::map<double, std::vector<std::pair<double, double>>> m;  // time -> (z, value)
+    const auto rows = table(csv, true);
+    for (std::size_t r = 1; r < rows.size(); ++r) {
+      const auto c = cells(rows[r]);
+      if (c[0] == "pole_top" && c[1] == "temperature_profile") m[std::stod(c[2])].emplace_back(std::stod(c[3]), std::stod(c[4]));
+    }
+    return m;
+  };
+  const auto ref_pole = profiles(dir / "full" / "reference" / "probes.csv");
+  ASSERT_EQ(ref_pole.size(), 13u);
+  for (const std::string label : {"shell2d", "adi-4"}) {
+    const auto var_pole = profiles(dir / "full" / label / "probes.csv");
+    std::vector<std::string> row;
+    for (const auto& line : table(dir / "full" / "study.csv", true))
+      if (line.rfind(label + ",", 0) == 0) row = cells(line);
+    EXPECT_EQ(row[4], "468") << label << ": every value of the reference's samples compared";
+    double largest = 0, offset = 0;
+    for (const auto& [t, ref_values] : ref_pole) {
+      auto near = var_pole.lower_bound(t);
+      if (near == var_pole.end() || (near != var_pole.begin() && t - std::prev(near)->first < near->first - t))
+        near = std::prev(near);
+      offset = std::max(offset, std::abs(near->first - t));
+      const auto& v = near->second;
+      for (const auto& [z, value] : ref_values) {
+        double at = v.front().second;
+        if (z >= v.back().first) {
+          at = v.back().second;
+        } else if (z > v.front().first) {
+          std::size_t k = 1;
+          while (v[k].first < z) ++k;
+          const double a = (z - v[k - 1].first) / (v[k].first - v[k - 1].first);
+          at = (1 - a) * v[k - 1].second + a * v[k].second;
+        }
+        largest = std::max(largest, std::abs(at - value));
+      }
+    }
+    EXPECT_LT(offset, 1e-3) << label;  // a step or so, against the 50 ms interval
+    const auto col = std::find(head.begin(), head.end(), "error_pole_top_K") - head.begin();
+    EXPECT_NEAR(std::stod(row[col]), largest, 1e-5 * largest) << label;
+    std::printf("%s pole_top: %.6g K, samples up to %.3g s apart\n", label.c_str(), largest, offset);
+  }
   EXPECT_EQ(table(out / "study.csv", false), full);
   EXPECT_TRUE(file_text(dir / "full" / "shell2d" / "probes.csv") == file_text(out / "shell2d" / "probes.csv"));
   // Stopped in its first run, the reference: it continues from its checkpoint.
