@@ -524,6 +524,10 @@ def plot_study(folder, out):
         if ref and float(ref[0]["wall_time_s"]) > 0:  # an analytic reference takes no time
             a.axvline(float(ref[0]["wall_time_s"]), color="grey", ls="--", lw=1, label="reference run time")
         a.set_xlabel("wall time (s)")
+        lo, hi = a.get_xlim()
+        if 0 < lo and hi < 10 * lo:  # within a decade: plain numbers (the log labels would crowd)
+            a.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+            a.xaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
         a.grid(alpha=0.3, which="both")
         if a.get_legend_handles_labels()[0]:
             a.legend(fontsize=8)
