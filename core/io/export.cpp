@@ -8,20 +8,11 @@
 #include <fstream>
 
 #include "io/results_reader.hpp"
+#include "io/results_writer.hpp"
 
 namespace ts {
 
 namespace {
-
-// The fields that the frames hold per element (ElementFields); the others
-// are per node, but for the through-thickness `temperature`, which lies on
-// the extruded mesh (its mean, top and bottom values are fields of their
-// own in the same frame).
-bool on_elements(const std::string& field) {
-  for (const char* f : {"shear_angle", "fibre_direction", "membrane_stress", "membrane_strain", "curvature"})
-    if (field == f) return true;
-  return false;
-}
 
 std::string number(double v) {
   char buf[32];
@@ -115,8 +106,10 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
       if (shape.empty()) throw std::runtime_error("'" + h5.string() + "': field '" + field + "' of ply '" + name +
                                                   "' cannot be read (cut short?)");
       const int components = shape.size() > 1 ? static_cast<int>(shape[1]) : 1;
-      const bool cells = on_elements(field);
-      if (shape[0] != static_cast<hsize_t>(cells ? ply.triangles : ply.nodes)) continue;  // the layers' temperature
+      const bool cells = field_on_elements(field);
+      // (the through-thickness `temperature` lies on the extruded mesh; its
+      // mean, top and bottom values are fields of their own in the frame)
+      if (shape[0] != static_cast<hsize_t>(cells ? ply.triangles : ply.nodes)) continue;
       write_data(m, cells ? "ElementData" : "NodeData", field, res.time, v, components);
       (cells ? ply.element_data : ply.node_data).push_back(field);
     }

@@ -88,6 +88,12 @@ std::string field_units(const std::string& name) {
   return "1";  // fibre_direction, contact_status, membrane_strain
 }
 
+bool field_on_elements(const std::string& name) {
+  for (const char* f : {"shear_angle", "fibre_direction", "membrane_stress", "membrane_strain", "curvature"})
+    if (name == f) return true;
+  return false;
+}
+
 std::string series_column_units(const std::string& column) {
   auto ends = [&](const char* e) {
     const std::size_t n = std::strlen(e);

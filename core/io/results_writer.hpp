@@ -21,6 +21,10 @@ struct WriterPart {
 // its attribute "units" gives them: "degC", "m", "m/s", "deg", "Pa", "N/m",
 // "1/m", or "1" for dimensionless values.
 std::string field_units(const std::string& name);
+// Whether a frame's dataset of this field holds a value per element
+// (ElementFields: shear angle, fibre direction, membrane stress and strain,
+// curvature) rather than per node.
+bool field_on_elements(const std::string& name);
 // The units of a series' column (the energy, tool and ply tables), as the
 // series' attribute "units" lists them beside "columns".
 std::string series_column_units(const std::string& column);

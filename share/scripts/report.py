@@ -256,25 +256,24 @@ def ply_rows(folder):
             for n in names}
 
 
-def by_ply(folder, value):
-    """An output setting given as one number or as numbers by material, as {ply: number} (from job_as_run.json)."""
+def job_as_run(folder):
+    """The run's job_as_run.json ({} where it cannot be read)."""
+    try:
+        doc = json.load(open(os.path.join(folder, "job_as_run.json")))
+        return doc if isinstance(doc, dict) else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def by_ply(job, value):
+    """An output setting given as one number or as numbers by material, as {ply: number}."""
     if value is None:
         return {}
     try:
-        parts = json.load(open(os.path.join(folder, "job_as_run.json")))["parts"]
         if isinstance(value, dict):
-            return {p["name"]: value[p["material"]] for p in parts if p.get("material") in value}
-        return {p["name"]: value for p in parts}
-    except (OSError, ValueError, KeyError, TypeError):
-        return {}
-
-
-def output_settings(folder):
-    """The job's output section, from job_as_run.json ({} where it cannot be read)."""
-    try:
-        o = json.load(open(os.path.join(folder, "job_as_run.json")))["output"]
-        return o if isinstance(o, dict) else {}
-    except (OSError, ValueError, KeyError, TypeError):
+            return {p["name"]: value[p["material"]] for p in job["parts"] if p.get("material") in value}
+        return {p["name"]: value for p in job["parts"]}
+    except (KeyError, TypeError):
         return {}
 
 
@@ -282,9 +281,10 @@ def plot_plies(folder, out):
     plies = ply_rows(folder)
     if not plies:
         return []
-    job = output_settings(folder)
-    threshold = by_ply(folder, job.get("temperature_threshold"))
-    limit = by_ply(folder, job.get("shear_angle_limit"))
+    job = job_as_run(folder)
+    output = job.get("output") if isinstance(job.get("output"), dict) else {}
+    threshold = by_ply(job, output.get("temperature_threshold"))
+    limit = by_ply(job, output.get("shear_angle_limit"))
     # one value for every ply: one line; otherwise a line per ply in its colour
     common_t = len(set(threshold.values())) == 1 and len(threshold) == len(plies)
     common_l = len(set(limit.values())) == 1 and len(limit) == len(plies)
