@@ -1,6 +1,7 @@
 #include "plugins/registry.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <boost/dll/runtime_symbol_info.hpp>
 #include <boost/dll/shared_library.hpp>
 #include <cstdlib>
@@ -224,8 +225,13 @@ sdk::Params::Value convert(const json& v, const std::string& ptr, const sdk::Par
     case sdk::ParamType::RealList: {
       out.list = as_reals(v, ptr, spec.list_size);
       for (std::size_t i = 0; i < out.list.size(); ++i)
-        if (out.list[i] < spec.min || out.list[i] > spec.max)
-          throw JobError(pointer_append(ptr, i), "must be between " + fmt(spec.min) + " and " + fmt(spec.max));
+        if (!(out.list[i] >= spec.min && out.list[i] <= spec.max)) {
+          const std::string unit = spec.unit.empty() || spec.unit == "-" ? "" : " " + spec.unit;
+          const std::string bound = std::isinf(spec.max)   ? ">= " + fmt(spec.min) + unit
+                                    : std::isinf(spec.min) ? "<= " + fmt(spec.max) + unit
+                                                           : "between " + fmt(spec.min) + " and " + fmt(spec.max) + unit;
+          throw JobError(pointer_append(ptr, i), "must be " + bound + ", found " + fmt(out.list[i]));
+        }
       break;
     }
   }

@@ -508,8 +508,30 @@ void Simulation::build_thermal() {
   faces_.resize(parts_.size());
   for (std::size_t p = 0; p < parts_.size(); ++p)
     faces_[p] = {parts_[p]->h_bottom, parts_[p]->t_bottom, parts_[p]->h_top, parts_[p]->t_top};
+  // The step holds for every conductance the contact pairs can give over
+  // the run, not only those of the start: each ply's faces are taken with
+  // at least the largest conductance of the pairs it is in.
+  std::vector<double> bound(parts_.size(), 0.0);
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    const double h = contacts_[c]->largest_conductance();
+    bound[job_.contacts[c].first.index] = std::max(bound[job_.contacts[c].first.index], h);
+    if (!job_.contacts[c].second.is_tool)
+      bound[job_.contacts[c].second.index] = std::max(bound[job_.contacts[c].second.index], h);
+  }
+  std::vector<std::vector<double>> h_bound(2 * parts_.size());
+  std::vector<sdk::FaceConditions> limit_faces = faces_;
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    if (!(bound[p] > 0)) continue;
+    for (int f = 0; f < 2; ++f) {
+      const std::vector<double>& h = f == 0 ? parts_[p]->h_bottom : parts_[p]->h_top;
+      std::vector<double>& hb = h_bound[2 * p + f];
+      hb.resize(h.size());
+      for (std::size_t i = 0; i < h.size(); ++i) hb[i] = std::max(h[i], bound[p]);
+      (f == 0 ? limit_faces[p].h_bottom : limit_faces[p].h_top) = hb;
+    }
+  }
   sdk::ThermalStepInput in;
-  in.faces = faces_;
+  in.faces = limit_faces;
   in.links = contact_map_.links;
   in.links_changed = true;
   if (auto s = splitter_->step_limits(in, &thermal_stable_dt_, &thermal_accurate_dt_); !s)

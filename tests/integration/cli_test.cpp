@@ -46,7 +46,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.16.3 (plugin SDK 0.16.0, ABI 16)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.17.0 (plugin SDK 0.17.0, ABI 17)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -218,6 +218,9 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"unknown_body", [](json& j) { j["interactions"][1]["between"][0] = "dye"; }, "error: /interactions/1/between/0: unknown part or tool 'dye'; did you mean 'die'?"},
       {"self_contact", [](json& j) { j["interactions"][0]["between"] = {"ply_top", "ply_top"}; }, "error: /interactions/0/between: a body in contact with itself needs \"self\": true"},
       {"negative_conductance", [](json& j) { j["interactions"][0]["conductance"] = -1.0; }, "error: /interactions/0/conductance: must be >= 0"},
+      {"conductance_table_lengths", [](json& j) { j["interactions"][0]["conductance_pressures"] = {0.0, 1e5}; j["interactions"][0]["conductance_values"] = {500.0, 1000.0, 2000.0}; }, "error: /interactions/0: contact handler 'penalty_node_surface': conductance_pressures has 2 entries, conductance_values has 3"},
+      {"conductance_table_not_increasing", [](json& j) { j["interactions"][0]["conductance_pressures"] = {0.0, 1e5, 1e5}; j["interactions"][0]["conductance_values"] = {500.0, 1000.0, 2000.0}; }, "error: /interactions/0: contact handler 'penalty_node_surface': conductance_pressures must increase: entry 2 (100000 Pa) follows 100000 Pa"},
+      {"conductance_table_negative", [](json& j) { j["interactions"][0]["conductance_pressures"] = {0.0, 1e5}; j["interactions"][0]["conductance_values"] = {500.0, -1.0}; }, "error: /interactions/0/conductance_values/1: must be >= 0 W/(m^2 K), found -1"},
       {"negative_penalty", [](json& j) { j["interactions"][0]["penalty"] = -1.0; }, "error: /interactions/0/penalty: must be >= 0"},
       {"negative_friction", [](json& j) { j["interactions"][1]["friction"] = -0.1; }, "error: /interactions/1/friction: must be >= 0"},
       {"search_interval_on_a_tool", [](json& j) { j["interactions"][1]["search_interval"] = 2; }, "error: /interactions/1: contact handler 'penalty_node_surface': search_interval applies to ply/ply pairs only"},

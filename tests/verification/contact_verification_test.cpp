@@ -5,10 +5,13 @@
 // - a ply dropped on a plane (no energy created by contact),
 // - two plies pressed by a cold tool (heat through the interface),
 // - the faces that exchange heat when a ply is flipped or approaches from below,
-// - the contact pressure on a pressed ply and through a stack of two plies.
+// - the contact pressure on a pressed ply and through a stack of two plies,
+// - a conductance that follows the contact pressure (eigen-series of a slab).
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include "test_support.hpp"
 
@@ -466,6 +469,101 @@ TEST(Contact, PressureThroughAStack) {
   const JobRun lifted = run_json(j);
   ASSERT_TRUE(lifted.result.ok) << lifted.result.error;
   EXPECT_EQ(lifted.sample(2, "contact_pressure", t_end)->values[0], 0.0);
+}
+
+// A conductance that follows the contact pressure. A ply at 300 degC is
+// pressed between a fixed die and a force-controlled holder, both at
+// 260 degC, at p = F / A; the conductance table gives h_c(p) on both faces,
+// so the ply cools as a slab of half-thickness h/2 insulated at its
+// mid-plane with Robin (h_c(p), 260 degC) on its face: the eigen-series.
+// Then two plies, 300 and 260 degC, pressed together between tools that
+// exchange no heat: by symmetry each is a slab of thickness h insulated on
+// its outer face, with Robin (2 h_c(p), 280 degC) on the face they share.
+// Two pressures, between different points of the table. Required: the
+// through-thickness profile within 1 % of the 40 K drop of the series at
+// h_c(p) at 0.25 and 0.5 s (16 layers; the constant-conductance solver is
+// within that, EigenSeries.ProfileWithin1PercentOfDrop). The load reaches
+// F / A within a millisecond. The thermal step must be chosen from the
+// table's largest conductance (the faces have h_c(0) at the start; from
+// it, the step would be 3x longer and the error at 1200 W/(m^2 K) 0.22 K
+// instead of 0.08 K). The series at the table's ends h_c(0) and
+// h_c(p_last) must lie farther than the tolerance at every point at 0.5 s,
+// one of them farther than 10x, so that the test tells the conductances
+// apart.
+TEST(Contact, ConductanceFollowsThePressure) {
+  const std::vector<double> table_p = {0.0, 1.0e5, 4.0e5}, table_h = {200.0, 800.0, 2000.0};
+  const double area = kSide * kSide, t_end = 0.5, alpha = 0.31 / (kRho * 1775.0);
+  // One ply, two plies, and one ply again with the explicit
+  // through-thickness scheme, whose stable step must hold at the table's
+  // largest conductance.
+  for (const int setup : {0, 1, 2}) {
+    const bool stack = setup == 1, explicit_rods = setup == 2;
+    // The slab each ply is: thickness L from its insulated side, face
+    // conductance factor, far temperature; z of the insulated side.
+    const double L = stack ? kH : 0.5 * kH, factor = stack ? 2.0 : 1.0, t_far = stack ? 280.0 : 260.0;
+    const double tol = 0.01 * (300.0 - t_far);
+    auto series = [&](double x, double t, double h) {
+      return slab_robin_series(x, t, L, alpha, factor * h * L / 0.31, 300.0, t_far);
+    };
+    for (const auto& [pressure, h_expected] :
+         std::vector<std::pair<double, double>>{{0.05e6, 500.0}, {0.2e6, 1200.0}}) {
+      json j = base_job(t_end);
+      auto table = [&](json c) {
+        c["type"] = "contact";
+        c["conductance_pressures"] = table_p;
+        c["conductance_values"] = table_h;
+        return c;
+      };
+      if (stack) {
+        j["parts"] = {ply("low", 0.5 * kH, 300.0), ply("up", 1.5 * kH, 260.0)};
+        j["tools"] = {plane("die", 0.0, 1), plane("holder", 2 * kH, -1)};
+        j["interactions"] = {{{"type", "contact"}, {"between", {"die", "low"}}, {"conductance", 0.0}},
+                             {{"type", "contact"}, {"between", {"holder", "up"}}, {"conductance", 0.0}},
+                             table({{"between", {"up", "low"}}})};
+      } else {
+        j["parts"] = {ply("ply", 0.0, 300.0)};
+        j["tools"] = {plane("die", -0.5 * kH, 1), plane("holder", 0.5 * kH, -1)};
+        j["interactions"] = {table({{"between", {"die", "ply"}}}), table({{"between", {"holder", "ply"}}})};
+      }
+      for (auto& part : j["parts"]) part["thickness_layers"] = 16;
+      j["tools"][1]["motion"] = {{"force", {0, 0, -pressure * area}}, {"mass", 0.05}, {"damping", 500.0}};
+      j["constraints"] = {
+          {{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+      j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"damping", 500.0}, {"mass_scaling", {{"target_dt", 2e-5}}}};
+      j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", explicit_rods ? "explicit" : "implicit"}};
+      const std::string probed = stack ? "low" : "ply";
+      j["output"]["probes"] = {{{"name", "centre"}, {"part", probed}, {"at", {kSide / 2, kSide / 2, 0}},
+                                {"quantities", {"temperature_profile", "contact_pressure"}}, {"interval", t_end / 2}}};
+      const JobRun r = run_json(j);
+      ASSERT_TRUE(r.result.ok) << r.result.error;
+      EXPECT_NEAR(r.sample(0, "contact_pressure", t_end)->values[0] / pressure, 1.0, 0.01);
+      // The step for accuracy, 1 % of rho c h / h_c, is taken at the table's
+      // largest conductance, not at h_c(0) of the start.
+      EXPECT_LE(r.result.thermal_dt, 0.01 * kRho * 1775.0 * kH / table_h.back() * (1 + 1e-12));
+      if (explicit_rods) {  // forward Euler at a face value: dt <= 0.9 rho c (e/2) / (k33/e + h_c), e = h/16
+        const double e = kH / 16;
+        EXPECT_LE(r.result.thermal_dt, 0.9 * kRho * 1775.0 * 0.5 * e / (0.31 / e + table_h.back()) * (1 + 1e-12));
+      }
+      for (const double t : {t_end / 2, t_end}) {
+        const ProbeSample* s = r.sample(0, "temperature_profile", t);
+        ASSERT_NE(s, nullptr);
+        double err = 0, off_low = 0, off_high = 0;
+        for (std::size_t k = 0; k < s->values.size(); ++k) {
+          // From the insulated side: the mid-plane (one ply), the die (stack).
+          const double x = stack ? s->z[k] + 0.5 * kH : std::abs(s->z[k]);
+          err = std::max(err, std::abs(s->values[k] - series(x, s->time, h_expected)));
+          off_low = std::max(off_low, std::abs(s->values[k] - series(x, s->time, table_h.front())));
+          off_high = std::max(off_high, std::abs(s->values[k] - series(x, s->time, table_h.back())));
+        }
+        EXPECT_LT(err, tol) << setup << ", p " << pressure << " Pa, t " << t;
+        std::printf("%s, conductance at %.3g Pa (h_c %.0f W/(m^2 K)), t %.3f s: largest error %.4f K against its "
+                    "series; the series at h_c %.0f and %.0f are up to %.3f and %.3f K away\n",
+                    stack ? "two plies" : explicit_rods ? "one ply, explicit" : "one ply", pressure, h_expected, s->time, err, table_h.front(),
+                    table_h.back(), off_low, off_high);
+        EXPECT_GT(std::min(off_low, off_high), 3 * tol);
+      }
+    }
+  }
 }
 
 }  // namespace ts::test

@@ -20,10 +20,15 @@
 //
 // Thermal: the faces found touching (gap between the facing shell surfaces
 // at most gap_tolerance) get the contact conductance: a Robin condition with
-// the tool temperature, or a conservative link between the two plies.
+// the tool temperature, or a conservative link between the two plies. The
+// conductance is a constant, or a table of the contact pressure
+// p = penalty * penetration (the pressure of the node's springs at that
+// moment), linear between its points and held beyond its ends.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include <thermostamp/sdk/math.hpp>
@@ -383,6 +388,19 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       slip_velocity_ = params.real("slip_velocity");
       damping_ = params.real("damping");
       conductance_ = params.real("conductance");
+      h_p_ = params.list("conductance_pressures");
+      h_v_ = params.list("conductance_values");
+      if (h_p_.size() != h_v_.size())
+        return sdk::Status::failure("conductance_pressures has " + std::to_string(h_p_.size()) +
+                                    " entries, conductance_values has " + std::to_string(h_v_.size()));
+      for (std::size_t k = 1; k < h_p_.size(); ++k)
+        if (!(h_p_[k] > h_p_[k - 1])) {
+          char msg[160];
+          std::snprintf(msg, sizeof msg, "conductance_pressures must increase: entry %zu (%g Pa) follows %g Pa", k,
+                        h_p_[k], h_p_[k - 1]);
+          return sdk::Status::failure(msg);
+        }
+      heat_on_ = h_v_.empty() ? conductance_ > 0 : *std::max_element(h_v_.begin(), h_v_.end()) > 0;
       gap_tol_ = params.real("gap_tolerance");
       search_interval_ = params.integer("search_interval");
       if (search_interval_ != 1 && pair.second.type != sdk::BodyRef::Type::Part)
@@ -422,12 +440,17 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     return sdk::Status::success();
   }
 
+  double largest_conductance() const override {
+    if (!heat_on_) return 0.0;
+    return h_v_.empty() ? conductance_ : *std::max_element(h_v_.begin(), h_v_.end());
+  }
+
   sdk::Status thermal_contacts(std::span<const sdk::PartView> parts, std::span<const sdk::ToolView> tools,
                                std::span<const std::span<const double>> node_area,
                                sdk::ThermalContactMap& out) override {
     return sdk::guarded([&] {
       const sdk::PartView& a = parts[pair_.first.index];
-      if (conductance_ <= 0) return sdk::Status::success();
+      if (!heat_on_) return sdk::Status::success();
       node_normals(a, nn_a_);
       if (pair_.second.type == sdk::BodyRef::Type::Tool) {
         const sdk::ToolView& tool = tools[pair_.second.index];
@@ -437,7 +460,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
           // A tool whose outward normal opposes the ply normal lies above it.
           const int face = c < 0 ? sdk::kTop : sdk::kBottom;
           const double gap = dist_[i] - 0.5 * a.thickness;
-          if (gap <= gap_tol_) out.tool_contacts.push_back({a.index, i, face, tool.index, conductance_});
+          if (gap <= gap_tol_)
+            out.tool_contacts.push_back({a.index, i, face, tool.index, conductance_at(-penalty_ * gap)});
         }
         return sdk::Status::success();
       }
@@ -468,7 +492,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
           l.face_b = sdk::kBottom;
           l.face_a = c > 0 ? sdk::kTop : sdk::kBottom;
         }
-        l.conductance = conductance_ * node_area[a.index][i];
+        l.conductance = conductance_at(-penalty_ * gap) * node_area[a.index][i];
         out.links.push_back(l);
       }
       return sdk::Status::success();
@@ -499,6 +523,17 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   }
 
  private:
+  // The conductance (W/(m^2 K)) at contact pressure p (Pa; a face within the
+  // gap tolerance but not pressed has p <= 0, taken as 0).
+  double conductance_at(double p) const {
+    if (h_p_.empty()) return conductance_;
+    if (!(p > h_p_.front())) return h_v_.front();
+    if (p >= h_p_.back()) return h_v_.back();
+    const std::size_t k = static_cast<std::size_t>(std::upper_bound(h_p_.begin(), h_p_.end(), p) - h_p_.begin());
+    const double s = (p - h_p_[k - 1]) / (h_p_[k] - h_p_[k - 1]);
+    return h_v_[k - 1] + s * (h_v_[k] - h_v_[k - 1]);
+  }
+
   // Distances and normals of a's nodes to the tool, for the nodes that can
   // be within `cutoff` (ply thickness + gap tolerance: every force and heat
   // decision looks closer than that). A node last found at distance d > 0
@@ -983,6 +1018,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
 
   sdk::ContactPair pair_;
   double penalty_ = 0, friction_ = 0, slip_velocity_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
+  std::vector<double> h_p_, h_v_;  // conductance table: pressures (Pa), conductances (W/(m^2 K))
+  bool heat_on_ = false;
   long long search_interval_ = 1;
   Pass pass_[2];  // tool pairs use pass_[0].ft only
   std::vector<double> nn_a_, dist_, tn_;
@@ -1000,7 +1037,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.8.0";
+  d.version = "0.9.0";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces; gives the contact pressure as penalty x penetration";
   d.params = {
@@ -1022,8 +1059,18 @@ void register_all(sdk::Registrar& r) {
                       "(removes the energy a stiff penalty can gain when contact starts or ends within a step)",
                       0.0, 1.0),
       sdk::real_param("conductance", "1000.0", "W/(m^2 K)",
-                      "thermal contact conductance h_c (1 / contact resistance); 0 switches the heat exchange off",
+                      "thermal contact conductance h_c (1 / contact resistance); 0 switches the heat exchange off. "
+                      "Not used where conductance_pressures is given",
                       0.0),
+      sdk::list_param("conductance_pressures", "[]", "Pa",
+                      "contact pressures p_k, increasing, of a conductance that follows the pressure: h_c(p) is "
+                      "linear between the points (p_k, conductance_values[k]) and held beyond the first and last; "
+                      "p = penalty x penetration at the node's face at that moment (a face within gap_tolerance "
+                      "but not pressed: p = 0). Needs the mechanics solver (without it the faces carry no "
+                      "pressure). Empty: the constant conductance",
+                      -1, 0.0),
+      sdk::list_param("conductance_values", "[]", "W/(m^2 K)",
+                      "the conductances h_c at conductance_pressures (as many entries)", -1, 0.0),
       sdk::real_param("gap_tolerance", "-1", "m",
                       "largest gap between facing shell surfaces still counted as touching for heat exchange; "
                       "negative = 1 % of the thinner ply"),
@@ -1044,4 +1091,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.8.0", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.9.0", ts::contact::register_all)

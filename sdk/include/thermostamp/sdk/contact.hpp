@@ -111,6 +111,14 @@ class ContactHandler {
                                 std::span<const std::span<double>> /*stiffness*/) {
     return Status::success();
   }
+  // Upper bound of the conductance (W/(m^2 K)) the pair can put on a face of
+  // its plies' nodes at any time of the run (a conductance that follows the
+  // contact pressure reaches it only under load; a face that touches only
+  // later has none at the start). The kernel chooses the thermal step from
+  // it: an explicit scheme's stable step and the step for accuracy then hold
+  // for every conductance the pair can give. 0 (the default): only the
+  // conductances of the thermal contact map at the start count.
+  virtual double largest_conductance() const { return 0.0; }
   // Checkpoints (state.hpp): whatever the handler carries from one call to
   // the next and its results depend on (tangential springs of stuck nodes,
   // the sides nodes are tracked on, search lists that are kept over several
