@@ -104,7 +104,8 @@ std::string series_column_units(const std::string& column) {
       ends("_fibre_strain_min") || ends("_fibre_strain_max"))
     return "1";
   if (ends("_shear_angle_min") || ends("_shear_angle_max")) return "deg";
-  if (ends("_temperature_min") || ends("_temperature_mean") || ends("_temperature_max")) return "degC";
+  if (ends("_temperature_min") || ends("_temperature_mean") || ends("_temperature_max") || ends("_temperature"))
+    return "degC";
   if (column.rfind("reaction", 0) == 0 || ends("_fx") || ends("_fy") || ends("_fz")) return "N";
   if (ends("_ux") || ends("_uy") || ends("_uz")) return "m";
   return "J";  // the energies and works, the tools' heat

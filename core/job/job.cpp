@@ -15,6 +15,32 @@ constexpr double kMaxProbeSamples = 1e7;
 constexpr double kMaxSeriesRows = 1e6;  // energy.csv rows, kept in memory until the end
 }  // namespace
 
+double ToolDef::temperature_over(double t0, double t1) const {
+  const auto& tab = temperature_table;
+  if (tab.empty()) return temperature;
+  auto at = [&](double t) {  // linear between rows, held beyond the ends
+    if (t <= tab.front()[0]) return tab.front()[1];
+    if (t >= tab.back()[0]) return tab.back()[1];
+    std::size_t k = 1;
+    while (tab[k][0] < t) ++k;
+    const double s = (t - tab[k - 1][0]) / (tab[k][0] - tab[k - 1][0]);
+    return tab[k - 1][1] + s * (tab[k][1] - tab[k - 1][1]);
+  };
+  if (!(t1 > t0)) return at(t0);
+  // The exact integral of the piecewise-linear curve: trapezoids between
+  // t0, the rows inside (t0, t1) and t1.
+  double sum = 0, ta = t0, va = at(t0);
+  for (const auto& row : tab) {
+    if (row[0] <= t0) continue;
+    if (row[0] >= t1) break;
+    sum += 0.5 * (va + row[1]) * (row[0] - ta);
+    ta = row[0];
+    va = row[1];
+  }
+  sum += 0.5 * (va + at(t1)) * (t1 - ta);
+  return sum / (t1 - t0);
+}
+
 bool RegionDef::contains(double x, double y) const {
   switch (kind) {
     case Kind::All: return true;
@@ -373,7 +399,21 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
         }
         mo.finish();
       }
-      t.temperature = r.real("temperature", 20.0, -273.15);
+      if (const json* tv = r.optional_raw("temperature"); tv && tv->is_array()) {
+        const std::string tp = r.at("temperature");
+        if (tv->empty()) throw JobError(tp, "expected a number or rows [t, T]");
+        for (std::size_t k = 0; k < tv->size(); ++k) {
+          const std::string rp = pointer_append(tp, k);
+          const auto row = as_reals((*tv)[k], rp, 2);
+          if (k > 0 && !(row[0] > t.temperature_table.back()[0]))
+            throw JobError(rp, "times must increase from row to row");
+          if (!(row[1] >= -273.15)) throw JobError(pointer_append(rp, 1), "must be >= -273.15 degC");
+          t.temperature_table.push_back({row[0], row[1]});
+        }
+        t.temperature = t.temperature_table.front()[1];
+      } else {
+        t.temperature = r.real("temperature", 20.0, -273.15);
+      }
       r.finish();
       tool_names.push_back(t.name);
       job.tools.push_back(std::move(t));

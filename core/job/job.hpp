@@ -69,7 +69,12 @@ struct ToolDef {
   std::string name, pointer;
   SurfaceDef surface;
   MotionDef motion;
-  double temperature = 20.0;
+  double temperature = 20.0;  // constant, or the table's first value
+  // Temperature over time: rows [t (s), T (degC)], times increasing; linear
+  // between rows, held before the first and after the last. Empty: constant.
+  std::vector<std::array<double, 2>> temperature_table;
+  // The mean temperature over [t0, t1] (degC); at t0 where t1 <= t0.
+  double temperature_over(double t0, double t1) const;
 };
 
 struct BodyDef {

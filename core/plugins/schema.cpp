@@ -180,9 +180,14 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
        {{{"type", "object"}, {"required", {"velocity"}}, {"properties", {{"velocity", vec(3)}}}, {"additionalProperties", false}},
         {{"type", "object"}, {"required", {"displacement"}}, {"properties", {{"displacement", {{"type", "array"}, {"items", {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 4}, {"maxItems", 4}}}, {"description", "rows [t, dx, dy, dz]"}}}}}, {"additionalProperties", false}},
         {{"type", "object"}, {"required", {"force", "mass"}}, {"properties", {{"force", vec(3)}, {"mass", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[kg]"}}}, {"damping", {{"type", "number"}, {"minimum", 0}, {"description", "[N s/m]"}}}}}, {"additionalProperties", false}}}}};
+  const json temperature_row = {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 2}, {"maxItems", 2}};
+  const json tool_temperature = {
+      {"oneOf", json::array({json{{"type", "number"}},
+                             json{{"type", "array"}, {"minItems", 1}, {"items", temperature_row}}})},
+      {"description", "[degC], constant, or rows [t (s), T (degC)] over time"}};
   const json tool = {{"type", "object"},
                      {"required", {"name", "surface"}},
-                     {"properties", {{"name", {{"type", "string"}}}, {"surface", surface}, {"motion", motion}, {"temperature", {{"type", "number"}, {"description", "[degC]"}}}}},
+                     {"properties", {{"name", {{"type", "string"}}}, {"surface", surface}, {"motion", motion}, {"temperature", tool_temperature}}},
                      {"additionalProperties", false}};
   json interaction_kinds = contact;
   interaction_kinds.push_back(heat_exchange);

@@ -558,6 +558,20 @@ void Simulation::build_thermal() {
   thermal_dt_ = interval / std::max(1.0, per);
 }
 
+void Simulation::update_tool_temperatures(double t0, double t1) {
+  bool any = false;
+  for (std::size_t k = 0; k < tool_views_.size(); ++k) {
+    if (job_.tools[k].temperature_table.empty()) continue;
+    tool_views_[k].temperature = job_.tools[k].temperature_over(t0, t1);
+    any = true;
+  }
+  if (!any) return;
+  for (const auto& tc : contact_map_.tool_contacts) {
+    PartState& st = *parts_[tc.part];
+    (tc.face == sdk::kTop ? st.t_top : st.t_bottom)[tc.node] = tool_views_[tc.tool].temperature;
+  }
+}
+
 void Simulation::assemble_faces() {
   for (auto& st : parts_) {
     std::fill(st->h_bottom.begin(), st->h_bottom.end(), 0.0);
@@ -2399,7 +2413,8 @@ RunResult Simulation::run(const RunOptions& opt) {
   energy_cols.push_back("kinetic_half_step");
   std::vector<std::string> tool_cols = {"time"};
   for (const auto& td : job_.tools)
-    for (const char* q : {"_ux", "_uy", "_uz", "_fx", "_fy", "_fz", "_heat_J"}) tool_cols.push_back(td.name + q);
+    for (const char* q : {"_ux", "_uy", "_uz", "_fx", "_fy", "_fz", "_heat_J", "_temperature"})
+      tool_cols.push_back(td.name + q);
   // Per part (empty: none asked for).
   const std::vector<double>& thresholds = job_.output.temperature_threshold;
   const std::vector<double>& shear_limits = job_.output.shear_angle_limit;
@@ -2458,14 +2473,14 @@ RunResult Simulation::run(const RunOptions& opt) {
     open_series(energy_csv, "energy.csv", 1, header + "\n");
   }
   if (opt.write_files && !job_.tools.empty())
-    open_series(tools_csv, "tools.csv", 2, "time,tool,ux,uy,uz,fx,fy,fz,heat_J\n");
+    open_series(tools_csv, "tools.csv", 2, "time,tool,ux,uy,uz,fx,fy,fz,heat_J,temperature\n");
   auto sample_tools = [&](double t) {
     tool_rows.push_back(t);
     for (std::size_t q = 0; q < tools_.size(); ++q) {
       const auto& u = tools_[q]->displacement();
-      const double row[7] = {u[0], u[1], u[2], tool_force_[3 * q], tool_force_[3 * q + 1], tool_force_[3 * q + 2],
-                             tool_heat_[q]};
-      tool_rows.insert(tool_rows.end(), row, row + 7);
+      const double row[8] = {u[0], u[1], u[2], tool_force_[3 * q], tool_force_[3 * q + 1], tool_force_[3 * q + 2],
+                             tool_heat_[q], job_.tools[q].temperature_over(t, t)};
+      tool_rows.insert(tool_rows.end(), row, row + 8);
       if (tools_csv.is_open()) {
         tools_csv << csv_number(t) << ',' << job_.tools[q].name;
         for (double v : row) tools_csv << ',' << csv_number(v);
@@ -2740,6 +2755,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             tc = Clock::now();
             update_element_fields();
             assemble_faces();
+            update_tool_temperatures(t_thermal, t);
             in.dt = t - t_thermal;
             in.geometry_changed = true;
             in.links = contact_map_.links;
@@ -2838,6 +2854,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         if (!landing_saved && t_end < grid_frame && t + step >= t_end - eps_t)
           end_checkpoint(", before the step that lands on time.end");
         in.dt = step;
+        update_tool_temperatures(t, t + step);
         sdk::ThermalStepReport rep;
         if (auto s = splitter_->advance(in, Tspans, &rep); !s)
           throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);

@@ -172,6 +172,9 @@ class Simulation {
   std::vector<LawUse> law_uses_;
   void update_element_fields();
   void assemble_faces();
+  // Tools whose temperature follows a table: their mean over the thermal
+  // step [t0, t1] into the tool views and the faces touching them.
+  void update_tool_temperatures(double t0, double t1);
   void check_field(double time, long long step);
   // The kernel's and the plugins' state between two steps, for checkpoints
   // (sections "kernel" and "plugin/..."; run() adds its loop's state).

@@ -222,7 +222,22 @@ def plot_maps(folder, out):
 def plot_tools(folder, out):
     rows = list(csv.DictReader(open(os.path.join(folder, "tools.csv"))))
     tools = sorted(set(r["tool"] for r in rows), key=[r["tool"] for r in rows].index)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    # A third panel for tools whose temperature follows a table (tools.csv
+    # of 0.17.0 on has the column).
+    def temps(name):
+        return [float(r["temperature"]) for r in rows if r["tool"] == name and r.get("temperature") not in (None, "")]
+    varying = [n for n in tools if len(set(temps(n))) > 1]
+    fig, axes = plt.subplots(1, 3 if varying else 2, figsize=(15 if varying else 10, 4))
+    a1, a2 = axes[0], axes[1]
+    if varying:
+        a3 = axes[2]
+        for name in varying:
+            a3.plot([float(r["time"]) for r in rows if r["tool"] == name], temps(name), label=name)
+        a3.set_xlabel("time (s)")
+        a3.set_ylabel("tool temperature (degC)")
+        a3.set_title("temperature of the tools that follow a table")
+        a3.grid(alpha=0.3)
+        a3.legend(fontsize=8)
     for name in tools:
         rs = [r for r in rows if r["tool"] == name]
         u = np.array([[float(r["ux"]), float(r["uy"]), float(r["uz"])] for r in rs])

@@ -227,6 +227,9 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"search_interval_zero", [](json& j) { j["interactions"][0]["search_interval"] = 0; }, "error: /interactions/0/search_interval: must be between 1 and 64, found 0"},
       {"tool_mesh_missing", [](json& j) { j["tools"][0]["surface"] = {{"type", "mesh"}, {"file", "nowhere.stl"}}; }, "error: /tools/0/surface/file: cannot read the tool mesh"},
       {"tool_mesh_unreadable", [](json& j) { j["tools"][0]["surface"] = {{"type", "mesh"}, {"file", "job.json"}}; }, "error: /tools/0/surface/file: cannot read the tool mesh"},
+      {"tool_temperature_times", [](json& j) { j["tools"][0]["temperature"] = {{0.0, 260.0}, {1.0, 250.0}, {1.0, 240.0}}; }, "error: /tools/0/temperature/2: times must increase from row to row"},
+      {"tool_temperature_row", [](json& j) { j["tools"][0]["temperature"] = {{0.0, 260.0}, {1.0}}; }, "error: /tools/0/temperature/1: expected 2 numbers"},
+      {"tool_temperature_absolute_zero", [](json& j) { j["tools"][0]["temperature"] = {{0.0, 260.0}, {1.0, -300.0}}; }, "error: /tools/0/temperature/1/1: must be >= -273.15 degC"},
       {"two_motions", [](json& j) { j["tools"][0]["motion"] = {{"velocity", {0, 0, 1}}, {"force", {0, 0, -1}}}; }, "error: /tools/0/motion: give exactly one of"},
       {"holder_without_mass", [](json& j) { j["tools"][0]["motion"] = {{"force", {0, 0, -100}}}; }, "error: /tools/0/motion/mass:"},
       {"arc_not_circular", [](json& j) { j["tools"][0]["surface"] = {{"type", "revolved"}, {"profile", {{{"arc", {{"from", {0, 0.01}}, {"to", {0.02, 0}}, {"centre", {0, 0}}}}}}}}; }, "error: /tools/0/surface/profile/0/arc/centre: the arc's end points are not at the same distance"},
@@ -1277,9 +1280,9 @@ TEST(Output, DatasetsCarryTheirUnits) {
   }
   const auto tcols = split(text("series/tools", "columns")), tunits = split(text("series/tools", "units"));
   ASSERT_EQ(tcols.size(), tunits.size());
-  ASSERT_EQ(tcols.size(), 1 + 7 * j["tools"].size());
+  ASSERT_EQ(tcols.size(), 1 + 8 * j["tools"].size());
   for (std::size_t c = 1; c < tcols.size(); ++c)
-    EXPECT_EQ(tunits[c], std::vector<std::string>({"m", "m", "m", "N", "N", "N", "J"})[(c - 1) % 7]) << tcols[c];
+    EXPECT_EQ(tunits[c], std::vector<std::string>({"m", "m", "m", "N", "N", "N", "J", "degC"})[(c - 1) % 8]) << tcols[c];
   EXPECT_EQ(tunits[0], "s");
   // The plies' history (the job sets output.temperature_threshold and
   // output.shear_angle_limit): the same rows in plies.csv, in results.h5
