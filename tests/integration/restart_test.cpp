@@ -162,10 +162,20 @@ void check_restart(const std::string& label, json j, double interval, std::strin
 // few steps, tools under force and motion control, four contact pairs with
 // rate friction and a ply/ply search every 64th step, adi), from a
 // checkpoint at 0.6 s; with a shear angle limit that elements pass before
-// the checkpoint (the first row beyond it comes from the checkpoint).
+// the checkpoint (the first row beyond it comes from the checkpoint), a die
+// whose temperature follows rows and a conductance that follows the
+// contact pressure on the ply/ply pair.
 TEST(Restart, HemisphereContinuesBitForBit) {
   json j = coarse_hemisphere("hemisphere_ud_2ply.json");
   j["output"]["shear_angle_limit"] = 0.3;
+  for (auto& t : j["tools"])
+    if (t["name"] == "die") t["temperature"] = {{0.0, 260.0}, {0.5, 250.0}, {1.0, 265.0}};
+  for (auto& c : j["interactions"])
+    if (c.value("type", "") == "contact" && c["between"][0] == "ply_top" && c["between"][1] == "ply_bottom") {
+      c.erase("conductance");
+      c["conductance_pressures"] = {0.0, 1e3, 1e5};
+      c["conductance_values"] = {300.0, 800.0, 2000.0};
+    }
   std::filesystem::path dir;
   check_restart("hemisphere", j, 0.6, "", &dir);
   const json s = json::parse(std::ifstream(dir / "continued" / "summary.json"));
@@ -199,7 +209,8 @@ TEST(Restart, WallTimeCheckpointsContinueBitForBit) {
 }
 
 // Thermal only: two plies in contact, the 3D reference splitter and adi
-// with in-plane conduction per layer.
+// with in-plane conduction per layer; a ply on a tool whose temperature
+// follows rows.
 TEST(Restart, ThermalSplittersContinueBitForBit) {
   json j = read_job_document(source_dir() / "share" / "verification" / "patch_contact.json");
   j["solvers"]["thermal"]["splitter"] = "layered3d";
@@ -207,6 +218,13 @@ TEST(Restart, ThermalSplittersContinueBitForBit) {
   j["solvers"]["thermal"]["splitter"] = "adi";
   j["solvers"]["thermal"]["in_plane"] = "layers";
   check_restart("adi_layers", j, 1.5);
+  // A ply on a die whose temperature follows rows, a kink inside a step.
+  json v = ply_job("adi", 8, 2.0, 0.1);
+  v["tools"] = {{{"name", "die"},
+                 {"surface", {{"type", "plane"}, {"point", {0, 0, -0.00025}}, {"normal", {0, 0, 1}}}},
+                 {"temperature", {{0.0, 260.0}, {0.73, 290.0}, {1.41, 240.0}}}}};
+  v["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"conductance", 1000.0}}};
+  check_restart("tool_rows", v, 1.0);
 }
 
 // A run stopped by SIGTERM (here after its first step) leaves a checkpoint;
