@@ -489,7 +489,9 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       const std::string face = r.choice("face", {"top", "bottom", "both"});
       h.top = face != "bottom";
       h.bottom = face != "top";
-      h.h = r.real("h", std::nullopt, 0.0);
+      h.emissivity = r.real("emissivity", 0.0, 0.0, false, 1.0);
+      // h may be left out where the face radiates.
+      h.h = r.real("h", h.emissivity > 0 ? std::optional<double>(0.0) : std::nullopt, 0.0);
       h.ambient = r.real("ambient", std::nullopt, -273.15);
       if (const json* reg = r.optional_raw("region")) {
         ObjectReader g(*reg, r.at("region"));

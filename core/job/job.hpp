@@ -101,6 +101,7 @@ struct HeatExchangeDef {
   std::vector<int> parts;
   bool top = false, bottom = false;
   double h = 0, ambient = 0;
+  double emissivity = 0;  // radiation to the ambient, eps sigma (T^4 - T_amb^4) in kelvin
   RegionDef region;
 };
 

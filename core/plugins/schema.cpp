@@ -145,13 +145,15 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                        {"flip", {{"type", "boolean"}, {"description", "reverse the orientation: the top face looks to -z"}}}}},
                      {"additionalProperties", false}};
   const json heat_exchange = {{"type", "object"},
-                              {"required", {"type", "part", "face", "h", "ambient"}},
+                              {"required", {"type", "part", "face", "ambient"}},
+                              {"anyOf", json::array({json{{"required", {"h"}}}, json{{"required", {"emissivity"}}}})},
                               {"properties",
                                {{"type", {{"const", "heat_exchange"}}},
                                 {"part", {{"type", "string"}}},
                                 {"face", {{"enum", {"top", "bottom", "both"}}}},
                                 {"h", {{"type", "number"}, {"minimum", 0}, {"description", "[W/m2/K]"}}},
                                 {"ambient", {{"type", "number"}, {"description", "[degC]"}}},
+                                {"emissivity", {{"type", "number"}, {"minimum", 0}, {"maximum", 1}, {"description", "[-] radiation to the ambient"}}},
                                 {"region", {{"type", "object"}}}}},
                               {"additionalProperties", false}};
   const json point2 = {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 2}, {"maxItems", 2}};

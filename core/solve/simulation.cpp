@@ -572,6 +572,16 @@ void Simulation::update_tool_temperatures(double t0, double t1) {
   }
 }
 
+void Simulation::apply_radiation() {
+  constexpr double kSigma = 5.670374419e-8, kKelvin = 273.15;  // W/(m^2 K^4), the Stefan-Boltzmann constant
+  for (const RadiatingFace& f : radiating_) {
+    PartState& st = *parts_[f.part];
+    const std::size_t base = static_cast<std::size_t>(st.nz) * f.node;
+    const double T = st.T[base + (f.face == sdk::kTop ? st.nz - 1 : 0)] + kKelvin, Ta = f.ambient + kKelvin;
+    (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = f.h + f.emissivity * kSigma * (T * T + Ta * Ta) * (T + Ta);
+  }
+}
+
 void Simulation::assemble_faces() {
   for (auto& st : parts_) {
     std::fill(st->h_bottom.begin(), st->h_bottom.end(), 0.0);
@@ -580,7 +590,14 @@ void Simulation::assemble_faces() {
     std::fill(st->t_top.begin(), st->t_top.end(), 0.0);
     std::fill(st->contact_status.begin(), st->contact_status.end(), 0.0);
   }
-  for (const auto& h : job_.heat_exchanges)
+  // Per part, 2 per node (bottom, top): the heat exchange that radiates
+  // there (its index), -1 where none does or a tool contact covers it.
+  bool radiation = false;
+  for (const auto& h : job_.heat_exchanges) radiation = radiation || h.emissivity > 0;
+  std::vector<std::vector<int>> radiates(radiation ? parts_.size() : 0);
+  for (std::size_t p = 0; p < radiates.size(); ++p) radiates[p].assign(2 * parts_[p]->mesh.num_nodes(), -1);
+  for (std::size_t k = 0; k < job_.heat_exchanges.size(); ++k) {
+    const auto& h = job_.heat_exchanges[k];
     for (int p : h.parts) {
       PartState& st = *parts_[p];
       for (int i = 0; i < st.mesh.num_nodes(); ++i) {
@@ -588,13 +605,16 @@ void Simulation::assemble_faces() {
         if (h.top) {
           st.h_top[i] = h.h;
           st.t_top[i] = h.ambient;
+          if (radiation) radiates[p][2 * i + 1] = h.emissivity > 0 ? static_cast<int>(k) : -1;
         }
         if (h.bottom) {
           st.h_bottom[i] = h.h;
           st.t_bottom[i] = h.ambient;
+          if (radiation) radiates[p][2 * i] = h.emissivity > 0 ? static_cast<int>(k) : -1;
         }
       }
     }
+  }
   contact_map_.tool_contacts.clear();
   contact_map_.links.clear();
   std::vector<std::span<const double>> areas;
@@ -613,8 +633,18 @@ void Simulation::assemble_faces() {
       st.h_bottom[tc.node] = tc.conductance;
       st.t_bottom[tc.node] = T;
     }
+    if (radiation) radiates[tc.part][2 * tc.node + (tc.face == sdk::kTop ? 1 : 0)] = -1;
     st.contact_status[tc.node] = std::max(st.contact_status[tc.node], 1.0);
   }
+  radiating_.clear();
+  for (std::size_t p = 0; p < radiates.size(); ++p)
+    for (std::size_t f = 0; f < radiates[p].size(); ++f)
+      if (const int k = radiates[p][f]; k >= 0) {
+        const auto& h = job_.heat_exchanges[static_cast<std::size_t>(k)];
+        radiating_.push_back({static_cast<int>(p), static_cast<int>(f / 2), f % 2 ? sdk::kTop : sdk::kBottom, h.h,
+                              h.emissivity, h.ambient});
+      }
+  apply_radiation();
   for (const auto& l : contact_map_.links) {
     parts_[l.part_a]->contact_status[l.node_a] = 2.0;
     for (int j = 0; j < 3; ++j)
@@ -2855,6 +2885,7 @@ RunResult Simulation::run(const RunOptions& opt) {
           end_checkpoint(", before the step that lands on time.end");
         in.dt = step;
         update_tool_temperatures(t, t + step);
+        apply_radiation();
         sdk::ThermalStepReport rep;
         if (auto s = splitter_->advance(in, Tspans, &rep); !s)
           throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);

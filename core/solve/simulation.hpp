@@ -175,6 +175,10 @@ class Simulation {
   // Tools whose temperature follows a table: their mean over the thermal
   // step [t0, t1] into the tool views and the faces touching them.
   void update_tool_temperatures(double t0, double t1);
+  // Faces that radiate (a heat exchange with an emissivity, not covered by a
+  // tool contact): their conductance h + eps sigma (T^2 + Ta^2)(T + Ta)
+  // (kelvin) at the face's present temperature.
+  void apply_radiation();
   void check_field(double time, long long step);
   // The kernel's and the plugins' state between two steps, for checkpoints
   // (sections "kernel" and "plugin/..."; run() adds its loop's state).
@@ -339,6 +343,11 @@ class Simulation {
   std::vector<std::unique_ptr<sdk::MaterialLaw>> laws_;
   std::vector<std::unique_ptr<sdk::ContactHandler>> contacts_;
   sdk::ThermalContactMap contact_map_;
+  struct RadiatingFace {
+    int part = 0, node = 0, face = 0;
+    double h = 0, emissivity = 0, ambient = 0;
+  };
+  std::vector<RadiatingFace> radiating_;  // from assemble_faces
   std::vector<sdk::FaceConditions> faces_;
   std::vector<int> probe_node_;
   std::vector<std::vector<int>> probe_elements_;  // elements around each probe's node
