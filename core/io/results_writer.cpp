@@ -83,6 +83,7 @@ std::string field_units(const std::string& name) {
   if (name == "velocity") return "m/s";
   if (name == "shear_angle") return "deg";
   if (name == "contact_pressure") return "Pa";
+  if (name.rfind("conductance", 0) == 0) return "W/(m^2 K)";
   if (name == "membrane_stress") return "N/m";
   if (name == "curvature") return "1/m";
   return "1";  // fibre_direction, contact_status, membrane_strain

@@ -197,13 +197,13 @@ inline const std::vector<std::string>& known_fields() {
   static const std::vector<std::string> f = {"temperature", "temperature_mean", "temperature_top",
                                              "temperature_bottom", "displacement", "velocity", "shear_angle",
                                              "fibre_direction", "contact_status", "contact_pressure",
-                                             "membrane_stress", "curvature", "membrane_strain"};
+                                             "membrane_stress", "curvature", "membrane_strain", "conductance"};
   return f;
 }
 inline const std::vector<std::string>& known_probe_quantities() {
   static const std::vector<std::string> q = {"temperature_profile", "temperature_mean", "displacement_x",
                                              "displacement_y", "displacement_z", "shear_angle",
-                                             "contact_pressure", "fibre_strain"};
+                                             "contact_pressure", "fibre_strain", "conductance"};
   return q;
 }
 

@@ -122,6 +122,10 @@ struct PartState {
   int nz = 1;
   std::vector<double> T, cap, mean, top, bottom;
   std::vector<double> h_bottom, t_bottom, h_top, t_top;
+  // Per node, W/(m^2 K): the conductance of each face at the last thermal
+  // step (tool contact, convection and radiation, ply/ply links per unit
+  // area), for the field and probe quantity `conductance`.
+  std::vector<double> conductance_bottom, conductance_top;
 };
 
 namespace {
@@ -356,6 +360,8 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), re
   for (const auto& p : job_.plugin_paths) registry_.add_search_dir(p);
   if (!job_.thermal && !job_.mechanics)
     throw JobError("/solvers", "nothing to run: set solvers.thermal (a thermal splitter such as \"adi\")");
+  want_conductance_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "conductance") !=
+                      job_.output.fields.end();
   want_pressure_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "contact_pressure") !=
                    job_.output.fields.end();
   for (const auto& pr : job_.output.probes) {
@@ -426,7 +432,9 @@ void Simulation::build_parts() {
     st->shear_angle.assign(ne, 0.0);
     st->contact_status.assign(nn, 0.0);
     if (want_pressure_) st->contact_pressure.assign(nn, 0.0);
-    for (auto* v : {&st->h_bottom, &st->t_bottom, &st->h_top, &st->t_top}) v->assign(nn, 0.0);
+    for (auto* v : {&st->h_bottom, &st->t_bottom, &st->h_top, &st->t_top, &st->conductance_bottom,
+                    &st->conductance_top})
+      v->assign(nn, 0.0);
     parts_.push_back(std::move(st));
   }
   part_views_.resize(parts_.size());
@@ -569,6 +577,22 @@ void Simulation::update_tool_temperatures(double t0, double t1) {
   for (const auto& tc : contact_map_.tool_contacts) {
     PartState& st = *parts_[tc.part];
     (tc.face == sdk::kTop ? st.t_top : st.t_bottom)[tc.node] = tool_views_[tc.tool].temperature;
+  }
+}
+
+void Simulation::update_face_conductance() {
+  if (!job_.thermal) return;  // no heat exchange: zero
+  for (auto& st : parts_) {
+    st->conductance_bottom = st->h_bottom;
+    st->conductance_top = st->h_top;
+  }
+  auto add = [&](int part, int node, int face, double g) {  // g in W/K
+    PartState& st = *parts_[part];
+    if (st.area[node] > 0) (face == sdk::kTop ? st.conductance_top : st.conductance_bottom)[node] += g / st.area[node];
+  };
+  for (const auto& l : contact_map_.links) {
+    add(l.part_a, l.node_a, l.face_a, l.conductance);
+    for (int j = 0; j < 3; ++j) add(l.part_b, l.nodes_b[j], l.face_b, l.conductance * l.w_b[j]);
   }
 }
 
@@ -2186,6 +2210,9 @@ RunResult Simulation::run(const RunOptions& opt) {
           fields[p].push_back({"contact_status", st.contact_status.data()});
         } else if (f == "contact_pressure") {
           fields[p].push_back({"contact_pressure", st.contact_pressure.data()});
+        } else if (f == "conductance") {
+          fields[p].push_back({"conductance_bottom", st.conductance_bottom.data()});
+          fields[p].push_back({"conductance_top", st.conductance_top.data()});
         } else if ((f == "membrane_stress" || f == "curvature" || f == "membrane_strain") && p < mech_.size()) {
           // Material-frame components [11, 22, 12] per element, as vectors.
           fields[p].push_back({f,
@@ -2321,6 +2348,7 @@ RunResult Simulation::run(const RunOptions& opt) {
       for (std::size_t k = 0; k < st->x.size(); ++k) st->displacement[k] = st->x[k] - st->x0[k];
     if (!writer) return;
     update_derived();
+    if (want_conductance_) update_face_conductance();
     std::vector<const double*> xs, ns;
     for (auto& st : parts_) {
       xs.push_back(st->x.data());
@@ -2358,6 +2386,10 @@ RunResult Simulation::run(const RunOptions& opt) {
           s.values.push_back(m);
         } else if (quantity == "contact_pressure") {
           s.values.push_back(st.contact_pressure[i]);
+        } else if (quantity == "conductance") {  // bottom and top face, at z = -h/2 and +h/2
+          update_face_conductance();
+          s.z = {-0.5 * st.def->thickness, 0.5 * st.def->thickness};
+          s.values = {st.conductance_bottom[i], st.conductance_top[i]};
         } else if (quantity.rfind("displacement_", 0) == 0) {
           const int d = quantity.back() - 'x';
           s.values.push_back(st.x[3 * i + d] - st.x0[3 * i + d]);

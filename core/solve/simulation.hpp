@@ -179,6 +179,10 @@ class Simulation {
   // tool contact): their conductance h + eps sigma (T^2 + Ta^2)(T + Ta)
   // (kelvin) at the face's present temperature.
   void apply_radiation();
+  // The faces' conductances (conductance_bottom / _top of the parts) from
+  // the last assembled faces and ply/ply links.
+  void update_face_conductance();
+  bool want_conductance_ = false;  // the field `conductance` is written
   void check_field(double time, long long step);
   // The kernel's and the plugins' state between two steps, for checkpoints
   // (sections "kernel" and "plugin/..."; run() adds its loop's state).

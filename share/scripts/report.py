@@ -10,6 +10,9 @@ Writes into DIR/figures/:
   shear_<part>.png     shear angle of each ply (degrees), last frame
   fibre_strain_<part>.png  strain along the fibres (E11 of membrane_strain,
                        %) of each ply, last frame, where the frames have it
+  conductance_<part>.png  the conductance of each face of each ply (tool
+                       contact, ply/ply, air), last frame, where the
+                       frames have the field conductance
   tool_forces.png      force on each moving tool against its travel
                        (punch force against stroke), and heat per tool
   plies.png            each ply's mean temperature against time, in a
@@ -155,6 +158,21 @@ def fibre_strain_map(out, part, time, tri, xyz, vals):
     return save(fig, out, "fibre_strain_%s.png" % part, dpi=110, tight=False)
 
 
+def conductance_map(out, part, time, tri, xyz, bottom, top):
+    """The conductance of each face of one ply (per node, W/(m^2 K)): where it
+    exchanges heat with a tool, the air or the other ply, and how much."""
+    vmax = max(bottom.max(), top.max(), 1e-9)
+    fig, axes = plt.subplots(1, 2, figsize=(11.4, 4.4))
+    fig.subplots_adjust(wspace=0.45)
+    for ax, (face, vals) in zip(axes, (("bottom", bottom), ("top", top))):
+        for mxy, mtri, v in mirrored(xyz[:, :2], tri, vals, False):
+            pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, v, vmin=0, vmax=vmax, cmap="magma",
+                              shading="gouraud")
+        finish_map(fig, ax, pc, "%s: conductance of the %s face, t = %.3g s\nmax %.4g W/(m2 K)"
+                   % (part, face, time, vals.max()), "W/(m2 K)")
+    return save(fig, out, "conductance_%s.png" % part, dpi=110, tight=False)
+
+
 def pressure_map(out, part, time, tri, xyz, vals):
     """The contact pressure of one ply (per node, kPa, some above zero): a log
     scale over three decades (a holder's pressure can be 50 times the
@@ -216,6 +234,9 @@ def plot_maps(folder, out):
                 made.append(fibre_strain_map(out, part, time, tri, xyz, 100 * g["membrane_strain"][()][:, 0]))
             if "contact_pressure" in g and g["contact_pressure"][()].max() > 0:
                 made.append(pressure_map(out, part, time, tri, xyz, g["contact_pressure"][()] * 1e-3))
+            if "conductance_top" in g and "conductance_bottom" in g:
+                made.append(conductance_map(out, part, time, tri, xyz, g["conductance_bottom"][()],
+                                            g["conductance_top"][()]))
     return made
 
 
@@ -390,7 +411,7 @@ def plot_energy(folder, out):
 
 
 UNITS = {"temperature_mean": "degC", "displacement_x": "m", "displacement_y": "m", "displacement_z": "m",
-         "shear_angle": "deg", "fibre_strain": "", "contact_pressure": "Pa"}
+         "shear_angle": "deg", "fibre_strain": "", "contact_pressure": "Pa", "conductance": "W/(m^2 K)"}
 
 
 def grid(n, width=4.2, height=3.0, most=3):
@@ -434,6 +455,11 @@ def against(folder, other, out):
             fig, axes = grid(len(scalars))
             for ax, key in zip(axes, scalars):
                 for rows, (_, ls, lab) in zip((data[0][key], data[1][key]), runs):
+                    if key[1] == "conductance":  # two rows a sample: the bottom face (z < 0) and the top face
+                        for face, keep in (("bottom", lambda z: z < 0), ("top", lambda z: z > 0)):
+                            sel = [r for r in rows if r[1] is not None and keep(r[1])]
+                            ax.plot([r[0] for r in sel], [r[2] for r in sel], ls, label="%s, %s" % (lab, face))
+                        continue
                     ax.plot([r[0] for r in rows], [r[2] for r in rows], ls, label=lab)
                 unit = UNITS.get(key[1], "")
                 finish(ax, "%s, %s" % key, "time (s)", key[1] + (" (%s)" % unit if unit else ""))

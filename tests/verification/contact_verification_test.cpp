@@ -480,6 +480,7 @@ TEST(Contact, PressureThroughAStack) {
 // exchange no heat: by symmetry each is a slab of thickness h insulated on
 // its outer face, with Robin (2 h_c(p), 280 degC) on the face they share.
 // Two pressures, between different points of the table. Required: the
+// faces' conductance (probe `conductance`) h_c(F / A) within 1 %, and the
 // through-thickness profile within 1 % of the 40 K drop of the series at
 // h_c(p) at 0.25 and 0.5 s (16 layers; the constant-conductance solver is
 // within that, EigenSeries.ProfileWithin1PercentOfDrop). The load reaches
@@ -533,10 +534,25 @@ TEST(Contact, ConductanceFollowsThePressure) {
       j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", explicit_rods ? "explicit" : "implicit"}};
       const std::string probed = stack ? "low" : "ply";
       j["output"]["probes"] = {{{"name", "centre"}, {"part", probed}, {"at", {kSide / 2, kSide / 2, 0}},
-                                {"quantities", {"temperature_profile", "contact_pressure"}}, {"interval", t_end / 2}}};
+                                {"quantities", {"temperature_profile", "contact_pressure", "conductance"}},
+                                {"interval", t_end / 2}}};
       const JobRun r = run_json(j);
       ASSERT_TRUE(r.result.ok) << r.result.error;
       EXPECT_NEAR(r.sample(0, "contact_pressure", t_end)->values[0] / pressure, 1.0, 0.01);
+      // The conductance the faces had (probe `conductance`: bottom, top):
+      // h_c(p) on both faces of the single ply, on the lower ply's top face
+      // in the stack (where the die exchanges nothing). The pressure within
+      // 1 % gives h_c within 1 %.
+      const auto& hc = r.sample(0, "conductance", t_end)->values;
+      ASSERT_EQ(hc.size(), 2u);
+      EXPECT_NEAR(hc[1] / h_expected, 1.0, 0.01);
+      std::printf("%s at %.3g Pa: face conductances %.3f (bottom) and %.3f (top) W/(m^2 K), h_c(F/A) %.0f\n",
+                  stack ? "two plies, lower ply" : explicit_rods ? "one ply, explicit" : "one ply", pressure, hc[0], hc[1],
+                  h_expected);
+      if (stack)
+        EXPECT_EQ(hc[0], 0.0);
+      else
+        EXPECT_NEAR(hc[0] / h_expected, 1.0, 0.01);
       // The step for accuracy, 1 % of rho c h / h_c, is taken at the table's
       // largest conductance, not at h_c(0) of the start.
       EXPECT_LE(r.result.thermal_dt, 0.01 * kRho * 1775.0 * kH / table_h.back() * (1 + 1e-12));
