@@ -148,6 +148,39 @@ double value_at(const PlySeries& m, double t) {
   return (1 - a) * m.value[k - 1] + a * m.value[k];
 }
 
+// What the forming comes to in a run: per ply its mean temperature at the
+// end, with output.temperature_threshold the first time a value and every
+// value were below it, with the mechanics its largest |shear angle| at the
+// end and, with output.shear_angle_limit, the share of its area beyond it;
+// per tool the heat it gave to the plies. Pairs [column, value or null], in
+// column order.
+json run_outcomes(const RunResult& r, const Job& job) {
+  json o = json::array();
+  auto when = [](const std::vector<double>& v, std::size_t p) {
+    return p < v.size() && v[p] >= 0 ? json(v[p]) : json(nullptr);
+  };
+  const bool thermal = r.thermal_dt > 0, mechanics = r.mechanical_steps > 0;
+  for (std::size_t p = 0; p < job.parts.size(); ++p) {
+    const std::string& n = job.parts[p].name;
+    const RunResult::PlySample* last = nullptr;
+    for (const auto& s : r.ply_history)
+      if (s.part == static_cast<int>(p)) last = &s;
+    if (thermal) o.push_back({n + "_mean_end_degC", last ? json(last->mean) : json(nullptr)});
+    if (thermal && !job.output.temperature_threshold.empty()) {
+      o.push_back({n + "_below_from_s", when(r.part_below_threshold_from_s, p)});
+      o.push_back({n + "_all_below_from_s", when(r.part_all_below_threshold_from_s, p)});
+    }
+    if (mechanics && p < r.part_shear_max_deg.size())
+      o.push_back({n + "_shear_max_deg", std::max(std::abs(r.part_shear_min_deg[p]), std::abs(r.part_shear_max_deg[p]))});
+    if (mechanics && !job.output.shear_angle_limit.empty())
+      o.push_back({n + "_over_shear_limit", last ? json(last->fraction_over_shear_limit) : json(nullptr)});
+  }
+  if (thermal)
+    for (std::size_t t = 0; t < job.tools.size() && t < r.energy.tool_heat.size(); ++t)
+      o.push_back({job.tools[t].name + "_heat_J", r.energy.tool_heat[t]});
+  return o;
+}
+
 // The study's state file (in its output folder): what a study stopped
 // before its end needs to go on with `--restart`.
 constexpr const char* kStudyStateFile = "study_state.json";
@@ -156,7 +189,7 @@ constexpr const char* kStudyStateFormat = "thermostamp-study-state/1";
 // What the study keeps of a run: its samples of the error's quantity
 // (exact: JSON numbers round-trip), its wall time, thermal and mechanical
 // steps, and its plies' rows (mean temperature, shear angle range).
-json run_record(const RunResult& r, const std::string& quantity, int completed) {
+json run_record(const RunResult& r, const std::string& quantity, int completed, const Job& job) {
   json samples = json::array(), plies = json::array();
   for (const auto& s : r.probes)
     if (s.quantity == quantity) samples.push_back({s.probe, s.time, s.z, s.values});
@@ -167,7 +200,8 @@ json run_record(const RunResult& r, const std::string& quantity, int completed) 
           {"thermal_dt", r.thermal_dt},
           {"mechanical_steps", r.mechanical_steps},
           {"samples", samples},
-          {"plies", plies}};
+          {"plies", plies},
+          {"outcomes", run_outcomes(r, job)}};
 }
 RunResult from_record(const json& rec, const std::string& quantity) {
   RunResult r;
@@ -324,9 +358,11 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     for (std::size_t i = 1; i < jobs.size(); ++i) check_slab_robin(jobs[i], "/variants/" + std::to_string(i - 1));
   PluginRegistry registry;
   std::vector<RunResult> results;
+  std::vector<json> outcomes;  // per run: run_outcomes (a study state written before 0.17.0 has none)
   for (std::size_t i = 0; i < all.size(); ++i) {
     if (i == 0 && !analytic.empty()) {
       results.emplace_back();
+      outcomes.emplace_back(json::array());
       continue;
     }
     const std::string& label = all[i].label;
@@ -336,6 +372,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     if (completed >= need) {  // a restart: run to the end before
       if (!quiet) std::cerr << "study: " << label << " completed before the restart\n";
       results.push_back(from_record(*done, quantity));
+      outcomes.push_back(done->value("outcomes", json::array()));
       continue;
     }
     RunOptions opt;
@@ -391,11 +428,13 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       if (!r.ok) return stopped(r);
       // A continued run's time: both parts (each with its own set-up).
       r.wall_time_s += r.wall_time_before_s;
-      state["runs"][label] = run_record(r, quantity, completed = 1);
+      state["runs"][label] = run_record(r, quantity, completed = 1, jobs[i]);
       write_state(out, state);
+      outcomes.push_back(state["runs"][label]["outcomes"]);
       results.push_back(std::move(r));
     } else {  // a restart between the repeats
       results.push_back(from_record(*done, quantity));
+      outcomes.push_back(done->value("outcomes", json::array()));
     }
     for (; completed < need; ++completed) {
       if (!quiet) std::cerr << "study: running " << label << " again (" << completed + 1 << " of " << need << ")\n";
@@ -423,10 +462,27 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   const bool shear = analytic.empty() && results[0].mechanical_steps > 0;
   if (shear)
     for (const auto& p : plies) csv << ",error_" << p.name << "_shear_deg";
+  // Then what each run's forming comes to (run_outcomes): every column any
+  // run has, in the order of first appearance; an empty cell where a run
+  // has none.
+  std::vector<std::string> outcome_cols;
+  for (const json& o : outcomes)
+    for (const json& pair : o)
+      if (std::find(outcome_cols.begin(), outcome_cols.end(), pair.at(0).get<std::string>()) == outcome_cols.end())
+        outcome_cols.push_back(pair.at(0).get<std::string>());
+  for (const auto& c : outcome_cols) csv << "," << c;
   csv << "\n";
+  auto write_outcomes = [&](std::size_t i) {
+    for (const auto& c : outcome_cols) {
+      csv << ",";
+      for (const json& pair : outcomes[i])
+        if (pair.at(0).get<std::string>() == c && pair.at(1).is_number()) csv << pair.at(1).get<double>();
+    }
+  };
   csv << "reference," << results[0].wall_time_s << ",0," << norm << "," << ref_samples << ","
       << results[0].thermal_steps << "," << results[0].thermal_dt;
   for (std::size_t k = 0; k < probes.size() + plies.size() * (shear ? 2 : 1); ++k) csv << ",0";
+  write_outcomes(0);
   csv << "\n";
   // The error of a variant's value of ply p (the history of plies.csv: its
   // mean temperature, or its largest shear angle) in the study's norm, at
@@ -526,6 +582,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
         if (!std::isnan(e)) csv << e;  // an empty cell where there is nothing to compare
       }
     }
+    write_outcomes(i);
     csv << "\n";
     if (!quiet) {
       std::cout << all[i].label << ": error " << err << " K (" << norm << "), wall " << results[i].wall_time_s
