@@ -270,7 +270,19 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       if (f[0] * f[0] + f[1] * f[1] + f[2] * f[2] == 0.0)
         throw JobError(r.at("fibre_direction"), "must not be the zero vector");
       p.element = r.text("element", std::string("shell_rf_t3"));
-      p.initial_temperature = r.real("initial_temperature", 20.0, -273.15);
+      if (const json* it = r.optional_raw("initial_temperature"); it && it->is_object()) {
+        ObjectReader g(*it, r.at("initial_temperature"));
+        p.initial_results = job.base_dir / g.text("results");
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(p.initial_results, ec))
+          throw JobError(g.at("results"), "cannot read the results file '" + p.initial_results.string() + "'");
+        p.initial_results_part = g.text("part", std::string());
+        p.initial_results_time = g.real("time", -1.0);
+        if (g.has("time") && p.initial_results_time < 0) throw JobError(g.at("time"), "must be >= 0");
+        g.finish();
+      } else {
+        p.initial_temperature = r.real("initial_temperature", 20.0, -273.15);
+      }
       p.thickness_layers = static_cast<int>(r.integer("thickness_layers", 8, 1, 10000));
       p.flip = r.boolean("flip", false);
       r.finish();
@@ -736,9 +748,12 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
   auto absolute = [](const std::filesystem::path& p) {
     return std::filesystem::absolute(p).lexically_normal().string();
   };
-  for (std::size_t i = 0; i < job.parts.size(); ++i)
+  for (std::size_t i = 0; i < job.parts.size(); ++i) {
     if (job.parts[i].mesh.kind == MeshDef::Kind::File)
       run_doc["parts"][i]["mesh"]["file"] = absolute(job.parts[i].mesh.file);
+    if (!job.parts[i].initial_results.empty())
+      run_doc["parts"][i]["initial_temperature"]["results"] = absolute(job.parts[i].initial_results);
+  }
   for (std::size_t i = 0; i < job.tools.size(); ++i)
     if (!job.tools[i].surface.file.empty())
       run_doc["tools"][i]["surface"]["file"] = absolute(job.tools[i].surface.file);

@@ -36,6 +36,12 @@ struct PartDef {
   std::array<double, 3> fibre_direction{1, 0, 0};
   std::string element;
   double initial_temperature = 20.0;
+  // The initial temperatures from a frame of an earlier run's results.h5
+  // (empty: the constant above): its file, part (empty: this part's name)
+  // and time (< 0: its last frame).
+  std::filesystem::path initial_results;
+  std::string initial_results_part;
+  double initial_results_time = -1;
   int thickness_layers = 8;
   bool flip = false;  // reverse the mesh orientation: the ply's top face looks the other way
 };

@@ -131,6 +131,16 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                      {"additionalProperties", false}};
   json element_prop = {{"type", "string"}};
   if (!elements.empty()) element_prop["enum"] = elements;
+  const json initial_temperature = {
+      {"oneOf", json::array({json{{"type", "number"}},
+                             json{{"type", "object"},
+                                  {"required", {"results"}},
+                                  {"properties",
+                                   {{"results", {{"type", "string"}, {"description", "an earlier run's results.h5"}}},
+                                    {"part", {{"type", "string"}}},
+                                    {"time", {{"type", "number"}, {"minimum", 0}, {"description", "[s]"}}}}},
+                                  {"additionalProperties", false}}})},
+      {"description", "[degC], or the temperatures of a frame of an earlier run"}};
   const json part = {{"type", "object"},
                      {"required", {"name", "mesh", "thickness", "material"}},
                      {"properties",
@@ -140,7 +150,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                        {"material", {{"type", "string"}}},
                        {"fibre_direction", vec(3)},
                        {"element", element_prop},
-                       {"initial_temperature", {{"type", "number"}, {"description", "[degC]"}}},
+                       {"initial_temperature", initial_temperature},
                        {"thickness_layers", {{"type", "integer"}, {"minimum", 1}}},
                        {"flip", {{"type", "boolean"}, {"description", "reverse the orientation: the top face looks to -z"}}}}},
                      {"additionalProperties", false}};

@@ -31,6 +31,7 @@
 #include <thermostamp/sdk/simd.hpp>
 
 #include "io/logging.hpp"
+#include "io/results_reader.hpp"
 #include "io/results_writer.hpp"
 #include "solve/interrupt.hpp"
 #include "solve/tools.hpp"
@@ -126,6 +127,9 @@ struct PartState {
   // step (tool contact, convection and radiation, ply/ply links per unit
   // area), for the field and probe quantity `conductance`.
   std::vector<double> conductance_bottom, conductance_top;
+  // degC: the initial temperature (with initial temperatures from a results
+  // file, their mean by heat capacity), for the laws probed at set-up.
+  double t0 = 20.0;
 };
 
 namespace {
@@ -374,6 +378,10 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), re
   build_thermal();
   if (!job_.thermal) {  // isothermal: one constant value per node
     for (auto& st : parts_) {
+      if (!st->def->initial_results.empty())
+        throw JobError(st->def->pointer + "/initial_temperature",
+                       "temperatures from a results file need the thermal solver (solvers.thermal)");
+      st->t0 = st->def->initial_temperature;
       st->nz = 1;
       st->T.assign(st->mesh.num_nodes(), st->def->initial_temperature);
       st->cap.assign(st->mesh.num_nodes(), 0.0);
@@ -508,6 +516,17 @@ void Simulation::build_thermal() {
     st.cap.assign(n, 0.0);
     if (auto s = splitter_->capacities(static_cast<int>(p), st.cap); !s)
       throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);
+    st.t0 = st.def->initial_temperature;
+    if (!st.def->initial_results.empty()) {
+      load_initial_temperature(st);
+      double q = 0, c = 0;
+      for (std::size_t k = 0; k < n; ++k) {
+        q += st.cap[k] * st.T[k];
+        c += st.cap[k];
+      }
+      st.t0 = c > 0 ? q / c : st.T[0];
+      part_views_[p].initial_temperature = st.t0;
+    }
     st.mean.assign(st.mesh.num_nodes(), 0.0);
     st.top.assign(st.mesh.num_nodes(), 0.0);
     st.bottom.assign(st.mesh.num_nodes(), 0.0);
@@ -578,6 +597,67 @@ void Simulation::update_tool_temperatures(double t0, double t1) {
     PartState& st = *parts_[tc.part];
     (tc.face == sdk::kTop ? st.t_top : st.t_bottom)[tc.node] = tool_views_[tc.tool].temperature;
   }
+}
+
+void Simulation::load_initial_temperature(PartState& st) {
+  const PartDef& def = *st.def;
+  const std::string ptr = def.pointer + "/initial_temperature", path = def.initial_results.string();
+  const std::string part = def.initial_results_part.empty() ? def.name : def.initial_results_part;
+  const QuietHdf5 quiet;
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) throw JobError(ptr + "/results", "'" + path + "' is not a results file (HDF5)");
+  struct Closer {
+    hid_t f;
+    ~Closer() { H5Fclose(f); }
+  } closer{file};
+  const Frames frames = read_frames(file);
+  if (frames.times.empty()) throw JobError(ptr + "/results", "'" + path + "' holds no frame");
+  std::size_t k = frames.times.size() - 1;
+  const double want = def.initial_results_time;
+  if (want >= 0) {
+    for (std::size_t j = 0; j < frames.times.size(); ++j)
+      if (std::abs(frames.times[j] - want) < std::abs(frames.times[k] - want)) k = j;
+    if (std::abs(frames.times[k] - want) > 1e-9 * std::max(1.0, want))
+      throw JobError(ptr + "/time", "'" + path + "' has no frame at t = " + fmt_g(want) + " s; its " +
+                                        std::to_string(frames.times.size()) + " frames run from " +
+                                        fmt_g(frames.times.front()) + " to " + fmt_g(frames.times.back()) + " s");
+  }
+  const std::string where = "the frame at t = " + fmt_g(frames.times[k]) + " s of '" + path + "'";
+  const std::string group = "frames/" + frames.names[k] + "/" + part + "/";
+  std::vector<hsize_t> shape;
+  const std::vector<double> nodes = read_values(file, group + "nodes", shape);
+  if (nodes.empty())
+    throw JobError(def.initial_results_part.empty() ? ptr : ptr + "/part", where + " has no part '" + part + "'");
+  const int nn = st.mesh.num_nodes();
+  if (static_cast<int>(nodes.size() / 3) != nn)
+    throw JobError(ptr, where + ": part '" + part + "' has " + std::to_string(nodes.size() / 3) +
+                            " nodes, this part " + std::to_string(nn) + " (the same mesh is needed)");
+  const std::vector<double> v = read_values(file, group + "temperature", shape);
+  if (v.empty())
+    throw JobError(ptr, where + " has no temperature of part '" + part +
+                            "' (the run that wrote it needs \"temperature\" in output.fields)");
+  // Levels bottom to top, evenly spaced through the thickness (a single
+  // value per node is written on two levels).
+  const int nl = static_cast<int>(v.size()) / nn, nz = st.nz;
+  for (int i = 0; i < nn; ++i) {
+    const double* src = &v[static_cast<std::size_t>(i) * nl];
+    double* dst = &st.T[static_cast<std::size_t>(i) * nz];
+    if (nz == nl) {
+      std::copy(src, src + nl, dst);
+    } else if (nz == 1) {  // the mean through the thickness (linear between the levels)
+      double m = 0;
+      for (int l = 0; l < nl; ++l) m += (l == 0 || l == nl - 1 ? 0.5 : 1.0) * src[l];
+      dst[0] = m / (nl - 1);
+    } else {  // linear between the levels, at this part's
+      for (int q = 0; q < nz; ++q) {
+        const double s = static_cast<double>(q) * (nl - 1) / (nz - 1);
+        const int l = std::min(static_cast<int>(s), nl - 2);
+        dst[q] = src[l] + (s - l) * (src[l + 1] - src[l]);
+      }
+    }
+  }
+  logger("solve")->info("part '{}': initial temperatures from {} (part '{}', {} values per node)", def.name, where,
+                        part, nl);
 }
 
 void Simulation::update_face_conductance() {
@@ -768,7 +848,7 @@ void Simulation::build_mechanics() {
     setup.membrane = m->membrane;
     setup.bending = bending;
     setup.density = mat.density;
-    setup.temperature = def.initial_temperature;
+    setup.temperature = st.t0;
     if (!(mat.density > 0)) throw JobError(mat.pointer + "/density", "a density > 0 is needed by the mechanics solver");
     if (auto s = m->element->configure(eparams, setup); !s)
       throw JobError(def.pointer + "/element", "element '" + def.element + "': " + s.message);
@@ -785,7 +865,7 @@ void Simulation::build_mechanics() {
     m->stress.assign(3 * ne, 0.0);
     m->curvature.assign(3 * ne, 0.0);
     m->strain.assign(3 * ne, 0.0);
-    m->node_temperature.assign(nn, def.initial_temperature);
+    m->node_temperature.assign(nn, st.t0);
     // The 6-node patches: own nodes, then the node opposite each edge in
     // the neighbour (-1 at a boundary edge).
     std::vector<int> patch(6 * ne, -1);

@@ -182,6 +182,9 @@ class Simulation {
   // The faces' conductances (conductance_bottom / _top of the parts) from
   // the last assembled faces and ply/ply links.
   void update_face_conductance();
+  // The initial temperatures of a part from a frame of an earlier run
+  // (PartDef::initial_results); JobError where that cannot be done.
+  void load_initial_temperature(PartState& st);
   bool want_conductance_ = false;  // the field `conductance` is written
   void check_field(double time, long long step);
   // The kernel's and the plugins' state between two steps, for checkpoints

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "io/logging.hpp"
+#include "job/errors.hpp"
 #include "plugins/registry.hpp"
 #include "test_support.hpp"
 
@@ -646,6 +647,98 @@ TEST(Radiation, LumpedPlyAgainstTheClosedForm) {
   EXPECT_LT(err[0], 1e-4 * drop);
   EXPECT_GT(err[0] / err[1], 1.8);
   EXPECT_LT(err[0] / err[1], 2.2);
+}
+
+// Initial temperatures from an earlier run: a ply cooled on its top face
+// (Robin, the eigen-series case) to 2 s in one run (A), and to 1 s, then
+// from A's frame at 1 s for another second (B), take the same steps from the
+// same values: B's profile at 1 s equals A's at 2 s to 1e-9 K (the frame's
+// doubles are stored exactly; only the step lengths next to the frames may
+// differ in their last bits). Read into other layers: 16 layers take A's 8
+// at every second level and linear between (exact, round-off); shell2d the
+// mean through the thickness (A's field temperature_mean). Errors name the
+// key: a time without a frame, a part the file lacks, another mesh, a file
+// without temperatures, and no thermal solver.
+TEST(InitialTemperature, FromAFrameOfAnEarlierRun) {
+  auto job = [](double t_end) {
+    json j = ply_job("adi", 8, t_end, 0.5);
+    j["solvers"]["thermal"]["dt"] = 0.01;
+    j["interactions"] = {{{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", 1000.0}, {"ambient", 260.0}}};
+    j["output"]["fields"] = {"temperature"};
+    return j;
+  };
+  const auto dir = temp_dir("initial_from_run");
+  const JobRun a = run_json(job(2.0), 1, dir / "a");
+  ASSERT_TRUE(a.result.ok) << a.result.error;
+  const std::string file = (dir / "a" / "results.h5").string();
+  json jb = job(1.0);
+  jb["parts"][0]["initial_temperature"] = {{"results", file}, {"time", 1.0}};
+  const JobRun b = run_json(jb);
+  ASSERT_TRUE(b.result.ok) << b.result.error;
+  const auto& a1 = a.sample(0, "temperature_profile", 1.0)->values;
+  const auto& a2 = a.sample(0, "temperature_profile", 2.0)->values;
+  const auto& b0 = b.sample(0, "temperature_profile", 0.0)->values;
+  const auto& b1 = b.sample(0, "temperature_profile", 1.0)->values;
+  ASSERT_EQ(b0.size(), 9u);
+  double start = 0, end = 0;
+  for (std::size_t k = 0; k < 9; ++k) {
+    start = std::max(start, std::abs(b0[k] - a1[k]));
+    end = std::max(end, std::abs(b1[k] - a2[k]));
+  }
+  EXPECT_EQ(start, 0.0);  // the same doubles
+  EXPECT_LT(end, 1e-9);  // (0 here: the same steps)
+  std::printf("from an earlier run's frame: start %.3g K, after 1 s %.3g K from the run that went on\n", start, end);
+  // Other layers: 16 (linear between A's 9 levels) and shell2d (the mean).
+  json jc = jb;
+  jc["parts"][0]["thickness_layers"] = 16;
+  const JobRun c = run_json(jc);
+  ASSERT_TRUE(c.result.ok) << c.result.error;
+  const auto& c0 = c.sample(0, "temperature_profile", 0.0)->values;
+  ASSERT_EQ(c0.size(), 17u);
+  for (std::size_t k = 0; k < 17; ++k) {
+    const double want = k % 2 == 0 ? a1[k / 2] : 0.5 * (a1[k / 2] + a1[k / 2 + 1]);
+    EXPECT_NEAR(c0[k], want, 1e-12) << k;
+  }
+  json jd = jb;
+  jd["solvers"]["thermal"]["splitter"] = "shell2d";
+  const JobRun d = run_json(jd);
+  ASSERT_TRUE(d.result.ok) << d.result.error;
+  double mean = 0;
+  for (std::size_t k = 0; k < 9; ++k) mean += (k == 0 || k == 8 ? 0.5 : 1.0) * a1[k] / 8;
+  EXPECT_NEAR(d.sample(0, "temperature_profile", 0.0)->values[0], mean, 1e-12);
+  // What cannot be read is named at its key.
+  auto refused = [&](json j, const std::string& pointer, const std::string& what) {
+    try {
+      run_json(j);
+      ADD_FAILURE() << "accepted: " << what;
+    } catch (const JobError& e) {
+      EXPECT_EQ(e.pointer(), pointer) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  json e = jb;
+  e["parts"][0]["initial_temperature"]["time"] = 0.75;
+  refused(e, "/parts/0/initial_temperature/time", "has no frame at t = 0.75 s; its 5 frames run from 0 to 2 s");
+  e = jb;
+  e["parts"][0]["initial_temperature"]["part"] = "upper";
+  refused(e, "/parts/0/initial_temperature/part", "has no part 'upper'");
+  e = jb;
+  e["parts"][0]["mesh"]["divisions"] = {3, 3};
+  refused(e, "/parts/0/initial_temperature", "part 'ply' has 9 nodes, this part 16 (the same mesh is needed)");
+  e = jb;
+  e["solvers"]["thermal"] = nullptr;  // the mechanics alone
+  e["solvers"]["mechanics"] = json::object();
+  e["materials"]["ply"]["membrane"] = {{"law", "ud_hyperelastic"}, {"k_fibre", 5.0e4}, {"p_ct", 5.0e3}};
+  e["interactions"] = json::array();
+  refused(e, "/parts/0/initial_temperature", "need the thermal solver");
+  json g = job(1.0);
+  g["output"]["fields"] = {"displacement"};
+  ASSERT_TRUE(run_json(g, 1, dir / "g").result.ok);
+  e = jb;
+  e["parts"][0]["initial_temperature"] = {{"results", (dir / "g" / "results.h5").string()}};
+  refused(e, "/parts/0/initial_temperature", "has no temperature of part 'ply'");
+  e["parts"][0]["initial_temperature"] = {{"results", (dir / "nowhere.h5").string()}};
+  refused(e, "/parts/0/initial_temperature/results", "cannot read the results file");
 }
 
 }  // namespace
