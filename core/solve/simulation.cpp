@@ -639,6 +639,10 @@ void Simulation::load_initial_temperature(PartState& st) {
   // Levels bottom to top, evenly spaced through the thickness (a single
   // value per node is written on two levels).
   const int nl = static_cast<int>(v.size()) / nn, nz = st.nz;
+  if (nl < 2 || v.size() != static_cast<std::size_t>(nl) * nn)
+    throw JobError(ptr, where + ": the temperature of part '" + part + "' has " + std::to_string(v.size()) +
+                            " values, not a whole number of levels (2 or more) for its " + std::to_string(nn) +
+                            " nodes");
   for (int i = 0; i < nn; ++i) {
     const double* src = &v[static_cast<std::size_t>(i) * nl];
     double* dst = &st.T[static_cast<std::size_t>(i) * nz];
