@@ -2,10 +2,12 @@
 """Regenerates the figures of docs/verification.md (after a Release build).
 
 Runs share/verification/slab_robin_study.json, patch_study.json,
-hemisphere_study.json (about 2.5 minutes on two cores) and the demo job,
-and writes PNG files into docs/figures/.
+hemisphere_study.json (about 2.5 minutes on two cores), the demo job and
+the default hemisphere job with a conductance that follows the contact
+pressure (half a minute), and writes PNG files into docs/figures/.
 """
 import csv
+import json
 import os
 import shutil
 import subprocess
@@ -31,6 +33,28 @@ def profiles(folder, probe):
 
 def closest(d, t):
     return d[min(d, key=lambda k: abs(k - t))]
+
+
+def hemisphere_conductance(tmp):
+    """The default hemisphere job with the conductance table of the user
+    guide on its four pairs: the conductance of each face at the end."""
+    with open(os.path.join(ROOT, "share", "jobs", "hemisphere_ud_2ply.json")) as f:
+        job = json.load(f)
+    for c in job["interactions"]:
+        if c.get("type") == "contact":
+            c.pop("conductance", None)
+            c["conductance_pressures"] = [0.0, 1e5, 1e6]
+            c["conductance_values"] = [300.0, 1000.0, 2000.0]
+    job["output"]["fields"].append("conductance")
+    path = os.path.join(tmp, "hemisphere_conductance.json")
+    with open(path, "w") as f:
+        json.dump(job, f, indent=1)
+    out = os.path.join(tmp, "hemisphere_conductance")
+    subprocess.run([EXE, "run", path, "--out", out, "--quiet", "--threads", "2"], check=True)
+    subprocess.run([EXE, "report", out], check=True, stdout=subprocess.DEVNULL)
+    for ply in ("ply_top", "ply_bottom"):
+        shutil.copy(os.path.join(out, "figures", "conductance_%s.png" % ply),
+                    os.path.join(FIG, "hemi_conductance_table_%s.png" % ply))
 
 
 def main():
@@ -70,6 +94,7 @@ def main():
     subprocess.run([EXE, "report", demo], check=True, stdout=subprocess.DEVNULL)
     for name in ("map_ply_top.png", "map_ply_bottom.png", "profile_centre_top.png", "profile_centre_bottom.png"):
         shutil.copy(os.path.join(demo, "figures", name), os.path.join(FIG, "demo_" + name))
+    hemisphere_conductance(tmp)
     shutil.rmtree(tmp)
     print("figures written to", FIG)
 
