@@ -400,7 +400,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
                         h_p_[k], h_p_[k - 1]);
           return sdk::Status::failure(msg);
         }
-      heat_on_ = h_v_.empty() ? conductance_ > 0 : *std::max_element(h_v_.begin(), h_v_.end()) > 0;
+      h_max_ = h_v_.empty() ? conductance_ : *std::max_element(h_v_.begin(), h_v_.end());
       gap_tol_ = params.real("gap_tolerance");
       search_interval_ = params.integer("search_interval");
       if (search_interval_ != 1 && pair.second.type != sdk::BodyRef::Type::Part)
@@ -440,17 +440,14 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     return sdk::Status::success();
   }
 
-  double largest_conductance() const override {
-    if (!heat_on_) return 0.0;
-    return h_v_.empty() ? conductance_ : *std::max_element(h_v_.begin(), h_v_.end());
-  }
+  double largest_conductance() const override { return h_max_; }
 
   sdk::Status thermal_contacts(std::span<const sdk::PartView> parts, std::span<const sdk::ToolView> tools,
                                std::span<const std::span<const double>> node_area,
                                sdk::ThermalContactMap& out) override {
     return sdk::guarded([&] {
       const sdk::PartView& a = parts[pair_.first.index];
-      if (!heat_on_) return sdk::Status::success();
+      if (!(h_max_ > 0)) return sdk::Status::success();  // no heat exchange
       node_normals(a, nn_a_);
       if (pair_.second.type == sdk::BodyRef::Type::Tool) {
         const sdk::ToolView& tool = tools[pair_.second.index];
@@ -1019,7 +1016,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   sdk::ContactPair pair_;
   double penalty_ = 0, friction_ = 0, slip_velocity_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
   std::vector<double> h_p_, h_v_;  // conductance table: pressures (Pa), conductances (W/(m^2 K))
-  bool heat_on_ = false;
+  double h_max_ = 0;  // the largest conductance the pair can give (W/(m^2 K))
   long long search_interval_ = 1;
   Pass pass_[2];  // tool pairs use pass_[0].ft only
   std::vector<double> nn_a_, dist_, tn_;
