@@ -13,11 +13,26 @@ namespace {
 constexpr double kMaxFrames = 1e6;
 constexpr double kMaxProbeSamples = 1e7;
 constexpr double kMaxSeriesRows = 1e6;  // energy.csv rows, kept in memory until the end
+// A temperature (degC) given as a number, or as rows [t (s), T (degC)]
+// with increasing times (into `rows`; the first value is returned).
+double temperature_or_rows(ObjectReader& r, const std::string& key, std::optional<double> def,
+                           std::vector<std::array<double, 2>>& rows) {
+  const json* v = r.optional_raw(key);
+  if (!v || !v->is_array()) return r.real(key, def, -273.15);
+  const std::string tp = r.at(key);
+  if (v->empty()) throw JobError(tp, "expected a number or rows [t, T]");
+  for (std::size_t k = 0; k < v->size(); ++k) {
+    const std::string rp = pointer_append(tp, k);
+    const auto row = as_reals((*v)[k], rp, 2);
+    if (k > 0 && !(row[0] > rows.back()[0])) throw JobError(rp, "times must increase from row to row");
+    if (!(row[1] >= -273.15)) throw JobError(pointer_append(rp, 1), "must be >= -273.15 degC");
+    rows.push_back({row[0], row[1]});
+  }
+  return rows.front()[1];
+}
 }  // namespace
 
-double ToolDef::temperature_over(double t0, double t1) const {
-  const auto& tab = temperature_table;
-  if (tab.empty()) return temperature;
+double rows_mean(const std::vector<std::array<double, 2>>& tab, double t0, double t1) {
   auto at = [&](double t) {  // linear between rows, held beyond the ends
     if (t <= tab.front()[0]) return tab.front()[1];
     if (t >= tab.back()[0]) return tab.back()[1];
@@ -27,8 +42,7 @@ double ToolDef::temperature_over(double t0, double t1) const {
     return tab[k - 1][1] + s * (tab[k][1] - tab[k - 1][1]);
   };
   if (!(t1 > t0)) return at(t0);
-  // The exact integral of the piecewise-linear curve: trapezoids between
-  // t0, the rows inside (t0, t1) and t1.
+  // Trapezoids between t0, the rows inside (t0, t1) and t1.
   double sum = 0, ta = t0, va = at(t0);
   for (const auto& row : tab) {
     if (row[0] <= t0) continue;
@@ -39,6 +53,10 @@ double ToolDef::temperature_over(double t0, double t1) const {
   }
   sum += 0.5 * (va + at(t1)) * (t1 - ta);
   return sum / (t1 - t0);
+}
+
+double ToolDef::temperature_over(double t0, double t1) const {
+  return temperature_table.empty() ? temperature : rows_mean(temperature_table, t0, t1);
 }
 
 bool RegionDef::contains(double x, double y) const {
@@ -411,21 +429,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
         }
         mo.finish();
       }
-      if (const json* tv = r.optional_raw("temperature"); tv && tv->is_array()) {
-        const std::string tp = r.at("temperature");
-        if (tv->empty()) throw JobError(tp, "expected a number or rows [t, T]");
-        for (std::size_t k = 0; k < tv->size(); ++k) {
-          const std::string rp = pointer_append(tp, k);
-          const auto row = as_reals((*tv)[k], rp, 2);
-          if (k > 0 && !(row[0] > t.temperature_table.back()[0]))
-            throw JobError(rp, "times must increase from row to row");
-          if (!(row[1] >= -273.15)) throw JobError(pointer_append(rp, 1), "must be >= -273.15 degC");
-          t.temperature_table.push_back({row[0], row[1]});
-        }
-        t.temperature = t.temperature_table.front()[1];
-      } else {
-        t.temperature = r.real("temperature", 20.0, -273.15);
-      }
+      t.temperature = temperature_or_rows(r, "temperature", 20.0, t.temperature_table);
       r.finish();
       tool_names.push_back(t.name);
       job.tools.push_back(std::move(t));
@@ -504,7 +508,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       h.emissivity = r.real("emissivity", 0.0, 0.0, false, 1.0);
       // h may be left out where the face radiates.
       h.h = r.real("h", h.emissivity > 0 ? std::optional<double>(0.0) : std::nullopt, 0.0);
-      h.ambient = r.real("ambient", std::nullopt, -273.15);
+      h.ambient = temperature_or_rows(r, "ambient", std::nullopt, h.ambient_table);
       if (const json* reg = r.optional_raw("region")) {
         ObjectReader g(*reg, r.at("region"));
         if (g.has("circle")) {

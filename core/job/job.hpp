@@ -83,6 +83,12 @@ struct ToolDef {
   double temperature_over(double t0, double t1) const;
 };
 
+// The mean over [t0, t1] of a piecewise-linear curve of rows [t, value]
+// (times increasing; held before the first row and after the last): the
+// exact integral, kinks inside the interval included; its value at t0
+// where t1 <= t0.
+double rows_mean(const std::vector<std::array<double, 2>>& rows, double t0, double t1);
+
 struct BodyDef {
   bool is_tool = false;
   int index = -1;
@@ -106,8 +112,12 @@ struct HeatExchangeDef {
   std::string pointer;
   std::vector<int> parts;
   bool top = false, bottom = false;
-  double h = 0, ambient = 0;
+  double h = 0, ambient = 0;  // ambient: constant, or the table's first value
+  std::vector<std::array<double, 2>> ambient_table;  // rows [t (s), T (degC)]; empty: constant
   double emissivity = 0;  // radiation to the ambient, eps sigma (T^4 - T_amb^4) in kelvin
+  double ambient_over(double t0, double t1) const {
+    return ambient_table.empty() ? ambient : rows_mean(ambient_table, t0, t1);
+  }
   RegionDef region;
 };
 

@@ -154,6 +154,13 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                        {"thickness_layers", {{"type", "integer"}, {"minimum", 1}}},
                        {"flip", {{"type", "boolean"}, {"description", "reverse the orientation: the top face looks to -z"}}}}},
                      {"additionalProperties", false}};
+  // A tool's temperature, a heat exchange's ambient.
+  const json temperature_or_rows = {
+      {"oneOf", json::array({json{{"type", "number"}},
+                             json{{"type", "array"},
+                                  {"minItems", 1},
+                                  {"items", {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 2}, {"maxItems", 2}}}}})},
+      {"description", "[degC], constant, or rows [t (s), T (degC)] over time"}};
   const json heat_exchange = {{"type", "object"},
                               {"required", {"type", "part", "face", "ambient"}},
                               {"anyOf", json::array({json{{"required", {"h"}}}, json{{"required", {"emissivity"}}}})},
@@ -162,7 +169,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                                 {"part", {{"type", "string"}}},
                                 {"face", {{"enum", {"top", "bottom", "both"}}}},
                                 {"h", {{"type", "number"}, {"minimum", 0}, {"description", "[W/m2/K]"}}},
-                                {"ambient", {{"type", "number"}, {"description", "[degC]"}}},
+                                {"ambient", temperature_or_rows},
                                 {"emissivity", {{"type", "number"}, {"minimum", 0}, {"maximum", 1}, {"description", "[-] radiation to the ambient"}}},
                                 {"region", {{"type", "object"}}}}},
                               {"additionalProperties", false}};
@@ -192,14 +199,9 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
        {{{"type", "object"}, {"required", {"velocity"}}, {"properties", {{"velocity", vec(3)}}}, {"additionalProperties", false}},
         {{"type", "object"}, {"required", {"displacement"}}, {"properties", {{"displacement", {{"type", "array"}, {"items", {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 4}, {"maxItems", 4}}}, {"description", "rows [t, dx, dy, dz]"}}}}}, {"additionalProperties", false}},
         {{"type", "object"}, {"required", {"force", "mass"}}, {"properties", {{"force", vec(3)}, {"mass", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[kg]"}}}, {"damping", {{"type", "number"}, {"minimum", 0}, {"description", "[N s/m]"}}}}}, {"additionalProperties", false}}}}};
-  const json temperature_row = {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 2}, {"maxItems", 2}};
-  const json tool_temperature = {
-      {"oneOf", json::array({json{{"type", "number"}},
-                             json{{"type", "array"}, {"minItems", 1}, {"items", temperature_row}}})},
-      {"description", "[degC], constant, or rows [t (s), T (degC)] over time"}};
   const json tool = {{"type", "object"},
                      {"required", {"name", "surface"}},
-                     {"properties", {{"name", {{"type", "string"}}}, {"surface", surface}, {"motion", motion}, {"temperature", tool_temperature}}},
+                     {"properties", {{"name", {{"type", "string"}}}, {"surface", surface}, {"motion", motion}, {"temperature", temperature_or_rows}}},
                      {"additionalProperties", false}};
   json interaction_kinds = contact;
   interaction_kinds.push_back(heat_exchange);

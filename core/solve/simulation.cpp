@@ -680,13 +680,17 @@ void Simulation::update_face_conductance() {
   }
 }
 
-void Simulation::apply_radiation() {
+void Simulation::update_exchange_faces(double t0, double t1) {
   constexpr double kSigma = 5.670374419e-8, kKelvin = 273.15;  // W/(m^2 K^4), the Stefan-Boltzmann constant
-  for (const RadiatingFace& f : radiating_) {
+  for (const ExchangeFace& f : exchange_faces_) {
+    const HeatExchangeDef& h = job_.heat_exchanges[static_cast<std::size_t>(f.exchange)];
     PartState& st = *parts_[f.part];
+    const double ambient = h.ambient_over(t0, t1);
+    (f.face == sdk::kTop ? st.t_top : st.t_bottom)[f.node] = ambient;
+    if (!(h.emissivity > 0)) continue;
     const std::size_t base = static_cast<std::size_t>(st.nz) * f.node;
-    const double T = st.T[base + (f.face == sdk::kTop ? st.nz - 1 : 0)] + kKelvin, Ta = f.ambient + kKelvin;
-    (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = f.h + f.emissivity * kSigma * (T * T + Ta * Ta) * (T + Ta);
+    const double T = st.T[base + (f.face == sdk::kTop ? st.nz - 1 : 0)] + kKelvin, Ta = ambient + kKelvin;
+    (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = h.h + h.emissivity * kSigma * (T * T + Ta * Ta) * (T + Ta);
   }
 }
 
@@ -698,12 +702,13 @@ void Simulation::assemble_faces() {
     std::fill(st->t_top.begin(), st->t_top.end(), 0.0);
     std::fill(st->contact_status.begin(), st->contact_status.end(), 0.0);
   }
-  // Per part, 2 per node (bottom, top): the heat exchange that radiates
-  // there (its index), -1 where none does or a tool contact covers it.
-  bool radiation = false;
-  for (const auto& h : job_.heat_exchanges) radiation = radiation || h.emissivity > 0;
-  std::vector<std::vector<int>> radiates(radiation ? parts_.size() : 0);
-  for (std::size_t p = 0; p < radiates.size(); ++p) radiates[p].assign(2 * parts_[p]->mesh.num_nodes(), -1);
+  // Per part, 2 per node (bottom, top): the heat exchange that renews or
+  // follows an ambient table there (its index), -1 where none does or a
+  // tool contact covers it.
+  bool renewed = false;
+  for (const auto& h : job_.heat_exchanges) renewed = renewed || h.emissivity > 0 || !h.ambient_table.empty();
+  std::vector<std::vector<int>> renews(renewed ? parts_.size() : 0);
+  for (std::size_t p = 0; p < renews.size(); ++p) renews[p].assign(2 * parts_[p]->mesh.num_nodes(), -1);
   for (std::size_t k = 0; k < job_.heat_exchanges.size(); ++k) {
     const auto& h = job_.heat_exchanges[k];
     for (int p : h.parts) {
@@ -713,12 +718,12 @@ void Simulation::assemble_faces() {
         if (h.top) {
           st.h_top[i] = h.h;
           st.t_top[i] = h.ambient;
-          if (radiation) radiates[p][2 * i + 1] = h.emissivity > 0 ? static_cast<int>(k) : -1;
+          if (renewed) renews[p][2 * i + 1] = h.emissivity > 0 || !h.ambient_table.empty() ? static_cast<int>(k) : -1;
         }
         if (h.bottom) {
           st.h_bottom[i] = h.h;
           st.t_bottom[i] = h.ambient;
-          if (radiation) radiates[p][2 * i] = h.emissivity > 0 ? static_cast<int>(k) : -1;
+          if (renewed) renews[p][2 * i] = h.emissivity > 0 || !h.ambient_table.empty() ? static_cast<int>(k) : -1;
         }
       }
     }
@@ -741,18 +746,15 @@ void Simulation::assemble_faces() {
       st.h_bottom[tc.node] = tc.conductance;
       st.t_bottom[tc.node] = T;
     }
-    if (radiation) radiates[tc.part][2 * tc.node + (tc.face == sdk::kTop ? 1 : 0)] = -1;
+    if (renewed) renews[tc.part][2 * tc.node + (tc.face == sdk::kTop ? 1 : 0)] = -1;
     st.contact_status[tc.node] = std::max(st.contact_status[tc.node], 1.0);
   }
-  radiating_.clear();
-  for (std::size_t p = 0; p < radiates.size(); ++p)
-    for (std::size_t f = 0; f < radiates[p].size(); ++f)
-      if (const int k = radiates[p][f]; k >= 0) {
-        const auto& h = job_.heat_exchanges[static_cast<std::size_t>(k)];
-        radiating_.push_back({static_cast<int>(p), static_cast<int>(f / 2), f % 2 ? sdk::kTop : sdk::kBottom, h.h,
-                              h.emissivity, h.ambient});
-      }
-  apply_radiation();
+  exchange_faces_.clear();
+  for (std::size_t p = 0; p < renews.size(); ++p)
+    for (std::size_t f = 0; f < renews[p].size(); ++f)
+      if (const int k = renews[p][f]; k >= 0)
+        exchange_faces_.push_back({static_cast<int>(p), static_cast<int>(f / 2), f % 2 ? sdk::kTop : sdk::kBottom, k});
+  update_exchange_faces(exchange_t0_, exchange_t1_);
   for (const auto& l : contact_map_.links) {
     parts_[l.part_a]->contact_status[l.node_a] = 2.0;
     for (int j = 0; j < 3; ++j)
@@ -2906,6 +2908,8 @@ RunResult Simulation::run(const RunOptions& opt) {
           if (since_thermal >= subcycle || t >= t_end - eps_t) {
             tc = Clock::now();
             update_element_fields();
+            exchange_t0_ = t_thermal;
+            exchange_t1_ = t;
             assemble_faces();
             update_tool_temperatures(t_thermal, t);
             in.dt = t - t_thermal;
@@ -3007,7 +3011,7 @@ RunResult Simulation::run(const RunOptions& opt) {
           end_checkpoint(", before the step that lands on time.end");
         in.dt = step;
         update_tool_temperatures(t, t + step);
-        apply_radiation();
+        update_exchange_faces(t, t + step);
         sdk::ThermalStepReport rep;
         if (auto s = splitter_->advance(in, Tspans, &rep); !s)
           throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);

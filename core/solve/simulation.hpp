@@ -175,10 +175,12 @@ class Simulation {
   // Tools whose temperature follows a table: their mean over the thermal
   // step [t0, t1] into the tool views and the faces touching them.
   void update_tool_temperatures(double t0, double t1);
-  // Faces that radiate (a heat exchange with an emissivity, not covered by a
-  // tool contact): their conductance h + eps sigma (T^2 + Ta^2)(T + Ta)
+  // Faces of heat exchanges that radiate or follow an ambient table (not
+  // covered by a tool contact): the ambient's mean over the thermal step
+  // [t0, t1], and the conductance h + eps sigma (T^2 + Ta^2)(T + Ta)
   // (kelvin) at the face's present temperature.
-  void apply_radiation();
+  void update_exchange_faces(double t0, double t1);
+  double exchange_t0_ = 0, exchange_t1_ = 0;  // the step assemble_faces assembles for
   // The faces' conductances (conductance_bottom / _top of the parts) from
   // the last assembled faces and ply/ply links.
   void update_face_conductance();
@@ -350,11 +352,10 @@ class Simulation {
   std::vector<std::unique_ptr<sdk::MaterialLaw>> laws_;
   std::vector<std::unique_ptr<sdk::ContactHandler>> contacts_;
   sdk::ThermalContactMap contact_map_;
-  struct RadiatingFace {
-    int part = 0, node = 0, face = 0;
-    double h = 0, emissivity = 0, ambient = 0;
+  struct ExchangeFace {
+    int part = 0, node = 0, face = 0, exchange = 0;  // exchange: index into job_.heat_exchanges
   };
-  std::vector<RadiatingFace> radiating_;  // from assemble_faces
+  std::vector<ExchangeFace> exchange_faces_;  // from assemble_faces
   std::vector<sdk::FaceConditions> faces_;
   std::vector<int> probe_node_;
   std::vector<std::vector<int>> probe_elements_;  // elements around each probe's node

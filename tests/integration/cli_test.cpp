@@ -239,6 +239,7 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"tool_temperature_absolute_zero", [](json& j) { j["tools"][0]["temperature"] = {{0.0, 260.0}, {1.0, -300.0}}; }, "error: /tools/0/temperature/1/1: must be >= -273.15 degC"},
       {"emissivity_above_one", [](json& j) { j["interactions"][2]["emissivity"] = 1.5; }, "error: /interactions/2/emissivity: must be <= 1, found 1.5"},
       {"heat_exchange_without_h", [](json& j) { j["interactions"][2].erase("h"); }, "error: /interactions/2/h: "},
+      {"ambient_rows_times", [](json& j) { j["interactions"][2]["ambient"] = {{0.0, 260.0}, {0.0, 250.0}}; }, "error: /interactions/2/ambient/1: times must increase from row to row"},
       {"two_motions", [](json& j) { j["tools"][0]["motion"] = {{"velocity", {0, 0, 1}}, {"force", {0, 0, -1}}}; }, "error: /tools/0/motion: give exactly one of"},
       {"holder_without_mass", [](json& j) { j["tools"][0]["motion"] = {{"force", {0, 0, -100}}}; }, "error: /tools/0/motion/mass:"},
       {"arc_not_circular", [](json& j) { j["tools"][0]["surface"] = {{"type", "revolved"}, {"profile", {{{"arc", {{"from", {0, 0.01}}, {"to", {0.02, 0}}, {"centre", {0, 0}}}}}}}}; }, "error: /tools/0/surface/profile/0/arc/centre: the arc's end points are not at the same distance"},

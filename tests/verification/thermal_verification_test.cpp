@@ -472,7 +472,8 @@ TEST(PlyHistory, LumpedPlyCrossesAtTheClosedFormStep) {
 // solution (exponentials on each linear piece) is approached at first
 // order: at dt = 0.05 s (a = 0.044) within 1 % of the tool's 60 K swing,
 // and the error halves with the step (ratio 1.8-2.2). tools.csv gives the
-// table's value at each row.
+// table's value at each row. The same rows as a heat exchange's ambient
+// (h = h_c) give the same temperatures to the bit.
 TEST(ToolTemperature, LumpedPlyFollowsAVariothermCycle) {
   const std::vector<std::array<double, 2>> table = {{0.0, 260.0}, {0.33, 290.0}, {1.07, 290.0}, {1.83, 230.0}};
   const double h_c = 1000.0, C = kRhoC * kH, tau = C / h_c, t_end = 2.5;
@@ -550,6 +551,18 @@ TEST(ToolTemperature, LumpedPlyFollowsAVariothermCycle) {
       ++rows_read;
     }
     EXPECT_EQ(rows_read, 11);
+    // The same rows as the ambient of a heat exchange with h = h_c: the
+    // same face conditions, so the same temperatures to the bit.
+    json jx = ply_job("shell2d", 4, t_end, 0.25);
+    jx["solvers"]["thermal"]["dt"] = dt;
+    json rows = json::array();
+    for (const auto& row : table) rows.push_back({row[0], row[1]});
+    jx["interactions"] = {{{"type", "heat_exchange"}, {"part", "ply"}, {"face", "bottom"}, {"h", h_c}, {"ambient", rows}}};
+    const JobRun rx = run_json(jx);
+    ASSERT_TRUE(rx.result.ok) << rx.result.error;
+    for (int k = 1; k <= 10; ++k)
+      EXPECT_EQ(rx.sample(0, "temperature_profile", 0.25 * k)->values[0], r.sample(0, "temperature_profile", 0.25 * k)->values[0])
+          << "ambient rows, t " << 0.25 * k;
   }
   // With the mechanics on (the ply resting on the die, held in plane), the
   // thermal steps end on mechanical steps: the same ODE, the same tolerance.
