@@ -556,10 +556,11 @@ TEST(Contact, ConductanceFollowsThePressure) {
       std::printf("%s at %.3g Pa: face conductances %.3f (bottom) and %.3f (top) W/(m^2 K), h_c(F/A) %.0f\n",
                   stack ? "two plies, lower ply" : explicit_rods ? "one ply, explicit" : "one ply", pressure, hc[0], hc[1],
                   h_expected);
-      if (stack)
+      if (stack) {
         EXPECT_EQ(hc[0], 0.0);
-      else
+      } else {
         EXPECT_NEAR(hc[0] / h_expected, 1.0, 0.01);
+      }
       // The step for accuracy, 1 % of rho c h / h_c, is taken at the table's
       // largest conductance, not at h_c(0) of the start.
       EXPECT_LE(r.result.thermal_dt, 0.01 * kRho * 1775.0 * kH / table_h.back() * (1 + 1e-12));

@@ -643,7 +643,9 @@ TEST(Radiation, LumpedPlyAgainstTheClosedForm) {
       const double Tk = T + 273.15;
       const double a = 2 * (h + eps * sigma * (Tk * Tk + Ta * Ta) * (Tk + Ta)) * dt / C;
       T = (T + a * 20.0) / (1 + a);
-      if (n % 10 == 0) EXPECT_NEAR(r.sample(0, "temperature_profile", n * dt)->values[0], T, 1e-9) << h << " " << n * dt;
+      if (n % 10 == 0) {
+        EXPECT_NEAR(r.sample(0, "temperature_profile", n * dt)->values[0], T, 1e-9) << h << " " << n * dt;
+      }
     }
   }
   // The ODE, at first order.
