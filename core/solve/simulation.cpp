@@ -532,6 +532,7 @@ void Simulation::build_thermal() {
     st.bottom.assign(st.mesh.num_nodes(), 0.0);
   }
   assemble_faces();
+  update_far_temperatures(0.0, 0.0);
   faces_.resize(parts_.size());
   for (std::size_t p = 0; p < parts_.size(); ++p)
     faces_[p] = {parts_[p]->h_bottom, parts_[p]->t_bottom, parts_[p]->h_top, parts_[p]->t_top};
@@ -585,17 +586,30 @@ void Simulation::build_thermal() {
   thermal_dt_ = interval / std::max(1.0, per);
 }
 
-void Simulation::update_tool_temperatures(double t0, double t1) {
+void Simulation::update_far_temperatures(double t0, double t1) {
+  // Tools: their views and the faces they touch.
   bool any = false;
   for (std::size_t k = 0; k < tool_views_.size(); ++k) {
     if (job_.tools[k].temperature_table.empty()) continue;
     tool_views_[k].temperature = job_.tools[k].temperature_over(t0, t1);
     any = true;
   }
-  if (!any) return;
-  for (const auto& tc : contact_map_.tool_contacts) {
-    PartState& st = *parts_[tc.part];
-    (tc.face == sdk::kTop ? st.t_top : st.t_bottom)[tc.node] = tool_views_[tc.tool].temperature;
+  if (any)
+    for (const auto& tc : contact_map_.tool_contacts) {
+      PartState& st = *parts_[tc.part];
+      (tc.face == sdk::kTop ? st.t_top : st.t_bottom)[tc.node] = tool_views_[tc.tool].temperature;
+    }
+  // Heat exchanges: the ambient, and radiation at the face's temperature.
+  constexpr double kSigma = 5.670374419e-8, kKelvin = 273.15;  // W/(m^2 K^4), the Stefan-Boltzmann constant
+  for (const ExchangeFace& f : exchange_faces_) {
+    const HeatExchangeDef& h = job_.heat_exchanges[static_cast<std::size_t>(f.exchange)];
+    PartState& st = *parts_[f.part];
+    const double ambient = h.ambient_over(t0, t1);
+    (f.face == sdk::kTop ? st.t_top : st.t_bottom)[f.node] = ambient;
+    if (!(h.emissivity > 0)) continue;
+    const std::size_t base = static_cast<std::size_t>(st.nz) * f.node;
+    const double T = st.T[base + (f.face == sdk::kTop ? st.nz - 1 : 0)] + kKelvin, Ta = ambient + kKelvin;
+    (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = h.h + h.emissivity * kSigma * (T * T + Ta * Ta) * (T + Ta);
   }
 }
 
@@ -680,20 +694,6 @@ void Simulation::update_face_conductance() {
   }
 }
 
-void Simulation::update_exchange_faces(double t0, double t1) {
-  constexpr double kSigma = 5.670374419e-8, kKelvin = 273.15;  // W/(m^2 K^4), the Stefan-Boltzmann constant
-  for (const ExchangeFace& f : exchange_faces_) {
-    const HeatExchangeDef& h = job_.heat_exchanges[static_cast<std::size_t>(f.exchange)];
-    PartState& st = *parts_[f.part];
-    const double ambient = h.ambient_over(t0, t1);
-    (f.face == sdk::kTop ? st.t_top : st.t_bottom)[f.node] = ambient;
-    if (!(h.emissivity > 0)) continue;
-    const std::size_t base = static_cast<std::size_t>(st.nz) * f.node;
-    const double T = st.T[base + (f.face == sdk::kTop ? st.nz - 1 : 0)] + kKelvin, Ta = ambient + kKelvin;
-    (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = h.h + h.emissivity * kSigma * (T * T + Ta * Ta) * (T + Ta);
-  }
-}
-
 void Simulation::assemble_faces() {
   for (auto& st : parts_) {
     std::fill(st->h_bottom.begin(), st->h_bottom.end(), 0.0);
@@ -702,15 +702,17 @@ void Simulation::assemble_faces() {
     std::fill(st->t_top.begin(), st->t_top.end(), 0.0);
     std::fill(st->contact_status.begin(), st->contact_status.end(), 0.0);
   }
-  // Per part, 2 per node (bottom, top): the heat exchange that renews or
-  // follows an ambient table there (its index), -1 where none does or a
+  // Per part, 2 per node (bottom, top): the heat exchange there whose face
+  // conditions are renewed at every thermal step (update_far_temperatures:
+  // it radiates or follows ambient rows; its index), -1 where none is or a
   // tool contact covers it.
-  bool renewed = false;
-  for (const auto& h : job_.heat_exchanges) renewed = renewed || h.emissivity > 0 || !h.ambient_table.empty();
+  auto renewed_at_steps = [](const HeatExchangeDef& h) { return h.emissivity > 0 || !h.ambient_table.empty(); };
+  const bool renewed = std::any_of(job_.heat_exchanges.begin(), job_.heat_exchanges.end(), renewed_at_steps);
   std::vector<std::vector<int>> renews(renewed ? parts_.size() : 0);
   for (std::size_t p = 0; p < renews.size(); ++p) renews[p].assign(2 * parts_[p]->mesh.num_nodes(), -1);
   for (std::size_t k = 0; k < job_.heat_exchanges.size(); ++k) {
     const auto& h = job_.heat_exchanges[k];
+    const int renew = renewed_at_steps(h) ? static_cast<int>(k) : -1;
     for (int p : h.parts) {
       PartState& st = *parts_[p];
       for (int i = 0; i < st.mesh.num_nodes(); ++i) {
@@ -718,12 +720,12 @@ void Simulation::assemble_faces() {
         if (h.top) {
           st.h_top[i] = h.h;
           st.t_top[i] = h.ambient;
-          if (renewed) renews[p][2 * i + 1] = h.emissivity > 0 || !h.ambient_table.empty() ? static_cast<int>(k) : -1;
+          if (renewed) renews[p][2 * i + 1] = renew;
         }
         if (h.bottom) {
           st.h_bottom[i] = h.h;
           st.t_bottom[i] = h.ambient;
-          if (renewed) renews[p][2 * i] = h.emissivity > 0 || !h.ambient_table.empty() ? static_cast<int>(k) : -1;
+          if (renewed) renews[p][2 * i] = renew;
         }
       }
     }
@@ -754,7 +756,6 @@ void Simulation::assemble_faces() {
     for (std::size_t f = 0; f < renews[p].size(); ++f)
       if (const int k = renews[p][f]; k >= 0)
         exchange_faces_.push_back({static_cast<int>(p), static_cast<int>(f / 2), f % 2 ? sdk::kTop : sdk::kBottom, k});
-  update_exchange_faces(exchange_t0_, exchange_t1_);
   for (const auto& l : contact_map_.links) {
     parts_[l.part_a]->contact_status[l.node_a] = 2.0;
     for (int j = 0; j < 3; ++j)
@@ -2908,10 +2909,8 @@ RunResult Simulation::run(const RunOptions& opt) {
           if (since_thermal >= subcycle || t >= t_end - eps_t) {
             tc = Clock::now();
             update_element_fields();
-            exchange_t0_ = t_thermal;
-            exchange_t1_ = t;
             assemble_faces();
-            update_tool_temperatures(t_thermal, t);
+            update_far_temperatures(t_thermal, t);
             in.dt = t - t_thermal;
             in.geometry_changed = true;
             in.links = contact_map_.links;
@@ -3010,8 +3009,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         if (!landing_saved && t_end < grid_frame && t + step >= t_end - eps_t)
           end_checkpoint(", before the step that lands on time.end");
         in.dt = step;
-        update_tool_temperatures(t, t + step);
-        update_exchange_faces(t, t + step);
+        update_far_temperatures(t, t + step);
         sdk::ThermalStepReport rep;
         if (auto s = splitter_->advance(in, Tspans, &rep); !s)
           throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);

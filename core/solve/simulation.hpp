@@ -172,15 +172,14 @@ class Simulation {
   std::vector<LawUse> law_uses_;
   void update_element_fields();
   void assemble_faces();
-  // Tools whose temperature follows a table: their mean over the thermal
-  // step [t0, t1] into the tool views and the faces touching them.
-  void update_tool_temperatures(double t0, double t1);
-  // Faces of heat exchanges that radiate or follow an ambient table (not
-  // covered by a tool contact): the ambient's mean over the thermal step
-  // [t0, t1], and the conductance h + eps sigma (T^2 + Ta^2)(T + Ta)
-  // (kelvin) at the face's present temperature.
-  void update_exchange_faces(double t0, double t1);
-  double exchange_t0_ = 0, exchange_t1_ = 0;  // the step assemble_faces assembles for
+  // The far temperatures of the faces over the thermal step [t0, t1]:
+  // tools whose temperature follows rows (their mean over the step, into
+  // the tool views and the faces touching them), and the faces of heat
+  // exchanges that follow ambient rows or radiate (not covered by a tool
+  // contact; exchange_faces_): the ambient's mean over the step and the
+  // conductance h + eps sigma (T^2 + Ta^2)(T + Ta) (kelvin) at the face's
+  // present temperature. After every assemble_faces().
+  void update_far_temperatures(double t0, double t1);
   // The faces' conductances (conductance_bottom / _top of the parts) from
   // the last assembled faces and ply/ply links.
   void update_face_conductance();
