@@ -2902,6 +2902,7 @@ RunResult Simulation::run(const RunOptions& opt) {
         }
         stable = forces_and_stable_dt(t, dt);
         audit.contact_stored = contact_energy_;
+        bool thermal_stepped = false;  // a thermal step ended at t
         if (job_.thermal) {
           ++since_thermal;
           if (subcycle <= 0)
@@ -2925,6 +2926,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             ++steps;
             t_thermal = t;
             since_thermal = 0;
+            thermal_stepped = true;
             check_field(t, steps);
             update_node_temperature();
             check_law_ranges(t);
@@ -2975,6 +2977,16 @@ RunResult Simulation::run(const RunOptions& opt) {
           next_sample += series_iv;
         }
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
+          if (job_.thermal && job_.output.probes[q].interval <= 0) {  // every thermal step
+            if (thermal_stepped) {
+              tc = Clock::now();
+              update_element_fields();
+              sample_probes(t, q);
+              timing_[kTimeOutput] += seconds_since(tc);
+            }
+            continue;
+          }
+          // Without the thermal solver, a probe without an interval samples at the frames' interval.
           const double iv = job_.output.probes[q].interval > 0 ? job_.output.probes[q].interval : interval;
           if (t >= next_probe[q] - eps_t || next_probe[q] <= 0) {
             tc = Clock::now();
@@ -3061,6 +3073,10 @@ RunResult Simulation::run(const RunOptions& opt) {
       if (ply_rows.empty() || ply_rows[ply_rows.size() - ply_cols.size()] < t) sample_plies(t);
       for (std::size_t q = 0; q < next_probe.size(); ++q) {  // the probes not sampled at t yet
         const double pi = job_.output.probes[q].interval;
+        if (pi <= 0 && job_.mechanics && job_.thermal) {  // sampled at every thermal step
+          if (t_thermal < t - eps_t) sample_probes(t, q);
+          continue;
+        }
         const double iv = pi > 0 ? pi : job_.mechanics ? interval : 0.0;
         if (iv > 0 && next_probe[q] - iv < t - eps_t) sample_probes(t, q);
       }
