@@ -66,6 +66,9 @@ struct MechPart {
   // The arrays every step streams through: on huge pages where the system
   // offers them (sdk/memory.hpp).
   sdk::large_vector<double> v, f_int, elem_sqrt_scale, node_temperature;
+  // The faces' temperatures the contact handlers see (ContactForceInput::
+  // face_temperature): bottom and top per node, degC.
+  std::vector<double> face_temperature;
   bool scaled = false;  // some elem_sqrt_scale is not 1 (else the elements get no step factors)
   std::vector<double> mass, mass_node_physical, elem_dt, elem_scale, stress;
   // Half of the next step's internal, external, damping and contact works,
@@ -873,6 +876,7 @@ void Simulation::build_mechanics() {
     m->curvature.assign(3 * ne, 0.0);
     m->strain.assign(3 * ne, 0.0);
     m->node_temperature.assign(nn, st.t0);
+    m->face_temperature.assign(2 * static_cast<std::size_t>(nn), st.t0);
     // The 6-node patches: own nodes, then the node opposite each edge in
     // the neighbour (-1 at a boundary edge).
     std::vector<int> patch(6 * ne, -1);
@@ -1185,6 +1189,8 @@ void Simulation::update_node_temperature() {
         s /= h;
       }
       m.node_temperature[i] = s;
+      m.face_temperature[2 * static_cast<std::size_t>(i)] = t[0];
+      m.face_temperature[2 * static_cast<std::size_t>(i) + 1] = t[nz - 1];
     }
   }
   ++temperature_version_;
@@ -1710,6 +1716,7 @@ void Simulation::build_contact_tasks() {
     cs.vel.emplace_back(mech_[p]->v);
     cs.mass.emplace_back(mech_[p]->mass);
     cs.areas.emplace_back(parts_[p]->area);
+    cs.temp.emplace_back(mech_[p]->face_temperature);
   }
   // The exchange copies of the parts that tasks of other parts read, and
   // the views of such tasks (used where the two parts' threads differ).
@@ -1762,6 +1769,7 @@ void Simulation::run_contact_task(ContactTask& task, double t, double dt) {
   in.node_area = contact_spans_.areas;
   in.mass = contact_spans_.mass;
   in.side = task.side;
+  in.face_temperature = contact_spans_.temp;
   sdk::ContactForceOutput out;
   out.force = task.force;
   out.tool_force = task.tool_force;

@@ -341,7 +341,7 @@ class Simulation {
   void one_thread_order(int passes);
   int thread_of_part(int part, int team) const;
   struct ContactSpans {  // per part views handed to the contact handlers every step
-    std::vector<std::span<const double>> vel, areas, mass;
+    std::vector<std::span<const double>> vel, areas, mass, temp;
   } contact_spans_;
   void accumulate_tool_heat(double dt);
   std::vector<sdk::PartView> part_views_;

@@ -46,7 +46,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.17.0 (plugin SDK 0.17.0, ABI 17)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.18.0 (plugin SDK 0.18.0, ABI 18)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -228,6 +228,9 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"conductance_table_lengths", [](json& j) { j["interactions"][0]["conductance_pressures"] = {0.0, 1e5}; j["interactions"][0]["conductance_values"] = {500.0, 1000.0, 2000.0}; }, "error: /interactions/0: contact handler 'penalty_node_surface': conductance_pressures has 2 entries, conductance_values has 3"},
       {"conductance_table_not_increasing", [](json& j) { j["interactions"][0]["conductance_pressures"] = {0.0, 1e5, 1e5}; j["interactions"][0]["conductance_values"] = {500.0, 1000.0, 2000.0}; }, "error: /interactions/0: contact handler 'penalty_node_surface': conductance_pressures must increase: entry 2 (100000 Pa) follows 100000 Pa"},
       {"conductance_table_negative", [](json& j) { j["interactions"][0]["conductance_pressures"] = {0.0, 1e5}; j["interactions"][0]["conductance_values"] = {500.0, -1.0}; }, "error: /interactions/0/conductance_values/1: must be >= 0 W/(m^2 K), found -1"},
+      {"friction_table_lengths", [](json& j) { j["interactions"][1]["friction_temperatures"] = {260.0, 300.0}; j["interactions"][1]["friction_values"] = {0.3}; }, "error: /interactions/1: contact handler 'penalty_node_surface': friction_temperatures has 2 entries, friction_values has 1"},
+      {"friction_table_not_increasing", [](json& j) { j["interactions"][1]["friction_temperatures"] = {300.0, 260.0}; j["interactions"][1]["friction_values"] = {0.1, 0.3}; }, "error: /interactions/1: contact handler 'penalty_node_surface': friction_temperatures must increase: entry 1 (260 degC) follows 300 degC"},
+      {"friction_table_negative", [](json& j) { j["interactions"][1]["friction_temperatures"] = {260.0, 300.0}; j["interactions"][1]["friction_values"] = {0.3, -0.1}; }, "error: /interactions/1/friction_values/1: must be >= 0, found -0.1"},
       {"negative_penalty", [](json& j) { j["interactions"][0]["penalty"] = -1.0; }, "error: /interactions/0/penalty: must be >= 0"},
       {"negative_friction", [](json& j) { j["interactions"][1]["friction"] = -0.1; }, "error: /interactions/1/friction: must be >= 0"},
       {"search_interval_on_a_tool", [](json& j) { j["interactions"][1]["search_interval"] = 2; }, "error: /interactions/1: contact handler 'penalty_node_surface': search_interval applies to ply/ply pairs only"},

@@ -6,7 +6,8 @@
 // - two plies pressed by a cold tool (heat through the interface),
 // - the faces that exchange heat when a ply is flipped or approaches from below,
 // - the contact pressure on a pressed ply and through a stack of two plies,
-// - a conductance that follows the contact pressure (eigen-series of a slab).
+// - a conductance that follows the contact pressure (eigen-series of a slab),
+// - a friction coefficient that follows the interface temperature.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -587,6 +588,159 @@ TEST(Contact, ConductanceFollowsThePressure) {
         EXPECT_GT(std::min(off_low, off_high), 3 * tol);
       }
     }
+  }
+}
+
+// A friction coefficient that follows the interface temperature, on the
+// tilted plane of CoulombSlideAndStickOnTiltedGravity (30 degrees, so the
+// ply slides at every coefficient of the table):
+// (a) without the thermal solver, a ply at 250, 290 and 310 degC: below,
+//     inside and beyond the table, with both friction models (with a slip
+//     velocity v0 the slide starts on the branch mu N v / v0: the closed
+//     form of that start, then Coulomb);
+// (b) a ply at 300 degC chilled by the die at 260 degC: its bottom face
+//     cools (probe, every thermal step) while the top face stays near 300;
+//     the slide is the double integral of g (sin a - mu(T_bottom) cos a),
+//     mu held at each thermal step's value until the next;
+// (c) a ply at 300 degC sliding on a fixed, larger ply at 270 degC
+//     (isothermal): the interface temperature is the mean, 285 (the table
+//     has a kink at 280, so that mu of the mean differs from the mean of
+//     the two faces' mu, which the two passes of the pair would give if
+//     each took its own node's face).
+// Required: slide within 0.5 % of the closed form, friction / normal force
+// within 0.5 % of mu(T) (the ply slides as a rigid body; its penalty
+// contact settles within a fraction of a millisecond, as in
+// CoulombSlideAndStickOnTiltedGravity, where the slide is within 0.01 %).
+// The coefficients of the wrong temperature (the top face or the
+// through-thickness mean in (b), either ply's face or the mean of their
+// coefficients in (c)) must put the slide farther than 10x the tolerance.
+TEST(Contact, FrictionFollowsTheTemperature) {
+  const double g = 9.81, a = 30.0 * M_PI / 180;
+  const std::vector<double> table_t = {260.0, 280.0, 300.0}, table_mu = {0.5, 0.4, 0.1};
+  auto mu_of = [&](double T) {
+    if (T <= table_t.front()) return table_mu.front();
+    if (T >= table_t.back()) return table_mu.back();
+    std::size_t k = 1;
+    while (T > table_t[k]) ++k;
+    return table_mu[k - 1] + (T - table_t[k - 1]) / (table_t[k] - table_t[k - 1]) * (table_mu[k] - table_mu[k - 1]);
+  };
+  auto slide = [&](double mu, double t) { return 0.5 * g * (std::sin(a) - mu * std::cos(a)) * t * t; };
+  // Rate-regularised (slip velocity v0): from rest v' = A - B v / v0 until
+  // v = v0 at t1, then v' = A - B (A = g sin a, B = mu g cos a < A).
+  auto slide_regularised = [&](double mu, double v0, double t) {
+    const double A = g * std::sin(a), B = mu * g * std::cos(a), c = v0 / B;
+    auto creep = [&](double s) { return A * c * (s - c * (1 - std::exp(-s / c))); };
+    const double t1 = -c * std::log(1 - B / A);
+    if (t <= t1) return creep(t);
+    return creep(t1) + v0 * (t - t1) + 0.5 * (A - B) * (t - t1) * (t - t1);
+  };
+  auto contact = [&](const std::string& first, const std::string& second, double v0) {
+    return json{{"type", "contact"}, {"between", {first, second}}, {"friction_temperatures", table_t},
+                {"friction_values", table_mu}, {"slip_velocity", v0}};
+  };
+  auto probe = [](const std::string& part, json quantities, double interval) {
+    json p = {{"name", "c"}, {"part", part}, {"at", {kSide / 2, kSide / 2, 0}}, {"quantities", quantities}};
+    if (interval > 0) p["interval"] = interval;
+    return json::array({p});
+  };
+  // (a)
+  {
+    const double t_end = 0.05;
+    for (const double v0 : {0.0, 1e-3})
+      for (const double T : {250.0, 290.0, 310.0}) {
+        json j = base_job(t_end);
+        j["parts"] = {ply("ply", 0.5 * kH, T)};
+        j["tools"] = {plane("die", 0.0, 1)};
+        j["interactions"] = {contact("die", "ply", v0)};
+        j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};
+        j["output"]["probes"] = probe("ply", {"displacement_x"}, t_end / 10);
+        const JobRun r = run_json(j);
+        ASSERT_TRUE(r.result.ok) << r.result.error;
+        const double ux = r.sample(0, "displacement_x", t_end)->values[0];
+        const double expected = v0 > 0 ? slide_regularised(mu_of(T), v0, t_end) : slide(mu_of(T), t_end);
+        const double ratio = std::abs(tool_value(r.result, 0, 0, true) / tool_value(r.result, 0, 2, true));
+        EXPECT_NEAR(ux / expected, 1.0, 0.005) << T << " degC, slip velocity " << v0;
+        EXPECT_NEAR(ratio, mu_of(T), 0.005 * mu_of(T)) << T << " degC, slip velocity " << v0;
+        std::printf("friction table, ply at %.0f degC, slip velocity %g: u %.5g m (mu(T) %.2f: %.5g m), "
+                    "friction/normal %.5f\n",
+                    T, v0, ux, mu_of(T), expected, ratio);
+      }
+  }
+  // (b)
+  {
+    const double t_end = 0.2;
+    json j = base_job(t_end);
+    j["parts"] = {ply("ply", 0.5 * kH, 300.0)};
+    j["tools"] = {plane("die", 0.0, 1, 260.0)};
+    j["interactions"] = {contact("die", "ply", 0.0)};
+    j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};
+    j["solvers"]["thermal"] = {{"splitter", "adi"}};
+    j["output"]["probes"] = probe("ply", {"temperature_profile", "displacement_x"}, 0.0);
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    // The bottom and top face values and the through-thickness mean at
+    // every thermal step, in time order.
+    std::vector<double> times, bottom, top, mean;
+    for (const ProbeSample& s : r.result.probes) {
+      if (s.quantity != "temperature_profile") continue;
+      times.push_back(s.time);
+      bottom.push_back(s.values.front());
+      top.push_back(s.values.back());
+      double m = 0;
+      for (std::size_t k = 0; k < s.values.size(); ++k)
+        m += (k == 0 || k + 1 == s.values.size() ? 0.5 : 1.0) * s.values[k] / (s.values.size() - 1);
+      mean.push_back(m);
+    }
+    ASSERT_GE(times.size(), 5u);
+    // u(t_end) with mu(T(t_k)) on [t_k, t_k+1).
+    auto integrate = [&](const std::vector<double>& temps) {
+      double u = 0, v = 0;
+      for (std::size_t k = 0; k + 1 < times.size(); ++k) {
+        const double dt = times[k + 1] - times[k];
+        const double acc = g * (std::sin(a) - mu_of(temps[k]) * std::cos(a));
+        u += v * dt + 0.5 * acc * dt * dt;
+        v += acc * dt;
+      }
+      return u;
+    };
+    const double ux = r.sample(0, "displacement_x", t_end)->values[0], expected = integrate(bottom);
+    const double ratio = std::abs(tool_value(r.result, 0, 0, true) / tool_value(r.result, 0, 2, true));
+    const double mu_last = mu_of(bottom[bottom.size() - 2]);  // the last step's forces: before the last thermal step
+    EXPECT_NEAR(ux / expected, 1.0, 0.005);
+    EXPECT_NEAR(ratio, mu_last, 0.005 * mu_last);
+    const double off_top = std::abs(integrate(top) / expected - 1), off_mean = std::abs(integrate(mean) / expected - 1);
+    EXPECT_GT(std::min(off_top, off_mean), 0.05);
+    std::printf("friction table, ply chilled by the die: %zu thermal steps, bottom face %.2f -> %.2f degC, top %.2f "
+                "degC at the end; u %.5g m (from mu(T_bottom) %.5g m; from the top face %+.1f %%, from the mean "
+                "%+.1f %%), friction/normal %.5f (mu %.5f)\n",
+                times.size() - 1, bottom.front(), bottom.back(), top.back(), ux, expected,
+                100 * (integrate(top) / expected - 1), 100 * (integrate(mean) / expected - 1), ratio, mu_last);
+  }
+  // (c)
+  {
+    const double t_end = 0.05;
+    json j = base_job(t_end);
+    json low = ply("low", 0.5 * kH, 270.0);
+    low["mesh"]["origin"] = {-0.01, -0.01, 0.5 * kH};
+    low["mesh"]["size"] = {0.05, 0.04};
+    low["mesh"]["divisions"] = {10, 8};
+    j["parts"] = {low, ply("up", 1.5 * kH, 300.0)};
+    j["interactions"] = {contact("up", "low", 0.0)};
+    j["constraints"] = {
+        {{"type", "fix"}, {"part", "low"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y", "z"}}}};
+    j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};
+    j["output"]["probes"] = probe("up", {"displacement_x"}, t_end / 10);
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    const double ux = r.sample(0, "displacement_x", t_end)->values[0], expected = slide(mu_of(285.0), t_end);
+    EXPECT_NEAR(ux / expected, 1.0, 0.005);
+    const double off_up = slide(mu_of(300.0), t_end) / expected - 1;
+    const double off_low = slide(mu_of(270.0), t_end) / expected - 1;
+    const double off_each = slide(0.5 * (mu_of(300.0) + mu_of(270.0)), t_end) / expected - 1;
+    EXPECT_GT(std::min({std::abs(off_up), std::abs(off_low), std::abs(off_each)}), 0.05);
+    std::printf("friction table, ply at 300 degC on a ply at 270 degC: u %.5g m (mu(285) %.3f: %.5g m; with the "
+                "upper ply's face %+.1f %%, the lower's %+.1f %%, each pass its own face %+.1f %%)\n",
+                ux, mu_of(285.0), expected, 100 * off_up, 100 * off_low, 100 * off_each);
   }
 }
 

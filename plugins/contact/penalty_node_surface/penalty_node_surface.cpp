@@ -24,6 +24,11 @@
 // conductance is a constant, or a table of the contact pressure
 // p = penalty * penetration (the pressure of the node's springs at that
 // moment), linear between its points and held beyond its ends.
+//
+// The friction coefficient is a constant, or a table of the interface
+// temperature, linear between its points and held beyond its ends: the
+// temperature of the ply's face that touches (against a tool), or the mean
+// of the two facing faces (ply/ply), as of the last thermal step.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -170,11 +175,14 @@ struct RateForce {
 // The tangential springs are cleared (there are none with a slip
 // velocity). Every node is computed, in contact or not: a vector pass over
 // all of them costs less than a scalar loop over those in contact.
-TS_VECTOR_CLONES
-void tool_force_block(int n, const double* __restrict dist, const double* __restrict tn, const double* __restrict v,
-                      const double* __restrict area, const double* __restrict mass, const double* vtool, double h2,
-                      double penalty, RateConstants c, double* __restrict f, double* __restrict energy,
-                      double* __restrict ft) {
+// With kTable, node i's friction coefficient is mu[i] (else c.friction).
+template <bool kTable>
+[[gnu::always_inline]] inline void tool_force_body(int n, const double* __restrict dist, const double* __restrict tn,
+                                                   const double* __restrict v, const double* __restrict area,
+                                                   const double* __restrict mass, const double* __restrict mu,
+                                                   const double* vtool, double h2, double penalty, RateConstants c,
+                                                   double* __restrict f, double* __restrict energy,
+                                                   double* __restrict ft) {
   const double w0 = vtool[0], w1 = vtool[1], w2 = vtool[2];
   const double c0 = c.damping2, c1 = c.friction, c2 = c.slip, c3 = c.half_share, c4 = c.dt;
 #pragma omp simd
@@ -182,7 +190,8 @@ void tool_force_block(int n, const double* __restrict dist, const double* __rest
     const double pen = h2 - dist[i];
     const bool on = (pen > 0) & !(pen > 2 * h2);
     const RateForce r = rate_force(pen, penalty * area[i], mass[i], tn[3 * i], tn[3 * i + 1], tn[3 * i + 2],
-                                   v[3 * i] - w0, v[3 * i + 1] - w1, v[3 * i + 2] - w2, c0, c1, c2, c3, c4);
+                                   v[3 * i] - w0, v[3 * i + 1] - w1, v[3 * i + 2] - w2, c0, kTable ? mu[i] : c1, c2,
+                                   c3, c4);
     energy[i] = on ? r.energy : 0.0;
     f[3 * i] = r.f0;
     f[3 * i + 1] = r.f1;
@@ -191,6 +200,20 @@ void tool_force_block(int n, const double* __restrict dist, const double* __rest
     ft[3 * i + 1] = 0.0;
     ft[3 * i + 2] = 0.0;
   }
+}
+TS_VECTOR_CLONES
+void tool_force_block(int n, const double* __restrict dist, const double* __restrict tn, const double* __restrict v,
+                      const double* __restrict area, const double* __restrict mass, const double* vtool, double h2,
+                      double penalty, RateConstants c, double* __restrict f, double* __restrict energy,
+                      double* __restrict ft) {
+  tool_force_body<false>(n, dist, tn, v, area, mass, nullptr, vtool, h2, penalty, c, f, energy, ft);
+}
+TS_VECTOR_CLONES
+void tool_force_block_mu(int n, const double* __restrict dist, const double* __restrict tn,
+                         const double* __restrict v, const double* __restrict area, const double* __restrict mass,
+                         const double* __restrict mu, const double* vtool, double h2, double penalty, RateConstants c,
+                         double* __restrict f, double* __restrict energy, double* __restrict ft) {
+  tool_force_body<true>(n, dist, tn, v, area, mass, mu, vtool, h2, penalty, c, f, energy, ft);
 }
 
 // Candidate target elements of every node of body A: a uniform bucket grid
@@ -375,6 +398,9 @@ struct Pass {
   // (-1: none), and per triangle of b its place (building the list).
   std::vector<int> kept_list, slot, used;
   std::vector<double> geo_kept;
+  // With a friction table: the unit normals of a's nodes, and (against a
+  // tool) each node's friction coefficient.
+  std::vector<double> nn, mu;
 };
 
 class PenaltyNodeSurface final : public sdk::ContactHandler {
@@ -401,6 +427,19 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
           return sdk::Status::failure(msg);
         }
       h_max_ = h_v_.empty() ? conductance_ : *std::max_element(h_v_.begin(), h_v_.end());
+      mu_t_ = params.list("friction_temperatures");
+      mu_v_ = params.list("friction_values");
+      if (mu_t_.size() != mu_v_.size())
+        return sdk::Status::failure("friction_temperatures has " + std::to_string(mu_t_.size()) +
+                                    " entries, friction_values has " + std::to_string(mu_v_.size()));
+      for (std::size_t k = 1; k < mu_t_.size(); ++k)
+        if (!(mu_t_[k] > mu_t_[k - 1])) {
+          char msg[160];
+          std::snprintf(msg, sizeof msg, "friction_temperatures must increase: entry %zu (%g degC) follows %g degC",
+                        k, mu_t_[k], mu_t_[k - 1]);
+          return sdk::Status::failure(msg);
+        }
+      has_friction_ = mu_v_.empty() ? friction_ > 0 : *std::max_element(mu_v_.begin(), mu_v_.end()) > 0;
       gap_tol_ = params.real("gap_tolerance");
       search_interval_ = params.integer("search_interval");
       if (search_interval_ != 1 && pair.second.type != sdk::BodyRef::Type::Part)
@@ -524,11 +563,28 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // gap tolerance but not pressed has p <= 0, taken as 0).
   double conductance_at(double p) const {
     if (h_p_.empty()) return conductance_;
-    if (!(p > h_p_.front())) return h_v_.front();
-    if (p >= h_p_.back()) return h_v_.back();
-    const std::size_t k = static_cast<std::size_t>(std::upper_bound(h_p_.begin(), h_p_.end(), p) - h_p_.begin());
-    const double s = (p - h_p_[k - 1]) / (h_p_[k] - h_p_[k - 1]);
-    return h_v_[k - 1] + s * (h_v_[k] - h_v_[k - 1]);
+    return table_at(h_p_, h_v_, p);
+  }
+  // The friction coefficient at interface temperature T (degC).
+  double friction_at(double T) const {
+    if (mu_t_.empty()) return friction_;
+    return table_at(mu_t_, mu_v_, T);
+  }
+  // y(x) of the table (xs increasing, ys as many), linear between its points
+  // and held beyond its ends.
+  static double table_at(const std::vector<double>& xs, const std::vector<double>& ys, double x) {
+    if (!(x > xs.front())) return ys.front();
+    if (x >= xs.back()) return ys.back();
+    const std::size_t k = static_cast<std::size_t>(std::upper_bound(xs.begin(), xs.end(), x) - xs.begin());
+    const double s = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
+    return ys[k - 1] + s * (ys[k] - ys[k - 1]);
+  }
+  // The temperature of face f of node i of part p as of the last thermal
+  // step (the part's initial temperature from a host that gives none).
+  static double face_temperature(const sdk::ContactForceInput& in, int p, int i, int f) {
+    if (static_cast<std::size_t>(p) >= in.face_temperature.size() || in.face_temperature[p].empty())
+      return in.parts[p].initial_temperature;
+    return in.face_temperature[p][2 * static_cast<std::size_t>(i) + f];
   }
 
   // Distances and normals of a's nodes to the tool, for the nodes that can
@@ -737,14 +793,15 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // rate_force()): n is the unit normal pushing the node out, vrel the
   // velocity relative to the target, m the effective mass, share this
   // pair's share of the node's friction (0.5 for each of the two ply/ply
-  // passes). Updates the node's tangential spring (none with a slip
-  // velocity); returns the stored spring energy.
-  double node_force(std::vector<double>& ftv, int i, double pen, double k, double m, double share, const Vec3& n,
-                    const Vec3& vrel, double dt, double* f) {
-    if (friction_ > 0 && slip_velocity_ > 0) {  // rate-regularised Coulomb friction
+  // passes), mu the node's friction coefficient. Updates the node's
+  // tangential spring (none with a slip velocity); returns the stored
+  // spring energy.
+  double node_force(std::vector<double>& ftv, int i, double pen, double k, double m, double share, double mu,
+                    const Vec3& n, const Vec3& vrel, double dt, double* f) {
+    if (has_friction_ && slip_velocity_ > 0) {  // rate-regularised Coulomb friction
       const RateConstants c = rate_constants(share, dt);
-      const RateForce r = rate_force(pen, k, m, n[0], n[1], n[2], vrel[0], vrel[1], vrel[2], c.damping2, c.friction,
-                                     c.slip, c.half_share, c.dt);
+      const RateForce r = rate_force(pen, k, m, n[0], n[1], n[2], vrel[0], vrel[1], vrel[2], c.damping2, mu, c.slip,
+                                     c.half_share, c.dt);
       for (int d = 0; d < 3; ++d) ftv[3 * static_cast<std::size_t>(i) + d] = 0.0;
       f[0] = r.f0;
       f[1] = r.f1;
@@ -757,12 +814,12 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const double fn = std::max(0.0, k * pen - damping_ * 2.0 * std::sqrt(k * m) * vn);
     double energy = 0.5 * k * pen * pen;
     Vec3 ft = {0, 0, 0};
-    if (friction_ > 0) {
+    if (has_friction_) {
       const Vec3 vt = sdk::sub(vrel, sdk::scale(n, vn));
       // The limit follows the penalty (elastic) pressure only: a limit that
       // followed the damper would tie the tangential force to the normal
       // velocity, a non-symmetric coupling that can feed vibrations.
-      const double lim = friction_ * k * pen;
+      const double lim = mu * k * pen;
       // Elastic slip: a tangential spring, held at the Coulomb limit while
       // sliding; last step's spring rotated into the current tangent plane.
       Vec3 old = sdk::load3(ftv.data(), i);
@@ -791,8 +848,9 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     }
     const Vec3 n = sdk::load3(tn_.data(), i);
     const Vec3 vrel = sdk::sub(sdk::load3(in.velocity[a.index].data(), i), vtool);
+    const double mu = mu_t_.empty() ? friction_ : pass_[0].mu[i];
     pass_[0].energy[i] = node_force(pass_[0].ft, i, pen, penalty_ * in.node_area[a.index][i], in.mass[a.index][i],
-                                    1.0, n, vrel, in.dt, &pass_[0].scratch[3 * static_cast<std::size_t>(i)]);
+                                    1.0, mu, n, vrel, in.dt, &pass_[0].scratch[3 * static_cast<std::size_t>(i)]);
   }
 
   // node_force()'s constants for rate_force().
@@ -813,14 +871,30 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // Written below for every node (energy) or every node in contact (forces).
     scratch.resize(3 * static_cast<std::size_t>(a.num_nodes));
     energy.resize(a.num_nodes);
-    if (friction_ > 0 && slip_velocity_ > 0) {  // vector lanes, chunks of kChunk nodes
+    const bool table = !mu_t_.empty();
+    if (table) {  // each node's coefficient at the temperature of its face that looks at the tool
+      Pass& ps = pass_[0];
+      node_normals(a, ps.nn);
+      ps.mu.resize(a.num_nodes);
+      for (int i = 0; i < a.num_nodes; ++i) {
+        const double c = sdk::dot(sdk::load3(tn_.data(), i), sdk::load3(ps.nn.data(), i));
+        const int face = c < 0 ? sdk::kTop : sdk::kBottom;  // as thermal_contacts
+        ps.mu[i] = friction_at(face_temperature(in, a.index, i, face));
+      }
+    }
+    if (has_friction_ && slip_velocity_ > 0) {  // vector lanes, chunks of kChunk nodes
       const int chunks = (a.num_nodes + kChunk - 1) / kChunk;
       const RateConstants c = rate_constants(1.0, in.dt);
       sdk::for_each_index(chunks, a.num_nodes > 256, 1, [&](int ch) {
         const std::size_t i0 = static_cast<std::size_t>(ch) * kChunk;
-        tool_force_block(std::min(kChunk, a.num_nodes - ch * kChunk), &dist_[i0], &tn_[3 * i0], &v[3 * i0], &area[i0],
-                         &in.mass[a.index][i0], vtool.data(), h2, penalty_, c, &scratch[3 * i0], &energy[i0],
-                         &pass_[0].ft[3 * i0]);
+        const int m = std::min(kChunk, a.num_nodes - ch * kChunk);
+        if (table)
+          tool_force_block_mu(m, &dist_[i0], &tn_[3 * i0], &v[3 * i0], &area[i0], &in.mass[a.index][i0],
+                              &pass_[0].mu[i0], vtool.data(), h2, penalty_, c, &scratch[3 * i0], &energy[i0],
+                              &pass_[0].ft[3 * i0]);
+        else
+          tool_force_block(m, &dist_[i0], &tn_[3 * i0], &v[3 * i0], &area[i0], &in.mass[a.index][i0], vtool.data(),
+                           h2, penalty_, c, &scratch[3 * i0], &energy[i0], &pass_[0].ft[3 * i0]);
       });
     } else {
       sdk::for_each_index(a.num_nodes, a.num_nodes > 256, kChunk, [&](int i) { tool_node(in, a, vtool, h2, i); });
@@ -894,6 +968,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       geometry_list(static_cast<int>(ps.kept_list.size()), ps.kept_list.data(), b.triangles.data(), b.x.data(),
                     ps.geo_kept.data());
     }
+    const bool table = !mu_t_.empty();
+    if (table) node_normals(a, ps.nn);
     // The nodes of a, dealt to the threads in interleaved chunks: the cost
     // of a node differs with where it lies (corner or centre of a cell, in
     // contact or not), and a mesh numbers such nodes in runs.
@@ -939,7 +1015,17 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       double mb = 0;
       for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
       const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
-      energy[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, sdk::scale(ne, ps.side[i]),
+      double mu = friction_;
+      if (table) {  // at the mean of the two facing faces' temperatures (the faces of thermal_contacts)
+        const double c = sdk::dot(sdk::load3(ps.nn.data(), i), ne);
+        const bool above = ps.side[i] > 0;
+        const int face_a = (above == (c > 0)) ? sdk::kBottom : sdk::kTop;
+        const int face_b = above ? sdk::kTop : sdk::kBottom;
+        double tb = 0;
+        for (int j = 0; j < 3; ++j) tb += pr.w[j] * face_temperature(in, b.index, t[j], face_b);
+        mu = friction_at(0.5 * (face_temperature(in, a.index, i, face_a) + tb));
+      }
+      energy[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, mu, sdk::scale(ne, ps.side[i]),
                               vrel, in.dt, &scratch[3 * static_cast<std::size_t>(i)]);
       tg[0] = pr.element;
       pen_of[i] = pen;
@@ -1015,6 +1101,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
 
   sdk::ContactPair pair_;
   double penalty_ = 0, friction_ = 0, slip_velocity_ = 0, damping_ = 0, conductance_ = 0, gap_tol_ = 0;
+  std::vector<double> mu_t_, mu_v_;  // friction table: temperatures (degC) and coefficients
+  bool has_friction_ = false;        // some friction coefficient above 0
   std::vector<double> h_p_, h_v_;  // conductance table: pressures (Pa), conductances (W/(m^2 K))
   double h_max_ = 0;  // the largest conductance the pair can give (W/(m^2 K))
   long long search_interval_ = 1;
@@ -1034,7 +1122,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.9.0";
+  d.version = "0.10.0";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces; gives the contact pressure as penalty x penetration";
   d.params = {
@@ -1043,8 +1131,18 @@ void register_all(sdk::Registrar& r) {
                       "0.5 mm ply up to 0.5 MPa contact pressure",
                       0.0),
       sdk::real_param("friction", "0.0", "-",
-                      "Coulomb friction coefficient, regularised as set by slip_velocity",
+                      "Coulomb friction coefficient, regularised as set by slip_velocity. Not used where "
+                      "friction_temperatures is given",
                       0.0),
+      sdk::list_param("friction_temperatures", "[]", "degC",
+                      "interface temperatures T_k, increasing, of a friction coefficient that follows the "
+                      "temperature: mu(T) is linear between the points (T_k, friction_values[k]) and held beyond "
+                      "the first and last; T is the temperature of the ply's face that touches (against a tool) or "
+                      "the mean of the two facing faces (ply/ply), as of the last thermal step (without the "
+                      "thermal solver, the initial temperatures). Empty: the constant friction",
+                      -1, -273.15),
+      sdk::list_param("friction_values", "[]", "-",
+                      "the friction coefficients at friction_temperatures (as many entries)", -1, 0.0),
       sdk::real_param("slip_velocity", "0.0", "m/s",
                       "friction regularisation. 0: elastic slip (a tangential spring of the penalty stiffness, "
                       "capped at friction times the normal force; parts can stick). > 0: rate-regularised Coulomb, "
@@ -1088,4 +1186,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.9.0", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.10.0", ts::contact::register_all)

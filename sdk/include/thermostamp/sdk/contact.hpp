@@ -56,6 +56,13 @@ struct ContactForceInput {
   // 0 the nodes of the pair's first body against the second body, 1 the
   // nodes of the second against the first, -1 both.
   int side = -1;
+  // Per part, 2 * num_nodes: the temperature (degC) of each node's bottom
+  // face (entry 2 i, at z = -h/2) and top face (entry 2 i + 1, at +h/2),
+  // the end values of the through-thickness field at the last thermal step
+  // (with one value per node, both that value; without the thermal solver,
+  // the initial temperatures). For interface laws that follow the
+  // temperature, such as a friction coefficient.
+  std::span<const std::span<const double>> face_temperature;
 };
 // The views in `parts` and `velocity` hold this step's values, but may be
 // copies of the kernel's arrays (with contact_schedule by_part, the other
