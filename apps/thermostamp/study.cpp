@@ -178,6 +178,9 @@ json run_outcomes(const RunResult& r, const Job& job) {
   if (thermal)
     for (std::size_t t = 0; t < job.tools.size() && t < r.energy.tool_heat.size(); ++t)
       o.push_back({job.tools[t].name + "_heat_J", r.energy.tool_heat[t]});
+  if (mechanics)
+    for (std::size_t t = 0; t < job.tools.size() && t < r.energy.tool_force_max.size(); ++t)
+      o.push_back({job.tools[t].name + "_force_max_N", r.energy.tool_force_max[t]});
   return o;
 }
 

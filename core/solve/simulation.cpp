@@ -1770,6 +1770,7 @@ void Simulation::run_contact_task(ContactTask& task, double t, double dt) {
   in.mass = contact_spans_.mass;
   in.side = task.side;
   in.face_temperature = contact_spans_.temp;
+  in.temperature_version = temperature_version_;
   sdk::ContactForceOutput out;
   out.force = task.force;
   out.tool_force = task.tool_force;
@@ -3159,6 +3160,20 @@ RunResult Simulation::run(const RunOptions& opt) {
     for (int d = 0; d < 3; ++d) result.energy.tool_forces.push_back(tool_force_[3 * q + d]);
     result.energy.tool_heat.push_back(tool_heat_[q]);
   }
+  if (job_.mechanics && !tools_.empty()) {  // the press force: the largest over the rows
+    const std::size_t nt = tools_.size(), stride = 1 + 8 * nt;
+    result.energy.tool_force_max.assign(nt, 0.0);
+    result.energy.tool_force_max_at.assign(nt, 0.0);
+    for (std::size_t r = 0; r + stride <= tool_rows.size(); r += stride)
+      for (std::size_t q = 0; q < nt; ++q) {
+        const double* f = &tool_rows[r + 1 + 8 * q + 3];
+        const double m = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+        if (m > result.energy.tool_force_max[q]) {
+          result.energy.tool_force_max[q] = m;
+          result.energy.tool_force_max_at[q] = tool_rows[r];
+        }
+      }
+  }
   for (const auto& m : mech_) result.energy.added_mass_percent.push_back(100 * m->mass_added / m->mass_physical);
   result.temperature_min = seen_min_;
   result.temperature_max = seen_max_;
@@ -3254,6 +3269,10 @@ RunResult Simulation::run(const RunOptions& opt) {
                        {"displacement_m", {u[0], u[1], u[2]}},
                        {"force_N", {tool_force_[3 * q], tool_force_[3 * q + 1], tool_force_[3 * q + 2]}},
                        {"heat_to_plies_J", tool_heat_[q]}});
+      if (q < result.energy.tool_force_max.size()) {
+        tools.back()["force_max_N"] = result.energy.tool_force_max[q];
+        tools.back()["force_max_at_s"] = result.energy.tool_force_max_at[q];
+      }
     }
     summary["tools"] = tools;
     if (job_.mechanics) {
@@ -3346,6 +3365,9 @@ RunResult Simulation::run(const RunOptions& opt) {
                 st.def->name, *mn, *mx, result.part_shear_min_deg[p], result.part_shear_max_deg[p], over,
                 result.part_fibre_strain_min[p], result.part_fibre_strain_max[p]);
     }
+    for (std::size_t q = 0; q < result.energy.tool_force_max.size(); ++q)
+      log->info("tool '{}': largest force {:.4g} N at t = {} s", job_.tools[q].name, result.energy.tool_force_max[q],
+                fmt_g(result.energy.tool_force_max_at[q], 4));
   }
   if (job_.thermal) {
     for (std::size_t p = 0; p < parts_.size(); ++p) {

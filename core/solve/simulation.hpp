@@ -55,6 +55,10 @@ struct EnergyAudit {
   std::vector<double> tool_forces;         // 3 per tool: force of the plies on the tool (N), last step
   std::vector<double> tool_displacements;  // 3 per tool (m)
   std::vector<double> tool_heat;           // per tool: heat given to the plies (J)
+  // per tool, with mechanics: the largest magnitude of the force of the
+  // plies on the tool over the rows of tools.csv (N), and the time of that
+  // row (s; the first such row)
+  std::vector<double> tool_force_max, tool_force_max_at;
 };
 
 struct RunResult {

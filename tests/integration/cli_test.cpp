@@ -194,6 +194,69 @@ TEST(Cli, StudyWritesItsTable) {
   EXPECT_EQ(lost.err.rfind("error: /job: cannot open job file '", 0), 0u) << lost.err;
 }
 
+// A study of a forming: study.csv gives each tool's largest force (the
+// press force), that of each run's summary, with the mechanics each ply's
+// largest shear. A ply pressed between a die and a holder under F and 2 F
+// (0.4 and 0.8 MPa on 20 x 20 mm), mechanics and thermal.
+TEST(Cli, StudyGivesTheToolForces) {
+  const auto dir = temp_dir("study_forces");
+  const double F = 160.0, h = 0.0005;
+  const json job = {
+      {"format", "thermostamp-job/1"},
+      {"name", "pressed"},
+      {"time", {{"end", 0.005}}},
+      {"materials", {{"ud", read_job_document(source_dir() / "share" / "materials" / "pa66_cf_ud.json")}}},
+      {"parts", {{{"name", "ply"}, {"thickness", h}, {"material", "ud"}, {"initial_temperature", 300.0},
+                  {"thickness_layers", 4},
+                  {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {0.02, 0.02}},
+                            {"divisions", {4, 4}}}}}}},
+      {"tools", {{{"name", "die"}, {"surface", {{"type", "plane"}, {"point", {0, 0, -0.5 * h}}, {"normal", {0, 0, 1}}}},
+                  {"temperature", 260.0}},
+                 {{"name", "holder"}, {"surface", {{"type", "plane"}, {"point", {0, 0, 0.5 * h}}, {"normal", {0, 0, -1}}}},
+                  {"temperature", 260.0},
+                  {"motion", {{"force", {0, 0, -F}}, {"mass", 0.1}, {"damping", 2000.0}}}}}},
+      {"interactions", {{{"type", "contact"}, {"between", {"die", "ply"}}},
+                        {{"type", "contact"}, {"between", {"holder", "ply"}}}}},
+      {"constraints", {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}}},
+      {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 2000.0}}}, {"thermal", {{"splitter", "adi"}}}}},
+      {"output", {{"interval", 0.005},
+                  {"probes", {{{"name", "c"}, {"part", "ply"}, {"at", {0.01, 0.01, 0}}, {"interval", 0.001}}}}}}};
+  std::ofstream(dir / "job.json") << job.dump(2);
+  const json st = {{"format", "thermostamp-study/1"},
+                   {"job", "job.json"},
+                   {"reference", {{"set", json::object()}}},
+                   {"variants", {{{"label", "twice"}, {"set", {{"tools.1.motion.force", {0, 0, -2 * F}}}}}}}};
+  std::ofstream(dir / "study.json") << st.dump(2);
+  const auto r = thermostamp("study " + q(dir / "study.json") + " --out " + q(dir / "out") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream csv(dir / "out" / "study.csv");
+  std::string line;
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    rows.push_back(cells);
+  }
+  ASSERT_EQ(rows.size(), 3u);  // header, reference, variant
+  auto col = [&](const std::string& name) {
+    const auto it = std::find(rows[0].begin(), rows[0].end(), name);
+    return it == rows[0].end() ? -1 : static_cast<int>(it - rows[0].begin());
+  };
+  const int die = col("die_force_max_N"), holder = col("holder_force_max_N"), shear = col("ply_shear_max_deg");
+  ASSERT_GE(die, 0) << line;
+  ASSERT_GE(holder, 0);
+  ASSERT_GE(shear, 0);
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    const json s = json::parse(std::ifstream(dir / "out" / rows[k][0] / "summary.json"));
+    for (const auto& [c, t] : {std::pair{die, 0}, std::pair{holder, 1}}) {
+      const double in_summary = s["tools"][t]["force_max_N"].get<double>();
+      EXPECT_NEAR(std::stod(rows[k][c]), in_summary, 5e-6 * in_summary) << rows[k][0];  // the table's 6 digits
+      EXPECT_GT(in_summary, 0.99 * F * k) << rows[k][0];
+    }
+  }
+}
+
 TEST(Cli, SetOverridesAValue) {
   const auto job = small_job("set");
   const auto out = job.parent_path() / "out";

@@ -163,8 +163,9 @@ void check_restart(const std::string& label, json j, double interval, std::strin
 // rate friction and a ply/ply search every 64th step, adi), from a
 // checkpoint at 0.6 s; with a shear angle limit that elements pass before
 // the checkpoint (the first row beyond it comes from the checkpoint), a die
-// whose temperature follows rows and a conductance that follows the
-// contact pressure on the ply/ply pair.
+// whose temperature follows rows, a conductance that follows the contact
+// pressure on the ply/ply pair, and a friction coefficient that follows
+// the temperature on the ply/ply pair and the die.
 TEST(Restart, HemisphereContinuesBitForBit) {
   json j = coarse_hemisphere("hemisphere_ud_2ply.json");
   j["output"]["shear_angle_limit"] = 0.3;
@@ -175,6 +176,11 @@ TEST(Restart, HemisphereContinuesBitForBit) {
       c.erase("conductance");
       c["conductance_pressures"] = {0.0, 1e3, 1e5};
       c["conductance_values"] = {300.0, 800.0, 2000.0};
+    }
+  for (auto& c : j["interactions"])
+    if (c.value("type", "") == "contact" && (c["between"][0] == "ply_top" || c["between"][0] == "die")) {
+      c["friction_temperatures"] = {260.0, 280.0, 300.0};
+      c["friction_values"] = {0.4, 0.3, 0.2};
     }
   std::filesystem::path dir;
   check_restart("hemisphere", j, 0.6, "", &dir);

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <sstream>
 #include <vector>
 
 #include "test_support.hpp"
@@ -80,8 +81,39 @@ TEST(Contact, PlyPressedBetweenTwoPlanes) {
                             {"quantities", {"contact_pressure"}}, {"interval", 0.01}},
                            {{"name", "corner"}, {"part", "ply"}, {"at", {0, 0, 0}},
                             {"quantities", {"contact_pressure"}}, {"interval", 0.01}}};
-  const JobRun r = run_json(j);
+  j["output"]["series_interval"] = 1e-4;
+  const auto dir = temp_dir("pressed_ply");
+  const JobRun r = run_json(j, 0, dir);
   ASSERT_TRUE(r.result.ok) << r.result.error;
+  // The summary's largest tool force (the press force) is that of the
+  // largest row of tools.csv, for each tool, and at least F (the holder
+  // overshoots F as it lands).
+  {
+    std::ifstream csv(dir / "tools.csv");
+    std::string line;
+    std::getline(csv, line);
+    double largest[2] = {0, 0}, at[2] = {0, 0};
+    while (std::getline(csv, line)) {
+      std::vector<std::string> v;
+      std::stringstream ss(line);
+      for (std::string item; std::getline(ss, item, ',');) v.push_back(item);
+      const int k = v.at(1) == "die" ? 0 : 1;
+      const double m = std::hypot(std::stod(v.at(5)), std::stod(v.at(6)), std::stod(v.at(7)));
+      if (m > largest[k]) {
+        largest[k] = m;
+        at[k] = std::stod(v.at(0));
+      }
+    }
+    const json summary = json::parse(std::ifstream(dir / "summary.json"));
+    for (int k = 0; k < 2; ++k) {
+      const json& tool = summary["tools"][k];
+      EXPECT_NEAR(tool["force_max_N"].get<double>(), largest[k], 1e-9 * largest[k]) << k;  // 10 digits in the csv
+      EXPECT_NEAR(tool["force_max_at_s"].get<double>(), at[k], 1e-12) << k;
+      EXPECT_GT(tool["force_max_N"].get<double>(), 0.99 * F) << k;
+      std::printf("pressed ply: largest force on the %s %.5g N at %.4g s (F %.4g N)\n", k ? "holder" : "die",
+                  tool["force_max_N"].get<double>(), tool["force_max_at_s"].get<double>(), F);
+    }
+  }
   // Both faces carry F / A at rest, at the centre and at a corner alike
   // (the pressure is per unit area, whatever a node's share of the area).
   const double p_centre = r.sample(0, "contact_pressure", 0.01)->values[0];

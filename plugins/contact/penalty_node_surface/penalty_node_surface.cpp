@@ -398,9 +398,15 @@ struct Pass {
   // (-1: none), and per triangle of b its place (building the list).
   std::vector<int> kept_list, slot, used;
   std::vector<double> geo_kept;
-  // With a friction table: the unit normals of a's nodes, and (against a
-  // tool) each node's friction coefficient.
-  std::vector<double> nn, mu;
+  // With a friction table: each node's coefficient at its bottom and top
+  // face (2 per node of a) for the face temperatures of `version`
+  // (ContactForceInput::temperature_version), whether a node of a has
+  // faces at different temperatures, the node normals of this call where
+  // thermal_contacts has given none, and (against a tool) each node's
+  // coefficient.
+  std::uint64_t version = 0;
+  bool faces_differ = false;
+  std::vector<double> mu2, nn_now, mu;
 };
 
 class PenaltyNodeSurface final : public sdk::ContactHandler {
@@ -486,8 +492,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
                                sdk::ThermalContactMap& out) override {
     return sdk::guarded([&] {
       const sdk::PartView& a = parts[pair_.first.index];
-      if (!(h_max_ > 0)) return sdk::Status::success();  // no heat exchange
+      // The node normals also choose the face whose temperature sets a
+      // friction table's coefficient (contact_forces).
+      const bool table = !mu_t_.empty();
+      if (!(h_max_ > 0) && !table) return sdk::Status::success();  // no heat exchange
       node_normals(a, nn_a_);
+      if (table && pair_.second.type == sdk::BodyRef::Type::Part) node_normals(parts[pair_.second.index], nn_b_);
+      if (!(h_max_ > 0)) return sdk::Status::success();
       if (pair_.second.type == sdk::BodyRef::Type::Tool) {
         const sdk::ToolView& tool = tools[pair_.second.index];
         query_tool(a, tool);
@@ -586,6 +597,34 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       return in.parts[p].initial_temperature;
     return in.face_temperature[p][2 * static_cast<std::size_t>(i) + f];
   }
+  // With a friction table: ps's coefficients at the faces of its nodes
+  // (renewed when the face temperatures change), and the node normals that
+  // choose the face where the two differ: those of the last
+  // thermal_contacts (every thermal step), else (no thermal solver) this
+  // call's. Returns the normals to use (empty where no node's faces differ).
+  const std::vector<double>& friction_faces(Pass& ps, const sdk::ContactForceInput& in, const sdk::PartView& a,
+                                            const std::vector<double>& thermal_normals) {
+    const std::size_t n = static_cast<std::size_t>(a.num_nodes);
+    if (in.temperature_version == 0 || ps.version != in.temperature_version || ps.mu2.size() != 2 * n) {
+      ps.version = in.temperature_version;
+      ps.mu2.resize(2 * n);
+      ps.faces_differ = false;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double tb = face_temperature(in, a.index, static_cast<int>(i), sdk::kBottom);
+        const double tt = face_temperature(in, a.index, static_cast<int>(i), sdk::kTop);
+        ps.faces_differ = ps.faces_differ || tb != tt;
+        ps.mu2[2 * i] = friction_at(tb);
+        ps.mu2[2 * i + 1] = friction_at(tt);
+      }
+    }
+    if (!ps.faces_differ) {
+      ps.nn_now.clear();
+      return ps.nn_now;
+    }
+    if (thermal_normals.size() == 3 * n) return thermal_normals;
+    node_normals(a, ps.nn_now);
+    return ps.nn_now;
+  }
 
   // Distances and normals of a's nodes to the tool, for the nodes that can
   // be within `cutoff` (ply thickness + gap tolerance: every force and heat
@@ -650,7 +689,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       ok = ok && a.io_array(ps.side) && a.io_array(ps.ft) && ps.cand.state_io(a) && a.io_vector(ps.kept) &&
            a.io(ps.calls) && a.io(ps.limit) && a.io_vector(ps.kept_list) && a.io_vector(ps.slot) &&
            a.io_vector(ps.used) && a.io_vector(ps.geo_kept) && a.io_vector(ps.geo_b);
-    return ok && a.io_vector(nn_a_) && a.io_vector(dist_) && a.io_vector(tn_) && a.io_vector(xq_) &&
+    return ok && a.io_vector(nn_a_) && a.io_vector(nn_b_) && a.io_vector(dist_) && a.io_vector(tn_) && a.io_vector(xq_) &&
            a.io_vector(sq_) && a.io(tool_path_) && a.io(tool_u_);
   }
 
@@ -874,12 +913,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const bool table = !mu_t_.empty();
     if (table) {  // each node's coefficient at the temperature of its face that looks at the tool
       Pass& ps = pass_[0];
-      node_normals(a, ps.nn);
+      const std::vector<double>& nn = friction_faces(ps, in, a, nn_a_);
       ps.mu.resize(a.num_nodes);
       for (int i = 0; i < a.num_nodes; ++i) {
-        const double c = sdk::dot(sdk::load3(tn_.data(), i), sdk::load3(ps.nn.data(), i));
-        const int face = c < 0 ? sdk::kTop : sdk::kBottom;  // as thermal_contacts
-        ps.mu[i] = friction_at(face_temperature(in, a.index, i, face));
+        const double c = nn.empty() ? 1.0 : sdk::dot(sdk::load3(tn_.data(), i), sdk::load3(nn.data(), i));
+        ps.mu[i] = ps.mu2[2 * static_cast<std::size_t>(i) + (c < 0 ? sdk::kTop : sdk::kBottom)];  // as thermal_contacts
       }
     }
     if (has_friction_ && slip_velocity_ > 0) {  // vector lanes, chunks of kChunk nodes
@@ -969,7 +1007,10 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
                     ps.geo_kept.data());
     }
     const bool table = !mu_t_.empty();
-    if (table) node_normals(a, ps.nn);
+    // The node's face temperatures through its pass's cache (the target's
+    // faces are read directly).
+    const std::vector<double>* nn = nullptr;
+    if (table) nn = &friction_faces(ps, in, a, &ps == &pass_[0] ? nn_a_ : nn_b_);
     // The nodes of a, dealt to the threads in interleaved chunks: the cost
     // of a node differs with where it lies (corner or centre of a cell, in
     // contact or not), and a mesh numbers such nodes in runs.
@@ -1017,7 +1058,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
       double mu = friction_;
       if (table) {  // at the mean of the two facing faces' temperatures (the faces of thermal_contacts)
-        const double c = sdk::dot(sdk::load3(ps.nn.data(), i), ne);
+        const double c = nn->empty() ? 1.0 : sdk::dot(sdk::load3(nn->data(), i), ne);
         const bool above = ps.side[i] > 0;
         const int face_a = (above == (c > 0)) ? sdk::kBottom : sdk::kTop;
         const int face_b = above ? sdk::kTop : sdk::kBottom;
@@ -1107,7 +1148,9 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   double h_max_ = 0;  // the largest conductance the pair can give (W/(m^2 K))
   long long search_interval_ = 1;
   Pass pass_[2];  // tool pairs use pass_[0].ft only
-  std::vector<double> nn_a_, dist_, tn_;
+  // Node normals of the first body at the last thermal_contacts, and of the
+  // second (a ply) where a friction table needs them.
+  std::vector<double> nn_a_, nn_b_, dist_, tn_;
   // Tool queries: where each node beyond the cutoff was last asked (xq_,
   // and the tool's path length then, sq_).
   std::vector<double> xq_, sq_;

@@ -2,6 +2,7 @@
 // Contact handlers: detect which faces of plies touch tools or other plies,
 // produce the thermal contact map (always) and contact forces (when the
 // mechanics solver runs).
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -63,6 +64,11 @@ struct ContactForceInput {
   // the initial temperatures). For interface laws that follow the
   // temperature, such as a friction coefficient.
   std::span<const std::span<const double>> face_temperature;
+  // A number that changes whenever face_temperature changes and never
+  // returns to an earlier value: calls with the same nonzero value see the
+  // same face temperatures, so a handler may keep what it derives from them
+  // from one call to the next. 0: unknown, they may differ at every call.
+  std::uint64_t temperature_version = 0;
 };
 // The views in `parts` and `velocity` hold this step's values, but may be
 // copies of the kernel's arrays (with contact_schedule by_part, the other
