@@ -422,29 +422,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       conductance_ = params.real("conductance");
       h_p_ = params.list("conductance_pressures");
       h_v_ = params.list("conductance_values");
-      if (h_p_.size() != h_v_.size())
-        return sdk::Status::failure("conductance_pressures has " + std::to_string(h_p_.size()) +
-                                    " entries, conductance_values has " + std::to_string(h_v_.size()));
-      for (std::size_t k = 1; k < h_p_.size(); ++k)
-        if (!(h_p_[k] > h_p_[k - 1])) {
-          char msg[160];
-          std::snprintf(msg, sizeof msg, "conductance_pressures must increase: entry %zu (%g Pa) follows %g Pa", k,
-                        h_p_[k], h_p_[k - 1]);
-          return sdk::Status::failure(msg);
-        }
+      if (auto st = check_table("conductance_pressures", "Pa", h_p_, "conductance_values", h_v_); !st) return st;
       h_max_ = h_v_.empty() ? conductance_ : *std::max_element(h_v_.begin(), h_v_.end());
       mu_t_ = params.list("friction_temperatures");
       mu_v_ = params.list("friction_values");
-      if (mu_t_.size() != mu_v_.size())
-        return sdk::Status::failure("friction_temperatures has " + std::to_string(mu_t_.size()) +
-                                    " entries, friction_values has " + std::to_string(mu_v_.size()));
-      for (std::size_t k = 1; k < mu_t_.size(); ++k)
-        if (!(mu_t_[k] > mu_t_[k - 1])) {
-          char msg[160];
-          std::snprintf(msg, sizeof msg, "friction_temperatures must increase: entry %zu (%g degC) follows %g degC",
-                        k, mu_t_[k], mu_t_[k - 1]);
-          return sdk::Status::failure(msg);
-        }
+      if (auto st = check_table("friction_temperatures", "degC", mu_t_, "friction_values", mu_v_); !st) return st;
       has_friction_ = mu_v_.empty() ? friction_ > 0 : *std::max_element(mu_v_.begin(), mu_v_.end()) > 0;
       gap_tol_ = params.real("gap_tolerance");
       search_interval_ = params.integer("search_interval");
@@ -570,6 +552,22 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   }
 
  private:
+  // A table of y at points x: as many entries of each, x increasing.
+  static sdk::Status check_table(const char* x_name, const char* x_unit, const std::vector<double>& x,
+                                 const char* y_name, const std::vector<double>& y) {
+    if (x.size() != y.size())
+      return sdk::Status::failure(std::string(x_name) + " has " + std::to_string(x.size()) + " entries, " + y_name +
+                                  " has " + std::to_string(y.size()));
+    for (std::size_t k = 1; k < x.size(); ++k)
+      if (!(x[k] > x[k - 1])) {
+        char msg[160];
+        std::snprintf(msg, sizeof msg, "%s must increase: entry %zu (%g %s) follows %g %s", x_name, k, x[k], x_unit,
+                      x[k - 1], x_unit);
+        return sdk::Status::failure(msg);
+      }
+    return sdk::Status::success();
+  }
+
   // The conductance (W/(m^2 K)) at contact pressure p (Pa; a face within the
   // gap tolerance but not pressed has p <= 0, taken as 0).
   double conductance_at(double p) const {
