@@ -213,13 +213,14 @@ inline const std::vector<std::string>& known_fields() {
   static const std::vector<std::string> f = {"temperature", "temperature_mean", "temperature_top",
                                              "temperature_bottom", "displacement", "velocity", "shear_angle",
                                              "fibre_direction", "contact_status", "contact_pressure",
-                                             "membrane_stress", "curvature", "membrane_strain", "conductance"};
+                                             "membrane_stress", "curvature", "membrane_strain", "conductance",
+                                             "tool_gap"};
   return f;
 }
 inline const std::vector<std::string>& known_probe_quantities() {
   static const std::vector<std::string> q = {"temperature_profile", "temperature_mean", "displacement_x",
                                              "displacement_y", "displacement_z", "shear_angle",
-                                             "contact_pressure", "fibre_strain", "conductance"};
+                                             "contact_pressure", "fibre_strain", "conductance", "tool_gap"};
   return q;
 }
 

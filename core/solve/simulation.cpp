@@ -130,6 +130,9 @@ struct PartState {
   // step (tool contact, convection and radiation, ply/ply links per unit
   // area), for the field and probe quantity `conductance`.
   std::vector<double> conductance_bottom, conductance_top;
+  // Per node, m: the gap from the ply's face to the nearest of its tools
+  // (Simulation::update_tool_gap), for the field and probe quantity `tool_gap`.
+  std::vector<double> tool_gap;
   // degC: the initial temperature (with initial temperatures from a results
   // file, their mean by heat capacity), for the laws probed at set-up.
   double t0 = 20.0;
@@ -367,6 +370,8 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), re
   for (const auto& p : job_.plugin_paths) registry_.add_search_dir(p);
   if (!job_.thermal && !job_.mechanics)
     throw JobError("/solvers", "nothing to run: set solvers.thermal (a thermal splitter such as \"adi\")");
+  want_tool_gap_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "tool_gap") !=
+                  job_.output.fields.end();
   want_conductance_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "conductance") !=
                       job_.output.fields.end();
   want_pressure_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "contact_pressure") !=
@@ -679,6 +684,38 @@ void Simulation::load_initial_temperature(PartState& st) {
   }
   logger("solve")->info("part '{}': initial temperatures from {} (part '{}', {} values per node)", def.name, where,
                         part, nl);
+}
+
+// The tools of the part's contact pairs; all of them where it has none.
+std::vector<int> Simulation::gap_tools(int part) const {
+  std::vector<int> tools;
+  for (const ContactDef& c : job_.contacts) {
+    if (c.second.is_tool && !c.first.is_tool && c.first.index == part) tools.push_back(c.second.index);
+    if (c.first.is_tool && !c.second.is_tool && c.second.index == part) tools.push_back(c.first.index);
+  }
+  if (tools.empty())
+    for (std::size_t t = 0; t < tools_.size(); ++t) tools.push_back(static_cast<int>(t));
+  return tools;
+}
+
+// The gaps of n nodes of part p (positions x, 3 per node) into gap.
+void Simulation::tool_gaps(int p, std::size_t n, const double* x, double* gap) const {
+  const PartState& st = *parts_[p];
+  const double h2 = 0.5 * st.def->thickness;
+  std::vector<double> d(n), normal(3 * n);
+  std::fill(gap, gap + n, kToolGapLimit);
+  for (const int t : gap_tools(p)) {
+    tools_[t]->query(n, x, kToolGapLimit + h2, d.data(), normal.data());
+    for (std::size_t i = 0; i < n; ++i) gap[i] = std::min(gap[i], d[i] - h2);
+  }
+}
+
+void Simulation::update_tool_gap() {
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    st.tool_gap.resize(st.mesh.num_nodes());
+    tool_gaps(static_cast<int>(p), st.tool_gap.size(), st.x.data(), st.tool_gap.data());
+  }
 }
 
 void Simulation::update_face_conductance() {
@@ -2309,6 +2346,8 @@ RunResult Simulation::run(const RunOptions& opt) {
         } else if (f == "conductance") {
           fields[p].push_back({"conductance_bottom", st.conductance_bottom.data()});
           fields[p].push_back({"conductance_top", st.conductance_top.data()});
+        } else if (f == "tool_gap") {
+          fields[p].push_back({"tool_gap", st.tool_gap.data()});
         } else if ((f == "membrane_stress" || f == "curvature" || f == "membrane_strain") && p < mech_.size()) {
           // Material-frame components [11, 22, 12] per element, as vectors.
           fields[p].push_back({f,
@@ -2445,6 +2484,7 @@ RunResult Simulation::run(const RunOptions& opt) {
     if (!writer) return;
     update_derived();
     if (want_conductance_) update_face_conductance();
+    if (want_tool_gap_) update_tool_gap();
     std::vector<const double*> xs, ns;
     for (auto& st : parts_) {
       xs.push_back(st->x.data());
@@ -2482,6 +2522,10 @@ RunResult Simulation::run(const RunOptions& opt) {
           s.values.push_back(m);
         } else if (quantity == "contact_pressure") {
           s.values.push_back(st.contact_pressure[i]);
+        } else if (quantity == "tool_gap") {
+          double gap = 0;
+          tool_gaps(pr.part, 1, &st.x[3 * static_cast<std::size_t>(i)], &gap);
+          s.values.push_back(gap);
         } else if (quantity == "conductance") {  // bottom and top face, at z = -h/2 and +h/2
           update_face_conductance();
           s.z = {-0.5 * st.def->thickness, 0.5 * st.def->thickness};

@@ -187,6 +187,16 @@ class Simulation {
   // The faces' conductances (conductance_bottom / _top of the parts) from
   // the last assembled faces and ply/ply links.
   void update_face_conductance();
+  // The parts' tool_gap: per node, the signed distance (m) from the ply's
+  // mid-surface to the nearest surface of the tools it has contact pairs
+  // with (of every tool where it has none), less half the thickness: the
+  // gap between the face and the tool, negative where the face is inside
+  // it; gaps beyond kToolGapLimit are shown as kToolGapLimit.
+  void update_tool_gap();
+  std::vector<int> gap_tools(int part) const;
+  void tool_gaps(int part, std::size_t n, const double* x, double* gap) const;
+  static constexpr double kToolGapLimit = 0.01;  // m
+  bool want_tool_gap_ = false;  // the field `tool_gap` is written
   // The initial temperatures of a part from a frame of an earlier run
   // (PartDef::initial_results); JobError where that cannot be done.
   void load_initial_temperature(PartState& st);

@@ -13,6 +13,8 @@ Writes into DIR/figures/:
   conductance_<part>.png  the conductance of each face of each ply (tool
                        contact, ply/ply, air), last frame, where the
                        frames have the field conductance
+  tool_gap_<part>.png  the gap between each ply and its tools (mm), last
+                       frame, where the frames have the field tool_gap
   tool_forces.png      force on each moving tool against its travel
                        (punch force against stroke), and heat per tool
   plies.png            each ply's mean temperature against time, in a
@@ -173,6 +175,19 @@ def conductance_map(out, part, time, tri, xyz, bottom, top):
     return save(fig, out, "conductance_%s.png" % part, dpi=110, tight=False)
 
 
+def tool_gap_map(out, part, time, tri, xyz, gap):
+    """The gap between one ply and its tools (per node, mm): 0 to 2 mm, where
+    a formed ply lies on its tools (about 0) or bridges, wrinkles or has not
+    reached them yet; gaps beyond 2 mm in the top colour."""
+    fig, ax = plt.subplots(figsize=(5.2, 4.4))
+    for mxy, mtri, v in mirrored(xyz[:, :2], tri, gap[tri].mean(axis=1), True):
+        pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.clip(v, 0.0, 2.0), vmin=0.0,
+                          vmax=2.0, cmap="magma_r")
+    finish_map(fig, ax, pc, "%s: gap to its tools, t = %.3g s\nlargest %.3g mm, smallest %.3g mm"
+               % (part, time, gap.max(), gap.min()), "mm")
+    return save(fig, out, "tool_gap_%s.png" % part, dpi=110, tight=False)
+
+
 def pressure_map(out, part, time, tri, xyz, vals):
     """The contact pressure of one ply (per node, kPa, some above zero): a log
     scale over three decades (a holder's pressure can be 50 times the
@@ -237,6 +252,8 @@ def plot_maps(folder, out):
             if "conductance_top" in g and "conductance_bottom" in g:
                 made.append(conductance_map(out, part, time, tri, xyz, g["conductance_bottom"][()],
                                             g["conductance_top"][()]))
+            if "tool_gap" in g:
+                made.append(tool_gap_map(out, part, time, tri, xyz, 1e3 * g["tool_gap"][()]))
     return made
 
 

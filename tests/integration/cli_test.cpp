@@ -1330,7 +1330,7 @@ TEST(Output, DatasetsCarryTheirUnits) {
       {"displacement", "m"},   {"velocity", "m/s"},          {"shear_angle", "deg"},
       {"fibre_direction", "1"}, {"contact_status", "1"},     {"contact_pressure", "Pa"},
       {"membrane_stress", "N/m"}, {"membrane_strain", "1"},  {"curvature", "1/m"},
-      {"conductance_bottom", "W/(m^2 K)"}, {"conductance_top", "W/(m^2 K)"}};
+      {"conductance_bottom", "W/(m^2 K)"}, {"conductance_top", "W/(m^2 K)"}, {"tool_gap", "m"}};
   const hid_t file = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
   auto text = [&](const std::string& object, const char* name) {

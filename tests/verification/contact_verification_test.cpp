@@ -7,9 +7,11 @@
 // - the faces that exchange heat when a ply is flipped or approaches from below,
 // - the contact pressure on a pressed ply and through a stack of two plies,
 // - a conductance that follows the contact pressure (eigen-series of a slab),
-// - a friction coefficient that follows the interface temperature.
+// - a friction coefficient that follows the interface temperature,
+// - the gap between each ply and its tools (field and probe tool_gap).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -774,6 +776,82 @@ TEST(Contact, FrictionFollowsTheTemperature) {
                 "upper ply's face %+.1f %%, the lower's %+.1f %%, each pass its own face %+.1f %%)\n",
                 ux, mu_of(285.0), expected, 100 * off_up, 100 * off_low, 100 * off_each);
   }
+}
+
+// The field and probe quantity tool_gap against the geometry, in a
+// thermal-only run (nothing moves): ply "flat" 1.5 mm above a plane die
+// (its pair), gap 1.5 mm - h/2 at every node; ply "capped" 3 mm above the
+// plane under a sphere (R 5 mm, centre 10 mm above the ply's centre, its
+// pair): |x - c| - R - h/2, the corners beyond the 10 mm limit shown as
+// 10 mm; ply "free" (2 mm up) with no pair: the nearest of all tools,
+// here a meshed plane 1 mm up (an STL file), which the other plies, whose
+// pairs do not name it, must not see (it is 0.5 mm under "flat").
+// Required: within
+// 1e-12 m of the closed forms (pure geometry, doubles), and the probe's
+// value that of the field at its node.
+TEST(ToolGap, FieldAndProbeAgainstTheGeometry) {
+  const double R = 0.005, h2 = 0.5 * kH, limit = 0.01;
+  const auto dir = temp_dir("tool_gap");
+  {
+    std::ofstream st(dir / "floor.stl");  // the plane z = 1 mm, normal +z, beyond the plies
+    st << "solid floor\n";
+    for (const auto& tri : {std::array<double, 6>{-0.1, -0.1, 0.1, -0.1, 0.1, 0.1},
+                            std::array<double, 6>{-0.1, -0.1, 0.1, 0.1, -0.1, 0.1}}) {
+      st << " facet normal 0 0 1\n  outer loop\n";
+      for (int k = 0; k < 3; ++k) st << "   vertex " << tri[2 * k] << ' ' << tri[2 * k + 1] << " 0.001\n";
+      st << "  endloop\n endfacet\n";
+    }
+    st << "endsolid floor\n";
+  }
+  json j = base_job(0.01);
+  json free_ply = ply("free", 0.002);
+  free_ply["mesh"]["origin"] = {0.03, 0.0, 0.0005};
+  j["parts"] = {ply("flat", 0.0015), ply("capped", 0.003), free_ply};
+  j["tools"] = {plane("die", 0.0, 1),
+                {{"name", "cap"},
+                 {"surface", {{"type", "sphere"}, {"centre", {kSide / 2, kSide / 2, 0.013}}, {"radius", R}}},
+                 {"temperature", 260.0}},
+                {{"name", "floor"}, {"surface", {{"type", "mesh"}, {"file", (dir / "floor.stl").string()}}},
+                 {"temperature", 260.0}}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "flat"}}},
+                       {{"type", "contact"}, {"between", {"cap", "capped"}}}};
+  j["solvers"] = {{"thermal", {{"splitter", "adi"}}}};
+  j["output"]["fields"] = {"tool_gap"};
+  j["output"]["probes"] = {{{"name", "c"}, {"part", "capped"}, {"at", {kSide / 2, kSide / 2, 0.003}},
+                            {"quantities", {"tool_gap"}}}};
+  const JobRun r = run_json(j, 0, dir / "out");
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const hid_t file = H5Fopen((dir / "out" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  double worst = 0;
+  int limited = 0, floor_nearest = 0;
+  for (const char* name : {"flat", "capped", "free"}) {
+    const std::string at = std::string("frames/000001/") + name + "/";
+    const auto x = read_dataset<double>(file, at + "nodes");
+    const auto gap = read_dataset<double>(file, at + "tool_gap");
+    ASSERT_EQ(3 * gap.size(), x.size()) << name;
+    for (std::size_t i = 0; i < gap.size(); ++i) {
+      const double px = x[3 * i], py = x[3 * i + 1], pz = x[3 * i + 2];
+      const double to_sphere = std::sqrt((px - kSide / 2) * (px - kSide / 2) + (py - kSide / 2) * (py - kSide / 2) +
+                                         (pz - 0.013) * (pz - 0.013)) - R - h2;
+      const double to_die = pz - h2, to_floor = pz - 0.001 - h2;
+      const std::string n = name;
+      const double exact = n == "flat" ? to_die : n == "capped" ? to_sphere : std::min({to_die, to_sphere, to_floor});
+      limited += exact > limit;
+      floor_nearest += n == "free" && to_floor < to_die;
+      worst = std::max(worst, std::abs(gap[i] - std::min(exact, limit)));
+    }
+  }
+  H5Fclose(file);
+  EXPECT_LT(worst, 1e-12);
+  EXPECT_GT(limited, 0);  // the capped ply's corners
+  EXPECT_EQ(floor_nearest, 25);  // every node of the free ply sees the meshed plane first
+  const ProbeSample* s = r.sample(0, "tool_gap", 0.01);
+  ASSERT_NE(s, nullptr);
+  EXPECT_NEAR(s->values[0], 0.01 - R - h2, 1e-12);  // the capped ply's centre, under the sphere's pole
+  std::printf("tool gap: largest difference from the geometry %.3g m over three plies, %d node(s) at the 10 mm "
+              "limit; probe under the sphere %.6g m (%.6g m)\n",
+              worst, limited, s->values[0], 0.01 - R - h2);
 }
 
 }  // namespace ts::test
