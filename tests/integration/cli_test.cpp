@@ -1268,17 +1268,7 @@ TEST(Output, JobAsRunRunsTheSameJobFromAnywhere) {
     }
     m << "$EndElements\n";
   }
-  {
-    std::ofstream s(dir / "die.stl");  // the plane z = 0, normal +z, beyond the plies
-    s << "solid die\n";
-    for (const auto& tri : {std::array<double, 6>{-0.01, -0.01, 0.06, -0.01, 0.06, 0.06},
-                            std::array<double, 6>{-0.01, -0.01, 0.06, 0.06, -0.01, 0.06}}) {
-      s << " facet normal 0 0 1\n  outer loop\n";
-      for (int k = 0; k < 3; ++k) s << "   vertex " << tri[2 * k] << ' ' << tri[2 * k + 1] << " 0\n";
-      s << "  endloop\n endfacet\n";
-    }
-    s << "endsolid die\n";
-  }
+  write_square_stl(dir / "die.stl", -0.01, 0.06, 0.0);  // the plane z = 0, normal +z, beyond the plies
   const auto out = dir / "out";
   const auto r = thermostamp("run " + q(job) + " --out " + q(out) + " --quiet --set output.interval=0.5");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -151,4 +151,15 @@ double slab_robin_mean(double t, double L, double alpha, double Bi, double T0, d
   return Tinf + (T0 - Tinf) * slab_robin_sum(t, L, alpha, Bi, [](double l) { return std::sin(l) / l; });
 }
 
+void write_square_stl(const std::filesystem::path& file, double lo, double hi, double z) {
+  std::ofstream s(file);
+  s << "solid square\n";
+  for (const auto& tri : {std::array<double, 6>{lo, lo, hi, lo, hi, hi}, std::array<double, 6>{lo, lo, hi, hi, lo, hi}}) {
+    s << " facet normal 0 0 1\n  outer loop\n";
+    for (int k = 0; k < 3; ++k) s << "   vertex " << tri[2 * k] << ' ' << tri[2 * k + 1] << ' ' << z << "\n";
+    s << "  endloop\n endfacet\n";
+  }
+  s << "endsolid square\n";
+}
+
 }  // namespace ts::test

@@ -69,6 +69,10 @@ std::filesystem::path binary_dir();
 std::filesystem::path source_dir();
 std::filesystem::path temp_dir(const std::string& name);
 
+// An STL file of the square [lo, hi]^2 in the plane z (two triangles,
+// normal +z), for a meshed tool.
+void write_square_stl(const std::filesystem::path& file, double lo, double hi, double z);
+
 // Plane wall, thickness L, insulated at x = 0, Robin (h, T_inf) at x = L,
 // initially T0: T(x, t) from the eigen-series (lambda tan lambda = Bi).
 double slab_robin_series(double x, double t, double L, double alpha, double Bi, double T0, double Tinf);

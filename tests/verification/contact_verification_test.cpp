@@ -11,7 +11,6 @@
 // - the gap between each ply and its tools (field and probe tool_gap).
 #include <gtest/gtest.h>
 
-#include <array>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -793,17 +792,7 @@ TEST(Contact, FrictionFollowsTheTemperature) {
 TEST(ToolGap, FieldAndProbeAgainstTheGeometry) {
   const double R = 0.005, h2 = 0.5 * kH, limit = 0.01;
   const auto dir = temp_dir("tool_gap");
-  {
-    std::ofstream st(dir / "floor.stl");  // the plane z = 1 mm, normal +z, beyond the plies
-    st << "solid floor\n";
-    for (const auto& tri : {std::array<double, 6>{-0.1, -0.1, 0.1, -0.1, 0.1, 0.1},
-                            std::array<double, 6>{-0.1, -0.1, 0.1, 0.1, -0.1, 0.1}}) {
-      st << " facet normal 0 0 1\n  outer loop\n";
-      for (int k = 0; k < 3; ++k) st << "   vertex " << tri[2 * k] << ' ' << tri[2 * k + 1] << " 0.001\n";
-      st << "  endloop\n endfacet\n";
-    }
-    st << "endsolid floor\n";
-  }
+  write_square_stl(dir / "floor.stl", -0.1, 0.1, 0.001);  // the plane z = 1 mm, normal +z, beyond the plies
   json j = base_job(0.01);
   json free_ply = ply("free", 0.002);
   free_ply["mesh"]["origin"] = {0.03, 0.0, 0.0005};
