@@ -2456,6 +2456,14 @@ RunResult Simulation::run(const RunOptions& opt) {
                 m.mass_added_contact > 0.5 * m.mass_added ? " or the contacts' penalty" : "");
   log->info("thermal contact: {} tool face node(s), {} ply/ply link(s)", contact_map_.tool_contacts.size(),
             contact_map_.links.size());
+  // A probe without an interval records every thermal step: say so where
+  // that is many samples (a short thermal step over a long stroke).
+  if (job_.thermal && thermal_dt_ > 0)
+    for (std::size_t q = 0; q < job_.output.probes.size(); ++q)
+      if (const double n = job_.t_end / thermal_dt_; job_.output.probes[q].interval <= 0 && n > 1e5)
+        log->warn("probe '{}' has no interval: it records at every thermal step, up to {:.3g} samples; set "
+                  "{}/interval for fewer",
+                  job_.output.probes[q].name, n, job_.output.probes[q].pointer);
 
   auto update_derived = [&] {
     for (auto& st : parts_) {

@@ -613,6 +613,34 @@ TEST(SharedJobs, AllValidate) {
 
 // A coupled thermo-mechanical job from the command line: outputs, reactions,
 // energy history, shear-angle probes.
+// A probe without an interval records at every thermal step (the job
+// format): where that can be many samples, the log says so and names the
+// key that sets fewer. The strip job with a thermal step of 10 ns over
+// 2 ms (up to 2e5 samples; the thermal steps follow the 2 us mechanical
+// steps, so the run is short), and with the probe's interval set.
+TEST(Cli, ProbeWithoutIntervalOnShortThermalStepsIsNamed) {
+  for (const bool with_interval : {false, true}) {
+    const auto dir = temp_dir(with_interval ? "probe_samples_interval" : "probe_samples");
+    json j = read_job_document(source_dir() / "share" / "jobs" / "ud_strip_tension.json");
+    j["time"]["end"] = 0.002;
+    j["output"]["interval"] = 0.001;
+    j["solvers"]["thermal"]["dt"] = 1e-8;
+    if (with_interval) {
+      j["output"]["probes"][0]["interval"] = 0.001;
+    } else {
+      j["output"]["probes"][0].erase("interval");
+    }
+    std::ofstream(dir / "job.json") << j.dump(2);
+    const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out") + " --quiet");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::stringstream log;
+    log << std::ifstream(dir / "out" / "log.txt").rdbuf();
+    const bool warned = log.str().find("probe 'centre' has no interval: it records at every thermal step, up to "
+                                       "2e+05 samples; set /output/probes/0/interval for fewer") != std::string::npos;
+    EXPECT_EQ(warned, !with_interval) << log.str();
+  }
+}
+
 TEST(Cli, MechanicsJobWritesEnergyAndReactions) {
   const auto dir = temp_dir("mech_cli");
   json j = read_job_document(source_dir() / "share" / "jobs" / "ud_strip_tension.json");
