@@ -3038,24 +3038,16 @@ RunResult Simulation::run(const RunOptions& opt) {
           next_sample += series_iv;
         }
         for (std::size_t q = 0; q < next_probe.size(); ++q) {
-          if (job_.thermal && job_.output.probes[q].interval <= 0) {  // every thermal step
-            if (thermal_stepped) {
-              tc = Clock::now();
-              update_element_fields();
-              sample_probes(t, q);
-              timing_[kTimeOutput] += seconds_since(tc);
-            }
-            continue;
-          }
-          // Without the thermal solver, a probe without an interval samples at the frames' interval.
+          // A probe without an interval samples at every thermal step, or
+          // without the thermal solver at the frames' interval.
+          const bool every_thermal = job_.thermal && job_.output.probes[q].interval <= 0;
           const double iv = job_.output.probes[q].interval > 0 ? job_.output.probes[q].interval : interval;
-          if (t >= next_probe[q] - eps_t || next_probe[q] <= 0) {
-            tc = Clock::now();
-            update_element_fields();
-            sample_probes(t, q);
-            timing_[kTimeOutput] += seconds_since(tc);
-            advance_past(next_probe[q], iv, t + eps_t);
-          }
+          if (every_thermal ? !thermal_stepped : !(t >= next_probe[q] - eps_t || next_probe[q] <= 0)) continue;
+          tc = Clock::now();
+          update_element_fields();
+          sample_probes(t, q);
+          timing_[kTimeOutput] += seconds_since(tc);
+          if (!every_thermal) advance_past(next_probe[q], iv, t + eps_t);
         }
         if (t >= next_frame - eps_t) {
           tc = Clock::now();
