@@ -91,6 +91,9 @@ void check_slab_robin(const Job& j, const std::string& ptr) {
   if (!ok)
     throw JobError(ptr, "the analytic reference 'slab_robin' needs one part, no contact and one heat_exchange on "
                         "its whole top face");
+  if (!j.materials[j.parts[0].material].specific_heat_table.empty())
+    throw JobError(ptr, "the analytic reference 'slab_robin' needs a constant specific_heat (the part's material "
+                        "gives rows)");
 }
 
 // The slab of a job that check_slab_robin accepted, at x from its

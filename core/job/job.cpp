@@ -30,6 +30,34 @@ double temperature_or_rows(ObjectReader& r, const std::string& key, std::optiona
   }
   return rows.front()[1];
 }
+// A specific heat (J/(kg K)) given as a number, or as rows [T (degC), c]
+// with increasing temperatures (into `rows`, left empty where every value
+// is the same). Returns the number, or the rows' smallest value.
+double specific_heat_or_rows(ObjectReader& r, std::vector<std::array<double, 2>>& rows) {
+  const json* v = r.optional_raw("specific_heat");
+  if (!v || !v->is_array()) return r.real("specific_heat", std::nullopt, 0.0, true);
+  const std::string tp = r.at("specific_heat");
+  if (v->empty()) throw JobError(tp, "expected a number (J/kg/K) or rows [T (degC), c (J/kg/K)]");
+  for (std::size_t k = 0; k < v->size(); ++k) {
+    const std::string rp = pointer_append(tp, k);
+    const auto row = as_reals((*v)[k], rp, 2);
+    if (!(row[0] >= -273.15)) throw JobError(pointer_append(rp, 0), "must be >= -273.15 degC");
+    if (k > 0 && !(row[0] > rows.back()[0])) throw JobError(pointer_append(rp, 0), "temperatures must increase from row to row");
+    if (!(row[1] > 0)) {
+      std::ostringstream os;
+      os << "must be > 0 J/kg/K, found " << row[1];
+      throw JobError(pointer_append(rp, 1), os.str());
+    }
+    rows.push_back({row[0], row[1]});
+  }
+  double c_min = rows.front()[1], c_max = c_min;
+  for (const auto& row : rows) {
+    c_min = std::min(c_min, row[1]);
+    c_max = std::max(c_max, row[1]);
+  }
+  if (c_min == c_max) rows.clear();
+  return c_min;
+}
 }  // namespace
 
 double rows_mean(const std::vector<std::array<double, 2>>& tab, double t0, double t1) {
@@ -250,7 +278,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       m.has_thermal = r.has("specific_heat") || r.has("conductivity");
       if (m.has_thermal) {
         m.density = r.real("density", std::nullopt, 0.0, true);
-        m.specific_heat = r.real("specific_heat", std::nullopt, 0.0, true);
+        m.specific_heat = specific_heat_or_rows(r, m.specific_heat_table);
         const auto k = r.reals("conductivity", 3);
         for (int d = 0; d < 3; ++d)
           if (!(k[d] > 0)) throw JobError(pointer_append(r.at("conductivity"), d), "conductivity must be > 0");

@@ -13,7 +13,12 @@ namespace ts {
 struct MaterialDef {
   std::string name;
   std::string pointer;
+  // specific_heat: J/(kg K); with a table, its smallest value (the one the
+  // thermal splitters advance with, see solve/heat_capacity.hpp).
   double density = 0, specific_heat = 0;
+  // Rows [T (degC), c (J/(kg K))] of a specific heat that depends on the
+  // temperature; empty for a constant one (a table of equal values too).
+  std::vector<std::array<double, 2>> specific_heat_table;
   std::array<double, 3> conductivity{0, 0, 0};  // k11, k22, k33
   bool has_thermal = false;
   json membrane, bending;  // null when absent

@@ -33,6 +33,7 @@
 #include "io/logging.hpp"
 #include "io/results_reader.hpp"
 #include "io/results_writer.hpp"
+#include "solve/heat_capacity.hpp"
 #include "solve/interrupt.hpp"
 #include "solve/tools.hpp"
 #include "solve/subnormals.hpp"
@@ -125,6 +126,10 @@ struct PartState {
   sdk::large_vector<double> x;  // positions (m), on huge pages where offered (sdk/memory.hpp)
   int nz = 1;
   std::vector<double> T, cap, mean, top, bottom;
+  // A specific heat that depends on the temperature (empty: constant), and
+  // the temperatures before the thermal step under way (solve/heat_capacity.hpp).
+  HeatCapacityTable cp;
+  std::vector<double> T_step;
   std::vector<double> h_bottom, t_bottom, h_top, t_top;
   // Per node, W/(m^2 K): the conductance of each face at the last thermal
   // step (tool contact, convection and radiation, ply/ply links per unit
@@ -522,6 +527,10 @@ void Simulation::build_thermal() {
     const std::size_t n = static_cast<std::size_t>(st.mesh.num_nodes()) * st.nz;
     st.T.assign(n, st.def->initial_temperature);
     st.cap.assign(n, 0.0);
+    if (const MaterialDef& mat = job_.materials[st.def->material]; !mat.specific_heat_table.empty()) {
+      st.cp = HeatCapacityTable(mat.specific_heat_table);
+      st.T_step.assign(n, 0.0);
+    }
     if (auto s = splitter_->capacities(static_cast<int>(p), st.cap); !s)
       throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);
     st.t0 = st.def->initial_temperature;
@@ -2050,6 +2059,34 @@ void Simulation::build_probes() {
   }
 }
 
+void Simulation::keep_step_temperatures() {
+  for (auto& st : parts_) {
+    if (st->cp.empty()) continue;
+    const long long n = static_cast<long long>(st->T.size());
+    const double* T = st->T.data();
+    double* T0 = st->T_step.data();
+#pragma omp parallel for schedule(static) if (n > 8192)
+    for (long long k = 0; k < n; ++k) T0[k] = T[k];
+  }
+}
+
+// The splitter advanced with c_min; each value gets the heat it was given,
+// c_min (T* - T_old) per kg, on the table's enthalpy curve.
+void Simulation::apply_heat_capacity() {
+  for (auto& stp : parts_) {
+    PartState& st = *stp;
+    if (st.cp.empty()) continue;
+    const HeatCapacityTable& cp = st.cp;
+    const double c_min = cp.c_min();
+    const long long n = static_cast<long long>(st.T.size());
+    double* T = st.T.data();
+    const double* T0 = st.T_step.data();
+#pragma omp parallel for schedule(static) if (n > 8192)
+    for (long long k = 0; k < n; ++k)
+      if (T[k] != T0[k]) T[k] = cp.advance(T0[k], c_min * (T[k] - T0[k]));
+  }
+}
+
 double Simulation::stored_heat() const {
   double e = 0;
   for (std::size_t p = 0; p < parts_.size(); ++p) e += stored_heat(static_cast<int>(p));
@@ -2059,6 +2096,11 @@ double Simulation::stored_heat() const {
 double Simulation::stored_heat(int part) const {
   const PartState& st = *parts_.at(part);
   double e = 0;
+  if (!st.cp.empty()) {  // the capacities are those of c_min: mass x c_min
+    const double per_c = 1.0 / st.cp.c_min();
+    for (std::size_t k = 0; k < st.T.size(); ++k) e += st.cap[k] * per_c * st.cp.enthalpy(st.T[k]);
+    return e;
+  }
   for (std::size_t k = 0; k < st.T.size(); ++k) e += st.cap[k] * st.T[k];
   return e;
 }
@@ -2442,6 +2484,16 @@ RunResult Simulation::run(const RunOptions& opt) {
   else
     log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s), subnormals {}", job_.name, parts_.size(),
               tools_.size(), threads, flushed.mode());
+  if (job_.thermal)
+    for (const auto& st : parts_)
+      if (!st->cp.empty()) {
+        const auto& rows = job_.materials[st->def->material].specific_heat_table;
+        double c_max = 0;
+        for (const auto& r : rows) c_max = std::max(c_max, r[1]);
+        log->info("part '{}': specific heat from {} rows between {:g} and {:g} degC, {:g} to {:g} J/(kg K) (the "
+                  "thermal steps are taken with the smallest, the heat stored follows the rows)",
+                  st->def->name, rows.size(), rows.front()[0], rows.back()[0], st->cp.c_min(), c_max);
+      }
   for (std::size_t p = 0; p < mech_.size(); ++p)
     log->info("part '{}': mass {:.6g} kg, added by mass scaling {:.6g} kg ({:.3g} %)", parts_[p]->def->name,
               mech_[p]->mass_physical, mech_[p]->mass_added, 100 * mech_[p]->mass_added / mech_[p]->mass_physical);
@@ -2978,11 +3030,13 @@ RunResult Simulation::run(const RunOptions& opt) {
             in.links = contact_map_.links;
             in.links_changed = true;
             sdk::ThermalStepReport rep;
+            keep_step_temperatures();
             if (auto st = splitter_->advance(in, Tspans, &rep); !st)
               throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + st.message);
             heat_in += rep.heat_in;
             limited_total += rep.limited;
             accumulate_tool_heat(in.dt);
+            apply_heat_capacity();
             timing_[kTimeThermal] += seconds_since(tc);
             ++steps;
             t_thermal = t;
@@ -3076,10 +3130,12 @@ RunResult Simulation::run(const RunOptions& opt) {
         in.dt = step;
         update_far_temperatures(t, t + step);
         sdk::ThermalStepReport rep;
+        keep_step_temperatures();
         if (auto s = splitter_->advance(in, Tspans, &rep); !s)
           throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);
         in.links_changed = false;
         accumulate_tool_heat(step);
+        apply_heat_capacity();
         ++steps;
         t += step;
         heat_in += rep.heat_in;

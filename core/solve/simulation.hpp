@@ -133,7 +133,8 @@ class Simulation {
   // without mechanics) and the thermal one (0 without thermal). Before run().
   double initial_mechanical_step();
   double thermal_step() const { return thermal_dt_; }
-  // Heat stored in the plies, J (sum of capacity x temperature, relative to 0 degC).
+  // Heat stored in the plies, J, relative to 0 degC (sum of capacity x temperature;
+  // with a specific heat table, of mass x int_0^T c).
   double stored_heat() const;
   double stored_heat(int part) const;
   // Replaces the initial temperature of a part by one value per node
@@ -154,6 +155,10 @@ class Simulation {
   void build_parts();
   void build_tools();
   void build_thermal();
+  // A specific heat table (solve/heat_capacity.hpp): the temperatures before
+  // a thermal step, and the enthalpy correction after it.
+  void keep_step_temperatures();
+  void apply_heat_capacity();
   void build_probes();
   void build_mechanics();
   // One explicit step of every part; returns the step taken.

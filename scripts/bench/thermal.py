@@ -2,7 +2,9 @@
 """Thermal benchmarks: cost of the adi splitter per node-layer-step against
 mesh size and threads, and adi against layered3d on the contact patch.
 
-Usage: scripts/bench/thermal.py [--quick]   (after a Release build in build/)
+Usage: scripts/bench/thermal.py [--quick] [--specific-heat]   (after a Release build in build/)
+--specific-heat runs only the comparison of a constant specific heat with
+a table whose peak the plate cools through.
 Prints Markdown tables (copied into docs/benchmarks.md).
 """
 import json
@@ -15,7 +17,12 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 EXE = os.environ.get("THERMOSTAMP_EXE", os.path.join(ROOT, "build", "bin", "thermostamp"))
 
 
-def plate_job(divisions, layers, splitter, steps, dt, linked=False):
+# A specific heat table whose peak the benchmark plate (300 degC, sinks at
+# 250-260 degC) cools through.
+PEAK_ROWS = [[280.0, 1775.0], [290.0, 3775.0], [300.0, 1775.0]]
+
+
+def plate_job(divisions, layers, splitter, steps, dt, linked=False, specific_heat=1775.0):
     size = divisions * 0.001  # 1 mm elements
     part = {
         "name": "ply", "thickness": 0.0005, "material": "m", "fibre_direction": [1, 1, 0],
@@ -39,7 +46,7 @@ def plate_job(divisions, layers, splitter, steps, dt, linked=False):
     return {
         "format": "thermostamp-job/1", "name": "bench",
         "time": {"end": steps * dt},
-        "materials": {"m": {"density": 1294.0, "specific_heat": 1775.0, "conductivity": [3.89, 0.31, 0.31]}},
+        "materials": {"m": {"density": 1294.0, "specific_heat": specific_heat, "conductivity": [3.89, 0.31, 0.31]}},
         "parts": parts, "interactions": inter,
         "solvers": {"mechanics": None, "thermal": {"splitter": splitter, "through_thickness": "implicit", "dt": dt}},
         "output": {"interval": steps * dt, "fields": ["temperature_mean"], "checkpoint_at_end": False},
@@ -59,6 +66,21 @@ def main():
     quick = "--quick" in sys.argv
     sizes = [100, 316] if quick else [100, 316, 1000]
     layers, steps, dt = 16, 20, 0.01
+    if "--specific-heat" in sys.argv:
+        print("### adi (implicit), a constant specific heat against rows %s, %d layers, %d steps\n"
+              % (PEAK_ROWS, layers, steps))
+        print("| nodes | threads | constant: wall (s) | ns per node-layer-step | table: wall (s) | ns per node-layer-step | ratio |")
+        print("|---|---|---|---|---|---|---|")
+        for n in sizes:
+            for th in (1, 2):
+                nodes = (n + 1) ** 2
+                a = run(plate_job(n, layers, "adi", steps, dt), th)
+                b = run(plate_job(n, layers, "adi", steps, dt, specific_heat=PEAK_ROWS), th)
+                per = nodes * (layers + 1) * steps / 1e9
+                print("| %d | %d | %.3f | %.2f | %.3f | %.2f | %.2f |" % (
+                    nodes, th, a["wall_time_s"], a["wall_time_s"] / per, b["wall_time_s"], b["wall_time_s"] / per,
+                    b["wall_time_s"] / a["wall_time_s"]))
+        return
     print("### adi (implicit) cost per node-layer-step, one ply, %d layers, %d steps\n" % (layers, steps))
     print("| nodes | threads | wall time (s) | ns per node-layer-step | speed-up |")
     print("|---|---|---|---|---|")

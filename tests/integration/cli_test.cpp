@@ -59,7 +59,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.18.0 (plugin SDK 0.18.0, ABI 18)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.19.0 (plugin SDK 0.18.0, ABI 18)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -197,6 +197,15 @@ TEST(Cli, StudyWritesItsTable) {
   const auto lost = thermostamp("study " + q(dir / "bad.json") + " --out " + q(dir / "bad") + " --quiet");
   EXPECT_EQ(lost.exit_code, 2);
   EXPECT_EQ(lost.err.rfind("error: /job: cannot open job file '", 0), 0u) << lost.err;
+  // The eigen-series holds for a constant specific heat only.
+  st["job"] = (source_dir() / "share" / "verification" / "slab_robin.json").string();
+  st["variants"][1]["set"] = {{"materials.pa66_cf_ud.specific_heat", {{250.0, 1775.0}, {300.0, 2000.0}}}};
+  std::ofstream(dir / "bad.json") << st.dump(2);
+  const auto table = thermostamp("study " + q(dir / "bad.json") + " --out " + q(dir / "bad") + " --quiet");
+  EXPECT_EQ(table.exit_code, 2);
+  EXPECT_EQ(table.err.rfind("error: /variants/1: the analytic reference 'slab_robin' needs a constant specific_heat", 0),
+            0u)
+      << table.err;
 }
 
 // A study of a forming: study.csv gives each tool's largest force (the
@@ -300,6 +309,10 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"tool_temperature_times", [](json& j) { j["tools"][0]["temperature"] = {{0.0, 260.0}, {1.0, 250.0}, {1.0, 240.0}}; }, "error: /tools/0/temperature/2: times must increase from row to row"},
       {"tool_temperature_row", [](json& j) { j["tools"][0]["temperature"] = {{0.0, 260.0}, {1.0}}; }, "error: /tools/0/temperature/1: expected 2 numbers"},
       {"tool_temperature_absolute_zero", [](json& j) { j["tools"][0]["temperature"] = {{0.0, 260.0}, {1.0, -300.0}}; }, "error: /tools/0/temperature/1/1: must be >= -273.15 degC"},
+      {"specific_heat_temperatures", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = {{240.0, 1775.0}, {230.0, 4000.0}}; }, "error: /materials/pa66_cf_ud/specific_heat/1/0: temperatures must increase from row to row"},
+      {"specific_heat_row", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = {{240.0, 1775.0}, {250.0}}; }, "error: /materials/pa66_cf_ud/specific_heat/1: expected 2 numbers"},
+      {"specific_heat_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = {{240.0, 1775.0}, {250.0, -1.0}}; }, "error: /materials/pa66_cf_ud/specific_heat/1/1: must be > 0 J/kg/K, found -1"},
+      {"specific_heat_empty", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = json::array(); }, "error: /materials/pa66_cf_ud/specific_heat: expected a number (J/kg/K) or rows [T (degC), c (J/kg/K)]"},
       {"emissivity_above_one", [](json& j) { j["interactions"][2]["emissivity"] = 1.5; }, "error: /interactions/2/emissivity: must be <= 1, found 1.5"},
       {"heat_exchange_without_h", [](json& j) { j["interactions"][2].erase("h"); }, "error: /interactions/2/h: "},
       {"ambient_rows_times", [](json& j) { j["interactions"][2]["ambient"] = {{0.0, 260.0}, {0.0, 250.0}}; }, "error: /interactions/2/ambient/1: times must increase from row to row"},
@@ -1718,8 +1731,9 @@ TEST(Cli, MechanicsBadMaterialParameter) {
 namespace ts::test {
 namespace {
 
-// `thermostamp schema` describes every shipped job, and rejects a typo and
-// an unknown probe quantity (validated with Debian's python3-jsonschema).
+// `thermostamp schema` describes every shipped job and a specific heat
+// given as rows, and rejects a typo, a row of three numbers and an unknown
+// probe quantity (validated with Debian's python3-jsonschema).
 TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   const auto dir = temp_dir("schema");
   const auto r = thermostamp("schema");
@@ -1736,6 +1750,12 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   json with_checkpoints = read_job_document(source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json");
   with_checkpoints["output"]["checkpoint_interval"] = 1.0;
   std::ofstream(dir / "checkpoints.json") << with_checkpoints.dump();
+  json with_table = with_checkpoints;  // a specific heat that follows the temperature
+  with_table["materials"]["pa66_cf_ud"]["specific_heat"] = {{220.0, 1775.0}, {230.0, 4775.0}, {240.0, 1775.0}};
+  std::ofstream(dir / "table.json") << with_table.dump();
+  json bad_table = with_table;
+  bad_table["materials"]["pa66_cf_ud"]["specific_heat"] = {{220.0, 1775.0, 1.0}};
+  std::ofstream(dir / "bad_table.json") << bad_table.dump();
   // A probe with a quantity the kernel does not know.
   json probe = with_checkpoints;
   probe["output"]["probes"][0]["quantities"] = {"temperature_mean", "fibre_strian"};
@@ -1746,8 +1766,9 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
     good += q(e.path()) + " ";
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
-  good += q(dir / "checkpoints.json") + " ";
+  good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "typo.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "probe.json") + " >/dev/null").c_str()), 0);
 }

@@ -164,10 +164,13 @@ void check_restart(const std::string& label, json j, double interval, std::strin
 // checkpoint at 0.6 s; with a shear angle limit that elements pass before
 // the checkpoint (the first row beyond it comes from the checkpoint), a die
 // whose temperature follows rows, a conductance that follows the contact
-// pressure on the ply/ply pair, and a friction coefficient that follows
-// the temperature on the ply/ply pair and the die.
+// pressure on the ply/ply pair, a friction coefficient that follows
+// the temperature on the ply/ply pair and the die, and a specific heat that
+// follows the temperature (a peak inside the plies' range; heat balance of
+// the continued run under 1e-9).
 TEST(Restart, HemisphereContinuesBitForBit) {
   json j = coarse_hemisphere("hemisphere_ud_2ply.json");
+  j["materials"]["pa66_cf_ud"]["specific_heat"] = {{260.0, 1775.0}, {280.0, 2775.0}, {300.0, 1775.0}};
   j["output"]["shear_angle_limit"] = 0.3;
   for (auto& t : j["tools"])
     if (t["name"] == "die") t["temperature"] = {{0.0, 260.0}, {0.5, 250.0}, {1.0, 265.0}};
@@ -185,6 +188,8 @@ TEST(Restart, HemisphereContinuesBitForBit) {
   std::filesystem::path dir;
   check_restart("hemisphere", j, 0.6, "", &dir);
   const json s = json::parse(std::ifstream(dir / "continued" / "summary.json"));
+  EXPECT_LT(s["heat"]["balance_error"].get<double>(), 1e-9);
+  EXPECT_LT(s["heat"]["faces_in_J"].get<double>(), -1.0);
   for (const auto& p : s["parts"]) {
     ASSERT_TRUE(p["over_shear_limit_from_s"].is_number()) << p.dump();
     EXPECT_LT(p["over_shear_limit_from_s"].get<double>(), 0.6);
