@@ -92,9 +92,10 @@ void keep_from(double from, std::vector<double>& times, Beside&... beside) {
   (beside.resize(kept), ...);
 }
 
-// Records |a - b| of one value in d (a NaN difference, once seen, stays).
+// Records |a - b| of one value in d (a NaN difference, once seen, stays;
+// two NaN are the same value: a time that neither run reached).
 void take(Difference& d, double a, double b, double time) {
-  const double diff = std::abs(a - b);
+  const double diff = std::isnan(a) && std::isnan(b) ? 0.0 : std::abs(a - b);
   if (d.values == 0 || diff > d.max_abs || (std::isnan(diff) && !std::isnan(d.max_abs))) {
     d.max_abs = diff;
     d.at_time = time;

@@ -82,6 +82,7 @@ std::string field_units(const std::string& name) {
   if (name == "nodes" || name == "layer_nodes" || name == "displacement") return "m";
   if (name == "velocity") return "m/s";
   if (name == "tool_gap") return "m";
+  if (name == "below_threshold_from" || name == "all_below_threshold_from") return "s";
   if (name == "shear_angle") return "deg";
   if (name == "contact_pressure") return "Pa";
   if (name.rfind("conductance", 0) == 0) return "W/(m^2 K)";

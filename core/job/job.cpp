@@ -728,6 +728,9 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
         if (!dym.empty()) msg += "; " + dym;
         throw JobError(pointer_append(r.at("fields"), i), msg + "; valid fields: " + join(known_fields()));
       }
+      if (f == "below_threshold_from" && (job.output.temperature_threshold.empty() || !job.thermal))
+        throw JobError(pointer_append(r.at("fields"), i),
+                       "the field 'below_threshold_from' needs output.temperature_threshold and the thermal solver");
     }
     if (const json* pr = r.optional_raw("probes")) {
       if (!pr->is_array()) throw JobError(r.at("probes"), "expected an array, found " + json_type_name(*pr));

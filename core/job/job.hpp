@@ -219,7 +219,7 @@ inline const std::vector<std::string>& known_fields() {
                                              "temperature_bottom", "displacement", "velocity", "shear_angle",
                                              "fibre_direction", "contact_status", "contact_pressure",
                                              "membrane_stress", "curvature", "membrane_strain", "conductance",
-                                             "tool_gap"};
+                                             "tool_gap", "below_threshold_from"};
   return f;
 }
 inline const std::vector<std::string>& known_probe_quantities() {

@@ -138,6 +138,10 @@ struct PartState {
   // Per node, m: the gap from the ply's face to the nearest of its tools
   // (Simulation::update_tool_gap), for the field and probe quantity `tool_gap`.
   std::vector<double> tool_gap;
+  // Per node, s: the first time a value of the node, and every value, was
+  // below output.temperature_threshold (NaN: not yet), for the field
+  // `below_threshold_from` (empty unless asked for).
+  std::vector<double> below_from, all_below_from;
   // degC: the initial temperature (with initial temperatures from a results
   // file, their mean by heat capacity), for the laws probed at set-up.
   double t0 = 20.0;
@@ -2139,6 +2143,26 @@ void Simulation::check_field(double time, long long step) {
     seen_max_ = std::max(seen_max_, hi);
     if (!thresholds.empty() && below_from_[p] < 0 && lo < thresholds[p]) below_from_[p] = time;
     if (!thresholds.empty() && all_below_from_[p] < 0 && hi < thresholds[p]) all_below_from_[p] = time;
+    if (!st->below_from.empty() && lo < thresholds[p] && !(all_below_from_[p] >= 0 && all_below_from_[p] < time)) {
+      // Node by node, until every node has set through (then nothing changes).
+      const int nz = st->nz;
+      const double th = thresholds[p];
+      double* below = parts_[p]->below_from.data();
+      double* all_below = parts_[p]->all_below_from.data();
+      const long long nn = st->mesh.num_nodes();
+#pragma omp parallel for schedule(static) if (n > 65536)
+      for (long long i = 0; i < nn; ++i) {
+        if (!std::isnan(all_below[i])) continue;
+        const double* Ti = T + static_cast<std::size_t>(nz) * i;
+        double mn = Ti[0], mx = Ti[0];
+        for (int k = 1; k < nz; ++k) {
+          mn = Ti[k] < mn ? Ti[k] : mn;
+          mx = Ti[k] > mx ? Ti[k] : mx;
+        }
+        if (std::isnan(below[i]) && mn < th) below[i] = time;
+        if (mx < th) all_below[i] = time;
+      }
+    }
     if (!bad) continue;
     for (std::size_t k = 0; k < n; ++k) {
       if (!std::isfinite(st->T[k])) {
@@ -2235,7 +2259,8 @@ bool Simulation::state_io(A& a) {
   for (std::size_t k = 0; k < warned.size(); ++k) law_uses_[k].warned = warned[k] != 0;
   for (auto& st : parts_)
     ok = ok && a.io_array(st->x) && a.io_array(st->T) && a.io_array(st->contact_status) &&
-         a.io_array(st->contact_pressure) && a.io_array(st->shear_angle);
+         a.io_array(st->contact_pressure) && a.io_array(st->shear_angle) && a.io_array(st->below_from) &&
+         a.io_array(st->all_below_from);
   for (auto& m : mech_)
     ok = ok && a.io_array(m->v) && a.io_array(m->f_int) && a.io_array(m->f_con) && a.io(m->pending_work) &&
          a.io_array(m->block_dt) && a.io_array(m->block_bdt) && a.io(m->bend_dt) && a.io_array(m->stress) &&
@@ -2390,6 +2415,9 @@ RunResult Simulation::run(const RunOptions& opt) {
           fields[p].push_back({"conductance_top", st.conductance_top.data()});
         } else if (f == "tool_gap") {
           fields[p].push_back({"tool_gap", st.tool_gap.data()});
+        } else if (f == "below_threshold_from") {
+          fields[p].push_back({"below_threshold_from", st.below_from.data()});
+          fields[p].push_back({"all_below_threshold_from", st.all_below_from.data()});
         } else if ((f == "membrane_stress" || f == "curvature" || f == "membrane_strain") && p < mech_.size()) {
           // Material-frame components [11, 22, 12] per element, as vectors.
           fields[p].push_back({f,
@@ -2791,6 +2819,12 @@ RunResult Simulation::run(const RunOptions& opt) {
   below_from_.assign(parts_.size(), -1.0);
   all_below_from_.assign(parts_.size(), -1.0);
   over_from_.assign(parts_.size(), -1.0);
+  if (std::find(job_.output.fields.begin(), job_.output.fields.end(), "below_threshold_from") !=
+      job_.output.fields.end())
+    for (auto& st : parts_) {
+      st->below_from.assign(st->mesh.num_nodes(), std::numeric_limits<double>::quiet_NaN());
+      st->all_below_from.assign(st->mesh.num_nodes(), std::numeric_limits<double>::quiet_NaN());
+    }
   // The mechanics loop's own state (explicit dynamics; the thermal
   // splitter advances every `subcycle` mechanical steps over the time
   // elapsed since its last step).

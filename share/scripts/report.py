@@ -15,6 +15,11 @@ Writes into DIR/figures/:
                        frames have the field conductance
   tool_gap_<part>.png  the gap between each ply and its tools (mm), last
                        frame, where the frames have the field tool_gap
+  below_threshold_<part>.png  when each place of each ply first had a
+                       value, and had every value, below
+                       output.temperature_threshold (s; grey: not by the
+                       last frame), where the frames have the field
+                       below_threshold_from
   tool_forces.png      force on each moving tool against its travel
                        (punch force against stroke), and heat per tool
   plies.png            each ply's mean temperature against time, in a
@@ -188,6 +193,27 @@ def tool_gap_map(out, part, time, tri, xyz, gap):
     return save(fig, out, "tool_gap_%s.png" % part, dpi=110, tight=False)
 
 
+def threshold_map(out, part, time, tri, xyz, some, every, threshold):
+    """When each place of one ply went below the temperature threshold (per
+    node, s): a value of the node's thickness (left) and all of them (right);
+    a triangle takes its last node's time, grey where a node had not by the
+    last frame."""
+    cmap = plt.get_cmap("viridis").copy()
+    cmap.set_bad("lightgrey")
+    fig, axes = plt.subplots(1, 2, figsize=(11.4, 4.4))
+    fig.subplots_adjust(wspace=0.45)
+    title = "below %g degC" % threshold if threshold is not None else "below the threshold"
+    for ax, (what, vals) in zip(axes, (("a value " + title, some), ("every value " + title, every))):
+        face = vals[tri].max(axis=1)  # NaN where a node has not gone below
+        for mxy, mtri, v in mirrored(xyz[:, :2], tri, face, True):
+            pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.ma.masked_invalid(v), vmin=0.0,
+                              vmax=max(time, 1e-12), cmap=cmap)
+        done = np.count_nonzero(~np.isnan(vals))
+        finish_map(fig, ax, pc, "%s: %s from (s)\n%d of %d nodes by t = %.3g s; grey: not yet"
+                   % (part, what, done, vals.size, time), "s")
+    return save(fig, out, "below_threshold_%s.png" % part, dpi=110, tight=False)
+
+
 def pressure_map(out, part, time, tri, xyz, vals):
     """The contact pressure of one ply (per node, kPa, some above zero): a log
     scale over three decades (a holder's pressure can be 50 times the
@@ -204,6 +230,17 @@ def pressure_map(out, part, time, tri, xyz, vals):
     finish_map(fig, ax, pc, "%s: contact pressure (larger face), t = %.3g s\nmax %.3g kPa; grey: no contact"
                % (part, time, top), "kPa")
     return save(fig, out, "pressure_%s.png" % part, dpi=110, tight=False)
+
+
+def threshold_of(folder, part):
+    """The ply's output.temperature_threshold from summary.json, None if unknown."""
+    try:
+        for p in json.load(open(os.path.join(folder, "summary.json"))).get("parts", []):
+            if p.get("name") == part:
+                return p.get("temperature_threshold")
+    except (OSError, ValueError):
+        pass
+    return None
 
 
 def plot_maps(folder, out):
@@ -254,6 +291,9 @@ def plot_maps(folder, out):
                                             g["conductance_top"][()]))
             if "tool_gap" in g:
                 made.append(tool_gap_map(out, part, time, tri, xyz, 1e3 * g["tool_gap"][()]))
+            if "below_threshold_from" in g and "all_below_threshold_from" in g:
+                made.append(threshold_map(out, part, time, tri, xyz, g["below_threshold_from"][()],
+                                          g["all_below_threshold_from"][()], threshold_of(folder, part)))
     return made
 
 

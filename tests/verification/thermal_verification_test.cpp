@@ -2,7 +2,9 @@
 // independent fine 1D reference. Each tolerance is stated with its reason.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <sstream>
 #include <array>
@@ -960,6 +962,95 @@ TEST(SpecificHeatTable, SlabThroughALatentPeakAgainstAFineReference) {
     }
     std::printf("%s %s: largest error %.4f K; top face at 3 s %.3f degC (reference %.3f)\n", splitter.c_str(),
                 scheme.c_str(), worst, r.sample(0, "temperature_profile", 3.0)->values.back(), ref.at(3, 0.5 * kH));
+  }
+}
+
+// The field below_threshold_from: per node, the first thermal step at
+// whose end a value of the node's thickness (below_threshold_from) and
+// every value (all_below_threshold_from) was below
+// output.temperature_threshold. A ply chilled on a disc of its top face
+// (adi, 8 layers, dt 0.01 s, threshold 280 degC): at five nodes, probes
+// without an interval record every thermal step's profile, from which the
+// test finds both times; the field at the last frame must give them
+// exactly (the same steps), and NaN at a node that never went below (the
+// far corner, 20 mm from the disc). The ply's first time in summary.json is
+// the smallest over the nodes. With the chill on the whole face every node
+// sets through, and every node's times are the ply's.
+TEST(PlyHistory, NodeTimesBelowTheThresholdAgainstTheProbes) {
+  const auto dir = temp_dir("node_threshold_times");
+  const std::vector<std::array<double, 2>> at = {{0.0, 0.0}, {0.005, 0.0}, {0.0075, 0.0025}, {0.01, 0.0}, {0.02, 0.02}};
+  for (const bool disc : {true, false}) {
+    json j = ply_job("adi", 8, 2.0, 0.5);
+    j["parts"][0]["mesh"] = {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {0.02, 0.02}}, {"divisions", {8, 8}}};
+    j["solvers"]["thermal"]["dt"] = 0.01;
+    json chill = {{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", 1000.0}, {"ambient", 200.0}};
+    if (disc) chill["region"] = {{"circle", {{"centre", {0, 0}}, {"radius", 0.008}}}};
+    j["interactions"] = {chill};
+    j["output"]["temperature_threshold"] = 280.0;
+    j["output"]["fields"] = {"temperature_mean", "below_threshold_from"};
+    j["output"]["probes"] = json::array();
+    for (std::size_t q = 0; q < at.size(); ++q)
+      j["output"]["probes"].push_back({{"name", "p" + std::to_string(q)}, {"part", "ply"}, {"at", {at[q][0], at[q][1], 0.0}},
+                                       {"quantities", {"temperature_profile"}}});
+    const auto out = dir / (disc ? "disc" : "face");
+    const JobRun r = run_json(j, 0, out);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    // A run compared with itself is identical, its NaN (never below) included.
+    EXPECT_EQ(thermostamp("compare " + q(out) + " " + q(out)).exit_code, 0);
+    const hid_t file = H5Fopen((out / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    ASSERT_GE(file, 0);
+    const std::vector<double> x = read_dataset<double>(file, "frames/000000/ply/nodes");
+    char last[32];
+    std::snprintf(last, sizeof last, "frames/%06d/ply/", frame_count(file) - 1);
+    const std::vector<double> some = read_dataset<double>(file, std::string(last) + "below_threshold_from");
+    const std::vector<double> every = read_dataset<double>(file, std::string(last) + "all_below_threshold_from");
+    H5Fclose(file);
+    ASSERT_EQ(some.size(), x.size() / 3);
+    int never = 0;
+    for (std::size_t q = 0; q < at.size(); ++q) {
+      int node = -1;
+      for (std::size_t i = 0; i < some.size(); ++i)
+        if (std::abs(x[3 * i] - at[q][0]) < 1e-9 && std::abs(x[3 * i + 1] - at[q][1]) < 1e-9) node = static_cast<int>(i);
+      ASSERT_GE(node, 0);
+      double first = std::nan(""), all = std::nan("");
+      int samples = 0;
+      for (const auto& smp : r.result.probes) {
+        if (smp.probe != static_cast<int>(q)) continue;
+        ++samples;
+        const double lo = *std::min_element(smp.values.begin(), smp.values.end());
+        const double hi = *std::max_element(smp.values.begin(), smp.values.end());
+        if (std::isnan(first) && lo < 280.0) first = smp.time;
+        if (std::isnan(all) && hi < 280.0) all = smp.time;
+      }
+      EXPECT_EQ(samples, 201);  // t = 0 and every step
+      if (std::isnan(first)) {
+        EXPECT_TRUE(std::isnan(some[node])) << q << ": " << some[node];
+        ++never;
+      } else {
+        EXPECT_EQ(some[node], first) << "probe " << q;
+      }
+      if (std::isnan(all)) {
+        EXPECT_TRUE(std::isnan(every[node])) << q << ": " << every[node];
+      } else {
+        EXPECT_EQ(every[node], all) << "probe " << q;
+      }
+      std::printf("%s, probe %zu: below 280 degC from %.2f s, all of it from %.2f s\n", disc ? "disc" : "face", q,
+                  some[node], every[node]);
+    }
+    double smallest = std::numeric_limits<double>::infinity();
+    for (double v : some)
+      if (!std::isnan(v)) smallest = std::min(smallest, v);
+    ASSERT_EQ(r.result.part_below_threshold_from_s.size(), 1u);
+    EXPECT_EQ(r.result.part_below_threshold_from_s[0], smallest);
+    if (disc) {
+      EXPECT_GE(never, 1);  // the far corner at least
+    } else {
+      EXPECT_EQ(never, 0);
+      for (std::size_t i = 0; i < some.size(); ++i) {
+        EXPECT_EQ(some[i], r.result.part_below_threshold_from_s[0]);
+        EXPECT_EQ(every[i], r.result.part_all_below_threshold_from_s[0]);
+      }
+    }
   }
 }
 }  // namespace
