@@ -186,6 +186,7 @@ int cmd_run(const Args& a, bool validate_only) {
   // while for a large mesh) the run then stops after its first step.
   if (!validate_only) ts::install_stop_handlers();
   ts::log_to_terminal(a.quiet);
+  if (!validate_only) ts::log_hold();  // the set-up's lines go to log.txt too
   const ts::Job job = ts::load_job(a.positional[0], a.sets);
   ts::PluginRegistry registry;
   ts::Simulation sim(job, registry);

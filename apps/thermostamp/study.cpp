@@ -415,6 +415,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
           throw JobError("", "--restart: study variant '" + label + "': " + e.what());
         }
       }
+      log_hold();  // the set-up's lines go to the variant's log.txt too
       Simulation sim(jobs[i], registry);
       double from = 0;
       if (checkpoint) {
@@ -444,6 +445,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     }
     for (; completed < need; ++completed) {
       if (!quiet) std::cerr << "study: running " << label << " again (" << completed + 1 << " of " << need << ")\n";
+      log_hold();
       Simulation again(jobs[i], registry);
       log_to_file(opt.out_dir / "log.txt");
       const RunResult r = again.run(opt);  // the same files again: output time counts alike

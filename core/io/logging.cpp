@@ -2,6 +2,7 @@
 
 #include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/sinks/dist_sink.h>
+#include <spdlog/sinks/ringbuffer_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 
 namespace ts {
@@ -22,6 +23,10 @@ std::shared_ptr<spdlog::sinks::sink>& file_sink() {
   static std::shared_ptr<spdlog::sinks::sink> f;
   return f;
 }
+std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt>& held() {
+  static std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> h;
+  return h;
+}
 }  // namespace
 
 std::shared_ptr<spdlog::logger> logger(const std::string& module) {
@@ -38,11 +43,23 @@ void log_to_terminal(bool quiet) {
   if (!sinks.empty()) sinks.front()->set_level(quiet ? spdlog::level::warn : spdlog::level::info);
 }
 
+void log_hold() {
+  if (held()) dist()->remove_sink(held());
+  held() = std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(4096);
+  held()->set_level(spdlog::level::debug);
+  dist()->add_sink(held());
+}
+
 void log_to_file(const std::filesystem::path& file, bool append) {
   log_close_file();
   auto f = std::make_shared<spdlog::sinks::basic_file_sink_mt>(file.string(), !append);
   f->set_pattern("%Y-%m-%d %H:%M:%S.%e [%n] [%l] %v");
   f->set_level(spdlog::level::debug);
+  if (held()) {  // what the set-up logged, first
+    for (const auto& m : held()->last_raw()) f->log(m);
+    dist()->remove_sink(held());
+    held().reset();
+  }
   file_sink() = f;
   dist()->add_sink(f);
 }

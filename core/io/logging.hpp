@@ -10,6 +10,10 @@ namespace ts {
 
 std::shared_ptr<spdlog::logger> logger(const std::string& module);
 void log_to_terminal(bool quiet);
+// Keeps what is logged from here on (at most 4096 lines) until
+// log_to_file, which writes it first: the set-up of a run (job, meshes,
+// initial temperatures), before its output folder is known, reaches log.txt.
+void log_hold();
 void log_to_file(const std::filesystem::path& file, bool append = false);
 void log_close_file();
 
