@@ -11,7 +11,8 @@ namespace ts::sdk {
 // Effective thermal properties of a ply (in its material frame).
 struct ThermalProps {
   double density = 0.0;        // kg/m^3
-  double specific_heat = 0.0;  // J/(kg K)
+  double specific_heat = 0.0;  // J/(kg K); for a table c(T), its smallest value (the kernel then
+                               // moves each value along the table's enthalpy after every step)
   double k11 = 0.0;            // W/(m K), along the fibres (warp)
   double k22 = 0.0;            // W/(m K), across the fibres, in the plane
   double k33 = 0.0;            // W/(m K), through the thickness
