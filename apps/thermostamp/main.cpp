@@ -200,7 +200,7 @@ int cmd_run(const Args& a, bool validate_only) {
       const double r = n >= 100 ? std::pow(10.0, std::floor(std::log10(n)) - 2) : 1.0;
       return std::round(n / r) * r;
     };
-    char line[200];
+    char line[512];
     if (const double dm = sim.initial_mechanical_step(); dm > 0) {
       std::snprintf(line, sizeof line, "mechanical step %.4g s at the start: about %.0f steps to t = %.4g s\n", dm,
                     rounded(job.t_end / dm), job.t_end);
@@ -209,6 +209,16 @@ int cmd_run(const Args& a, bool validate_only) {
     if (const double dt = sim.thermal_step(); dt > 0) {
       std::snprintf(line, sizeof line, "thermal step %.4g s: about %.0f steps\n", dt, rounded(job.t_end / dt));
       std::cout << line;
+      for (const auto& m : job.materials) {
+        if (m.specific_heat_table.empty()) continue;
+        double c_max = 0;
+        for (const auto& r : m.specific_heat_table) c_max = std::max(c_max, r[1]);
+        std::snprintf(line, sizeof line,
+                      "material '%s': specific heat from %zu rows, %g to %g degC, %g to %g J/(kg K) (steps with %g)\n",
+                      m.name.c_str(), m.specific_heat_table.size(), m.specific_heat_table.front()[0],
+                      m.specific_heat_table.back()[0], m.specific_heat, c_max, m.specific_heat);
+        std::cout << line;
+      }
     }
     return 0;
   }

@@ -635,6 +635,12 @@ TEST(SharedJobs, AllValidate) {
 // upper ply), value for value, and the log names the frame read.
 TEST(SharedJobs, PreheatChainsIntoTheForming) {
   const auto dir = temp_dir("preheat_chain");
+  const auto v = thermostamp("validate " + q(source_dir() / "share" / "jobs" / "preheat_and_transfer.json"));
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  EXPECT_NE(v.out.find("material 'pa66_cf_ud': specific heat from 5 rows, 20 to 300 degC, 1200 to 4775 J/(kg K) "
+                       "(steps with 1200)"),
+            std::string::npos)
+      << v.out;
   const auto pre = thermostamp("run " + q(source_dir() / "share" / "jobs" / "preheat_and_transfer.json") + " --out " +
                                q(dir / "preheat") + " --quiet");
   ASSERT_EQ(pre.exit_code, 0) << pre.err;
