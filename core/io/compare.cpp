@@ -315,6 +315,17 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
             }
             for (std::size_t i = 0; i < va.size(); ++i) take(d, va[i], vb[i], ra.times[k]);
           }
+          const auto fields_a = members(fa, ga + "/" + part);
+          for (const auto& field : fields_b) {  // and those B has, A not
+            if (std::binary_search(fields_a.begin(), fields_a.end(), field)) continue;
+            const std::string key = part + "/" + field;
+            if (!by_name.count(key)) {
+              order.push_back(key);
+              by_name[key].what = key;
+              by_name[key].units = field_units(field);
+            }
+            by_name[key].note = "only in B";
+          }
         }
       }
       for (const auto& key : order) {

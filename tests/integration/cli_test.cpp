@@ -1512,8 +1512,8 @@ TEST(Output, DatasetsCarryTheirUnits) {
 // largest differences that the test takes from the files itself (exit 1);
 // with a tolerance (--rtol), a run that differs a little passes at its
 // largest relative difference and fails below it; layered fields of other
-// layer counts are named as not compared; a folder without output is
-// refused (exit 2).
+// layer counts are named as not compared, a field only one run wrote as
+// only in A or only in B; a folder without output is refused (exit 2).
 TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
   const auto dir = temp_dir("compare");
   json j = short_hemisphere(0.3, 0.1, 6);
@@ -1527,6 +1527,29 @@ TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
   EXPECT_GT(same.fields.size(), 10u);
   for (const auto& d : same.fields) EXPECT_EQ(d.max_abs, 0.0) << d.what;
   EXPECT_EQ(thermostamp("compare " + q(dir / "adi") + " " + q(dir / "adi")).exit_code, 0);
+
+  // A field that only one of the two runs wrote is named, either way round.
+  {
+    json extra = short_hemisphere(0.1, 0.1, 6);
+    extra["output"]["fields"] = {"temperature_mean"};
+    ASSERT_TRUE(run_json(extra, 1, dir / "fewer").result.ok);
+    extra["output"]["fields"] = {"temperature_mean", "tool_gap"};
+    ASSERT_TRUE(run_json(extra, 1, dir / "more").result.ok);
+    for (const bool more_first : {true, false}) {
+      const Comparison x = more_first ? compare_outputs(dir / "more", dir / "fewer")
+                                      : compare_outputs(dir / "fewer", dir / "more");
+      EXPECT_FALSE(x.identical);
+      int named = 0;
+      for (const auto& d : x.fields)
+        if (d.what.find("tool_gap") != std::string::npos) {
+          EXPECT_EQ(d.note, more_first ? "only in A" : "only in B") << d.what;
+          ++named;
+        } else {
+          EXPECT_EQ(d.max_abs, 0.0) << d.what;
+        }
+      EXPECT_EQ(named, 2) << "both plies";
+    }
+  }
 
   const Comparison c = compare_outputs(dir / "adi", dir / "shell2d");
   EXPECT_FALSE(c.identical);
