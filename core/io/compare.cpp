@@ -325,6 +325,7 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
               by_name[key].units = field_units(field);
             }
             by_name[key].note = "only in B";
+            unmatched();
           }
         }
       }
