@@ -211,12 +211,10 @@ int cmd_run(const Args& a, bool validate_only) {
       std::cout << line;
       for (const auto& m : job.materials) {
         if (m.specific_heat_table.empty()) continue;
-        double c_max = 0;
-        for (const auto& r : m.specific_heat_table) c_max = std::max(c_max, r[1]);
         std::snprintf(line, sizeof line,
                       "material '%s': specific heat from %zu rows, %g to %g degC, %g to %g J/(kg K) (steps with %g)\n",
                       m.name.c_str(), m.specific_heat_table.size(), m.specific_heat_table.front()[0],
-                      m.specific_heat_table.back()[0], m.specific_heat, c_max, m.specific_heat);
+                      m.specific_heat_table.back()[0], m.specific_heat, m.specific_heat_max, m.specific_heat);
         std::cout << line;
       }
     }

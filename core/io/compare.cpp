@@ -286,6 +286,15 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
              " frames matched by time with B's " + std::to_string(rb.times.size()));
       std::map<std::string, Difference> by_name;  // "part/field"
       std::vector<std::string> order;
+      auto entry = [&](const std::string& part, const std::string& field) -> Difference& {
+        const std::string key = part + "/" + field;
+        if (!by_name.count(key)) {
+          order.push_back(key);
+          by_name[key].what = key;
+          by_name[key].units = field_units(field);
+        }
+        return by_name[key];
+      };
       for (std::size_t k = 0; k < m.size(); ++k) {
         if (m[k] < 0) continue;
         const std::string ga = "frames/" + ra.names[k], gb = "frames/" + rb.names[m[k]];
@@ -293,14 +302,10 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
         for (const auto& part : members(fa, ga)) {
           if (!std::binary_search(parts_b.begin(), parts_b.end(), part)) continue;
           const auto fields_b = members(fb, gb + "/" + part);
-          for (const auto& field : members(fa, ga + "/" + part)) {
+          const auto fields_a = members(fa, ga + "/" + part);
+          for (const auto& field : fields_a) {
             const std::string key = part + "/" + field;
-            if (!by_name.count(key)) {
-              order.push_back(key);
-              by_name[key].what = key;
-              by_name[key].units = field_units(field);
-            }
-            Difference& d = by_name[key];
+            Difference& d = entry(part, field);
             if (!std::binary_search(fields_b.begin(), fields_b.end(), field)) {
               d.note = "only in A";
               unmatched();
@@ -315,16 +320,9 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
             }
             for (std::size_t i = 0; i < va.size(); ++i) take(d, va[i], vb[i], ra.times[k]);
           }
-          const auto fields_a = members(fa, ga + "/" + part);
           for (const auto& field : fields_b) {  // and those B has, A not
             if (std::binary_search(fields_a.begin(), fields_a.end(), field)) continue;
-            const std::string key = part + "/" + field;
-            if (!by_name.count(key)) {
-              order.push_back(key);
-              by_name[key].what = key;
-              by_name[key].units = field_units(field);
-            }
-            by_name[key].note = "only in B";
+            entry(part, field).note = "only in B";
             unmatched();
           }
         }

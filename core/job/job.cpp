@@ -32,10 +32,11 @@ double temperature_or_rows(ObjectReader& r, const std::string& key, std::optiona
 }
 // A specific heat (J/(kg K)) given as a number, or as rows [T (degC), c]
 // with increasing temperatures (into `rows`, left empty where every value
-// is the same). Returns the number, or the rows' smallest value.
-double specific_heat_or_rows(ObjectReader& r, std::vector<std::array<double, 2>>& rows) {
+// is the same). Returns the number, or the rows' smallest value; `largest`
+// is the number, or the rows' largest value.
+double specific_heat_or_rows(ObjectReader& r, std::vector<std::array<double, 2>>& rows, double& largest) {
   const json* v = r.optional_raw("specific_heat");
-  if (!v || !v->is_array()) return r.real("specific_heat", std::nullopt, 0.0, true);
+  if (!v || !v->is_array()) return largest = r.real("specific_heat", std::nullopt, 0.0, true);
   const std::string tp = r.at("specific_heat");
   if (v->empty()) throw JobError(tp, "expected a number (J/kg/K) or rows [T (degC), c (J/kg/K)]");
   for (std::size_t k = 0; k < v->size(); ++k) {
@@ -56,6 +57,7 @@ double specific_heat_or_rows(ObjectReader& r, std::vector<std::array<double, 2>>
     c_max = std::max(c_max, row[1]);
   }
   if (c_min == c_max) rows.clear();
+  largest = c_max;
   return c_min;
 }
 }  // namespace
@@ -278,7 +280,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       m.has_thermal = r.has("specific_heat") || r.has("conductivity");
       if (m.has_thermal) {
         m.density = r.real("density", std::nullopt, 0.0, true);
-        m.specific_heat = specific_heat_or_rows(r, m.specific_heat_table);
+        m.specific_heat = specific_heat_or_rows(r, m.specific_heat_table, m.specific_heat_max);
         const auto k = r.reals("conductivity", 3);
         for (int d = 0; d < 3; ++d)
           if (!(k[d] > 0)) throw JobError(pointer_append(r.at("conductivity"), d), "conductivity must be > 0");

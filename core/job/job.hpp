@@ -17,8 +17,10 @@ struct MaterialDef {
   // thermal splitters advance with, see solve/heat_capacity.hpp).
   double density = 0, specific_heat = 0;
   // Rows [T (degC), c (J/(kg K))] of a specific heat that depends on the
-  // temperature; empty for a constant one (a table of equal values too).
+  // temperature; empty for a constant one (a table of equal values too);
+  // and the largest value (= specific_heat when constant).
   std::vector<std::array<double, 2>> specific_heat_table;
+  double specific_heat_max = 0;
   std::array<double, 3> conductivity{0, 0, 0};  // k11, k22, k33
   bool has_thermal = false;
   json membrane, bending;  // null when absent

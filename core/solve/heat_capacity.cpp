@@ -1,61 +1,40 @@
 #include "solve/heat_capacity.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <limits>
 
 namespace ts {
 
 HeatCapacityTable::HeatCapacityTable(const std::vector<std::array<double, 2>>& rows) {
+  const std::size_t n = rows.size();
+  if (n == 0) return;
+  const double inf = std::numeric_limits<double>::infinity();
+  c_min_ = rows[0][1];
   for (const auto& r : rows) {
     t_.push_back(r[0]);
-    c_.push_back(r[1]);
+    c_min_ = std::min(c_min_, r[1]);
   }
-  h_.assign(t_.size(), 0.0);
-  for (std::size_t j = 1; j < t_.size(); ++j) h_[j] = h_[j - 1] + 0.5 * (c_[j - 1] + c_[j]) * (t_[j] - t_[j - 1]);
-  c_min_ = c_.empty() ? 0.0 : *std::min_element(c_.begin(), c_.end());
-  const double inf = std::numeric_limits<double>::infinity();
-  const std::size_t n = t_.size();
-  regions_.clear();
-  for (std::size_t r = 0; r <= n && n > 0; ++r) {
-    Region g;
-    if (r == 0) {
-      g = {t_[0], -inf, t_[0], c_[0], c_[0], 0.0};
-    } else if (r == n) {
-      g = {t_[n - 1], t_[n - 1], inf, c_[n - 1], c_[n - 1], 0.0};
-    } else {
-      g = {t_[r - 1], t_[r - 1], t_[r], c_[r - 1], c_[r], (c_[r] - c_[r - 1]) / (t_[r] - t_[r - 1])};
-    }
-    regions_.push_back(g);
+  // Region r runs from row r-1 to row r; below the first row and above the
+  // last, c is held.
+  double h = 0;  // int_{t_0}^{row r-1} c
+  regions_.push_back({rows[0][0], -inf, rows[0][0], rows[0][1], rows[0][1], 0.0, 0.0});
+  for (std::size_t r = 1; r < n; ++r) {
+    const auto &a = rows[r - 1], &b = rows[r];
+    regions_.push_back({a[0], a[0], b[0], a[1], b[1], (b[1] - a[1]) / (b[0] - a[0]), h});
+    h += 0.5 * (a[1] + b[1]) * (b[0] - a[0]);
   }
-  h_zero_ = 0.0;
-  if (!t_.empty()) {
-    const double h0 = enthalpy(0.0);  // with h_zero_ = 0: int_{t_0}^{0} c
-    h_zero_ = h0;
-  }
+  regions_.push_back({rows[n - 1][0], rows[n - 1][0], inf, rows[n - 1][1], rows[n - 1][1], 0.0, h});
+  h_zero_ = enthalpy(0.0);  // with h_zero_ = 0: int_{t_0}^{0} c
 }
 
 double HeatCapacityTable::value(double T) const {
-  const int n = static_cast<int>(t_.size());
-  const int r = region(T);
-  if (r == 0) return c_.front();
-  if (r == n) return c_.back();
-  const double s = (T - t_[r - 1]) / (t_[r] - t_[r - 1]);
-  return c_[r - 1] + s * (c_[r] - c_[r - 1]);
+  const Region& g = regions_[region(T)];
+  return g.c_lo + g.slope * (T - g.lo);
 }
 
 double HeatCapacityTable::enthalpy(double T) const {
-  const int n = static_cast<int>(t_.size());
-  const int r = region(T);
-  double h;
-  if (r == 0) {
-    h = c_.front() * (T - t_.front());
-  } else if (r == n) {
-    h = h_.back() + c_.back() * (T - t_.back());
-  } else {
-    h = h_[r - 1] + 0.5 * (c_[r - 1] + value(T)) * (T - t_[r - 1]);
-  }
-  return h - h_zero_;
+  const Region& g = regions_[region(T)];
+  return g.h_lo + 0.5 * (g.c_lo + value(T)) * (T - g.lo) - h_zero_;
 }
 
 }  // namespace ts

@@ -66,9 +66,10 @@ class HeatCapacityTable {
   struct Region {
     double lo, lo_edge, hi;  // lo: the point c_lo is taken at; lo_edge, hi: the region's ends (+-infinity)
     double c_lo, c_hi, slope;
+    double h_lo;  // int_{t_0}^{lo} c
   };
-  std::vector<double> t_, c_, h_;  // h_[j] = int_{t_0}^{t_j} c
-  std::vector<Region> regions_;    // n + 1
+  std::vector<double> t_;        // the rows' temperatures
+  std::vector<Region> regions_;  // n + 1
   double h_zero_ = 0;              // int_{t_0}^{0} c
   double c_min_ = 0;
 };

@@ -381,6 +381,8 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), re
     throw JobError("/solvers", "nothing to run: set solvers.thermal (a thermal splitter such as \"adi\")");
   want_tool_gap_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "tool_gap") !=
                   job_.output.fields.end();
+  want_below_from_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "below_threshold_from") !=
+                     job_.output.fields.end();
   want_conductance_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "conductance") !=
                       job_.output.fields.end();
   want_pressure_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "contact_pressure") !=
@@ -2124,7 +2126,7 @@ int Simulation::values_per_node(int part) const { return parts_.at(part)->nz; }
 void Simulation::check_field(double time, long long step) {
   const auto& thresholds = job_.output.temperature_threshold;  // per part, empty: none
   for (std::size_t p = 0; p < parts_.size(); ++p) {
-    const PartState* st = parts_[p].get();
+    PartState* st = parts_[p].get();
     // Branch-free pass (vectorised): range, and whether every value is
     // finite; the slow search for the culprit runs only then.
     const double* T = st->T.data();
@@ -2147,8 +2149,8 @@ void Simulation::check_field(double time, long long step) {
       // Node by node, until every node has set through (then nothing changes).
       const int nz = st->nz;
       const double th = thresholds[p];
-      double* below = parts_[p]->below_from.data();
-      double* all_below = parts_[p]->all_below_from.data();
+      double* below = st->below_from.data();
+      double* all_below = st->all_below_from.data();
       const long long nn = st->mesh.num_nodes();
 #pragma omp parallel for schedule(static) if (n > 65536)
       for (long long i = 0; i < nn; ++i) {
@@ -2515,12 +2517,11 @@ RunResult Simulation::run(const RunOptions& opt) {
   if (job_.thermal)
     for (const auto& st : parts_)
       if (!st->cp.empty()) {
-        const auto& rows = job_.materials[st->def->material].specific_heat_table;
-        double c_max = 0;
-        for (const auto& r : rows) c_max = std::max(c_max, r[1]);
+        const MaterialDef& m = job_.materials[st->def->material];
+        const auto& rows = m.specific_heat_table;
         log->info("part '{}': specific heat from {} rows between {:g} and {:g} degC, {:g} to {:g} J/(kg K) (the "
                   "thermal steps are taken with the smallest, the heat stored follows the rows)",
-                  st->def->name, rows.size(), rows.front()[0], rows.back()[0], st->cp.c_min(), c_max);
+                  st->def->name, rows.size(), rows.front()[0], rows.back()[0], m.specific_heat, m.specific_heat_max);
       }
   for (std::size_t p = 0; p < mech_.size(); ++p)
     log->info("part '{}': mass {:.6g} kg, added by mass scaling {:.6g} kg ({:.3g} %)", parts_[p]->def->name,
@@ -2819,8 +2820,7 @@ RunResult Simulation::run(const RunOptions& opt) {
   below_from_.assign(parts_.size(), -1.0);
   all_below_from_.assign(parts_.size(), -1.0);
   over_from_.assign(parts_.size(), -1.0);
-  if (std::find(job_.output.fields.begin(), job_.output.fields.end(), "below_threshold_from") !=
-      job_.output.fields.end())
+  if (want_below_from_)
     for (auto& st : parts_) {
       st->below_from.assign(st->mesh.num_nodes(), std::numeric_limits<double>::quiet_NaN());
       st->all_below_from.assign(st->mesh.num_nodes(), std::numeric_limits<double>::quiet_NaN());

@@ -202,6 +202,7 @@ class Simulation {
   void tool_gaps(int part, std::size_t n, const double* x, double* gap) const;
   static constexpr double kToolGapLimit = 0.01;  // m
   bool want_tool_gap_ = false;  // the field `tool_gap` is written
+  bool want_below_from_ = false;  // the field `below_threshold_from` is written
   // The initial temperatures of a part from a frame of an earlier run
   // (PartDef::initial_results); JobError where that cannot be done.
   void load_initial_temperature(PartState& st);
