@@ -210,6 +210,8 @@ int cmd_run(const Args& a, bool validate_only) {
       std::snprintf(line, sizeof line, "thermal step %.4g s: about %.0f steps\n", dt, rounded(job.t_end / dt));
       std::cout << line;
       for (const auto& m : job.materials) {
+        if (m.crystallisation.present)
+          std::cout << "material '" << m.name << "': " << ts::describe_crystallisation(m) << "\n";
         if (m.specific_heat_table.empty()) continue;
         std::snprintf(line, sizeof line,
                       "material '%s': specific heat from %zu rows, %g to %g degC, %g to %g J/(kg K) (steps with %g)\n",

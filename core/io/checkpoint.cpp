@@ -11,7 +11,7 @@ namespace ts {
 
 namespace {
 constexpr char kMagic[] = "THERMOSTAMP-CHECKPOINT\n";
-constexpr std::uint32_t kFormat = 5;
+constexpr std::uint32_t kFormat = 6;
 
 template <class T>
 void put(std::ofstream& out, const T& v) {

@@ -104,6 +104,7 @@ std::string series_column_units(const std::string& column) {
   };
   if (column == "time") return "s";
   if (column == "balance_error" || ends("fraction_below") || ends("fraction_over_shear_limit") ||
+      ends("_crystallinity_min") || ends("_crystallinity_mean") || ends("_crystallinity_max") ||
       ends("_fibre_strain_min") || ends("_fibre_strain_max"))
     return "1";
   if (ends("_shear_angle_min") || ends("_shear_angle_max")) return "deg";

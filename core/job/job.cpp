@@ -60,6 +60,46 @@ double specific_heat_or_rows(ObjectReader& r, std::vector<std::array<double, 2>>
   largest = c_max;
   return c_min;
 }
+
+// materials.<m>.crystallisation: the Nakamura kinetics of the matrix.
+MaterialDef::Crystallisation parse_crystallisation(const json& v, const std::string& ptr) {
+  MaterialDef::Crystallisation c;
+  c.present = true;
+  c.pointer = ptr;
+  ObjectReader r(v, ptr);
+  c.latent_heat = r.real("latent_heat", std::nullopt, 0.0);
+  c.avrami_exponent = r.real("avrami_exponent", std::nullopt, 0.0, true, 10.0);
+  c.initial = r.real("initial", 0.0, 0.0);
+  if (!(c.initial < 1.0)) throw JobError(r.at("initial"), "must be below 1 (a relative crystallinity)");
+  const json& rate = r.raw("rate");
+  const std::string rp = r.at("rate");
+  if (rate.is_array()) {
+    if (rate.empty()) throw JobError(rp, "expected rows [T (degC), K (1/s)] or an object {k_max, t_max, half_width}");
+    double k_max = 0;
+    for (std::size_t k = 0; k < rate.size(); ++k) {
+      const std::string kp = pointer_append(rp, k);
+      const auto row = as_reals(rate[k], kp, 2);
+      if (!(row[0] >= -273.15)) throw JobError(pointer_append(kp, 0), "must be >= -273.15 degC");
+      if (k > 0 && !(row[0] > c.rate_rows.back()[0]))
+        throw JobError(pointer_append(kp, 0), "temperatures must increase from row to row");
+      if (!(row[1] >= 0)) throw JobError(pointer_append(kp, 1), "must be >= 0 1/s, found " + fmt_number(row[1]));
+      c.rate_rows.push_back({row[0], row[1]});
+      k_max = std::max(k_max, row[1]);
+    }
+    if (!(k_max > 0)) throw JobError(rp, "every rate is zero: the matrix would never crystallise");
+  } else if (rate.is_object()) {
+    ObjectReader g(rate, rp);
+    c.k_max = g.real("k_max", std::nullopt, 0.0, true);
+    c.t_max = g.real("t_max", std::nullopt, -273.15);
+    c.half_width = g.real("half_width", std::nullopt, 0.0, true);
+    g.finish();
+  } else {
+    throw JobError(rp, "expected rows [T (degC), K (1/s)] or an object {k_max, t_max, half_width}, found " +
+                           json_type_name(rate));
+  }
+  r.finish();
+  return c;
+}
 }  // namespace
 
 double rows_mean(const std::vector<std::array<double, 2>>& tab, double t0, double t1) {
@@ -286,6 +326,8 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
           if (!(k[d] > 0)) throw JobError(pointer_append(r.at("conductivity"), d), "conductivity must be > 0");
         m.conductivity = {k[0], k[1], k[2]};
       }
+      if (const json* v = r.optional_raw("crystallisation"))
+        m.crystallisation = parse_crystallisation(*v, r.at("crystallisation"));
       if (const json* v = r.optional_raw("membrane")) m.membrane = *v;
       if (const json* v = r.optional_raw("bending")) m.bending = *v;
       r.declare("source");
@@ -730,6 +772,13 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
         if (!dym.empty()) msg += "; " + dym;
         throw JobError(pointer_append(r.at("fields"), i), msg + "; valid fields: " + join(known_fields()));
       }
+      if (f == "crystallinity" &&
+          (!job.thermal || std::none_of(job.parts.begin(), job.parts.end(), [&](const PartDef& p) {
+             return job.materials[p.material].crystallisation.present;
+           })))
+        throw JobError(pointer_append(r.at("fields"), i),
+                       "the field 'crystallinity' needs the thermal solver and a ply whose material has "
+                       "'crystallisation'");
       if (f == "below_threshold_from" && (job.output.temperature_threshold.empty() || !job.thermal))
         throw JobError(pointer_append(r.at("fields"), i),
                        "the field 'below_threshold_from' needs output.temperature_threshold and the thermal solver");
@@ -760,6 +809,10 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
             if (!dym.empty()) msg += "; " + dym;
             throw JobError(pointer_append(q.at("quantities"), k), msg + "; valid quantities: " + join(known));
           }
+          if (v == "crystallinity_profile" && (!job.thermal || !job.materials[job.parts[p.part].material].crystallisation.present))
+            throw JobError(pointer_append(q.at("quantities"), k),
+                           "'crystallinity_profile' needs the thermal solver and a part whose material has "
+                           "'crystallisation'; part '" + part + "' has none");
         }
         p.interval = q.real("interval", 0.0, 0.0);
         if (!job.mechanics && p.interval > 0 && job.t_end / p.interval > kMaxProbeSamples)

@@ -24,6 +24,20 @@ struct MaterialDef {
   std::array<double, 3> conductivity{0, 0, 0};  // k11, k22, k33
   bool has_thermal = false;
   json membrane, bending;  // null when absent
+  // The crystallisation kinetics of the matrix (Nakamura), see
+  // solve/crystallisation.hpp; `present` false when the material has none.
+  struct Crystallisation {
+    bool present = false;
+    std::string pointer;
+    double latent_heat = 0;      // J/kg of ply, released from relative crystallinity 0 to 1
+    double avrami_exponent = 3;  // n
+    // The rate K(T) (1/s): rows [T (degC), K] (linear between them, held
+    // beyond), or, with the rows empty, Ziabicki's Gaussian
+    // K = k_max exp(-4 ln 2 (T - t_max)^2 / half_width^2).
+    std::vector<std::array<double, 2>> rate_rows;
+    double k_max = 0, t_max = 0, half_width = 0;
+    double initial = 0;  // relative crystallinity at the start, in [0, 1)
+  } crystallisation;
 };
 
 struct MeshDef {
@@ -221,13 +235,14 @@ inline const std::vector<std::string>& known_fields() {
                                              "temperature_bottom", "displacement", "velocity", "shear_angle",
                                              "fibre_direction", "contact_status", "contact_pressure",
                                              "membrane_stress", "curvature", "membrane_strain", "conductance",
-                                             "tool_gap", "below_threshold_from"};
+                                             "tool_gap", "below_threshold_from", "crystallinity"};
   return f;
 }
 inline const std::vector<std::string>& known_probe_quantities() {
   static const std::vector<std::string> q = {"temperature_profile", "temperature_mean", "displacement_x",
                                              "displacement_y", "displacement_z", "shear_angle",
-                                             "contact_pressure", "fibre_strain", "conductance", "tool_gap"};
+                                             "contact_pressure", "fibre_strain", "conductance", "tool_gap",
+                                             "crystallinity_profile"};
   return q;
 }
 

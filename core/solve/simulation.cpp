@@ -33,6 +33,7 @@
 #include "io/logging.hpp"
 #include "io/results_reader.hpp"
 #include "io/results_writer.hpp"
+#include "solve/crystallisation.hpp"
 #include "solve/heat_capacity.hpp"
 #include "solve/interrupt.hpp"
 #include "solve/tools.hpp"
@@ -130,6 +131,13 @@ struct PartState {
   // the temperatures before the thermal step under way (solve/heat_capacity.hpp).
   HeatCapacityTable cp;
   std::vector<double> T_step;
+  // The matrix's crystallisation (solve/crystallisation.hpp; empty: none):
+  // per value, the Nakamura integral theta and the relative crystallinity
+  // X; per node, X's mean through the thickness (for the frames); and the
+  // specific heat the latent heat is given with where c is constant (J/(kg K)).
+  CrystallisationKinetics kin;
+  std::vector<double> theta, X, X_mean;
+  double c_latent = 0;
   std::vector<double> h_bottom, t_bottom, h_top, t_top;
   // Per node, W/(m^2 K): the conductance of each face at the last thermal
   // step (tool contact, convection and radiation, ply/ply links per unit
@@ -148,6 +156,23 @@ struct PartState {
 };
 
 namespace {
+
+// A ply's smallest, mean (by mass) and largest relative crystallinity (NaN
+// for a ply whose material has no crystallisation kinetics).
+std::array<double, 3> ply_crystallinity(const PartState& st) {
+  if (st.X.empty()) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan, nan};
+  }
+  double lo = 1, hi = 0, sum = 0, cap = 0;
+  for (std::size_t k = 0; k < st.X.size(); ++k) {
+    lo = std::min(lo, st.X[k]);
+    hi = std::max(hi, st.X[k]);
+    sum += st.cap[k] * st.X[k];
+    cap += st.cap[k];
+  }
+  return {lo, cap > 0 ? sum / cap : st.X[0], hi};
+}
 
 // A ply's coldest, mean (weighted by heat capacity) and hottest value
 // (degC), and the share of its heat capacity below the threshold (0
@@ -520,7 +545,12 @@ void Simulation::build_thermal() {
       throw JobError(c.pointer, "contact handler '" + c.handler + "': " + s.message);
     contacts_.push_back(std::move(h));
   }
-  if (!job_.thermal) return;
+  if (!job_.thermal) {
+    for (const auto& m : job_.materials)
+      if (m.crystallisation.present)
+        logger("job")->warn("{}: ignored, an isothermal job has no crystallisation", m.crystallisation.pointer);
+    return;
+  }
   const ThermalSolverDef& th = *job_.thermal;
   const PluginRecord& rec = registry_.require(sdk::PluginKind::Thermal, th.splitter, th.pointer + "/splitter");
   const sdk::Params params = validate_params(th.params, th.pointer, rec.descriptor, {"splitter", "subcycle", "dt"});
@@ -533,8 +563,17 @@ void Simulation::build_thermal() {
     const std::size_t n = static_cast<std::size_t>(st.mesh.num_nodes()) * st.nz;
     st.T.assign(n, st.def->initial_temperature);
     st.cap.assign(n, 0.0);
-    if (const MaterialDef& mat = job_.materials[st.def->material]; !mat.specific_heat_table.empty()) {
+    const MaterialDef& mat = job_.materials[st.def->material];
+    if (!mat.specific_heat_table.empty()) {
       st.cp = HeatCapacityTable(mat.specific_heat_table);
+      st.T_step.assign(n, 0.0);
+    }
+    if (const auto& c = mat.crystallisation; c.present) {
+      st.kin = CrystallisationKinetics(c.latent_heat, c.avrami_exponent, c.rate_rows, c.k_max, c.t_max, c.half_width);
+      st.c_latent = mat.specific_heat;
+      st.X.assign(n, c.initial);
+      st.theta.assign(n, st.kin.integral(c.initial));
+      st.X_mean.assign(st.mesh.num_nodes(), c.initial);
       st.T_step.assign(n, 0.0);
     }
     if (auto s = splitter_->capacities(static_cast<int>(p), st.cap); !s)
@@ -2067,7 +2106,7 @@ void Simulation::build_probes() {
 
 void Simulation::keep_step_temperatures() {
   for (auto& st : parts_) {
-    if (st->cp.empty()) continue;
+    if (st->T_step.empty()) continue;
     const long long n = static_cast<long long>(st->T.size());
     const double* T = st->T.data();
     double* T0 = st->T_step.data();
@@ -2076,20 +2115,40 @@ void Simulation::keep_step_temperatures() {
   }
 }
 
-// The splitter advanced with c_min; each value gets the heat it was given,
-// c_min (T* - T_old) per kg, on the table's enthalpy curve.
-void Simulation::apply_heat_capacity() {
+// After a splitter's step over dt: with a specific heat table, the splitter
+// advanced with c_min and each value gets the heat it was given, c_min
+// (T* - T_old) per kg, on the table's enthalpy curve; with crystallisation,
+// each value's Nakamura integral takes the step's trapezoid of K(T) and the
+// value gets the latent heat of its new crystallinity.
+void Simulation::finish_thermal_step(double dt) {
   for (auto& stp : parts_) {
     PartState& st = *stp;
-    if (st.cp.empty()) continue;
+    if (st.T_step.empty()) continue;
     const HeatCapacityTable& cp = st.cp;
-    const double c_min = cp.c_min();
+    const CrystallisationKinetics& kin = st.kin;
+    const bool table = !cp.empty(), crystallising = !kin.empty();
+    const double c_min = cp.c_min(), latent = kin.latent_heat(), per_c = st.c_latent > 0 ? 1.0 / st.c_latent : 0.0;
     const long long n = static_cast<long long>(st.T.size());
     double* T = st.T.data();
     const double* T0 = st.T_step.data();
+    double* theta = st.theta.data();
+    double* X = st.X.data();
 #pragma omp parallel for schedule(static) if (n > 8192)
-    for (long long k = 0; k < n; ++k)
-      if (T[k] != T0[k]) T[k] = cp.advance(T0[k], c_min * (T[k] - T0[k]));
+    for (long long k = 0; k < n; ++k) {
+      double t = T[k];
+      if (table && t != T0[k]) t = cp.advance(T0[k], c_min * (t - T0[k]));
+      if (crystallising && X[k] < 1.0) {
+        const double r = 0.5 * (kin.rate(T0[k]) + kin.rate(t));
+        if (r > 0) {
+          theta[k] += r * dt;
+          const double x = kin.crystallinity(theta[k]);
+          const double e = latent * (x - X[k]);  // J/kg
+          X[k] = x;
+          if (e > 0) t = table ? cp.advance(t, e) : t + e * per_c;
+        }
+      }
+      T[k] = t;
+    }
   }
 }
 
@@ -2105,9 +2164,15 @@ double Simulation::stored_heat(int part) const {
   if (!st.cp.empty()) {  // the capacities are those of c_min: mass x c_min
     const double per_c = 1.0 / st.cp.c_min();
     for (std::size_t k = 0; k < st.T.size(); ++k) e += st.cap[k] * per_c * st.cp.enthalpy(st.T[k]);
-    return e;
+  } else {
+    for (std::size_t k = 0; k < st.T.size(); ++k) e += st.cap[k] * st.T[k];
   }
-  for (std::size_t k = 0; k < st.T.size(); ++k) e += st.cap[k] * st.T[k];
+  // The latent heat still held by the melt: mass x latent_heat x (1 - X),
+  // counted from the crystallinity 0 (the constant is irrelevant to changes).
+  if (!st.kin.empty()) {
+    const double per_c = 1.0 / (st.cp.empty() ? st.c_latent : st.cp.c_min());
+    for (std::size_t k = 0; k < st.X.size(); ++k) e -= st.cap[k] * per_c * st.kin.latent_heat() * st.X[k];
+  }
   return e;
 }
 
@@ -2121,6 +2186,27 @@ void Simulation::set_initial_temperature(int part, std::span<const double> per_n
 
 std::span<const double> Simulation::initial_coordinates(int part) const { return parts_.at(part)->x0; }
 std::span<const double> Simulation::temperature(int part) const { return parts_.at(part)->T; }
+std::span<const double> Simulation::crystallinity(int part) const { return parts_.at(part)->X; }
+
+std::string describe_crystallisation(const MaterialDef& m) {
+  const auto& c = m.crystallisation;
+  const CrystallisationKinetics kin(c.latent_heat, c.avrami_exponent, c.rate_rows, c.k_max, c.t_max, c.half_width);
+  std::ostringstream os;
+  os << "crystallisation (Nakamura, n = " << fmt_g(c.avrami_exponent) << ", latent heat " << fmt_g(c.latent_heat)
+     << " J/kg), rate ";
+  if (!c.rate_rows.empty()) {
+    double k_max = 0;
+    for (const auto& r : c.rate_rows) k_max = std::max(k_max, r[1]);
+    os << "from " << c.rate_rows.size() << " rows between " << fmt_g(c.rate_rows.front()[0]) << " and "
+       << fmt_g(c.rate_rows.back()[0]) << " degC, up to " << fmt_g(k_max) << " 1/s";
+  } else {
+    os << fmt_g(c.k_max) << " 1/s at " << fmt_g(c.t_max) << " degC, half width " << fmt_g(c.half_width) << " K";
+  }
+  // The half-crystallisation temperature at the usual DSC cooling rate.
+  const double t_half = kin.temperature_at(0.5, 10.0 / 60.0, kin.upper_temperature());
+  if (std::isfinite(t_half)) os << "; cooled at 10 K/min, half crystallised at " << fmt_g(t_half, 4) << " degC";
+  return os.str();
+}
 int Simulation::values_per_node(int part) const { return parts_.at(part)->nz; }
 
 void Simulation::check_field(double time, long long step) {
@@ -2262,7 +2348,7 @@ bool Simulation::state_io(A& a) {
   for (auto& st : parts_)
     ok = ok && a.io_array(st->x) && a.io_array(st->T) && a.io_array(st->contact_status) &&
          a.io_array(st->contact_pressure) && a.io_array(st->shear_angle) && a.io_array(st->below_from) &&
-         a.io_array(st->all_below_from);
+         a.io_array(st->all_below_from) && a.io_array(st->theta) && a.io_array(st->X);
   for (auto& m : mech_)
     ok = ok && a.io_array(m->v) && a.io_array(m->f_int) && a.io_array(m->f_con) && a.io(m->pending_work) &&
          a.io_array(m->block_dt) && a.io_array(m->block_bdt) && a.io(m->bend_dt) && a.io_array(m->stress) &&
@@ -2417,6 +2503,9 @@ RunResult Simulation::run(const RunOptions& opt) {
           fields[p].push_back({"conductance_top", st.conductance_top.data()});
         } else if (f == "tool_gap") {
           fields[p].push_back({"tool_gap", st.tool_gap.data()});
+        } else if (f == "crystallinity" && !st.X.empty()) {
+          fields[p].push_back({"crystallinity", st.X.data(), 1, false, true});
+          fields[p].push_back({"crystallinity_mean", st.X_mean.data()});
         } else if (f == "below_threshold_from") {
           fields[p].push_back({"below_threshold_from", st.below_from.data()});
           fields[p].push_back({"all_below_threshold_from", st.all_below_from.data()});
@@ -2523,6 +2612,10 @@ RunResult Simulation::run(const RunOptions& opt) {
                   "thermal steps are taken with the smallest, the heat stored follows the rows)",
                   st->def->name, rows.size(), rows.front()[0], rows.back()[0], m.specific_heat, m.specific_heat_max);
       }
+  if (job_.thermal)
+    for (const auto& st : parts_)
+      if (!st->kin.empty())
+        log->info("part '{}': {}", st->def->name, describe_crystallisation(job_.materials[st->def->material]));
   for (std::size_t p = 0; p < mech_.size(); ++p)
     log->info("part '{}': mass {:.6g} kg, added by mass scaling {:.6g} kg ({:.3g} %)", parts_[p]->def->name,
               mech_[p]->mass_physical, mech_[p]->mass_added, 100 * mech_[p]->mass_added / mech_[p]->mass_physical);
@@ -2563,6 +2656,17 @@ RunResult Simulation::run(const RunOptions& opt) {
         st->mean[i] = s;
         st->bottom[i] = t[0];
         st->top[i] = t[nz - 1];
+        if (!st->X.empty()) {
+          const double* x = &st->X[static_cast<std::size_t>(nz) * i];
+          double m = x[0];
+          if (nz > 1) {
+            const double e = h / (nz - 1);
+            m = 0;
+            for (int k = 0; k < nz; ++k) m += (k == 0 || k == nz - 1 ? 0.5 * e : e) * x[k];
+            m /= h;
+          }
+          st->X_mean[i] = m;
+        }
       }
     }
   };
@@ -2596,10 +2700,11 @@ RunResult Simulation::run(const RunOptions& opt) {
         s.probe = static_cast<int>(q);
         s.time = t;
         s.quantity = quantity;
-        if (quantity == "temperature_profile") {
+        if (quantity == "temperature_profile" || quantity == "crystallinity_profile") {
+          const double* v = quantity == "temperature_profile" ? T : &st.X[static_cast<std::size_t>(nz) * i];
           for (int k = 0; k < nz; ++k) {
             s.z.push_back(nz > 1 ? -0.5 * st.def->thickness + st.def->thickness * k / (nz - 1) : 0.0);
-            s.values.push_back(T[k]);
+            s.values.push_back(v[k]);
           }
         } else if (quantity == "temperature_mean") {
           double m = T[0];
@@ -2720,10 +2825,15 @@ RunResult Simulation::run(const RunOptions& opt) {
   // plies.csv: each ply's temperatures (with thermal) and its shear angles
   // and fibre strains (with mechanics), a row per ply.
   const bool ply_series = job_.thermal || job_.mechanics;
+  // Some ply's material crystallises (the thermal solver on).
+  const bool crystallising =
+      job_.thermal && std::any_of(parts_.begin(), parts_.end(), [](const auto& st) { return !st->kin.empty(); });
   std::vector<std::string> ply_fields;
   if (job_.thermal) {
     ply_fields = {"temperature_min", "temperature_mean", "temperature_max"};
     if (threshold) ply_fields.push_back("fraction_below");
+    if (crystallising)
+      for (const char* q : {"crystallinity_min", "crystallinity_mean", "crystallinity_max"}) ply_fields.push_back(q);
   }
   if (job_.mechanics) {
     for (const char* q : {"shear_angle_min", "shear_angle_max", "fibre_strain_min", "fibre_strain_max"})
@@ -2799,6 +2909,10 @@ RunResult Simulation::run(const RunOptions& opt) {
       if (job_.thermal) {
         const std::array<double, 4> row = ply_temperature(*parts_[p], threshold_of(p));
         ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + (threshold ? 4 : 3));
+        if (crystallising) {
+          const std::array<double, 3> x = ply_crystallinity(*parts_[p]);
+          ply_rows.insert(ply_rows.end(), x.begin(), x.end());
+        }
       }
       if (job_.mechanics) {
         const std::array<double, 5> row = ply_mechanics(p, t);
@@ -3070,7 +3184,7 @@ RunResult Simulation::run(const RunOptions& opt) {
             heat_in += rep.heat_in;
             limited_total += rep.limited;
             accumulate_tool_heat(in.dt);
-            apply_heat_capacity();
+            finish_thermal_step(in.dt);
             timing_[kTimeThermal] += seconds_since(tc);
             ++steps;
             t_thermal = t;
@@ -3169,7 +3283,7 @@ RunResult Simulation::run(const RunOptions& opt) {
           throw RunError("thermal plugin '" + job_.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);
         in.links_changed = false;
         accumulate_tool_heat(step);
-        apply_heat_capacity();
+        finish_thermal_step(step);
         ++steps;
         t += step;
         heat_in += rep.heat_in;
@@ -3329,6 +3443,12 @@ RunResult Simulation::run(const RunOptions& opt) {
           s.max = v[2];
           s.fraction_below = threshold ? v[3] : 0.0;
           v += threshold ? 4 : 3;
+          if (crystallising) {
+            s.crystallinity_min = v[0];
+            s.crystallinity_mean = v[1];
+            s.crystallinity_max = v[2];
+            v += 3;
+          }
         }
         if (job_.mechanics) {
           s.shear_min = v[0];
@@ -3438,6 +3558,12 @@ RunResult Simulation::run(const RunOptions& opt) {
       if (job_.thermal) {
         plies.back()["temperature_mean"] = ply_end[p][1];
         if (threshold) plies.back()["fraction_below_threshold"] = ply_end[p][3];
+        if (!st->X.empty()) {
+          const std::array<double, 3> x = ply_crystallinity(*st);
+          plies.back()["crystallinity_min"] = x[0];
+          plies.back()["crystallinity_mean"] = x[1];
+          plies.back()["crystallinity_max"] = x[2];
+        }
       }
       if (threshold) {
         plies.back()["temperature_threshold"] = thresholds[p];
@@ -3516,6 +3642,11 @@ RunResult Simulation::run(const RunOptions& opt) {
              << ", " << std::setprecision(1) << 100 * now[3] << " % of it below at the end";
       else if (threshold)
         line << ", never below " << fmt_g(thresholds[p]) << " degC";
+      if (!parts_[p]->X.empty()) {
+        const std::array<double, 3> x = ply_crystallinity(*parts_[p]);
+        line << std::setprecision(3) << ", relative crystallinity " << x[0] << " to " << x[2] << " (mean " << x[1]
+             << ")";
+      }
       log->info("{}", line.str());
     }
   }

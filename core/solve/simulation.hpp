@@ -61,6 +61,11 @@ struct EnergyAudit {
   std::vector<double> tool_force_max, tool_force_max_at;
 };
 
+// One line on a material's crystallisation kinetics (for the log and
+// `thermostamp validate`), with the temperature at which it is half
+// crystallised when cooled at 10 K/min.
+std::string describe_crystallisation(const MaterialDef& m);
+
 struct RunResult {
   bool ok = true;     // false: the run failed (error says why) or was interrupted
   int interrupted = 0;  // the signal that stopped the run early (see solve/interrupt.hpp), 0 if none
@@ -90,6 +95,9 @@ struct RunResult {
     // with thermal:
     double min = 0, mean = 0, max = 0;  // degC; the mean weighted by heat capacity
     double fraction_below = 0;          // of the heat capacity below output.temperature_threshold (0 without one)
+    // relative crystallinity, with a ply of a crystallising material (NaN
+    // for a ply without; 0 in a job without any)
+    double crystallinity_min = 0, crystallinity_mean = 0, crystallinity_max = 0;
     // with mechanics:
     double shear_min = 0, shear_max = 0;                // shear angle (degrees), over the elements
     double fibre_strain_min = 0, fibre_strain_max = 0;  // E11, over the elements
@@ -143,6 +151,9 @@ class Simulation {
   int num_parts() const { return static_cast<int>(parts_.size()); }
   // Current temperature of a part (values_per_node per node, bottom to top).
   std::span<const double> temperature(int part) const;
+  // Current relative crystallinity of a part, as temperature() (empty where
+  // its material has no crystallisation kinetics).
+  std::span<const double> crystallinity(int part) const;
   int values_per_node(int part) const;
   // Initial mid-surface coordinates of a part, 3 per node.
   std::span<const double> initial_coordinates(int part) const;
@@ -155,10 +166,11 @@ class Simulation {
   void build_parts();
   void build_tools();
   void build_thermal();
-  // A specific heat table (solve/heat_capacity.hpp): the temperatures before
-  // a thermal step, and the enthalpy correction after it.
+  // A specific heat table (solve/heat_capacity.hpp) or crystallisation
+  // kinetics (solve/crystallisation.hpp): the temperatures before a thermal
+  // step, and the enthalpy correction and crystallisation after it.
   void keep_step_temperatures();
-  void apply_heat_capacity();
+  void finish_thermal_step(double dt);
   void build_probes();
   void build_mechanics();
   // One explicit step of every part; returns the step taken.

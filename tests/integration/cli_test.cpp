@@ -315,6 +315,16 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"specific_heat_row", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = {{240.0, 1775.0}, {250.0}}; }, "error: /materials/pa66_cf_ud/specific_heat/1: expected 2 numbers"},
       {"specific_heat_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = {{240.0, 1775.0}, {250.0, -1.0}}; }, "error: /materials/pa66_cf_ud/specific_heat/1/1: must be > 0 J/kg/K, found -1"},
       {"specific_heat_empty", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = json::array(); }, "error: /materials/pa66_cf_ud/specific_heat: expected a number (J/kg/K) or rows [T (degC), c (J/kg/K)]"},
+      {"crystallisation_rate_temperatures", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{240.0, 0.1}, {230.0, 0.5}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/1/0: temperatures must increase from row to row"},
+      {"crystallisation_rate_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}, {230.0, -0.5}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/1/1: must be >= 0 1/s, found -0.5"},
+      {"crystallisation_rate_zero", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate: every rate is zero"},
+      {"crystallisation_gaussian_width", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{"k_max", 50.0}, {"t_max", 150.0}, {"half_width", 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/half_width: must be > 0"},
+      {"crystallisation_exponent", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 0}, {"rate", {{200.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/avrami_exponent: must be > 0"},
+      {"crystallisation_initial", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"initial", 1.0}, {"rate", {{200.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/initial: must be below 1"},
+      {"crystallisation_latent_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", -1.0}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/latent_heat: must be >= 0"},
+      {"crystallisation_unknown_key", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rates", {{200.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate: "},
+      {"field_crystallinity_without_kinetics", [](json& j) { j["output"]["fields"] = {"temperature", "crystallinity"}; }, "error: /output/fields/1: the field 'crystallinity' needs the thermal solver and a ply whose material has 'crystallisation'"},
+      {"probe_crystallinity_without_kinetics", [](json& j) { j["output"]["probes"][0]["quantities"] = {"temperature_mean", "crystallinity_profile"}; }, "error: /output/probes/0/quantities/1: 'crystallinity_profile' needs the thermal solver and a part whose material has 'crystallisation'"},
       {"field_below_threshold_without_threshold", [](json& j) { j["output"]["fields"] = {"temperature", "below_threshold_from"}; }, "error: /output/fields/1: the field 'below_threshold_from' needs output.temperature_threshold and the thermal solver"},
       {"emissivity_above_one", [](json& j) { j["interactions"][2]["emissivity"] = 1.5; }, "error: /interactions/2/emissivity: must be <= 1, found 1.5"},
       {"heat_exchange_without_h", [](json& j) { j["interactions"][2].erase("h"); }, "error: /interactions/2/h: "},
@@ -1826,6 +1836,15 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   json with_table = with_checkpoints;  // a specific heat that follows the temperature
   with_table["materials"]["pa66_cf_ud"]["specific_heat"] = {{220.0, 1775.0}, {230.0, 4775.0}, {240.0, 1775.0}};
   std::ofstream(dir / "table.json") << with_table.dump();
+  json with_kinetics = with_checkpoints;  // crystallisation kinetics, both forms of the rate
+  with_kinetics["materials"]["pa66_cf_ud"]["crystallisation"] = {
+      {"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{"k_max", 50.0}, {"t_max", 150.0}, {"half_width", 50.0}}}};
+  std::ofstream(dir / "kinetics.json") << with_kinetics.dump();
+  with_kinetics["materials"]["pa66_cf_ud"]["crystallisation"]["rate"] = {{150.0, 2.0}, {250.0, 0.0}};
+  with_kinetics["output"]["fields"] = {"temperature", "crystallinity"};
+  std::ofstream(dir / "kinetics_rows.json") << with_kinetics.dump();
+  with_kinetics["materials"]["pa66_cf_ud"]["crystallisation"]["rate"] = {{"k_max", 50.0}, {"t_max", 150.0}};
+  std::ofstream(dir / "bad_kinetics.json") << with_kinetics.dump();
   json bad_table = with_table;
   bad_table["materials"]["pa66_cf_ud"]["specific_heat"] = {{220.0, 1775.0, 1.0}};
   std::ofstream(dir / "bad_table.json") << bad_table.dump();
@@ -1839,9 +1858,11 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
     good += q(e.path()) + " ";
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
-  good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " ";
+  good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " " + q(dir / "kinetics.json") + " " +
+          q(dir / "kinetics_rows.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "bad_kinetics.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "typo.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "probe.json") + " >/dev/null").c_str()), 0);
 }

@@ -185,12 +185,17 @@ void check_restart(const std::string& label, json j, double interval, std::strin
 // pressure on the ply/ply pair, a friction coefficient that follows
 // the temperature on the ply/ply pair and the die, and a specific heat that
 // follows the temperature (a peak inside the plies' range; heat balance of
-// the continued run under 1e-9), and the field below_threshold_from (each
-// node's times, some from before the checkpoint).
+// the continued run under 1e-9), crystallisation kinetics with a rate in
+// the plies' range (the field crystallinity, every value's integral carried
+// by the checkpoint), and the field below_threshold_from (each node's
+// times, some from before the checkpoint).
 TEST(Restart, HemisphereContinuesBitForBit) {
   json j = coarse_hemisphere("hemisphere_ud_2ply.json");
   j["materials"]["pa66_cf_ud"]["specific_heat"] = {{260.0, 1775.0}, {280.0, 2775.0}, {300.0, 1775.0}};
+  j["materials"]["pa66_cf_ud"]["crystallisation"] = {
+      {"latent_heat", 20000.0}, {"avrami_exponent", 3.0}, {"rate", {{270.0, 2.0}, {300.0, 0.0}}}};
   j["output"]["fields"].push_back("below_threshold_from");
+  j["output"]["fields"].push_back("crystallinity");
   j["output"]["shear_angle_limit"] = 0.3;
   for (auto& t : j["tools"])
     if (t["name"] == "die") t["temperature"] = {{0.0, 260.0}, {0.5, 250.0}, {1.0, 265.0}};
@@ -213,6 +218,7 @@ TEST(Restart, HemisphereContinuesBitForBit) {
   for (const auto& p : s["parts"]) {
     ASSERT_TRUE(p["over_shear_limit_from_s"].is_number()) << p.dump();
     EXPECT_LT(p["over_shear_limit_from_s"].get<double>(), 0.6);
+    EXPECT_GT(p["crystallinity_max"].get<double>(), 1e-3) << p.dump();  // the kinetics are at work
   }
 }
 

@@ -1,0 +1,79 @@
+#pragma once
+// The crystallisation of a semi-crystalline matrix on cooling, by
+// Nakamura's non-isothermal extension of the Avrami law:
+//   X(t) = 1 - exp(-theta(t)^n),  theta(t) = int_0^t K(T(s)) ds,
+// X the relative crystallinity (0: amorphous melt, 1: as crystalline as the
+// matrix gets), n the Avrami exponent and K(T) (1/s) the rate: rows
+// [T (degC), K] (linear between them, held beyond), or Ziabicki's Gaussian
+// K = k_max exp(-4 ln 2 (T - t_max)^2 / half_width^2). The crystallisation
+// releases latent_heat (J/kg of ply) from X = 0 to 1.
+//
+// Each value of a ply's thickness carries theta. After a thermal step the
+// kernel adds the trapezoid 1/2 (K(T_old) + K(T_new)) dt to it and gives
+// the value the heat latent_heat (X_new - X_old) (see Simulation::
+// finish_thermal_step). X never decreases: the model has no melting (on
+// heating, a specific heat table carries the heat of melting).
+#include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace ts {
+
+class CrystallisationKinetics {
+ public:
+  CrystallisationKinetics() = default;
+  // Rows with increasing temperatures and rates >= 0, or (rows empty) the
+  // Gaussian's k_max > 0 and half_width > 0 (checked by the job reader).
+  CrystallisationKinetics(double latent_heat, double exponent, std::vector<std::array<double, 2>> rows,
+                          double k_max, double t_max, double half_width)
+      : on_(true), latent_(latent_heat), n_(exponent), rows_(std::move(rows)), k_max_(k_max), t_max_(t_max),
+        a_(half_width > 0 ? 4.0 * std::log(2.0) / (half_width * half_width) : 0.0) {}
+  bool empty() const { return !on_; }
+  double latent_heat() const { return latent_; }
+  double exponent() const { return n_; }
+  // K(T), 1/s.
+  double rate(double T) const {
+    if (rows_.empty()) {
+      const double d = T - t_max_;
+      return k_max_ * std::exp(-a_ * d * d);
+    }
+    if (T <= rows_.front()[0]) return rows_.front()[1];
+    if (T >= rows_.back()[0]) return rows_.back()[1];
+    std::size_t k = 1;
+    while (rows_[k][0] < T) ++k;
+    const auto &a = rows_[k - 1], &b = rows_[k];
+    return a[1] + (T - a[0]) / (b[0] - a[0]) * (b[1] - a[1]);
+  }
+  // Cooling at a constant rate (K/s) from `from` (degC): the temperature at
+  // which X reaches x (degC; -infinity if it never does above -273.15). For
+  // a comparison with a DSC run at that rate.
+  double temperature_at(double x, double cooling_rate, double from) const {
+    const double target = integral(x) * cooling_rate, step = 0.01;
+    double sum = 0, T = from, k = rate(T);
+    while (T > -273.15) {
+      const double k1 = rate(T - step);
+      const double add = 0.5 * (k + k1) * step;
+      if (sum + add >= target) return T - step * (target - sum) / add;
+      sum += add;
+      T -= step;
+      k = k1;
+    }
+    return -std::numeric_limits<double>::infinity();
+  }
+  // The temperature above which K is negligible: the last row, or four half
+  // widths above the Gaussian's peak (K there is 2^-64 of its peak).
+  double upper_temperature() const { return rows_.empty() ? t_max_ + 4.0 * half_width() : rows_.back()[0]; }
+  double half_width() const { return a_ > 0 ? std::sqrt(4.0 * std::log(2.0) / a_) : 0.0; }
+  // X from theta, and theta from X (X < 1).
+  double crystallinity(double theta) const { return theta > 0 ? -std::expm1(-std::pow(theta, n_)) : 0.0; }
+  double integral(double X) const { return X > 0 ? std::pow(-std::log1p(-X), 1.0 / n_) : 0.0; }
+
+ private:
+  bool on_ = false;
+  double latent_ = 0, n_ = 1;
+  std::vector<std::array<double, 2>> rows_;
+  double k_max_ = 0, t_max_ = 0, a_ = 0;
+};
+
+}  // namespace ts
