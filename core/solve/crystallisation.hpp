@@ -5,11 +5,12 @@
 // X the relative crystallinity (0: amorphous melt, 1: as crystalline as the
 // matrix gets), n the Avrami exponent and K(T) (1/s) the rate: rows
 // [T (degC), K] (linear between them, held beyond), or Ziabicki's Gaussian
-// K = k_max exp(-4 ln 2 (T - t_max)^2 / half_width^2). The crystallisation
+// K = k_max exp(-4 ln 2 (T - t_max)^2 / half_width^2) (zero beyond four
+// half widths from t_max, where it is below 2^-64 k_max). The crystallisation
 // releases latent_heat (J/kg of ply) from X = 0 to 1.
 //
 // Each value of a ply's thickness carries theta. After a thermal step the
-// kernel adds the trapezoid 1/2 (K(T_old) + K(T_new)) dt to it and gives
+// kernel adds K((T_old + T_new) / 2) dt to it (the midpoint rule) and gives
 // the value the heat latent_heat (X_new - X_old) (see Simulation::
 // finish_thermal_step). X never decreases: the model has no melting (on
 // heating, a specific heat table carries the heat of melting).
@@ -28,15 +29,19 @@ class CrystallisationKinetics {
   CrystallisationKinetics(double latent_heat, double exponent, std::vector<std::array<double, 2>> rows,
                           double k_max, double t_max, double half_width)
       : on_(true), latent_(latent_heat), n_(exponent), rows_(std::move(rows)), k_max_(k_max), t_max_(t_max),
-        a_(half_width > 0 ? 4.0 * std::log(2.0) / (half_width * half_width) : 0.0) {}
+        a_(half_width > 0 ? 4.0 * std::log(2.0) / (half_width * half_width) : 0.0),
+        whole_(exponent == 1.0 || exponent == 2.0 || exponent == 3.0 || exponent == 4.0 ? static_cast<int>(exponent)
+                                                                                         : 0) {}
   bool empty() const { return !on_; }
   double latent_heat() const { return latent_; }
   double exponent() const { return n_; }
   // K(T), 1/s.
   double rate(double T) const {
     if (rows_.empty()) {
-      const double d = T - t_max_;
-      return k_max_ * std::exp(-a_ * d * d);
+      // Zero beyond four half widths, where K is below 2^-64 of its peak:
+      // values there skip the kinetics.
+      const double d = T - t_max_, ad2 = a_ * d * d;
+      return ad2 > kCut ? 0.0 : k_max_ * std::exp(-ad2);
     }
     if (T <= rows_.front()[0]) return rows_.front()[1];
     if (T >= rows_.back()[0]) return rows_.back()[1];
@@ -66,14 +71,27 @@ class CrystallisationKinetics {
   double upper_temperature() const { return rows_.empty() ? t_max_ + 4.0 * half_width() : rows_.back()[0]; }
   double half_width() const { return a_ > 0 ? std::sqrt(4.0 * std::log(2.0) / a_) : 0.0; }
   // X from theta, and theta from X (X < 1).
-  double crystallinity(double theta) const { return theta > 0 ? -std::expm1(-std::pow(theta, n_)) : 0.0; }
+  double crystallinity(double theta) const {
+    if (!(theta > 0)) return 0.0;
+    double p;  // theta^n, by products for the usual whole exponents
+    switch (whole_) {
+      case 1: p = theta; break;
+      case 2: p = theta * theta; break;
+      case 3: p = theta * theta * theta; break;
+      case 4: p = (theta * theta) * (theta * theta); break;
+      default: p = std::pow(theta, n_);
+    }
+    return -std::expm1(-p);
+  }
   double integral(double X) const { return X > 0 ? std::pow(-std::log1p(-X), 1.0 / n_) : 0.0; }
 
  private:
+  static constexpr double kCut = 64.0 * 0.6931471805599453;  // a d^2 at four half widths: 4 ln 2 x 16
   bool on_ = false;
   double latent_ = 0, n_ = 1;
   std::vector<std::array<double, 2>> rows_;
   double k_max_ = 0, t_max_ = 0, a_ = 0;
+  int whole_ = 0;  // n when it is 1, 2, 3 or 4, else 0
 };
 
 }  // namespace ts

@@ -2118,8 +2118,9 @@ void Simulation::keep_step_temperatures() {
 // After a splitter's step over dt: with a specific heat table, the splitter
 // advanced with c_min and each value gets the heat it was given, c_min
 // (T* - T_old) per kg, on the table's enthalpy curve; with crystallisation,
-// each value's Nakamura integral takes the step's trapezoid of K(T) and the
-// value gets the latent heat of its new crystallinity.
+// each value's Nakamura integral takes the step's K at the mean of its old
+// and new temperatures (the midpoint rule) times dt, and the value gets the
+// latent heat of its new crystallinity.
 void Simulation::finish_thermal_step(double dt) {
   for (auto& stp : parts_) {
     PartState& st = *stp;
@@ -2138,7 +2139,7 @@ void Simulation::finish_thermal_step(double dt) {
       double t = T[k];
       if (table && t != T0[k]) t = cp.advance(T0[k], c_min * (t - T0[k]));
       if (crystallising && X[k] < 1.0) {
-        const double r = 0.5 * (kin.rate(T0[k]) + kin.rate(t));
+        const double r = kin.rate(0.5 * (T0[k] + t));
         if (r > 0) {
           theta[k] += r * dt;
           const double x = kin.crystallinity(theta[k]);

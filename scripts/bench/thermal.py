@@ -2,9 +2,12 @@
 """Thermal benchmarks: cost of the adi splitter per node-layer-step against
 mesh size and threads, and adi against layered3d on the contact patch.
 
-Usage: scripts/bench/thermal.py [--quick] [--specific-heat]   (after a Release build in build/)
+Usage: scripts/bench/thermal.py [--quick] [--specific-heat | --crystallisation]   (after a Release build in build/)
 --specific-heat runs only the comparison of a constant specific heat with
-a table whose peak the plate cools through.
+a table whose peak the plate cools through; --crystallisation only the
+comparison of a plate without crystallisation kinetics with plates whose
+every value crystallises at every step (the rate from rows, and from
+the Gaussian).
 Prints Markdown tables (copied into docs/benchmarks.md).
 """
 import json
@@ -22,7 +25,16 @@ EXE = os.environ.get("THERMOSTAMP_EXE", os.path.join(ROOT, "build", "bin", "ther
 PEAK_ROWS = [[280.0, 1775.0], [290.0, 3775.0], [300.0, 1775.0]]
 
 
-def plate_job(divisions, layers, splitter, steps, dt, linked=False, specific_heat=1775.0):
+# Crystallisation kinetics with a rate above zero at every temperature of
+# the plate (every value takes the kinetics' full path at every step).
+KINETICS = {
+    "rows": {"latent_heat": 30000.0, "avrami_exponent": 3.0, "rate": [[200.0, 2.0], [320.0, 1.0]]},
+    "gaussian": {"latent_heat": 30000.0, "avrami_exponent": 3.0,
+                 "rate": {"k_max": 2.0, "t_max": 280.0, "half_width": 50.0}},
+}
+
+
+def plate_job(divisions, layers, splitter, steps, dt, linked=False, specific_heat=1775.0, crystallisation=None):
     size = divisions * 0.001  # 1 mm elements
     part = {
         "name": "ply", "thickness": 0.0005, "material": "m", "fibre_direction": [1, 1, 0],
@@ -43,10 +55,13 @@ def plate_job(divisions, layers, splitter, steps, dt, linked=False, specific_hea
                   "conductance": 1000.0},
                  {"type": "heat_exchange", "part": "upper", "face": "top", "h": 1000.0, "ambient": 260.0},
                  {"type": "heat_exchange", "part": "ply", "face": "bottom", "h": 500.0, "ambient": 250.0}]
+    material = {"density": 1294.0, "specific_heat": specific_heat, "conductivity": [3.89, 0.31, 0.31]}
+    if crystallisation:
+        material["crystallisation"] = crystallisation
     return {
         "format": "thermostamp-job/1", "name": "bench",
         "time": {"end": steps * dt},
-        "materials": {"m": {"density": 1294.0, "specific_heat": specific_heat, "conductivity": [3.89, 0.31, 0.31]}},
+        "materials": {"m": material},
         "parts": parts, "interactions": inter,
         "solvers": {"mechanics": None, "thermal": {"splitter": splitter, "through_thickness": "implicit", "dt": dt}},
         "output": {"interval": steps * dt, "fields": ["temperature_mean"], "checkpoint_at_end": False},
@@ -80,6 +95,20 @@ def main():
                 print("| %d | %d | %.3f | %.2f | %.3f | %.2f | %.2f |" % (
                     nodes, th, a["wall_time_s"], a["wall_time_s"] / per, b["wall_time_s"], b["wall_time_s"] / per,
                     b["wall_time_s"] / a["wall_time_s"]))
+        return
+    if "--crystallisation" in sys.argv:
+        print("### adi (implicit), without crystallisation kinetics and with them (every value crystallising), "
+              "%d layers, %d steps\n" % (layers, steps))
+        print("| nodes | threads | without: ns per node-layer-step | rate from rows: ns | ratio | Gaussian rate: ns | ratio |")
+        print("|---|---|---|---|---|---|---|")
+        for n in sizes:
+            for th in (1, 2):
+                nodes = (n + 1) ** 2
+                per = nodes * (layers + 1) * steps / 1e9
+                a = run(plate_job(n, layers, "adi", steps, dt), th)["wall_time_s"]
+                r = run(plate_job(n, layers, "adi", steps, dt, crystallisation=KINETICS["rows"]), th)["wall_time_s"]
+                g = run(plate_job(n, layers, "adi", steps, dt, crystallisation=KINETICS["gaussian"]), th)["wall_time_s"]
+                print("| %d | %d | %.2f | %.2f | %.2f | %.2f | %.2f |" % (nodes, th, a / per, r / per, r / a, g / per, g / a))
         return
     print("### adi (implicit) cost per node-layer-step, one ply, %d layers, %d steps\n" % (layers, steps))
     print("| nodes | threads | wall time (s) | ns per node-layer-step | speed-up |")

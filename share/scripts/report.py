@@ -15,6 +15,10 @@ Writes into DIR/figures/:
                        frames have the field conductance
   tool_gap_<part>.png  the gap between each ply and its tools (mm), last
                        frame, where the frames have the field tool_gap
+  crystallinity_<part>.png  the relative crystallinity of each ply (its
+                       mean and its smallest value through the
+                       thickness), last frame, where the frames have the
+                       field crystallinity
   below_threshold_<part>.png  when each place of each ply first had a
                        value, and had every value, below
                        output.temperature_threshold (s; grey: not by the
@@ -25,8 +29,9 @@ Writes into DIR/figures/:
   plies.png            each ply's mean temperature against time, in a
                        band from its coldest to its hottest value, and
                        with output.temperature_threshold its share below
-                       it; with the mechanics, the band of its elements'
-                       shear angles and, with output.shear_angle_limit,
+                       it, and with crystallisation kinetics its
+                       crystallinity; with the mechanics, the band of its
+                       elements' shear angles and, with output.shear_angle_limit,
                        the share of its area sheared beyond the limit
   energy.png           energy audit against time
   study.png            error against wall time when DIR holds a study.csv
@@ -214,6 +219,26 @@ def threshold_map(out, part, time, tri, xyz, some, every, threshold):
     return save(fig, out, "below_threshold_%s.png" % part, dpi=110, tight=False)
 
 
+def crystallinity_map(out, part, time, tri, xyz, mean, layers):
+    """The relative crystallinity of one ply (0: amorphous melt, 1: as
+    crystalline as the matrix gets), per node: its mean through the
+    thickness (left) and its smallest value through the thickness (right,
+    where the thickness is resolved: the least crystallised layer)."""
+    nodes = xyz.shape[0]
+    panels = [("mean through the thickness", mean)]
+    if layers is not None and layers.size > nodes and layers.size % nodes == 0:
+        panels.append(("smallest through the thickness", layers.reshape(nodes, -1).min(axis=1)))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.7 * len(panels), 4.4), squeeze=False)
+    fig.subplots_adjust(wspace=0.45)
+    for ax, (what, vals) in zip(axes[0], panels):
+        for mxy, mtri, v in mirrored(xyz[:, :2], tri, vals, False):
+            pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, v, shading="gouraud", vmin=0.0, vmax=1.0,
+                              cmap="cividis")
+        finish_map(fig, ax, pc, "%s: relative crystallinity, %s\nt = %.3g s, from %.3f to %.3f"
+                   % (part, what, time, vals.min(), vals.max()), "1")
+    return save(fig, out, "crystallinity_%s.png" % part, dpi=110, tight=False)
+
+
 def pressure_map(out, part, time, tri, xyz, vals):
     """The contact pressure of one ply (per node, kPa, some above zero): a log
     scale over three decades (a holder's pressure can be 50 times the
@@ -294,6 +319,9 @@ def plot_maps(folder, out):
             if "below_threshold_from" in g and "all_below_threshold_from" in g:
                 made.append(threshold_map(out, part, time, tri, xyz, g["below_threshold_from"][()],
                                           g["all_below_threshold_from"][()], threshold_of(folder, part)))
+            if "crystallinity_mean" in g:
+                made.append(crystallinity_map(out, part, time, tri, xyz, g["crystallinity_mean"][()],
+                                              g["crystallinity"][()] if "crystallinity" in g else None))
     return made
 
 
@@ -386,6 +414,8 @@ def plot_plies(folder, out):
         panels.append("temperature")
         if all("fraction_below" in v for v in plies.values()):
             panels.append("below")
+    if any("crystallinity_mean" in v and not np.all(np.isnan(v["crystallinity_mean"])) for v in plies.values()):
+        panels.append("crystallinity")
     if all("shear_angle_max" in v for v in plies.values()):
         panels.append("shear")
         if all("fraction_over_shear_limit" in v for v in plies.values()):
@@ -405,6 +435,12 @@ def plot_plies(folder, out):
                 a.plot(v["time"], v["shear_angle_min"], color=c, lw=1)
             elif panel == "below":
                 a.plot(v["time"], 100 * v["fraction_below"], color=c, label=name)
+            elif panel == "crystallinity":
+                if "crystallinity_mean" in v and not np.all(np.isnan(v["crystallinity_mean"])):
+                    a.fill_between(v["time"], v["crystallinity_min"], v["crystallinity_max"], color=c, alpha=0.2,
+                                   lw=0)
+                    a.plot(v["time"], v["crystallinity_mean"], color=c,
+                           label="%s: mean, band from smallest to largest" % name)
             else:
                 a.plot(v["time"], 100 * v["fraction_over_shear_limit"], color=c, label=name)
         if panel == "temperature":
@@ -423,6 +459,10 @@ def plot_plies(folder, out):
                                       limit[name], "" if common_l else " (%s)" % name))
             a.set_ylabel("shear angle (deg)")
             a.set_title("shear angle of each ply's elements")
+        elif panel == "crystallinity":
+            a.set_ylabel("relative crystallinity")
+            a.set_title("crystallinity of each ply")
+            a.set_ylim(-0.02, 1.02)
         elif panel == "below":
             a.set_ylabel("% of the ply's heat capacity")
             a.set_title("share below %s" % ("%g degC" % next(iter(threshold.values())) if common_t

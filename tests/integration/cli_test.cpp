@@ -61,7 +61,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.19.0 (plugin SDK 0.18.0, ABI 18)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.20.0 (plugin SDK 0.18.0, ABI 18)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -1104,6 +1104,15 @@ json short_hemisphere(double t_end, double interval, int cells) {
   return j;
 }
 
+// Every field of known_fields() on job j: the field crystallinity needs
+// crystallisation kinetics, given to every material with a rate in the
+// plies' range.
+void every_field(json& j) {
+  j["output"]["fields"] = known_fields();
+  for (auto& m : j["materials"])
+    m["crystallisation"] = {{"latent_heat", 20000.0}, {"avrami_exponent", 3.0}, {"rate", {{270.0, 2.0}, {300.0, 0.0}}}};
+}
+
 // The thermal demo, 2 s on 8 x 8 cells per ply, frames every 0.5 s and
 // rows every 50 ms.
 json short_thermal_demo() {
@@ -1193,7 +1202,7 @@ TEST(Output, ThermalOnlyToolRowsAtTheSeriesRows) {
 TEST(Export, PliesOfAFrameAsGmshMeshes) {
   const auto dir = temp_dir("export");
   json j = short_hemisphere(0.02, 0.005, 6);
-  j["output"]["fields"] = known_fields();
+  every_field(j);
   std::ofstream(dir / "job.json") << j.dump(2);
   ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "run")).exit_code, 0);
   const auto r = thermostamp("export " + q(dir / "run") + " --time 0.011 --out " + q(dir / "formed"));
@@ -1256,12 +1265,14 @@ TEST(Export, PliesOfAFrameAsGmshMeshes) {
         EXPECT_EQ(data.count(field), 0u);
       } else if (field == "below_threshold_from") {
         names.insert(names.end(), {"below_threshold_from", "all_below_threshold_from"});
+      } else if (field == "crystallinity") {
+        names.insert(names.end(), {"crystallinity", "crystallinity_mean"});
       } else {
         names.push_back(field);
       }
     }
     for (const std::string& field : names) {
-      if (field == "temperature") {  // on the extruded mesh: its mean, top and bottom are fields of their own
+      if (field == "temperature" || field == "crystallinity") {  // on the extruded mesh: their means are fields
         EXPECT_EQ(data.count(field), 0u);
         continue;
       }
@@ -1316,7 +1327,7 @@ TEST(Export, PliesOfAFrameAsGmshMeshes) {
 TEST(Output, CompressedResultsHoldTheSameValues) {
   const auto dir = temp_dir("compression");
   json j = short_hemisphere(0.02, 0.005, 10);
-  j["output"]["fields"] = known_fields();
+  every_field(j);
   j["output"]["series_interval"] = 1e-4;
   std::ofstream(dir / "job.json") << j.dump(2);
   const std::string run = "run " + q(dir / "job.json") + " --quiet --out ";
@@ -1404,13 +1415,137 @@ TEST(Output, JobAsRunRunsTheSameJobFromAnywhere) {
   EXPECT_EQ(after.str(), before.str());
 }
 
+// Crystallisation kinetics from the command line: `validate` and the log
+// name them with the temperature of half crystallisation at 10 K/min
+// (232.1 degC for these parameters, by an independent quadrature in
+// scipy); the run writes the field (every value through the thickness,
+// units 1, and the node means, the thickness-weighted mean of the values),
+// the probe's profiles, the plies' columns (units 1; the last row is the
+// summary's) and the summary's range; export carries the mean. An
+// isothermal job ignores the kinetics with a warning.
+TEST(Output, CrystallinityInFramesSeriesSummaryAndExport) {
+  const auto dir = temp_dir("crystallinity_output");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json");
+  j["time"]["end"] = 3.0;
+  j["tools"][0]["temperature"] = 150.0;
+  j["interactions"][2]["ambient"] = 150.0;
+  j["materials"]["pa66_cf_ud"]["crystallisation"] = {
+      {"latent_heat", 30000.0}, {"avrami_exponent", 3.0},
+      {"rate", {{"k_max", 50.0}, {"t_max", 150.0}, {"half_width", 50.0}}}};
+  j["output"]["fields"] = {"temperature", "crystallinity"};
+  j["output"]["probes"][0]["quantities"] = {"temperature_profile", "crystallinity_profile"};
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto v = thermostamp("validate " + q(dir / "job.json"));
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  EXPECT_NE(v.out.find("material 'pa66_cf_ud': crystallisation (Nakamura, n = 3, latent heat 30000 J/kg), rate 50 "
+                       "1/s at 150 degC, half width 50 K; cooled at 10 K/min, half crystallised at 232.1 degC"),
+            std::string::npos)
+      << v.out;
+  const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "run") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::stringstream log;
+  log << std::ifstream(dir / "run" / "log.txt").rdbuf();
+  EXPECT_NE(log.str().find("part 'ply_top': crystallisation (Nakamura"), std::string::npos);
+  EXPECT_NE(log.str().find(", relative crystallinity "), std::string::npos);
+  const json sum = json::parse(std::ifstream(dir / "run" / "summary.json"));
+  EXPECT_LT(sum["heat"]["balance_error"].get<double>(), 1e-10);
+  std::map<std::string, std::array<double, 3>> range;
+  for (const auto& p : sum["parts"]) {
+    const std::array<double, 3> x = {p["crystallinity_min"].get<double>(), p["crystallinity_mean"].get<double>(),
+                                     p["crystallinity_max"].get<double>()};
+    EXPECT_LE(0.0, x[0]);
+    EXPECT_LE(x[0], x[1]);
+    EXPECT_LE(x[1], x[2]);
+    EXPECT_LE(x[2], 1.0);
+    range[p["name"].get<std::string>()] = x;
+  }
+  EXPECT_GT(range["ply_bottom"][2], 0.5);  // the lower ply, on the 150 degC die, crystallises
+  // plies.csv: the columns, and its last rows are the summary's.
+  std::ifstream csv(dir / "run" / "plies.csv");
+  std::string line, last_top, last_bottom;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "time,ply,temperature_min,temperature_mean,temperature_max,crystallinity_min,crystallinity_mean,"
+                  "crystallinity_max");
+  while (std::getline(csv, line)) (line.find(",ply_top,") != std::string::npos ? last_top : last_bottom) = line;
+  for (const auto& [name, row] : {std::pair{std::string("ply_top"), last_top}, {std::string("ply_bottom"), last_bottom}}) {
+    std::vector<double> v;
+    std::stringstream ss(row.substr(row.find(name) + name.size() + 1));
+    for (std::string item; std::getline(ss, item, ',');) v.push_back(std::stod(item));
+    ASSERT_EQ(v.size(), 6u) << row;
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(v[3 + k], range[name][k], 1e-9) << name << " " << k;
+  }
+  std::stringstream probes;
+  probes << std::ifstream(dir / "run" / "probes.csv").rdbuf();
+  EXPECT_NE(probes.str().find("centre_top,crystallinity_profile,3,"), std::string::npos);
+  // The frame: values through the thickness and their mean.
+  const hid_t file = H5Fopen((dir / "run" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  auto units = [&](const std::string& object) {
+    const hid_t at = H5Aopen_by_name(file, object.c_str(), "units", H5P_DEFAULT, H5P_DEFAULT);
+    if (at < 0) return std::string("(none)");
+    const hid_t type = H5Aget_type(at);
+    std::string u(H5Tget_size(type), '\0');
+    H5Aread(at, type, u.data());
+    H5Tclose(type);
+    H5Aclose(at);
+    return std::string(u.c_str());
+  };
+  const std::string frame = "frames/000006/ply_bottom/";
+  EXPECT_EQ(units(frame + "crystallinity"), "1");
+  EXPECT_EQ(units(frame + "crystallinity_mean"), "1");
+  const auto layers = read_dataset<double>(file, frame + "crystallinity");
+  const auto mean = read_dataset<double>(file, frame + "crystallinity_mean");
+  const auto temps = read_dataset<double>(file, frame + "temperature");
+  const std::string cols = [&] {
+    const hid_t at = H5Aopen_by_name(file, "series/plies", "units", H5P_DEFAULT, H5P_DEFAULT);
+    const hid_t type = H5Aget_type(at);
+    std::string u(H5Tget_size(type), '\0');
+    H5Aread(at, type, u.data());
+    H5Tclose(type);
+    H5Aclose(at);
+    return std::string(u.c_str());
+  }();
+  H5Fclose(file);
+  EXPECT_EQ(cols, "s,degC,degC,degC,1,1,1,degC,degC,degC,1,1,1");
+  ASSERT_EQ(layers.size(), temps.size());
+  ASSERT_EQ(layers.size(), 11 * mean.size());  // 10 layers: 11 values per node
+  double most = 0;
+  for (std::size_t i = 0; i < mean.size(); ++i) {
+    double m = 0;
+    for (int k = 0; k < 11; ++k) m += (k == 0 || k == 10 ? 0.5 : 1.0) * layers[11 * i + k];
+    EXPECT_NEAR(mean[i], m / 10, 1e-12) << i;
+    most = std::max(most, mean[i]);
+  }
+  EXPECT_GT(most, 0.5);
+  const auto e = thermostamp("export " + q(dir / "run"));
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  std::stringstream msh;
+  msh << std::ifstream(dir / "run" / "export" / "ply_bottom.msh").rdbuf();
+  EXPECT_NE(msh.str().find("\"crystallinity_mean\""), std::string::npos);
+  // An isothermal job: ignored, with a warning naming the key.
+  json iso = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply_isothermal.json");
+  iso["materials"]["pa66_cf_ud"]["crystallisation"] = j["materials"]["pa66_cf_ud"]["crystallisation"];
+  iso["time"]["end"] = 1e-4;
+  std::ofstream(dir / "iso.json") << iso.dump(2);
+  const auto w = thermostamp("run " + q(dir / "iso.json") + " --out " + q(dir / "iso"));
+  EXPECT_EQ(w.exit_code, 0) << w.err;
+  EXPECT_NE((w.out + w.err).find("/materials/pa66_cf_ud/crystallisation: ignored, an isothermal job has no "
+                                 "crystallisation"),
+            std::string::npos)
+      << w.out << w.err;
+}
+
 // Every dataset of a frame carries its units (attribute "units", the user
 // guide's table), and each series the units of its columns beside their
 // names: the hemisphere scene, coarse and short, with every field.
 TEST(Output, DatasetsCarryTheirUnits) {
   const auto dir = temp_dir("units");
   json j = short_hemisphere(0.002, 0.001, 4);
-  j["output"]["fields"] = known_fields();
+  // Every field but crystallinity, which needs crystallisation kinetics
+  // (Output.CrystallinityInFramesSeriesSummaryAndExport).
+  j["output"]["fields"] = json::array();
+  for (const auto& f : known_fields())
+    if (f != "crystallinity") j["output"]["fields"].push_back(f);
   // degrees, by material (both plies' material): some elements (up to 2.6e-5) are beyond it at the end
   j["output"]["shear_angle_limit"] = {{"pa66_cf_ud", 1e-5}};
   const JobRun run = run_json(j, 1, dir);
