@@ -121,10 +121,12 @@ ProbeSample slab_robin_sample(const Job& j, const ProbeSample& s) {
   return r;
 }
 
-// What the study compares of a ply's rows: its mean temperature, and its
-// largest shear angle of either sign.
+// What the study compares of a ply's rows: its mean temperature, its
+// largest shear angle of either sign, and its mean crystallinity (NaN for
+// a ply without crystallisation kinetics).
 double ply_mean(const RunResult::PlySample& s) { return s.mean; }
 double ply_shear(const RunResult::PlySample& s) { return std::max(std::abs(s.shear_min), std::abs(s.shear_max)); }
+double ply_crystallinity(const RunResult::PlySample& s) { return s.crystallinity_mean; }
 using PlyValue = double (*)(const RunResult::PlySample&);
 
 // One ply's value by row (plies.csv), in time order.
@@ -169,6 +171,8 @@ json run_outcomes(const RunResult& r, const Job& job) {
     for (const auto& s : r.ply_history)
       if (s.part == static_cast<int>(p)) last = &s;
     if (thermal) o.push_back({n + "_mean_end_degC", last ? json(last->mean) : json(nullptr)});
+    if (thermal && job.materials[job.parts[p].material].crystallisation.present)
+      o.push_back({n + "_crystallinity_mean_end", last ? json(last->crystallinity_mean) : json(nullptr)});
     if (thermal && !job.output.temperature_threshold.empty()) {
       o.push_back({n + "_below_from_s", when(r.part_below_threshold_from_s, p)});
       o.push_back({n + "_all_below_from_s", when(r.part_all_below_threshold_from_s, p)});
@@ -199,7 +203,9 @@ json run_record(const RunResult& r, const std::string& quantity, int completed, 
   json samples = json::array(), plies = json::array();
   for (const auto& s : r.probes)
     if (s.quantity == quantity) samples.push_back({s.probe, s.time, s.z, s.values});
-  for (const auto& s : r.ply_history) plies.push_back({s.part, s.time, s.mean, s.shear_min, s.shear_max});
+  for (const auto& s : r.ply_history)
+    plies.push_back({s.part, s.time, s.mean, s.shear_min, s.shear_max,
+                     std::isnan(s.crystallinity_mean) ? json(nullptr) : json(s.crystallinity_mean)});
   return {{"completed", completed},
           {"wall_time_s", r.wall_time_s},
           {"thermal_steps", r.thermal_steps},
@@ -230,6 +236,8 @@ RunResult from_record(const json& rec, const std::string& quantity) {
       p.part = s.at(0).get<int>();
       p.time = s.at(1).get<double>();
       p.mean = s.at(2).get<double>();
+      p.crystallinity_mean = s.size() >= 6 && s.at(5).is_number() ? s.at(5).get<double>()
+                                                                  : std::numeric_limits<double>::quiet_NaN();
       if (s.size() >= 5) {
         p.shear_min = s.at(3).get<double>();
         p.shear_max = s.at(4).get<double>();
@@ -301,6 +309,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   // (the runs give identical results; a shared machine adds noise to times).
   const int repeat = static_cast<int>(top.integer("repeat", 1, 1, 100));
   top.declare("name");
+  top.text("description", std::string());  // for the reader, as in a job
   top.finish();
 
   json base_doc;
@@ -470,6 +479,13 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   const bool shear = analytic.empty() && results[0].mechanical_steps > 0;
   if (shear)
     for (const auto& p : plies) csv << ",error_" << p.name << "_shear_deg";
+  // With crystallisation kinetics in the reference run: each ply's mean
+  // relative crystallinity.
+  const bool crystallinity = analytic.empty() && std::any_of(results[0].ply_history.begin(),
+                                                             results[0].ply_history.end(),
+                                                             [](const auto& s) { return !std::isnan(s.crystallinity_mean); });
+  if (crystallinity)
+    for (const auto& p : plies) csv << ",error_" << p.name << "_crystallinity";
   // Then what each run's forming comes to (run_outcomes): every column any
   // run has, in the order of first appearance; an empty cell where a run
   // has none.
@@ -489,11 +505,12 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   };
   csv << "reference," << results[0].wall_time_s << ",0," << norm << "," << ref_samples << ","
       << results[0].thermal_steps << "," << results[0].thermal_dt;
-  for (std::size_t k = 0; k < probes.size() + plies.size() * (shear ? 2 : 1); ++k) csv << ",0";
+  for (std::size_t k = 0; k < probes.size() + plies.size() * (1 + shear + crystallinity); ++k) csv << ",0";
   write_outcomes(0);
   csv << "\n";
   // The error of a variant's value of ply p (the history of plies.csv: its
-  // mean temperature, or its largest shear angle) in the study's norm, at
+  // mean temperature, its largest shear angle, or its mean crystallinity)
+  // in the study's norm, at
   // the reference's rows (the variant linear between its rows) or, for the
   // mean against the analytic slab, at the variant's own rows; NaN where
   // there is none to compare (a job without the thermal solver, or without
@@ -506,8 +523,8 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       e_sq += d * d;
       ++n;
     };
-    const bool mean = value == ply_mean;
-    auto has = [&](const RunResult& r) { return mean ? r.thermal_dt > 0 : r.mechanical_steps > 0; };
+    const bool mean = value == ply_mean, thermal = mean || value == ply_crystallinity;
+    auto has = [&](const RunResult& r) { return thermal ? r.thermal_dt > 0 : r.mechanical_steps > 0; };
     if (jobs[i].parts.size() != plies.size() || jobs[i].parts[p].name != plies[p].name || !has(results[i]) ||
         (analytic.empty() && !has(results[0])) || (!analytic.empty() && !mean))
       return std::numeric_limits<double>::quiet_NaN();
@@ -516,7 +533,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
       if (s.part != p) continue;
       if (!analytic.empty()) {
         take(std::abs(s.mean - slab_robin_of(jobs[i], -1, s.time)));
-      } else if (const double v = value_at(variant, s.time); !std::isnan(v)) {
+      } else if (const double v = value_at(variant, s.time); !std::isnan(v) && !std::isnan(value(s))) {
         take(std::abs(v - value(s)));
       }
     }
@@ -582,8 +599,8 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
         << results[i].thermal_steps << "," << results[i].thermal_dt;
     for (std::size_t k = 0; k < probes.size(); ++k)
       csv << "," << (norm == "max" ? probe_max[k] : (probe_n[k] ? std::sqrt(probe_sq[k] / probe_n[k]) : 0.0));
-    for (const PlyValue value : {ply_mean, ply_shear}) {
-      if (value == ply_shear && !shear) break;
+    for (const PlyValue value : {ply_mean, ply_shear, ply_crystallinity}) {
+      if ((value == ply_shear && !shear) || (value == ply_crystallinity && !crystallinity)) continue;
       for (std::size_t p = 0; p < plies.size(); ++p) {
         const double e = ply_error(i, static_cast<int>(p), value);
         csv << ",";

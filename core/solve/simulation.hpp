@@ -96,8 +96,10 @@ struct RunResult {
     double min = 0, mean = 0, max = 0;  // degC; the mean weighted by heat capacity
     double fraction_below = 0;          // of the heat capacity below output.temperature_threshold (0 without one)
     // relative crystallinity, with a ply of a crystallising material (NaN
-    // for a ply without; 0 in a job without any)
-    double crystallinity_min = 0, crystallinity_mean = 0, crystallinity_max = 0;
+    // for a ply without)
+    double crystallinity_min = std::numeric_limits<double>::quiet_NaN(),
+           crystallinity_mean = std::numeric_limits<double>::quiet_NaN(),
+           crystallinity_max = std::numeric_limits<double>::quiet_NaN();
     // with mechanics:
     double shear_min = 0, shear_max = 0;                // shear angle (degrees), over the elements
     double fibre_strain_min = 0, fibre_strain_max = 0;  // E11, over the elements

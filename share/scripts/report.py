@@ -35,7 +35,9 @@ Writes into DIR/figures/:
                        the share of its area sheared beyond the limit
   energy.png           energy audit against time
   study.png            error against wall time when DIR holds a study.csv
-                       (at the probes, and of each ply's mean temperature)
+                       (at the probes, of each ply's mean temperature and,
+                       where the study has them, of each ply's largest
+                       shear angle and mean crystallinity)
 
 With --against OTHER (thermostamp report DIR --against OTHER), also the
 two runs on the same axes, DIR solid and OTHER dashed, into
@@ -632,8 +634,13 @@ def plot_study(folder, out):
     # ... and of each ply's largest shear angle (error_<ply>_shear_deg), in a study with the mechanics.
     shears = [c for c in (rows[0].keys() if rows else []) if c.startswith("error_") and c.endswith("_shear_deg")]
     shears = [c for c in shears if any(r[c] for r in var)]
-    n = 1 + bool(means) + bool(shears)
-    fig, axes = plt.subplots(1, n, figsize=(5.5 * n, 4.5), squeeze=False)
+    # ... and of each ply's mean crystallinity (error_<ply>_crystallinity), with crystallisation kinetics.
+    crystal = [c for c in (rows[0].keys() if rows else []) if c.startswith("error_") and c.endswith("_crystallinity")]
+    crystal = [c for c in crystal if any(r[c] for r in var)]
+    n = 1 + bool(means) + bool(shears) + bool(crystal)
+    cols = 2 if n == 4 else n  # four panels in two rows
+    fig, grid_axes = plt.subplots(n // cols, cols, figsize=(5.5 * cols, 4.5 * (n // cols)), squeeze=False)
+    axes = [list(grid_axes.flat)]
     ax = axes[0][0]
     for r in var:
         t, e = float(r["wall_time_s"]), max(float(r["error_K"]), 1e-6)
@@ -655,8 +662,11 @@ def plot_study(folder, out):
     if means:
         per_ply(axes[0][1], means, "_mean_K", "error of the ply's mean temperature (K)", "each ply's mean")
     if shears:
-        per_ply(axes[0][n - 1], shears, "_shear_deg", "error of the ply's largest shear angle (deg)",
+        per_ply(axes[0][1 + bool(means)], shears, "_shear_deg", "error of the ply's largest shear angle (deg)",
                 "each ply's largest shear angle")
+    if crystal:
+        per_ply(axes[0][n - 1], crystal, "_crystallinity", "error of the ply's mean relative crystallinity",
+                "each ply's mean crystallinity")
     ref = [r for r in rows if r["label"] == "reference"]
     for a in axes[0]:
         if ref and float(ref[0]["wall_time_s"]) > 0:  # an analytic reference takes no time

@@ -126,6 +126,70 @@ TEST(Cli, RunWritesTheOutputFolder) {
   EXPECT_NE(xdmf.str().find("<Time Value=\"1\" />"), std::string::npos);
 }
 
+// A study of runs with crystallisation kinetics (the Robin slab cooling
+// through a rate from rows, layered3d as the reference): the error of each
+// variant's mean crystallinity is the largest difference, over the
+// reference's rows of plies.csv, from the reference's (the variants' rows
+// fall on the same times here), to the table's 6 digits, and each run's
+// mean crystallinity at the end is its last row's; a variant without the
+// kinetics has empty cells.
+TEST(Cli, StudyComparesTheCrystallinity) {
+  const auto dir = temp_dir("study_crystallinity");
+  json j = read_job_document(source_dir() / "share" / "verification" / "slab_robin.json");
+  j["materials"]["pa66_cf_ud"]["crystallisation"] = {
+      {"latent_heat", 30000.0}, {"avrami_exponent", 3.0}, {"rate", {{260.0, 3.0}, {290.0, 0.0}}}};
+  j["solvers"]["thermal"]["dt"] = 0.02;
+  std::ofstream(dir / "job.json") << j.dump(2);
+  json plain = j["materials"]["pa66_cf_ud"];
+  plain.erase("crystallisation");
+  json st = {{"format", "thermostamp-study/1"},
+             {"job", (dir / "job.json").string()},
+             {"reference", {{"set", {{"solvers.thermal.splitter", "layered3d"}}}}}};
+  st["variants"] = json::array();
+  st["variants"].push_back({{"label", "adi-4"}, {"set", {{"parts.*.thickness_layers", 4}}}});
+  st["variants"].push_back({{"label", "shell2d"}, {"set", {{"solvers.thermal.splitter", "shell2d"}}}});
+  st["variants"].push_back({{"label", "none"}, {"set", {{"materials.pa66_cf_ud", plain}}}});
+  std::ofstream(dir / "study.json") << st.dump(2);
+  const auto r = thermostamp("study " + q(dir / "study.json") + " --out " + q(dir / "out") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = csv_rows(dir / "out" / "study.csv");
+  ASSERT_EQ(rows.size(), 5u);
+  const auto& head = rows[0];
+  const auto col = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(head.begin(), head.end(), name) - head.begin());
+  };
+  const std::size_t err = col("error_ply_crystallinity"), end = col("ply_crystallinity_mean_end");
+  ASSERT_LT(err, head.size());
+  ASSERT_LT(end, head.size());
+  EXPECT_EQ(rows[1][err], "0");
+  // The plies.csv mean crystallinity by row (column 6).
+  auto means = [&](const std::string& label) {
+    std::vector<double> v;
+    for (const auto& c : csv_rows(dir / "out" / label / "plies.csv"))
+      if (c[0] != "time") v.push_back(std::stod(c[6]));
+    return v;
+  };
+  const std::vector<double> ref = means("reference");
+  ASSERT_GT(ref.size(), 10u);
+  EXPECT_GT(ref.back(), 0.5);  // the slab crystallises
+  EXPECT_NEAR(std::stod(rows[1][end]), ref.back(), 5e-6);
+  for (std::size_t k : {2u, 3u}) {
+    const std::vector<double> v = means(rows[k][0]);
+    ASSERT_EQ(v.size(), ref.size()) << rows[k][0];
+    double largest = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) largest = std::max(largest, std::abs(v[i] - ref[i]));
+    EXPECT_NEAR(std::stod(rows[k][err]), largest, 5e-6 * largest + 1e-12) << rows[k][0];
+    EXPECT_NEAR(std::stod(rows[k][end]), v.back(), 5e-6) << rows[k][0];
+    std::printf("%s: error in the mean crystallinity %.4g\n", rows[k][0].c_str(), largest);
+  }
+  EXPECT_GT(std::stod(rows[2][err]), 0.0);
+  EXPECT_LT(std::stod(rows[2][err]), std::stod(rows[3][err]));  // adi nearer the reference than shell2d
+  // Without kinetics: nothing to compare.
+  ASSERT_EQ(rows[4][0], "none");
+  EXPECT_TRUE(err >= rows[4].size() || rows[4][err].empty());
+  EXPECT_TRUE(end >= rows[4].size() || rows[4][end].empty());
+}
+
 // A study against the analytic slab solution: one table row per variant,
 // the error of the rod below the single-value shell's, the shortest of
 // "repeat" runs kept; a bad study key is refused like a bad job key.
