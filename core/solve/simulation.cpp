@@ -157,6 +157,16 @@ struct PartState {
 
 namespace {
 
+// The mean through the thickness h of a node's nz values (linear between
+// them), or its one value.
+double thickness_mean(const double* v, int nz, double h) {
+  if (nz == 1) return v[0];
+  const double e = h / (nz - 1);
+  double s = 0;
+  for (int k = 0; k < nz; ++k) s += (k == 0 || k == nz - 1 ? 0.5 * e : e) * v[k];
+  return s / h;
+}
+
 // A ply's smallest, mean (by mass) and largest relative crystallinity (NaN
 // for a ply whose material has no crystallisation kinetics).
 std::array<double, 3> ply_crystallinity(const PartState& st) {
@@ -1272,14 +1282,7 @@ void Simulation::update_node_temperature() {
     const double h = st.def->thickness;
     for (int i = 0; i < st.mesh.num_nodes(); ++i) {
       const double* t = &st.T[static_cast<std::size_t>(nz) * i];
-      double s = t[0];
-      if (nz > 1) {
-        const double e = h / (nz - 1);
-        s = 0;
-        for (int k = 0; k < nz; ++k) s += (k == 0 || k == nz - 1 ? 0.5 * e : e) * t[k];
-        s /= h;
-      }
-      m.node_temperature[i] = s;
+      m.node_temperature[i] = thickness_mean(t, nz, h);
       m.face_temperature[2 * static_cast<std::size_t>(i)] = t[0];
       m.face_temperature[2 * static_cast<std::size_t>(i) + 1] = t[nz - 1];
     }
@@ -2646,28 +2649,10 @@ RunResult Simulation::run(const RunOptions& opt) {
       const double h = st->def->thickness;
       for (int i = 0; i < st->mesh.num_nodes(); ++i) {
         const double* t = &st->T[static_cast<std::size_t>(nz) * i];
-        double s = 0;
-        if (nz == 1) {
-          s = t[0];
-        } else {
-          const double e = h / (nz - 1);
-          for (int k = 0; k < nz; ++k) s += (k == 0 || k == nz - 1 ? 0.5 * e : e) * t[k];
-          s /= h;
-        }
-        st->mean[i] = s;
+        st->mean[i] = thickness_mean(t, nz, h);
         st->bottom[i] = t[0];
         st->top[i] = t[nz - 1];
-        if (!st->X.empty()) {
-          const double* x = &st->X[static_cast<std::size_t>(nz) * i];
-          double m = x[0];
-          if (nz > 1) {
-            const double e = h / (nz - 1);
-            m = 0;
-            for (int k = 0; k < nz; ++k) m += (k == 0 || k == nz - 1 ? 0.5 * e : e) * x[k];
-            m /= h;
-          }
-          st->X_mean[i] = m;
-        }
+        if (!st->X.empty()) st->X_mean[i] = thickness_mean(&st->X[static_cast<std::size_t>(nz) * i], nz, h);
       }
     }
   };

@@ -5,12 +5,15 @@ Runs share/verification/slab_robin_study.json, patch_study.json,
 hemisphere_study.json (about 2.5 minutes on two cores), the demo job and
 the default hemisphere job with a conductance that follows the contact
 pressure (half a minute), and writes PNG files into docs/figures/.
+With --crystallisation, only the crystallisation studies' figures
+(about 6 minutes).
 """
 import csv
 import json
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 
 import matplotlib
@@ -57,9 +60,44 @@ def hemisphere_conductance(tmp):
                     os.path.join(FIG, "hemi_conductance_table_%s.png" % ply))
 
 
+def crystallisation(tmp):
+    """The crystallisation studies of the user guide and docs/verification.md
+    (share/studies/hemisphere_crystallisation.json and
+    hemisphere_crystallisation_strategies.json, about 6 minutes on two
+    cores): the latent heat against the reference, the run with kinetics,
+    and the thermal strategies with kinetics."""
+    studies = os.path.join(ROOT, "share", "studies")
+    runs = {}
+    for study in ("hemisphere_crystallisation", "hemisphere_crystallisation_strategies"):
+        runs[study] = os.path.join(tmp, study)
+        subprocess.run([EXE, "study", os.path.join(studies, study + ".json"), "--out", runs[study], "--quiet",
+                        "--threads", "2"], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    latent = runs["hemisphere_crystallisation"]
+    subprocess.run([EXE, "report", os.path.join(latent, "latent-heat-230"), "--against",
+                    os.path.join(latent, "reference")], check=True, stdout=subprocess.DEVNULL)
+    shutil.copy(os.path.join(latent, "latent-heat-230", "figures", "against", "plies.png"),
+                os.path.join(FIG, "hemi_crystallisation_plies.png"))
+    kinetics = os.path.join(latent, "kinetics")
+    subprocess.run([EXE, "report", kinetics], check=True, stdout=subprocess.DEVNULL)
+    shutil.copy(os.path.join(kinetics, "figures", "plies.png"), os.path.join(FIG, "hemi_kinetics_plies.png"))
+    shutil.copy(os.path.join(kinetics, "figures", "crystallinity_ply_bottom.png"),
+                os.path.join(FIG, "hemi_kinetics_crystallinity_ply_bottom.png"))
+    strategies = runs["hemisphere_crystallisation_strategies"]
+    subprocess.run([EXE, "report", strategies], check=True, stdout=subprocess.DEVNULL)
+    shutil.copy(os.path.join(strategies, "study.png"), os.path.join(FIG, "hemi_crystallisation_strategies.png"))
+    for study, folder in runs.items():
+        print("%s:" % study)
+        print(open(os.path.join(folder, "study.csv")).read())
+
+
 def main():
     os.makedirs(FIG, exist_ok=True)
     tmp = tempfile.mkdtemp()
+    if "--crystallisation" in sys.argv:
+        crystallisation(tmp)
+        shutil.rmtree(tmp)
+        print("figures written to", FIG)
+        return
     ver = os.path.join(ROOT, "share", "verification")
     for study in ("slab_robin_study", "patch_study", "hemisphere_study"):
         out = os.path.join(tmp, study)

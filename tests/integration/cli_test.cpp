@@ -1168,6 +1168,19 @@ json short_hemisphere(double t_end, double interval, int cells) {
   return j;
 }
 
+// A text attribute of an object of an open HDF5 file ("(none)" if it has
+// none).
+std::string h5_text(hid_t file, const std::string& object, const char* name) {
+  const hid_t at = H5Aopen_by_name(file, object.c_str(), name, H5P_DEFAULT, H5P_DEFAULT);
+  if (at < 0) return "(none)";
+  const hid_t type = H5Aget_type(at);
+  std::string v(H5Tget_size(type), '\0');
+  H5Aread(at, type, v.data());
+  H5Tclose(type);
+  H5Aclose(at);
+  return std::string(v.c_str());
+}
+
 // Every field of known_fields() on job j: the field crystallinity needs
 // crystallisation kinetics, given to every material with a rate in the
 // plies' range.
@@ -1544,31 +1557,14 @@ TEST(Output, CrystallinityInFramesSeriesSummaryAndExport) {
   // The frame: values through the thickness and their mean.
   const hid_t file = H5Fopen((dir / "run" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
-  auto units = [&](const std::string& object) {
-    const hid_t at = H5Aopen_by_name(file, object.c_str(), "units", H5P_DEFAULT, H5P_DEFAULT);
-    if (at < 0) return std::string("(none)");
-    const hid_t type = H5Aget_type(at);
-    std::string u(H5Tget_size(type), '\0');
-    H5Aread(at, type, u.data());
-    H5Tclose(type);
-    H5Aclose(at);
-    return std::string(u.c_str());
-  };
+  auto units = [&](const std::string& object) { return h5_text(file, object, "units"); };
   const std::string frame = "frames/000006/ply_bottom/";
   EXPECT_EQ(units(frame + "crystallinity"), "1");
   EXPECT_EQ(units(frame + "crystallinity_mean"), "1");
   const auto layers = read_dataset<double>(file, frame + "crystallinity");
   const auto mean = read_dataset<double>(file, frame + "crystallinity_mean");
   const auto temps = read_dataset<double>(file, frame + "temperature");
-  const std::string cols = [&] {
-    const hid_t at = H5Aopen_by_name(file, "series/plies", "units", H5P_DEFAULT, H5P_DEFAULT);
-    const hid_t type = H5Aget_type(at);
-    std::string u(H5Tget_size(type), '\0');
-    H5Aread(at, type, u.data());
-    H5Tclose(type);
-    H5Aclose(at);
-    return std::string(u.c_str());
-  }();
+  const std::string cols = units("series/plies");
   H5Fclose(file);
   EXPECT_EQ(cols, "s,degC,degC,degC,1,1,1,degC,degC,degC,1,1,1");
   ASSERT_EQ(layers.size(), temps.size());
@@ -1623,16 +1619,7 @@ TEST(Output, DatasetsCarryTheirUnits) {
       {"conductance_bottom", "W/(m^2 K)"}, {"conductance_top", "W/(m^2 K)"}, {"tool_gap", "m"}};
   const hid_t file = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
-  auto text = [&](const std::string& object, const char* name) {
-    const hid_t at = H5Aopen_by_name(file, object.c_str(), name, H5P_DEFAULT, H5P_DEFAULT);
-    if (at < 0) return std::string("(none)");
-    const hid_t type = H5Aget_type(at);
-    std::string v(H5Tget_size(type), '\0');
-    H5Aread(at, type, v.data());
-    H5Tclose(type);
-    H5Aclose(at);
-    return std::string(v.c_str());
-  };
+  auto text = [&](const std::string& object, const char* name) { return h5_text(file, object, name); };
   for (const std::string part : {"ply_top", "ply_bottom"}) {
     for (const auto& [name, units] : expected)
       EXPECT_EQ(text("frames/000002/" + part + "/" + name, "units"), units) << part << " " << name;

@@ -162,4 +162,15 @@ void write_square_stl(const std::filesystem::path& file, double lo, double hi, d
   s << "endsolid square\n";
 }
 
+void slab_heat_flows(const std::vector<double>& T, double k, double e, double h, double Ta, std::vector<double>& q) {
+  const std::size_t n = T.size() - 1;
+  q.assign(n + 1, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double f = k / e * (T[i + 1] - T[i]);
+    q[i] += f;
+    q[i + 1] -= f;
+  }
+  q[n] += h * (Ta - T[n]);
+}
+
 }  // namespace ts::test

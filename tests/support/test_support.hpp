@@ -79,4 +79,10 @@ double slab_robin_series(double x, double t, double L, double alpha, double Bi, 
 // The same wall's mean temperature over its thickness.
 double slab_robin_mean(double t, double L, double alpha, double Bi, double T0, double Tinf);
 
+// The heat flows (W/m^2) into the values T[0..n] of a slab of n cells of
+// thickness e with linear elements and lumped capacities (the independent
+// explicit references of the tests): conduction k between neighbours, an
+// adiabatic bottom (value 0) and a Robin top (value n: h, to Ta).
+void slab_heat_flows(const std::vector<double>& T, double k, double e, double h, double Ta, std::vector<double>& q);
+
 }  // namespace ts::test

@@ -185,13 +185,7 @@ struct CrystallisingSlabReference {
     const double dt = 1.0 / per_second;
     std::vector<double> T(n + 1, 260.0), theta(n + 1, 0.0), X(n + 1, 0.0), q(n + 1);
     for (int s = 1; s <= seconds * per_second; ++s) {
-      std::fill(q.begin(), q.end(), 0.0);
-      for (int i = 0; i < n; ++i) {
-        const double f = k / e * (T[i + 1] - T[i]);
-        q[i] += f;
-        q[i + 1] -= f;
-      }
-      q[n] += h * (Ta - T[n]);
+      slab_heat_flows(T, k, e, h, Ta, q);
       for (int i = 0; i <= n; ++i) {
         const double w = (i == 0 || i == n) ? 0.5 * e : e;
         theta[i] += gaussian_rate(T[i]) * dt;

@@ -901,13 +901,7 @@ struct LatentSlabReference {
     const double dt = 1.0 / per_second;
     std::vector<double> T(n + 1, 300.0), H(n + 1, latent_h(300.0)), q(n + 1);
     for (int s = 1; s <= seconds * per_second; ++s) {
-      std::fill(q.begin(), q.end(), 0.0);
-      for (int i = 0; i < n; ++i) {  // conduction between values i and i+1 (W/m^2)
-        const double f = k / e * (T[i + 1] - T[i]);
-        q[i] += f;
-        q[i + 1] -= f;
-      }
-      q[n] += h * (Ta - T[n]);
+      slab_heat_flows(T, k, e, h, Ta, q);
       for (int i = 0; i <= n; ++i) {
         const double w = (i == 0 || i == n) ? 0.5 * e : e;
         H[i] += dt * q[i] / (rho * w);
