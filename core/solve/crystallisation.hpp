@@ -14,6 +14,7 @@
 // the value the heat latent_heat (X_new - X_old) (see Simulation::
 // finish_thermal_step). X never decreases: the model has no melting (on
 // heating, a specific heat table carries the heat of melting).
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -50,12 +51,12 @@ class CrystallisationKinetics {
     const auto &a = rows_[k - 1], &b = rows_[k];
     return a[1] + (T - a[0]) / (b[0] - a[0]) * (b[1] - a[1]);
   }
-  // Cooling at a constant rate (K/s) from `from` (degC): the temperature at
-  // which X reaches x (degC; -infinity if it never does above -273.15). For
-  // a comparison with a DSC run at that rate.
+  // Cooling at a constant rate (K/s) from `from` (degC; at most 2000): the
+  // temperature at which X reaches x (degC; -infinity if it never does
+  // above -273.15). For a comparison with a DSC run at that rate.
   double temperature_at(double x, double cooling_rate, double from) const {
     const double target = integral(x) * cooling_rate, step = 0.01;
-    double sum = 0, T = from, k = rate(T);
+    double sum = 0, T = std::min(from, 2000.0), k = rate(T);
     while (T > -273.15) {
       const double k1 = rate(T - step);
       const double add = 0.5 * (k + k1) * step;

@@ -729,25 +729,41 @@ void Simulation::load_initial_temperature(PartState& st) {
     throw JobError(ptr, where + ": the temperature of part '" + part + "' has " + std::to_string(v.size()) +
                             " values, not a whole number of levels (2 or more) for its " + std::to_string(nn) +
                             " nodes");
-  for (int i = 0; i < nn; ++i) {
-    const double* src = &v[static_cast<std::size_t>(i) * nl];
-    double* dst = &st.T[static_cast<std::size_t>(i) * nz];
-    if (nz == nl) {
-      std::copy(src, src + nl, dst);
-    } else if (nz == 1) {  // the mean through the thickness (linear between the levels)
-      double m = 0;
-      for (int l = 0; l < nl; ++l) m += (l == 0 || l == nl - 1 ? 0.5 : 1.0) * src[l];
-      dst[0] = m / (nl - 1);
-    } else {  // linear between the levels, at this part's
-      for (int q = 0; q < nz; ++q) {
-        const double s = static_cast<double>(q) * (nl - 1) / (nz - 1);
-        const int l = std::min(static_cast<int>(s), nl - 2);
-        dst[q] = src[l] + (s - l) * (src[l + 1] - src[l]);
+  // The frame's nl levels per node onto this part's nz values.
+  auto levels = [&](const std::vector<double>& from, std::vector<double>& to) {
+    for (int i = 0; i < nn; ++i) {
+      const double* src = &from[static_cast<std::size_t>(i) * nl];
+      double* dst = &to[static_cast<std::size_t>(i) * nz];
+      if (nz == nl) {
+        std::copy(src, src + nl, dst);
+      } else if (nz == 1) {  // the mean through the thickness (linear between the levels)
+        double m = 0;
+        for (int l = 0; l < nl; ++l) m += (l == 0 || l == nl - 1 ? 0.5 : 1.0) * src[l];
+        dst[0] = m / (nl - 1);
+      } else {  // linear between the levels, at this part's
+        for (int q = 0; q < nz; ++q) {
+          const double s = static_cast<double>(q) * (nl - 1) / (nz - 1);
+          const int l = std::min(static_cast<int>(s), nl - 2);
+          dst[q] = src[l] + (s - l) * (src[l + 1] - src[l]);
+        }
       }
     }
-  }
+  };
+  levels(v, st.T);
   logger("solve")->info("part '{}': initial temperatures from {} (part '{}', {} values per node)", def.name, where,
                         part, nl);
+  // With crystallisation kinetics, the crystallinity of the same frame,
+  // where it has one (the field crystallinity).
+  if (st.kin.empty()) return;
+  const std::vector<double> x = read_values(file, group + "crystallinity", shape);
+  if (x.size() != v.size()) {
+    logger("solve")->info("part '{}': {} has no crystallinity of part '{}': the crystallinity starts at {}", def.name,
+                          where, part, fmt_g(job_.materials[def.material].crystallisation.initial));
+    return;
+  }
+  levels(x, st.X);
+  for (std::size_t k = 0; k < st.X.size(); ++k) st.theta[k] = st.kin.integral(std::clamp(st.X[k], 0.0, 1.0));
+  logger("solve")->info("part '{}': initial crystallinity from the same frame", def.name);
 }
 
 // The tools of the part's contact pairs; all of them where it has none.

@@ -3,6 +3,8 @@
 
 Writes into DIR/figures/:
   profile_<probe>.png  through-thickness temperature at several times
+  crystallinity_profile_<probe>.png  through-thickness crystallinity at
+                       several times, for a probe that records it
   probes_mean.png      mean temperature of every probe against time
   map_<part>.png       mean / top / bottom temperature of each ply on its
                        deformed shape (top view), last frame; a quarter
@@ -92,8 +94,9 @@ def plot_probes(folder, out):
     data = read_probes(os.path.join(folder, "probes.csv"))
     made = []
     for (probe, quantity), rows in sorted(data.items()):
-        if quantity != "temperature_profile":
+        if quantity not in ("temperature_profile", "crystallinity_profile"):
             continue
+        crystal = quantity == "crystallinity_profile"
         times = sorted(set(r[0] for r in rows))
         pick = [times[int(round(i))] for i in np.linspace(0, len(times) - 1, min(8, len(times)))]
         fig, ax = plt.subplots(figsize=(5, 4))
@@ -102,12 +105,12 @@ def plot_probes(folder, out):
             z = np.array([p[0] for p in pts]) * 1e3
             v = np.array([p[1] for p in pts])
             ax.plot(v, z, marker="." if len(z) < 30 else None, label="t = %.3g s" % t)
-        ax.set_xlabel("temperature (degC)")
+        ax.set_xlabel("relative crystallinity" if crystal else "temperature (degC)")
         ax.set_ylabel("z from mid-plane (mm)")
-        ax.set_title("through-thickness profile, probe %s" % probe)
+        ax.set_title("through-thickness %s, probe %s" % ("crystallinity" if crystal else "profile", probe))
         ax.legend(fontsize=7)
         ax.grid(alpha=0.3)
-        made.append(save(fig, out, "profile_%s.png" % probe))
+        made.append(save(fig, out, "%sprofile_%s.png" % ("crystallinity_" if crystal else "", probe)))
     means = [(p, rows) for (p, q), rows in sorted(data.items()) if q == "temperature_mean"]
     if means:
         fig, ax = plt.subplots(figsize=(6, 4))

@@ -55,6 +55,11 @@ TEST(CrystallisationKinetics, TemperatureAtAConstantCoolingRate) {
   // A rate that vanishes below 240 degC: X never reaches 0.5 from 250 degC.
   const CrystallisationKinetics low(0, 3.0, {{240.0, 0.0}, {250.0, 1e-4}}, 0, 0, 0);
   EXPECT_TRUE(std::isinf(low.temperature_at(0.5, beta, 250.0)));
+  // A Gaussian too wide to matter: the sum starts at 2000 degC (not at
+  // four half widths above the peak), and ends.
+  const CrystallisationKinetics wide(0, 3.0, {}, 0.02, 150.0, 1e30);
+  EXPECT_NEAR(wide.temperature_at(0.5, beta, wide.upper_temperature()),
+              2000.0 - beta * std::cbrt(std::log(2.0)) / 0.02, 1e-6);
 }
 
 }  // namespace

@@ -266,5 +266,63 @@ TEST(Crystallisation, SlabCrystallisingAgainstAFineReference) {
   }
 }
 
+// A process chain carries the crystallinity: a slab crystallising from its
+// cooled face (adi, 8 layers, dt 0.01 s) to 2 s in one run (A), and from
+// A's frame at 1 s for another second (B: initial_temperature from the
+// results file, whose frames have the field crystallinity). B starts with
+// A's crystallinity at 1 s (the same doubles) and ends within 1e-9 of A at
+// 2 s in X and in T (theta is taken back from X, exact to round-off). A
+// frame without the field starts from crystallisation.initial.
+TEST(Crystallisation, CarriedFromAFrameOfAnEarlierRun) {
+  auto job = [](double t_end) {
+    json j = ply_job("adi", 8, t_end, 0.5);
+    j["parts"][0]["initial_temperature"] = 260.0;
+    j["materials"]["ply"]["crystallisation"] = kinetics(3.0, kGaussian);
+    j["solvers"]["thermal"]["dt"] = 0.01;
+    j["interactions"] = {{{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", 1000.0}, {"ambient", 150.0}}};
+    j["output"]["fields"] = {"temperature", "crystallinity"};
+    probe_both(j, 0.5);
+    return j;
+  };
+  const auto dir = temp_dir("crystallinity_from_run");
+  const JobRun a = run_json(job(2.0), 1, dir / "a");
+  ASSERT_TRUE(a.result.ok) << a.result.error;
+  json jb = job(1.0);
+  jb["parts"][0]["initial_temperature"] = {{"results", (dir / "a" / "results.h5").string()}, {"time", 1.0}};
+  const JobRun b = run_json(jb);
+  ASSERT_TRUE(b.result.ok) << b.result.error;
+  const auto& a1 = a.sample(0, "crystallinity_profile", 1.0)->values;
+  const auto& b0 = b.sample(0, "crystallinity_profile", 0.0)->values;
+  const auto& a2 = a.sample(0, "crystallinity_profile", 2.0)->values;
+  const auto& b1 = b.sample(0, "crystallinity_profile", 1.0)->values;
+  const auto& ta2 = a.sample(0, "temperature_profile", 2.0)->values;
+  const auto& tb1 = b.sample(0, "temperature_profile", 1.0)->values;
+  ASSERT_EQ(b0.size(), 9u);
+  double start = 0, end_x = 0, end_t = 0;
+  for (std::size_t k = 0; k < 9; ++k) {
+    start = std::max(start, std::abs(b0[k] - a1[k]));
+    end_x = std::max(end_x, std::abs(b1[k] - a2[k]));
+    end_t = std::max(end_t, std::abs(tb1[k] - ta2[k]));
+  }
+  EXPECT_EQ(start, 0.0);
+  EXPECT_LT(end_x, 1e-9);
+  EXPECT_LT(end_t, 1e-9);
+  EXPECT_GT(a1.back(), 0.5);  // the top has crystallised at 1 s, the bottom not yet
+  EXPECT_LT(a1.front(), 0.5);
+  EXPECT_GT(a2.front() - a1.front(), 0.1);  // and goes on after it
+  std::printf("crystallinity from an earlier run's frame: start %.3g, after 1 s %.3g in X, %.3g K\n", start, end_x,
+              end_t);
+  // A frame without the field: crystallisation.initial.
+  json jc = job(2.0);
+  jc["output"]["fields"] = {"temperature"};
+  ASSERT_TRUE(run_json(jc, 1, dir / "c").result.ok);
+  json jd = jb;
+  jd["parts"][0]["initial_temperature"]["results"] = (dir / "c" / "results.h5").string();
+  jd["materials"]["ply"]["crystallisation"]["initial"] = 0.25;
+  const JobRun d = run_json(jd);
+  ASSERT_TRUE(d.result.ok) << d.result.error;
+  for (double x : d.sample(0, "crystallinity_profile", 0.0)->values) EXPECT_EQ(x, 0.25);
+}
+
 }  // namespace
 }  // namespace ts::test
