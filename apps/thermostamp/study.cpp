@@ -510,8 +510,8 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   csv << "\n";
   // The error of a variant's value of ply p (the history of plies.csv: its
   // mean temperature, its largest shear angle, or its mean crystallinity)
-  // in the study's norm, at
-  // the reference's rows (the variant linear between its rows) or, for the
+  // in the study's norm, at the reference's rows (the variant linear
+  // between its rows; rows where either has no value are left out) or, for the
   // mean against the analytic slab, at the variant's own rows; NaN where
   // there is none to compare (a job without the thermal solver, or without
   // the mechanics, other plies).
