@@ -84,6 +84,10 @@ def crystallisation(tmp):
                 os.path.join(FIG, "hemi_kinetics_crystallinity_ply_bottom.png"))
     strategies = runs["hemisphere_crystallisation_strategies"]
     subprocess.run([EXE, "report", strategies], check=True, stdout=subprocess.DEVNULL)
+    subprocess.run([EXE, "report", os.path.join(strategies, "adi-8"), "--against", os.path.join(strategies, "shell2d")],
+                   check=True, stdout=subprocess.DEVNULL)
+    shutil.copy(os.path.join(strategies, "adi-8", "figures", "against", "plies.png"),
+                os.path.join(FIG, "hemi_crystallisation_shell2d.png"))
     shutil.copy(os.path.join(strategies, "study.png"), os.path.join(FIG, "hemi_crystallisation_strategies.png"))
     for study, folder in runs.items():
         print("%s:" % study)

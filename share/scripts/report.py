@@ -51,8 +51,9 @@ DIR/figures/against/:
                        of the shorter run
   tools.png            force on each tool along z and heat per tool,
                        against time
-  plies.png            each ply's mean temperature, coldest value and
-                       largest shear angle (either sign), as the runs have
+  plies.png            each ply's mean temperature, coldest value, mean
+                       crystallinity and largest shear angle (either
+                       sign), as the runs have
   energy.png           internal, kinetic and contact energy against time
 """
 import csv
@@ -601,6 +602,7 @@ def against(folder, other, out):
         kinds = [(k, y, f) for k, y, f, col in (
             ("mean temperature", "temperature (degC)", lambda v: v["temperature_mean"], "temperature_mean"),
             ("coldest value", "temperature (degC)", lambda v: v["temperature_min"], "temperature_min"),
+            ("mean crystallinity", "relative crystallinity", lambda v: v["crystallinity_mean"], "crystallinity_mean"),
             ("largest shear angle (either sign)", "|shear angle| (deg)",
              lambda v: np.maximum(np.abs(v["shear_angle_min"]), np.abs(v["shear_angle_max"])), "shear_angle_max"))
             if all(col in t[n] for t in tabs for n in names)]
