@@ -1582,6 +1582,12 @@ TEST(Output, CrystallinityInFramesSeriesSummaryAndExport) {
   std::stringstream msh;
   msh << std::ifstream(dir / "run" / "export" / "ply_bottom.msh").rdbuf();
   EXPECT_NE(msh.str().find("\"crystallinity_mean\""), std::string::npos);
+  // The figures: each ply's map, the probe's profiles and the plies' panel.
+  const auto rep = thermostamp("report " + q(dir / "run"));
+  ASSERT_EQ(rep.exit_code, 0) << rep.err;
+  for (const char* f : {"crystallinity_ply_bottom.png", "crystallinity_ply_top.png",
+                        "crystallinity_profile_centre_top.png", "plies.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "run" / "figures" / f)) << f;
   // An isothermal job: ignored, with a warning naming the key.
   json iso = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply_isothermal.json");
   iso["materials"]["pa66_cf_ud"]["crystallisation"] = j["materials"]["pa66_cf_ud"]["crystallisation"];
