@@ -165,6 +165,8 @@ class Simulation {
   double check_restart(const Checkpoint& c) const;
 
  private:
+  // One call of run(): its loop, checkpoints and output (solve/simulation_internal.hpp).
+  struct Run;
   void build_parts();
   void build_tools();
   void build_thermal();

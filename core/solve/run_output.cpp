@@ -1,0 +1,871 @@
+// What a run writes: the frames of results.h5, the probe samples, the time
+// series (energy.csv, tools.csv, plies.csv and their tables in results.h5),
+// summary.json and the log's first and last lines (docs/user-guide.md, "The
+// output folder").
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "io/checkpoint.hpp"
+#include "io/logging.hpp"
+#include "solve/interrupt.hpp"
+#include "solve/simulation_internal.hpp"
+#include "solve/tools.hpp"
+#include "version.hpp"
+
+namespace ts {
+
+using detail::Clock;
+using detail::fmt_g;
+using detail::seconds_since;
+using detail::thickness_mean;
+using json = nlohmann::json;
+
+namespace {
+
+// The smallest and largest E11 (the strain along the initial fibre
+// direction) of a part's elements, from their strains [E11, E22, E12].
+std::pair<double, double> fibre_strain_range(const std::vector<double>& strain) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t i = 0; i < strain.size(); i += 3) {
+    lo = std::min(lo, strain[i]);
+    hi = std::max(hi, strain[i]);
+  }
+  return {lo, hi};
+}
+
+// A ply's smallest, mean (by mass) and largest relative crystallinity (NaN
+// for a ply whose material has no crystallisation kinetics).
+std::array<double, 3> ply_crystallinity(const PartState& st) {
+  if (st.X.empty()) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan, nan};
+  }
+  double lo = 1, hi = 0, sum = 0, cap = 0;
+  for (std::size_t k = 0; k < st.X.size(); ++k) {
+    lo = std::min(lo, st.X[k]);
+    hi = std::max(hi, st.X[k]);
+    sum += st.cap[k] * st.X[k];
+    cap += st.cap[k];
+  }
+  return {lo, cap > 0 ? sum / cap : st.X[0], hi};
+}
+
+// A ply's coldest, mean (weighted by heat capacity) and hottest value
+// (degC), and the share of its heat capacity below the threshold (0
+// without one): by node, the part of the thickness below it with the
+// temperature linear between the values (a single value: all or nothing).
+std::array<double, 4> ply_temperature(const PartState& st, const std::optional<double>& threshold) {
+  const int nz = st.nz;
+  const std::size_t nn = static_cast<std::size_t>(st.mesh.num_nodes());
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, heat = 0, cap = 0, below = 0;
+  for (std::size_t i = 0; i < nn; ++i) {
+    const double* T = &st.T[i * nz];
+    const double* c = &st.cap[i * nz];
+    double column = 0, frac = 0;
+    for (int k = 0; k < nz; ++k) {
+      lo = std::min(lo, T[k]);
+      hi = std::max(hi, T[k]);
+      heat += c[k] * T[k];
+      column += c[k];
+    }
+    if (threshold) {
+      const double th = *threshold;
+      if (nz == 1) {
+        frac = T[0] < th ? 1.0 : 0.0;
+      } else {
+        for (int k = 0; k + 1 < nz; ++k) {
+          const double a = std::min(T[k], T[k + 1]), b = std::max(T[k], T[k + 1]);
+          frac += a >= th ? 0.0 : b <= th ? 1.0 : (th - a) / (b - a);
+        }
+        frac /= nz - 1;
+      }
+    }
+    cap += column;
+    below += column * frac;
+  }
+  return {lo, heat / cap, hi, below / cap};
+}
+
+// The peak resident memory of the process so far (MB), 0 where the system
+// does not say (Linux reports ru_maxrss in KiB).
+double peak_resident_mb() {
+#if defined(__linux__)
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) == 0) return static_cast<double>(u.ru_maxrss) * 1024.0 / 1e6;
+#endif
+  return 0.0;
+}
+
+std::string csv_number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+}  // namespace
+
+void detail::Progress::update(double t, long long steps, bool force) {
+  const auto now = Clock::now();
+  const double el = std::chrono::duration<double>(now - start).count();
+  const double frac = std::min(1.0, t / t_end);
+  const double eta = frac > 0 ? el * (1 - frac) / frac : 0;
+  const double rate = el > 0 ? steps / el : 0;
+  if (tty && !quiet) {
+    if (!force && std::chrono::duration<double>(now - last).count() < 0.2) return;
+    last = now;
+    std::fprintf(stderr, "\r  t = %.4g / %.4g s  %5.1f %%  %.0f steps/s  ETA %.0f s   ", t, t_end, 100 * frac, rate,
+                 eta);
+    if (force) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  } else {
+    const int decile = static_cast<int>(10 * frac);
+    if (decile == last_decile && !force) return;
+    last_decile = decile;
+    if (frac < 0.01 && !force)  // the first steps (setup, caches) say nothing of the rate yet
+      logger("solve")->info("t = {:.4g} / {:.4g} s ({:.0f} %)", t, t_end, 100 * frac);
+    else
+      logger("solve")->info("t = {:.4g} / {:.4g} s ({:.0f} %), {:.0f} steps/s, ETA {:.0f} s", t, t_end, 100 * frac,
+                            rate, eta);
+  }
+}
+
+// A time series file: new with its header, or on a restart the run's file
+// cut back to its length at the checkpoint and continued.
+void Simulation::Run::open_series(std::ofstream& out, const char* name, int k, const std::string& header) {
+  const auto path = opt.out_dir / name;
+  if (opt.restart) {  // checked by read_checkpoint()
+    std::filesystem::resize_file(path, csv_size[k]);
+    out.open(path, std::ios::app);
+  } else {
+    out.open(path);
+    out << header;
+  }
+}
+
+void Simulation::Run::open_output() {
+  if (opt.write_files) {
+    std::filesystem::create_directories(opt.out_dir);
+    // A new run replaces the folder's results: a checkpoint of an earlier
+    // run there no longer fits them.
+    if (!opt.restart) std::filesystem::remove(opt.out_dir / kCheckpointFile);
+    // The job as run (after --set, file paths absolute): `thermostamp run
+    // DIR/job_as_run.json` runs it again, from anywhere.
+    if (std::ofstream jf(opt.out_dir / "job_as_run.json"); !(jf << job.document_as_run.dump(2) << '\n'))
+      throw RunError("cannot write " + (opt.out_dir / "job_as_run.json").string());
+    std::vector<WriterPart> wparts;
+    const bool layers =
+        std::find(job.output.fields.begin(), job.output.fields.end(), "temperature") != job.output.fields.end();
+    for (const auto& st : sim.parts_)
+      wparts.push_back({st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(), &st->mesh.triangles,
+                        st->def->thickness, st->nz, layers});
+    try {
+      const int level = job.output.compression;
+      writer = opt.restart
+                   ? std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), frame_times, frame_fields(), level)
+                   : std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), level);
+    } catch (const std::runtime_error& e) {
+      if (opt.restart) throw JobError("", std::string("--restart: ") + e.what());
+      throw;
+    }
+    open_series(probes_csv, "probes.csv", 0, "probe,quantity,time,z,value\n");
+  }
+
+  energy_cols = {"time", "kinetic", "internal", "external_work", "damping", "contact", "contact_stored", "balance_error"};
+  for (std::size_t c = 0; c < job.constraints.size(); ++c)
+    for (const char* d : {"x", "y", "z"}) energy_cols.push_back("reaction" + std::to_string(c) + "_" + d);
+  // 1/2 m v^2 at the half step just computed: never negative (the
+  // "kinetic" column is the product form of the balance, which turns
+  // negative when nodes vibrate near the step's frequency limit).
+  energy_cols.push_back("kinetic_half_step");
+  tool_cols = {"time"};
+  for (const auto& td : job.tools)
+    for (const char* q : {"_ux", "_uy", "_uz", "_fx", "_fy", "_fz", "_heat_J", "_temperature"})
+      tool_cols.push_back(td.name + q);
+  // plies.csv: each ply's temperatures (with thermal) and its shear angles
+  // and fibre strains (with mechanics), a row per ply.
+  if (job.thermal) {
+    ply_fields = {"temperature_min", "temperature_mean", "temperature_max"};
+    if (threshold) ply_fields.push_back("fraction_below");
+    if (crystallising)
+      for (const char* q : {"crystallinity_min", "crystallinity_mean", "crystallinity_max"}) ply_fields.push_back(q);
+  }
+  if (job.mechanics) {
+    for (const char* q : {"shear_angle_min", "shear_angle_max", "fibre_strain_min", "fibre_strain_max"})
+      ply_fields.push_back(q);
+    if (shear_limit) ply_fields.push_back("fraction_over_shear_limit");
+  }
+  ply_per = ply_fields.size();
+  ply_cols = {"time"};
+  for (const auto& st : sim.parts_)
+    for (const auto& q : ply_fields) ply_cols.push_back(st->def->name + "_" + q);
+
+  if (opt.write_files && job.mechanics) {
+    std::string header;
+    for (std::size_t c = 0; c < energy_cols.size(); ++c) header += (c ? "," : "") + energy_cols[c];
+    open_series(energy_csv, "energy.csv", 1, header + "\n");
+  }
+  if (opt.write_files && !job.tools.empty())
+    open_series(tools_csv, "tools.csv", 2, "time,tool,ux,uy,uz,fx,fy,fz,heat_J,temperature\n");
+  if (opt.write_files && ply_series) {
+    std::string header = "time,ply";
+    for (const auto& q : ply_fields) header += "," + q;
+    open_series(plies_csv, "plies.csv", 3, header + "\n");
+  }
+}
+
+void Simulation::Run::log_start() const {
+  auto log = logger("solve");
+  const auto& parts = sim.parts_;
+  const auto& mech = sim.mech_;
+  if (job.thermal)
+    log->info("job '{}': {} part(s), {} tool(s), splitter '{}', thermal step {:.4g} s (stable {:.4g} s, "
+              "accurate {:.4g} s), {} thread(s), subnormals {}",
+              job.name, parts.size(), sim.tools_.size(), job.thermal->splitter, sim.thermal_dt_,
+              sim.thermal_stable_dt_, sim.thermal_accurate_dt_, threads, subnormals);
+  else
+    log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s), subnormals {}", job.name, parts.size(),
+              sim.tools_.size(), threads, subnormals);
+  if (job.thermal)
+    for (const auto& st : parts)
+      if (!st->cp.empty()) {
+        const MaterialDef& m = job.materials[st->def->material];
+        const auto& rows = m.specific_heat_table;
+        log->info("part '{}': specific heat from {} rows between {:g} and {:g} degC, {:g} to {:g} J/(kg K) (the "
+                  "thermal steps are taken with the smallest, the heat stored follows the rows)",
+                  st->def->name, rows.size(), rows.front()[0], rows.back()[0], m.specific_heat, m.specific_heat_max);
+      }
+  if (job.thermal)
+    for (const auto& st : parts)
+      if (!st->kin.empty())
+        log->info("part '{}': {}", st->def->name, describe_crystallisation(job.materials[st->def->material]));
+  for (std::size_t p = 0; p < mech.size(); ++p)
+    log->info("part '{}': mass {:.6g} kg, added by mass scaling {:.6g} kg ({:.3g} %)", parts[p]->def->name,
+              mech[p]->mass_physical, mech[p]->mass_added, 100 * mech[p]->mass_added / mech[p]->mass_physical);
+  // More than a thousand times the ply's own mass: the inertia, not the
+  // material, then decides how the ply deforms.
+  for (std::size_t p = 0; p < mech.size(); ++p)
+    if (const MechPart& m = *mech[p]; m.mass_added > 1e3 * m.mass_physical)
+      log->warn("mass scaling multiplies the mass of part '{}' by {:.3g}{}: its inertia will dominate the "
+                "response; lower solvers.mechanics.mass_scaling{}",
+                parts[p]->def->name, (m.mass_physical + m.mass_added) / m.mass_physical,
+                m.mass_added_contact > 0.5 * m.mass_added ? " (most of it for the contact springs)" : "",
+                m.mass_added_contact > 0.5 * m.mass_added ? " or the contacts' penalty" : "");
+  log->info("thermal contact: {} tool face node(s), {} ply/ply link(s)", sim.contact_map_.tool_contacts.size(),
+            sim.contact_map_.links.size());
+  // A probe without an interval records every thermal step: say so where
+  // that is many samples (a short thermal step over a long stroke).
+  if (job.thermal && sim.thermal_dt_ > 0)
+    for (std::size_t q = 0; q < job.output.probes.size(); ++q)
+      if (const double n = job.t_end / sim.thermal_dt_; job.output.probes[q].interval <= 0 && n > 1e5)
+        log->warn("probe '{}' has no interval: it records at every thermal step, up to {:.3g} samples; set "
+                  "{}/interval for fewer",
+                  job.output.probes[q].name, n, job.output.probes[q].pointer);
+}
+
+// The fields of a frame, per part (the same in every frame of a run).
+std::vector<std::vector<FrameField>> Simulation::Run::frame_fields() const {
+  const auto& mech = sim.mech_;
+  std::vector<std::vector<FrameField>> fields(sim.parts_.size());
+  for (std::size_t p = 0; p < sim.parts_.size(); ++p) {
+    PartState& st = *sim.parts_[p];
+    for (const auto& f : job.output.fields) {
+      if (f == "temperature") {
+        fields[p].push_back({"temperature", st.T.data(), 1, false, true});
+        fields[p].push_back({"temperature_mean", st.mean.data()});
+        fields[p].push_back({"temperature_top", st.top.data()});
+        fields[p].push_back({"temperature_bottom", st.bottom.data()});
+      } else if (f == "temperature_mean") {
+        fields[p].push_back({"temperature_mean", st.mean.data()});
+      } else if (f == "temperature_top") {
+        fields[p].push_back({"temperature_top", st.top.data()});
+      } else if (f == "temperature_bottom") {
+        fields[p].push_back({"temperature_bottom", st.bottom.data()});
+      } else if (f == "displacement") {
+        fields[p].push_back({"displacement", st.displacement.data(), 3});
+      } else if (f == "velocity" && p < mech.size()) {
+        // Half-step velocity v^{n-1/2} of the step that ended at the frame.
+        fields[p].push_back({"velocity", mech[p]->v.data(), 3});
+      } else if (f == "shear_angle") {
+        fields[p].push_back({"shear_angle", st.shear_angle.data(), 1, true});
+      } else if (f == "fibre_direction") {
+        fields[p].push_back({"fibre_direction", st.fibre.data(), 3, true});
+      } else if (f == "contact_status") {
+        fields[p].push_back({"contact_status", st.contact_status.data()});
+      } else if (f == "contact_pressure") {
+        fields[p].push_back({"contact_pressure", st.contact_pressure.data()});
+      } else if (f == "conductance") {
+        fields[p].push_back({"conductance_bottom", st.conductance_bottom.data()});
+        fields[p].push_back({"conductance_top", st.conductance_top.data()});
+      } else if (f == "tool_gap") {
+        fields[p].push_back({"tool_gap", st.tool_gap.data()});
+      } else if (f == "crystallinity" && !st.X.empty()) {
+        fields[p].push_back({"crystallinity", st.X.data(), 1, false, true});
+        fields[p].push_back({"crystallinity_mean", st.X_mean.data()});
+      } else if (f == "below_threshold_from") {
+        fields[p].push_back({"below_threshold_from", st.below_from.data()});
+        fields[p].push_back({"all_below_threshold_from", st.all_below_from.data()});
+      } else if ((f == "membrane_stress" || f == "curvature" || f == "membrane_strain") && p < mech.size()) {
+        // Material-frame components [11, 22, 12] per element, as vectors.
+        fields[p].push_back({f,
+                             f == "membrane_stress" ? mech[p]->stress.data()
+                             : f == "curvature"     ? mech[p]->curvature.data()
+                                                    : mech[p]->strain.data(),
+                             3, true});
+      }
+    }
+    // No field twice (e.g. "temperature" and "temperature_mean").
+    auto& v = fields[p];
+    std::vector<FrameField> unique;
+    for (const auto& ff : v)
+      if (std::none_of(unique.begin(), unique.end(), [&](const FrameField& u) { return u.name == ff.name; }))
+        unique.push_back(ff);
+    v = std::move(unique);
+  }
+  return fields;
+}
+
+// The per-node values derived from the temperatures (and crystallinities):
+// the mean through the thickness, the bottom and top values.
+void Simulation::Run::update_derived() {
+  for (auto& st : sim.parts_) {
+    const int nz = st->nz;
+    const double h = st->def->thickness;
+    for (int i = 0; i < st->mesh.num_nodes(); ++i) {
+      const double* T = &st->T[static_cast<std::size_t>(nz) * i];
+      st->mean[i] = thickness_mean(T, nz, h);
+      st->bottom[i] = T[0];
+      st->top[i] = T[nz - 1];
+      if (!st->X.empty()) st->X_mean[i] = thickness_mean(&st->X[static_cast<std::size_t>(nz) * i], nz, h);
+    }
+  }
+}
+
+void Simulation::Run::write_frame(double time) {
+  for (auto& st : sim.parts_)
+    for (std::size_t k = 0; k < st->x.size(); ++k) st->displacement[k] = st->x[k] - st->x0[k];
+  if (!writer) return;
+  update_derived();
+  if (sim.want_conductance_) sim.update_face_conductance();
+  if (sim.want_tool_gap_) sim.update_tool_gap();
+  std::vector<const double*> xs, ns;
+  for (auto& st : sim.parts_) {
+    xs.push_back(st->x.data());
+    ns.push_back(st->normals.data());
+  }
+  writer->write_frame(time, xs, ns, frame_fields());
+  frame_times.push_back(time);
+}
+
+// The probes' samples at `time` (of probe `only`, or of every probe).
+void Simulation::Run::sample_probes(double time, std::size_t only) {
+  const auto& mech = sim.mech_;
+  for (std::size_t q = 0; q < job.output.probes.size(); ++q) {
+    if (only != static_cast<std::size_t>(-1) && q != only) continue;
+    const ProbeDef& pr = job.output.probes[q];
+    const PartState& st = *sim.parts_[pr.part];
+    const int i = sim.probe_node_[q];
+    const std::vector<int>& around = sim.probe_elements_[q];
+    const int nz = st.nz;
+    const double* T = &st.T[static_cast<std::size_t>(nz) * i];
+    for (const auto& quantity : pr.quantities) {
+      ProbeSample s;
+      s.probe = static_cast<int>(q);
+      s.time = time;
+      s.quantity = quantity;
+      if (quantity == "temperature_profile" || quantity == "crystallinity_profile") {
+        const double* v = quantity == "temperature_profile" ? T : &st.X[static_cast<std::size_t>(nz) * i];
+        for (int k = 0; k < nz; ++k) {
+          s.z.push_back(nz > 1 ? -0.5 * st.def->thickness + st.def->thickness * k / (nz - 1) : 0.0);
+          s.values.push_back(v[k]);
+        }
+      } else if (quantity == "temperature_mean") {
+        double m = T[0];
+        if (nz > 1) {
+          m = 0;
+          for (int k = 0; k < nz; ++k) m += (k == 0 || k == nz - 1 ? 0.5 : 1.0) * T[k];
+          m /= (nz - 1);
+        }
+        s.values.push_back(m);
+      } else if (quantity == "contact_pressure") {
+        s.values.push_back(st.contact_pressure[i]);
+      } else if (quantity == "tool_gap") {
+        double gap = 0;
+        sim.tool_gaps(pr.part, 1, &st.x[3 * static_cast<std::size_t>(i)], &gap);
+        s.values.push_back(gap);
+      } else if (quantity == "conductance") {  // bottom and top face, at z = -h/2 and +h/2
+        sim.update_face_conductance();
+        s.z = {-0.5 * st.def->thickness, 0.5 * st.def->thickness};
+        s.values = {st.conductance_bottom[i], st.conductance_top[i]};
+      } else if (quantity.rfind("displacement_", 0) == 0) {
+        const int d = quantity.back() - 'x';
+        s.values.push_back(st.x[3 * i + d] - st.x0[3 * i + d]);
+      } else if (quantity == "fibre_strain") {  // E11: mean of the elements around the node (0 without mechanics)
+        double a = 0;
+        if (static_cast<std::size_t>(pr.part) < mech.size())
+          for (int e : around) a += mech[pr.part]->strain[3 * static_cast<std::size_t>(e)];
+        s.values.push_back(around.empty() ? 0.0 : a / around.size());
+      } else {  // shear_angle: mean of the elements around the node (0 without mechanics)
+        double a = 0;
+        for (int e : around) a += st.shear_angle[e];
+        s.values.push_back(around.empty() ? 0.0 : a / around.size());
+      }
+      if (probes_csv.is_open()) {
+        for (std::size_t k = 0; k < s.values.size(); ++k)
+          probes_csv << pr.name << ',' << quantity << ',' << csv_number(time) << ','
+                     << (s.z.empty() ? "" : csv_number(s.z[k])) << ',' << csv_number(s.values[k]) << '\n';
+      }
+      result.probes.push_back(std::move(s));
+    }
+  }
+  if (probes_csv.is_open()) probes_csv.flush();
+}
+
+// A row of tools.csv: each tool's displacement, force, heat and temperature.
+void Simulation::Run::sample_tools(double time) {
+  tool_rows.push_back(time);
+  for (std::size_t q = 0; q < sim.tools_.size(); ++q) {
+    const auto& u = sim.tools_[q]->displacement();
+    const double* f = &sim.tool_force_[3 * q];
+    const double row[8] = {u[0], u[1], u[2], f[0], f[1], f[2], sim.tool_heat_[q], job.tools[q].temperature_over(time, time)};
+    tool_rows.insert(tool_rows.end(), row, row + 8);
+    if (tools_csv.is_open()) {
+      tools_csv << csv_number(time) << ',' << job.tools[q].name;
+      for (double v : row) tools_csv << ',' << csv_number(v);
+      tools_csv << '\n';
+    }
+  }
+  if (tools_csv.is_open()) tools_csv.flush();
+}
+
+std::optional<double> Simulation::Run::threshold_of(std::size_t p) const {
+  return threshold ? std::optional<double>(job.output.temperature_threshold[p]) : std::nullopt;
+}
+
+// Part p's shear angle range, fibre strain range and share of its area
+// beyond the shear limit at the current positions (ElementKernel::fields,
+// as the frames show them); the first row beyond the limit is noted at time.
+std::array<double, 5> Simulation::Run::ply_mechanics(std::size_t p, double time) {
+  sdk::ElementFields f;
+  f.shear_angle = row_shear[p];
+  f.strain = row_strain[p];
+  if (auto s = sim.mech_[p]->element->fields(f); !s)
+    throw RunError("element plugin of part '" + sim.parts_[p]->def->name + "' failed at t = " + fmt_g(time) +
+                   " s: " + s.message);
+  const auto [smn, smx] = std::minmax_element(row_shear[p].begin(), row_shear[p].end());
+  const auto [fmn, fmx] = fibre_strain_range(row_strain[p]);
+  double over = 0, total = 0;
+  for (std::size_t e = 0; e < row_shear[p].size(); ++e) {
+    total += elem_area[p][e];
+    if (shear_limit && std::abs(row_shear[p][e]) > job.output.shear_angle_limit[p]) over += elem_area[p][e];
+  }
+  if (shear_limit && over > 0 && sim.over_from_[p] < 0) sim.over_from_[p] = time;
+  return {*smn, *smx, fmn, fmx, over / total};
+}
+
+// Each ply's row of plies.csv (ply_temperature, ply_crystallinity, ply_mechanics).
+void Simulation::Run::sample_plies(double time) {
+  ply_rows.push_back(time);
+  for (std::size_t p = 0; p < sim.parts_.size(); ++p) {
+    const std::size_t at = ply_rows.size();
+    if (job.thermal) {
+      const std::array<double, 4> row = ply_temperature(*sim.parts_[p], threshold_of(p));
+      ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + (threshold ? 4 : 3));
+      if (crystallising) {
+        const std::array<double, 3> x = ply_crystallinity(*sim.parts_[p]);
+        ply_rows.insert(ply_rows.end(), x.begin(), x.end());
+      }
+    }
+    if (job.mechanics) {
+      const std::array<double, 5> row = ply_mechanics(p, time);
+      ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + (shear_limit ? 5 : 4));
+    }
+    if (plies_csv.is_open()) {
+      plies_csv << csv_number(time) << ',' << sim.parts_[p]->def->name;
+      for (std::size_t k = at; k < ply_rows.size(); ++k) plies_csv << ',' << csv_number(ply_rows[k]);
+      plies_csv << '\n';
+    }
+  }
+  if (plies_csv.is_open()) plies_csv.flush();
+}
+
+// A row of energy.csv: the audit at t.
+void Simulation::Run::sample_energy() {
+  const double row[8] = {t,           audit.kinetic, audit.internal,      audit.external,
+                         audit.damping, audit.contact, audit.contact_stored, audit.balance_error};
+  energy_rows.insert(energy_rows.end(), row, row + 8);
+  energy_rows.insert(energy_rows.end(), audit.reactions.begin(), audit.reactions.end());
+  energy_rows.push_back(audit.kinetic_half);
+  if (energy_csv.is_open()) {
+    for (int c = 0; c < 8; ++c) energy_csv << (c ? "," : "") << csv_number(row[c]);
+    for (double r : audit.reactions) energy_csv << ',' << csv_number(r);
+    energy_csv << ',' << csv_number(audit.kinetic_half) << '\n';
+  }
+}
+
+// Quasi-static check over the sampled energy history: kinetic (half-step)
+// / internal energy at the end, and the time from which it stays under
+// 5 % (-1: not at the end).
+std::pair<double, double> Simulation::Run::quasi_static() const {
+  // ratio NaN: no internal energy was ever stored (the check does not
+  // apply). Internal energy at the round-off of the run's energies (plies
+  // held in their plane and only pressed: 1e-20 J beside contact springs
+  // of 1e-4 J) counts as none.
+  const std::size_t w = energy_cols.size();
+  double scale = 0;  // the largest energy of the run
+  for (std::size_t r = 0; r + w <= energy_rows.size(); r += w)
+    for (std::size_t c = 1; c <= 6; ++c) scale = std::max(scale, std::abs(energy_rows[r + c]));
+  double ratio = std::numeric_limits<double>::quiet_NaN(), below_from = -1;
+  for (std::size_t r = 0; r + w <= energy_rows.size(); r += w) {
+    const double t_r = energy_rows[r], ie = energy_rows[r + 2], ke = energy_rows[r + w - 1];
+    if (!(ie > 1e-9 * scale)) continue;
+    ratio = ke / ie;
+    if (ratio >= 0.05)
+      below_from = -1;
+    else if (below_from < 0)
+      below_from = t_r;
+  }
+  return {ratio, below_from};
+}
+
+void Simulation::Run::finish() {
+  const auto& parts = sim.parts_;
+  const auto& tools = sim.tools_;
+  if (writer && job.mechanics && energy_rows.size() % energy_cols.size() == 0)
+    writer->write_series("energy", energy_cols, energy_rows);
+  if (writer && !tools.empty() && tool_rows.size() % tool_cols.size() == 0 && !tool_rows.empty())
+    writer->write_series("tools", tool_cols, tool_rows);
+  if (writer && ply_series && ply_rows.size() % ply_cols.size() == 0 && !ply_rows.empty())
+    writer->write_series("plies", ply_cols, ply_rows);
+  const double stored_change = sim.stored_heat() - stored0;
+  const double scale = std::max({std::abs(stored_change), std::abs(heat_in), 1e-300});
+  if (failure.empty() && stop_signal != 0) {
+    failure = std::string("interrupted by ") + signal_name(stop_signal) + " at t = " + fmt_g(t) + " s of " +
+              fmt_g(t_end) + " s (" +
+              (job.mechanics ? "mechanical step " + std::to_string(mech_steps)
+                             : "thermal step " + std::to_string(steps)) +
+              "); the output folder holds the frames up to that time";
+    result.interrupted = stop_signal;
+  }
+  // Each ply's share beyond the shear limit at the end (where the run
+  // stopped; a first time beyond it found here is the end's).
+  over_end.assign(parts.size(), 0.0);
+  if (shear_limit) try {
+      for (std::size_t p = 0; p < parts.size(); ++p) over_end[p] = ply_mechanics(p, t)[4];
+    } catch (const RunError& e) {
+      if (failure.empty()) failure = e.what();
+    }
+  result.ok = failure.empty();
+  result.error = failure;
+  result.wall_time_s = seconds_since(wall0);
+  result.wall_time_before_s = wall_before;
+  result.peak_memory_mb = peak_resident_mb();
+  result.simulated_time_s = t;
+  result.thermal_steps = steps;
+  result.thermal_dt = sim.thermal_dt_;
+  result.heat_in = heat_in;
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    result.part_heat_change.push_back(sim.stored_heat(static_cast<int>(p)) - stored0_part[p]);
+    result.part_link_heat.push_back(sim.link_heat_.size() > p ? sim.link_heat_[p] : 0.0);
+    // With mechanics, one range per part (every part has elements, so its
+    // shear angles and strains are not empty).
+    const auto& sa = parts[p]->shear_angle;
+    if (job.mechanics) {
+      const auto [smn, smx] = std::minmax_element(sa.begin(), sa.end());
+      result.part_shear_min_deg.push_back(*smn);
+      result.part_shear_max_deg.push_back(*smx);
+      const auto [fmn, fmx] = fibre_strain_range(sim.mech_[p]->strain);
+      result.part_fibre_strain_min.push_back(fmn);
+      result.part_fibre_strain_max.push_back(fmx);
+    }
+  }
+  result.stored_change = stored_change;
+  result.heat_balance_error = std::abs(stored_change - heat_in) / scale;
+  result.limited_node_steps = limited_total;
+  result.mechanical_steps = mech_steps;
+  result.bending_evaluations = sim.bending_evaluations_;
+  result.bending_largest = sim.bending_largest_;
+  result.mechanical_dt = mech_dt;
+  result.energy = audit;
+  for (std::size_t q = 0; q < tools.size(); ++q) {
+    const auto& u = tools[q]->displacement();
+    result.energy.tool_displacements.insert(result.energy.tool_displacements.end(), u.begin(), u.end());
+    for (int d = 0; d < 3; ++d) result.energy.tool_forces.push_back(sim.tool_force_[3 * q + d]);
+    result.energy.tool_heat.push_back(sim.tool_heat_[q]);
+  }
+  if (job.mechanics && !tools.empty()) {  // the press force: the largest over the rows
+    const std::size_t nt = tools.size(), stride = 1 + 8 * nt;
+    result.energy.tool_force_max.assign(nt, 0.0);
+    result.energy.tool_force_max_at.assign(nt, 0.0);
+    for (std::size_t r = 0; r + stride <= tool_rows.size(); r += stride)
+      for (std::size_t q = 0; q < nt; ++q) {
+        const double* f = &tool_rows[r + 1 + 8 * q + 3];
+        const double m = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+        if (m > result.energy.tool_force_max[q]) {
+          result.energy.tool_force_max[q] = m;
+          result.energy.tool_force_max_at[q] = tool_rows[r];
+        }
+      }
+  }
+  for (const auto& m : sim.mech_) result.energy.added_mass_percent.push_back(100 * m->mass_added / m->mass_physical);
+  result.temperature_min = sim.seen_min_;
+  result.temperature_max = sim.seen_max_;
+  // Each ply's temperatures at the end (the summary and the log's last lines).
+  if (job.thermal)
+    for (std::size_t p = 0; p < parts.size(); ++p) ply_end.push_back(ply_temperature(*parts[p], threshold_of(p)));
+  const std::size_t w = ply_cols.size();
+  for (std::size_t r = 0; r + w <= ply_rows.size(); r += w)
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+      const double* v = &ply_rows[r + 1 + ply_per * p];
+      RunResult::PlySample s;
+      s.part = static_cast<int>(p);
+      s.time = ply_rows[r];
+      if (job.thermal) {
+        s.min = v[0];
+        s.mean = v[1];
+        s.max = v[2];
+        s.fraction_below = threshold ? v[3] : 0.0;
+        v += threshold ? 4 : 3;
+        if (crystallising) {
+          s.crystallinity_min = v[0];
+          s.crystallinity_mean = v[1];
+          s.crystallinity_max = v[2];
+          v += 3;
+        }
+      }
+      if (job.mechanics) {
+        s.shear_min = v[0];
+        s.shear_max = v[1];
+        s.fibre_strain_min = v[2];
+        s.fibre_strain_max = v[3];
+        s.fraction_over_shear_limit = shear_limit ? v[4] : 0.0;
+      }
+      result.ply_history.push_back(s);
+    }
+  if (threshold) result.part_below_threshold_from_s = sim.below_from_;
+  if (threshold) result.part_all_below_threshold_from_s = sim.all_below_from_;
+  if (shear_limit) result.part_over_shear_limit_from_s = sim.over_from_;
+
+  if (opt.write_files) {
+    update_derived();
+    write_summary();
+  }
+  log_end();
+}
+
+void Simulation::Run::write_summary() const {
+  const auto& parts = sim.parts_;
+  const auto& mech = sim.mech_;
+  const auto& timing = sim.timing_;
+  json summary;
+  summary["job"] = job.name;
+  summary["job_file"] = std::filesystem::absolute(job.file).lexically_normal().string();
+  summary["status"] = result.ok ? "completed" : result.interrupted ? "interrupted" : "failed";
+  summary["version"] = kVersion;
+  summary["threads"] = threads;
+  summary["subnormals"] = subnormals;
+  summary["wall_time_s"] = result.wall_time_s;
+  summary["wall_time_total_s"] = result.wall_time_before_s + result.wall_time_s;
+  summary["peak_memory_MB"] = result.peak_memory_mb > 0 ? json(result.peak_memory_mb) : json(nullptr);
+  summary["simulated_time_s"] = t;
+  summary["restarted_from_s"] = restarted_from >= 0 ? json(restarted_from) : json(nullptr);
+  summary["steps"] = {{"mechanics", mech_steps}, {"thermal", steps}};
+  summary["dt"] = {{"mechanics", job.mechanics ? json(mech_dt) : json(nullptr)},
+                   {"thermal", job.thermal ? json(sim.thermal_dt_) : json(nullptr)}};
+  if (job.thermal)
+    summary["thermal"] = {
+        {"splitter", job.thermal->splitter},
+        {"stable_dt", std::isfinite(sim.thermal_stable_dt_) ? json(sim.thermal_stable_dt_) : json(nullptr)},
+        {"accurate_dt", sim.thermal_accurate_dt_},
+        {"inplane_substeps_max", substeps_max},
+        {"limited_node_steps", limited_total}};
+  summary["plugins_loaded"] = sim.registry_.loaded_names();
+  if (job.mechanics)
+    summary["timing_s"] = {{"elements_and_laws", timing[kTimeElements]},
+                           {"contact", timing[kTimeContact]},
+                           {"thermal", timing[kTimeThermal]},
+                           {"time_integration_and_audit", timing[kTimeIntegrate]},
+                           {"output", timing[kTimeOutput]}};
+  if (job.mechanics) {  // share of the steps whose contact ran beside the element blocks (either way)
+    const ForceSchedule& fs = sim.schedule_;
+    const double calls = static_cast<double>(std::max(fs.calls, 1LL));
+    summary["contact_beside_elements"] = static_cast<double>(fs.way_calls[kBeside] + fs.way_calls[kByPart]) / calls;
+    summary["contact_schedule_share"] = {{"in_turn", static_cast<double>(fs.way_calls[kInTurn]) / calls},
+                                         {"beside", static_cast<double>(fs.way_calls[kBeside]) / calls},
+                                         {"by_part", static_cast<double>(fs.way_calls[kByPart]) / calls}};
+  }
+  if (job.mechanics && job.mechanics_settings.bending_subcycles > 1)
+    summary["bending_subcycles"] = {{"at_most", job.mechanics_settings.bending_subcycles},
+                                    {"evaluations", sim.bending_evaluations_},
+                                    {"largest", sim.bending_largest_}};
+  summary["energy"] = {{"kinetic", audit.kinetic}, {"internal", audit.internal}, {"external_work", audit.external},
+                       {"contact", audit.contact}, {"contact_stored", audit.contact_stored},
+                       {"damping", audit.damping}, {"balance_error", audit.balance_error},
+                       {"kinetic_half_step", audit.kinetic_half}};
+  if (job.mechanics && !energy_rows.empty()) {
+    const auto [ratio, below_from] = quasi_static();
+    summary["energy"]["kinetic_to_internal"] = {
+        {"at_end", std::isnan(ratio) ? json(nullptr) : json(ratio)},
+        {"under_5_percent_from_s", below_from >= 0 ? json(below_from) : json(nullptr)}};
+  }
+  json tools = json::array();
+  for (std::size_t q = 0; q < sim.tools_.size(); ++q) {
+    const auto& u = sim.tools_[q]->displacement();
+    const double* f = &sim.tool_force_[3 * q];
+    tools.push_back({{"name", job.tools[q].name},
+                     {"displacement_m", {u[0], u[1], u[2]}},
+                     {"force_N", {f[0], f[1], f[2]}},
+                     {"heat_to_plies_J", sim.tool_heat_[q]}});
+    if (q < result.energy.tool_force_max.size()) {
+      tools.back()["force_max_N"] = result.energy.tool_force_max[q];
+      tools.back()["force_max_at_s"] = result.energy.tool_force_max_at[q];
+    }
+  }
+  summary["tools"] = tools;
+  if (job.mechanics) {
+    json reactions = json::array();
+    for (std::size_t c = 0; c < job.constraints.size(); ++c)
+      reactions.push_back({{"constraint", job.constraints[c].pointer},
+                           {"force", {audit.reactions.size() > 3 * c ? audit.reactions[3 * c] : 0.0,
+                                      audit.reactions.size() > 3 * c ? audit.reactions[3 * c + 1] : 0.0,
+                                      audit.reactions.size() > 3 * c ? audit.reactions[3 * c + 2] : 0.0}}});
+    summary["reactions_N"] = reactions;
+    json added = json::object();
+    for (std::size_t p = 0; p < mech.size(); ++p)
+      added[parts[p]->def->name] = 100 * mech[p]->mass_added / mech[p]->mass_physical;
+    summary["mass_scaling_added_percent"] = added;
+  }
+  summary["heat"] = {{"stored_change_J", result.stored_change},
+                     {"faces_in_J", heat_in},
+                     {"balance_error", result.heat_balance_error}};
+  const std::vector<double>& thresholds = job.output.temperature_threshold;
+  const std::vector<double>& shear_limits = job.output.shear_angle_limit;
+  json plies = json::array();
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    const auto& st = parts[p];
+    const auto [mn, mx] = std::minmax_element(st->T.begin(), st->T.end());
+    plies.push_back({{"name", st->def->name},
+                     {"nodes", st->mesh.num_nodes()},
+                     {"elements", st->mesh.num_elements()},
+                     {"values_per_node", st->nz},
+                     {"temperature_min", *mn},
+                     {"temperature_max", *mx}});
+    json& ply = plies.back();
+    if (job.thermal) {
+      ply["temperature_mean"] = ply_end[p][1];
+      if (threshold) ply["fraction_below_threshold"] = ply_end[p][3];
+      if (!st->X.empty()) {
+        const std::array<double, 3> x = ply_crystallinity(*st);
+        ply["crystallinity_min"] = x[0];
+        ply["crystallinity_mean"] = x[1];
+        ply["crystallinity_max"] = x[2];
+      }
+    }
+    if (threshold) {
+      ply["temperature_threshold"] = thresholds[p];
+      ply["below_threshold_from_s"] = sim.below_from_[p] >= 0 ? json(sim.below_from_[p]) : json(nullptr);
+      ply["all_below_threshold_from_s"] = sim.all_below_from_[p] >= 0 ? json(sim.all_below_from_[p]) : json(nullptr);
+    }
+    if (job.mechanics) {
+      ply["shear_angle_min_deg"] = result.part_shear_min_deg[p];
+      ply["shear_angle_max_deg"] = result.part_shear_max_deg[p];
+      ply["fibre_strain_min"] = result.part_fibre_strain_min[p];
+      ply["fibre_strain_max"] = result.part_fibre_strain_max[p];
+    }
+    if (shear_limit) {
+      ply["shear_angle_limit"] = shear_limits[p];
+      ply["fraction_over_shear_limit"] = over_end[p];
+      ply["over_shear_limit_from_s"] = sim.over_from_[p] >= 0 ? json(sim.over_from_[p]) : json(nullptr);
+    }
+  }
+  summary["parts"] = plies;
+  summary["frames"] = writer ? writer->frames() : 0;
+  summary["error"] = result.ok ? json(nullptr) : json(failure);
+  std::ofstream(opt.out_dir / "summary.json") << summary.dump(2) << '\n';
+}
+
+void Simulation::Run::log_end() const {
+  auto log = logger("solve");
+  const auto& parts = sim.parts_;
+  const std::vector<double>& thresholds = job.output.temperature_threshold;
+  const std::vector<double>& shear_limits = job.output.shear_angle_limit;
+  if (limited_total > 0)
+    log->info("the thermal splitter limited {} node-step(s) to keep temperatures inside their local range "
+              "(steep through-thickness profiles next to strong in-plane conduction)",
+              limited_total);
+  if (result.ok && job.mechanics) {
+    log->info("mechanics: {} steps (last {:.3g} s), energy balance error {:.2e}, kinetic {:.4g} J, internal {:.4g} J, "
+              "contact {:.4g} J, damping {:.4g} J",
+              mech_steps, mech_dt, audit.balance_error, audit.kinetic, audit.internal, audit.contact, audit.damping);
+    if (!energy_rows.empty()) {
+      const auto [ratio, below_from] = quasi_static();
+      const std::string hint =
+          ": the mass scaling makes part of the run dynamic; compare the results with a smaller "
+          "solvers.mechanics.mass_scaling.target_dt";
+      if (std::isnan(ratio))
+        log->info("kinetic/internal energy: no internal energy was stored, the ratio does not apply");
+      else if (below_from >= 0 && below_from <= 0.1 * t_end)
+        log->info("kinetic/internal energy {:.2g} % at the end, under 5 % from t = {:.3g} s", 100 * ratio, below_from);
+      else if (below_from >= 0)
+        log->info("kinetic/internal energy {:.2g} % at the end, under 5 % only from t = {:.3g} s ({:.0f} % of the run){}",
+                  100 * ratio, below_from, 100 * below_from / t_end, hint);
+      else
+        log->warn("kinetic/internal energy {:.2g} % at the end (above 5 %){}", 100 * ratio, hint);
+    }
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+      const PartState& st = *parts[p];
+      const auto [mn, mx] = std::minmax_element(st.T.begin(), st.T.end());
+      std::string over;
+      if (shear_limit && sim.over_from_[p] >= 0)
+        over = fmt::format(", beyond {} deg from t = {} s, {:.1f} % of its area at the end", fmt_g(shear_limits[p]),
+                           fmt_g(sim.over_from_[p], 4), 100 * over_end[p]);
+      else if (shear_limit)
+        over = fmt::format(", never beyond {} deg", fmt_g(shear_limits[p]));
+      log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg{}, fibre strain {:.3g} "
+                "to {:.3g}",
+                st.def->name, *mn, *mx, result.part_shear_min_deg[p], result.part_shear_max_deg[p], over,
+                result.part_fibre_strain_min[p], result.part_fibre_strain_max[p]);
+    }
+    for (std::size_t q = 0; q < result.energy.tool_force_max.size(); ++q)
+      log->info("tool '{}': largest force {:.4g} N at t = {} s", job.tools[q].name, result.energy.tool_force_max[q],
+                fmt_g(result.energy.tool_force_max_at[q], 4));
+  }
+  if (job.thermal) {
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+      const std::array<double, 4>& now = ply_end[p];
+      std::ostringstream line;
+      line << std::fixed << std::setprecision(2) << "part '" << parts[p]->def->name << "': ";
+      if (!job.mechanics) line << "temperature " << now[0] << " to " << now[2] << " degC, ";
+      line << "mean " << now[1] << " degC";
+      if (threshold && sim.below_from_[p] >= 0)
+        line << ", below " << fmt_g(thresholds[p]) << " degC from t = " << fmt_g(sim.below_from_[p], 4) << " s"
+             << (sim.all_below_from_[p] >= 0 ? ", all of it from t = " + fmt_g(sim.all_below_from_[p], 4) + " s" : "")
+             << ", " << std::setprecision(1) << 100 * now[3] << " % of it below at the end";
+      else if (threshold)
+        line << ", never below " << fmt_g(thresholds[p]) << " degC";
+      if (!parts[p]->X.empty()) {
+        const std::array<double, 3> x = ply_crystallinity(*parts[p]);
+        line << std::setprecision(3) << ", relative crystallinity " << x[0] << " to " << x[2] << " (mean " << x[1]
+             << ")";
+      }
+      log->info("{}", line.str());
+    }
+  }
+  if (result.ok) {
+    log->info("completed: {} thermal steps in {:.3g} s wall; heat into the plies {:.6g} J, stored change {:.6g} J "
+              "(balance error {:.2e}); peak memory {:.0f} MB",
+              steps, result.wall_time_s, heat_in, result.stored_change, result.heat_balance_error,
+              result.peak_memory_mb);
+  } else if (result.interrupted) {
+    log->warn("{}", failure);
+  } else {
+    log->error("run failed: {}", failure);
+  }
+}
+
+}  // namespace ts
