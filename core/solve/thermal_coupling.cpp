@@ -1,0 +1,549 @@
+// The thermal side of the kernel: the splitter's set-up and step size,
+// the faces' conditions (tools, convection, radiation, ply/ply links), the
+// initial temperatures from an earlier run, the heat capacity and
+// crystallisation after each thermal step, the heat stored and the check of
+// every value (docs/thermal-method.md).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "io/logging.hpp"
+#include "io/results_reader.hpp"
+#include "solve/simulation_internal.hpp"
+#include "solve/tools.hpp"
+
+namespace ts {
+
+using detail::fmt_g;
+using detail::thickness_mean;
+
+void Simulation::build_thermal() {
+  // Contact handlers: needed for the thermal contact map.
+  for (const auto& c : job_.contacts) {
+    const PluginRecord& rec = registry_.require(sdk::PluginKind::Contact, c.handler, c.pointer + "/handler");
+    const sdk::Params params = validate_params(c.params, c.pointer, rec.descriptor);
+    std::unique_ptr<sdk::ContactHandler> h(reinterpret_cast<sdk::ContactHandler* (*)()>(rec.create)());
+    sdk::ContactPair pair;
+    pair.first = {sdk::BodyRef::Type::Part, c.first.index};
+    pair.second = {c.second.is_tool ? sdk::BodyRef::Type::Tool : sdk::BodyRef::Type::Part, c.second.index};
+    if (auto s = h->configure(params, pair, part_views_, tool_views_); !s)
+      throw JobError(c.pointer, "contact handler '" + c.handler + "': " + s.message);
+    contacts_.push_back(std::move(h));
+  }
+  if (!job_.thermal) {
+    for (const auto& m : job_.materials)
+      if (m.crystallisation.present)
+        logger("job")->warn("{}: ignored, an isothermal job has no crystallisation", m.crystallisation.pointer);
+    return;
+  }
+  const ThermalSolverDef& th = *job_.thermal;
+  const PluginRecord& rec = registry_.require(sdk::PluginKind::Thermal, th.splitter, th.pointer + "/splitter");
+  const sdk::Params params = validate_params(th.params, th.pointer, rec.descriptor, {"splitter", "subcycle", "dt"});
+  splitter_.reset(reinterpret_cast<sdk::ThermalSplitter* (*)()>(rec.create)());
+  if (auto s = splitter_->configure(params, part_views_); !s)
+    throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    st.nz = splitter_->values_per_node(static_cast<int>(p));
+    const std::size_t n = static_cast<std::size_t>(st.mesh.num_nodes()) * st.nz;
+    st.T.assign(n, st.def->initial_temperature);
+    st.cap.assign(n, 0.0);
+    const MaterialDef& mat = job_.materials[st.def->material];
+    if (!mat.specific_heat_table.empty()) {
+      st.cp = HeatCapacityTable(mat.specific_heat_table);
+      st.T_step.assign(n, 0.0);
+    }
+    if (const auto& c = mat.crystallisation; c.present) {
+      st.kin = CrystallisationKinetics(c.latent_heat, c.avrami_exponent, c.rate_rows, c.k_max, c.t_max, c.half_width);
+      st.c_latent = mat.specific_heat;
+      st.X.assign(n, c.initial);
+      st.theta.assign(n, st.kin.integral(c.initial));
+      st.X_mean.assign(st.mesh.num_nodes(), c.initial);
+      st.T_step.assign(n, 0.0);
+    }
+    if (auto s = splitter_->capacities(static_cast<int>(p), st.cap); !s)
+      throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);
+    st.t0 = st.def->initial_temperature;
+    if (!st.def->initial_results.empty()) {
+      load_initial_temperature(st);
+      double q = 0, c = 0;
+      for (std::size_t k = 0; k < n; ++k) {
+        q += st.cap[k] * st.T[k];
+        c += st.cap[k];
+      }
+      st.t0 = c > 0 ? q / c : st.T[0];
+      part_views_[p].initial_temperature = st.t0;
+    }
+    st.mean.assign(st.mesh.num_nodes(), 0.0);
+    st.top.assign(st.mesh.num_nodes(), 0.0);
+    st.bottom.assign(st.mesh.num_nodes(), 0.0);
+  }
+  assemble_faces();
+  update_far_temperatures(0.0, 0.0);
+  faces_.resize(parts_.size());
+  for (std::size_t p = 0; p < parts_.size(); ++p)
+    faces_[p] = {parts_[p]->h_bottom, parts_[p]->t_bottom, parts_[p]->h_top, parts_[p]->t_top};
+  // The step holds for every conductance the contact pairs can give over
+  // the run, not only those of the start: each ply's faces are taken with
+  // at least the largest conductance of the pairs it is in.
+  std::vector<double> bound(parts_.size(), 0.0);
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    const double h = contacts_[c]->largest_conductance();
+    bound[job_.contacts[c].first.index] = std::max(bound[job_.contacts[c].first.index], h);
+    if (!job_.contacts[c].second.is_tool)
+      bound[job_.contacts[c].second.index] = std::max(bound[job_.contacts[c].second.index], h);
+  }
+  std::vector<std::vector<double>> h_bound(2 * parts_.size());
+  std::vector<sdk::FaceConditions> limit_faces = faces_;
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    if (!(bound[p] > 0)) continue;
+    for (int f = 0; f < 2; ++f) {
+      const std::vector<double>& h = f == 0 ? parts_[p]->h_bottom : parts_[p]->h_top;
+      std::vector<double>& hb = h_bound[2 * p + f];
+      hb.resize(h.size());
+      for (std::size_t i = 0; i < h.size(); ++i) hb[i] = std::max(h[i], bound[p]);
+      (f == 0 ? limit_faces[p].h_bottom : limit_faces[p].h_top) = hb;
+    }
+  }
+  sdk::ThermalStepInput in;
+  in.faces = limit_faces;
+  in.links = contact_map_.links;
+  in.links_changed = true;
+  if (auto s = splitter_->step_limits(in, &thermal_stable_dt_, &thermal_accurate_dt_); !s)
+    throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);
+  double dt = thermal_accurate_dt_;
+  if (th.dt > 0) {
+    if (th.dt > thermal_stable_dt_ * (1 + 1e-12))
+      throw JobError(th.pointer + "/dt", "thermal step " + fmt_g(th.dt) + " s exceeds the stable step " +
+                                             fmt_g(thermal_stable_dt_) +
+                                             " s of the explicit scheme (dt_safety included); lower it or use "
+                                             "\"through_thickness\": \"implicit\"");
+    dt = th.dt;
+  }
+  if (!(dt > 0) || !std::isfinite(dt)) dt = job_.output.interval;
+  const double steps = job_.t_end / dt;
+  if (steps > 2e8)
+    throw JobError(th.pointer, "the thermal step " + fmt_g(dt) + " s would need " + fmt_g(steps, 3) +
+                                   " steps to reach " + fmt_g(job_.t_end) +
+                                   " s; the explicit scheme is limited by thin layers or high conductances here: "
+                                   "use \"through_thickness\": \"implicit\"");
+  // Land on the frame times: an integer number of steps per output interval.
+  const double interval = std::min(job_.output.interval, job_.t_end);
+  const double per = std::ceil(interval / dt * (1 - 1e-12));
+  thermal_dt_ = interval / std::max(1.0, per);
+}
+
+void Simulation::update_far_temperatures(double t0, double t1) {
+  // Tools: their views and the faces they touch.
+  bool any = false;
+  for (std::size_t k = 0; k < tool_views_.size(); ++k) {
+    if (job_.tools[k].temperature_table.empty()) continue;
+    tool_views_[k].temperature = job_.tools[k].temperature_over(t0, t1);
+    any = true;
+  }
+  if (any)
+    for (const auto& tc : contact_map_.tool_contacts) {
+      PartState& st = *parts_[tc.part];
+      (tc.face == sdk::kTop ? st.t_top : st.t_bottom)[tc.node] = tool_views_[tc.tool].temperature;
+    }
+  // Heat exchanges: the ambient, and radiation at the face's temperature.
+  constexpr double kSigma = 5.670374419e-8, kKelvin = 273.15;  // W/(m^2 K^4), the Stefan-Boltzmann constant
+  for (const ExchangeFace& f : exchange_faces_) {
+    const HeatExchangeDef& h = job_.heat_exchanges[static_cast<std::size_t>(f.exchange)];
+    PartState& st = *parts_[f.part];
+    const double ambient = h.ambient_over(t0, t1);
+    (f.face == sdk::kTop ? st.t_top : st.t_bottom)[f.node] = ambient;
+    if (!(h.emissivity > 0)) continue;
+    const std::size_t base = static_cast<std::size_t>(st.nz) * f.node;
+    const double T = st.T[base + (f.face == sdk::kTop ? st.nz - 1 : 0)] + kKelvin, Ta = ambient + kKelvin;
+    (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = h.h + h.emissivity * kSigma * (T * T + Ta * Ta) * (T + Ta);
+  }
+}
+
+void Simulation::load_initial_temperature(PartState& st) {
+  const PartDef& def = *st.def;
+  const std::string ptr = def.pointer + "/initial_temperature", path = def.initial_results.string();
+  const std::string part = def.initial_results_part.empty() ? def.name : def.initial_results_part;
+  const QuietHdf5 quiet;
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) throw JobError(ptr + "/results", "'" + path + "' is not a results file (HDF5)");
+  struct Closer {
+    hid_t f;
+    ~Closer() { H5Fclose(f); }
+  } closer{file};
+  const Frames frames = read_frames(file);
+  if (frames.times.empty()) throw JobError(ptr + "/results", "'" + path + "' holds no frame");
+  std::size_t k = frames.times.size() - 1;
+  const double want = def.initial_results_time;
+  if (want >= 0) {
+    for (std::size_t j = 0; j < frames.times.size(); ++j)
+      if (std::abs(frames.times[j] - want) < std::abs(frames.times[k] - want)) k = j;
+    if (std::abs(frames.times[k] - want) > 1e-9 * std::max(1.0, want))
+      throw JobError(ptr + "/time", "'" + path + "' has no frame at t = " + fmt_g(want) + " s; its " +
+                                        std::to_string(frames.times.size()) + " frames run from " +
+                                        fmt_g(frames.times.front()) + " to " + fmt_g(frames.times.back()) + " s");
+  }
+  const std::string where = "the frame at t = " + fmt_g(frames.times[k]) + " s of '" + path + "'";
+  const std::string group = "frames/" + frames.names[k] + "/" + part + "/";
+  std::vector<hsize_t> shape;
+  const std::vector<double> nodes = read_values(file, group + "nodes", shape);
+  if (nodes.empty())
+    throw JobError(def.initial_results_part.empty() ? ptr : ptr + "/part", where + " has no part '" + part + "'");
+  const int nn = st.mesh.num_nodes();
+  if (static_cast<int>(nodes.size() / 3) != nn)
+    throw JobError(ptr, where + ": part '" + part + "' has " + std::to_string(nodes.size() / 3) +
+                            " nodes, this part " + std::to_string(nn) + " (the same mesh is needed)");
+  const std::vector<double> v = read_values(file, group + "temperature", shape);
+  if (v.empty())
+    throw JobError(ptr, where + " has no temperature of part '" + part +
+                            "' (the run that wrote it needs \"temperature\" in output.fields)");
+  // Levels bottom to top, evenly spaced through the thickness (a single
+  // value per node is written on two levels).
+  const int nl = static_cast<int>(v.size()) / nn, nz = st.nz;
+  if (nl < 2 || v.size() != static_cast<std::size_t>(nl) * nn)
+    throw JobError(ptr, where + ": the temperature of part '" + part + "' has " + std::to_string(v.size()) +
+                            " values, not a whole number of levels (2 or more) for its " + std::to_string(nn) +
+                            " nodes");
+  // The frame's nl levels per node onto this part's nz values.
+  auto levels = [&](const std::vector<double>& from, std::vector<double>& to) {
+    for (int i = 0; i < nn; ++i) {
+      const double* src = &from[static_cast<std::size_t>(i) * nl];
+      double* dst = &to[static_cast<std::size_t>(i) * nz];
+      if (nz == nl) {
+        std::copy(src, src + nl, dst);
+      } else if (nz == 1) {  // the mean through the thickness (linear between the levels)
+        double m = 0;
+        for (int l = 0; l < nl; ++l) m += (l == 0 || l == nl - 1 ? 0.5 : 1.0) * src[l];
+        dst[0] = m / (nl - 1);
+      } else {  // linear between the levels, at this part's
+        for (int q = 0; q < nz; ++q) {
+          const double s = static_cast<double>(q) * (nl - 1) / (nz - 1);
+          const int l = std::min(static_cast<int>(s), nl - 2);
+          dst[q] = src[l] + (s - l) * (src[l + 1] - src[l]);
+        }
+      }
+    }
+  };
+  levels(v, st.T);
+  logger("solve")->info("part '{}': initial temperatures from {} (part '{}', {} values per node)", def.name, where,
+                        part, nl);
+  // With crystallisation kinetics, the crystallinity of the same frame,
+  // where it has one (the field crystallinity).
+  if (st.kin.empty()) return;
+  const std::vector<double> x = read_values(file, group + "crystallinity", shape);
+  if (x.size() != v.size()) {
+    logger("solve")->info("part '{}': {} has no crystallinity of part '{}': the crystallinity starts at {}", def.name,
+                          where, part, fmt_g(job_.materials[def.material].crystallisation.initial));
+    return;
+  }
+  levels(x, st.X);
+  for (std::size_t k = 0; k < st.X.size(); ++k) st.theta[k] = st.kin.integral(std::clamp(st.X[k], 0.0, 1.0));
+  logger("solve")->info("part '{}': initial crystallinity from the same frame", def.name);
+}
+
+// The tools of the part's contact pairs; all of them where it has none.
+std::vector<int> Simulation::gap_tools(int part) const {
+  std::vector<int> tools;
+  for (const ContactDef& c : job_.contacts) {
+    if (c.second.is_tool && !c.first.is_tool && c.first.index == part) tools.push_back(c.second.index);
+    if (c.first.is_tool && !c.second.is_tool && c.second.index == part) tools.push_back(c.first.index);
+  }
+  if (tools.empty())
+    for (std::size_t t = 0; t < tools_.size(); ++t) tools.push_back(static_cast<int>(t));
+  return tools;
+}
+
+// The gaps of n nodes of part p (positions x, 3 per node) into gap.
+void Simulation::tool_gaps(int p, std::size_t n, const double* x, double* gap) const {
+  const PartState& st = *parts_[p];
+  const double h2 = 0.5 * st.def->thickness;
+  std::vector<double> d(n), normal(3 * n);
+  std::fill(gap, gap + n, kToolGapLimit);
+  for (const int t : gap_tools(p)) {
+    tools_[t]->query(n, x, kToolGapLimit + h2, d.data(), normal.data());
+    for (std::size_t i = 0; i < n; ++i) gap[i] = std::min(gap[i], d[i] - h2);
+  }
+}
+
+void Simulation::update_tool_gap() {
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    st.tool_gap.resize(st.mesh.num_nodes());
+    tool_gaps(static_cast<int>(p), st.tool_gap.size(), st.x.data(), st.tool_gap.data());
+  }
+}
+
+void Simulation::update_face_conductance() {
+  if (!job_.thermal) return;  // no heat exchange: zero
+  for (auto& st : parts_) {
+    st->conductance_bottom = st->h_bottom;
+    st->conductance_top = st->h_top;
+  }
+  auto add = [&](int part, int node, int face, double g) {  // g in W/K
+    PartState& st = *parts_[part];
+    if (st.area[node] > 0) (face == sdk::kTop ? st.conductance_top : st.conductance_bottom)[node] += g / st.area[node];
+  };
+  for (const auto& l : contact_map_.links) {
+    add(l.part_a, l.node_a, l.face_a, l.conductance);
+    for (int j = 0; j < 3; ++j) add(l.part_b, l.nodes_b[j], l.face_b, l.conductance * l.w_b[j]);
+  }
+}
+
+void Simulation::assemble_faces() {
+  for (auto& st : parts_) {
+    std::fill(st->h_bottom.begin(), st->h_bottom.end(), 0.0);
+    std::fill(st->h_top.begin(), st->h_top.end(), 0.0);
+    std::fill(st->t_bottom.begin(), st->t_bottom.end(), 0.0);
+    std::fill(st->t_top.begin(), st->t_top.end(), 0.0);
+    std::fill(st->contact_status.begin(), st->contact_status.end(), 0.0);
+  }
+  // Per part, 2 per node (bottom, top): the heat exchange there whose face
+  // conditions are renewed at every thermal step (update_far_temperatures:
+  // it radiates or follows ambient rows; its index), -1 where none is or a
+  // tool contact covers it.
+  auto renewed_at_steps = [](const HeatExchangeDef& h) { return h.emissivity > 0 || !h.ambient_table.empty(); };
+  const bool renewed = std::any_of(job_.heat_exchanges.begin(), job_.heat_exchanges.end(), renewed_at_steps);
+  std::vector<std::vector<int>> renews(renewed ? parts_.size() : 0);
+  for (std::size_t p = 0; p < renews.size(); ++p) renews[p].assign(2 * parts_[p]->mesh.num_nodes(), -1);
+  for (std::size_t k = 0; k < job_.heat_exchanges.size(); ++k) {
+    const auto& h = job_.heat_exchanges[k];
+    const int renew = renewed_at_steps(h) ? static_cast<int>(k) : -1;
+    for (int p : h.parts) {
+      PartState& st = *parts_[p];
+      for (int i = 0; i < st.mesh.num_nodes(); ++i) {
+        if (!h.region.contains(st.x0[3 * i], st.x0[3 * i + 1])) continue;
+        if (h.top) {
+          st.h_top[i] = h.h;
+          st.t_top[i] = h.ambient;
+          if (renewed) renews[p][2 * i + 1] = renew;
+        }
+        if (h.bottom) {
+          st.h_bottom[i] = h.h;
+          st.t_bottom[i] = h.ambient;
+          if (renewed) renews[p][2 * i] = renew;
+        }
+      }
+    }
+  }
+  contact_map_.tool_contacts.clear();
+  contact_map_.links.clear();
+  std::vector<std::span<const double>> areas;
+  for (auto& st : parts_) areas.emplace_back(st->area);
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    if (auto s = contacts_[c]->thermal_contacts(part_views_, tool_views_, areas, contact_map_); !s)
+      throw RunError("contact handler of " + job_.contacts[c].pointer + ": " + s.message);
+  }
+  for (const auto& tc : contact_map_.tool_contacts) {
+    PartState& st = *parts_[tc.part];
+    const double T = tool_views_[tc.tool].temperature;
+    if (tc.face == sdk::kTop) {
+      st.h_top[tc.node] = tc.conductance;
+      st.t_top[tc.node] = T;
+    } else {
+      st.h_bottom[tc.node] = tc.conductance;
+      st.t_bottom[tc.node] = T;
+    }
+    if (renewed) renews[tc.part][2 * tc.node + (tc.face == sdk::kTop ? 1 : 0)] = -1;
+    st.contact_status[tc.node] = std::max(st.contact_status[tc.node], 1.0);
+  }
+  exchange_faces_.clear();
+  for (std::size_t p = 0; p < renews.size(); ++p)
+    for (std::size_t f = 0; f < renews[p].size(); ++f)
+      if (const int k = renews[p][f]; k >= 0)
+        exchange_faces_.push_back({static_cast<int>(p), static_cast<int>(f / 2), f % 2 ? sdk::kTop : sdk::kBottom, k});
+  for (const auto& l : contact_map_.links) {
+    parts_[l.part_a]->contact_status[l.node_a] = 2.0;
+    for (int j = 0; j < 3; ++j)
+      if (l.w_b[j] > 0) parts_[l.part_b]->contact_status[l.nodes_b[j]] = 2.0;
+  }
+}
+
+// Heat given by every tool to the plies over the thermal step just taken
+// (conductance times the jump at the end of the step, as the implicit
+// face condition uses it).
+void Simulation::accumulate_tool_heat(double dt) {
+  for (const auto& tc : contact_map_.tool_contacts) {
+    const PartState& st = *parts_[tc.part];
+    const std::size_t base = static_cast<std::size_t>(st.nz) * tc.node;
+    const double Tf = tc.face == sdk::kTop ? st.T[base + st.nz - 1] : st.T[base];
+    tool_heat_[tc.tool] += tc.conductance * st.area[tc.node] * (tool_views_[tc.tool].temperature - Tf) * dt;
+  }
+  // Ply/ply: G (T_b - T_a) into a, out of b, with the facing surface values.
+  if (link_heat_.size() != parts_.size()) link_heat_.assign(parts_.size(), 0.0);
+  auto face_value = [&](int part, int node, int face) {
+    const PartState& st = *parts_[part];
+    const std::size_t base = static_cast<std::size_t>(st.nz) * node;
+    return face == sdk::kTop ? st.T[base + st.nz - 1] : st.T[base];
+  };
+  for (const auto& l : contact_map_.links) {
+    double Tb = 0;
+    for (int j = 0; j < 3; ++j) Tb += l.w_b[j] * face_value(l.part_b, l.nodes_b[j], l.face_b);
+    const double q = l.conductance * (Tb - face_value(l.part_a, l.node_a, l.face_a)) * dt;
+    link_heat_[l.part_a] += q;
+    link_heat_[l.part_b] -= q;
+  }
+}
+
+void Simulation::keep_step_temperatures() {
+  for (auto& st : parts_) {
+    if (st->T_step.empty()) continue;
+    const long long n = static_cast<long long>(st->T.size());
+    const double* T = st->T.data();
+    double* T0 = st->T_step.data();
+#pragma omp parallel for schedule(static) if (n > 8192)
+    for (long long k = 0; k < n; ++k) T0[k] = T[k];
+  }
+}
+
+// After a splitter's step over dt: with a specific heat table, the splitter
+// advanced with c_min and each value gets the heat it was given, c_min
+// (T* - T_old) per kg, on the table's enthalpy curve; with crystallisation,
+// each value's Nakamura integral takes the step's K at the mean of its old
+// and new temperatures (the midpoint rule) times dt, and the value gets the
+// latent heat of its new crystallinity.
+void Simulation::finish_thermal_step(double dt) {
+  for (auto& stp : parts_) {
+    PartState& st = *stp;
+    if (st.T_step.empty()) continue;
+    const HeatCapacityTable& cp = st.cp;
+    const CrystallisationKinetics& kin = st.kin;
+    const bool table = !cp.empty(), crystallising = !kin.empty();
+    const double c_min = cp.c_min(), latent = kin.latent_heat(), per_c = st.c_latent > 0 ? 1.0 / st.c_latent : 0.0;
+    const long long n = static_cast<long long>(st.T.size());
+    double* T = st.T.data();
+    const double* T0 = st.T_step.data();
+    double* theta = st.theta.data();
+    double* X = st.X.data();
+#pragma omp parallel for schedule(static) if (n > 8192)
+    for (long long k = 0; k < n; ++k) {
+      double t = T[k];
+      if (table && t != T0[k]) t = cp.advance(T0[k], c_min * (t - T0[k]));
+      if (crystallising && X[k] < 1.0) {
+        const double r = kin.rate(0.5 * (T0[k] + t));
+        if (r > 0) {
+          theta[k] += r * dt;
+          const double x = kin.crystallinity(theta[k]);
+          const double e = latent * (x - X[k]);  // J/kg
+          X[k] = x;
+          if (e > 0) t = table ? cp.advance(t, e) : t + e * per_c;
+        }
+      }
+      T[k] = t;
+    }
+  }
+}
+
+double Simulation::stored_heat() const {
+  double e = 0;
+  for (std::size_t p = 0; p < parts_.size(); ++p) e += stored_heat(static_cast<int>(p));
+  return e;
+}
+
+double Simulation::stored_heat(int part) const {
+  const PartState& st = *parts_.at(part);
+  double e = 0;
+  if (!st.cp.empty()) {  // the capacities are those of c_min: mass x c_min
+    const double per_c = 1.0 / st.cp.c_min();
+    for (std::size_t k = 0; k < st.T.size(); ++k) e += st.cap[k] * per_c * st.cp.enthalpy(st.T[k]);
+  } else {
+    for (std::size_t k = 0; k < st.T.size(); ++k) e += st.cap[k] * st.T[k];
+  }
+  // The latent heat still held by the melt: mass x latent_heat x (1 - X),
+  // counted from the crystallinity 0 (the constant is irrelevant to changes).
+  if (!st.kin.empty()) {
+    const double per_c = 1.0 / (st.cp.empty() ? st.c_latent : st.cp.c_min());
+    for (std::size_t k = 0; k < st.X.size(); ++k) e -= st.cap[k] * per_c * st.kin.latent_heat() * st.X[k];
+  }
+  return e;
+}
+
+void Simulation::set_initial_temperature(int part, std::span<const double> per_node) {
+  PartState& st = *parts_.at(part);
+  if (static_cast<int>(per_node.size()) != st.mesh.num_nodes())
+    throw std::invalid_argument("set_initial_temperature: one value per node expected");
+  for (int i = 0; i < st.mesh.num_nodes(); ++i)
+    for (int k = 0; k < st.nz; ++k) st.T[static_cast<std::size_t>(st.nz) * i + k] = per_node[i];
+}
+
+std::span<const double> Simulation::initial_coordinates(int part) const { return parts_.at(part)->x0; }
+std::span<const double> Simulation::temperature(int part) const { return parts_.at(part)->T; }
+std::span<const double> Simulation::crystallinity(int part) const { return parts_.at(part)->X; }
+
+std::string describe_crystallisation(const MaterialDef& m) {
+  const auto& c = m.crystallisation;
+  const CrystallisationKinetics kin(c.latent_heat, c.avrami_exponent, c.rate_rows, c.k_max, c.t_max, c.half_width);
+  std::ostringstream os;
+  os << "crystallisation (Nakamura, n = " << fmt_g(c.avrami_exponent) << ", latent heat " << fmt_g(c.latent_heat)
+     << " J/kg), rate ";
+  if (!c.rate_rows.empty()) {
+    double k_max = 0;
+    for (const auto& r : c.rate_rows) k_max = std::max(k_max, r[1]);
+    os << "from " << c.rate_rows.size() << " rows between " << fmt_g(c.rate_rows.front()[0]) << " and "
+       << fmt_g(c.rate_rows.back()[0]) << " degC, up to " << fmt_g(k_max) << " 1/s";
+  } else {
+    os << fmt_g(c.k_max) << " 1/s at " << fmt_g(c.t_max) << " degC, half width " << fmt_g(c.half_width) << " K";
+  }
+  // The half-crystallisation temperature at the usual DSC cooling rate.
+  const double t_half = kin.temperature_at(0.5, 10.0 / 60.0, kin.upper_temperature());
+  if (std::isfinite(t_half)) os << "; cooled at 10 K/min, half crystallised at " << fmt_g(t_half, 4) << " degC";
+  return os.str();
+}
+int Simulation::values_per_node(int part) const { return parts_.at(part)->nz; }
+
+void Simulation::check_field(double time, long long step) {
+  const auto& thresholds = job_.output.temperature_threshold;  // per part, empty: none
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState* st = parts_[p].get();
+    // Branch-free pass (vectorised): range, and whether every value is
+    // finite; the slow search for the culprit runs only then.
+    const double* T = st->T.data();
+    const std::size_t n = st->T.size();
+    // v - v is 0 for a finite value, NaN otherwise (in any summation order).
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo, z = 0;
+#pragma omp simd reduction(min : lo) reduction(max : hi) reduction(+ : z)
+    for (std::size_t k = 0; k < n; ++k) {
+      const double v = T[k];
+      lo = v < lo ? v : lo;
+      hi = v > hi ? v : hi;
+      z += v - v;
+    }
+    const bool bad = !(z == 0.0);
+    seen_min_ = std::min(seen_min_, lo);
+    seen_max_ = std::max(seen_max_, hi);
+    if (!thresholds.empty() && below_from_[p] < 0 && lo < thresholds[p]) below_from_[p] = time;
+    if (!thresholds.empty() && all_below_from_[p] < 0 && hi < thresholds[p]) all_below_from_[p] = time;
+    if (!st->below_from.empty() && lo < thresholds[p] && !(all_below_from_[p] >= 0 && all_below_from_[p] < time)) {
+      // Node by node, until every node has set through (then nothing changes).
+      const int nz = st->nz;
+      const double th = thresholds[p];
+      double* below = st->below_from.data();
+      double* all_below = st->all_below_from.data();
+      const long long nn = st->mesh.num_nodes();
+#pragma omp parallel for schedule(static) if (n > 65536)
+      for (long long i = 0; i < nn; ++i) {
+        if (!std::isnan(all_below[i])) continue;
+        const double* Ti = T + static_cast<std::size_t>(nz) * i;
+        double mn = Ti[0], mx = Ti[0];
+        for (int k = 1; k < nz; ++k) {
+          mn = Ti[k] < mn ? Ti[k] : mn;
+          mx = Ti[k] > mx ? Ti[k] : mx;
+        }
+        if (std::isnan(below[i]) && mn < th) below[i] = time;
+        if (mx < th) all_below[i] = time;
+      }
+    }
+    if (!bad) continue;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!std::isfinite(st->T[k])) {
+        const int i = static_cast<int>(k / st->nz);
+        throw RunError("non-finite temperature in part '" + st->def->name + "' at node " + std::to_string(i) + " (" +
+                       fmt_g(st->x0[3 * i], 4) + ", " + fmt_g(st->x0[3 * i + 1], 4) + ", " +
+                       fmt_g(st->x0[3 * i + 2], 4) + "), layer value " + std::to_string(k % st->nz) + ", at t = " +
+                       fmt_g(time) + " s (thermal step " + std::to_string(step) + ")");
+      }
+    }
+  }
+}
+
+}  // namespace ts
