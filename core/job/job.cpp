@@ -70,7 +70,7 @@ MaterialDef::Crystallisation parse_crystallisation(const json& v, const std::str
   c.latent_heat = r.real("latent_heat", std::nullopt, 0.0);
   c.avrami_exponent = r.real("avrami_exponent", std::nullopt, 0.0, true, 10.0);
   c.initial = r.real("initial", 0.0, 0.0);
-  if (!(c.initial < 1.0)) throw JobError(r.at("initial"), "must be below 1 (a relative crystallinity)");
+  if (!(c.initial <= 1.0)) throw JobError(r.at("initial"), "must be at most 1 (a relative crystallinity)");
   const json& rate = r.raw("rate");
   const std::string rp = r.at("rate");
   if (rate.is_array()) {
@@ -96,6 +96,29 @@ MaterialDef::Crystallisation parse_crystallisation(const json& v, const std::str
   } else {
     throw JobError(rp, "expected rows [T (degC), K (1/s)] or an object {k_max, t_max, half_width}, found " +
                            json_type_name(rate));
+  }
+  if (const json* melting = r.optional_raw("melting")) {
+    const std::string mp = r.at("melting");
+    if (!melting->is_array() || melting->size() < 2)
+      throw JobError(mp, "expected at least two rows [T (degC), share of the crystals still solid], from 1 to 0");
+    for (std::size_t k = 0; k < melting->size(); ++k) {
+      const std::string kp = pointer_append(mp, k);
+      const auto row = as_reals((*melting)[k], kp, 2);
+      if (!(row[0] >= -273.15)) throw JobError(pointer_append(kp, 0), "must be >= -273.15 degC");
+      if (k > 0 && !(row[0] > c.melting_rows.back()[0]))
+        throw JobError(pointer_append(kp, 0), "temperatures must increase from row to row");
+      if (!(row[1] >= 0 && row[1] <= 1))
+        throw JobError(pointer_append(kp, 1), "must be between 0 and 1 (a share of the crystals), found " +
+                                                  fmt_number(row[1]));
+      if (k > 0 && !(row[1] <= c.melting_rows.back()[1]))
+        throw JobError(pointer_append(kp, 1), "the share still solid must not rise with the temperature");
+      c.melting_rows.push_back({row[0], row[1]});
+    }
+    if (c.melting_rows.front()[1] != 1.0)
+      throw JobError(pointer_append(pointer_append(mp, 0), 1), "must be 1: every crystal is solid below the melting");
+    if (c.melting_rows.back()[1] != 0.0)
+      throw JobError(pointer_append(pointer_append(mp, melting->size() - 1), 1),
+                     "must be 0: every crystal has melted above the melting");
   }
   r.finish();
   return c;

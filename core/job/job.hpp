@@ -36,7 +36,13 @@ struct MaterialDef {
     // K = k_max exp(-4 ln 2 (T - t_max)^2 / half_width^2).
     std::vector<std::array<double, 2>> rate_rows;
     double k_max = 0, t_max = 0, half_width = 0;
-    double initial = 0;  // relative crystallinity at the start, in [0, 1)
+    double initial = 0;  // relative crystallinity at the start, in [0, 1] (1: as crystalline as it gets)
+    // Melting on heating (empty: none): rows [T (degC), share of the
+    // crystals still solid], temperatures increasing, the shares falling
+    // from 1 at the first row to 0 at the last (linear between the rows,
+    // held beyond them): the cumulative melting endotherm of a DSC heating
+    // run. A value holds at most the share at its temperature.
+    std::vector<std::array<double, 2>> melting_rows;
   } crystallisation;
 };
 

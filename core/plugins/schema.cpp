@@ -129,7 +129,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
           {"properties",
            {{"latent_heat", {{"type", "number"}, {"minimum", 0}, {"description", "[J/kg] of ply, from X = 0 to 1"}}},
             {"avrami_exponent", {{"type", "number"}, {"exclusiveMinimum", 0}, {"maximum", 10}}},
-            {"initial", {{"type", "number"}, {"minimum", 0}, {"exclusiveMaximum", 1}, {"default", 0}}},
+            {"initial", {{"type", "number"}, {"minimum", 0}, {"maximum", 1}, {"default", 0}}},
             {"rate",
              {{"oneOf",
                json::array(
@@ -145,7 +145,18 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                            {"t_max", {{"type", "number"}, {"description", "[degC]"}}},
                            {"half_width", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[K]"}}}}}}})},
               {"description", "[1/s], rows [T (degC), K] (linear between rows, held beyond them), or Ziabicki's "
-                              "Gaussian {k_max, t_max, half_width}"}}}}}}},
+                              "Gaussian {k_max, t_max, half_width}"}}},
+            {"melting",
+             {{"type", "array"},
+              {"minItems", 2},
+              {"items",
+               {{"type", "array"},
+                {"prefixItems", json::array({json{{"type", "number"}},
+                                             json{{"type", "number"}, {"minimum", 0}, {"maximum", 1}}})},
+                {"minItems", 2},
+                {"maxItems", 2}}},
+              {"description", "rows [T (degC), share of the crystals still solid], from 1 at the first row to 0 at "
+                              "the last (linear between rows): the crystals melt on heating, taking the latent heat"}}}}}}},
         {"membrane", {{"anyOf", {law, {{"type", "array"}, {"items", law}}}}}},
         {"bending", law},
         {"description", {{"type", "string"}}},

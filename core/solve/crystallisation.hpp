@@ -12,12 +12,21 @@
 // Each value of a ply's thickness carries theta. After a thermal step the
 // kernel adds K((T_old + T_new) / 2) dt to it (the midpoint rule) and gives
 // the value the heat latent_heat (X_new - X_old) (see Simulation::
-// finish_thermal_step). X never decreases: the model has no melting (on
-// heating, a specific heat table carries the heat of melting).
+// finish_thermal_step).
+//
+// Melting (optional): rows [T, s] give the share s(T) of the crystals still
+// solid at T (1 at the first row, 0 at the last; linear between, held
+// beyond), the cumulative endotherm of a DSC heating run. The melting is
+// taken as instantaneous: a value never holds more than s(T), and one that
+// does melts down to it, taking the heat latent_heat (X_old - X_new), at
+// the temperature that heat leaves it (X_new = s(T_new)); theta follows X,
+// so that a value cooled again crystallises on from what is left. Without
+// rows X never decreases.
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 namespace ts {
@@ -27,13 +36,58 @@ class CrystallisationKinetics {
   CrystallisationKinetics() = default;
   // Rows with increasing temperatures and rates >= 0, or (rows empty) the
   // Gaussian's k_max > 0 and half_width > 0 (checked by the job reader).
+  // Melting rows: temperatures increasing, shares non-increasing from 1 to
+  // 0 (checked by the job reader), or empty.
   CrystallisationKinetics(double latent_heat, double exponent, std::vector<std::array<double, 2>> rows,
-                          double k_max, double t_max, double half_width)
+                          double k_max, double t_max, double half_width,
+                          std::vector<std::array<double, 2>> melting = {})
       : on_(true), latent_(latent_heat), n_(exponent), rows_(std::move(rows)), k_max_(k_max), t_max_(t_max),
         a_(half_width > 0 ? 4.0 * std::log(2.0) / (half_width * half_width) : 0.0),
         whole_(exponent == 1.0 || exponent == 2.0 || exponent == 3.0 || exponent == 4.0 ? static_cast<int>(exponent)
-                                                                                         : 0) {}
+                                                                                         : 0),
+        melting_(std::move(melting)),
+        melt_onset_(melting_.empty() ? std::numeric_limits<double>::infinity() : melting_.front()[0]) {}
   bool empty() const { return !on_; }
+  bool melts() const { return !melting_.empty(); }
+  // Below this temperature (degC) every crystal is solid (infinity without melting).
+  double melting_onset() const { return melt_onset_; }
+  double melting_end() const { return melting_.empty() ? melt_onset_ : melting_.back()[0]; }
+  // s(T): the share of the crystals still solid at T (1 without melting).
+  double solid_share(double T) const {
+    if (T <= melt_onset_) return 1.0;
+    if (T >= melting_.back()[0]) return 0.0;
+    std::size_t k = 1;
+    while (melting_[k][0] < T) ++k;
+    const auto &a = melting_[k - 1], &b = melting_[k];
+    return a[1] + (T - a[0]) / (b[0] - a[0]) * (b[1] - a[1]);
+  }
+  // The temperature (degC) at which the share still solid falls to s in
+  // (0, 1) (the first, where s(T) holds it over a range).
+  double melting_temperature(double share) const {
+    for (std::size_t k = 1; k < melting_.size(); ++k) {
+      const auto &a = melting_[k - 1], &b = melting_[k];
+      if (b[1] <= share) return a[1] == b[1] ? a[0] : a[0] + (a[1] - share) / (a[1] - b[1]) * (b[0] - a[0]);
+    }
+    return melting_end();
+  }
+  // A value at T holding X > s(T) melts: the crystallinity x = s(T') it
+  // melts down to and its temperature T' = after(x), after(x) giving the
+  // temperature the heat latent_heat (X - x) leaves it at (falling as x
+  // does). x by bisection between s(T) (too much melted: s(after) >= x)
+  // and X, to 1e-15; T' is after(x) of that x, so that the heat is that of
+  // the crystals melted, to round-off.
+  template <class After>
+  std::pair<double, double> melt(double X, double T, After after) const {
+    double lo = solid_share(T), hi = X;
+    for (int it = 0; it < 64 && hi - lo > 1e-15; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      if (solid_share(after(mid)) >= mid)
+        lo = mid;
+      else
+        hi = mid;
+    }
+    return {lo, after(lo)};
+  }
   double latent_heat() const { return latent_; }
   double exponent() const { return n_; }
   // K(T), 1/s.
@@ -71,7 +125,8 @@ class CrystallisationKinetics {
   // widths above the Gaussian's peak (K there is 2^-64 of its peak).
   double upper_temperature() const { return rows_.empty() ? t_max_ + 4.0 * half_width() : rows_.back()[0]; }
   double half_width() const { return a_ > 0 ? std::sqrt(4.0 * std::log(2.0) / a_) : 0.0; }
-  // X from theta, and theta from X (X < 1).
+  // X from theta, and theta from X (infinite for X = 1: a value that
+  // crystallises no further until it melts).
   double crystallinity(double theta) const {
     if (!(theta > 0)) return 0.0;
     double p;  // theta^n, by products for the usual whole exponents
@@ -93,6 +148,8 @@ class CrystallisationKinetics {
   std::vector<std::array<double, 2>> rows_;
   double k_max_ = 0, t_max_ = 0, a_ = 0;
   int whole_ = 0;  // n when it is 1, 2, 3 or 4, else 0
+  std::vector<std::array<double, 2>> melting_;  // [T, share still solid]
+  double melt_onset_ = std::numeric_limits<double>::infinity();
 };
 
 }  // namespace ts

@@ -55,7 +55,8 @@ void Simulation::build_thermal() {
       st.T_step.assign(n, 0.0);
     }
     if (const auto& c = mat.crystallisation; c.present) {
-      st.kin = CrystallisationKinetics(c.latent_heat, c.avrami_exponent, c.rate_rows, c.k_max, c.t_max, c.half_width);
+      st.kin = CrystallisationKinetics(c.latent_heat, c.avrami_exponent, c.rate_rows, c.k_max, c.t_max, c.half_width,
+                                       c.melting_rows);
       st.c_latent = mat.specific_heat;
       st.X.assign(n, c.initial);
       st.theta.assign(n, st.kin.integral(c.initial));
@@ -410,6 +411,7 @@ void Simulation::finish_thermal_step(double dt) {
     const CrystallisationKinetics& kin = st.kin;
     const bool table = !cp.empty(), crystallising = !kin.empty();
     const double c_min = cp.c_min(), latent = kin.latent_heat(), per_c = st.c_latent > 0 ? 1.0 / st.c_latent : 0.0;
+    const double melt_onset = kin.melting_onset();  // infinity without melting
     const long long n = static_cast<long long>(st.T.size());
     double* T = st.T.data();
     const double* T0 = st.T_step.data();
@@ -428,6 +430,18 @@ void Simulation::finish_thermal_step(double dt) {
           X[k] = x;
           if (e > 0) t = table ? cp.advance(t, e) : t + e * per_c;
         }
+      }
+      // Melting: more crystals than survive at t melt down to s(T'), at the
+      // temperature T' their heat of melting leaves the value at.
+      if (crystallising && t > melt_onset && X[k] > kin.solid_share(t)) {
+        const double x0 = X[k], t0 = t;
+        const auto [x, t1] = kin.melt(x0, t0, [&](double xm) {
+          const double e = latent * (xm - x0);  // J/kg, <= 0
+          return table ? cp.advance(t0, e) : t0 + e * per_c;
+        });
+        X[k] = x;
+        theta[k] = kin.integral(x);
+        t = t1;
       }
       T[k] = t;
     }
@@ -472,7 +486,8 @@ std::span<const double> Simulation::crystallinity(int part) const { return parts
 
 std::string describe_crystallisation(const MaterialDef& m) {
   const auto& c = m.crystallisation;
-  const CrystallisationKinetics kin(c.latent_heat, c.avrami_exponent, c.rate_rows, c.k_max, c.t_max, c.half_width);
+  const CrystallisationKinetics kin(c.latent_heat, c.avrami_exponent, c.rate_rows, c.k_max, c.t_max, c.half_width,
+                                    c.melting_rows);
   std::ostringstream os;
   os << "crystallisation (Nakamura, n = " << fmt_g(c.avrami_exponent) << ", latent heat " << fmt_g(c.latent_heat)
      << " J/kg), rate ";
@@ -487,6 +502,11 @@ std::string describe_crystallisation(const MaterialDef& m) {
   // The half-crystallisation temperature at the usual DSC cooling rate.
   const double t_half = kin.temperature_at(0.5, 10.0 / 60.0, kin.upper_temperature());
   if (std::isfinite(t_half)) os << "; cooled at 10 K/min, half crystallised at " << fmt_g(t_half, 4) << " degC";
+  if (kin.melts())
+    os << "; melting from " << fmt_g(kin.melting_onset()) << " to " << fmt_g(kin.melting_end())
+       << " degC, half melted at " << fmt_g(kin.melting_temperature(0.5), 4) << " degC";
+  else
+    os << "; no melting (the crystallinity never decreases)";
   return os.str();
 }
 int Simulation::values_per_node(int part) const { return parts_.at(part)->nz; }

@@ -384,9 +384,15 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"crystallisation_rate_zero", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate: every rate is zero"},
       {"crystallisation_gaussian_width", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{"k_max", 50.0}, {"t_max", 150.0}, {"half_width", 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/half_width: must be > 0"},
       {"crystallisation_exponent", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 0}, {"rate", {{200.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/avrami_exponent: must be > 0"},
-      {"crystallisation_initial", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"initial", 1.0}, {"rate", {{200.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/initial: must be below 1"},
+      {"crystallisation_initial", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"initial", 1.5}, {"rate", {{200.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/initial: must be at most 1"},
       {"crystallisation_latent_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", -1.0}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/latent_heat: must be >= 0"},
       {"crystallisation_unknown_key", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rates", {{200.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate: "},
+      {"melting_one_row", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}}}, {"melting", {{250.0, 1.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/melting: expected at least two rows [T (degC), share of the crystals still solid], from 1 to 0"},
+      {"melting_temperatures", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}}}, {"melting", {{260.0, 1.0}, {250.0, 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/melting/1/0: temperatures must increase from row to row"},
+      {"melting_share_above_one", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}}}, {"melting", {{250.0, 1.2}, {270.0, 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/melting/0/1: must be between 0 and 1 (a share of the crystals), found 1.2"},
+      {"melting_share_rises", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}}}, {"melting", {{250.0, 1.0}, {260.0, 0.2}, {265.0, 0.5}, {270.0, 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/melting/2/1: the share still solid must not rise with the temperature"},
+      {"melting_first_share", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}}}, {"melting", {{250.0, 0.9}, {270.0, 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/melting/0/1: must be 1: every crystal is solid below the melting"},
+      {"melting_last_share", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}}}, {"melting", {{250.0, 1.0}, {270.0, 0.1}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/melting/1/1: must be 0: every crystal has melted above the melting"},
       {"field_crystallinity_without_kinetics", [](json& j) { j["output"]["fields"] = {"temperature", "crystallinity"}; }, "error: /output/fields/1: the field 'crystallinity' needs the thermal solver and a ply whose material has 'crystallisation'"},
       {"probe_crystallinity_without_kinetics", [](json& j) { j["output"]["probes"][0]["quantities"] = {"temperature_mean", "crystallinity_profile"}; }, "error: /output/probes/0/quantities/1: 'crystallinity_profile' needs the thermal solver and a part whose material has 'crystallisation'"},
       {"field_below_threshold_without_threshold", [](json& j) { j["output"]["fields"] = {"temperature", "below_threshold_from"}; }, "error: /output/fields/1: the field 'below_threshold_from' needs output.temperature_threshold and the thermal solver"},
@@ -1495,7 +1501,7 @@ TEST(Output, JobAsRunRunsTheSameJobFromAnywhere) {
 // Crystallisation kinetics from the command line: `validate` and the log
 // name them with the temperature of half crystallisation at 10 K/min
 // (232.1 degC for these parameters, by an independent quadrature in
-// scipy); the run writes the field (every value through the thickness,
+// scipy) and the melting range; the run writes the field (every value through the thickness,
 // units 1, and the node means, the thickness-weighted mean of the values),
 // the probe's profiles, the plies' columns (units 1; the last row is the
 // summary's) and the summary's range; export carries the mean. An
@@ -1515,9 +1521,20 @@ TEST(Output, CrystallinityInFramesSeriesSummaryAndExport) {
   const auto v = thermostamp("validate " + q(dir / "job.json"));
   ASSERT_EQ(v.exit_code, 0) << v.err;
   EXPECT_NE(v.out.find("material 'pa66_cf_ud': crystallisation (Nakamura, n = 3, latent heat 30000 J/kg), rate 50 "
-                       "1/s at 150 degC, half width 50 K; cooled at 10 K/min, half crystallised at 232.1 degC"),
+                       "1/s at 150 degC, half width 50 K; cooled at 10 K/min, half crystallised at 232.1 degC; no "
+                       "melting (the crystallinity never decreases)"),
             std::string::npos)
       << v.out;
+  {  // with melting rows, their range and where half the crystals have melted
+    json jm = j;
+    jm["materials"]["pa66_cf_ud"]["crystallisation"]["melting"] = {{245.0, 1.0}, {255.0, 0.8}, {262.0, 0.3}, {268.0, 0.0}};
+    std::ofstream(dir / "melting.json") << jm.dump(2);
+    const auto vm = thermostamp("validate " + q(dir / "melting.json"));
+    ASSERT_EQ(vm.exit_code, 0) << vm.err;
+    EXPECT_NE(vm.out.find("half crystallised at 232.1 degC; melting from 245 to 268 degC, half melted at 259.2 degC"),
+              std::string::npos)
+        << vm.out;
+  }
   const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "run") + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::stringstream log;
@@ -2006,9 +2023,10 @@ TEST(Cli, MechanicsBadMaterialParameter) {
 namespace ts::test {
 namespace {
 
-// `thermostamp schema` describes every shipped job and a specific heat
-// given as rows, and rejects a typo, a row of three numbers and an unknown
-// probe quantity (validated with Debian's python3-jsonschema).
+// `thermostamp schema` describes every shipped job, a specific heat given
+// as rows and crystallisation kinetics with melting rows, and rejects a
+// typo, a row of three numbers, an incomplete rate, a melting share above 1
+// and an unknown probe quantity (validated with Debian's python3-jsonschema).
 TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   const auto dir = temp_dir("schema");
   const auto r = thermostamp("schema");
@@ -2034,7 +2052,11 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   std::ofstream(dir / "kinetics.json") << with_kinetics.dump();
   with_kinetics["materials"]["pa66_cf_ud"]["crystallisation"]["rate"] = {{150.0, 2.0}, {250.0, 0.0}};
   with_kinetics["output"]["fields"] = {"temperature", "crystallinity"};
+  with_kinetics["materials"]["pa66_cf_ud"]["crystallisation"]["melting"] = {{245.0, 1.0}, {268.0, 0.0}};
   std::ofstream(dir / "kinetics_rows.json") << with_kinetics.dump();
+  json bad_melting = with_kinetics;  // a share above 1
+  bad_melting["materials"]["pa66_cf_ud"]["crystallisation"]["melting"] = {{245.0, 1.5}, {268.0, 0.0}};
+  std::ofstream(dir / "bad_melting.json") << bad_melting.dump();
   with_kinetics["materials"]["pa66_cf_ud"]["crystallisation"]["rate"] = {{"k_max", 50.0}, {"t_max", 150.0}};
   std::ofstream(dir / "bad_kinetics.json") << with_kinetics.dump();
   json bad_table = with_table;
@@ -2055,6 +2077,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_kinetics.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "bad_melting.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "typo.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "probe.json") + " >/dev/null").c_str()), 0);
 }

@@ -1,6 +1,6 @@
 // The Nakamura kinetics' rate K(T), the crystallinity of the integral and
-// its inverse, and the half-crystallisation temperature at a constant
-// cooling rate, against closed forms.
+// its inverse, the half-crystallisation temperature at a constant cooling
+// rate, and the melting, against closed forms.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -60,6 +60,51 @@ TEST(CrystallisationKinetics, TemperatureAtAConstantCoolingRate) {
   const CrystallisationKinetics wide(0, 3.0, {}, 0.02, 150.0, 1e30);
   EXPECT_NEAR(wide.temperature_at(0.5, beta, wide.upper_temperature()),
               2000.0 - beta * std::cbrt(std::log(2.0)) / 0.02, 1e-6);
+}
+
+// The share still solid: 1 below the first row, 0 above the last, linear
+// between; the temperature at which a share is left; none without rows.
+TEST(CrystallisationKinetics, SolidShareOfTheMeltingRows) {
+  const CrystallisationKinetics k(3e4, 3.0, {{0.0, 1.0}}, 0, 0, 0, {{245.0, 1.0}, {255.0, 0.8}, {262.0, 0.3}, {268.0, 0.0}});
+  EXPECT_TRUE(k.melts());
+  EXPECT_EQ(k.melting_onset(), 245.0);
+  EXPECT_EQ(k.melting_end(), 268.0);
+  EXPECT_EQ(k.solid_share(20.0), 1.0);
+  EXPECT_EQ(k.solid_share(245.0), 1.0);
+  EXPECT_DOUBLE_EQ(k.solid_share(250.0), 0.9);
+  EXPECT_DOUBLE_EQ(k.solid_share(258.5), 0.55);
+  EXPECT_DOUBLE_EQ(k.solid_share(265.0), 0.15);
+  EXPECT_EQ(k.solid_share(268.0), 0.0);
+  EXPECT_EQ(k.solid_share(400.0), 0.0);
+  EXPECT_DOUBLE_EQ(k.melting_temperature(0.5), 259.2);
+  EXPECT_DOUBLE_EQ(k.melting_temperature(0.9), 250.0);
+  EXPECT_DOUBLE_EQ(k.melting_temperature(0.15), 265.0);
+  const CrystallisationKinetics none(3e4, 3.0, {{0.0, 1.0}}, 0, 0, 0);
+  EXPECT_FALSE(none.melts());
+  EXPECT_EQ(none.solid_share(1e6), 1.0);
+  EXPECT_TRUE(std::isinf(none.melting_onset()));
+}
+
+// melt() with a constant specific heat c: T' = T - L (X - x) / c and x =
+// s(T'), in closed form on the segment of s where the root lies (here s =
+// 0.8 - (T - 255) / 14 between 255 and 262 degC).
+TEST(CrystallisationKinetics, MeltingAgainstItsClosedForm) {
+  const double L = 3e4, c = 1775.0, a = L / c;
+  const CrystallisationKinetics k(L, 3.0, {{0.0, 1.0}}, 0, 0, 0, {{245.0, 1.0}, {255.0, 0.8}, {262.0, 0.3}, {268.0, 0.0}});
+  const double X = 0.9, T = 264.0;
+  const auto [x, t] = k.melt(X, T, [&](double xm) { return T - a * (X - xm); });
+  // T' = T - a X + a (0.8 + 255 / 14) - a T' / 14
+  const double t_exact = (T - a * X + a * (0.8 + 255.0 / 14.0)) / (1.0 + a / 14.0);
+  ASSERT_GT(t_exact, 255.0);
+  ASSERT_LT(t_exact, 262.0);
+  EXPECT_NEAR(t, t_exact, 1e-12);
+  EXPECT_NEAR(x, 0.8 - (t_exact - 255.0) / 14.0, 1e-14);
+  EXPECT_EQ(t, T - a * (X - x));  // the temperature is that of the crystals melted
+  // Without latent heat the value melts at its temperature.
+  const CrystallisationKinetics cold(0.0, 3.0, {{0.0, 1.0}}, 0, 0, 0, {{250.0, 1.0}, {270.0, 0.0}});
+  const auto [x0, t0] = cold.melt(0.9, 265.0, [](double) { return 265.0; });
+  EXPECT_NEAR(x0, 0.25, 1e-15);
+  EXPECT_EQ(t0, 265.0);
 }
 
 }  // namespace

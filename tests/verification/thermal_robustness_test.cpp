@@ -71,8 +71,21 @@ TEST(Conservation, StoredHeatEqualsFaceHeat) {
     ASSERT_TRUE(rk.result.ok) << rk.result.error;
     EXPECT_LT(rk.result.heat_balance_error, 1e-9) << splitter << " " << scheme << " with crystallisation";
     EXPECT_GT(rk.result.probes.back().values.front(), rt.result.probes.back().values.front() + 0.5);
-    std::printf("  with a table: balance error %.2e; with crystallisation too: %.2e\n", rt.result.heat_balance_error,
-                rk.result.heat_balance_error);
+    // With melting too: plies at 300 degC holding half their crystals melt
+    // at the first step (every crystal has melted above 285 degC), and
+    // crystallise again where they cool.
+    json jm = jk;
+    jm["materials"]["ply"]["crystallisation"]["initial"] = 0.5;
+    jm["materials"]["ply"]["crystallisation"]["melting"] = {{265.0, 1.0}, {285.0, 0.0}};
+    jm["output"]["probes"][0]["quantities"] = {"temperature_profile", "crystallinity_profile"};
+    const JobRun rm = run_json(jm);
+    ASSERT_TRUE(rm.result.ok) << rm.result.error;
+    EXPECT_LT(rm.result.heat_balance_error, 1e-9) << splitter << " " << scheme << " with melting";
+    EXPECT_EQ(rm.sample(0, "crystallinity_profile", 0.0)->values.front(), 0.5);
+    EXPECT_LT(rm.sample(0, "crystallinity_profile", 0.25)->values.back(), 0.2);  // melted
+    EXPECT_GT(rm.sample(0, "crystallinity_profile", 1.0)->values.back(), 0.0);   // crystallising again
+    std::printf("  with a table: balance error %.2e; with crystallisation too: %.2e; with melting: %.2e\n",
+                rt.result.heat_balance_error, rk.result.heat_balance_error, rm.result.heat_balance_error);
   }
 }
 
