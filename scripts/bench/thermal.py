@@ -2,12 +2,16 @@
 """Thermal benchmarks: cost of the adi splitter per node-layer-step against
 mesh size and threads, and adi against layered3d on the contact patch.
 
-Usage: scripts/bench/thermal.py [--quick] [--specific-heat | --crystallisation]   (after a Release build in build/)
+Usage: scripts/bench/thermal.py [--quick] [--specific-heat | --crystallisation | --melting]
+(after a Release build in build/)
 --specific-heat runs only the comparison of a constant specific heat with
 a table whose peak the plate cools through; --crystallisation only the
 comparison of a plate without crystallisation kinetics with plates whose
 every value crystallises at every step (the rate from rows, and from
-the Gaussian).
+the Gaussian); --melting only the comparison of a plate heated without
+kinetics, with kinetics whose rate is zero there, and with kinetics whose
+every value melts at every step (melting rows from 250 to 350 degC, a
+crystalline plate heated from 250 degC).
 Prints Markdown tables (copied into docs/benchmarks.md).
 """
 import json
@@ -34,7 +38,18 @@ KINETICS = {
 }
 
 
-def plate_job(divisions, layers, splitter, steps, dt, linked=False, specific_heat=1775.0, crystallisation=None):
+# Kinetics whose rate is zero above 160 degC, without and with melting rows
+# over the whole range the heated plate crosses (every value melts at
+# every step), starting fully crystalline.
+MELTING = {
+    "zero_rate": {"latent_heat": 30000.0, "avrami_exponent": 3.0, "rate": [[150.0, 1.0], [160.0, 0.0]], "initial": 1.0},
+    "melting": {"latent_heat": 30000.0, "avrami_exponent": 3.0, "rate": [[150.0, 1.0], [160.0, 0.0]], "initial": 1.0,
+                "melting": [[250.0, 1.0], [280.0, 0.7], [320.0, 0.2], [350.0, 0.0]]},
+}
+
+
+def plate_job(divisions, layers, splitter, steps, dt, linked=False, specific_heat=1775.0, crystallisation=None,
+              heated=False):
     size = divisions * 0.001  # 1 mm elements
     part = {
         "name": "ply", "thickness": 0.0005, "material": "m", "fibre_direction": [1, 1, 0],
@@ -42,12 +57,17 @@ def plate_job(divisions, layers, splitter, steps, dt, linked=False, specific_hea
                  "divisions": [divisions, divisions]},
         "initial_temperature": 300.0, "thickness_layers": layers,
     }
+    if heated:  # from 250 degC, heated on both faces from 400 degC
+        part["initial_temperature"] = 250.0
     parts = [part]
     inter = [
         {"type": "heat_exchange", "part": "ply", "face": "top", "h": 1000.0, "ambient": 260.0,
          "region": {"circle": {"centre": [0, 0], "radius": size / 2}}},
         {"type": "heat_exchange", "part": "ply", "face": "bottom", "h": 500.0, "ambient": 250.0},
     ]
+    if heated:
+        inter = [{"type": "heat_exchange", "part": "ply", "face": face, "h": 1000.0, "ambient": 400.0}
+                 for face in ("top", "bottom")]
     if linked:
         upper = dict(part, name="upper", mesh=dict(part["mesh"], origin=[0, 0, 0.00075]))
         parts.append(upper)
@@ -109,6 +129,23 @@ def main():
                 r = run(plate_job(n, layers, "adi", steps, dt, crystallisation=KINETICS["rows"]), th)["wall_time_s"]
                 g = run(plate_job(n, layers, "adi", steps, dt, crystallisation=KINETICS["gaussian"]), th)["wall_time_s"]
                 print("| %d | %d | %.2f | %.2f | %.2f | %.2f | %.2f |" % (nodes, th, a / per, r / per, r / a, g / per, g / a))
+        return
+    if "--melting" in sys.argv:
+        print("### adi (implicit), a crystalline plate heated from 250 degC: without kinetics, with kinetics whose "
+              "rate is zero there, and with melting rows (every value melting at every step), %d layers, %d steps\n"
+              % (layers, steps))
+        print("| nodes | threads | without: ns per node-layer-step | zero rate: ns | ratio | melting: ns | ratio |")
+        print("|---|---|---|---|---|---|---|")
+        for n in sizes:
+            for th in (1, 2):
+                nodes = (n + 1) ** 2
+                per = nodes * (layers + 1) * steps / 1e9
+                a = run(plate_job(n, layers, "adi", steps, dt, heated=True), th)["wall_time_s"]
+                z = run(plate_job(n, layers, "adi", steps, dt, crystallisation=MELTING["zero_rate"], heated=True),
+                        th)["wall_time_s"]
+                m = run(plate_job(n, layers, "adi", steps, dt, crystallisation=MELTING["melting"], heated=True),
+                        th)["wall_time_s"]
+                print("| %d | %d | %.2f | %.2f | %.2f | %.2f | %.2f |" % (nodes, th, a / per, z / per, z / a, m / per, m / a))
         return
     print("### adi (implicit) cost per node-layer-step, one ply, %d layers, %d steps\n" % (layers, steps))
     print("| nodes | threads | wall time (s) | ns per node-layer-step | speed-up |")
