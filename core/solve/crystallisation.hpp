@@ -70,23 +70,62 @@ class CrystallisationKinetics {
     }
     return melting_end();
   }
-  // A value at T holding X > s(T) melts: the crystallinity x = s(T') it
-  // melts down to and its temperature T' = after(x), after(x) giving the
-  // temperature the heat latent_heat (X - x) leaves it at (falling as x
-  // does). x by bisection between s(T) (too much melted: s(after) >= x)
-  // and X, to 1e-15; T' is after(x) of that x, so that the heat is that of
-  // the crystals melted, to round-off.
-  template <class After>
-  std::pair<double, double> melt(double X, double T, After after) const {
-    double lo = solid_share(T), hi = X;
-    for (int it = 0; it < 64 && hi - lo > 1e-15; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      if (solid_share(after(mid)) >= mid)
-        lo = mid;
-      else
-        hi = mid;
+  // A value at T holding X > s(T) melts down to x = s(T'), T' the
+  // temperature the heat latent_heat (X - x) leaves it at:
+  //   F(T') = H(T') - H(T) + latent_heat (X - s(T')) = 0,
+  // H the value's enthalpy per kg (c T for a constant c), after(x) the
+  // temperature H gives after the heat latent_heat (X - x) is taken. F rises
+  // with T' (H rises, s falls), F(T) > 0 and F(after(s(T))) <= 0: one root
+  // between. The rows inside that bracket narrow it to a piece where s is
+  // linear (F then linear for a constant c: the secant step is the root),
+  // and the Illinois variant of regula falsi ends there, at |F| below 1e-14
+  // of the heats (a few steps for the quadratic pieces of a specific heat
+  // table). Returns x = s(T') (kept
+  // between s(T) and X) and after(x): the heat is that of the crystals
+  // melted, to round-off.
+  template <class Enthalpy, class After>
+  std::pair<double, double> melt(double X, double T, Enthalpy enthalpy, After after) const {
+    const double h0 = enthalpy(T), s0 = solid_share(T);
+    auto F = [&](double t) { return enthalpy(t) - h0 + latent_ * (X - solid_share(t)); };
+    double lo = after(s0), hi = T;
+    double f_lo = F(lo), f_hi = F(hi);
+    for (std::size_t k = melting_.size(); k-- > 0;) {  // from the top: the last row below hi decides
+      const double r = melting_[k][0];
+      if (!(r > lo && r < hi)) continue;
+      const double f = F(r);
+      if (f > 0) {
+        hi = r;
+        f_hi = f;
+      } else {
+        lo = r;
+        f_lo = f;
+        break;
+      }
     }
-    return {lo, after(lo)};
+    // A root to 1e-14 of the heats involved (1e-12 K and below in T').
+    const double tol = 1e-14 * (std::abs(h0) + latent_);
+    double t = hi;
+    int side = 0;  // the end kept by the last two steps (Illinois: halve its value)
+    for (int it = 0; it < 100 && f_lo < 0 && f_hi > 0; ++it) {
+      t = lo - f_lo * (hi - lo) / (f_hi - f_lo);
+      if (!(t > lo && t < hi)) break;  // the bracket is as narrow as the doubles allow
+      const double f = F(t);
+      if (std::abs(f) <= tol) break;
+      if (f < 0) {
+        lo = t;
+        f_lo = f;
+        if (side == -1) f_hi *= 0.5;
+        side = -1;
+      } else {
+        hi = t;
+        f_hi = f;
+        if (side == 1) f_lo *= 0.5;
+        side = 1;
+      }
+    }
+    if (f_lo == 0) t = lo;
+    const double x = std::clamp(solid_share(t), s0, X);
+    return {x, after(x)};
   }
   double latent_heat() const { return latent_; }
   double exponent() const { return n_; }

@@ -102,8 +102,9 @@ struct PartState {
   HeatCapacityTable cp;
   std::vector<double> T_step;
   // The matrix's crystallisation (solve/crystallisation.hpp; empty: none):
-  // per value, the Nakamura integral theta and the relative crystallinity
-  // X; per node, X's mean through the thickness (for the frames); and the
+  // per value, the Nakamura integral theta (-1 after a melting: the
+  // integral of X, taken when the value next crystallises) and the
+  // relative crystallinity X; per node, X's mean through the thickness (for the frames); and the
   // specific heat the latent heat is given with where c is constant (J/(kg K)).
   CrystallisationKinetics kin;
   std::vector<double> theta, X, X_mean;

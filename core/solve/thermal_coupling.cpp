@@ -424,6 +424,10 @@ void Simulation::finish_thermal_step(double dt) {
       if (crystallising && X[k] < 1.0) {
         const double r = kin.rate(0.5 * (T0[k] + t));
         if (r > 0) {
+          // theta < 0: the value melted since it last crystallised; theta
+          // is then the integral that gives its X (taken here, where it is
+          // needed, not at every step of a melting value).
+          if (theta[k] < 0) theta[k] = kin.integral(X[k]);
           theta[k] += r * dt;
           const double x = kin.crystallinity(theta[k]);
           const double e = latent * (x - X[k]);  // J/kg
@@ -435,12 +439,14 @@ void Simulation::finish_thermal_step(double dt) {
       // temperature T' their heat of melting leaves the value at.
       if (crystallising && t > melt_onset && X[k] > kin.solid_share(t)) {
         const double x0 = X[k], t0 = t;
-        const auto [x, t1] = kin.melt(x0, t0, [&](double xm) {
-          const double e = latent * (xm - x0);  // J/kg, <= 0
-          return table ? cp.advance(t0, e) : t0 + e * per_c;
-        });
+        const auto [x, t1] = kin.melt(
+            x0, t0, [&](double tt) { return table ? cp.enthalpy(tt) : st.c_latent * tt; },
+            [&](double xm) {
+              const double e = latent * (xm - x0);  // J/kg, <= 0
+              return table ? cp.advance(t0, e) : t0 + e * per_c;
+            });
         X[k] = x;
-        theta[k] = kin.integral(x);
+        theta[k] = -1.0;  // the integral of x, when the value next crystallises
         t = t1;
       }
       T[k] = t;

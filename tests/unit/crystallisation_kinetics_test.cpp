@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "solve/crystallisation.hpp"
+#include "solve/heat_capacity.hpp"
 
 namespace ts {
 namespace {
@@ -87,12 +88,13 @@ TEST(CrystallisationKinetics, SolidShareOfTheMeltingRows) {
 
 // melt() with a constant specific heat c: T' = T - L (X - x) / c and x =
 // s(T'), in closed form on the segment of s where the root lies (here s =
-// 0.8 - (T - 255) / 14 between 255 and 262 degC).
+// 0.8 - (T - 255) / 14 between 255 and 262 degC); with a specific heat
+// table, the heat balance of the root and x = s(T').
 TEST(CrystallisationKinetics, MeltingAgainstItsClosedForm) {
   const double L = 3e4, c = 1775.0, a = L / c;
   const CrystallisationKinetics k(L, 3.0, {{0.0, 1.0}}, 0, 0, 0, {{245.0, 1.0}, {255.0, 0.8}, {262.0, 0.3}, {268.0, 0.0}});
   const double X = 0.9, T = 264.0;
-  const auto [x, t] = k.melt(X, T, [&](double xm) { return T - a * (X - xm); });
+  const auto [x, t] = k.melt(X, T, [&](double tt) { return c * tt; }, [&](double xm) { return T - a * (X - xm); });
   // T' = T - a X + a (0.8 + 255 / 14) - a T' / 14
   const double t_exact = (T - a * X + a * (0.8 + 255.0 / 14.0)) / (1.0 + a / 14.0);
   ASSERT_GT(t_exact, 255.0);
@@ -100,9 +102,18 @@ TEST(CrystallisationKinetics, MeltingAgainstItsClosedForm) {
   EXPECT_NEAR(t, t_exact, 1e-12);
   EXPECT_NEAR(x, 0.8 - (t_exact - 255.0) / 14.0, 1e-14);
   EXPECT_EQ(t, T - a * (X - x));  // the temperature is that of the crystals melted
+  // With a specific heat table (H piecewise quadratic): the root of
+  // H(T') - H(T) + L (X - s(T')) = 0, to round-off in the heat.
+  const HeatCapacityTable cp({{200.0, 1500.0}, {258.0, 2600.0}, {300.0, 1900.0}});
+  const auto [xt, tt] = k.melt(X, T, [&](double u) { return cp.enthalpy(u); },
+                               [&](double xm) { return cp.advance(T, L * (xm - X)); });
+  EXPECT_NEAR(cp.enthalpy(tt) - cp.enthalpy(T) + L * (X - xt), 0.0, 1e-9);  // J/kg, of about 1e4
+  EXPECT_NEAR(xt, k.solid_share(tt), 1e-12);
+  EXPECT_GT(xt, k.solid_share(T));
+  EXPECT_LT(xt, X);
   // Without latent heat the value melts at its temperature.
   const CrystallisationKinetics cold(0.0, 3.0, {{0.0, 1.0}}, 0, 0, 0, {{250.0, 1.0}, {270.0, 0.0}});
-  const auto [x0, t0] = cold.melt(0.9, 265.0, [](double) { return 265.0; });
+  const auto [x0, t0] = cold.melt(0.9, 265.0, [&](double tt) { return c * tt; }, [](double) { return 265.0; });
   EXPECT_NEAR(x0, 0.25, 1e-15);
   EXPECT_EQ(t0, 265.0);
 }
