@@ -411,7 +411,10 @@ void Simulation::finish_thermal_step(double dt) {
     const CrystallisationKinetics& kin = st.kin;
     const bool table = !cp.empty(), crystallising = !kin.empty();
     const double c_min = cp.c_min(), latent = kin.latent_heat(), per_c = st.c_latent > 0 ? 1.0 / st.c_latent : 0.0;
-    const double melt_onset = kin.melting_onset();  // infinity without melting
+    // Infinity without melting. At or above the end of the melting no
+    // crystal survives: such values skip the kinetics (a crystal formed
+    // there would melt again at once, its heat given back).
+    const double melt_onset = kin.melting_onset(), melt_end = kin.melting_end();
     const long long n = static_cast<long long>(st.T.size());
     double* T = st.T.data();
     const double* T0 = st.T_step.data();
@@ -421,7 +424,7 @@ void Simulation::finish_thermal_step(double dt) {
     for (long long k = 0; k < n; ++k) {
       double t = T[k];
       if (table && t != T0[k]) t = cp.advance(T0[k], c_min * (t - T0[k]));
-      if (crystallising && X[k] < 1.0) {
+      if (crystallising && X[k] < 1.0 && t < melt_end) {
         const double r = kin.rate(0.5 * (T0[k] + t));
         if (r > 0) {
           // theta < 0: the value melted since it last crystallised; theta
