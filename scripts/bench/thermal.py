@@ -97,6 +97,21 @@ def run(job, threads):
         return json.load(open(os.path.join(out, "summary.json")))
 
 
+def three_way(sizes, layers, steps, title, header, variants):
+    """A table of the ns per node-layer-step of a plate (n divisions) and of
+    two variants of it, variants(n) giving the three jobs, with the ratios
+    of the variants to the first, on 1 and 2 threads."""
+    print(title)
+    print(header)
+    print("|---|---|---|---|---|---|---|")
+    for n in sizes:
+        for th in (1, 2):
+            nodes = (n + 1) ** 2
+            per = nodes * (layers + 1) * steps / 1e9
+            a, b, c = (run(job, th)["wall_time_s"] for job in variants(n))
+            print("| %d | %d | %.2f | %.2f | %.2f | %.2f | %.2f |" % (nodes, th, a / per, b / per, b / a, c / per, c / a))
+
+
 def main():
     quick = "--quick" in sys.argv
     sizes = [100, 316] if quick else [100, 316, 1000]
@@ -117,35 +132,23 @@ def main():
                     b["wall_time_s"] / a["wall_time_s"]))
         return
     if "--crystallisation" in sys.argv:
-        print("### adi (implicit), without crystallisation kinetics and with them (every value crystallising), "
-              "%d layers, %d steps\n" % (layers, steps))
-        print("| nodes | threads | without: ns per node-layer-step | rate from rows: ns | ratio | Gaussian rate: ns | ratio |")
-        print("|---|---|---|---|---|---|---|")
-        for n in sizes:
-            for th in (1, 2):
-                nodes = (n + 1) ** 2
-                per = nodes * (layers + 1) * steps / 1e9
-                a = run(plate_job(n, layers, "adi", steps, dt), th)["wall_time_s"]
-                r = run(plate_job(n, layers, "adi", steps, dt, crystallisation=KINETICS["rows"]), th)["wall_time_s"]
-                g = run(plate_job(n, layers, "adi", steps, dt, crystallisation=KINETICS["gaussian"]), th)["wall_time_s"]
-                print("| %d | %d | %.2f | %.2f | %.2f | %.2f | %.2f |" % (nodes, th, a / per, r / per, r / a, g / per, g / a))
+        three_way(sizes, layers, steps,
+                  "### adi (implicit), without crystallisation kinetics and with them (every value crystallising), "
+                  "%d layers, %d steps\n" % (layers, steps),
+                  "| nodes | threads | without: ns per node-layer-step | rate from rows: ns | ratio | Gaussian rate: ns | ratio |",
+                  lambda n: [plate_job(n, layers, "adi", steps, dt),
+                             plate_job(n, layers, "adi", steps, dt, crystallisation=KINETICS["rows"]),
+                             plate_job(n, layers, "adi", steps, dt, crystallisation=KINETICS["gaussian"])])
         return
     if "--melting" in sys.argv:
-        print("### adi (implicit), a crystalline plate heated from 250 degC: without kinetics, with kinetics whose "
-              "rate is zero there, and with melting rows (every value melting at every step), %d layers, %d steps\n"
-              % (layers, steps))
-        print("| nodes | threads | without: ns per node-layer-step | zero rate: ns | ratio | melting: ns | ratio |")
-        print("|---|---|---|---|---|---|---|")
-        for n in sizes:
-            for th in (1, 2):
-                nodes = (n + 1) ** 2
-                per = nodes * (layers + 1) * steps / 1e9
-                a = run(plate_job(n, layers, "adi", steps, dt, heated=True), th)["wall_time_s"]
-                z = run(plate_job(n, layers, "adi", steps, dt, crystallisation=MELTING["zero_rate"], heated=True),
-                        th)["wall_time_s"]
-                m = run(plate_job(n, layers, "adi", steps, dt, crystallisation=MELTING["melting"], heated=True),
-                        th)["wall_time_s"]
-                print("| %d | %d | %.2f | %.2f | %.2f | %.2f | %.2f |" % (nodes, th, a / per, z / per, z / a, m / per, m / a))
+        three_way(sizes, layers, steps,
+                  "### adi (implicit), a crystalline plate heated from 250 degC: without kinetics, with kinetics whose "
+                  "rate is zero there, and with melting rows (every value melting at every step), %d layers, %d steps\n"
+                  % (layers, steps),
+                  "| nodes | threads | without: ns per node-layer-step | zero rate: ns | ratio | melting: ns | ratio |",
+                  lambda n: [plate_job(n, layers, "adi", steps, dt, heated=True),
+                             plate_job(n, layers, "adi", steps, dt, crystallisation=MELTING["zero_rate"], heated=True),
+                             plate_job(n, layers, "adi", steps, dt, crystallisation=MELTING["melting"], heated=True)])
         return
     print("### adi (implicit) cost per node-layer-step, one ply, %d layers, %d steps\n" % (layers, steps))
     print("| nodes | threads | wall time (s) | ns per node-layer-step | speed-up |")
