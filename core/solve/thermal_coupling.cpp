@@ -511,9 +511,13 @@ std::string describe_crystallisation(const MaterialDef& m) {
   // The half-crystallisation temperature at the usual DSC cooling rate.
   const double t_half = kin.temperature_at(0.5, 10.0 / 60.0, kin.upper_temperature());
   if (std::isfinite(t_half)) os << "; cooled at 10 K/min, half crystallised at " << fmt_g(t_half, 4) << " degC";
-  if (kin.melts())
+  if (kin.melts()) {
     os << "; melting from " << fmt_g(kin.melting_onset()) << " to " << fmt_g(kin.melting_end())
        << " degC, half melted at " << fmt_g(kin.melting_temperature(0.5), 4) << " degC";
+    if (std::isfinite(t_half) && t_half > kin.melting_onset())
+      os << " (the half crystallisation is above the melting's onset: crystals formed there melt again at once; "
+            "check the rate and the melting rows)";
+  }
   else
     os << "; no melting (the crystallinity never decreases)";
   return os.str();

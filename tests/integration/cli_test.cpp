@@ -1531,9 +1531,19 @@ TEST(Output, CrystallinityInFramesSeriesSummaryAndExport) {
     std::ofstream(dir / "melting.json") << jm.dump(2);
     const auto vm = thermostamp("validate " + q(dir / "melting.json"));
     ASSERT_EQ(vm.exit_code, 0) << vm.err;
-    EXPECT_NE(vm.out.find("half crystallised at 232.1 degC; melting from 245 to 268 degC, half melted at 259.2 degC"),
+    EXPECT_NE(vm.out.find("half crystallised at 232.1 degC; melting from 245 to 268 degC, half melted at 259.2 "
+                          "degC\n"),
               std::string::npos)
         << vm.out;
+    // Melting rows below the crystallisation: said on the same line.
+    jm["materials"]["pa66_cf_ud"]["crystallisation"]["melting"] = {{200.0, 1.0}, {240.0, 0.0}};
+    std::ofstream(dir / "melting_low.json") << jm.dump(2);
+    const auto vl = thermostamp("validate " + q(dir / "melting_low.json"));
+    ASSERT_EQ(vl.exit_code, 0) << vl.err;
+    EXPECT_NE(vl.out.find("half melted at 220 degC (the half crystallisation is above the melting's onset: crystals "
+                          "formed there melt again at once; check the rate and the melting rows)"),
+              std::string::npos)
+        << vl.out;
   }
   const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "run") + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
