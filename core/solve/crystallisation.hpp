@@ -53,14 +53,7 @@ class CrystallisationKinetics {
   double melting_onset() const { return melt_onset_; }
   double melting_end() const { return melting_.empty() ? melt_onset_ : melting_.back()[0]; }
   // s(T): the share of the crystals still solid at T (1 without melting).
-  double solid_share(double T) const {
-    if (T <= melt_onset_) return 1.0;
-    if (T >= melting_.back()[0]) return 0.0;
-    std::size_t k = 1;
-    while (melting_[k][0] < T) ++k;
-    const auto &a = melting_[k - 1], &b = melting_[k];
-    return a[1] + (T - a[0]) / (b[0] - a[0]) * (b[1] - a[1]);
-  }
+  double solid_share(double T) const { return T <= melt_onset_ ? 1.0 : along_rows(melting_, T); }
   // The temperature (degC) at which the share still solid falls to s in
   // (0, 1) (the first, where s(T) holds it over a range).
   double melting_temperature(double share) const {
@@ -137,12 +130,7 @@ class CrystallisationKinetics {
       const double d = T - t_max_, ad2 = a_ * d * d;
       return ad2 > kCut ? 0.0 : k_max_ * std::exp(-ad2);
     }
-    if (T <= rows_.front()[0]) return rows_.front()[1];
-    if (T >= rows_.back()[0]) return rows_.back()[1];
-    std::size_t k = 1;
-    while (rows_[k][0] < T) ++k;
-    const auto &a = rows_[k - 1], &b = rows_[k];
-    return a[1] + (T - a[0]) / (b[0] - a[0]) * (b[1] - a[1]);
+    return along_rows(rows_, T);
   }
   // Cooling at a constant rate (K/s) from `from` (degC; at most 2000): the
   // temperature at which X reaches x (degC; -infinity if it never does
@@ -181,6 +169,15 @@ class CrystallisationKinetics {
   double integral(double X) const { return X > 0 ? std::pow(-std::log1p(-X), 1.0 / n_) : 0.0; }
 
  private:
+  // The value of rows [T, v] at T: linear between the rows, held beyond them.
+  static double along_rows(const std::vector<std::array<double, 2>>& rows, double T) {
+    if (T <= rows.front()[0]) return rows.front()[1];
+    if (T >= rows.back()[0]) return rows.back()[1];
+    std::size_t k = 1;
+    while (rows[k][0] < T) ++k;
+    const auto &a = rows[k - 1], &b = rows[k];
+    return a[1] + (T - a[0]) / (b[0] - a[0]) * (b[1] - a[1]);
+  }
   static constexpr double kCut = 64.0 * 0.6931471805599453;  // a d^2 at four half widths: 4 ln 2 x 16
   bool on_ = false;
   double latent_ = 0, n_ = 1;
