@@ -61,6 +61,45 @@ double specific_heat_or_rows(ObjectReader& r, std::vector<std::array<double, 2>>
   return c_min;
 }
 
+// materials.<m>.conductivity: [k11, k22, k33] (W/(m K)), or rows
+// [T (degC), k11, k22, k33]; returns the values, or the table's largest.
+std::array<double, 3> conductivity_or_rows(ObjectReader& r, std::vector<std::array<double, 4>>& rows) {
+  const json& v = r.raw("conductivity");
+  const std::string tp = r.at("conductivity");
+  auto check = [](const std::string& rp, const std::vector<double>& row, int first) {
+    for (int d = 0; d < 3; ++d)
+      if (!(row[first + d] > 0)) {
+        std::ostringstream os;
+        os << "conductivity must be > 0 W/m/K, found " << row[first + d];
+        throw JobError(pointer_append(rp, first + d), os.str());
+      }
+  };
+  if (!v.is_array() || v.empty() || !v[0].is_array()) {
+    const auto k = r.reals("conductivity", 3);
+    check(tp, k, 0);
+    return {k[0], k[1], k[2]};
+  }
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    const std::string rp = pointer_append(tp, k);
+    if (!v[k].is_array())
+      throw JobError(rp, "expected a row [T (degC), k11, k22, k33 (W/m/K)], found " + json_type_name(v[k]));
+    const auto row = as_reals(v[k], rp, 4);
+    if (!(row[0] >= -273.15)) throw JobError(pointer_append(rp, 0), "must be >= -273.15 degC");
+    if (k > 0 && !(row[0] > rows.back()[0])) throw JobError(pointer_append(rp, 0), "temperatures must increase from row to row");
+    check(rp, row, 1);
+    rows.push_back({row[0], row[1], row[2], row[3]});
+  }
+  std::array<double, 3> largest{0, 0, 0};
+  bool varies = false;
+  for (const auto& row : rows)
+    for (int d = 0; d < 3; ++d) {
+      largest[d] = std::max(largest[d], row[d + 1]);
+      varies = varies || row[d + 1] != rows.front()[d + 1];
+    }
+  if (!varies) rows.clear();
+  return largest;
+}
+
 // materials.<m>.crystallisation: the Nakamura kinetics of the matrix.
 MaterialDef::Crystallisation parse_crystallisation(const json& v, const std::string& ptr) {
   MaterialDef::Crystallisation c;
@@ -344,10 +383,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       if (m.has_thermal) {
         m.density = r.real("density", std::nullopt, 0.0, true);
         m.specific_heat = specific_heat_or_rows(r, m.specific_heat_table, m.specific_heat_max);
-        const auto k = r.reals("conductivity", 3);
-        for (int d = 0; d < 3; ++d)
-          if (!(k[d] > 0)) throw JobError(pointer_append(r.at("conductivity"), d), "conductivity must be > 0");
-        m.conductivity = {k[0], k[1], k[2]};
+        m.conductivity = conductivity_or_rows(r, m.conductivity_table);
       }
       if (const json* v = r.optional_raw("crystallisation"))
         m.crystallisation = parse_crystallisation(*v, r.at("crystallisation"));

@@ -21,7 +21,12 @@ struct MaterialDef {
   // and the largest value (= specific_heat when constant).
   std::vector<std::array<double, 2>> specific_heat_table;
   double specific_heat_max = 0;
-  std::array<double, 3> conductivity{0, 0, 0};  // k11, k22, k33
+  // k11, k22, k33 (W/(m K)); with a table, its largest values.
+  std::array<double, 3> conductivity{0, 0, 0};
+  // Rows [T (degC), k11, k22, k33] of a conductivity that depends on the
+  // temperature (linear between the rows, held beyond them); empty for a
+  // constant one (a table of equal rows too).
+  std::vector<std::array<double, 4>> conductivity_table;
   bool has_thermal = false;
   json membrane, bending;  // null when absent
   // The crystallisation kinetics of the matrix (Nakamura), see

@@ -104,8 +104,17 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
     }
   }
   const json law = {{"anyOf", materials}};
-  json conductivity = vec(3);
-  conductivity["description"] = "k11 (fibres), k22 (across), k33 (thickness) [W/m/K]";
+  const json conductivity = {
+      {"oneOf",
+       json::array({vec(3), json{{"type", "array"},
+                                 {"minItems", 1},
+                                 {"items",
+                                  {{"type", "array"},
+                                   {"items", {{"type", "number"}}},
+                                   {"minItems", 4},
+                                   {"maxItems", 4}}}}})},
+      {"description", "k11 (fibres), k22 (across), k33 (thickness) [W/m/K], constant, or rows [T (degC), k11, "
+                      "k22, k33] (linear between rows, held beyond them)"}};
   json thermal_or_null = thermal;
   thermal_or_null.push_back({{"type", "null"}});
   const json material = {

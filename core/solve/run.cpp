@@ -138,6 +138,7 @@ Simulation::Run::Run(Simulation& s, const RunOptions& o, Clock::time_point w0, i
   progress.t_end = t_end;
   for (auto& st : parts) Tspans.emplace_back(st->T);
   in.faces = sim.faces_;
+  in.conductivity = sim.conductivity_;
   in.links = sim.contact_map_.links;
   in.links_changed = true;
 

@@ -315,7 +315,8 @@ void Simulation::build_parts() {
     v.thickness = st.def->thickness;
     v.thickness_layers = st.def->thickness_layers;
     v.initial_temperature = st.def->initial_temperature;
-    v.thermal = {mat.density, mat.specific_heat, mat.conductivity[0], mat.conductivity[1], mat.conductivity[2]};
+    v.thermal = {mat.density,          mat.specific_heat, mat.conductivity[0], mat.conductivity[1],
+                 mat.conductivity[2], !mat.conductivity_table.empty()};
   }
 }
 

@@ -172,7 +172,9 @@ class Simulation {
   void build_thermal();
   // A specific heat table (solve/heat_capacity.hpp) or crystallisation
   // kinetics (solve/crystallisation.hpp): the temperatures before a thermal
-  // step, and the enthalpy correction and crystallisation after it.
+  // step, and the enthalpy correction and crystallisation after it; a
+  // conductivity table (solve/conductivity.hpp): its values at the
+  // temperatures before the step.
   void keep_step_temperatures();
   void finish_thermal_step(double dt);
   void build_probes();
@@ -392,6 +394,9 @@ class Simulation {
   };
   std::vector<ExchangeFace> exchange_faces_;  // from assemble_faces
   std::vector<sdk::FaceConditions> faces_;
+  // Per part: its values of a conductivity table at the step's start, or
+  // empty (sdk::ThermalStepInput::conductivity); none when no ply has a table.
+  std::vector<std::span<const double>> conductivity_;
   std::vector<int> probe_node_;
   std::vector<std::vector<int>> probe_elements_;  // elements around each probe's node
   double thermal_stable_dt_ = 0, thermal_accurate_dt_ = 0, thermal_dt_ = 0;

@@ -22,6 +22,7 @@
 
 #include "io/results_writer.hpp"
 #include "solve/crystallisation.hpp"
+#include "solve/conductivity.hpp"
 #include "solve/heat_capacity.hpp"
 #include "solve/simulation.hpp"
 
@@ -101,6 +102,11 @@ struct PartState {
   // the temperatures before the thermal step under way (solve/heat_capacity.hpp).
   HeatCapacityTable cp;
   std::vector<double> T_step;
+  // A conductivity that depends on the temperature (empty: constant) and
+  // its values at the temperatures of the step's start, 3 per value
+  // (solve/conductivity.hpp).
+  ConductivityTable kt;
+  std::vector<double> k_field;
   // The matrix's crystallisation (solve/crystallisation.hpp; empty: none):
   // per value, the Nakamura integral theta (-1 after a melting: the
   // integral of X, taken when the value next crystallises) and the

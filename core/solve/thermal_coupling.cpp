@@ -41,6 +41,13 @@ void Simulation::build_thermal() {
   const PluginRecord& rec = registry_.require(sdk::PluginKind::Thermal, th.splitter, th.pointer + "/splitter");
   const sdk::Params params = validate_params(th.params, th.pointer, rec.descriptor, {"splitter", "subcycle", "dt"});
   splitter_.reset(reinterpret_cast<sdk::ThermalSplitter* (*)()>(rec.create)());
+  for (const auto& st : parts_) {
+    const MaterialDef& mat = job_.materials[st->def->material];
+    if (!mat.conductivity_table.empty() && !splitter_->takes_conductivity_field())
+      throw JobError(mat.pointer + "/conductivity", "the thermal splitter '" + th.splitter +
+                                                        "' takes no temperature-dependent conductivity; give "
+                                                        "constant values [k11, k22, k33] or choose another splitter");
+  }
   if (auto s = splitter_->configure(params, part_views_); !s)
     throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);
   for (std::size_t p = 0; p < parts_.size(); ++p) {
@@ -53,6 +60,10 @@ void Simulation::build_thermal() {
     if (!mat.specific_heat_table.empty()) {
       st.cp = HeatCapacityTable(mat.specific_heat_table);
       st.T_step.assign(n, 0.0);
+    }
+    if (!mat.conductivity_table.empty()) {
+      st.kt = ConductivityTable(mat.conductivity_table);
+      st.k_field.assign(3 * n, 0.0);
     }
     if (const auto& c = mat.crystallisation; c.present) {
       st.kin = CrystallisationKinetics(c.latent_heat, c.avrami_exponent, c.rate_rows, c.k_max, c.t_max, c.half_width,
@@ -82,6 +93,10 @@ void Simulation::build_thermal() {
   }
   assemble_faces();
   update_far_temperatures(0.0, 0.0);
+  bool any_table = false;
+  for (const auto& st : parts_) any_table = any_table || !st->kt.empty();
+  if (any_table)
+    for (const auto& st : parts_) conductivity_.emplace_back(st->k_field);
   faces_.resize(parts_.size());
   for (std::size_t p = 0; p < parts_.size(); ++p)
     faces_[p] = {parts_[p]->h_bottom, parts_[p]->t_bottom, parts_[p]->h_top, parts_[p]->t_top};
@@ -388,6 +403,14 @@ void Simulation::accumulate_tool_heat(double dt) {
 
 void Simulation::keep_step_temperatures() {
   for (auto& st : parts_) {
+    if (!st->kt.empty()) {
+      const long long n = static_cast<long long>(st->T.size());
+      const double* T = st->T.data();
+      double* k = st->k_field.data();
+      const ConductivityTable& kt = st->kt;
+#pragma omp parallel for schedule(static) if (n > 8192)
+      for (long long v = 0; v < n; ++v) kt.value(T[v], k + 3 * v);
+    }
     if (st->T_step.empty()) continue;
     const long long n = static_cast<long long>(st->T.size());
     const double* T = st->T.data();

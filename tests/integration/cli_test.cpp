@@ -61,7 +61,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.21.0 (plugin SDK 0.18.0, ABI 18)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.22.0 (plugin SDK 0.19.0, ABI 19)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -379,6 +379,12 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"specific_heat_row", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = {{240.0, 1775.0}, {250.0}}; }, "error: /materials/pa66_cf_ud/specific_heat/1: expected 2 numbers"},
       {"specific_heat_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = {{240.0, 1775.0}, {250.0, -1.0}}; }, "error: /materials/pa66_cf_ud/specific_heat/1/1: must be > 0 J/kg/K, found -1"},
       {"specific_heat_empty", [](json& j) { j["materials"]["pa66_cf_ud"]["specific_heat"] = json::array(); }, "error: /materials/pa66_cf_ud/specific_heat: expected a number (J/kg/K) or rows [T (degC), c (J/kg/K)]"},
+      {"conductivity_temperatures", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {{240.0, 3.89, 0.31, 0.31}, {240.0, 3.89, 0.31, 0.4}}; }, "error: /materials/pa66_cf_ud/conductivity/1/0: temperatures must increase from row to row"},
+      {"conductivity_row", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {{240.0, 3.89, 0.31, 0.31}, {250.0, 3.89, 0.31}}; }, "error: /materials/pa66_cf_ud/conductivity/1: expected 4 numbers"},
+      {"conductivity_row_not_a_row", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {{240.0, 3.89, 0.31, 0.31}, 250.0}; }, "error: /materials/pa66_cf_ud/conductivity/1: expected a row [T (degC), k11, k22, k33 (W/m/K)], found a number"},
+      {"conductivity_row_zero", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {{240.0, 3.89, 0.31, 0.31}, {250.0, 3.89, 0.0, 0.31}}; }, "error: /materials/pa66_cf_ud/conductivity/1/2: conductivity must be > 0 W/m/K, found 0"},
+      {"conductivity_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {3.89, 0.31, -0.31}; }, "error: /materials/pa66_cf_ud/conductivity/2: conductivity must be > 0 W/m/K, found -0.31"},
+      {"conductivity_rows_with_a_splitter_without_them", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {{240.0, 3.89, 0.31, 0.31}, {300.0, 3.89, 0.31, 0.4}}; j["solvers"]["thermal"] = {{"splitter", "nan_after"}}; j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR}; }, "error: /materials/pa66_cf_ud/conductivity: the thermal splitter 'nan_after' takes no temperature-dependent conductivity"},
       {"crystallisation_rate_temperatures", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{240.0, 0.1}, {230.0, 0.5}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/1/0: temperatures must increase from row to row"},
       {"crystallisation_rate_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}, {230.0, -0.5}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/1/1: must be >= 0 1/s, found -0.5"},
       {"crystallisation_rate_zero", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate: every rate is zero"},
@@ -2112,6 +2118,12 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   std::ofstream(dir / "bad_melting.json") << bad_melting.dump();
   with_kinetics["materials"]["pa66_cf_ud"]["crystallisation"]["rate"] = {{"k_max", 50.0}, {"t_max", 150.0}};
   std::ofstream(dir / "bad_kinetics.json") << with_kinetics.dump();
+  json k_table = with_checkpoints;  // a conductivity that follows the temperature
+  k_table["materials"]["pa66_cf_ud"]["conductivity"] = {{220.0, 3.89, 0.25, 0.25}, {300.0, 3.89, 0.31, 0.35}};
+  std::ofstream(dir / "k_table.json") << k_table.dump();
+  json bad_k_table = k_table;  // a row of three numbers
+  bad_k_table["materials"]["pa66_cf_ud"]["conductivity"] = {{220.0, 3.89, 0.25}, {300.0, 3.89, 0.31}};
+  std::ofstream(dir / "bad_k_table.json") << bad_k_table.dump();
   json bad_table = with_table;
   bad_table["materials"]["pa66_cf_ud"]["specific_heat"] = {{220.0, 1775.0, 1.0}};
   std::ofstream(dir / "bad_table.json") << bad_table.dump();
@@ -2126,9 +2138,10 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
   good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " " + q(dir / "kinetics.json") + " " +
-          q(dir / "kinetics_rows.json") + " ";
+          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "bad_k_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_kinetics.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_melting.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "typo.json") + " >/dev/null").c_str()), 0);

@@ -173,4 +173,23 @@ void slab_heat_flows(const std::vector<double>& T, double k, double e, double h,
   q[n] += h * (Ta - T[n]);
 }
 
+void write_parallelogram(const std::filesystem::path& file, double L, double W, double s, int nx, int ny) {
+  std::ofstream f(file);
+  f << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << (nx + 1) * (ny + 1) << "\n";
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      const double y = W * j / ny, xi = L * i / nx;
+      f << j * (nx + 1) + i + 1 << " " << xi + s * y << " " << y << " 0\n";
+    }
+  f << "$EndNodes\n$Elements\n" << 2 * nx * ny << "\n";
+  int id = 1;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int a = j * (nx + 1) + i + 1, b = a + 1, c = b + nx + 1, d = a + nx + 1;
+      f << id++ << " 2 2 0 1 " << a << " " << b << " " << c << "\n";
+      f << id++ << " 2 2 0 1 " << a << " " << c << " " << d << "\n";
+    }
+  f << "$EndElements\n";
+}
+
 }  // namespace ts::test

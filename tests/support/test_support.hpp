@@ -73,6 +73,10 @@ std::filesystem::path temp_dir(const std::string& name);
 // normal +z), for a meshed tool.
 void write_square_stl(const std::filesystem::path& file, double lo, double hi, double z);
 
+// A Gmsh 2.2 mesh of the parallelogram x = xi + s y, xi in [0, L], y in
+// [0, W]: its slanted edges follow the level lines of cos(pi xi / L).
+void write_parallelogram(const std::filesystem::path& file, double L, double W, double s, int nx, int ny);
+
 // Plane wall, thickness L, insulated at x = 0, Robin (h, T_inf) at x = L,
 // initially T0: T(x, t) from the eigen-series (lambda tan lambda = Bi).
 double slab_robin_series(double x, double t, double L, double alpha, double Bi, double T0, double Tinf);

@@ -84,20 +84,35 @@ TEST(Conservation, StoredHeatEqualsFaceHeat) {
     EXPECT_EQ(rm.sample(0, "crystallinity_profile", 0.0)->values.front(), 0.5);
     EXPECT_LT(rm.sample(0, "crystallinity_profile", 0.25)->values.back(), 0.2);  // melted
     EXPECT_GT(rm.sample(0, "crystallinity_profile", 1.0)->values.back(), 0.0);   // crystallising again
-    std::printf("  with a table: balance error %.2e; with crystallisation too: %.2e; with melting: %.2e\n",
-                rt.result.heat_balance_error, rk.result.heat_balance_error, rm.result.heat_balance_error);
+    // With a conductivity that follows the temperature on top of it all
+    // (k33 halved at 250 degC): the plies keep more of their heat.
+    json jc = jm;
+    jc["materials"]["ply"]["conductivity"] = {{250.0, 2.0, 0.16, 0.16}, {300.0, 3.89, 0.31, 0.31}};
+    const JobRun rc = run_json(jc);
+    ASSERT_TRUE(rc.result.ok) << rc.result.error;
+    EXPECT_LT(rc.result.heat_balance_error, 1e-9) << splitter << " " << scheme << " with a conductivity table";
+    EXPECT_LT(rc.result.heat_in, 0.0);
+    EXPECT_GT(rc.result.heat_in, rm.result.heat_in);
+    std::printf("  with a table: balance error %.2e; with crystallisation too: %.2e; with melting: %.2e; with a "
+                "conductivity table: %.2e (heat in %.4f J against %.4f J)\n",
+                rt.result.heat_balance_error, rk.result.heat_balance_error, rm.result.heat_balance_error,
+                rc.result.heat_balance_error, rc.result.heat_in, rm.result.heat_in);
   }
 }
 
 // Same answer, bit for bit, with 1 and 2 threads.
 TEST(Determinism, OneAndTwoThreadsIdentical) {
   for (const std::string splitter : {"adi", "shell2d", "layered3d"}) {
-    const JobRun a = run_json(stack_job(splitter, "implicit", 6), 1);
-    const JobRun b = run_json(stack_job(splitter, "implicit", 6), 2);
-    ASSERT_EQ(a.result.probes.size(), b.result.probes.size());
-    for (std::size_t i = 0; i < a.result.probes.size(); ++i)
-      for (std::size_t k = 0; k < a.result.probes[i].values.size(); ++k)
-        ASSERT_EQ(a.result.probes[i].values[k], b.result.probes[i].values[k]) << splitter;
+    for (bool table : {false, true}) {
+      json j = stack_job(splitter, "implicit", 6);
+      if (table) j["materials"]["ply"]["conductivity"] = {{250.0, 2.0, 0.16, 0.16}, {300.0, 3.89, 0.31, 0.31}};
+      const JobRun a = run_json(j, 1);
+      const JobRun b = run_json(j, 2);
+      ASSERT_EQ(a.result.probes.size(), b.result.probes.size());
+      for (std::size_t i = 0; i < a.result.probes.size(); ++i)
+        for (std::size_t k = 0; k < a.result.probes[i].values.size(); ++k)
+          ASSERT_EQ(a.result.probes[i].values[k], b.result.probes[i].values[k]) << splitter << " table " << table;
+    }
   }
 }
 

@@ -331,27 +331,6 @@ TEST(ThreePlies, MiddlePlyLinkedOnBothFaces) {
   }
 }
 
-// Writes a Gmsh 2.2 mesh of the parallelogram x = xi + s y, xi in [0, L],
-// y in [0, W]: its slanted edges follow the level lines of cos(pi xi / L).
-void write_parallelogram(const std::filesystem::path& file, double L, double W, double s, int nx, int ny) {
-  std::ofstream f(file);
-  f << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << (nx + 1) * (ny + 1) << "\n";
-  for (int j = 0; j <= ny; ++j)
-    for (int i = 0; i <= nx; ++i) {
-      const double y = W * j / ny, xi = L * i / nx;
-      f << j * (nx + 1) + i + 1 << " " << xi + s * y << " " << y << " 0\n";
-    }
-  f << "$EndNodes\n$Elements\n" << 2 * nx * ny << "\n";
-  int id = 1;
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      const int a = j * (nx + 1) + i + 1, b = a + 1, c = b + nx + 1, d = a + nx + 1;
-      f << id++ << " 2 2 0 1 " << a << " " << b << " " << c << "\n";
-      f << id++ << " 2 2 0 1 " << a << " " << c << " " << d << "\n";
-    }
-  f << "$EndElements\n";
-}
-
 // In-plane anisotropic diffusion, fibres at 30 degrees: on the parallelogram
 // whose slant is s = k_xy / k_yy, cos(pi (x - s y) / L) is an exact mode that
 // decays at k_eff pi^2 / (rho c L^2) with k_eff = 1 / (K^-1)_xx. Tolerance

@@ -33,7 +33,7 @@ int max_threads() {
 // as when it is solved alone.
 struct RodGroupData {
   int nz;
-  double g;
+  const double* gk;  // nz per factor id: conductance of the layer below value k (W/(m^2 K)), gk[0] = 0
   const double* cap;
   const double* inv_den;
   const double* g_inv_den;
@@ -50,12 +50,14 @@ void solve_rods(const RodGroupData& d, int i0) {
   double* ti[R];
   const double* inv[R];
   const double* gi[R];
+  const double* gk[R];
   double prev[R];
   for (int r = 0; r < R; ++r) {
     const int i = i0 + r;
     ti[r] = d.t + static_cast<std::size_t>(nz) * i;
     inv[r] = d.inv_den + static_cast<std::size_t>(nz) * d.id[i];
     gi[r] = d.g_inv_den + static_cast<std::size_t>(nz) * d.id[i];
+    gk[r] = d.gk + static_cast<std::size_t>(nz) * d.id[i];
     // Forward substitution (a_k = -g), in place.
     prev[r] = (d.cap[0] * ti[r][0] + d.hb[i] * d.tb[i] + (nz == 1 ? d.ht[i] * d.tt[i] : 0.0)) * inv[r][0];
     ti[r][0] = prev[r];
@@ -64,10 +66,10 @@ void solve_rods(const RodGroupData& d, int i0) {
     for (int r = 0; r < R; ++r) {
       double rr = d.cap[k] * ti[r][k];
       if (k == nz - 1) rr += d.ht[i0 + r] * d.tt[i0 + r];
-      prev[r] = (rr + d.g * prev[r]) * inv[r][k];
+      prev[r] = (rr + gk[r][k] * prev[r]) * inv[r][k];
       ti[r][k] = prev[r];
     }
-  // Back substitution: T_k = d_k - c'_k T_{k+1}, c'_k = -g / den_k.
+  // Back substitution: T_k = d_k - c'_k T_{k+1}, c'_k = -g_{k+1} / den_k.
   for (int k = nz - 2; k >= 0; --k)
     for (int r = 0; r < R; ++r) {
       prev[r] = ti[r][k] + gi[r][k] * prev[r];
@@ -95,6 +97,7 @@ sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const s
     node_heat_.resize(parts.size());
     scratch_.resize(parts.size());
     mean_.resize(parts.size());
+    k_mean_.resize(parts.size());
     rod_lo_.resize(parts.size());
     mean_old_.resize(parts.size());
     factors_.assign(parts.size(), RodFactors{});
@@ -106,6 +109,7 @@ sdk::Status SplitThermal::configure(const sdk::Params& params, std::span<const s
       node_heat_[p].assign(n, 0.0);
       scratch_[p].assign(4 * static_cast<std::size_t>(n) * (inplane_layers_ ? plies_[p].nz : 1), 0.0);
       mean_[p].assign(n, 0.0);
+      k_mean_[p].assign(parts[p].thermal.conductivity_varies ? 2 * static_cast<std::size_t>(n) : 0, 0.0);
       rod_lo_[p].assign(n, 0.0);
       mean_old_[p].assign(n, 0.0);
       rod_hi_[p].assign(n, 0.0);
@@ -136,6 +140,38 @@ sdk::Status SplitThermal::step_limits(const sdk::ThermalStepInput& in, double* s
   });
 }
 
+// Thomas forward elimination of (C/dt + K_rod + Robin) for one rod (faces
+// hb, ht; layer conductances gk, gk[0] = gk[nz] = 0) into slot `id` of rf
+// (its arrays hold at least nz (id + 1) values), and the rod's responses to
+// a unit flux on each face: M^-1 e_bottom, M^-1 e_top.
+void SplitThermal::factor_rod(RodFactors& rf, int id, int nz, double hb, double ht, const double* gk) {
+  const std::size_t o = static_cast<std::size_t>(nz) * id;
+  double* inv = rf.inv_den.data() + o;
+  double* gi = rf.g_inv_den.data() + o;
+  double cp_prev = 0;
+  for (int k = 0; k < nz; ++k) {
+    double b = rf.cap[k] + gk[k] + gk[k + 1];
+    if (k == 0) b += hb;
+    if (k == nz - 1) b += ht;
+    const double den = b - (k > 0 ? -gk[k] : 0.0) * cp_prev;
+    inv[k] = 1.0 / den;
+    gi[k] = gk[k + 1] / den;  // -c_k / den
+    rf.gk[o + k] = gk[k];
+    cp_prev = (k + 1 < nz ? -gk[k + 1] : 0.0) / den;
+  }
+  for (int face = 0; face < 2; ++face) {
+    double* v = (face == 0 ? rf.v_bottom : rf.v_top).data() + o;
+    std::fill(v, v + nz, 0.0);
+    v[face == 0 ? 0 : nz - 1] = 1.0;
+    double prev = 0;
+    for (int k = 0; k < nz; ++k) {
+      prev = (v[k] + gk[k] * prev) * inv[k];
+      v[k] = prev;
+    }
+    for (int k = nz - 2; k >= 0; --k) v[k] += gi[k] * v[k + 1];
+  }
+}
+
 bool SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
   bool any = false;
   // The rods of a ply differ only by their two face conductances; their
@@ -146,7 +182,8 @@ bool SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
     const int n = ply.view->num_nodes, nz = ply.nz;
     const auto& f = in.faces[p];
     RodFactors& rf = factors_[p];
-    bool same = rf.dt == dt && !in.geometry_changed && static_cast<int>(rf.hb.size()) == n;
+    const double* kf = conductivity(in, p);
+    bool same = !kf && rf.dt == dt && !in.geometry_changed && static_cast<int>(rf.hb.size()) == n;
     for (int i = 0; same && i < n; ++i) same = rf.hb[i] == f.h_bottom[i] && rf.ht[i] == f.h_top[i];
     if (same) continue;
     any = true;
@@ -155,44 +192,37 @@ bool SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
     rf.ht.assign(f.h_top.begin(), f.h_top.end());
     rf.cap.resize(nz);
     for (int k = 0; k < nz; ++k) rf.cap[k] = ply.rho_c * ply.w[k] / dt;
-    const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
-    std::map<std::pair<double, double>, int> ids;
     rf.id.resize(n);
-    rf.inv_den.clear();
-    rf.g_inv_den.clear();
-    rf.v_bottom.clear();
-    rf.v_top.clear();
+    auto size_for = [&](std::size_t ids) {
+      for (auto* v : {&rf.inv_den, &rf.g_inv_den, &rf.v_bottom, &rf.v_top, &rf.gk}) v->resize(nz * ids);
+    };
+    if (kf) {
+      // A conductivity that depends on the temperature: every rod has its
+      // own layer conductances, k33 at the mean of the layer's two values.
+      size_for(n);
+      std::vector<std::vector<double>>& work = thread_work_;
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * nz > kParallelValues)
+      for (int i = 0; i < n; ++i) {
+        double* gk = work[thread_id()].data();  // nz + 1 values
+        const double* ki = kf + 3 * static_cast<std::size_t>(nz) * i;
+        gk[0] = gk[nz] = 0.0;
+        for (int k = 1; k < nz; ++k) gk[k] = 0.5 * (ki[3 * (k - 1) + 2] + ki[3 * k + 2]) / ply.e;
+        rf.id[i] = i;
+        factor_rod(rf, i, nz, f.h_bottom[i], f.h_top[i], gk);
+      }
+      continue;
+    }
+    const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
+    std::vector<double> gk(nz + 1, 0.0);  // gk[k]: layer between values k - 1 and k; gk[0] = gk[nz] = 0
+    for (int k = 1; k < nz; ++k) gk[k] = g;
+    std::map<std::pair<double, double>, int> ids;
     for (int i = 0; i < n; ++i) {
       const auto key = std::make_pair(f.h_bottom[i], f.h_top[i]);
       auto it = ids.find(key);
       if (it == ids.end()) {
         it = ids.emplace(key, static_cast<int>(ids.size())).first;
-        // Thomas forward elimination of (C/dt + K_rod + Robin) for this pair.
-        double cp_prev = 0;
-        for (int k = 0; k < nz; ++k) {
-          double b = rf.cap[k] + (k > 0 ? g : 0.0) + (k + 1 < nz ? g : 0.0);
-          if (k == 0) b += key.first;
-          if (k == nz - 1) b += key.second;
-          const double den = b - (k > 0 ? -g : 0.0) * cp_prev;
-          rf.inv_den.push_back(1.0 / den);
-          rf.g_inv_den.push_back(g / den);  // -c_k / den
-          cp_prev = (k + 1 < nz ? -g : 0.0) / den;
-        }
-        // Responses to a unit flux on each face: M^-1 e_bottom, M^-1 e_top.
-        const double* inv = rf.inv_den.data() + rf.inv_den.size() - nz;
-        const double* gi = rf.g_inv_den.data() + rf.g_inv_den.size() - nz;
-        for (int face = 0; face < 2; ++face) {
-          std::vector<double> v(nz, 0.0);
-          v[face == 0 ? 0 : nz - 1] = 1.0;
-          double prev = 0;
-          for (int k = 0; k < nz; ++k) {
-            prev = (v[k] + g * prev) * inv[k];
-            v[k] = prev;
-          }
-          for (int k = nz - 2; k >= 0; --k) v[k] += gi[k] * v[k + 1];
-          auto& dst = face == 0 ? rf.v_bottom : rf.v_top;
-          dst.insert(dst.end(), v.begin(), v.end());
-        }
+        size_for(ids.size());
+        factor_rod(rf, it->second, nz, key.first, key.second, gk.data());
       }
       rf.id[i] = it->second;
     }
@@ -207,14 +237,13 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
     const PlyThermal& ply = plies_[p];
     const int nz = ply.nz;
     const int n = ply.view->num_nodes;
-    const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
     const auto& f = in.faces[p];
     const RodFactors& rf = factors_[p];
     const double* cap = rf.cap.data();
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
     const char* linked = linked_[p].data();
-    const RodGroupData d{nz, g, cap, rf.inv_den.data(), rf.g_inv_den.data(), rf.id.data(), f.h_bottom.data(),
+    const RodGroupData d{nz, rf.gk.data(), cap, rf.inv_den.data(), rf.g_inv_den.data(), rf.id.data(), f.h_bottom.data(),
                          f.h_top.data(), f.t_bottom.data(), f.t_top.data(), t};
     const int groups = (n + kRodGroup - 1) / kRodGroup;
 #pragma omp parallel for schedule(static) if (static_cast<long long>(n) * nz > kParallelValues)
@@ -389,6 +418,7 @@ double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<co
     const int nz = ply.nz;
     const int n = ply.view->num_nodes;
     const double g = nz > 1 ? ply.k33 / ply.e : 0.0;
+    const double* kf = conductivity(in, p);
     const auto& f = in.faces[p];
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
@@ -396,12 +426,17 @@ double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<co
     for (int i = 0; i < n; ++i) {
       double* ti = t + static_cast<std::size_t>(nz) * i;
       double* old = thread_work_[thread_id()].data();
+      double* gk = old + nz;  // gk[k]: layer between values k - 1 and k
       std::copy(ti, ti + nz, old);
+      for (int k = 1; k < nz; ++k) {
+        const double* ki = kf ? kf + 3 * (static_cast<std::size_t>(nz) * i + k) : nullptr;
+        gk[k] = kf ? 0.5 * (ki[-1] + ki[2]) / ply.e : g;
+      }
       const double hb = f.h_bottom[i], ht = f.h_top[i];
       for (int k = 0; k < nz; ++k) {
         double q = 0;  // W/m^2 leaving value k
-        if (k > 0) q += g * (old[k] - old[k - 1]);
-        if (k + 1 < nz) q += g * (old[k] - old[k + 1]);
+        if (k > 0) q += gk[k] * (old[k] - old[k - 1]);
+        if (k + 1 < nz) q += gk[k + 1] * (old[k] - old[k + 1]);
         if (k == 0) q += hb * (old[0] - f.t_bottom[i]);
         if (k == nz - 1) q += ht * (old[nz - 1] - f.t_top[i]);
         ti[k] = old[k] - dt * q / (ply.rho_c * ply.w[k]);
@@ -454,11 +489,38 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
       double* lo = rod_lo_[p].data();
       double* m_old = mean_old_[p].data();
       double* hi = rod_hi_[p].data();
+      const double* kf = conductivity(in, p);
+      if (inplane_layers_ && kf) {
+        // Each layer with the conductivity of its own values.
+        PlyThermal& pl = plies_[p];
+        for (int k = 0; k < nz; ++k) {
+          assemble_inplane(pl, kf + 3 * k, kf + 3 * k + 1, 3 * static_cast<std::size_t>(nz));
+          for (int i = 0; i < n; ++i) m[i] = t[static_cast<std::size_t>(nz) * i + k];
+          substeps = std::max(substeps, advance_inplane(pl, in.dt, mean_[p], scratch_[p]));
+          for (int i = 0; i < n; ++i) t[static_cast<std::size_t>(nz) * i + k] = m[i];
+        }
+        continue;
+      }
       if (inplane_layers_) {
         // Every layer value by the in-plane operator: the lateral flow of the
         // through-thickness deviation is kept (no recomposition needed).
         substeps = std::max(substeps, advance_inplane(ply, in.dt, T[p], scratch_[p], nz));
         continue;
+      }
+      if (kf) {
+        // The mean's operator with the conductivity's mean through the thickness.
+        double* kn = k_mean_[p].data();
+        for (int i = 0; i < n; ++i) {
+          const double* ki = kf + 3 * static_cast<std::size_t>(nz) * i;
+          double s11 = 0, s22 = 0;
+          for (int k = 0; k < nz; ++k) {
+            s11 += ply.w[k] * ki[3 * k];
+            s22 += ply.w[k] * ki[3 * k + 1];
+          }
+          kn[2 * i] = s11 / ply.h;
+          kn[2 * i + 1] = s22 / ply.h;
+        }
+        assemble_inplane(plies_[p], kn, kn + 1, 2);
       }
 #pragma omp parallel for schedule(static) if (n > 1024)
       for (int i = 0; i < n; ++i) {

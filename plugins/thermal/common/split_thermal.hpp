@@ -41,10 +41,17 @@ class SplitThermal : public sdk::ThermalSplitter {
   sdk::Status step_limits(const sdk::ThermalStepInput& in, double* stable_dt, double* accurate) override;
   sdk::Status advance(const sdk::ThermalStepInput& in, std::span<const std::span<double>> temperature,
                       sdk::ThermalStepReport* report) override;
+  bool takes_conductivity_field() const override { return true; }
 
  private:
   double rods_explicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T);
   bool update_rod_factors(const sdk::ThermalStepInput& in);
+  struct RodFactors;
+  static void factor_rod(RodFactors& rf, int id, int nz, double hb, double ht, const double* gk);
+  // The part's conductivity values of this step (3 per value), or null.
+  static const double* conductivity(const sdk::ThermalStepInput& in, std::size_t part) {
+    return part < in.conductivity.size() && !in.conductivity[part].empty() ? in.conductivity[part].data() : nullptr;
+  }
   double rods_implicit(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T);
 
   bool layered_;          // true: one rod of thickness_layers elements per node (adi)
@@ -56,10 +63,11 @@ class SplitThermal : public sdk::ThermalSplitter {
   std::vector<std::vector<double>> node_heat_;   // per part, per node: J in this step
   std::vector<std::vector<double>> scratch_;     // per part
   std::vector<std::vector<double>> mean_;        // per part
+  std::vector<std::vector<double>> k_mean_;      // per part, 2 per node: k11, k22 through-thickness means
   std::vector<std::vector<double>> rod_lo_, rod_hi_, mean_old_;
   struct RodFactors {  // shared tridiagonal factorisations, one per (h_bottom, h_top) pair
     double dt = -1;
-    std::vector<double> hb, ht, cap, inv_den, g_inv_den, v_bottom, v_top;
+    std::vector<double> hb, ht, cap, inv_den, g_inv_den, v_bottom, v_top, gk;
     std::vector<int> id;  // per node
   };
   std::vector<RodFactors> factors_;  // per part  // per part: range of each rod before the in-plane step

@@ -68,6 +68,11 @@ void update_geometry(PlyThermal& ply) {
   if (first) std::fill(ply.area.begin(), ply.area.end(), 0.0);
   std::fill(ply.k2d.val.begin(), ply.k2d.val.end(), 0.0);
   const double k11 = part.thermal.k11, k22 = part.thermal.k22;
+  const bool varies = part.thermal.conductivity_varies;
+  if (varies) {
+    ply.g11.resize(6 * static_cast<std::size_t>(part.num_elements));
+    ply.g22.resize(6 * static_cast<std::size_t>(part.num_elements));
+  }
   for (int el = 0; el < part.num_elements; ++el) {
     const int* t = &part.triangles[3 * el];
     const Vec3 x0 = sdk::load3(x, t[0]), x1 = sdk::load3(x, t[1]), x2 = sdk::load3(x, t[2]);
@@ -97,8 +102,40 @@ void update_geometry(PlyThermal& ply) {
       for (int b = 0; b < 3; ++b)
         ply.k2d.val[ply.k2d.elem_slot[9 * el + 3 * a + b]] += A * (k11 * gf[a] * gf[b] + k22 * gt[a] * gt[b]);
     }
+    if (varies) {
+      double* u = &ply.g11[6 * static_cast<std::size_t>(el)];
+      double* v = &ply.g22[6 * static_cast<std::size_t>(el)];
+      int q = 0;
+      for (int a = 0; a < 3; ++a)
+        for (int b = a; b < 3; ++b, ++q) {
+          u[q] = A * gf[a] * gf[b];
+          v[q] = A * gt[a] * gt[b];
+        }
+    }
   }
   ply.area_set = true;
+  update_inplane_bounds(ply);
+}
+
+void assemble_inplane(PlyThermal& ply, const double* k11, const double* k22, std::size_t stride) {
+  const sdk::PartView& part = *ply.view;
+  double* val = ply.k2d.val.data();
+  std::fill(ply.k2d.val.begin(), ply.k2d.val.end(), 0.0);
+  constexpr int kPair[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  for (int el = 0; el < part.num_elements; ++el) {
+    const int* t = &part.triangles[3 * el];
+    const double c11 = (k11[stride * t[0]] + k11[stride * t[1]] + k11[stride * t[2]]) / 3.0;
+    const double c22 = (k22[stride * t[0]] + k22[stride * t[1]] + k22[stride * t[2]]) / 3.0;
+    const double* u = &ply.g11[6 * static_cast<std::size_t>(el)];
+    const double* v = &ply.g22[6 * static_cast<std::size_t>(el)];
+    const int* slot = &ply.k2d.elem_slot[9 * static_cast<std::size_t>(el)];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) val[slot[3 * a + b]] += c11 * u[kPair[a][b]] + c22 * v[kPair[a][b]];
+  }
+  update_inplane_bounds(ply);
+}
+
+void update_inplane_bounds(PlyThermal& ply) {
   // Gershgorin bound of C^-1 K for the in-plane problem (h cancels).
   double rate = 0;
   for (int i = 0; i < ply.k2d.n; ++i) {

@@ -38,6 +38,10 @@ struct PlyThermal {
   std::vector<double> area;  // lumped node area of the initial configuration, m^2
   bool area_set = false;
   Csr k2d;                 // in-plane conduction of one unit thickness: K_ab = A grad Na . Ks grad Nb (W/(m K))
+  // Per element, 6 values each (ab = 00, 01, 02, 11, 12, 22): A (grad Na . f)
+  // (grad Nb . f) and the same across the fibres, for a conductivity that
+  // varies from element to element (assemble_inplane).
+  std::vector<double> g11, g22;
   double inplane_rate = 0; // Gershgorin bound of max eigenvalue of C^-1 K in plane, 1/s
   bool inplane_positive_offdiag = false;  // K has K_ij > 0 (i != j): not an M-matrix, flux limiting needed
 };
@@ -45,6 +49,13 @@ struct PlyThermal {
 // Sets nz, weights, pattern and values for the current geometry of `part`.
 void setup_ply(PlyThermal& ply, const sdk::PartView& part, int nz);
 void update_geometry(PlyThermal& ply);
+
+// Assembles k2d (and the rate and sign flags) for a conductivity that
+// varies over the ply: element e takes the mean of its three nodes' values
+// k11[stride * node], k22[stride * node] (W/(m K)).
+void assemble_inplane(PlyThermal& ply, const double* k11, const double* k22, std::size_t stride);
+// The in-plane rate bound and the sign flag of the current k2d.
+void update_inplane_bounds(PlyThermal& ply);
 
 // Largest forward-Euler step of the rods, Robin faces and (explicit) links
 // that keeps the discrete maximum principle: min_i C_i / K_ii, s.

@@ -47,6 +47,7 @@ class Layered3d final : public sdk::ThermalSplitter {
     });
   }
   int values_per_node(int part) const override { return plies_[part].nz; }
+  bool takes_conductivity_field() const override { return true; }
   sdk::Status capacities(int part, std::span<double> cap) const override {
     std::copy(cap_.begin() + offset_[part], cap_.begin() + offset_[part + 1], cap.begin());
     return sdk::Status::success();
@@ -212,7 +213,11 @@ class Layered3d final : public sdk::ThermalSplitter {
 
   void assemble_if_needed(const sdk::ThermalStepInput& in) {
     const bool links_changed = in.links_changed && !same_links(in.links, last_links_);
-    bool changed = !assembled_ || in.geometry_changed || links_changed;
+    // A conductivity that depends on the temperature changes K at every step.
+    bool field = false;
+    for (const auto& k : in.conductivity) field = field || !k.empty();
+    bool changed = !assembled_ || in.geometry_changed || links_changed || field || assembled_with_field_;
+    assembled_with_field_ = field;
     if (links_changed) last_links_.assign(in.links.begin(), in.links.end());
     if (!changed) {
       std::size_t q = 0;
@@ -238,6 +243,10 @@ class Layered3d final : public sdk::ThermalSplitter {
       const double g = ply.k33 / ply.e;
       const auto& f = in.faces[p];
       const auto& m = ply.k2d;
+      if (p < in.conductivity.size() && !in.conductivity[p].empty()) {
+        add_varying(in.conductivity[p].data(), p, f, trip);
+        continue;
+      }
       for (int i = 0; i < ply.view->num_nodes; ++i) {
         const int o = offset_[p] + nz * i;
         const double A = ply.area[i];
@@ -284,7 +293,39 @@ class Layered3d final : public sdk::ThermalSplitter {
       }
   }
 
+  // K's triplets of a ply whose conductivity varies: every slice with the
+  // conductivity of its values (the element's mean of its three nodes), every
+  // layer with k33 at the mean of its two values.
+  void add_varying(const double* kf, std::size_t p, const sdk::FaceConditions& f,
+                   std::vector<Eigen::Triplet<double>>& trip) {
+    PlyThermal& ply = plies_[p];
+    const int nz = ply.nz;
+    const auto& m = ply.k2d;
+    const std::size_t stride = 3 * static_cast<std::size_t>(nz);
+    for (int k = 0; k < nz; ++k) {
+      assemble_inplane(ply, kf + 3 * k, kf + 3 * k + 1, stride);
+      for (int i = 0; i < ply.view->num_nodes; ++i)
+        for (int q = m.row_start[i]; q < m.row_start[i + 1]; ++q)
+          trip.emplace_back(offset_[p] + nz * i + k, offset_[p] + nz * m.col[q] + k, m.val[q] * ply.w[k]);
+    }
+    for (int i = 0; i < ply.view->num_nodes; ++i) {
+      const int o = offset_[p] + nz * i;
+      const double A = ply.area[i];
+      const double* ki = kf + stride * i;
+      for (int k = 0; k + 1 < nz; ++k) {
+        const double g = 0.5 * (ki[3 * k + 2] + ki[3 * k + 5]) / ply.e;
+        trip.emplace_back(o + k, o + k, g * A);
+        trip.emplace_back(o + k + 1, o + k + 1, g * A);
+        trip.emplace_back(o + k, o + k + 1, -g * A);
+        trip.emplace_back(o + k + 1, o + k, -g * A);
+      }
+      trip.emplace_back(o, o, f.h_bottom[i] * A);
+      trip.emplace_back(o + nz - 1, o + nz - 1, f.h_top[i] * A);
+    }
+  }
+
   bool implicit_ = true;
+  bool assembled_with_field_ = false;
   double dt_safety_ = 0.9;
   std::vector<PlyThermal> plies_;
   std::vector<int> offset_;

@@ -49,6 +49,12 @@ struct ThermalStepInput {
   std::span<const HeatLink> links;                // ply-to-ply conductances
   bool geometry_changed = false;                  // parts' x or fibre moved since last step
   bool links_changed = false;                     // links differ from the last step
+  // Temperature-dependent conductivity (advance only; step_limits takes
+  // ThermalProps, the table's largest values). One span per part: empty
+  // where the ply's conductivity is constant, else k11, k22, k33 (W/(m K))
+  // of every temperature value at the start of the step, 3 per value in the
+  // order of the temperatures (node-major, bottom to top).
+  std::span<const std::span<const double>> conductivity;
 };
 
 struct ThermalStepReport {
@@ -73,6 +79,10 @@ class ThermalSplitter {
   // Advances every part's temperature from t to t + in.dt, in place.
   virtual Status advance(const ThermalStepInput& in, std::span<const std::span<double>> temperature,
                          ThermalStepReport* report) = 0;
+  // True when advance() uses ThermalStepInput::conductivity. A job whose
+  // ply has a conductivity table is refused with a splitter that says false
+  // (the default), rather than run with constant values.
+  virtual bool takes_conductivity_field() const { return false; }
   // Checkpoints (state.hpp): whatever the splitter carries from one step to
   // the next beyond the kernel's temperatures and its results depend on.
   // Work arrays and factorisations it forms again from its inputs need not

@@ -16,6 +16,11 @@ struct ThermalProps {
   double k11 = 0.0;            // W/(m K), along the fibres (warp)
   double k22 = 0.0;            // W/(m K), across the fibres, in the plane
   double k33 = 0.0;            // W/(m K), through the thickness
+  // For a conductivity table k(T): k11, k22, k33 above are the table's
+  // largest values (step limits taken with them hold for any temperature),
+  // and every thermal step passes the values at the step's temperatures
+  // (ThermalStepInput::conductivity).
+  bool conductivity_varies = false;
 };
 
 // One ply (a shell part). Arrays are stable for the life of the run: the
