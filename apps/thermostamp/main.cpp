@@ -212,6 +212,14 @@ int cmd_run(const Args& a, bool validate_only) {
       for (const auto& m : job.materials) {
         if (m.crystallisation.present)
           std::cout << "material '" << m.name << "': " << ts::describe_crystallisation(m) << "\n";
+        if (const auto& k = m.conductivity_table; !k.empty()) {
+          std::snprintf(line, sizeof line,
+                        "material '%s': conductivity from %zu rows, %g to %g degC, k33 %g to %g W/(m K) (steps with "
+                        "the largest: %g, %g, %g)\n",
+                        m.name.c_str(), k.size(), k.front()[0], k.back()[0], m.k33_range()[0], m.k33_range()[1],
+                        m.conductivity[0], m.conductivity[1], m.conductivity[2]);
+          std::cout << line;
+        }
         if (m.specific_heat_table.empty()) continue;
         std::snprintf(line, sizeof line,
                       "material '%s': specific heat from %zu rows, %g to %g degC, %g to %g J/(kg K) (steps with %g)\n",

@@ -1,5 +1,6 @@
 #pragma once
 // The validated content of a job file (format thermostamp-job/1).
+#include <algorithm>
 #include <array>
 #include <filesystem>
 #include <optional>
@@ -27,6 +28,15 @@ struct MaterialDef {
   // temperature (linear between the rows, held beyond them); empty for a
   // constant one (a table of equal rows too).
   std::vector<std::array<double, 4>> conductivity_table;
+  // The smallest and largest k33 of the table (W/(m K)), for the log.
+  std::array<double, 2> k33_range() const {
+    std::array<double, 2> r{conductivity[2], conductivity[2]};
+    for (const auto& row : conductivity_table) {
+      r[0] = std::min(r[0], row[3]);
+      r[1] = std::max(r[1], row[3]);
+    }
+    return r;
+  }
   bool has_thermal = false;
   json membrane, bending;  // null when absent
   // The crystallisation kinetics of the matrix (Nakamura), see

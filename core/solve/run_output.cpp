@@ -242,6 +242,15 @@ void Simulation::Run::log_start() const {
       }
   if (job.thermal)
     for (const auto& st : parts)
+      if (!st->kt.empty()) {
+        const MaterialDef& m = job.materials[st->def->material];
+        const auto& rows = m.conductivity_table;
+        log->info("part '{}': conductivity from {} rows between {:g} and {:g} degC, k33 {:g} to {:g} W/(m K) (each "
+                  "thermal step takes the values at its start; the step is chosen with the largest)",
+                  st->def->name, rows.size(), rows.front()[0], rows.back()[0], m.k33_range()[0], m.k33_range()[1]);
+      }
+  if (job.thermal)
+    for (const auto& st : parts)
       if (!st->kin.empty())
         log->info("part '{}': {}", st->def->name, describe_crystallisation(job.materials[st->def->material]));
   for (std::size_t p = 0; p < mech.size(); ++p)

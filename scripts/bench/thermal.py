@@ -2,7 +2,7 @@
 """Thermal benchmarks: cost of the adi splitter per node-layer-step against
 mesh size and threads, and adi against layered3d on the contact patch.
 
-Usage: scripts/bench/thermal.py [--quick] [--specific-heat | --crystallisation | --melting]
+Usage: scripts/bench/thermal.py [--quick] [--specific-heat | --crystallisation | --melting | --conductivity]
 (after a Release build in build/)
 --specific-heat runs only the comparison of a constant specific heat with
 a table whose peak the plate cools through; --crystallisation only the
@@ -11,7 +11,9 @@ every value crystallises at every step (the rate from rows, and from
 the Gaussian); --melting only the comparison of a plate heated without
 kinetics, with kinetics whose rate is zero there, and with kinetics whose
 every value melts at every step (melting rows from 250 to 350 degC, a
-crystalline plate heated from 250 degC).
+crystalline plate heated from 250 degC); --conductivity only the
+comparison of a constant conductivity with rows (the mean operator in
+plane, and every layer's own), on one ply and on two linked plies.
 Prints Markdown tables (copied into docs/benchmarks.md).
 """
 import json
@@ -48,8 +50,12 @@ MELTING = {
 }
 
 
+# A conductivity that follows the temperature over the plate's range.
+K_ROWS = [[240.0, 3.5, 0.25, 0.25], [300.0, 3.89, 0.31, 0.35]]
+
+
 def plate_job(divisions, layers, splitter, steps, dt, linked=False, specific_heat=1775.0, crystallisation=None,
-              heated=False):
+              heated=False, conductivity=(3.89, 0.31, 0.31), in_plane=None):
     size = divisions * 0.001  # 1 mm elements
     part = {
         "name": "ply", "thickness": 0.0005, "material": "m", "fibre_direction": [1, 1, 0],
@@ -75,15 +81,18 @@ def plate_job(divisions, layers, splitter, steps, dt, linked=False, specific_hea
                   "conductance": 1000.0},
                  {"type": "heat_exchange", "part": "upper", "face": "top", "h": 1000.0, "ambient": 260.0},
                  {"type": "heat_exchange", "part": "ply", "face": "bottom", "h": 500.0, "ambient": 250.0}]
-    material = {"density": 1294.0, "specific_heat": specific_heat, "conductivity": [3.89, 0.31, 0.31]}
+    material = {"density": 1294.0, "specific_heat": specific_heat, "conductivity": list(conductivity)}
     if crystallisation:
         material["crystallisation"] = crystallisation
+    thermal = {"splitter": splitter, "through_thickness": "implicit", "dt": dt}
+    if in_plane:
+        thermal["in_plane"] = in_plane
     return {
         "format": "thermostamp-job/1", "name": "bench",
         "time": {"end": steps * dt},
         "materials": {"m": material},
         "parts": parts, "interactions": inter,
-        "solvers": {"mechanics": None, "thermal": {"splitter": splitter, "through_thickness": "implicit", "dt": dt}},
+        "solvers": {"mechanics": None, "thermal": thermal},
         "output": {"interval": steps * dt, "fields": ["temperature_mean"], "checkpoint_at_end": False},
     }
 
@@ -149,6 +158,27 @@ def main():
                   lambda n: [plate_job(n, layers, "adi", steps, dt, heated=True),
                              plate_job(n, layers, "adi", steps, dt, crystallisation=MELTING["zero_rate"], heated=True),
                              plate_job(n, layers, "adi", steps, dt, crystallisation=MELTING["melting"], heated=True)])
+        return
+    if "--conductivity" in sys.argv:
+        three_way(sizes, layers, steps,
+                  "### adi (implicit), a constant conductivity against rows %s, one ply, %d layers, %d steps\n"
+                  % (K_ROWS, layers, steps),
+                  "| nodes | threads | constant: ns per node-layer-step | rows: ns | ratio | rows, in_plane layers: ns | ratio |",
+                  lambda n: [plate_job(n, layers, "adi", steps, dt),
+                             plate_job(n, layers, "adi", steps, dt, conductivity=K_ROWS),
+                             plate_job(n, layers, "adi", steps, dt, conductivity=K_ROWS, in_plane="layers")])
+        print()
+        print("### two plies in full contact (linked rods), constant conductivity against rows, %d layers, %d steps, "
+              "1 thread\n" % (layers, steps))
+        print("| nodes | splitter | constant: ns per node-layer-step | rows: ns | ratio |")
+        print("|---|---|---|---|---|")
+        for n in sizes[:2]:
+            for sp in ("adi", "layered3d"):
+                nodes = 2 * (n + 1) ** 2
+                per = nodes * (layers + 1) * steps / 1e9
+                a = run(plate_job(n, layers, sp, steps, dt, linked=True), 1)["wall_time_s"]
+                b = run(plate_job(n, layers, sp, steps, dt, linked=True, conductivity=K_ROWS), 1)["wall_time_s"]
+                print("| %d | %s | %.2f | %.2f | %.2f |" % (nodes, sp, a / per, b / per, b / a))
         return
     print("### adi (implicit) cost per node-layer-step, one ply, %d layers, %d steps\n" % (layers, steps))
     print("| nodes | threads | wall time (s) | ns per node-layer-step | speed-up |")

@@ -142,8 +142,7 @@ sdk::Status SplitThermal::step_limits(const sdk::ThermalStepInput& in, double* s
 
 // Thomas forward elimination of (C/dt + K_rod + Robin) for one rod (faces
 // hb, ht; layer conductances gk, gk[0] = gk[nz] = 0) into slot `id` of rf
-// (its arrays hold at least nz (id + 1) values), and the rod's responses to
-// a unit flux on each face: M^-1 e_bottom, M^-1 e_top.
+// (its arrays hold at least nz (id + 1) values), and the rod's responses.
 void SplitThermal::factor_rod(RodFactors& rf, int id, int nz, double hb, double ht, const double* gk) {
   const std::size_t o = static_cast<std::size_t>(nz) * id;
   double* inv = rf.inv_den.data() + o;
@@ -159,6 +158,16 @@ void SplitThermal::factor_rod(RodFactors& rf, int id, int nz, double hb, double 
     rf.gk[o + k] = gk[k];
     cp_prev = (k + 1 < nz ? -gk[k + 1] : 0.0) / den;
   }
+  rod_responses(rf, id, nz);
+}
+
+// The responses of the rod in slot `id` to a unit flux on each face:
+// M^-1 e_bottom, M^-1 e_top (for the rods joined by links).
+void SplitThermal::rod_responses(RodFactors& rf, int id, int nz) {
+  const std::size_t o = static_cast<std::size_t>(nz) * id;
+  const double* inv = rf.inv_den.data() + o;
+  const double* gi = rf.g_inv_den.data() + o;
+  const double* gk = rf.gk.data() + o;
   for (int face = 0; face < 2; ++face) {
     double* v = (face == 0 ? rf.v_bottom : rf.v_top).data() + o;
     std::fill(v, v + nz, 0.0);
@@ -171,6 +180,72 @@ void SplitThermal::factor_rod(RodFactors& rf, int id, int nz, double hb, double 
     for (int k = nz - 2; k >= 0; --k) v[k] += gi[k] * v[k + 1];
   }
 }
+
+namespace {
+// The eliminations of R rods of a ply whose conductivity varies (slots
+// i0 .. i0 + R - 1 = their nodes), interleaved so that the latencies of
+// their divisions overlap; one division per value. gk[k]: k33 at the mean
+// of values k - 1 and k over the layer thickness.
+template <int R>
+void eliminate_rods(int i0, int nz, double e, const double* cap, const double* hb, const double* ht,
+                    const double* kf, double* inv_den, double* g_inv_den, double* gk_out) {
+  double cp_prev[R], g_lo[R];
+  for (int r = 0; r < R; ++r) cp_prev[r] = g_lo[r] = 0.0;
+  for (int k = 0; k < nz; ++k)
+    for (int r = 0; r < R; ++r) {
+      const std::size_t v = static_cast<std::size_t>(nz) * (i0 + r) + k;
+      const double g_hi = k + 1 < nz ? 0.5 * (kf[3 * v + 2] + kf[3 * v + 5]) / e : 0.0;
+      double b = cap[k] + g_lo[r] + g_hi;
+      if (k == 0) b += hb[i0 + r];
+      if (k == nz - 1) b += ht[i0 + r];
+      const double inv = 1.0 / (b + g_lo[r] * cp_prev[r]);
+      inv_den[v] = inv;
+      g_inv_den[v] = g_hi * inv;
+      gk_out[v] = g_lo[r];
+      cp_prev[r] = -g_hi * inv;
+      g_lo[r] = g_hi;
+    }
+}
+
+// One implicit step of R rods of a ply whose conductivity varies, not
+// joined by links: elimination and substitution in one pass, nothing kept
+// (c' of the R rods in `work`, R nz values). The same arithmetic as
+// eliminate_rods followed by solve_rods.
+template <int R>
+void solve_rods_varying(int i0, int nz, double e, const double* cap, const double* hb, const double* ht,
+                        const double* tb, const double* tt, const double* kf, double* t, double* work) {
+  double cp_prev[R], g_lo[R], prev[R];
+  for (int r = 0; r < R; ++r) cp_prev[r] = g_lo[r] = prev[r] = 0.0;
+  for (int k = 0; k < nz; ++k)
+    for (int r = 0; r < R; ++r) {
+      const int i = i0 + r;
+      const std::size_t v = static_cast<std::size_t>(nz) * i + k;
+      const double g_hi = k + 1 < nz ? 0.5 * (kf[3 * v + 2] + kf[3 * v + 5]) / e : 0.0;
+      double b = cap[k] + g_lo[r] + g_hi;
+      double rr = cap[k] * t[v];
+      if (k == 0) {
+        b += hb[i];
+        rr += hb[i] * tb[i];
+      }
+      if (k == nz - 1) {
+        b += ht[i];
+        rr += ht[i] * tt[i];
+      }
+      const double inv = 1.0 / (b + g_lo[r] * cp_prev[r]);
+      prev[r] = (rr + g_lo[r] * prev[r]) * inv;
+      t[v] = prev[r];
+      work[static_cast<std::size_t>(nz) * r + k] = g_hi * inv;
+      cp_prev[r] = -g_hi * inv;
+      g_lo[r] = g_hi;
+    }
+  for (int k = nz - 2; k >= 0; --k)
+    for (int r = 0; r < R; ++r) {
+      const std::size_t v = static_cast<std::size_t>(nz) * (i0 + r) + k;
+      prev[r] = t[v] + work[static_cast<std::size_t>(nz) * r + k] * prev[r];
+      t[v] = prev[r];
+    }
+}
+}  // namespace
 
 bool SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
   bool any = false;
@@ -199,16 +274,16 @@ bool SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
     if (kf) {
       // A conductivity that depends on the temperature: every rod has its
       // own layer conductances, k33 at the mean of the layer's two values.
+      // Only the rods joined by links keep factors (and face responses);
+      // rods_implicit solves the others in one pass.
       size_for(n);
-      std::vector<std::vector<double>>& work = thread_work_;
-#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * nz > kParallelValues)
+      const char* linked = linked_[p].data();
       for (int i = 0; i < n; ++i) {
-        double* gk = work[thread_id()].data();  // nz + 1 values
-        const double* ki = kf + 3 * static_cast<std::size_t>(nz) * i;
-        gk[0] = gk[nz] = 0.0;
-        for (int k = 1; k < nz; ++k) gk[k] = 0.5 * (ki[3 * (k - 1) + 2] + ki[3 * k + 2]) / ply.e;
         rf.id[i] = i;
-        factor_rod(rf, i, nz, f.h_bottom[i], f.h_top[i], gk);
+        if (!linked[i]) continue;
+        eliminate_rods<1>(i, nz, ply.e, rf.cap.data(), f.h_bottom.data(), f.h_top.data(), kf, rf.inv_den.data(),
+                          rf.g_inv_den.data(), rf.gk.data());
+        rod_responses(rf, i, nz);
       }
       continue;
     }
@@ -245,11 +320,29 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
     const char* linked = linked_[p].data();
     const RodGroupData d{nz, rf.gk.data(), cap, rf.inv_den.data(), rf.g_inv_den.data(), rf.id.data(), f.h_bottom.data(),
                          f.h_top.data(), f.t_bottom.data(), f.t_top.data(), t};
+    const double* kf = conductivity(in, p);
     const int groups = (n + kRodGroup - 1) / kRodGroup;
 #pragma omp parallel for schedule(static) if (static_cast<long long>(n) * nz > kParallelValues)
     for (int gidx = 0; gidx < groups; ++gidx) {
       const int i0 = gidx * kRodGroup;
-      if (i0 + kRodGroup <= n) {
+      if (kf) {
+        double* work = thread_work_[thread_id()].data();
+        bool any_linked = i0 + kRodGroup > n;
+        for (int i = i0; i < std::min(n, i0 + kRodGroup); ++i) any_linked = any_linked || linked[i];
+        if (!any_linked) {
+          solve_rods_varying<kRodGroup>(i0, nz, ply.e, cap, f.h_bottom.data(), f.h_top.data(), f.t_bottom.data(),
+                                        f.t_top.data(), kf, t, work);
+        } else {
+          for (int i = i0; i < std::min(n, i0 + kRodGroup); ++i) {
+            if (linked[i]) {
+              solve_rods<1>(d, i);
+            } else {
+              solve_rods_varying<1>(i, nz, ply.e, cap, f.h_bottom.data(), f.h_top.data(), f.t_bottom.data(),
+                                    f.t_top.data(), kf, t, work);
+            }
+          }
+        }
+      } else if (i0 + kRodGroup <= n) {
         solve_rods<kRodGroup>(d, i0);
       } else {
         for (int i = i0; i < n; ++i) solve_rods<1>(d, i);

@@ -48,6 +48,7 @@ class SplitThermal : public sdk::ThermalSplitter {
   bool update_rod_factors(const sdk::ThermalStepInput& in);
   struct RodFactors;
   static void factor_rod(RodFactors& rf, int id, int nz, double hb, double ht, const double* gk);
+  static void rod_responses(RodFactors& rf, int id, int nz);
   // The part's conductivity values of this step (3 per value), or null.
   static const double* conductivity(const sdk::ThermalStepInput& in, std::size_t part) {
     return part < in.conductivity.size() && !in.conductivity[part].empty() ? in.conductivity[part].data() : nullptr;

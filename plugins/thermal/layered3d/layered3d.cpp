@@ -218,6 +218,9 @@ class Layered3d final : public sdk::ThermalSplitter {
     for (const auto& k : in.conductivity) field = field || !k.empty();
     bool changed = !assembled_ || in.geometry_changed || links_changed || field || assembled_with_field_;
     assembled_with_field_ = field;
+    // With a varying conductivity K keeps its pattern from step to step: the
+    // values go straight into the places found at the last full assembly.
+    const bool refill = field && slots_valid_ && !links_changed;
     if (links_changed) last_links_.assign(in.links.begin(), in.links.end());
     if (!changed) {
       std::size_t q = 0;
@@ -236,7 +239,8 @@ class Layered3d final : public sdk::ThermalSplitter {
         last_h_.push_back(f.h_bottom[i]);
         last_h_.push_back(f.h_top[i]);
       }
-    std::vector<Eigen::Triplet<double>> trip;
+    std::vector<Eigen::Triplet<double>>& trip = trip_;
+    trip.clear();
     for (std::size_t p = 0; p < plies_.size(); ++p) {
       const PlyThermal& ply = plies_[p];
       const int nz = ply.nz;
@@ -280,6 +284,17 @@ class Layered3d final : public sdk::ThermalSplitter {
         trip.emplace_back(ib, ia, -g);
       }
     }
+    if (refill) {
+      double* val = k_.valuePtr();
+      std::fill(val, val + k_.nonZeros(), 0.0);
+      for (std::size_t t = 0; t < trip.size(); ++t) val[slot_[t]] += trip[t].value();
+      for (int r = 0; r < n_; ++r) {
+        tri_sub_[r] = tri_slot_[3 * r] >= 0 ? val[tri_slot_[3 * r]] : 0.0;
+        tri_diag_[r] = val[tri_slot_[3 * r + 1]];
+        tri_sup_[r] = tri_slot_[3 * r + 2] >= 0 ? val[tri_slot_[3 * r + 2]] : 0.0;
+      }
+      return;
+    }
     k_.resize(n_, n_);
     k_.setFromTriplets(trip.begin(), trip.end());
     k_.makeCompressed();
@@ -291,6 +306,25 @@ class Layered3d final : public sdk::ThermalSplitter {
         tri_diag_[r] = k_.coeff(r, r);
         tri_sup_[r] = r + 1 < rod_start_[q + 1] ? k_.coeff(r, r + 1) : 0.0;
       }
+    slots_valid_ = field;
+    if (field) {
+      // The place of every triplet (and of the through-thickness blocks) in K's values.
+      const int* outer = k_.outerIndexPtr();
+      const int* inner = k_.innerIndexPtr();
+      auto place = [&](int r, int c) {
+        const int* it = std::lower_bound(inner + outer[r], inner + outer[r + 1], c);
+        return it != inner + outer[r + 1] && *it == c ? static_cast<int>(it - inner) : -1;
+      };
+      slot_.resize(trip.size());
+      for (std::size_t t = 0; t < trip.size(); ++t) slot_[t] = place(trip[t].row(), trip[t].col());
+      tri_slot_.assign(3 * static_cast<std::size_t>(n_), -1);
+      for (int q = 0; q + 1 < static_cast<int>(rod_start_.size()); ++q)
+        for (int r = rod_start_[q]; r < rod_start_[q + 1]; ++r) {
+          if (r > rod_start_[q]) tri_slot_[3 * r] = place(r, r - 1);
+          tri_slot_[3 * r + 1] = place(r, r);
+          if (r + 1 < rod_start_[q + 1]) tri_slot_[3 * r + 2] = place(r, r + 1);
+        }
+    }
   }
 
   // K's triplets of a ply whose conductivity varies: every slice with the
@@ -326,6 +360,9 @@ class Layered3d final : public sdk::ThermalSplitter {
 
   bool implicit_ = true;
   bool assembled_with_field_ = false;
+  bool slots_valid_ = false;
+  std::vector<Eigen::Triplet<double>> trip_;
+  std::vector<int> slot_, tri_slot_;  // places in K's values: of each triplet; 3 per value (sub, diag, sup)
   double dt_safety_ = 0.9;
   std::vector<PlyThermal> plies_;
   std::vector<int> offset_;
