@@ -1,10 +1,13 @@
 // The specific heat table c(T) and its enthalpy H(T) = int_0^T c, against
-// closed-form integrals of the piecewise linear c.
+// closed-form integrals of the piecewise linear c; the conductivity table.
 #include <gtest/gtest.h>
 
 #include <random>
 
+#include "job/job.hpp"
+#include "solve/conductivity.hpp"
 #include "solve/heat_capacity.hpp"
+#include "test_support.hpp"
 
 namespace ts {
 namespace {
@@ -49,6 +52,46 @@ TEST(HeatCapacity, AdvanceInvertsTheEnthalpy) {
   EXPECT_NEAR(cp.advance(230.0, -15000.0 - 1775.0 * 10.0), 220.0, 1e-9);
   EXPECT_NEAR(cp.advance(400.0, -2000.0 * 50.0), 350.0, 1e-9);
   EXPECT_NEAR(cp.advance(100.0, 1500.0 * 50.0), 150.0, 1e-9);
+}
+
+// The conductivity table k(T): linear between rows, held beyond them, each
+// column on its own; and the job reader's forms (a table of equal rows is
+// a constant; a table's largest values are what the step limits take).
+TEST(ConductivityTable, InterpolatesEachColumnAndHoldsBeyondTheRows) {
+  const ConductivityTable kt({{200.0, 3.0, 0.2, 0.1}, {250.0, 4.0, 0.3, 0.5}, {300.0, 4.0, 0.5, 0.3}});
+  double k[3];
+  kt.value(100.0, k);
+  EXPECT_EQ(k[0], 3.0);
+  EXPECT_EQ(k[2], 0.1);
+  kt.value(225.0, k);
+  EXPECT_NEAR(k[0], 3.5, 1e-15);
+  EXPECT_NEAR(k[1], 0.25, 1e-15);
+  EXPECT_NEAR(k[2], 0.3, 1e-15);
+  kt.value(250.0, k);
+  EXPECT_NEAR(k[2], 0.5, 1e-15);
+  kt.value(290.0, k);
+  EXPECT_NEAR(k[1], 0.46, 1e-15);
+  EXPECT_NEAR(k[2], 0.34, 1e-15);
+  kt.value(1000.0, k);
+  EXPECT_EQ(k[1], 0.5);
+  EXPECT_EQ(k[2], 0.3);
+}
+
+TEST(ConductivityTable, JobFormsAndLargestValues) {
+  json d = test::ply_job("adi", 8, 1.0, 0.1);
+  d["materials"]["ply"]["conductivity"] = {{200.0, 3.0, 0.2, 0.1}, {250.0, 4.0, 0.3, 0.5}, {300.0, 4.0, 0.5, 0.3}};
+  Job j = parse_job(d, "job.json");
+  EXPECT_EQ(j.materials[0].conductivity_table.size(), 3u);
+  EXPECT_EQ(j.materials[0].conductivity, (std::array<double, 3>{4.0, 0.5, 0.5}));
+  EXPECT_EQ(j.materials[0].k33_range(), (std::array<double, 2>{0.1, 0.5}));
+  d["materials"]["ply"]["conductivity"] = {{200.0, 3.0, 0.2, 0.1}, {300.0, 3.0, 0.2, 0.1}};
+  j = parse_job(d, "job.json");
+  EXPECT_TRUE(j.materials[0].conductivity_table.empty());
+  EXPECT_EQ(j.materials[0].conductivity, (std::array<double, 3>{3.0, 0.2, 0.1}));
+  d["materials"]["ply"]["conductivity"] = {3.89, 0.31, 0.31};
+  j = parse_job(d, "job.json");
+  EXPECT_TRUE(j.materials[0].conductivity_table.empty());
+  EXPECT_EQ(j.materials[0].conductivity[0], 3.89);
 }
 
 }  // namespace

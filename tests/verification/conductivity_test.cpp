@@ -181,6 +181,50 @@ TEST(ConductivityTable, CooledSlabAgainstAFineReference) {
   }
 }
 
+// Two plies on a die (300 degC plies, 260 degC die, 1000 W/(m^2 K)), joined
+// by a ply/ply conductance of 300 W/(m^2 K), uniform in plane: adi's rods
+// joined by links (the interface system with every rod's own factors) and
+// layered3d's one 3D system (conjugate gradients) discretise the same
+// problem the same way through the thickness, and without in-plane
+// gradients the split adds nothing: they must agree to the solvers'
+// tolerance, 1e-8 K (5e-11 K here), while the table moves the
+// profiles by more than 0.5 K from the constant k33 of its largest value.
+TEST(ConductivityTable, LinkedPliesAdiAgainstLayered3d) {
+  auto job = [](const std::string& splitter, bool table) {
+    json j = ply_job(splitter, 12, 2.0, 0.5);
+    json lower = j["parts"][0];
+    lower["name"] = "lower";
+    lower["mesh"]["origin"] = {0, 0, 0.00025};
+    json upper = lower;
+    upper["name"] = "upper";
+    upper["mesh"]["origin"] = {0, 0, 0.00075};
+    j["parts"] = {lower, upper};
+    j["materials"]["ply"]["conductivity"] =
+        table ? json{{260.0, 3.89, 0.31, 0.15}, {300.0, 3.89, 0.31, 0.45}} : json{3.89, 0.31, 0.45};
+    j["tools"] = {{{"name", "die"}, {"surface", {{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 0, 1}}}},
+                   {"temperature", 260.0}}};
+    j["interactions"] = {{{"type", "contact"}, {"between", {"die", "lower"}}, {"conductance", 1000.0}},
+                         {{"type", "contact"}, {"between", {"upper", "lower"}}, {"conductance", 300.0}}};
+    j["output"]["probes"] = {
+        {{"name", "lo"}, {"part", "lower"}, {"at", {0.005, 0.005, 0.00025}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}},
+        {{"name", "up"}, {"part", "upper"}, {"at", {0.005, 0.005, 0.00075}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}}};
+    j["solvers"]["thermal"]["dt"] = 0.01;
+    return j;
+  };
+  const JobRun adi = run_json(job("adi", true)), l3d = run_json(job("layered3d", true)), flat = run_json(job("adi", false));
+  for (const JobRun* r : {&adi, &l3d, &flat}) ASSERT_TRUE(r->result.ok) << r->result.error;
+  double diff = 0, moved = 0;
+  for (std::size_t s = 0; s < adi.result.probes.size(); ++s)
+    for (std::size_t k = 0; k < adi.result.probes[s].values.size(); ++k) {
+      diff = std::max(diff, std::abs(adi.result.probes[s].values[k] - l3d.result.probes[s].values[k]));
+      moved = std::max(moved, std::abs(adi.result.probes[s].values[k] - flat.result.probes[s].values[k]));
+    }
+  std::printf("adi against layered3d: %.3g K; the table against k33 = 0.45: %.3f K\n", diff, moved);
+  EXPECT_LT(diff, 1e-8);
+  EXPECT_GT(moved, 0.5);
+  EXPECT_LT(adi.result.heat_balance_error, 1e-10);
+}
+
 // In-plane: with c(T) and k(T) in proportion, c = c0 f(T), k = k0 f(T),
 // the Kirchhoff variable u = int_T0^T f satisfies the linear diffusion
 // equation with the diffusivity of (k0, c0): a cosine mode of u decays at

@@ -182,29 +182,27 @@ void SplitThermal::rod_responses(RodFactors& rf, int id, int nz) {
 }
 
 namespace {
-// The eliminations of R rods of a ply whose conductivity varies (slots
-// i0 .. i0 + R - 1 = their nodes), interleaved so that the latencies of
-// their divisions overlap; one division per value. gk[k]: k33 at the mean
-// of values k - 1 and k over the layer thickness.
-template <int R>
-void eliminate_rods(int i0, int nz, double e, const double* cap, const double* hb, const double* ht,
-                    const double* kf, double* inv_den, double* g_inv_den, double* gk_out) {
-  double cp_prev[R], g_lo[R];
-  for (int r = 0; r < R; ++r) cp_prev[r] = g_lo[r] = 0.0;
-  for (int k = 0; k < nz; ++k)
-    for (int r = 0; r < R; ++r) {
-      const std::size_t v = static_cast<std::size_t>(nz) * (i0 + r) + k;
-      const double g_hi = k + 1 < nz ? 0.5 * (kf[3 * v + 2] + kf[3 * v + 5]) / e : 0.0;
-      double b = cap[k] + g_lo[r] + g_hi;
-      if (k == 0) b += hb[i0 + r];
-      if (k == nz - 1) b += ht[i0 + r];
-      const double inv = 1.0 / (b + g_lo[r] * cp_prev[r]);
-      inv_den[v] = inv;
-      g_inv_den[v] = g_hi * inv;
-      gk_out[v] = g_lo[r];
-      cp_prev[r] = -g_hi * inv;
-      g_lo[r] = g_hi;
-    }
+// The elimination of rod i of a ply whose conductivity varies into slot
+// `slot` of the factor arrays; one division per value. gk[k]: k33 at the
+// mean of values k - 1 and k over the layer thickness. The same arithmetic
+// as solve_rods_varying.
+void eliminate_rod(int i, int slot, int nz, double e, const double* cap, const double* hb, const double* ht,
+                   const double* kf, double* inv_den, double* g_inv_den, double* gk_out) {
+  double cp_prev = 0, g_lo = 0;
+  for (int k = 0; k < nz; ++k) {
+    const std::size_t v = static_cast<std::size_t>(nz) * i + k;
+    const std::size_t o = static_cast<std::size_t>(nz) * slot + k;
+    const double g_hi = k + 1 < nz ? 0.5 * (kf[3 * v + 2] + kf[3 * v + 5]) / e : 0.0;
+    double b = cap[k] + g_lo + g_hi;
+    if (k == 0) b += hb[i];
+    if (k == nz - 1) b += ht[i];
+    const double inv = 1.0 / (b + g_lo * cp_prev);
+    inv_den[o] = inv;
+    g_inv_den[o] = g_hi * inv;
+    gk_out[o] = g_lo;
+    cp_prev = -g_hi * inv;
+    g_lo = g_hi;
+  }
 }
 
 // One implicit step of R rods of a ply whose conductivity varies, not
@@ -276,14 +274,17 @@ bool SplitThermal::update_rod_factors(const sdk::ThermalStepInput& in) {
       // own layer conductances, k33 at the mean of the layer's two values.
       // Only the rods joined by links keep factors (and face responses);
       // rods_implicit solves the others in one pass.
-      size_for(n);
       const char* linked = linked_[p].data();
+      int slots = 0;
+      for (int i = 0; i < n; ++i) slots += linked[i] != 0;
+      size_for(slots);
+      slots = 0;
       for (int i = 0; i < n; ++i) {
-        rf.id[i] = i;
+        rf.id[i] = linked[i] ? slots : -1;
         if (!linked[i]) continue;
-        eliminate_rods<1>(i, nz, ply.e, rf.cap.data(), f.h_bottom.data(), f.h_top.data(), kf, rf.inv_den.data(),
-                          rf.g_inv_den.data(), rf.gk.data());
-        rod_responses(rf, i, nz);
+        eliminate_rod(i, slots, nz, ply.e, rf.cap.data(), f.h_bottom.data(), f.h_top.data(), kf, rf.inv_den.data(),
+                      rf.g_inv_den.data(), rf.gk.data());
+        rod_responses(rf, slots++, nz);
       }
       continue;
     }
@@ -584,14 +585,9 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
       double* hi = rod_hi_[p].data();
       const double* kf = conductivity(in, p);
       if (inplane_layers_ && kf) {
-        // Each layer with the conductivity of its own values.
-        PlyThermal& pl = plies_[p];
-        for (int k = 0; k < nz; ++k) {
-          assemble_inplane(pl, kf + 3 * k, kf + 3 * k + 1, 3 * static_cast<std::size_t>(nz));
-          for (int i = 0; i < n; ++i) m[i] = t[static_cast<std::size_t>(nz) * i + k];
-          substeps = std::max(substeps, advance_inplane(pl, in.dt, mean_[p], scratch_[p]));
-          for (int i = 0; i < n; ++i) t[static_cast<std::size_t>(nz) * i + k] = m[i];
-        }
+        // Each layer value with the conductivity of its own values.
+        assemble_inplane_layers(plies_[p], kf);
+        substeps = std::max(substeps, advance_inplane(ply, in.dt, T[p], scratch_[p], nz, true));
         continue;
       }
       if (inplane_layers_) {

@@ -135,6 +135,53 @@ void assemble_inplane(PlyThermal& ply, const double* k11, const double* k22, std
   update_inplane_bounds(ply);
 }
 
+void assemble_inplane_layers(PlyThermal& ply, const double* kf) {
+  const sdk::PartView& part = *ply.view;
+  const std::size_t nz = static_cast<std::size_t>(ply.nz);
+  ply.k2d_layers.resize(ply.k2d.val.size() * nz);
+  std::fill(ply.k2d_layers.begin(), ply.k2d_layers.end(), 0.0);
+  double* val = ply.k2d_layers.data();
+  std::vector<double> c(2 * nz);  // per layer value: the element's k11, k22
+  double* c11 = c.data();
+  double* c22 = c11 + nz;
+  constexpr int kPair[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  for (int el = 0; el < part.num_elements; ++el) {
+    const int* t = &part.triangles[3 * el];
+    const double* k0 = kf + 3 * nz * t[0];
+    const double* k1 = kf + 3 * nz * t[1];
+    const double* k2 = kf + 3 * nz * t[2];
+    const double* u = &ply.g11[6 * static_cast<std::size_t>(el)];
+    const double* v = &ply.g22[6 * static_cast<std::size_t>(el)];
+    const int* slot = &ply.k2d.elem_slot[9 * static_cast<std::size_t>(el)];
+    for (std::size_t k = 0; k < nz; ++k) {
+      c11[k] = (k0[3 * k] + k1[3 * k] + k2[3 * k]) / 3.0;
+      c22[k] = (k0[3 * k + 1] + k1[3 * k + 1] + k2[3 * k + 1]) / 3.0;
+    }
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        double* dst = val + nz * slot[3 * a + b];
+        const double ua = u[kPair[a][b]], va = v[kPair[a][b]];
+        for (std::size_t k = 0; k < nz; ++k) dst[k] += c11[k] * ua + c22[k] * va;
+      }
+  }
+  double rate = 0;
+  bool positive = false;
+  for (int i = 0; i < ply.k2d.n; ++i) {
+    std::fill(c11, c11 + nz, 0.0);  // row sums of |K| per layer value
+    for (int p = ply.k2d.row_start[i]; p < ply.k2d.row_start[i + 1]; ++p) {
+      const double* x = val + nz * p;
+      const bool off = ply.k2d.col[p] != i;
+      for (std::size_t k = 0; k < nz; ++k) {
+        c11[k] += std::abs(x[k]);
+        positive = positive || (off && x[k] > 0);
+      }
+    }
+    for (std::size_t k = 0; k < nz; ++k) rate = std::max(rate, c11[k] / (ply.rho_c * ply.area[i]));
+  }
+  ply.inplane_rate = rate;
+  ply.inplane_positive_offdiag = positive;
+}
+
 void update_inplane_bounds(PlyThermal& ply) {
   // Gershgorin bound of C^-1 K for the in-plane problem (h cancels).
   double rate = 0;
@@ -245,20 +292,41 @@ void row_kernel(int n, const int* rs, const int* col, const double* val, const d
   }
 }
 
+// The same with an operator per layer value (val: W per entry).
+template <std::size_t W>
+void row_kernel_layers(int n, const int* rs, const int* col, const double* val, const double* m, double* r) {
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * W > kParallelValues)
+  for (int i = 0; i < n; ++i) {
+    double acc[W > 0 ? W : 1] = {};
+    for (int p = rs[i]; p < rs[i + 1]; ++p) {
+      const double* v = val + W * static_cast<std::size_t>(p);
+      const double* mj = m + W * static_cast<std::size_t>(col[p]);
+      for (std::size_t k = 0; k < W; ++k) acc[k] += v[k] * mj[k];
+    }
+    double* ri = r + W * static_cast<std::size_t>(i);
+    for (std::size_t k = 0; k < W; ++k) ri[k] = acc[k];
+  }
+}
+
 using RowKernel = void (*)(int, const int*, const int*, const double*, const double*, double*);
 
 template <std::size_t... W>
 constexpr std::array<RowKernel, sizeof...(W)> make_row_kernels(std::index_sequence<W...>) {
   return {&row_kernel<W>...};
 }
+template <std::size_t... W>
+constexpr std::array<RowKernel, sizeof...(W)> make_row_kernels_layers(std::index_sequence<W...>) {
+  return {&row_kernel_layers<W>...};
+}
 
 // Widths 0..33 (up to 32 layers); wider rods take the generic loop.
 constexpr auto kRowKernels = make_row_kernels(std::make_index_sequence<34>{});
+constexpr auto kRowKernelsLayers = make_row_kernels_layers(std::make_index_sequence<34>{});
 
 }  // namespace
 
 int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, std::span<double> scratch,
-                    int stride) {
+                    int stride, bool per_layer) {
   if (ply.inplane_rate <= 0) return 0;
   const double dt_max = 0.9 * 2.0 / ply.inplane_rate;
   const double needed = std::ceil(dt / dt_max - 1e-12);
@@ -276,12 +344,15 @@ int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, 
   const int n = ply.k2d.n;
   const int* rs = ply.k2d.row_start.data();
   const int* col = ply.k2d.col.data();
-  const double* val = ply.k2d.val.data();
+  const double* val = per_layer ? ply.k2d_layers.data() : ply.k2d.val.data();
   const double* area = ply.area.data();
   const double inv_rc = 1.0 / ply.rho_c;
   double* m = values.data();
   double* r = scratch.data();
   const std::size_t w = static_cast<std::size_t>(stride);
+  // K_ij of value k: one operator for every value, or one per layer value.
+  const std::size_t vw = per_layer ? w : 0;
+  auto kij = [val, vw](int p, std::size_t k) { return vw ? val[vw * p + k] : val[p]; };
   if (ply.inplane_positive_offdiag) {
     // Algebraic flux correction. Low order: the pairs with K_ij < 0 (a
     // convex combination for ds <= 0.9 * 2 / rate, since the Gershgorin rate
@@ -305,8 +376,9 @@ int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, 
             const double tj = m[w * j + k];
             tmax = std::max(tmax, tj);
             tmin = std::min(tmin, tj);
-            const double f = c0 * -val[p] * (tj - ti);
-            if (val[p] <= 0) {
+            const double v = kij(p, k);
+            const double f = c0 * -v * (tj - ti);
+            if (v <= 0) {
               dl += f;
             } else if (f > 0) {
               pp += f;
@@ -328,8 +400,9 @@ int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, 
           double acc = 0;
           for (int p = rs[i]; p < rs[i + 1]; ++p) {
             const int j = col[p];
-            if (j == i || val[p] <= 0) continue;
-            const double f = c0 * -val[p] * (m[w * j + k] - ti);
+            const double v = kij(p, k);
+            if (j == i || v <= 0) continue;
+            const double f = c0 * -v * (m[w * j + k] - ti);
             // Symmetric factor (alpha_ij = alpha_ji): heat is conserved.
             const double a = f > 0 ? std::min(rp[w * i + k], rm[w * j + k]) : std::min(rm[w * i + k], rp[w * j + k]);
             acc += a * f;
@@ -342,7 +415,20 @@ int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, 
     return steps;
   }
   for (int s = 0; s < steps; ++s) {
-    if (stride == 1) {
+    if (per_layer && w < kRowKernelsLayers.size()) {
+      kRowKernelsLayers[w](n, rs, col, val, m, r);
+    } else if (per_layer) {
+#pragma omp parallel for schedule(static) if (static_cast<long long>(n) * w > kParallelValues)
+      for (int i = 0; i < n; ++i) {
+        double* ri = r + w * i;
+        for (std::size_t k = 0; k < w; ++k) ri[k] = 0.0;
+        for (int p = rs[i]; p < rs[i + 1]; ++p) {
+          const double* v = val + w * static_cast<std::size_t>(p);
+          const double* mj = m + w * col[p];
+          for (std::size_t k = 0; k < w; ++k) ri[k] += v[k] * mj[k];
+        }
+      }
+    } else if (stride == 1) {
 #pragma omp parallel for schedule(static) if (n > 1024)
       for (int i = 0; i < n; ++i) {
         double acc = 0;

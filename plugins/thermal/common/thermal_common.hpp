@@ -42,6 +42,9 @@ struct PlyThermal {
   // (grad Nb . f) and the same across the fibres, for a conductivity that
   // varies from element to element (assemble_inplane).
   std::vector<double> g11, g22;
+  // The in-plane operator of every layer value (assemble_inplane_layers):
+  // K's values in k2d's pattern, nz per entry (entry-major).
+  std::vector<double> k2d_layers;
   double inplane_rate = 0; // Gershgorin bound of max eigenvalue of C^-1 K in plane, 1/s
   bool inplane_positive_offdiag = false;  // K has K_ij > 0 (i != j): not an M-matrix, flux limiting needed
 };
@@ -56,6 +59,12 @@ void update_geometry(PlyThermal& ply);
 void assemble_inplane(PlyThermal& ply, const double* k11, const double* k22, std::size_t stride);
 // The in-plane rate bound and the sign flag of the current k2d.
 void update_inplane_bounds(PlyThermal& ply);
+// Assembles k2d_layers for a conductivity that varies through the ply: layer
+// value k of element e takes the mean of its three nodes' k11, k22 of that
+// value (kf: 3 per value, node-major as the temperatures), and sets the
+// rate bound and sign flag over every layer (advance_inplane with
+// per_layer = true then takes these operators).
+void assemble_inplane_layers(PlyThermal& ply, const double* kf);
 
 // Largest forward-Euler step of the rods, Robin faces and (explicit) links
 // that keeps the discrete maximum principle: min_i C_i / K_ii, s.
@@ -83,8 +92,10 @@ void solve_tridiagonal(int n, const double* a, const double* b, const double* c,
 // correction) so that no value leaves the range its stencil held before the
 // sub-step. The fluxes are pairwise, so heat is conserved exactly. `scratch`
 // then needs 4 x values.size() entries.
+// With per_layer, value k of every node (stride = nz) takes its own
+// operator, k2d_layers.
 int advance_inplane(const PlyThermal& ply, double dt, std::span<double> values, std::span<double> scratch,
-                    int stride = 1);
+                    int stride = 1, bool per_layer = false);
 
 // The parameters every thermal splitter declares (the job contract writes
 // them for any splitter): through_thickness and dt_safety.
