@@ -183,7 +183,8 @@ void check_restart(const std::string& label, json j, double interval, std::strin
 // the checkpoint (the first row beyond it comes from the checkpoint), a die
 // whose temperature follows rows, a conductance that follows the contact
 // pressure on the ply/ply pair, a friction coefficient that follows
-// the temperature on the ply/ply pair and the die, and a specific heat that
+// the temperature on the ply/ply pair and the die, a conductivity that
+// follows the temperature, and a specific heat that
 // follows the temperature (a peak inside the plies' range; heat balance of
 // the continued run under 1e-9), crystallisation kinetics with a rate in
 // the plies' range (the field crystallinity, every value's integral carried
@@ -192,6 +193,7 @@ void check_restart(const std::string& label, json j, double interval, std::strin
 TEST(Restart, HemisphereContinuesBitForBit) {
   json j = coarse_hemisphere("hemisphere_ud_2ply.json");
   j["materials"]["pa66_cf_ud"]["specific_heat"] = {{260.0, 1775.0}, {280.0, 2775.0}, {300.0, 1775.0}};
+  j["materials"]["pa66_cf_ud"]["conductivity"] = {{260.0, 3.5, 0.25, 0.25}, {300.0, 3.89, 0.31, 0.35}};
   j["materials"]["pa66_cf_ud"]["crystallisation"] = {
       {"latent_heat", 20000.0}, {"avrami_exponent", 3.0}, {"rate", {{270.0, 2.0}, {300.0, 0.0}}}};
   j["output"]["fields"].push_back("below_threshold_from");
@@ -246,8 +248,8 @@ TEST(Restart, WallTimeCheckpointsContinueBitForBit) {
 }
 
 // Thermal only: two plies in contact, the 3D reference splitter and adi
-// with in-plane conduction per layer; a ply on a tool whose temperature
-// follows rows.
+// with in-plane conduction per layer, with constant conductivities and with
+// rows; a ply on a tool whose temperature follows rows.
 TEST(Restart, ThermalSplittersContinueBitForBit) {
   json j = read_job_document(source_dir() / "share" / "verification" / "patch_contact.json");
   j["solvers"]["thermal"]["splitter"] = "layered3d";
@@ -255,6 +257,13 @@ TEST(Restart, ThermalSplittersContinueBitForBit) {
   j["solvers"]["thermal"]["splitter"] = "adi";
   j["solvers"]["thermal"]["in_plane"] = "layers";
   check_restart("adi_layers", j, 1.5);
+  // Both with a conductivity that follows the temperature (every step
+  // assembles again what a restart assembles first).
+  for (auto& [name, m] : j["materials"].items()) m["conductivity"] = {{260.0, 3.5, 0.25, 0.25}, {300.0, 3.89, 0.31, 0.35}};
+  check_restart("adi_layers_k_rows", j, 1.5);
+  j["solvers"]["thermal"]["splitter"] = "layered3d";
+  j["solvers"]["thermal"].erase("in_plane");
+  check_restart("layered3d_k_rows", j, 1.5);
   // A ply on a die whose temperature follows rows, a kink inside a step.
   json v = ply_job("adi", 8, 2.0, 0.1);
   v["tools"] = {{{"name", "die"},

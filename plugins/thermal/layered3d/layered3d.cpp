@@ -284,7 +284,10 @@ class Layered3d final : public sdk::ThermalSplitter {
         trip.emplace_back(ib, ia, -g);
       }
     }
-    if (refill) {
+    if (!refill) assemble_pattern(field);
+    if (field) {
+      // Every step sums the triplets the same way, whether the pattern was
+      // found again or not (a restarted run gives the same bits).
       double* val = k_.valuePtr();
       std::fill(val, val + k_.nonZeros(), 0.0);
       for (std::size_t t = 0; t < trip.size(); ++t) val[slot_[t]] += trip[t].value();
@@ -293,8 +296,13 @@ class Layered3d final : public sdk::ThermalSplitter {
         tri_diag_[r] = val[tri_slot_[3 * r + 1]];
         tri_sup_[r] = tri_slot_[3 * r + 2] >= 0 ? val[tri_slot_[3 * r + 2]] : 0.0;
       }
-      return;
     }
+  }
+
+  // K from the triplets in trip_ (and, with a varying conductivity, the
+  // places of the triplets and of the through-thickness blocks in K's values).
+  void assemble_pattern(bool field) {
+    const std::vector<Eigen::Triplet<double>>& trip = trip_;
     k_.resize(n_, n_);
     k_.setFromTriplets(trip.begin(), trip.end());
     k_.makeCompressed();
