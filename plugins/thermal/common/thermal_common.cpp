@@ -8,6 +8,9 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include <thermostamp/sdk/math.hpp>
 
@@ -141,42 +144,73 @@ void assemble_inplane_layers(PlyThermal& ply, const double* kf) {
   ply.k2d_layers.resize(ply.k2d.val.size() * nz);
   std::fill(ply.k2d_layers.begin(), ply.k2d_layers.end(), 0.0);
   double* val = ply.k2d_layers.data();
-  std::vector<double> c(2 * nz);  // per layer value: the element's k11, k22
-  double* c11 = c.data();
-  double* c22 = c11 + nz;
   constexpr int kPair[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
-  for (int el = 0; el < part.num_elements; ++el) {
-    const int* t = &part.triangles[3 * el];
-    const double* k0 = kf + 3 * nz * t[0];
-    const double* k1 = kf + 3 * nz * t[1];
-    const double* k2 = kf + 3 * nz * t[2];
-    const double* u = &ply.g11[6 * static_cast<std::size_t>(el)];
-    const double* v = &ply.g22[6 * static_cast<std::size_t>(el)];
-    const int* slot = &ply.k2d.elem_slot[9 * static_cast<std::size_t>(el)];
-    for (std::size_t k = 0; k < nz; ++k) {
-      c11[k] = (k0[3 * k] + k1[3 * k] + k2[3 * k]) / 3.0;
-      c22[k] = (k0[3 * k + 1] + k1[3 * k + 1] + k2[3 * k + 1]) / 3.0;
-    }
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) {
-        double* dst = val + nz * slot[3 * a + b];
-        const double ua = u[kPair[a][b]], va = v[kPair[a][b]];
-        for (std::size_t k = 0; k < nz; ++k) dst[k] += c11[k] * ua + c22[k] * va;
+  const bool parallel = static_cast<long long>(ply.k2d.n) * static_cast<long long>(nz) > kParallelValues;
+  // Each thread assembles a range of the layer values (every value is summed
+  // over the elements in the same order whatever the thread count).
+#pragma omp parallel if (parallel)
+  {
+#ifdef _OPENMP
+    const std::size_t threads = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t me = static_cast<std::size_t>(omp_get_thread_num());
+#else
+    const std::size_t threads = 1, me = 0;
+#endif
+    const std::size_t k0 = nz * me / threads, k1 = nz * (me + 1) / threads, w = k1 - k0;
+    std::vector<double> c(2 * w + 1);  // per layer value of the range: the element's k11, k22
+    double* c11 = c.data();
+    double* c22 = c11 + w;
+    for (int el = 0; el < part.num_elements && w > 0; ++el) {
+      const int* t = &part.triangles[3 * el];
+      const double* n0 = kf + 3 * nz * t[0];
+      const double* n1 = kf + 3 * nz * t[1];
+      const double* n2 = kf + 3 * nz * t[2];
+      const double* u = &ply.g11[6 * static_cast<std::size_t>(el)];
+      const double* v = &ply.g22[6 * static_cast<std::size_t>(el)];
+      const int* slot = &ply.k2d.elem_slot[9 * static_cast<std::size_t>(el)];
+      for (std::size_t q = 0; q < w; ++q) {
+        const std::size_t k = 3 * (k0 + q);
+        c11[q] = (n0[k] + n1[k] + n2[k]) / 3.0;
+        c22[q] = (n0[k + 1] + n1[k + 1] + n2[k + 1]) / 3.0;
       }
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+          double* dst = val + nz * slot[3 * a + b] + k0;
+          const double ua = u[kPair[a][b]], va = v[kPair[a][b]];
+          for (std::size_t q = 0; q < w; ++q) dst[q] += c11[q] * ua + c22[q] * va;
+        }
+    }
   }
   double rate = 0;
   bool positive = false;
-  for (int i = 0; i < ply.k2d.n; ++i) {
-    std::fill(c11, c11 + nz, 0.0);  // row sums of |K| per layer value
-    for (int p = ply.k2d.row_start[i]; p < ply.k2d.row_start[i + 1]; ++p) {
-      const double* x = val + nz * p;
-      const bool off = ply.k2d.col[p] != i;
-      for (std::size_t k = 0; k < nz; ++k) {
-        c11[k] += std::abs(x[k]);
-        positive = positive || (off && x[k] > 0);
+  const int n = ply.k2d.n;
+  const int* rs = ply.k2d.row_start.data();
+  const int* col = ply.k2d.col.data();
+  const double* area = ply.area.data();
+  const double rho_c = ply.rho_c;
+#pragma omp parallel if (parallel)
+  {
+    std::vector<double> sum(nz);  // row sums of |K| per layer value
+    double my_rate = 0;
+    bool my_positive = false;
+#pragma omp for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      std::fill(sum.begin(), sum.end(), 0.0);
+      for (int p = rs[i]; p < rs[i + 1]; ++p) {
+        const double* x = val + nz * p;
+        const bool off = col[p] != i;
+        for (std::size_t k = 0; k < nz; ++k) {
+          sum[k] += std::abs(x[k]);
+          my_positive = my_positive || (off && x[k] > 0);
+        }
       }
+      for (std::size_t k = 0; k < nz; ++k) my_rate = std::max(my_rate, sum[k] / (rho_c * area[i]));
     }
-    for (std::size_t k = 0; k < nz; ++k) rate = std::max(rate, c11[k] / (ply.rho_c * ply.area[i]));
+#pragma omp critical
+    {
+      rate = std::max(rate, my_rate);
+      positive = positive || my_positive;
+    }
   }
   ply.inplane_rate = rate;
   ply.inplane_positive_offdiag = positive;
