@@ -6,7 +6,8 @@ hemisphere_study.json (about 2.5 minutes on two cores), the demo job and
 the default hemisphere job with a conductance that follows the contact
 pressure (half a minute), and writes PNG files into docs/figures/.
 With --crystallisation, only the crystallisation studies' figures
-(about 6 minutes).
+(about 6 minutes); with --conductivity, only the slab cooled with a
+conductivity that follows the temperature against its reference (seconds).
 """
 import csv
 import json
@@ -94,9 +95,84 @@ def crystallisation(tmp):
         print(open(os.path.join(folder, "study.csv")).read())
 
 
+def conductivity(tmp):
+    """The slab of ConductivityTable.CooledSlabAgainstAFineReference: one
+    ply from 300 degC cooled through its top (h 1000 W/(m^2 K), 200 degC),
+    k33 from 0.2 (200 degC) to 0.5 W/(m K) (300 degC), adi implicit with 16
+    layers, against a 50-cell explicit reference with the exact Kirchhoff
+    fluxes (written here), and the runs with k33 constant at either end."""
+    h, rho_c = 0.0005, 1294.0 * 1775.0
+    t0, k0, t1, k1 = 200.0, 0.2, 300.0, 0.5
+
+    def K(T):  # int_t0^T k33, k33 held beyond the rows
+        s = min(max(T, t0), t1) - t0
+        return k0 * (min(T, t0) - t0) + k0 * s + 0.5 * (k1 - k0) / (t1 - t0) * s * s + k1 * max(T - t1, 0.0)
+
+    n = 50
+    e = h / n
+    dt = 0.4 * rho_c * 0.5 * e / (2 * k1 / e + 1000.0)
+    T = [300.0] * (n + 1)
+    ref, t, marks = {}, 0.0, [1.0, 3.0, 6.0]
+    while marks:
+        q = [0.0] * (n + 1)
+        for i in range(n):
+            f = (K(T[i + 1]) - K(T[i])) / e
+            q[i] += f
+            q[i + 1] -= f
+        q[n] += 1000.0 * (200.0 - T[n])
+        T = [T[i] + dt * q[i] / (rho_c * (0.5 * e if i in (0, n) else e)) for i in range(n + 1)]
+        t += dt
+        if t >= marks[0] - 0.5 * dt:
+            ref[marks.pop(0)] = list(T)
+    runs = {}
+    for label, k in (("rows", [[t0, 3.89, 0.31, k0], [t1, 3.89, 0.31, k1]]), ("k33 = 0.2", [3.89, 0.31, 0.2]),
+                     ("k33 = 0.5", [3.89, 0.31, 0.5])):
+        job = {"format": "thermostamp-job/1", "name": "slab", "time": {"end": 6.0},
+               "materials": {"ply": {"density": 1294.0, "specific_heat": 1775.0, "conductivity": k}},
+               "parts": [{"name": "ply", "mesh": {"generator": "rectangle", "origin": [0, 0, 0], "size": [0.01, 0.01],
+                                                  "divisions": [2, 2]},
+                          "thickness": h, "material": "ply", "initial_temperature": 300.0, "thickness_layers": 16}],
+               "interactions": [{"type": "heat_exchange", "part": "ply", "face": "top", "h": 1000.0, "ambient": 200.0}],
+               "solvers": {"mechanics": None, "thermal": {"splitter": "adi", "through_thickness": "implicit"}},
+               "output": {"interval": 1.0, "fields": ["temperature"],
+                          "probes": [{"name": "c", "part": "ply", "at": [0.005, 0.005, 0], "interval": 1.0,
+                                      "quantities": ["temperature_profile"]}]}}
+        path = os.path.join(tmp, "slab.json")
+        with open(path, "w") as f:
+            json.dump(job, f)
+        out = os.path.join(tmp, "slab_" + label.replace(" ", ""))
+        subprocess.run([EXE, "run", path, "--out", out, "--quiet"], check=True)
+        runs[label] = profiles(out, "c")
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    zr = [(i / n - 0.5) * h * 1e3 for i in range(n + 1)]
+    for j, tm in enumerate((1.0, 3.0, 6.0)):
+        ax.plot(ref[tm], zr, "k-", lw=1, label="reference (50 cells)" if j == 0 else None)
+        for label, style in (("rows", "C0o"), ("k33 = 0.2", "C1--"), ("k33 = 0.5", "C2:")):
+            pts = sorted(closest(runs[label], tm))
+            ax.plot([p[1] for p in pts], [p[0] * 1e3 for p in pts], style, ms=4,
+                    label=("adi, " + label if label == "rows" else "adi, " + label + " W/(m K)") if j == 0 else None)
+        ax.annotate("%g s" % tm, (ref[tm][-1], zr[-1]), textcoords="offset points", xytext=(4, -10), fontsize=8)
+    ax.set_xlabel("temperature (degC)")
+    ax.set_ylabel("z from mid-plane (mm)")
+    ax.set_title("slab cooled on top, k33 from 0.2 (200 degC) to 0.5 W/(m K) (300 degC)", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(FIG, "conductivity_slab.png"), dpi=110)
+    plt.close(fig)
+    worst = max(abs(v - ref[tm][min(n, round((z / h + 0.5) * n))]) for tm in ref for z, v in closest(runs["rows"], tm)
+                if abs((z / h + 0.5) * n - round((z / h + 0.5) * n)) < 1e-9)
+    print("rows against the reference at the shared nodes: largest difference %.3f K" % worst)
+
+
 def main():
     os.makedirs(FIG, exist_ok=True)
     tmp = tempfile.mkdtemp()
+    if "--conductivity" in sys.argv:
+        conductivity(tmp)
+        shutil.rmtree(tmp)
+        print("figures written to", FIG)
+        return
     if "--crystallisation" in sys.argv:
         crystallisation(tmp)
         shutil.rmtree(tmp)
