@@ -208,7 +208,7 @@ void eliminate_rod(int i, int slot, int nz, double e, const double* cap, const d
 // One implicit step of R rods of a ply whose conductivity varies, not
 // joined by links: elimination and substitution in one pass, nothing kept
 // (c' of the R rods in `work`, R nz values). The same arithmetic as
-// eliminate_rods followed by solve_rods.
+// eliminate_rod followed by solve_rods.
 template <int R>
 void solve_rods_varying(int i0, int nz, double e, const double* cap, const double* hb, const double* ht,
                         const double* tb, const double* tt, const double* kf, double* t, double* work) {
