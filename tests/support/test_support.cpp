@@ -1,5 +1,6 @@
 #include "test_support.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -190,6 +191,24 @@ void write_parallelogram(const std::filesystem::path& file, double L, double W, 
       f << id++ << " 2 2 0 1 " << a << " " << c << " " << d << "\n";
     }
   f << "$EndElements\n";
+}
+
+double profile_at(const std::vector<double>& T, double h, double z) {
+  const int n = static_cast<int>(T.size()) - 1;
+  const double s = (z / h + 0.5) * n;
+  const int i = std::min(n - 1, static_cast<int>(s));
+  return (1 - (s - i)) * T[i] + (s - i) * T[i + 1];
+}
+
+double largest_difference(const std::vector<std::vector<double>>& a, const std::vector<std::vector<double>>& b,
+                          double h) {
+  double d = 0;
+  for (std::size_t t = 0; t < std::min(a.size(), b.size()); ++t)
+    for (int m = 0; m <= 16; ++m) {
+      const double z = (m / 16.0 - 0.5) * h;
+      d = std::max(d, std::abs(profile_at(a[t], h, z) - profile_at(b[t], h, z)));
+    }
+  return d;
 }
 
 }  // namespace ts::test

@@ -77,6 +77,15 @@ void write_square_stl(const std::filesystem::path& file, double lo, double hi, d
 // [0, W]: its slanted edges follow the level lines of cos(pi xi / L).
 void write_parallelogram(const std::filesystem::path& file, double L, double W, double s, int nx, int ny);
 
+// The nodal values T (n + 1 across a thickness h, bottom to top) at z in
+// [-h/2, h/2], linear between nodes.
+double profile_at(const std::vector<double>& T, double h, double z);
+// Largest difference between two series of such profiles (one per sample
+// time, any node counts) at 17 levels of the thickness h: a reference's
+// own convergence.
+double largest_difference(const std::vector<std::vector<double>>& a, const std::vector<std::vector<double>>& b,
+                          double h);
+
 // Plane wall, thickness L, insulated at x = 0, Robin (h, T_inf) at x = L,
 // initially T0: T(x, t) from the eigen-series (lambda tan lambda = Bi).
 double slab_robin_series(double x, double t, double L, double alpha, double Bi, double T0, double Tinf);

@@ -258,12 +258,7 @@ class Layered3d final : public sdk::ThermalSplitter {
           // In-plane conduction in the slice of value k (lumped weight w_k).
           for (int q = m.row_start[i]; q < m.row_start[i + 1]; ++q)
             trip.emplace_back(o + k, offset_[p] + nz * m.col[q] + k, m.val[q] * ply.w[k]);
-          if (k + 1 < nz) {
-            trip.emplace_back(o + k, o + k, g * A);
-            trip.emplace_back(o + k + 1, o + k + 1, g * A);
-            trip.emplace_back(o + k, o + k + 1, -g * A);
-            trip.emplace_back(o + k + 1, o + k, -g * A);
-          }
+          if (k + 1 < nz) add_pair(trip, o + k, o + k + 1, g * A);
         }
         trip.emplace_back(o, o, f.h_bottom[i] * A);
         trip.emplace_back(o + nz - 1, o + nz - 1, f.h_top[i] * A);
@@ -278,10 +273,7 @@ class Layered3d final : public sdk::ThermalSplitter {
         const double g = l.conductance * l.w_b[j];
         if (g == 0) continue;
         const int ib = offset_[l.part_b] + pb.nz * l.nodes_b[j] + (l.face_b == sdk::kTop ? pb.nz - 1 : 0);
-        trip.emplace_back(ia, ia, g);
-        trip.emplace_back(ib, ib, g);
-        trip.emplace_back(ia, ib, -g);
-        trip.emplace_back(ib, ia, -g);
+        add_pair(trip, ia, ib, g);
       }
     }
     if (!refill) assemble_pattern(field);
@@ -335,6 +327,14 @@ class Layered3d final : public sdk::ThermalSplitter {
     }
   }
 
+  // A conductance G (W/K) between values a and b: K_aa, K_bb += G; K_ab, K_ba -= G.
+  static void add_pair(std::vector<Eigen::Triplet<double>>& trip, int a, int b, double G) {
+    trip.emplace_back(a, a, G);
+    trip.emplace_back(b, b, G);
+    trip.emplace_back(a, b, -G);
+    trip.emplace_back(b, a, -G);
+  }
+
   // K's triplets of a ply whose conductivity varies: every slice with the
   // conductivity of its values (the element's mean of its three nodes), every
   // layer with k33 at the mean of its two values.
@@ -355,11 +355,7 @@ class Layered3d final : public sdk::ThermalSplitter {
       const double A = ply.area[i];
       const double* ki = kf + stride * i;
       for (int k = 0; k + 1 < nz; ++k) {
-        const double g = 0.5 * (ki[3 * k + 2] + ki[3 * k + 5]) / ply.e;
-        trip.emplace_back(o + k, o + k, g * A);
-        trip.emplace_back(o + k + 1, o + k + 1, g * A);
-        trip.emplace_back(o + k, o + k + 1, -g * A);
-        trip.emplace_back(o + k + 1, o + k, -g * A);
+        add_pair(trip, o + k, o + k + 1, 0.5 * (ki[3 * k + 2] + ki[3 * k + 5]) / ply.e * A);
       }
       trip.emplace_back(o, o, f.h_bottom[i] * A);
       trip.emplace_back(o + nz - 1, o + nz - 1, f.h_top[i] * A);
