@@ -211,4 +211,24 @@ double largest_difference(const std::vector<std::vector<double>>& a, const std::
   return d;
 }
 
+json two_ply_job(const std::string& splitter, int layers, double hc) {
+  json j = ply_job(splitter, layers, 2.0, 0.5);
+  json lower = j["parts"][0];
+  lower["name"] = "lower";
+  lower["mesh"]["origin"] = {0, 0, 0.00025};
+  json upper = lower;
+  upper["name"] = "upper";
+  upper["mesh"]["origin"] = {0, 0, 0.00075};
+  j["parts"] = {lower, upper};
+  j["tools"] = {{{"name", "die"}, {"surface", {{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 0, 1}}}},
+                 {"temperature", 260.0}}};
+  j["interactions"] = {
+      {{"type", "contact"}, {"handler", "penalty_node_surface"}, {"between", {"die", "lower"}}, {"conductance", 1000.0}},
+      {{"type", "contact"}, {"handler", "penalty_node_surface"}, {"between", {"upper", "lower"}}, {"conductance", hc}}};
+  j["output"]["probes"] = {
+      {{"name", "lo"}, {"part", "lower"}, {"at", {0.005, 0.005, 0.00025}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}},
+      {{"name", "up"}, {"part", "upper"}, {"at", {0.005, 0.005, 0.00075}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}}};
+  return j;
+}
+
 }  // namespace ts::test

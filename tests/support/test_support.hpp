@@ -30,6 +30,11 @@ struct JobRun {
   const ProbeSample* sample(int probe, const std::string& quantity, double t) const;
 };
 
+// Two plies of ply_job's material (the lower on a die at 260 degC, h_c
+// 1000 W/(m^2 K)), h_c between them, to 2 s; probes `lo` and `up` give
+// their profiles every 0.5 s.
+json two_ply_job(const std::string& splitter, int layers, double hc);
+
 // Runs the job in-process (no files unless out is given).
 JobRun run_json(const json& doc, int threads = 0, const std::filesystem::path& out = {});
 

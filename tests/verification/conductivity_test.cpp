@@ -181,23 +181,9 @@ TEST(ConductivityTable, CooledSlabAgainstAFineReference) {
 // profiles by more than 0.5 K from the constant k33 of its largest value.
 TEST(ConductivityTable, LinkedPliesAdiAgainstLayered3d) {
   auto job = [](const std::string& splitter, bool table) {
-    json j = ply_job(splitter, 12, 2.0, 0.5);
-    json lower = j["parts"][0];
-    lower["name"] = "lower";
-    lower["mesh"]["origin"] = {0, 0, 0.00025};
-    json upper = lower;
-    upper["name"] = "upper";
-    upper["mesh"]["origin"] = {0, 0, 0.00075};
-    j["parts"] = {lower, upper};
+    json j = two_ply_job(splitter, 12, 300.0);
     j["materials"]["ply"]["conductivity"] =
         table ? json{{260.0, 3.89, 0.31, 0.15}, {300.0, 3.89, 0.31, 0.45}} : json{3.89, 0.31, 0.45};
-    j["tools"] = {{{"name", "die"}, {"surface", {{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 0, 1}}}},
-                   {"temperature", 260.0}}};
-    j["interactions"] = {{{"type", "contact"}, {"between", {"die", "lower"}}, {"conductance", 1000.0}},
-                         {{"type", "contact"}, {"between", {"upper", "lower"}}, {"conductance", 300.0}}};
-    j["output"]["probes"] = {
-        {{"name", "lo"}, {"part", "lower"}, {"at", {0.005, 0.005, 0.00025}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}},
-        {{"name", "up"}, {"part", "upper"}, {"at", {0.005, 0.005, 0.00075}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}}};
     j["solvers"]["thermal"]["dt"] = 0.01;
     return j;
   };

@@ -233,25 +233,6 @@ struct TwoPlyReference {
   }
 };
 
-json two_ply_job(const std::string& splitter, int layers, double hc) {
-  json j = ply_job(splitter, layers, 2.0, 0.5);
-  json lower = j["parts"][0];
-  lower["name"] = "lower";
-  lower["mesh"]["origin"] = {0, 0, 0.00025};
-  json upper = lower;
-  upper["name"] = "upper";
-  upper["mesh"]["origin"] = {0, 0, 0.00075};
-  j["parts"] = {lower, upper};
-  j["tools"] = {{{"name", "die"}, {"surface", {{"type", "plane"}, {"point", {0, 0, 0}}, {"normal", {0, 0, 1}}}},
-                 {"temperature", 260.0}}};
-  j["interactions"] = {
-      {{"type", "contact"}, {"handler", "penalty_node_surface"}, {"between", {"die", "lower"}}, {"conductance", 1000.0}},
-      {{"type", "contact"}, {"handler", "penalty_node_surface"}, {"between", {"upper", "lower"}}, {"conductance", hc}}};
-  j["output"]["probes"] = {
-      {{"name", "lo"}, {"part", "lower"}, {"at", {0.005, 0.005, 0.00025}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}},
-      {{"name", "up"}, {"part", "upper"}, {"at", {0.005, 0.005, 0.00075}}, {"quantities", {"temperature_profile"}}, {"interval", 0.5}}};
-  return j;
-}
 
 // Tolerances: profile within 1 % of the 40 K drop (16 layers, as above);
 // the interface jump T_upper,bottom - T_lower,top within 2 % of the
