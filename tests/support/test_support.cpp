@@ -231,4 +231,36 @@ json two_ply_job(const std::string& splitter, int layers, double hc) {
   return j;
 }
 
+double mode_decay_rate(const json& j, const std::filesystem::path& dir, double L, double slant, double a,
+                       double (*T_of)(double), double (*u_of)(double), RunResult* result) {
+  log_to_terminal(true);
+  const Job job = parse_job(j, dir / "job.json");
+  PluginRegistry reg;
+  Simulation sim(job, reg);
+  const auto x0 = sim.initial_coordinates(0);
+  const int n = static_cast<int>(x0.size() / 3);
+  std::vector<double> T0(n), mode(n);
+  for (int i = 0; i < n; ++i) {
+    mode[i] = std::cos(M_PI * (x0[3 * i] - slant * x0[3 * i + 1]) / L);
+    T0[i] = T_of(a * mode[i]);
+  }
+  sim.set_initial_temperature(0, T0);
+  RunOptions opt;
+  opt.write_files = false;
+  opt.quiet = true;
+  const RunResult r = sim.run(opt);
+  if (result) *result = r;
+  if (!r.ok) return std::numeric_limits<double>::quiet_NaN();
+  const auto T = sim.temperature(0);
+  const int nz = sim.values_per_node(0);
+  double num = 0, den = 0;
+  for (int i = 0; i < n; ++i) {
+    double u = 0;  // the mean through the thickness (uniform here)
+    for (int k = 0; k < nz; ++k) u += u_of(T[static_cast<std::size_t>(nz) * i + k]) / nz;
+    num += u * mode[i];
+    den += a * mode[i] * mode[i];
+  }
+  return -std::log(num / den) / job.t_end;
+}
+
 }  // namespace ts::test

@@ -91,6 +91,14 @@ double profile_at(const std::vector<double>& T, double h, double z);
 double largest_difference(const std::vector<std::vector<double>>& a, const std::vector<std::vector<double>>& b,
                           double h);
 
+// In-plane diffusion of a mode: runs job `j` (one ply, no probes, read
+// from `dir`) from T0 = T_of(a cos(pi (x - slant y) / L)) (uniform through
+// the thickness) and returns the decay rate (1/s) of the projection on
+// that cosine of u_of(T), the mean through the thickness, over time.end.
+// `result` receives the run's result.
+double mode_decay_rate(const json& j, const std::filesystem::path& dir, double L, double slant, double a,
+                       double (*T_of)(double), double (*u_of)(double), RunResult* result = nullptr);
+
 // Plane wall, thickness L, insulated at x = 0, Robin (h, T_inf) at x = L,
 // initially T0: T(x, t) from the eigen-series (lambda tan lambda = Bi).
 double slab_robin_series(double x, double t, double L, double alpha, double Bi, double T0, double Tinf);

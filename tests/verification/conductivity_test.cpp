@@ -216,10 +216,11 @@ TEST(ConductivityTable, InPlaneModeWithProportionalTables) {
   const double c = std::cos(th), s = std::sin(th);
   const double kxx = k11 * c * c + k22 * s * s, kyy = k11 * s * s + k22 * c * c, kxy = (k11 - k22) * s * c;
   const double slant = kxy / kyy, keff = kxx - kxy * kxy / kyy;
-  const double L = 0.02, W = 0.01, beta = 0.01, amp = 10.0;
-  auto f = [&](double T) { return 1.0 + beta * (T - 300.0); };
-  auto U = [&](double T) { return (T - 300.0) + 0.5 * beta * (T - 300.0) * (T - 300.0); };
-  auto U_inverse = [&](double u) { return 300.0 + 2.0 * u / (1.0 + std::sqrt(1.0 + 2.0 * beta * u)); };
+  const double L = 0.02, W = 0.01, amp = 10.0;
+  constexpr double beta = 0.01;
+  auto f = [](double T) { return 1.0 + beta * (T - 300.0); };
+  double (*U)(double) = [](double T) { return (T - 300.0) + 0.5 * beta * (T - 300.0) * (T - 300.0); };
+  double (*U_inverse)(double) = [](double u) { return 300.0 + 2.0 * u / (1.0 + std::sqrt(1.0 + 2.0 * beta * u)); };
   const auto dir = temp_dir("inplane_k_table");
   write_parallelogram(dir / "para.msh", L, W, slant, 40, 20);
   for (const std::string name : {"adi", "adi_layers", "layered3d", "shell2d"}) {
@@ -232,33 +233,9 @@ TEST(ConductivityTable, InPlaneModeWithProportionalTables) {
     j["materials"]["ply"]["conductivity"] = {{250.0, k11 * f(250.0), k22 * f(250.0), 0.31 * f(250.0)},
                                              {350.0, k11 * f(350.0), k22 * f(350.0), 0.31 * f(350.0)}};
     if (name == "adi_layers") j["solvers"]["thermal"]["in_plane"] = "layers";
-    log_to_terminal(true);
-    const Job job = parse_job(j, dir / "job.json");
-    PluginRegistry reg;
-    Simulation sim(job, reg);
-    const auto x0 = sim.initial_coordinates(0);
-    const int n = static_cast<int>(x0.size() / 3);
-    const int nz = sim.values_per_node(0);
-    std::vector<double> T0(n), mode(n);
-    for (int i = 0; i < n; ++i) {
-      mode[i] = std::cos(M_PI * (x0[3 * i] - slant * x0[3 * i + 1]) / L);
-      T0[i] = U_inverse(amp * mode[i]);
-    }
-    sim.set_initial_temperature(0, T0);
-    RunOptions opt;
-    opt.write_files = false;
-    opt.quiet = true;
-    const RunResult r = sim.run(opt);
+    RunResult r;
+    const double rate = mode_decay_rate(j, dir, L, slant, amp, U_inverse, U, &r);
     ASSERT_TRUE(r.ok) << r.error;
-    const auto T = sim.temperature(0);
-    double num = 0, den = 0;
-    for (int i = 0; i < n; ++i) {
-      double u = 0;  // u's mean through the thickness (uniform here)
-      for (int k = 0; k < nz; ++k) u += U(T[static_cast<std::size_t>(nz) * i + k]) / nz;
-      num += u * mode[i];
-      den += amp * mode[i] * mode[i];
-    }
-    const double rate = -std::log(num / den) / 20.0;
     const double exact = keff * M_PI * M_PI / (kRho * kC * L * L);
     std::printf("%s: decay rate of u %.6g 1/s, exact %.6g 1/s, error %.3f %%\n", name.c_str(), rate, exact,
                 100 * (rate / exact - 1));

@@ -330,33 +330,10 @@ TEST(InPlane, AnisotropicCosineDecayRate) {
     j["parts"][0]["mesh"] = {{"file", (dir / "para.msh").string()}};
     j["parts"][0]["fibre_direction"] = {c, s, 0.0};
     j["output"]["probes"] = json::array();
-    log_to_terminal(true);
-    const Job job = parse_job(j, dir / "job.json");
-    PluginRegistry reg;
-    Simulation sim(job, reg);
-    const auto x0 = sim.initial_coordinates(0);
-    const int n = static_cast<int>(x0.size() / 3);
-    std::vector<double> T0(n), mode(n);
-    for (int i = 0; i < n; ++i) {
-      mode[i] = std::cos(M_PI * (x0[3 * i] - slant * x0[3 * i + 1]) / L);
-      T0[i] = 300.0 + 10.0 * mode[i];
-    }
-    sim.set_initial_temperature(0, T0);
-    RunOptions opt;
-    opt.write_files = false;
-    opt.quiet = true;
-    const RunResult r = sim.run(opt);
+    RunResult r;
+    const double rate = mode_decay_rate(
+        j, dir, L, slant, 10.0, [](double u) { return 300.0 + u; }, [](double T) { return T - 300.0; }, &r);
     ASSERT_TRUE(r.ok) << r.error;
-    const auto T = sim.temperature(0);
-    const int nz = sim.values_per_node(0);
-    double num = 0, den = 0;
-    for (int i = 0; i < n; ++i) {
-      double m = 0;  // through-thickness mean (uniform here)
-      for (int k = 0; k < nz; ++k) m += T[static_cast<std::size_t>(nz) * i + k] / nz;
-      num += (m - 300.0) * mode[i];
-      den += 10.0 * mode[i] * mode[i];
-    }
-    const double rate = -std::log(num / den) / 20.0;
     const double exact = keff * M_PI * M_PI / (kRhoC * L * L);
     std::printf("%s: decay rate %.6g 1/s, exact %.6g 1/s, error %.3f %%\n", splitter.c_str(), rate, exact,
                 100 * (rate / exact - 1));
