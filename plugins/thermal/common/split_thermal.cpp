@@ -610,6 +610,7 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
           kn[2 * i + 1] = s22 / ply.h;
         }
         assemble_inplane(plies_[p], kn, kn + 1, 2);
+        update_inplane_bounds(plies_[p]);
       }
 #pragma omp parallel for schedule(static) if (n > 1024)
       for (int i = 0; i < n; ++i) {

@@ -135,7 +135,6 @@ void assemble_inplane(PlyThermal& ply, const double* k11, const double* k22, std
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) val[slot[3 * a + b]] += c11 * u[kPair[a][b]] + c22 * v[kPair[a][b]];
   }
-  update_inplane_bounds(ply);
 }
 
 void assemble_inplane_layers(PlyThermal& ply, const double* kf) {

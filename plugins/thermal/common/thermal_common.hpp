@@ -53,9 +53,10 @@ struct PlyThermal {
 void setup_ply(PlyThermal& ply, const sdk::PartView& part, int nz);
 void update_geometry(PlyThermal& ply);
 
-// Assembles k2d (and the rate and sign flags) for a conductivity that
-// varies over the ply: element e takes the mean of its three nodes' values
-// k11[stride * node], k22[stride * node] (W/(m K)).
+// Assembles k2d for a conductivity that varies over the ply: element e
+// takes the mean of its three nodes' values k11[stride * node],
+// k22[stride * node] (W/(m K)). The explicit in-plane step then needs
+// update_inplane_bounds.
 void assemble_inplane(PlyThermal& ply, const double* k11, const double* k22, std::size_t stride);
 // The in-plane rate bound and the sign flag of the current k2d.
 void update_inplane_bounds(PlyThermal& ply);
