@@ -145,6 +145,14 @@ void assemble_inplane_layers(PlyThermal& ply, const double* kf) {
   double* val = ply.k2d_layers.data();
   constexpr int kPair[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
   const bool parallel = static_cast<long long>(ply.k2d.n) * static_cast<long long>(nz) > kParallelValues;
+#ifdef _OPENMP
+  const std::size_t most_threads = static_cast<std::size_t>(omp_get_max_threads());
+#else
+  const std::size_t most_threads = 1;
+#endif
+  const std::size_t per_thread = 2 * nz + 1;
+  if (ply.layer_work.size() < most_threads * per_thread) ply.layer_work.resize(most_threads * per_thread);
+  double* work = ply.layer_work.data();
   // Each thread assembles a range of the layer values (every value is summed
   // over the elements in the same order whatever the thread count).
 #pragma omp parallel if (parallel)
@@ -156,8 +164,7 @@ void assemble_inplane_layers(PlyThermal& ply, const double* kf) {
     const std::size_t threads = 1, me = 0;
 #endif
     const std::size_t k0 = nz * me / threads, k1 = nz * (me + 1) / threads, w = k1 - k0;
-    std::vector<double> c(2 * w + 1);  // per layer value of the range: the element's k11, k22
-    double* c11 = c.data();
+    double* c11 = work + per_thread * me;  // per layer value of the range: the element's k11, k22
     double* c22 = c11 + w;
     for (int el = 0; el < part.num_elements && w > 0; ++el) {
       const int* t = &part.triangles[3 * el];
@@ -189,12 +196,16 @@ void assemble_inplane_layers(PlyThermal& ply, const double* kf) {
   const double rho_c = ply.rho_c;
 #pragma omp parallel if (parallel)
   {
-    std::vector<double> sum(nz);  // row sums of |K| per layer value
+#ifdef _OPENMP
+    double* sum = work + per_thread * static_cast<std::size_t>(omp_get_thread_num());  // row sums of |K| per layer value
+#else
+    double* sum = work;
+#endif
     double my_rate = 0;
     bool my_positive = false;
 #pragma omp for schedule(static)
     for (int i = 0; i < n; ++i) {
-      std::fill(sum.begin(), sum.end(), 0.0);
+      std::fill(sum, sum + nz, 0.0);
       for (int p = rs[i]; p < rs[i + 1]; ++p) {
         const double* x = val + nz * p;
         const bool off = col[p] != i;

@@ -45,6 +45,7 @@ struct PlyThermal {
   // The in-plane operator of every layer value (assemble_inplane_layers):
   // K's values in k2d's pattern, nz per entry (entry-major).
   std::vector<double> k2d_layers;
+  std::vector<double> layer_work;  // per thread, 2 nz + 1 values (assemble_inplane_layers)
   double inplane_rate = 0; // Gershgorin bound of max eigenvalue of C^-1 K in plane, 1/s
   bool inplane_positive_offdiag = false;  // K has K_ij > 0 (i != j): not an M-matrix, flux limiting needed
 };
