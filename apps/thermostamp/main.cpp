@@ -206,6 +206,9 @@ int cmd_run(const Args& a, bool validate_only) {
                     rounded(job.t_end / dm), job.t_end);
       std::cout << line;
     }
+    for (const auto& m : job.materials)
+      if (const auto mix = ts::describe_mixture(m); !mix.empty())
+        std::cout << "material '" << m.name << "': " << mix << "\n";
     if (const double dt = sim.thermal_step(); dt > 0) {
       std::snprintf(line, sizeof line, "thermal step %.4g s: about %.0f steps\n", dt, rounded(job.t_end / dt));
       std::cout << line;

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <sstream>
 
 namespace ts {
@@ -30,6 +32,9 @@ double temperature_or_rows(ObjectReader& r, const std::string& key, std::optiona
   }
   return rows.front()[1];
 }
+double finish_specific_heat_rows(std::vector<std::array<double, 2>>& rows, double& largest);
+std::array<double, 3> finish_conductivity_rows(std::vector<std::array<double, 4>>& rows);
+
 // A specific heat (J/(kg K)) given as a number, or as rows [T (degC), c]
 // with increasing temperatures (into `rows`, left empty where every value
 // is the same). Returns the number, or the rows' smallest value; `largest`
@@ -51,6 +56,12 @@ double specific_heat_or_rows(ObjectReader& r, std::vector<std::array<double, 2>>
     }
     rows.push_back({row[0], row[1]});
   }
+  return finish_specific_heat_rows(rows, largest);
+}
+
+// The rows of a specific heat read or formed: returns their smallest value
+// and sets `largest`; rows of one value are cleared (a constant).
+double finish_specific_heat_rows(std::vector<std::array<double, 2>>& rows, double& largest) {
   double c_min = rows.front()[1], c_max = c_min;
   for (const auto& row : rows) {
     c_min = std::min(c_min, row[1]);
@@ -89,6 +100,12 @@ std::array<double, 3> conductivity_or_rows(ObjectReader& r, std::vector<std::arr
     check(rp, row, 1);
     rows.push_back({row[0], row[1], row[2], row[3]});
   }
+  return finish_conductivity_rows(rows);
+}
+
+// The rows of a conductivity read or formed: returns each column's largest
+// value; rows that are all the same are cleared (a constant).
+std::array<double, 3> finish_conductivity_rows(std::vector<std::array<double, 4>>& rows) {
   std::array<double, 3> largest{0, 0, 0};
   bool varies = false;
   for (const auto& row : rows)
@@ -98,6 +115,120 @@ std::array<double, 3> conductivity_or_rows(ObjectReader& r, std::vector<std::arr
     }
   if (!varies) rows.clear();
   return largest;
+}
+
+// A constituent's property of `n` values (1 or 2) for the mixture: a number
+// (n = 1) or n numbers, or rows [T (degC), v1 .. vn] with increasing
+// temperatures. Returns rows {T, v1, v2}; a constant is one row whose T is
+// NaN. Every value must be > 0 (`unit` for the messages).
+std::vector<std::array<double, 3>> constituent_rows(ObjectReader& r, const std::string& key, int n,
+                                                    const std::string& unit) {
+  const json& v = r.raw(key);
+  const std::string tp = r.at(key);
+  auto positive = [&](double x, const std::string& ptr) {
+    if (!(x > 0)) throw JobError(ptr, "must be > 0 " + unit + ", found " + fmt_number(x));
+  };
+  const std::string row_form = n == 1 ? "[T (degC), value]" : "[T (degC), axial, transverse]";
+  const std::string form = n == 1 ? "a number (" + unit + ") or rows " + row_form
+                                  : "[axial, transverse] (" + unit + ") or rows " + row_form;
+  if (v.is_number() && n == 1) {
+    const double x = as_real(v, tp);
+    positive(x, tp);
+    return {{std::numeric_limits<double>::quiet_NaN(), x, 0.0}};
+  }
+  if (!v.is_array() || v.empty()) throw JobError(tp, "expected " + form + ", found " + json_type_name(v));
+  if (!v[0].is_array()) {
+    if (n == 1) throw JobError(tp, "expected " + form + ", found an array of numbers");
+    const auto x = as_reals(v, tp, n);
+    for (int d = 0; d < n; ++d) positive(x[d], pointer_append(tp, d));
+    return {{std::numeric_limits<double>::quiet_NaN(), x[0], x[1]}};
+  }
+  std::vector<std::array<double, 3>> rows;
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    const std::string rp = pointer_append(tp, k);
+    if (!v[k].is_array()) throw JobError(rp, "expected a row " + row_form + ", found " + json_type_name(v[k]));
+    const auto row = as_reals(v[k], rp, n + 1);
+    if (!(row[0] >= -273.15)) throw JobError(pointer_append(rp, 0), "must be >= -273.15 degC");
+    if (k > 0 && !(row[0] > rows.back()[0]))
+      throw JobError(pointer_append(rp, 0), "temperatures must increase from row to row");
+    for (int d = 1; d <= n; ++d) positive(row[d], pointer_append(rp, d));
+    rows.push_back({row[0], row[1], n == 2 ? row[2] : 0.0});
+  }
+  return rows;
+}
+
+// The value `d` (1 or 2) of constituent rows at T: linear between the rows,
+// held beyond them.
+double constituent_at(const std::vector<std::array<double, 3>>& rows, double t, int d) {
+  if (rows.size() == 1 || t <= rows.front()[0]) return rows.front()[d];
+  if (t >= rows.back()[0]) return rows.back()[d];
+  std::size_t k = 1;
+  while (rows[k][0] < t) ++k;
+  const auto &a = rows[k - 1], &b = rows[k];
+  return a[d] + (b[d] - a[d]) * ((t - a[0]) / (b[0] - a[0]));
+}
+
+// The temperatures of the rows among `tables` (sorted, each once); empty
+// when every one is a constant.
+std::vector<double> row_temperatures(std::initializer_list<const std::vector<std::array<double, 3>>*> tables) {
+  std::vector<double> ts;
+  for (const auto* t : tables)
+    if (!std::isnan(t->front()[0]))
+      for (const auto& row : *t) ts.push_back(row[0]);
+  std::sort(ts.begin(), ts.end());
+  ts.erase(std::unique(ts.begin(), ts.end()), ts.end());
+  return ts;
+}
+
+// materials.<m>.mixture: the ply's thermal data from its matrix and fibres
+// at a fibre volume fraction Vf: density and heat capacity per volume by
+// the parallel rule, k11 (along the fibres) parallel, k22 and k33 (across
+// them, where matrix and fibres lie in series) by the series rule. With
+// rows, the ply's rows are the mixture at every temperature of the
+// constituents' rows.
+void parse_mixture(const json& v, const std::string& ptr, MaterialDef& m) {
+  ObjectReader r(v, ptr);
+  const double vf = r.real("fibre_volume_fraction", std::nullopt, 0.0, false, 1.0);
+  ObjectReader mr(r.raw("matrix"), r.at("matrix"));
+  ObjectReader fr(r.raw("fibre"), r.at("fibre"));
+  r.finish();
+  const double rho_m = mr.real("density", std::nullopt, 0.0, true);
+  const auto c_m = constituent_rows(mr, "specific_heat", 1, "J/kg/K");
+  const auto k_m = constituent_rows(mr, "conductivity", 1, "W/m/K");
+  mr.finish();
+  const double rho_f = fr.real("density", std::nullopt, 0.0, true);
+  const auto c_f = constituent_rows(fr, "specific_heat", 1, "J/kg/K");
+  const auto k_f = constituent_rows(fr, "conductivity", 2, "W/m/K");
+  fr.finish();
+
+  const double vm = 1.0 - vf;
+  m.mixture_fibre_fraction = vf;
+  m.density = vf * rho_f + vm * rho_m;
+  auto c_at = [&](double t) {
+    return (vf * rho_f * constituent_at(c_f, t, 1) + vm * rho_m * constituent_at(c_m, t, 1)) / m.density;
+  };
+  auto k_at = [&](double t) -> std::array<double, 3> {
+    const double km = constituent_at(k_m, t, 1);
+    const double across = 1.0 / (vf / constituent_at(k_f, t, 2) + vm / km);
+    return {vf * constituent_at(k_f, t, 1) + vm * km, across, across};
+  };
+  const auto tc = row_temperatures({&c_m, &c_f});
+  if (tc.empty()) {
+    m.specific_heat = m.specific_heat_max = c_at(0.0);
+  } else {
+    for (double t : tc) m.specific_heat_table.push_back({t, c_at(t)});
+    m.specific_heat = finish_specific_heat_rows(m.specific_heat_table, m.specific_heat_max);
+  }
+  const auto tk = row_temperatures({&k_m, &k_f});
+  if (tk.empty()) {
+    m.conductivity = k_at(0.0);
+  } else {
+    for (double t : tk) {
+      const auto k = k_at(t);
+      m.conductivity_table.push_back({t, k[0], k[1], k[2]});
+    }
+    m.conductivity = finish_conductivity_rows(m.conductivity_table);
+  }
 }
 
 // materials.<m>.crystallisation: the Nakamura kinetics of the matrix.
@@ -342,6 +473,31 @@ std::string unknown_name(const std::string& what, const std::string& name, const
 
 }  // namespace
 
+std::string describe_mixture(const MaterialDef& m) {
+  if (m.mixture_fibre_fraction < 0) return "";
+  char line[512];
+  std::string s;
+  std::snprintf(line, sizeof line, "thermal data from its mixture at a fibre volume fraction of %g: density %.6g kg/m3, ",
+                m.mixture_fibre_fraction, m.density);
+  s = line;
+  if (m.specific_heat_table.empty())
+    std::snprintf(line, sizeof line, "specific heat %.6g J/(kg K), ", m.specific_heat);
+  else
+    std::snprintf(line, sizeof line, "specific heat %.6g to %.6g J/(kg K) over %zu rows, ", m.specific_heat,
+                  m.specific_heat_max, m.specific_heat_table.size());
+  s += line;
+  if (m.conductivity_table.empty()) {
+    std::snprintf(line, sizeof line, "conductivity %.6g, %.6g, %.6g W/(m K)", m.conductivity[0], m.conductivity[1],
+                  m.conductivity[2]);
+  } else {
+    double k11[2] = {m.conductivity[0], m.conductivity[0]};
+    for (const auto& row : m.conductivity_table) k11[0] = std::min(k11[0], row[1]);
+    std::snprintf(line, sizeof line, "conductivity k11 %.6g to %.6g, k22 = k33 %.6g to %.6g W/(m K) over %zu rows",
+                  k11[0], k11[1], m.k33_range()[0], m.k33_range()[1], m.conductivity_table.size());
+  }
+  return s + line;
+}
+
 Job parse_job(const json& doc, const std::filesystem::path& file) {
   Job job;
   job.file = file;
@@ -378,9 +534,16 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       m.name = it.key();
       m.pointer = pointer_append("/materials", it.key());
       ObjectReader r(it.value(), m.pointer);
-      if (r.has("density")) m.density = r.real("density", std::nullopt, 0.0, true);
-      m.has_thermal = r.has("specific_heat") || r.has("conductivity");
-      if (m.has_thermal) {
+      if (const json* mix = r.optional_raw("mixture")) {
+        for (const char* key : {"density", "specific_heat", "conductivity"})
+          if (r.has(key))
+            throw JobError(r.at(key), "give either 'mixture' or density, specific_heat and conductivity, not both");
+        parse_mixture(*mix, r.at("mixture"), m);
+        m.has_thermal = true;
+      }
+      if (r.has("density") && !m.has_thermal) m.density = r.real("density", std::nullopt, 0.0, true);
+      if (!m.has_thermal && (r.has("specific_heat") || r.has("conductivity"))) {
+        m.has_thermal = true;
         m.density = r.real("density", std::nullopt, 0.0, true);
         m.specific_heat = specific_heat_or_rows(r, m.specific_heat_table, m.specific_heat_max);
         m.conductivity = conductivity_or_rows(r, m.conductivity_table);

@@ -38,6 +38,9 @@ struct MaterialDef {
     return r;
   }
   bool has_thermal = false;
+  // The fibre volume fraction when the thermal data above were formed from
+  // `mixture` (matrix and fibre); negative when they were given.
+  double mixture_fibre_fraction = -1;
   json membrane, bending;  // null when absent
   // The crystallisation kinetics of the matrix (Nakamura), see
   // solve/crystallisation.hpp; `present` false when the material has none.
@@ -249,6 +252,10 @@ json read_job_document(const std::filesystem::path& file);
 void apply_set(json& doc, const std::string& assignment);
 void apply_set_value(json& doc, const std::string& path, const json& value);
 Job parse_job(const json& doc, const std::filesystem::path& file);
+// One line on the thermal data a material formed from `mixture` (its fibre
+// volume fraction, density, specific heat and conductivity, or their
+// ranges over the rows); empty for a material without one.
+std::string describe_mixture(const MaterialDef& m);
 Job load_job(const std::filesystem::path& file, const std::vector<std::string>& sets);
 
 inline const std::vector<std::string>& known_fields() {

@@ -115,6 +115,41 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                                    {"maxItems", 4}}}}})},
       {"description", "k11 (fibres), k22 (across), k33 (thickness) [W/m/K], constant, or rows [T (degC), k11, "
                       "k22, k33] (linear between rows, held beyond them)"}};
+  // materials.*.mixture: a constituent's value, a number or rows [T, value].
+  auto number_or_rows = [](int n, const std::string& desc) {
+    json number = n == 1 ? json{{"type", "number"}, {"exclusiveMinimum", 0}}
+                         : json{{"type", "array"},
+                                {"items", {{"type", "number"}, {"exclusiveMinimum", 0}}},
+                                {"minItems", n},
+                                {"maxItems", n}};
+    return json{{"oneOf", json::array({number, json{{"type", "array"},
+                                                    {"minItems", 1},
+                                                    {"items",
+                                                     {{"type", "array"},
+                                                      {"items", {{"type", "number"}}},
+                                                      {"minItems", n + 1},
+                                                      {"maxItems", n + 1}}}}})},
+                {"description", desc}};
+  };
+  auto constituent = [&](const std::string& k_desc, int k_values) {
+    return json{{"type", "object"},
+                {"required", json::array({"density", "specific_heat", "conductivity"})},
+                {"additionalProperties", false},
+                {"properties",
+                 {{"density", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[kg/m3]"}}},
+                  {"specific_heat", number_or_rows(1, "[J/kg/K], constant, or rows [T (degC), c]")},
+                  {"conductivity", number_or_rows(k_values, k_desc)}}}};
+  };
+  const json mixture = {
+      {"type", "object"},
+      {"description", "the thermal data from the matrix and the fibres (instead of density, specific_heat and "
+                      "conductivity): density and rho c parallel, k11 parallel, k22 = k33 in series"},
+      {"required", json::array({"fibre_volume_fraction", "matrix", "fibre"})},
+      {"additionalProperties", false},
+      {"properties",
+       {{"fibre_volume_fraction", {{"type", "number"}, {"minimum", 0}, {"maximum", 1}}},
+        {"matrix", constituent("[W/m/K], constant, or rows [T (degC), k]", 1)},
+        {"fibre", constituent("[W/m/K] [axial, transverse], constant, or rows [T (degC), axial, transverse]", 2)}}}};
   json thermal_or_null = thermal;
   thermal_or_null.push_back({{"type", "null"}});
   const json material = {
@@ -130,6 +165,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
           {"description", "[J/kg/K], constant, or rows [T (degC), c (J/kg/K)] (an apparent specific heat, "
                           "linear between rows, held beyond them)"}}},
         {"conductivity", conductivity},
+        {"mixture", mixture},
         {"crystallisation",
          {{"type", "object"},
           {"description", "Nakamura crystallisation kinetics of the matrix: X = 1 - exp(-(int K(T) dt)^n)"},
@@ -170,6 +206,10 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
         {"bending", law},
         {"description", {{"type", "string"}}},
         {"source", {{"type", "string"}}}}},
+      {"not",
+       {{"anyOf", json::array({json{{"required", json::array({"mixture", "density"})}},
+                               json{{"required", json::array({"mixture", "specific_heat"})}},
+                               json{{"required", json::array({"mixture", "conductivity"})}}})}}},
       {"additionalProperties", false}};
   const json mesh = {{"type", "object"},
                      {"properties",

@@ -231,6 +231,8 @@ void Simulation::Run::log_start() const {
   else
     log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s), subnormals {}", job.name, parts.size(),
               sim.tools_.size(), threads, subnormals);
+  for (const auto& m : job.materials)
+    if (const auto mix = describe_mixture(m); !mix.empty()) log->info("material '{}': {}", m.name, mix);
   if (job.thermal)
     for (const auto& st : parts)
       if (!st->cp.empty()) {

@@ -43,10 +43,16 @@ void Simulation::build_thermal() {
   splitter_.reset(reinterpret_cast<sdk::ThermalSplitter* (*)()>(rec.create)());
   for (const auto& st : parts_) {
     const MaterialDef& mat = job_.materials[st->def->material];
-    if (!mat.conductivity_table.empty() && !splitter_->takes_conductivity_field())
+    if (!mat.conductivity_table.empty() && !splitter_->takes_conductivity_field()) {
+      if (mat.mixture_fibre_fraction >= 0)
+        throw JobError(mat.pointer + "/mixture", "the thermal splitter '" + th.splitter +
+                                                     "' takes no temperature-dependent conductivity; give the "
+                                                     "matrix and fibre constant conductivities or choose another "
+                                                     "splitter");
       throw JobError(mat.pointer + "/conductivity", "the thermal splitter '" + th.splitter +
                                                         "' takes no temperature-dependent conductivity; give "
                                                         "constant values [k11, k22, k33] or choose another splitter");
+    }
   }
   if (auto s = splitter_->configure(params, part_views_); !s)
     throw JobError(th.pointer, "thermal plugin '" + th.splitter + "': " + s.message);

@@ -61,7 +61,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.22.0 (plugin SDK 0.19.0, ABI 19)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.23.0 (plugin SDK 0.19.0, ABI 19)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -385,6 +385,16 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"conductivity_row_zero", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {{240.0, 3.89, 0.31, 0.31}, {250.0, 3.89, 0.0, 0.31}}; }, "error: /materials/pa66_cf_ud/conductivity/1/2: conductivity must be > 0 W/m/K, found 0"},
       {"conductivity_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {3.89, 0.31, -0.31}; }, "error: /materials/pa66_cf_ud/conductivity/2: conductivity must be > 0 W/m/K, found -0.31"},
       {"conductivity_rows_with_a_splitter_without_them", [](json& j) { j["materials"]["pa66_cf_ud"]["conductivity"] = {{240.0, 3.89, 0.31, 0.31}, {300.0, 3.89, 0.31, 0.4}}; j["solvers"]["thermal"] = {{"splitter", "nan_after"}}; j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR}; }, "error: /materials/pa66_cf_ud/conductivity: the thermal splitter 'nan_after' takes no temperature-dependent conductivity"},
+      {"mixture_and_density", [](json& j) { j["materials"]["pa66_cf_ud"]["mixture"] = test::pa66_carbon_mixture(); }, "error: /materials/pa66_cf_ud/density: give either 'mixture' or density, specific_heat and conductivity, not both"},
+      {"mixture_fraction_above_one", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["fibre_volume_fraction"] = 1.2; }, "error: /materials/pa66_cf_ud/mixture/fibre_volume_fraction: must be <= 1, found 1.2"},
+      {"mixture_without_fibre", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"].erase("fibre"); }, "error: /materials/pa66_cf_ud/mixture/fibre: "},
+      {"mixture_matrix_density", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["matrix"]["density"] = 0.0; }, "error: /materials/pa66_cf_ud/mixture/matrix/density: must be > 0, found 0"},
+      {"mixture_fibre_conductivity_one_value", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["fibre"]["conductivity"] = 9.4; }, "error: /materials/pa66_cf_ud/mixture/fibre/conductivity: expected [axial, transverse] (W/m/K) or rows [T (degC), axial, transverse], found a number"},
+      {"mixture_matrix_conductivity_two_values", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["matrix"]["conductivity"] = {0.22, 0.22}; }, "error: /materials/pa66_cf_ud/mixture/matrix/conductivity: expected a number (W/m/K) or rows [T (degC), value], found an array of numbers"},
+      {"mixture_fibre_conductivity_zero", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["fibre"]["conductivity"] = {{250.0, 9.4, 0.84}, {300.0, 9.4, 0.0}}; }, "error: /materials/pa66_cf_ud/mixture/fibre/conductivity/1/2: must be > 0 W/m/K, found 0"},
+      {"mixture_specific_heat_temperatures", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["matrix"]["specific_heat"] = {{250.0, 2600.0}, {250.0, 2500.0}}; }, "error: /materials/pa66_cf_ud/mixture/matrix/specific_heat/1/0: temperatures must increase from row to row"},
+      {"mixture_unknown_key", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["matrix"]["densty"] = 970.0; }, "error: /materials/pa66_cf_ud/mixture/matrix/densty: unknown key 'densty'; did you mean 'density'?"},
+      {"mixture_rows_with_a_splitter_without_them", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["matrix"]["conductivity"] = {{250.0, 0.25}, {300.0, 0.22}}; j["solvers"]["thermal"] = {{"splitter", "nan_after"}}; j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR}; }, "error: /materials/pa66_cf_ud/mixture: the thermal splitter 'nan_after' takes no temperature-dependent conductivity"},
       {"crystallisation_rate_temperatures", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{240.0, 0.1}, {230.0, 0.5}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/1/0: temperatures must increase from row to row"},
       {"crystallisation_rate_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}, {230.0, -0.5}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/1/1: must be >= 0 1/s, found -0.5"},
       {"crystallisation_rate_zero", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate: every rate is zero"},
@@ -2127,6 +2137,17 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   json bad_table = with_table;
   bad_table["materials"]["pa66_cf_ud"]["specific_heat"] = {{220.0, 1775.0, 1.0}};
   std::ofstream(dir / "bad_table.json") << bad_table.dump();
+  json mixture = with_checkpoints;  // thermal data from the matrix and the fibres, with rows
+  mixture["materials"]["pa66_cf_ud"] = {{"mixture", pa66_carbon_mixture()}};
+  mixture["materials"]["pa66_cf_ud"]["mixture"]["matrix"]["conductivity"] = {{250.0, 0.25}, {300.0, 0.22}};
+  mixture["materials"]["pa66_cf_ud"]["mixture"]["fibre"]["specific_heat"] = {{20.0, 710.0}, {300.0, 1100.0}};
+  std::ofstream(dir / "mixture.json") << mixture.dump();
+  json bad_mixture = mixture;  // three conductivities for the fibres
+  bad_mixture["materials"]["pa66_cf_ud"]["mixture"]["fibre"]["conductivity"] = {9.4, 0.84, 0.84};
+  std::ofstream(dir / "bad_mixture.json") << bad_mixture.dump();
+  json mixture_and_density = mixture;  // both forms of the thermal data
+  mixture_and_density["materials"]["pa66_cf_ud"]["density"] = 1294.0;
+  std::ofstream(dir / "mixture_and_density.json") << mixture_and_density.dump();
   // A probe with a quantity the kernel does not know.
   json probe = with_checkpoints;
   probe["output"]["probes"][0]["quantities"] = {"temperature_mean", "fibre_strian"};
@@ -2138,10 +2159,12 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
   good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " " + q(dir / "kinetics.json") + " " +
-          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " ";
+          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_k_table.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "bad_mixture.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "mixture_and_density.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_kinetics.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_melting.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "typo.json") + " >/dev/null").c_str()), 0);

@@ -80,6 +80,10 @@ JobRun run_json(const json& doc, int threads, const std::filesystem::path& out) 
 std::filesystem::path binary_dir() { return THERMOSTAMP_TEST_BINARY_DIR; }
 std::filesystem::path source_dir() { return THERMOSTAMP_TEST_SOURCE_DIR; }
 
+json pa66_carbon_mixture() {
+  return read_job_document(source_dir() / "share" / "materials" / "pa66_cf_ud_mixture.json").at("mixture");
+}
+
 std::filesystem::path temp_dir(const std::string& name) {
   auto d = binary_dir() / "test_tmp" / name;
   std::filesystem::remove_all(d);

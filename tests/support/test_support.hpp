@@ -72,6 +72,10 @@ inline std::string q(const std::filesystem::path& p) { return "'" + p.string() +
 CommandResult thermostamp(const std::string& args);
 std::filesystem::path binary_dir();
 std::filesystem::path source_dir();
+
+// The `mixture` of share/materials/pa66_cf_ud_mixture.json: PA66 melt and
+// carbon fibres at a fibre volume fraction of 0.4.
+json pa66_carbon_mixture();
 std::filesystem::path temp_dir(const std::string& name);
 
 // An STL file of the square [lo, hi]^2 in the plane z (two triangles,

@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
 #include "job/job.hpp"
 #include "test_support.hpp"
 
@@ -65,6 +69,164 @@ TEST(ParseJob, ErrorsCarryThePointer) {
   bad = d;
   bad["output"]["probes"][0]["quantities"] = {"temperature_profil"};
   EXPECT_NE(job_error(bad).find("did you mean 'temperature_profile'"), std::string::npos);
+}
+
+
+// materials.*.mixture: the ply's thermal data from its matrix and fibres.
+// The rules (density and rho c parallel, k11 parallel, k22 = k33 in
+// series) written out here from the constituents, and the values of the
+// card pa66_cf_ud.json, which are those rules rounded.
+const MaterialDef& mixture_material(const json& mixture, Job& keep) {
+  json d = test::ply_job("adi", 8, 1.0, 0.1);
+  d["materials"]["ply"] = {{"mixture", mixture}};
+  keep = parse_job(d, "job.json");
+  return keep.materials[0];
+}
+
+TEST(Mixture, CardConstituentsGiveTheCardsValues) {
+  const json mix = test::pa66_carbon_mixture();
+  Job keep;
+  const MaterialDef& m = mixture_material(mix, keep);
+  const double vf = 0.4, rho_m = 970, rho_f = 1780, c_m = 2600, c_f = 1100, k_m = 0.22, k_a = 9.4, k_t = 0.84;
+  const double rho = vf * rho_f + (1 - vf) * rho_m;
+  const double c = (vf * rho_f * c_f + (1 - vf) * rho_m * c_m) / rho;
+  const double k11 = vf * k_a + (1 - vf) * k_m, k22 = 1.0 / (vf / k_t + (1 - vf) / k_m);
+  EXPECT_NEAR(m.density, rho, 1e-14 * rho);
+  EXPECT_NEAR(m.specific_heat, c, 1e-14 * c);
+  EXPECT_EQ(m.specific_heat_max, m.specific_heat);
+  EXPECT_TRUE(m.specific_heat_table.empty());
+  EXPECT_TRUE(m.conductivity_table.empty());
+  EXPECT_NEAR(m.conductivity[0], k11, 1e-14 * k11);
+  EXPECT_NEAR(m.conductivity[1], k22, 1e-14 * k22);
+  EXPECT_EQ(m.conductivity[2], m.conductivity[1]);
+  EXPECT_TRUE(m.has_thermal);
+  EXPECT_EQ(m.mixture_fibre_fraction, 0.4);
+  EXPECT_NE(describe_mixture(m).find("density 1294 kg/m3, specific heat 1774.65 J/(kg K), conductivity 3.892, "
+                                     "0.312162, 0.312162 W/(m K)"),
+            std::string::npos)
+      << describe_mixture(m);
+
+  // pa66_cf_ud.json gives these values to its printed digits.
+  const json card = read_job_document(test::source_dir() / "share" / "materials" / "pa66_cf_ud.json");
+  EXPECT_EQ(card["density"].get<double>(), m.density);
+  EXPECT_LE(std::abs(card["specific_heat"].get<double>() - m.specific_heat), 0.5);
+  for (int d = 0; d < 3; ++d) EXPECT_LE(std::abs(card["conductivity"][d].get<double>() - m.conductivity[d]), 0.005) << d;
+
+  // pa66_cf_ud_mixture.json is that card with its thermal data from the
+  // mixture: the same laws.
+  const json mixture_card = read_job_document(test::source_dir() / "share" / "materials" / "pa66_cf_ud_mixture.json");
+  json whole = test::ply_job("adi", 8, 1.0, 0.1);
+  whole["materials"]["ply"] = mixture_card;
+  EXPECT_EQ(parse_job(whole, "job.json").materials[0].density, m.density);
+  EXPECT_EQ(mixture_card["membrane"], card["membrane"]);
+  EXPECT_EQ(mixture_card["bending"], card["bending"]);
+
+  // A fibre fraction of 0 is the matrix, of 1 the fibres.
+  json none = mix, all = mix;
+  none["fibre_volume_fraction"] = 0.0;
+  all["fibre_volume_fraction"] = 1.0;
+  const MaterialDef& mn = mixture_material(none, keep);
+  EXPECT_EQ(mn.density, rho_m);
+  EXPECT_DOUBLE_EQ(mn.specific_heat, c_m);
+  for (int d = 0; d < 3; ++d) EXPECT_DOUBLE_EQ(mn.conductivity[d], k_m) << d;
+  const MaterialDef& ma = mixture_material(all, keep);
+  EXPECT_EQ(ma.density, rho_f);
+  EXPECT_DOUBLE_EQ(ma.specific_heat, c_f);
+  EXPECT_DOUBLE_EQ(ma.conductivity[0], k_a);
+  EXPECT_DOUBLE_EQ(ma.conductivity[1], k_t);
+  EXPECT_DOUBLE_EQ(ma.conductivity[2], k_t);
+}
+
+// Constituents whose values follow the temperature: the ply's rows are the
+// mixture at every temperature of the constituents' rows (each held beyond
+// its own rows), sorted, each once.
+TEST(Mixture, RowsAtEveryTemperatureOfTheConstituents) {
+  json mix = test::pa66_carbon_mixture();
+  mix["matrix"]["specific_heat"] = {{200.0, 2000.0}, {260.0, 2600.0}};
+  mix["matrix"]["conductivity"] = {{200.0, 0.30}, {280.0, 0.22}};
+  mix["fibre"]["conductivity"] = {{250.0, 9.4, 0.84}, {300.0, 10.0, 0.90}};
+  Job keep;
+  const MaterialDef& m = mixture_material(mix, keep);
+  auto lin = [](double t, double t0, double v0, double t1, double v1) {
+    const double s = std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
+    return v0 + s * (v1 - v0);
+  };
+  const double vf = 0.4, rho = 1294;
+  auto c_at = [&](double t) { return (vf * 1780 * 1100 + (1 - vf) * 970 * lin(t, 200, 2000, 260, 2600)) / rho; };
+  auto k_at = [&](double t) {
+    const double km = lin(t, 200, 0.30, 280, 0.22), ka = lin(t, 250, 9.4, 300, 10.0), kt = lin(t, 250, 0.84, 300, 0.90);
+    return std::array<double, 2>{vf * ka + (1 - vf) * km, 1.0 / (vf / kt + (1 - vf) / km)};
+  };
+  ASSERT_EQ(m.specific_heat_table.size(), 2u);
+  for (const auto& row : m.specific_heat_table) EXPECT_NEAR(row[1], c_at(row[0]), 1e-12 * row[1]) << row[0];
+  EXPECT_EQ(m.specific_heat_table[0][0], 200.0);
+  EXPECT_EQ(m.specific_heat_table[1][0], 260.0);
+  EXPECT_EQ(m.specific_heat, m.specific_heat_table[0][1]);
+  EXPECT_EQ(m.specific_heat_max, m.specific_heat_table[1][1]);
+  const std::vector<double> tk = {200, 250, 280, 300};
+  ASSERT_EQ(m.conductivity_table.size(), tk.size());
+  std::array<double, 3> largest{0, 0, 0};
+  for (std::size_t i = 0; i < tk.size(); ++i) {
+    const auto& row = m.conductivity_table[i];
+    EXPECT_EQ(row[0], tk[i]);
+    const auto k = k_at(tk[i]);
+    EXPECT_NEAR(row[1], k[0], 1e-12 * k[0]) << tk[i];
+    EXPECT_NEAR(row[2], k[1], 1e-12 * k[1]) << tk[i];
+    EXPECT_EQ(row[3], row[2]);
+    for (int d = 0; d < 3; ++d) largest[d] = std::max(largest[d], row[d + 1]);
+  }
+  EXPECT_EQ(m.conductivity, largest);  // the thermal steps are chosen with these
+  // Between its rows the heat capacity per volume is linear in the
+  // constituents', so the ply's rows hold the mixture at every temperature.
+  for (double t : {150.0, 215.0, 237.5, 290.0}) {
+    const auto& r = m.specific_heat_table;
+    const double rows = t <= r[0][0] ? r[0][1] : t >= r[1][0] ? r[1][1] : lin(t, r[0][0], r[0][1], r[1][0], r[1][1]);
+    EXPECT_NEAR(rows, c_at(t), 1e-12 * rows) << t;
+  }
+
+  // Rows of one value are a constant.
+  json flat = test::pa66_carbon_mixture();
+  flat["matrix"]["specific_heat"] = {{200.0, 2600.0}, {260.0, 2600.0}};
+  flat["matrix"]["conductivity"] = {{200.0, 0.22}, {280.0, 0.22}};
+  const MaterialDef& mf = mixture_material(flat, keep);
+  EXPECT_TRUE(mf.specific_heat_table.empty());
+  EXPECT_TRUE(mf.conductivity_table.empty());
+  Job keep_card;
+  const MaterialDef& card = mixture_material(test::pa66_carbon_mixture(), keep_card);
+  EXPECT_EQ(mf.specific_heat, card.specific_heat);
+  EXPECT_EQ(mf.conductivity, card.conductivity);
+}
+
+// A run with a mixture is the run with the rows it forms, written out as
+// `specific_heat` and `conductivity`: two linked plies (adi), bit for bit.
+TEST(Mixture, RunsAsTheRowsItForms) {
+  json mix = test::pa66_carbon_mixture();
+  mix["matrix"]["specific_heat"] = {{250.0, 2300.0}, {300.0, 2600.0}};
+  mix["matrix"]["conductivity"] = {{250.0, 0.26}, {300.0, 0.22}};
+  json with_mixture = test::two_ply_job("adi", 6, 1000.0);
+  with_mixture["materials"]["ply"] = {{"mixture", mix}};
+  Job keep;
+  const MaterialDef& m = mixture_material(mix, keep);
+  json rows = with_mixture;
+  json c = json::array(), k = json::array();
+  for (const auto& r : m.specific_heat_table) c.push_back({r[0], r[1]});
+  for (const auto& r : m.conductivity_table) k.push_back({r[0], r[1], r[2], r[3]});
+  rows["materials"]["ply"] = {{"density", m.density}, {"specific_heat", c}, {"conductivity", k}};
+  const auto a = test::run_json(with_mixture), b = test::run_json(rows);
+  ASSERT_EQ(a.result.probes.size(), b.result.probes.size());
+  ASSERT_GT(a.result.probes.size(), 4u);
+  for (std::size_t i = 0; i < a.result.probes.size(); ++i) EXPECT_EQ(a.result.probes[i].values, b.result.probes[i].values) << i;
+  // The rows move the profiles (0.54 K from the card's constants): the comparison
+  // above is not one of two runs that the rows leave alike.
+  json constant = with_mixture;
+  constant["materials"]["ply"] = {{"mixture", test::pa66_carbon_mixture()}};
+  const auto d = test::run_json(constant);
+  double moved = 0;
+  for (std::size_t i = 0; i < a.result.probes.size(); ++i)
+    for (std::size_t z = 0; z < a.result.probes[i].values.size(); ++z)
+      moved = std::max(moved, std::abs(a.result.probes[i].values[z] - d.result.probes[i].values[z]));
+  std::printf("rows against the card's constants: %.3g K\n", moved);
+  EXPECT_GT(moved, 0.25);
 }
 
 }  // namespace
