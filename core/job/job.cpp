@@ -204,6 +204,7 @@ void parse_mixture(const json& v, const std::string& ptr, MaterialDef& m) {
   const double vm = 1.0 - vf;
   m.mixture_fibre_fraction = vf;
   m.density = vf * rho_f + vm * rho_m;
+  m.mixture_matrix_mass_fraction = vm * rho_m / m.density;
   auto c_at = [&](double t) {
     return (vf * rho_f * constituent_at(c_f, t, 1) + vm * rho_m * constituent_at(c_m, t, 1)) / m.density;
   };
@@ -477,8 +478,10 @@ std::string describe_mixture(const MaterialDef& m) {
   if (m.mixture_fibre_fraction < 0) return "";
   char line[512];
   std::string s;
-  std::snprintf(line, sizeof line, "thermal data from its mixture at a fibre volume fraction of %g: density %.6g kg/m3, ",
-                m.mixture_fibre_fraction, m.density);
+  std::snprintf(line, sizeof line,
+                "thermal data from its mixture at a fibre volume fraction of %g (matrix mass fraction %.4g): density "
+                "%.6g kg/m3, ",
+                m.mixture_fibre_fraction, m.mixture_matrix_mass_fraction, m.density);
   s = line;
   if (m.specific_heat_table.empty())
     std::snprintf(line, sizeof line, "specific heat %.6g J/(kg K), ", m.specific_heat);

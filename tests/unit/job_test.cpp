@@ -101,7 +101,8 @@ TEST(Mixture, CardConstituentsGiveTheCardsValues) {
   EXPECT_EQ(m.conductivity[2], m.conductivity[1]);
   EXPECT_TRUE(m.has_thermal);
   EXPECT_EQ(m.mixture_fibre_fraction, 0.4);
-  EXPECT_NE(describe_mixture(m).find("density 1294 kg/m3, specific heat 1774.65 J/(kg K), conductivity 3.892, "
+  EXPECT_NEAR(m.mixture_matrix_mass_fraction, (1 - vf) * rho_m / rho, 1e-15);
+  EXPECT_NE(describe_mixture(m).find("(matrix mass fraction 0.4498): density 1294 kg/m3, specific heat 1774.65 J/(kg K), conductivity 3.892, "
                                      "0.312162, 0.312162 W/(m K)"),
             std::string::npos)
       << describe_mixture(m);
