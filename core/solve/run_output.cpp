@@ -669,6 +669,41 @@ void Simulation::Run::finish() {
   log_end();
 }
 
+namespace {
+// What the run took of each material: the density and the thermal data (a
+// number, or the rows [T (degC), ...] where they follow the temperature),
+// as given or as formed from a mixture, whose fractions it adds.
+json materials_summary(const Job& job) {
+  json out = json::object();
+  for (const auto& m : job.materials) {
+    json e = json::object();
+    if (m.density > 0) e["density_kg_m3"] = m.density;
+    if (m.has_thermal) {
+      if (m.specific_heat_table.empty()) {
+        e["specific_heat_J_kg_K"] = m.specific_heat;
+      } else {
+        json rows = json::array();
+        for (const auto& r : m.specific_heat_table) rows.push_back({r[0], r[1]});
+        e["specific_heat_J_kg_K"] = rows;
+      }
+      if (m.conductivity_table.empty()) {
+        e["conductivity_W_m_K"] = {m.conductivity[0], m.conductivity[1], m.conductivity[2]};
+      } else {
+        json rows = json::array();
+        for (const auto& r : m.conductivity_table) rows.push_back({r[0], r[1], r[2], r[3]});
+        e["conductivity_W_m_K"] = rows;
+      }
+    }
+    if (m.mixture_fibre_fraction >= 0) {
+      e["fibre_volume_fraction"] = m.mixture_fibre_fraction;
+      e["matrix_mass_fraction"] = m.mixture_matrix_mass_fraction;
+    }
+    out[m.name] = e;
+  }
+  return out;
+}
+}  // namespace
+
 void Simulation::Run::write_summary() const {
   const auto& parts = sim.parts_;
   const auto& mech = sim.mech_;
@@ -696,6 +731,7 @@ void Simulation::Run::write_summary() const {
         {"inplane_substeps_max", substeps_max},
         {"limited_node_steps", limited_total}};
   summary["plugins_loaded"] = sim.registry_.loaded_names();
+  summary["materials"] = materials_summary(job);
   if (job.mechanics)
     summary["timing_s"] = {{"elements_and_laws", timing[kTimeElements]},
                            {"contact", timing[kTimeContact]},

@@ -36,6 +36,11 @@ Writes into DIR/figures/:
                        elements' shear angles and, with output.shear_angle_limit,
                        the share of its area sheared beyond the limit
   energy.png           energy audit against time
+  materials.png        the specific heat and the conductivity against the
+                       temperature of every material whose values
+                       follow it (rows, held beyond the first and the
+                       last), as the run took them (summary.json; formed
+                       from a mixture where the material has one)
   study.png            error against wall time when DIR holds a study.csv
                        (at the probes, of each ply's mean temperature and,
                        where the study has them, of each ply's largest
@@ -513,6 +518,55 @@ def plot_energy(folder, out):
     return [save(fig, out, "energy.png")]
 
 
+def plot_materials(folder, out):
+    """The specific heat and conductivity of every material whose values follow the temperature (summary.json)."""
+    summary = json.load(open(os.path.join(folder, "summary.json")))
+    mats = summary.get("materials") if isinstance(summary, dict) else None
+    if not isinstance(mats, dict):
+        return []
+
+    def rows(v):
+        return v if isinstance(v, list) and v and isinstance(v[0], list) else None
+
+    tabled = [(n, m) for n, m in mats.items() if isinstance(m, dict) and
+              (rows(m.get("specific_heat_J_kg_K")) or rows(m.get("conductivity_W_m_K")))]
+    if not tabled:
+        return []
+    fig, axes = grid(3 * len(tabled), most=3)
+    for i, (name, m) in enumerate(tabled):
+        c, k = m.get("specific_heat_J_kg_K"), m.get("conductivity_W_m_K")
+        temps = [r[0] for t in (rows(c), rows(k)) if t for r in t]
+        lo, hi = min(temps), max(temps)
+        pad = max(0.1 * (hi - lo), 5.0)
+        span = (lo - pad, hi + pad)
+        mix = m.get("fibre_volume_fraction")
+        title = name + (" (mixture, Vf %g)" % mix if mix is not None else "")
+
+        def curve(ax, value, col, label, style):
+            # rows: held beyond the first and the last, linear between them
+            table = rows(value)
+            if table:
+                x = [span[0]] + [r[0] for r in table] + [span[1]]
+                y = [table[0][col]] + [r[col] for r in table] + [table[-1][col]]
+                ax.plot(x, y, style, label=label)
+                ax.plot([r[0] for r in table], [r[col] for r in table], "o", ms=3, color=ax.lines[-1].get_color())
+            elif isinstance(value, (int, float)) or (isinstance(value, list) and len(value) == 3):
+                v = value if isinstance(value, (int, float)) else value[col - 1]
+                ax.plot(span, [v, v], style, label=label + " (constant)")
+
+        a_c, a_along, a_across = axes[3 * i:3 * i + 3]
+        curve(a_c, c, 1, "c", "-")
+        curve(a_along, k, 1, "k11", "-")
+        curve(a_across, k, 2, "k22", "--")
+        curve(a_across, k, 3, "k33", ":")
+        for ax, what, unit in ((a_c, "specific heat", "c (J/(kg K))"),
+                               (a_along, "conductivity along the fibres", "k (W/(m K))"),
+                               (a_across, "conductivity across", "k (W/(m K))")):
+            if ax.lines:
+                finish(ax, title + ": " + what, "temperature (degC)", unit)
+    return [save(fig, out, "materials.png")]
+
+
 UNITS = {"temperature_mean": "degC", "displacement_x": "m", "displacement_y": "m", "displacement_z": "m",
          "shear_angle": "deg", "fibre_strain": "", "contact_pressure": "Pa", "conductance": "W/(m^2 K)"}
 
@@ -707,7 +761,8 @@ def main():
     # killed while writing it, a file edited by hand) is named in one line,
     # and the figures of the others are still made.
     for name, plot in (("study.csv", plot_study), ("probes.csv", plot_probes), ("results.h5", plot_maps),
-                       ("tools.csv", plot_tools), ("plies.csv", plot_plies), ("energy.csv", plot_energy)):
+                       ("tools.csv", plot_tools), ("plies.csv", plot_plies), ("energy.csv", plot_energy),
+                       ("summary.json", plot_materials)):
         if not os.path.exists(os.path.join(folder, name)):
             continue
         try:

@@ -2009,6 +2009,66 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   EXPECT_EQ(none.err.rfind("error: report: nothing to plot in ", 0), 0u) << none.err;
 }
 
+// summary.json gives the thermal data each material had in the run, as
+// given or as formed from its mixture, and `thermostamp report` draws those
+// that follow the temperature (materials.png); a job whose values are all
+// constant gets no such figure.
+TEST(Cli, SummaryAndReportGiveTheMaterialsAsRun) {
+  const auto job = small_job("materials_as_run", [](json& j) {
+    j["materials"]["other"] = j["materials"]["pa66_cf_ud"];
+    j["parts"][1]["material"] = "other";
+    auto& m = j["materials"]["pa66_cf_ud"];
+    m = {{"mixture", pa66_carbon_mixture()}};
+    m["mixture"]["matrix"]["conductivity"] = {{250.0, 0.25}, {300.0, 0.22}};
+    m["mixture"]["fibre"]["specific_heat"] = {{20.0, 710.0}, {300.0, 1100.0}};
+  });
+  const auto out = job.parent_path() / "out";
+  const auto r = thermostamp("run " + q(job) + " --out " + q(out) + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  const Job parsed = load_job(job, {});
+  for (const auto& m : parsed.materials) {
+    SCOPED_TRACE(m.name);
+    const json& e = s["materials"][m.name];
+    EXPECT_EQ(e["density_kg_m3"].get<double>(), m.density);
+    if (m.specific_heat_table.empty()) {
+      EXPECT_EQ(e["specific_heat_J_kg_K"].get<double>(), m.specific_heat);
+    } else {
+      ASSERT_EQ(e["specific_heat_J_kg_K"].size(), m.specific_heat_table.size());
+      for (std::size_t i = 0; i < m.specific_heat_table.size(); ++i)
+        for (int d = 0; d < 2; ++d)
+          EXPECT_EQ(e["specific_heat_J_kg_K"][i][d].get<double>(), m.specific_heat_table[i][d]);
+    }
+    if (m.conductivity_table.empty()) {
+      for (int d = 0; d < 3; ++d) EXPECT_EQ(e["conductivity_W_m_K"][d].get<double>(), m.conductivity[d]);
+    } else {
+      ASSERT_EQ(e["conductivity_W_m_K"].size(), m.conductivity_table.size());
+      for (std::size_t i = 0; i < m.conductivity_table.size(); ++i)
+        for (int d = 0; d < 4; ++d)
+          EXPECT_EQ(e["conductivity_W_m_K"][i][d].get<double>(), m.conductivity_table[i][d]);
+    }
+  }
+  // The mixture: rows of c at the fibres' temperatures, of k at the matrix's.
+  const json& mix = s["materials"]["pa66_cf_ud"];
+  EXPECT_EQ(mix["fibre_volume_fraction"].get<double>(), 0.4);
+  EXPECT_NEAR(mix["matrix_mass_fraction"].get<double>(), 0.6 * 970 / 1294.0, 1e-15);
+  EXPECT_EQ(mix["specific_heat_J_kg_K"].size(), 2u);
+  EXPECT_EQ(mix["conductivity_W_m_K"].size(), 2u);
+  EXPECT_EQ(s["materials"]["other"]["specific_heat_J_kg_K"].get<double>(), 1775.0);
+  EXPECT_FALSE(s["materials"]["other"].contains("fibre_volume_fraction"));
+  const auto rep = thermostamp("report " + q(out));
+  ASSERT_EQ(rep.exit_code, 0) << rep.err;
+  std::ifstream png(out / "figures" / "materials.png", std::ios::binary);
+  char magic[4] = {0, 0, 0, 0};
+  png.read(magic, 4);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+  // Constant values only: no figure.
+  const auto plain = small_job("materials_constant");
+  ASSERT_EQ(thermostamp("run " + q(plain) + " --out " + q(plain.parent_path() / "out") + " --quiet").exit_code, 0);
+  ASSERT_EQ(thermostamp("report " + q(plain.parent_path() / "out")).exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(plain.parent_path() / "out" / "figures" / "materials.png"));
+}
+
 // `thermostamp report A --against B`: the two runs on the same axes (here
 // adi against shell2d), beside A's own figures; another folder that is
 // not one, or that shares nothing with A, is named in one line.
