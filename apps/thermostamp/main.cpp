@@ -207,6 +207,9 @@ int cmd_run(const Args& a, bool validate_only) {
       std::cout << line;
     }
     for (const auto& m : job.materials)
+      if (const auto card = ts::material_card_file(job, m); !card.empty())
+        std::cout << "material '" << m.name << "': from the material card " << card.string() << "\n";
+    for (const auto& m : job.materials)
       if (const auto mix = ts::describe_mixture(m); !mix.empty())
         std::cout << "material '" << m.name << "': " << mix << "\n";
     if (const double dt = sim.thermal_step(); dt > 0) {

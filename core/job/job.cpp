@@ -332,14 +332,48 @@ bool RegionDef::contains(double x, double y) const {
   return false;
 }
 
+// materials.<m>.card: a material card (a file holding a material object,
+// share/materials) whose keys the material takes where it does not give
+// them itself. The "card" key stays, naming the file as given.
+void resolve_material_cards(json& doc, const std::filesystem::path& base_dir) {
+  if (!doc.is_object() || !doc.contains("materials") || !doc["materials"].is_object()) return;
+  for (auto it = doc["materials"].begin(); it != doc["materials"].end(); ++it) {
+    json& m = it.value();
+    if (!m.is_object() || !m.contains("card")) continue;
+    const std::string ptr = pointer_append(pointer_append("/materials", it.key()), "card");
+    if (!m["card"].is_string()) throw JobError(ptr, "expected the path of a material card, found " + json_type_name(m["card"]));
+    const std::filesystem::path given = m["card"].get<std::string>();
+    const std::filesystem::path file = given.is_absolute() ? given : base_dir / given;
+    if (!std::filesystem::is_regular_file(file)) throw JobError(ptr, "material card '" + file.string() + "' not found");
+    json card;
+    try {
+      card = read_job_document(file);
+    } catch (const JobError& e) {
+      throw JobError(ptr, std::string("material card: ") + e.what());
+    }
+    if (!card.is_object()) throw JobError(ptr, "the material card '" + file.string() + "' holds " + json_type_name(card) + ", not a material object");
+    if (card.contains("card")) throw JobError(ptr, "the material card '" + file.string() + "' names another card; a card holds the material itself");
+    for (auto c = card.begin(); c != card.end(); ++c)
+      if (!m.contains(c.key())) m[c.key()] = c.value();
+  }
+}
+
+std::filesystem::path material_card_file(const Job& job, const MaterialDef& m) {
+  const json* mats = job.document.contains("materials") ? &job.document["materials"] : nullptr;
+  if (!mats || !mats->contains(m.name) || !(*mats)[m.name].contains("card")) return {};
+  const std::filesystem::path given = (*mats)[m.name]["card"].get<std::string>();
+  return std::filesystem::absolute(given.is_absolute() ? given : job.base_dir / given).lexically_normal();
+}
+
 json read_job_document(const std::filesystem::path& file) {
   std::ifstream in(file);
   if (!in) throw JobError("", "cannot open job file '" + file.string() + "'");
   std::stringstream ss;
   ss << in.rdbuf();
   const std::string text = ss.str();
+  json doc;
   try {
-    return json::parse(text);
+    doc = json::parse(text);
   } catch (const json::parse_error& e) {
     // Translate the byte offset into line:column for the user.
     std::size_t line = 1, col = 1;
@@ -357,6 +391,8 @@ json read_job_document(const std::filesystem::path& file) {
     throw JobError("", file.string() + ":" + std::to_string(line) + ":" + std::to_string(col) +
                            ": not valid JSON (" + what + ")");
   }
+  resolve_material_cards(doc, file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
+  return doc;
 }
 
 namespace {
@@ -501,11 +537,55 @@ std::string describe_mixture(const MaterialDef& m) {
   return s + line;
 }
 
-Job parse_job(const json& doc, const std::filesystem::path& file) {
+namespace {
+void parse_job_into(Job& job);
+}  // namespace
+
+Job parse_job(const json& given, const std::filesystem::path& file) {
   Job job;
   job.file = file;
   job.base_dir = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
-  job.document = doc;
+  job.document = given;
+  resolve_material_cards(job.document, job.base_dir);  // a document built in memory
+  try {
+    parse_job_into(job);
+  } catch (const JobError& e) {
+    throw with_material_card(job, e);
+  }
+  return job;
+}
+
+JobError with_material_card(const Job& job, const JobError& e) {
+  // An error in a value the material took from its card: say which card.
+  static const std::string prefix = "/materials/";
+  const std::string& ptr = e.pointer();
+  if (ptr.rfind(prefix, 0) != 0 || !job.document.contains("materials")) return e;
+  const auto slash = ptr.find('/', prefix.size());
+  if (slash == std::string::npos) return e;
+  const auto end = ptr.find('/', slash + 1);
+  const std::string name = ptr.substr(prefix.size(), slash - prefix.size());
+  const std::string key = ptr.substr(slash + 1, end == std::string::npos ? std::string::npos : end - slash - 1);
+  const json& mats = job.document["materials"];
+  if (!mats.is_object() || !mats.contains(name) || !mats[name].is_object() || !mats[name].contains("card") ||
+      key == "card" || !mats[name]["card"].is_string())
+    return e;
+  const std::filesystem::path given = mats[name]["card"].get<std::string>();
+  const std::filesystem::path file = given.is_absolute() ? given : job.base_dir / given;
+  json card;
+  try {
+    card = read_job_document(file);
+  } catch (const JobError&) {
+    return e;
+  }
+  if (!card.is_object() || !card.contains(key) || card[key] != mats[name][key]) return e;
+  std::string what = e.what();
+  if (what.rfind(ptr + ": ", 0) == 0) what = what.substr(ptr.size() + 2);
+  return JobError(ptr, what + " (from the material card '" + file.lexically_normal().string() + "')");
+}
+
+namespace {
+void parse_job_into(Job& job) {
+  const json& doc = job.document;
   ObjectReader top(doc, "");
   const std::string format = top.text("format");
   if (format != "thermostamp-job/1")
@@ -557,6 +637,7 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       if (const json* v = r.optional_raw("bending")) m.bending = *v;
       r.declare("source");
       r.declare("description");
+      r.declare("card");  // taken in by resolve_material_cards
       r.finish();
       material_names.push_back(m.name);
       job.materials.push_back(std::move(m));
@@ -1074,8 +1155,12 @@ Job parse_job(const json& doc, const std::filesystem::path& file) {
       run_doc["tools"][i]["surface"]["file"] = absolute(job.tools[i].surface.file);
   for (std::size_t i = 0; i < job.plugin_paths.size(); ++i)
     run_doc["plugin_paths"][i] = absolute(job.plugin_paths[i]);
-  return job;
+  // Materials from cards carry the cards' values: the job as run needs
+  // no card.
+  for (auto& m : run_doc["materials"])
+    if (m.is_object()) m.erase("card");
 }
+}  // namespace
 
 Job load_job(const std::filesystem::path& file, const std::vector<std::string>& sets) {
   json doc = read_job_document(file);

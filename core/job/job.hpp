@@ -257,6 +257,12 @@ Job parse_job(const json& doc, const std::filesystem::path& file);
 // volume fraction, density, specific heat and conductivity, or their
 // ranges over the rows); empty for a material without one.
 std::string describe_mixture(const MaterialDef& m);
+// The material card a material of the job took its values from (absolute),
+// empty for a material without "card".
+std::filesystem::path material_card_file(const Job& job, const MaterialDef& m);
+// `e` with the material card named where its pointer is a value that a
+// material took from its card; `e` itself otherwise.
+JobError with_material_card(const Job& job, const JobError& e);
 Job load_job(const std::filesystem::path& file, const std::vector<std::string>& sets);
 
 inline const std::vector<std::string>& known_fields() {

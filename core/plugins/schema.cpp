@@ -166,6 +166,10 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                           "linear between rows, held beyond them)"}}},
         {"conductivity", conductivity},
         {"mixture", mixture},
+        {"card",
+         {{"type", "string"},
+          {"description", "a material card (a file holding a material object, such as share/materials/*.json; "
+                          "relative to the job file) whose keys the material takes where it gives none itself"}}},
         {"crystallisation",
          {{"type", "object"},
           {"description", "Nakamura crystallisation kinetics of the matrix: X = 1 - exp(-(int K(T) dt)^n)"},

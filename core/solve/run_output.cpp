@@ -232,6 +232,9 @@ void Simulation::Run::log_start() const {
     log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s), subnormals {}", job.name, parts.size(),
               sim.tools_.size(), threads, subnormals);
   for (const auto& m : job.materials)
+    if (const auto card = material_card_file(job, m); !card.empty())
+      log->info("material '{}': from the material card {}", m.name, card.string());
+  for (const auto& m : job.materials)
     if (const auto mix = describe_mixture(m); !mix.empty()) log->info("material '{}': {}", m.name, mix);
   if (job.thermal)
     for (const auto& st : parts)

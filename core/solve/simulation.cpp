@@ -209,7 +209,7 @@ void compute_normals(const ShellMesh& m, std::span<const double> x, std::vector<
 
 }  // namespace
 
-Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), registry_(registry) {
+Simulation::Simulation(const Job& job, PluginRegistry& registry) try : job_(job), registry_(registry) {
   for (const auto& p : job_.plugin_paths) registry_.add_search_dir(p);
   if (!job_.thermal && !job_.mechanics)
     throw JobError("/solvers", "nothing to run: set solvers.thermal (a thermal splitter such as \"adi\")");
@@ -248,6 +248,9 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) : job_(job), re
     if (!contacts_.empty()) build_contact_tasks();
   }
   build_probes();
+} catch (const JobError& e) {
+  // A value a material took from its card: the error names the card.
+  throw with_material_card(job, e);
 }
 
 Simulation::~Simulation() = default;

@@ -395,6 +395,8 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"mixture_specific_heat_temperatures", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["matrix"]["specific_heat"] = {{250.0, 2600.0}, {250.0, 2500.0}}; }, "error: /materials/pa66_cf_ud/mixture/matrix/specific_heat/1/0: temperatures must increase from row to row"},
       {"mixture_unknown_key", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["matrix"]["densty"] = 970.0; }, "error: /materials/pa66_cf_ud/mixture/matrix/densty: unknown key 'densty'; did you mean 'density'?"},
       {"mixture_rows_with_a_splitter_without_them", [](json& j) { auto& m = j["materials"]["pa66_cf_ud"]; m = {{"mixture", test::pa66_carbon_mixture()}}; m["mixture"]["matrix"]["conductivity"] = {{250.0, 0.25}, {300.0, 0.22}}; j["solvers"]["thermal"] = {{"splitter", "nan_after"}}; j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR}; }, "error: /materials/pa66_cf_ud/mixture: the thermal splitter 'nan_after' takes no temperature-dependent conductivity"},
+      {"card_missing", [](json& j) { j["materials"]["pa66_cf_ud"] = {{"card", "nowhere/ud.json"}}; }, "error: /materials/pa66_cf_ud/card: material card '"},
+      {"card_value", [](json& j) { j["materials"]["pa66_cf_ud"] = {{"card", (source_dir() / "share" / "materials" / "pa66_cf_ud.json").string()}, {"conductivity", {3.89, 0.31, -0.31}}}; }, "error: /materials/pa66_cf_ud/conductivity/2: conductivity must be > 0 W/m/K, found -0.31"},
       {"crystallisation_rate_temperatures", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{240.0, 0.1}, {230.0, 0.5}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/1/0: temperatures must increase from row to row"},
       {"crystallisation_rate_negative", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.1}, {230.0, -0.5}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate/1/1: must be >= 0 1/s, found -0.5"},
       {"crystallisation_rate_zero", [](json& j) { j["materials"]["pa66_cf_ud"]["crystallisation"] = {{"latent_heat", 3e4}, {"avrami_exponent", 3}, {"rate", {{200.0, 0.0}}}}; }, "error: /materials/pa66_cf_ud/crystallisation/rate: every rate is zero"},
@@ -2202,6 +2204,13 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   mixture["materials"]["pa66_cf_ud"]["mixture"]["matrix"]["conductivity"] = {{250.0, 0.25}, {300.0, 0.22}};
   mixture["materials"]["pa66_cf_ud"]["mixture"]["fibre"]["specific_heat"] = {{20.0, 710.0}, {300.0, 1100.0}};
   std::ofstream(dir / "mixture.json") << mixture.dump();
+  json card = with_checkpoints;  // a material from a card, with a value of its own
+  card["materials"]["pa66_cf_ud"] = {{"card", (source_dir() / "share" / "materials" / "pa66_cf_ud.json").string()},
+                                     {"specific_heat", 1700.0}};
+  std::ofstream(dir / "card.json") << card.dump();
+  json bad_card = card;  // a card given as a number
+  bad_card["materials"]["pa66_cf_ud"]["card"] = 1;
+  std::ofstream(dir / "bad_card.json") << bad_card.dump();
   json bad_mixture = mixture;  // three conductivities for the fibres
   bad_mixture["materials"]["pa66_cf_ud"]["mixture"]["fibre"]["conductivity"] = {9.4, 0.84, 0.84};
   std::ofstream(dir / "bad_mixture.json") << bad_mixture.dump();
@@ -2219,11 +2228,12 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
   good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " " + q(dir / "kinetics.json") + " " +
-          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " ";
+          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_k_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_mixture.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "bad_card.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "mixture_and_density.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_kinetics.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_melting.json") + " >/dev/null").c_str()), 0);

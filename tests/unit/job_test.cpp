@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 
 #include "job/job.hpp"
+#include "plugins/registry.hpp"
+#include "solve/simulation.hpp"
 #include "test_support.hpp"
 
 namespace ts {
@@ -228,6 +231,102 @@ TEST(Mixture, RunsAsTheRowsItForms) {
       moved = std::max(moved, std::abs(a.result.probes[i].values[z] - d.result.probes[i].values[z]));
   std::printf("rows against the card's constants: %.3g K\n", moved);
   EXPECT_GT(moved, 0.25);
+}
+
+
+// materials.*.card: a material card (share/materials) whose keys a
+// material takes where it gives none itself, read relative to the job file.
+TEST(MaterialCard, TakesTheCardsValuesWhereTheMaterialGivesNone) {
+  const auto dir = test::temp_dir("material_card");
+  std::filesystem::create_directories(dir / "cards");
+  json card = read_job_document(test::source_dir() / "share" / "materials" / "pa66_cf_ud.json");
+  std::ofstream(dir / "cards" / "ud.json") << card.dump(2);
+  json d = test::ply_job("adi", 8, 1.0, 0.1);
+  d["materials"]["ply"] = {{"card", "cards/ud.json"}, {"specific_heat", 1500.0}};
+  std::ofstream(dir / "job.json") << d.dump(2);
+  const Job j = load_job(dir / "job.json", {});
+  const MaterialDef& m = j.materials[0];
+  EXPECT_EQ(m.density, 1294.0);
+  EXPECT_EQ(m.specific_heat, 1500.0);  // the material's own value
+  EXPECT_EQ(m.conductivity, (std::array<double, 3>{3.89, 0.31, 0.31}));
+  EXPECT_EQ(m.membrane, card["membrane"]);
+  EXPECT_EQ(m.bending, card["bending"]);
+  EXPECT_EQ(material_card_file(j, m), std::filesystem::absolute(dir / "cards" / "ud.json").lexically_normal());
+  // The job as run holds the card's values and no card: it runs without it.
+  const json& as_run = j.document_as_run["materials"]["ply"];
+  EXPECT_FALSE(as_run.contains("card"));
+  EXPECT_EQ(as_run["membrane"], card["membrane"]);
+  EXPECT_EQ(as_run["specific_heat"], 1500.0);
+  // --set reaches into what the card gave.
+  const Job s = load_job(dir / "job.json", {"materials.ply.membrane.0.k_fibre=2e6", "materials.ply.density=1300"});
+  EXPECT_EQ(s.materials[0].membrane[0]["k_fibre"].get<double>(), 2e6);
+  EXPECT_EQ(s.materials[0].density, 1300.0);
+
+  auto error_of = [&](const json& job) {
+    std::ofstream(dir / "bad.json") << job.dump(2);
+    try {
+      load_job(dir / "bad.json", {});
+    } catch (const JobError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string card_file = std::filesystem::absolute(dir / "cards" / "bad_card.json").lexically_normal().string();
+  // A value from the card: the error names the card; the material's own value: it does not.
+  json bad_card = card;
+  bad_card["density"] = -1.0;
+  std::ofstream(dir / "cards" / "bad_card.json") << bad_card.dump(2);
+  json bad = d;
+  bad["materials"]["ply"] = {{"card", "cards/bad_card.json"}};
+  EXPECT_EQ(error_of(bad), "/materials/ply/density: must be > 0, found -1 (from the material card '" + card_file + "')");
+  bad["materials"]["ply"]["density"] = -2.0;
+  EXPECT_EQ(error_of(bad), "/materials/ply/density: must be > 0, found -2");
+  bad["materials"]["ply"] = {{"card", "cards/none.json"}};
+  EXPECT_EQ(error_of(bad).rfind("/materials/ply/card: material card '", 0), 0u) << error_of(bad);
+  EXPECT_NE(error_of(bad).find("none.json' not found"), std::string::npos) << error_of(bad);
+  bad["materials"]["ply"] = {{"card", 12}};
+  EXPECT_EQ(error_of(bad), "/materials/ply/card: expected the path of a material card, found a number (12)");
+  std::ofstream(dir / "cards" / "chained.json") << json{{"card", "ud.json"}}.dump();
+  bad["materials"]["ply"] = {{"card", "cards/chained.json"}};
+  EXPECT_NE(error_of(bad).find("names another card"), std::string::npos) << error_of(bad);
+  std::ofstream(dir / "cards" / "list.json") << json::array({1, 2}).dump();
+  bad["materials"]["ply"] = {{"card", "cards/list.json"}};
+  EXPECT_NE(error_of(bad).find("holds an array, not a material object"), std::string::npos) << error_of(bad);
+  // A law parameter from the card, refused by the plugin when the run is set up.
+  json bad_law = card;
+  bad_law["membrane"][1]["tau"] = {0.0, 2.0};
+  std::ofstream(dir / "cards" / "bad_card.json") << bad_law.dump(2);
+  json mech = read_job_document(test::source_dir() / "share" / "jobs" / "ud_strip_tension.json");
+  const std::string mat = mech["parts"][0]["material"];
+  mech["materials"][mat] = {{"card", (dir / "cards" / "bad_card.json").string()}};
+  std::ofstream(dir / "mech.json") << mech.dump(2);
+  const Job mj = load_job(dir / "mech.json", {});
+  PluginRegistry registry;
+  try {
+    Simulation sim(mj, registry);
+    ADD_FAILURE() << "a relaxation time of zero must be refused";
+  } catch (const JobError& e) {
+    EXPECT_EQ(std::string(e.pointer()).rfind("/materials/" + mat + "/membrane", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("(from the material card '" + card_file + "')"), std::string::npos) << e.what();
+  }
+}
+
+// The hemisphere job's material is the UD card with a softer fibre: the job
+// written with the card and its own membrane is the shipped job.
+TEST(MaterialCard, HemisphereJobIsTheCardWithItsOwnMembrane) {
+  const auto jobs = test::source_dir() / "share" / "jobs";
+  json d = read_job_document(jobs / "hemisphere_ud_2ply.json");
+  json& m = d["materials"]["pa66_cf_ud"];
+  const json shipped = m;
+  m = {{"card", (test::source_dir() / "share" / "materials" / "pa66_cf_ud.json").string()},
+       {"membrane", shipped["membrane"]}};
+  const Job with_card = parse_job(d, jobs / "hemisphere_ud_2ply.json");
+  json a = with_card.document_as_run["materials"]["pa66_cf_ud"], b = shipped;
+  for (const char* k : {"description", "source"}) {
+    a.erase(k);
+    b.erase(k);
+  }
+  EXPECT_EQ(a, b);
 }
 
 }  // namespace
