@@ -380,8 +380,15 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
   if (sa && sb) {
     std::map<std::string, double> na, nb;
     try {
-      flatten(json::parse(std::ifstream(a / "summary.json")), "", na);
-      flatten(json::parse(std::ifstream(b / "summary.json")), "", nb);
+      json ja = json::parse(std::ifstream(a / "summary.json")), jb = json::parse(std::ifstream(b / "summary.json"));
+      // Summaries before 0.23.0 have no `materials`: a run is compared
+      // with an older one on its results alone.
+      if (ja.is_object() && jb.is_object() && ja.contains("materials") != jb.contains("materials")) {
+        ja.erase("materials");
+        jb.erase("materials");
+      }
+      flatten(ja, "", na);
+      flatten(jb, "", nb);
     } catch (const std::exception& e) {
       note(std::string("a summary.json cannot be read: ") + e.what());
     }

@@ -2071,6 +2071,28 @@ TEST(Cli, SummaryAndReportGiveTheMaterialsAsRun) {
   EXPECT_FALSE(std::filesystem::exists(plain.parent_path() / "out" / "figures" / "materials.png"));
 }
 
+// A run's summary from before 0.23.0 has no `materials`: compare looks at
+// the results alone; two summaries that both have them are compared on
+// them too.
+TEST(Compare, SummariesWithoutMaterialsAreComparedOnTheResults) {
+  const auto job = small_job("compare_materials");
+  const auto dir = job.parent_path();
+  ASSERT_EQ(thermostamp("run " + q(job) + " --out " + q(dir / "a") + " --quiet").exit_code, 0);
+  std::filesystem::copy(dir / "a", dir / "b", std::filesystem::copy_options::recursive);
+  json s = json::parse(std::ifstream(dir / "b" / "summary.json"));
+  ASSERT_TRUE(s.contains("materials"));
+  s.erase("materials");
+  std::ofstream(dir / "b" / "summary.json") << s.dump(2);
+  auto r = thermostamp("compare " + q(dir / "a") + " " + q(dir / "b"));
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  s = json::parse(std::ifstream(dir / "a" / "summary.json"));
+  s["materials"]["pa66_cf_ud"]["density_kg_m3"] = 1300.0;
+  std::ofstream(dir / "b" / "summary.json") << s.dump(2);
+  r = thermostamp("compare " + q(dir / "a") + " " + q(dir / "b"));
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("materials/pa66_cf_ud/density_kg_m3"), std::string::npos) << r.out;
+}
+
 // `thermostamp report A --against B`: the two runs on the same axes (here
 // adi against shell2d), beside A's own figures; another folder that is
 // not one, or that shares nothing with A, is named in one line.
