@@ -332,6 +332,7 @@ bool RegionDef::contains(double x, double y) const {
   return false;
 }
 
+namespace {
 // materials.<m>.card: a material card (a file holding a material object,
 // share/materials) whose keys the material takes where it does not give
 // them itself. The "card" key stays, naming the file as given.
@@ -357,6 +358,7 @@ void resolve_material_cards(json& doc, const std::filesystem::path& base_dir) {
       if (!m.contains(c.key())) m[c.key()] = c.value();
   }
 }
+}  // namespace
 
 std::filesystem::path material_card_file(const Job& job, const MaterialDef& m) {
   const json* mats = job.document.contains("materials") ? &job.document["materials"] : nullptr;
