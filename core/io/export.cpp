@@ -20,16 +20,26 @@ std::string number(double v) {
   return buf;
 }
 
+// Tags of n entities as results.h5 holds them at `path` (those of the mesh
+// file the run read), else 1 .. n (results of earlier versions).
+std::vector<long long> tags(hid_t file, const std::string& path, std::size_t n) {
+  std::vector<hsize_t> shape;
+  const std::vector<double> v = read_values(file, path, shape);
+  std::vector<long long> t(n);
+  for (std::size_t i = 0; i < n; ++i) t[i] = v.size() == n ? static_cast<long long>(v[i]) : static_cast<long long>(i + 1);
+  return t;
+}
+
 // One $NodeData or $ElementData block (Gmsh 2.2): the name, the time, and
-// rows of `components` values for entities 1 .. n, as the file's only time
-// step (0).
+// rows of `components` values for the entities of these tags, as the
+// file's only time step (0).
 void write_data(std::ofstream& out, const char* section, const std::string& name, double time,
-                const std::vector<double>& v, int components) {
+                const std::vector<double>& v, int components, const std::vector<long long>& tag) {
   const std::size_t n = v.size() / components;
   out << '$' << section << "\n1\n\"" << name << "\"\n1\n" << number(time) << "\n3\n0\n"
       << components << '\n' << n << '\n';
   for (std::size_t i = 0; i < n; ++i) {
-    out << i + 1;
+    out << tag[i];
     for (int c = 0; c < components; ++c) out << ' ' << number(v[i * components + c]);
     out << '\n';
   }
@@ -86,16 +96,18 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
     ply.nodes = static_cast<int>(xshape[0]);
     ply.triangles = static_cast<int>(tshape[0]);
     ply.file = out / (name + ".msh");
+    const std::vector<long long> node_tag = tags(file, "parts/" + name + "/node_tags", ply.nodes),
+                                 element_tag = tags(file, "parts/" + name + "/element_tags", ply.triangles);
     std::ofstream m(ply.file);
     if (!m) throw std::runtime_error("cannot write '" + ply.file.string() + "'");
     m << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n2 1 \"" << name << "\"\n$EndPhysicalNames\n";
     m << "$Nodes\n" << ply.nodes << '\n';
     for (std::size_t i = 0; i < static_cast<std::size_t>(ply.nodes); ++i)
-      m << i + 1 << ' ' << number(x[3 * i]) << ' ' << number(x[3 * i + 1]) << ' ' << number(x[3 * i + 2]) << '\n';
+      m << node_tag[i] << ' ' << number(x[3 * i]) << ' ' << number(x[3 * i + 1]) << ' ' << number(x[3 * i + 2]) << '\n';
     m << "$EndNodes\n$Elements\n" << ply.triangles << '\n';
     for (std::size_t e = 0; e < static_cast<std::size_t>(ply.triangles); ++e) {
-      m << e + 1 << " 2 2 1 1";
-      for (std::size_t c = 0; c < 3; ++c) m << ' ' << static_cast<long long>(tri[3 * e + c]) + 1;
+      m << element_tag[e] << " 2 2 1 1";
+      for (std::size_t c = 0; c < 3; ++c) m << ' ' << node_tag[static_cast<std::size_t>(tri[3 * e + c])];
       m << '\n';
     }
     m << "$EndElements\n";
@@ -110,7 +122,7 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
       // (the through-thickness `temperature` lies on the extruded mesh; its
       // mean, top and bottom values are fields of their own in the frame)
       if (shape[0] != static_cast<hsize_t>(cells ? ply.triangles : ply.nodes)) continue;
-      write_data(m, cells ? "ElementData" : "NodeData", field, res.time, v, components);
+      write_data(m, cells ? "ElementData" : "NodeData", field, res.time, v, components, cells ? element_tag : node_tag);
       (cells ? ply.element_data : ply.node_data).push_back(field);
     }
     m.close();

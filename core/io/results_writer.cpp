@@ -28,7 +28,9 @@ void write_dataset(hid_t loc, const std::string& name, const T* data, hsize_t ro
     H5Pset_shuffle(dcpl);
     H5Pset_deflate(dcpl, static_cast<unsigned>(level));
   }
-  const hid_t type = std::is_same_v<T, int> ? H5T_NATIVE_INT : H5T_NATIVE_DOUBLE;
+  const hid_t type = std::is_same_v<T, int>         ? H5T_NATIVE_INT
+                     : std::is_same_v<T, long long> ? H5T_NATIVE_LLONG
+                                                    : H5T_NATIVE_DOUBLE;
   const hid_t ds = H5Dcreate2(loc, name.c_str(), type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
   if (dcpl != H5P_DEFAULT) H5Pclose(dcpl);
   if (ds < 0) {
@@ -45,6 +47,9 @@ void write_dataset(hid_t loc, const std::string& name, const double* data, hsize
 }
 void write_dataset(hid_t loc, const std::string& name, const int* data, hsize_t rows, hsize_t cols, int level) {
   write_dataset(loc, name, data, rows, cols, level, true);
+}
+void write_dataset(hid_t loc, const std::string& name, const long long* data, hsize_t rows, int level) {
+  write_dataset(loc, name, data, rows, 1, level, false);
 }
 hid_t make_group(hid_t loc, const std::string& name) {
   const hid_t g = H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
@@ -143,6 +148,8 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
   for (const auto& p : parts_) {
     const hid_t pg = make_group(g, p.name);
     write_dataset(pg, "triangles", p.triangles->data(), p.num_elements, 3, compression_);
+    write_dataset(pg, "node_tags", p.node_tags.data(), p.node_tags.size(), compression_);
+    write_dataset(pg, "element_tags", p.element_tags.data(), p.element_tags.size(), compression_);
     if (!p.layers) {
       H5Gclose(pg);
       continue;

@@ -15,6 +15,9 @@ struct WriterPart {
   double thickness = 0;
   int nz = 1;  // through-thickness values per node
   bool layers = true;  // write the extruded through-thickness mesh
+  // Each node's and triangle's tag in the mesh file, or its number from 1
+  // (results.h5's /parts/<ply>/node_tags and element_tags).
+  std::vector<long long> node_tags, element_tags;
 };
 
 // The units of a frame's dataset (a field, "nodes" or "layer_nodes"), as

@@ -475,9 +475,13 @@ MeshDef parse_mesh(const json& j, const std::string& ptr, const std::filesystem:
     const std::string f = r.text("file");
     m.file = std::filesystem::path(f).is_absolute() ? std::filesystem::path(f) : base / f;
     if (!std::filesystem::exists(m.file)) throw JobError(r.at("file"), "mesh file '" + m.file.string() + "' not found");
+    m.reorder = r.boolean("reorder", true);
   } else {
     const std::string gen = r.choice("generator", {"rectangle"});
     (void)gen;
+    if (r.has("reorder"))
+      throw JobError(r.at("reorder"),
+                     "only for a mesh read from a file: the rectangle generator numbers its triangles row by row");
     const auto o = r.reals("origin", 3, std::vector<double>{0, 0, 0});
     const auto s = r.reals("size", 2);
     for (int d = 0; d < 2; ++d)

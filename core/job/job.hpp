@@ -72,6 +72,9 @@ struct MeshDef {
   std::array<int, 2> divisions{1, 1};
   bool crossed = false;  // rectangle: four triangles per cell around a centre node
   std::filesystem::path file;
+  // file: the elements renumbered so that neighbours are close in memory
+  // (reverse Cuthill-McKee); the nodes keep the file's order.
+  bool reorder = true;
 };
 
 struct PartDef {

@@ -88,7 +88,27 @@ T parse(LineReader& r, std::istringstream& ss, const char* what) {
 }
 }  // namespace
 
-ShellMesh read_gmsh(const std::filesystem::path& file) {
+namespace {
+void number_nodes_by_first_use(ShellMesh& m) {
+  std::vector<int> used(m.num_nodes(), -1);
+  int count = 0;
+  for (int& n : m.triangles) {
+    if (used[n] < 0) used[n] = count++;
+  }
+  std::vector<double> x(3 * count);
+  std::vector<long long> tags(m.node_tags.empty() ? 0 : count);
+  for (int i = 0; i < m.num_nodes(); ++i)
+    if (used[i] >= 0) {
+      for (int d = 0; d < 3; ++d) x[3 * used[i] + d] = m.x[3 * i + d];
+      if (!tags.empty()) tags[used[i]] = m.node_tags[i];
+    }
+  for (int& n : m.triangles) n = used[n];
+  m.x = std::move(x);
+  m.node_tags = std::move(tags);
+}
+}  // namespace
+
+ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder) {
   LineReader r;
   r.path = file.string();
   r.in.open(file);
@@ -105,7 +125,7 @@ ShellMesh read_gmsh(const std::filesystem::path& file) {
 
   std::unordered_map<long long, int> node_index;
   ShellMesh m;
-  std::vector<long long> tri_tags;
+  std::vector<long long> tri_tags, node_tags;
   while (r.in) {
     std::string section;
     while (std::getline(r.in, section)) {
@@ -134,6 +154,7 @@ ShellMesh read_gmsh(const std::filesystem::path& file) {
             const double x = parse<double>(r, cs, "x"), y = parse<double>(r, cs, "y"), z = parse<double>(r, cs, "z");
             (void)parametric;
             node_index[tags[k]] = m.num_nodes();
+            node_tags.push_back(tags[k]);
             m.x.insert(m.x.end(), {x, y, z});
           }
         }
@@ -144,6 +165,7 @@ ShellMesh read_gmsh(const std::filesystem::path& file) {
           const long long tag = parse<long long>(r, ns, "node tag");
           const double x = parse<double>(r, ns, "x"), y = parse<double>(r, ns, "y"), z = parse<double>(r, ns, "z");
           node_index[tag] = m.num_nodes();
+          node_tags.push_back(tag);
           m.x.insert(m.x.end(), {x, y, z});
         }
       }
@@ -167,11 +189,12 @@ ShellMesh read_gmsh(const std::filesystem::path& file) {
           const long long n = parse<long long>(r, bs, "element count");
           for (long long k = 0; k < n; ++k) {
             std::istringstream es(r.next());
-            parse<long long>(r, es, "element tag");
+            const long long tag = parse<long long>(r, es, "element tag");
             if (type == 2) {
               const long long a = parse<long long>(r, es, "node"), bb = parse<long long>(r, es, "node"),
                               c = parse<long long>(r, es, "node");
               add_tri(a, bb, c);
+              tri_tags.push_back(tag);
             }
           }
         }
@@ -179,7 +202,7 @@ ShellMesh read_gmsh(const std::filesystem::path& file) {
         const long long n = parse<long long>(r, hs, "number of elements");
         for (long long k = 0; k < n; ++k) {
           std::istringstream es(r.next());
-          parse<long long>(r, es, "element tag");
+          const long long tag = parse<long long>(r, es, "element tag");
           const int type = parse<int>(r, es, "element type");
           const int ntags = parse<int>(r, es, "tag count");
           for (int t = 0; t < ntags; ++t) parse<long long>(r, es, "tag");
@@ -187,6 +210,7 @@ ShellMesh read_gmsh(const std::filesystem::path& file) {
             const long long a = parse<long long>(r, es, "node"), b = parse<long long>(r, es, "node"),
                             c = parse<long long>(r, es, "node");
             add_tri(a, b, c);
+            tri_tags.push_back(tag);
           }
         }
       }
@@ -195,31 +219,33 @@ ShellMesh read_gmsh(const std::filesystem::path& file) {
   }
   if (m.num_nodes() == 0) throw std::runtime_error(file.string() + ": no $Nodes section");
   if (m.num_elements() == 0) throw std::runtime_error(file.string() + ": no triangles (element type 2) found");
-  // Drop nodes no triangle uses (points, geometry vertices) and renumber.
-  std::vector<int> used(m.num_nodes(), -1);
-  int count = 0;
-  for (int& n : m.triangles) {
-    if (used[n] < 0) used[n] = count++;
-  }
-  std::vector<double> x(3 * count);
-  for (int i = 0; i < m.num_nodes(); ++i)
-    if (used[i] >= 0)
-      for (int d = 0; d < 3; ++d) x[3 * used[i] + d] = m.x[3 * i + d];
-  for (int& n : m.triangles) n = used[n];
-  m.x = std::move(x);
+  m.element_tags = std::move(tri_tags);
+  m.node_tags = std::move(node_tags);
+  // Drop nodes no triangle uses (points, geometry vertices); the others in
+  // the order in which the triangles first use them.
+  number_nodes_by_first_use(m);
   finalize_mesh(m);
+  if (reorder) {
+    reorder_elements(m, locality_order(m));
+    number_nodes_by_first_use(m);
+  }
   return m;
 }
 
 void finalize_mesh(ShellMesh& m) {
   const int ne = m.num_elements();
+  // Triangles and nodes by their tags in the file where they have some.
+  auto triangle = [&](int e) {
+    return "triangle " + std::to_string(e) +
+           (m.element_tags.empty() ? std::string() : " (element " + std::to_string(m.element_tags[e]) + ")");
+  };
+  auto node = [&](int n) { return std::to_string(m.node_tags.empty() ? n : m.node_tags[n]); };
   for (int e = 0; e < ne; ++e) {
     const int* t = &m.triangles[3 * e];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
-      throw std::runtime_error("triangle " + std::to_string(e) + " repeats a node");
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) throw std::runtime_error(triangle(e) + " repeats a node");
     const Vec3 a = sdk::load3(m.x.data(), t[0]), b = sdk::load3(m.x.data(), t[1]), c = sdk::load3(m.x.data(), t[2]);
     if (sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a))) == 0.0)
-      throw std::runtime_error("triangle " + std::to_string(e) + " has zero area");
+      throw std::runtime_error(triangle(e) + " has zero area");
   }
   // Edge -> (element, local edge) table.
   std::unordered_map<unsigned long long, std::array<int, 4>> edges;  // e0, k0, e1, k1
@@ -234,8 +260,7 @@ void finalize_mesh(ShellMesh& m) {
       auto [it, inserted] = edges.try_emplace(key(a, b), std::array<int, 4>{e, k, -1, -1});
       if (!inserted) {
         if (it->second[2] >= 0)
-          throw std::runtime_error("edge " + std::to_string(a) + "-" + std::to_string(b) +
-                                   " is shared by more than two triangles");
+          throw std::runtime_error("edge " + node(a) + "-" + node(b) + " is shared by more than two triangles");
         it->second[2] = e;
         it->second[3] = k;
       }
@@ -286,6 +311,119 @@ void finalize_mesh(ShellMesh& m) {
   if (nz < 0)
     for (int e = 0; e < ne; ++e) flip(e);
 }
+
+namespace {
+// Breadth-first levels of the elements reachable from `start` within one
+// component: returns the last level, writes the number of levels.
+std::vector<int> last_level(const ShellMesh& m, int start, std::vector<int>& mark, int stamp, int& depth) {
+  std::vector<int> level{start}, next;
+  mark[start] = stamp;
+  depth = 1;
+  for (;;) {
+    next.clear();
+    for (const int e : level)
+      for (int k = 0; k < 3; ++k)
+        if (const int f = m.neighbours[3 * e + k]; f >= 0 && mark[f] != stamp) {
+          mark[f] = stamp;
+          next.push_back(f);
+        }
+    if (next.empty()) return level;
+    level.swap(next);
+    ++depth;
+  }
+}
+}  // namespace
+
+std::vector<int> locality_order(const ShellMesh& m) {
+  const int ne = m.num_elements();
+  std::vector<int> degree(ne, 0);
+  for (int e = 0; e < ne; ++e)
+    for (int k = 0; k < 3; ++k) degree[e] += m.neighbours[3 * e + k] >= 0;
+  auto before = [&](int a, int b) { return degree[a] != degree[b] ? degree[a] < degree[b] : a < b; };
+  std::vector<int> order, mark(ne, -1), placed(ne, 0);
+  order.reserve(ne);
+  int stamp = 0;
+  for (int seed = 0; seed < ne; ++seed) {
+    if (placed[seed]) continue;
+    // A pseudo-peripheral start (George and Liu): from the component's first
+    // element, the smallest-degree element of the last breadth-first level,
+    // while that deepens the levels.
+    int start = seed, depth = 0;
+    std::vector<int> last = last_level(m, start, mark, stamp++, depth);
+    for (int it = 0; it < 8; ++it) {
+      const int cand = *std::min_element(last.begin(), last.end(), before);
+      int d = 0;
+      std::vector<int> l = last_level(m, cand, mark, stamp++, d);
+      if (d <= depth) break;
+      start = cand;
+      depth = d;
+      last.swap(l);
+    }
+    // Cuthill-McKee from there: neighbours by increasing degree.
+    std::size_t head = order.size();
+    order.push_back(start);
+    placed[start] = 1;
+    int nb[3];
+    while (head < order.size()) {
+      const int e = order[head++];
+      int n = 0;
+      for (int k = 0; k < 3; ++k)
+        if (const int f = m.neighbours[3 * e + k]; f >= 0 && !placed[f]) nb[n++] = f;
+      for (int i = 1; i < n; ++i)  // at most three: by insertion
+        for (int j = i; j > 0 && before(nb[j], nb[j - 1]); --j) std::swap(nb[j], nb[j - 1]);
+      for (int i = 0; i < n; ++i) {
+        placed[nb[i]] = 1;
+        order.push_back(nb[i]);
+      }
+    }
+  }
+  std::reverse(order.begin(), order.end());
+  return order;
+}
+
+void reorder_elements(ShellMesh& m, const std::vector<int>& order) {
+  const int ne = m.num_elements();
+  std::vector<int> new_index(ne);
+  for (int i = 0; i < ne; ++i) new_index[order[i]] = i;
+  std::vector<int> tri(3 * static_cast<std::size_t>(ne)), nbr(3 * static_cast<std::size_t>(ne));
+  for (int i = 0; i < ne; ++i)
+    for (int k = 0; k < 3; ++k) {
+      tri[3 * i + k] = m.triangles[3 * order[i] + k];
+      const int f = m.neighbours[3 * order[i] + k];
+      nbr[3 * i + k] = f < 0 ? -1 : new_index[f];
+    }
+  m.triangles.swap(tri);
+  m.neighbours.swap(nbr);
+  if (!m.element_tags.empty()) {
+    std::vector<long long> tags(ne);
+    for (int i = 0; i < ne; ++i) tags[i] = m.element_tags[order[i]];
+    m.element_tags.swap(tags);
+  }
+}
+
+std::string element_label(const ShellMesh& m, int e) {
+  std::string s = "element " + std::to_string(e);
+  if (static_cast<std::size_t>(e) < m.element_tags.size())
+    s += " (element " + std::to_string(m.element_tags[e]) + " of the mesh file)";
+  return s;
+}
+
+std::string node_label(const ShellMesh& m, int n) {
+  std::string s = "node " + std::to_string(n);
+  if (static_cast<std::size_t>(n) < m.node_tags.size()) s += " (node " + std::to_string(m.node_tags[n]) + " of the mesh file)";
+  return s;
+}
+
+int element_bandwidth(const ShellMesh& m) {
+  int w = 0;
+  for (int e = 0; e < m.num_elements(); ++e)
+    for (int k = 0; k < 3; ++k)
+      if (const int f = m.neighbours[3 * e + k]; f >= 0) w = std::max(w, std::abs(f - e));
+  return w;
+}
+
+long long node_tag(const ShellMesh& m, int n) { return m.node_tags.empty() ? n + 1LL : m.node_tags[n]; }
+long long element_tag(const ShellMesh& m, int e) { return m.element_tags.empty() ? e + 1LL : m.element_tags[e]; }
 
 std::vector<double> element_areas(const ShellMesh& m) {
   std::vector<double> area(m.num_elements());

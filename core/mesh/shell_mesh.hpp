@@ -2,6 +2,7 @@
 // Triangulated mid-surface of a ply. Storage order as in sdk/math.hpp.
 #include <array>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace ts {
@@ -10,6 +11,8 @@ struct ShellMesh {
   std::vector<double> x;          // 3 per node
   std::vector<int> triangles;     // 3 per element, counter-clockwise seen from the top face
   std::vector<int> neighbours;    // 3 per element, across the edge opposite node k, -1 if none
+  std::vector<long long> node_tags;     // read from a file: each node's tag there; else empty
+  std::vector<long long> element_tags;  // read from a file: each triangle's element tag there; else empty
 
   int num_nodes() const { return static_cast<int>(x.size() / 3); }
   int num_elements() const { return static_cast<int>(triangles.size() / 3); }
@@ -21,13 +24,37 @@ ShellMesh rectangle_mesh(const std::array<double, 3>& origin, const std::array<d
                          const std::array<int, 2>& divisions, bool crossed = false);
 
 // Gmsh ASCII 2.2 or 4.1, triangles only (other elements are ignored).
-// Throws std::runtime_error with the line number on malformed files.
-ShellMesh read_gmsh(const std::filesystem::path& file);
+// The nodes that the triangles use are numbered in the order in which the
+// triangles first use them (others are dropped); with `reorder`, the
+// triangles in locality_order and their nodes then numbered again so. Throws std::runtime_error with the line number
+// on malformed files.
+ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder = false);
 
 // Orients all triangles consistently (normal of the first one kept, or +z
 // for a mostly flat mesh) and fills the neighbour table. Throws if an edge
 // is shared by more than two triangles.
 void finalize_mesh(ShellMesh& mesh);
+
+// An order of the elements in which neighbours are close: reverse
+// Cuthill-McKee on the elements' edge adjacency (each component from a
+// pseudo-peripheral element, neighbours by increasing degree, ties by
+// index). Depends on the connectivity alone, not on the positions.
+std::vector<int> locality_order(const ShellMesh& mesh);
+// Puts element order[i] at place i (triangles, neighbours, element tags);
+// the nodes keep their numbers.
+void reorder_elements(ShellMesh& mesh, const std::vector<int>& order);
+
+// The largest difference in index between neighbouring elements.
+int element_bandwidth(const ShellMesh& mesh);
+
+// Tags as results.h5 and `thermostamp export` give them: those of the mesh
+// file, else the number from 1.
+long long node_tag(const ShellMesh& mesh, int n);
+long long element_tag(const ShellMesh& mesh, int e);
+// "element 12", or "element 12 (element 4711 of the mesh file)" for a mesh
+// read from a file; so for nodes.
+std::string element_label(const ShellMesh& mesh, int e);
+std::string node_label(const ShellMesh& mesh, int n);
 
 // Area of each triangle, m^2.
 std::vector<double> element_areas(const ShellMesh& mesh);

@@ -215,16 +215,26 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                                json{{"required", json::array({"mixture", "specific_heat"})}},
                                json{{"required", json::array({"mixture", "conductivity"})}}})}}},
       {"additionalProperties", false}};
-  const json mesh = {{"type", "object"},
-                     {"properties",
-                      {{"generator", {{"enum", {"rectangle"}}}},
-                       {"origin", vec(3)},
-                       {"size", vec(2)},
-                       {"divisions", {{"type", "array"}, {"items", {{"type", "integer"}, {"minimum", 1}}}, {"minItems", 2}, {"maxItems", 2}}},
-                       {"pattern", {{"enum", {"alternating", "crossed"}},
-                                    {"description", "two triangles per cell (alternating diagonals) or four around a centre node"}}},
-                       {"file", {{"type", "string"}, {"description", "Gmsh ASCII 2.2 or 4.1, relative to the job file"}}}}},
-                     {"additionalProperties", false}};
+  const json mesh = {
+      {"oneOf",
+       json::array(
+           {json{{"type", "object"},
+                 {"required", {"file"}},
+                 {"properties",
+                  {{"file", {{"type", "string"}, {"description", "Gmsh ASCII 2.2 or 4.1, relative to the job file"}}},
+                   {"reorder", {{"type", "boolean"},
+                                {"description", "number the triangles so that neighbours are close in memory "
+                                                "(default true)"}}}}},
+                 {"additionalProperties", false}},
+            json{{"type", "object"},
+                 {"properties",
+                  {{"generator", {{"enum", {"rectangle"}}}},
+                   {"origin", vec(3)},
+                   {"size", vec(2)},
+                   {"divisions", {{"type", "array"}, {"items", {{"type", "integer"}, {"minimum", 1}}}, {"minItems", 2}, {"maxItems", 2}}},
+                   {"pattern", {{"enum", {"alternating", "crossed"}},
+                                {"description", "two triangles per cell (alternating diagonals) or four around a centre node"}}}}},
+                 {"additionalProperties", false}}})}};
   json element_prop = {{"type", "string"}};
   if (!elements.empty()) element_prop["enum"] = elements;
   const json initial_temperature = {

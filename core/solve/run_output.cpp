@@ -161,9 +161,12 @@ void Simulation::Run::open_output() {
     std::vector<WriterPart> wparts;
     const bool layers =
         std::find(job.output.fields.begin(), job.output.fields.end(), "temperature") != job.output.fields.end();
-    for (const auto& st : sim.parts_)
-      wparts.push_back({st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(), &st->mesh.triangles,
-                        st->def->thickness, st->nz, layers});
+    for (const auto& st : sim.parts_) {
+      WriterPart& wp = wparts.emplace_back(WriterPart{st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(),
+                                                      &st->mesh.triangles, st->def->thickness, st->nz, layers, {}, {}});
+      for (int i = 0; i < wp.num_nodes; ++i) wp.node_tags.push_back(node_tag(st->mesh, i));
+      for (int e = 0; e < wp.num_elements; ++e) wp.element_tags.push_back(element_tag(st->mesh, e));
+    }
     try {
       const int level = job.output.compression;
       writer = opt.restart
@@ -231,6 +234,12 @@ void Simulation::Run::log_start() const {
   else
     log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s), subnormals {}", job.name, parts.size(),
               sim.tools_.size(), threads, subnormals);
+  for (const auto& st : parts)
+    if (st->def->mesh.kind == MeshDef::Kind::File)
+      log->info("part '{}': {} triangles, {} nodes from {}, {} (neighbouring triangles at most {} places apart)",
+                st->def->name, st->mesh.num_elements(), st->mesh.num_nodes(), st->def->mesh.file.string(),
+                st->def->mesh.reorder ? "numbered so that neighbours are close (mesh.reorder)" : "in the file's order",
+                element_bandwidth(st->mesh));
   for (const auto& m : job.materials)
     if (const auto card = material_card_file(job, m); !card.empty())
       log->info("material '{}': from the material card {}", m.name, card.string());

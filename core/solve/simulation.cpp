@@ -262,7 +262,7 @@ void Simulation::build_parts() {
     st->def = &def;
     try {
       st->mesh = def.mesh.kind == MeshDef::Kind::File
-                     ? read_gmsh(def.mesh.file)
+                     ? read_gmsh(def.mesh.file, def.mesh.reorder)
                      : rectangle_mesh(def.mesh.origin, def.mesh.size, def.mesh.divisions, def.mesh.crossed);
     } catch (const std::exception& e) {
       throw JobError(def.pointer + "/mesh", e.what());
@@ -287,7 +287,7 @@ void Simulation::build_parts() {
       const Vec3 f = sdk::sub(f0, sdk::scale(n, sdk::dot(f0, n)));
       if (sdk::norm(f) < 1e-3)
         throw JobError(def.pointer + "/fibre_direction",
-                       "the fibre direction is normal to the ply at element " + std::to_string(e) +
+                       "the fibre direction is normal to the ply at " + element_label(st->mesh, e) +
                            "; give a direction in the ply's plane");
       const Vec3 u = sdk::normalized(f);
       for (int d = 0; d < 3; ++d) st->fibre[3 * e + d] = u[d];
@@ -602,7 +602,7 @@ void Simulation::build_mechanics() {
       for (int b = 0; b < mech_[p]->blocks; ++b)
         if (mech_[p]->block_error[b].empty() && mech_[p]->block_fail[b] >= 0)
           throw JobError(parts_[p]->def->pointer + "/mesh",
-                         "element " + std::to_string(mech_[p]->block_fail[b]) + " of part '" + parts_[p]->def->name +
+                         element_label(parts_[p]->mesh, mech_[p]->block_fail[b]) + " of part '" + parts_[p]->def->name +
                              "' is degenerate in the initial mesh (zero area, a sliver beyond the precision of its "
                              "coordinates, or sizes beyond the range of numbers)");
     throw;
@@ -833,7 +833,7 @@ double Simulation::finish_elements() {
       if (!m.block_error[b].empty())
         throw RunError("element '" + st.def->element + "' of part '" + st.def->name + "': " + m.block_error[b]);
       if (m.block_fail[b] >= 0)
-        throw RunError("degenerate (collapsed or inverted) element " + std::to_string(m.block_fail[b]) + " in part '" +
+        throw RunError("degenerate (collapsed or inverted) " + element_label(st.mesh, m.block_fail[b]) + " in part '" +
                        st.def->name + "'");
       dt = std::min(dt, m.block_dt[b]);
       bend_dt = std::min(bend_dt, m.block_bdt[b]);
@@ -1491,8 +1491,8 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
   for (int p = 0; p < np; ++p) {
     if (part_bad_[p] >= 0)
-      throw RunError("non-finite position in part '" + parts_[p]->def->name + "' at node " +
-                     std::to_string(part_bad_[p] / 3) + ", t = " + fmt_g(t + dt) + " s (mechanical step " +
+      throw RunError("non-finite position in part '" + parts_[p]->def->name + "' at " +
+                     node_label(parts_[p]->mesh, part_bad_[p] / 3) + ", t = " + fmt_g(t + dt) + " s (mechanical step " +
                      std::to_string(step + 1) + ")");
     const double* sums = &part_sums_[p * (6 + nr)];
     w_int += sums[0];

@@ -4,9 +4,11 @@
 // crystallisation after each thermal step, the heat stored and the check of
 // every value (docs/thermal-method.md).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <unordered_map>
 
 #include "io/logging.hpp"
 #include "io/results_reader.hpp"
@@ -216,6 +218,60 @@ void Simulation::load_initial_temperature(PartState& st) {
   if (static_cast<int>(nodes.size() / 3) != nn)
     throw JobError(ptr, where + ": part '" + part + "' has " + std::to_string(nodes.size() / 3) +
                             " nodes, this part " + std::to_string(nn) + " (the same mesh is needed)");
+  // The frame's nodes as this part's: by their tags where the file gives
+  // them (results of 0.24 and later: a mesh file's tags, else the numbers
+  // from 1), else in order; then the same triangles, so that a mesh of the
+  // same size but another shape or numbering is refused, not taken.
+  std::vector<int> ours(nn);  // this part's node of each frame node
+  const std::vector<double> tags = read_values(file, "parts/" + part + "/node_tags", shape);
+  const bool by_tags = tags.size() == static_cast<std::size_t>(nn);
+  if (by_tags) {
+    std::unordered_map<long long, int> index;
+    for (int i = 0; i < nn; ++i) index.emplace(node_tag(st.mesh, i), i);
+    std::vector<char> taken(nn, 0);
+    for (int j = 0; j < nn; ++j) {
+      const auto it = index.find(static_cast<long long>(tags[j]));
+      if (it == index.end() || taken[it->second])
+        throw JobError(ptr, where + ": node " + fmt_g(tags[j], 17) + " of part '" + part +
+                                "' is not a node of this part's mesh (the same mesh is needed)");
+      taken[it->second] = 1;
+      ours[j] = it->second;
+    }
+  } else {
+    for (int j = 0; j < nn; ++j) ours[j] = j;
+  }
+  {
+    const std::vector<double> tri = read_values(file, "parts/" + part + "/triangles", shape);
+    const int ne = st.mesh.num_elements();
+    auto sorted = [](std::array<int, 3> t) {
+      std::sort(t.begin(), t.end());
+      return t;
+    };
+    std::vector<std::array<int, 3>> a(ne), b;
+    for (int e = 0; e < ne; ++e)
+      a[e] = sorted({st.mesh.triangles[3 * e], st.mesh.triangles[3 * e + 1], st.mesh.triangles[3 * e + 2]});
+    bool same = tri.size() == a.size() * 3;
+    for (std::size_t e = 0; same && e < a.size(); ++e) {
+      std::array<int, 3> t;
+      for (int k = 0; k < 3; ++k) {
+        const double n = tri[3 * e + k];
+        same = same && n >= 0 && n < nn;
+        t[k] = same ? ours[static_cast<int>(n)] : 0;
+      }
+      b.push_back(sorted(t));
+    }
+    if (same) {
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      same = a == b;
+    }
+    if (!same)
+      throw JobError(ptr, where + ": the triangles of part '" + part + "' are not those of this part's mesh (the same mesh is needed" +
+                              (!by_tags && def.mesh.kind == MeshDef::Kind::File && def.mesh.reorder
+                                   ? "; results of ThermoStamp 0.23 and earlier number the nodes of a mesh file as "
+                                     "\"reorder\": false does)"
+                                   : ")"));
+  }
   const std::vector<double> v = read_values(file, group + "temperature", shape);
   if (v.empty())
     throw JobError(ptr, where + " has no temperature of part '" + part +
@@ -229,9 +285,9 @@ void Simulation::load_initial_temperature(PartState& st) {
                             " nodes");
   // The frame's nl levels per node onto this part's nz values.
   auto levels = [&](const std::vector<double>& from, std::vector<double>& to) {
-    for (int i = 0; i < nn; ++i) {
-      const double* src = &from[static_cast<std::size_t>(i) * nl];
-      double* dst = &to[static_cast<std::size_t>(i) * nz];
+    for (int j = 0; j < nn; ++j) {
+      const double* src = &from[static_cast<std::size_t>(j) * nl];
+      double* dst = &to[static_cast<std::size_t>(ours[j]) * nz];
       if (nz == nl) {
         std::copy(src, src + nl, dst);
       } else if (nz == 1) {  // the mean through the thickness (linear between the levels)
@@ -599,7 +655,7 @@ void Simulation::check_field(double time, long long step) {
     for (std::size_t k = 0; k < n; ++k) {
       if (!std::isfinite(st->T[k])) {
         const int i = static_cast<int>(k / st->nz);
-        throw RunError("non-finite temperature in part '" + st->def->name + "' at node " + std::to_string(i) + " (" +
+        throw RunError("non-finite temperature in part '" + st->def->name + "' at " + node_label(st->mesh, i) + " (" +
                        fmt_g(st->x0[3 * i], 4) + ", " + fmt_g(st->x0[3 * i + 1], 4) + ", " +
                        fmt_g(st->x0[3 * i + 2], 4) + "), layer value " + std::to_string(k % st->nz) + ", at t = " +
                        fmt_g(time) + " s (thermal step " + std::to_string(step) + ")");

@@ -20,6 +20,7 @@
 #include <csignal>
 
 #include "io/compare.hpp"
+#include "io/results_writer.hpp"
 #include "job/job.hpp"
 #include "mesh/shell_mesh.hpp"
 #include "solve/interrupt.hpp"
@@ -421,6 +422,8 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"holder_without_mass", [](json& j) { j["tools"][0]["motion"] = {{"force", {0, 0, -100}}}; }, "error: /tools/0/motion/mass:"},
       {"arc_not_circular", [](json& j) { j["tools"][0]["surface"] = {{"type", "revolved"}, {"profile", {{{"arc", {{"from", {0, 0.01}}, {"to", {0.02, 0}}, {"centre", {0, 0}}}}}}}}; }, "error: /tools/0/surface/profile/0/arc/centre: the arc's end points are not at the same distance"},
       {"mesh_file_missing", [](json& j) { j["parts"][0]["mesh"] = {{"file", "nowhere.msh"}}; }, "error: /parts/0/mesh/file: mesh file"},
+      {"mesh_reorder_text", [](json& j) { j["parts"][0]["mesh"] = {{"file", "."}, {"reorder", "yes"}}; }, "error: /parts/0/mesh/reorder: expected true or false, found a string"},
+      {"mesh_reorder_generator", [](json& j) { j["parts"][0]["mesh"]["reorder"] = false; }, "error: /parts/0/mesh/reorder: only for a mesh read from a file: the rectangle generator numbers its triangles row by row"},
       {"mechanics_no_law", [](json& j) { j["solvers"]["mechanics"] = {{"dt_safety", 0.8}}; }, "error: /materials/pa66_cf_ud: material 'pa66_cf_ud' has no membrane law"},
       {"bending_subcycles_zero", [](json& j) { j["solvers"]["mechanics"] = {{"bending_subcycles", 0}}; }, "error: /solvers/mechanics/bending_subcycles: must be >= 1, found 0"},
       {"explicit_dt", [](json& j) { j["solvers"]["thermal"]["through_thickness"] = "explicit"; j["solvers"]["thermal"]["dt"] = 0.1; }, "error: /solvers/thermal/dt: thermal step 0.1 s exceeds the stable step"},
@@ -1344,6 +1347,204 @@ TEST(Output, ThermalOnlyToolRowsAtTheSeriesRows) {
               1e-9 * std::abs(summary["tools"][0]["heat_to_plies_J"].get<double>()));
 }
 
+// Plies meshed in files whose triangles come in a shuffled order, as mesh
+// generators leave them (the hemisphere job's 6 x 6 crossed plies, every
+// field, crystallisation kinetics), run in the order of `mesh.reorder` (the
+// default) and in the file's order:
+// - results.h5 and the exported meshes carry the files' tags;
+// - a run takes its initial temperatures and crystallinities from a frame
+//   by the tags, whatever the order of either run: every node starts at its
+//   tag's values, to the bit;
+// - the plies then pulled at an edge and cooled by convection from there
+//   (no contact) give the same results in either order, matched by tags,
+//   within 1e-9 of each field's largest value: the orders sum the same
+//   terms in another order (measured: 1e-11 at most). In the stamping
+//   itself the two orders part by more, up to 8e-5 of the largest
+//   displacement: the plies' matching meshes put each node of one ply over a
+//   node of the other, where several triangles are equally near, and the
+//   ply/ply node-to-surface contact takes the first it finds, whose normal
+//   differs; the order of the elements decides which. Without the ply/ply
+//   contact the stamping too differs by round-off (8e-12);
+// - a results file without tags (ThermoStamp 0.23 and earlier) is taken in
+//   order, and refused where its triangles are not this mesh's, as are tags
+//   of another mesh.
+TEST(MeshOrder, FileMeshesRunAlikeInEitherOrderAndChainByTags) {
+  const auto dir = temp_dir("mesh_order");
+  json j = short_hemisphere(0.02, 0.01, 6);
+  every_field(j);
+  for (auto& p : j["parts"]) {
+    const auto& m = p["mesh"];
+    const ShellMesh rect = rectangle_mesh(m["origin"].get<std::array<double, 3>>(),
+                                          m["size"].get<std::array<double, 2>>(),
+                                          m["divisions"].get<std::array<int, 2>>(), true);
+    const std::string file = p["name"].get<std::string>() + ".msh";
+    write_shuffled_gmsh(dir / file, rect, 11);
+    p["mesh"] = {{"file", file}};
+  }
+  auto run = [&](const json& job, const std::string& name) {
+    std::ofstream(dir / (name + ".json")) << job.dump(2);
+    return thermostamp("run " + q(dir / (name + ".json")) + " --quiet --out " + q(dir / name));
+  };
+  auto in_file_order = [](json job) {
+    for (auto& p : job["parts"]) p["mesh"]["reorder"] = false;
+    return job;
+  };
+  ASSERT_EQ(run(j, "stamped").exit_code, 0);
+  ASSERT_EQ(run(in_file_order(j), "stamped_file_order").exit_code, 0);
+  // A frame's field of a part, by tag: tag -> values.
+  auto by_tag = [](const std::filesystem::path& h5, const std::string& part, const std::string& frame,
+                   const std::string& field) {
+    const hid_t file = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    std::map<long long, std::vector<double>> out;
+    if (file < 0) return out;
+    const auto v = read_dataset<double>(file, "frames/" + frame + "/" + part + "/" + field);
+    const bool cells = field_on_elements(field);
+    const auto tags = read_dataset<double>(file, "parts/" + part + (cells ? "/element_tags" : "/node_tags"));
+    H5Fclose(file);
+    const std::size_t c = tags.empty() ? 0 : v.size() / tags.size();
+    for (std::size_t i = 0; i < tags.size(); ++i)
+      out[static_cast<long long>(tags[i])].assign(v.begin() + i * c, v.begin() + (i + 1) * c);
+    return out;
+  };
+  auto tags = [](const std::filesystem::path& h5, const std::string& dataset) {
+    const hid_t file = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    const auto v = read_dataset<double>(file, dataset);
+    H5Fclose(file);
+    return std::vector<long long>(v.begin(), v.end());
+  };
+  std::set<long long> node_tags, element_tags;
+  for (int i = 0; i < 49 + 36; ++i) node_tags.insert(shuffled_node_tag(i));
+  for (int e = 0; e < 144; ++e) element_tags.insert(shuffled_element_tag(e));
+  for (const std::string part : {"ply_bottom", "ply_top"}) {
+    const auto ea = tags(dir / "stamped" / "results.h5", "parts/" + part + "/element_tags");
+    const auto eb = tags(dir / "stamped_file_order" / "results.h5", "parts/" + part + "/element_tags");
+    EXPECT_EQ(std::set<long long>(ea.begin(), ea.end()), element_tags) << part;
+    EXPECT_EQ(std::set<long long>(eb.begin(), eb.end()), element_tags) << part;
+    EXPECT_NE(ea, eb) << part;  // the runs' orders differ
+    const auto na = tags(dir / "stamped" / "results.h5", "parts/" + part + "/node_tags");
+    EXPECT_EQ(std::set<long long>(na.begin(), na.end()), node_tags) << part;
+  }
+  // The exported meshes carry the tags: element and node numbers, and the
+  // rows of the data blocks.
+  ASSERT_EQ(thermostamp("export " + q(dir / "stamped")).exit_code, 0);
+  {
+    const ShellMesh m = read_gmsh(dir / "stamped" / "export" / "ply_top.msh");
+    EXPECT_EQ(std::set<long long>(m.element_tags.begin(), m.element_tags.end()), element_tags);
+    EXPECT_EQ(std::set<long long>(m.node_tags.begin(), m.node_tags.end()), node_tags);
+    std::ifstream in(dir / "stamped" / "export" / "ply_top.msh");
+    std::string line;
+    while (std::getline(in, line) && line != "$ElementData") {
+    }
+    std::string name, skip;
+    int n_str = 0, n_real = 0, n_int = 0, step = 0, components = 0, count = 0;
+    in >> n_str >> name >> n_real >> skip >> n_int >> step >> components >> count;
+    ASSERT_EQ(count, 144);
+    std::set<long long> rows;
+    for (int i = 0; i < count; ++i) {
+      long long id = 0;
+      in >> id;
+      rows.insert(id);
+      for (int c = 0; c < components; ++c) in >> skip;
+    }
+    EXPECT_EQ(rows, element_tags);
+  }
+  // The plies pulled at their edge x = 0.15 m from the stamping's last
+  // frame, cooled on both faces, without tools.
+  auto pulled = [&](json job, const std::string& from) {
+    job["time"]["end"] = 0.004;
+    job["output"]["interval"] = 0.002;
+    job["tools"] = json::array();
+    job["interactions"] = json::array();
+    for (auto& p : job["parts"]) {
+      p["initial_temperature"] = {{"results", (dir / from / "results.h5").string()}, {"time", 0.02}};
+      for (const std::string face : {"top", "bottom"})
+        job["interactions"].push_back(
+            {{"type", "heat_exchange"}, {"part", p["name"]}, {"face", face}, {"h", 50.0}, {"ambient", 20.0}});
+    }
+    job["constraints"].push_back({{"type", "velocity"}, {"part", "*"},
+                                  {"box", {{0.15 - 1e-9, -1, -1}, {0.15 + 1e-9, 1, 1}}},
+                                  {"velocity", {1.0, 0.0, 0.5}}});
+    return job;
+  };
+  auto expect_started_from = [&](const std::string& run_dir, const std::string& from) {
+    for (const std::string part : {"ply_bottom", "ply_top"})
+      for (const std::string field : {"temperature_mean", "temperature_top", "crystallinity_mean"}) {
+        const auto got = by_tag(dir / run_dir / "results.h5", part, "000000", field);
+        EXPECT_FALSE(got.empty()) << run_dir << " " << part << " " << field;
+        EXPECT_EQ(got, by_tag(dir / from / "results.h5", part, "000002", field)) << run_dir << " " << part << " " << field;
+      }
+  };
+  const auto pa = run(pulled(j, "stamped"), "pulled");
+  ASSERT_EQ(pa.exit_code, 0) << pa.err;
+  ASSERT_EQ(run(pulled(in_file_order(j), "stamped"), "pulled_file_order").exit_code, 0);
+  expect_started_from("pulled", "stamped");
+  expect_started_from("pulled_file_order", "stamped");
+  for (const std::string part : {"ply_bottom", "ply_top"})
+    for (const std::string field : {"displacement", "velocity", "temperature_mean", "temperature_top",
+                                    "temperature_bottom", "crystallinity_mean", "shear_angle", "membrane_stress",
+                                    "membrane_strain", "curvature", "fibre_direction"}) {
+      const auto fa = by_tag(dir / "pulled" / "results.h5", part, "000002", field);
+      const auto fb = by_tag(dir / "pulled_file_order" / "results.h5", part, "000002", field);
+      ASSERT_EQ(fa.size(), fb.size()) << part << " " << field;
+      ASSERT_FALSE(fa.empty()) << part << " " << field;
+      double largest = 0, diff = 0;
+      for (const auto& [tag, v] : fb) {
+        ASSERT_EQ(fa.count(tag), 1u) << part << " " << field << " " << tag;
+        for (std::size_t c = 0; c < v.size(); ++c) {
+          largest = std::max(largest, std::abs(v[c]));
+          diff = std::max(diff, std::abs(fa.at(tag)[c] - v[c]));
+        }
+      }
+      std::printf("%s %s: largest %.6g, largest difference between the orders %.3g\n", part.c_str(), field.c_str(),
+                  largest, diff);
+      EXPECT_GT(largest, 0.0) << part << " " << field;
+      EXPECT_LE(diff, 1e-9 * largest) << part << " " << field;
+    }
+  // A results file without tags (as 0.23 and earlier wrote them), of a run
+  // in the file's order: taken in order where the triangles match, refused
+  // with the key to set where they do not.
+  std::filesystem::create_directories(dir / "old");
+  std::filesystem::copy_file(dir / "stamped_file_order" / "results.h5", dir / "old" / "results.h5");
+  {
+    const hid_t f = H5Fopen((dir / "old" / "results.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    for (const std::string part : {"ply_bottom", "ply_top"}) {
+      EXPECT_GE(H5Ldelete(f, ("parts/" + part + "/node_tags").c_str(), H5P_DEFAULT), 0);
+      EXPECT_GE(H5Ldelete(f, ("parts/" + part + "/element_tags").c_str(), H5P_DEFAULT), 0);
+    }
+    H5Fclose(f);
+  }
+  ASSERT_EQ(run(pulled(in_file_order(j), "old"), "from_old").exit_code, 0);
+  expect_started_from("from_old", "stamped_file_order");
+  const auto refused = run(pulled(j, "old"), "from_old_reordered");
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("error: /parts/0/initial_temperature: the frame at t = 0.02 s of '" +
+                             (dir / "old" / "results.h5").string() +
+                             "': the triangles of part 'ply_bottom' are not those of this part's mesh (the same mesh "
+                             "is needed; results of ThermoStamp 0.23 and earlier number the nodes of a mesh file as "
+                             "\"reorder\": false does)"),
+            std::string::npos)
+      << refused.err;
+  // Tags of another mesh: the same tags on other nodes.
+  {
+    const ShellMesh rect = rectangle_mesh({0, 0, 0.00025}, {0.15, 0.15}, {6, 6}, true);
+    ShellMesh moved = rect;
+    const int nn = rect.num_nodes();
+    for (int& t : moved.triangles) t = (t + 1) % nn;  // node i's triangles on node i + 1
+    for (int i = 0; i < nn; ++i)
+      for (int d = 0; d < 3; ++d) moved.x[3 * ((i + 1) % nn) + d] = rect.x[3 * i + d];
+    write_shuffled_gmsh(dir / "moved.msh", moved, 11);
+  }
+  json other = pulled(j, "stamped");
+  other["parts"][0]["mesh"]["file"] = "moved.msh";
+  const auto moved = run(other, "moved");
+  EXPECT_EQ(moved.exit_code, 2);
+  EXPECT_NE(moved.err.find("the triangles of part 'ply_bottom' are not those of this part's mesh (the same mesh is "
+                           "needed)\n"),
+            std::string::npos)
+      << moved.err;
+}
+
 // `thermostamp export`: each ply of a frame as a Gmsh 2.2 mesh, its nodes at
 // the frame's positions and the frame's fields as node and element data,
 // every value as results.h5 holds it (17 significant digits: the same
@@ -2239,6 +2440,12 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   json mixture_and_density = mixture;  // both forms of the thermal data
   mixture_and_density["materials"]["pa66_cf_ud"]["density"] = 1294.0;
   std::ofstream(dir / "mixture_and_density.json") << mixture_and_density.dump();
+  json mesh_file = with_checkpoints;  // a mesh file in its own order
+  mesh_file["parts"][0]["mesh"] = {{"file", "ply.msh"}, {"reorder", false}};
+  std::ofstream(dir / "mesh_file.json") << mesh_file.dump();
+  json reorder_generator = with_checkpoints;  // reorder is for mesh files
+  reorder_generator["parts"][0]["mesh"]["reorder"] = true;
+  std::ofstream(dir / "reorder_generator.json") << reorder_generator.dump();
   // A probe with a quantity the kernel does not know.
   json probe = with_checkpoints;
   probe["output"]["probes"][0]["quantities"] = {"temperature_mean", "fibre_strian"};
@@ -2250,7 +2457,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
   good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " " + q(dir / "kinetics.json") + " " +
-          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " ";
+          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " " + q(dir / "mesh_file.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_k_table.json") + " >/dev/null").c_str()), 0);
@@ -2261,6 +2468,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   EXPECT_NE(std::system((py + q(dir / "bad_melting.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "typo.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "probe.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "reorder_generator.json") + " >/dev/null").c_str()), 0);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <unistd.h>
 
@@ -176,6 +177,24 @@ void slab_heat_flows(const std::vector<double>& T, double k, double e, double h,
     q[i + 1] -= f;
   }
   q[n] += h * (Ta - T[n]);
+}
+
+void write_shuffled_gmsh(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed) {
+  std::vector<int> order(mesh.num_elements());
+  for (int e = 0; e < mesh.num_elements(); ++e) order[e] = e;
+  if (seed != 0) std::shuffle(order.begin(), order.end(), std::mt19937(seed));
+  std::ofstream f(file);
+  f << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << mesh.num_nodes() << '\n';
+  f.precision(17);
+  for (int i = mesh.num_nodes() - 1; i >= 0; --i)
+    f << shuffled_node_tag(i) << ' ' << mesh.x[3 * i] << ' ' << mesh.x[3 * i + 1] << ' ' << mesh.x[3 * i + 2] << '\n';
+  f << "$EndNodes\n$Elements\n" << mesh.num_elements() << '\n';
+  for (const int e : order) {
+    f << shuffled_element_tag(e) << " 2 2 1 1";
+    for (int k = 0; k < 3; ++k) f << ' ' << shuffled_node_tag(mesh.triangles[3 * e + k]);
+    f << '\n';
+  }
+  f << "$EndElements\n";
 }
 
 void write_parallelogram(const std::filesystem::path& file, double L, double W, double s, int nx, int ny) {

@@ -82,6 +82,13 @@ std::filesystem::path temp_dir(const std::string& name);
 // normal +z), for a meshed tool.
 void write_square_stl(const std::filesystem::path& file, double lo, double hi, double z);
 
+// The mesh as a Gmsh 2.2 file as mesh generators leave them: its triangles
+// in an order shuffled by `seed` (0: in order), tagged 100 + their index in
+// `mesh`, the nodes tagged 7 + 3 x their index, listed from the last.
+void write_shuffled_gmsh(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed);
+inline long long shuffled_node_tag(int node) { return 7 + 3LL * node; }
+inline long long shuffled_element_tag(int element) { return 100 + element; }
+
 // A Gmsh 2.2 mesh of the parallelogram x = xi + s y, xi in [0, L], y in
 // [0, W]: its slanted edges follow the level lines of cos(pi xi / L).
 void write_parallelogram(const std::filesystem::path& file, double L, double W, double s, int nx, int ny);
