@@ -57,6 +57,28 @@ json restart_document(const json& doc) {
 
 // What a restart compares: the stored document without time.end (a restart
 // may move the end, to extend a finished run).
+// Each part's mesh as the run numbers it (FNV-1a of its counts, triangles
+// and node tags): a checkpoint holds them, so that a restart refuses a mesh
+// file that changed, or that another version numbered otherwise.
+std::vector<unsigned char> mesh_prints(const std::vector<std::unique_ptr<PartState>>& parts) {
+  sdk::StateWriter w;
+  for (const auto& st : parts) {
+    std::uint64_t h = 1469598103934665603ULL;
+    auto mix = [&](long long v) {
+      for (int b = 0; b < 8; ++b) {
+        h ^= static_cast<unsigned char>(static_cast<unsigned long long>(v) >> (8 * b));
+        h *= 1099511628211ULL;
+      }
+    };
+    mix(st->mesh.num_nodes());
+    mix(st->mesh.num_elements());
+    for (const int t : st->mesh.triangles) mix(t);
+    for (int i = 0; i < st->mesh.num_nodes(); ++i) mix(node_tag(st->mesh, i));
+    w.put(h);
+  }
+  return std::move(w.bytes());
+}
+
 json restart_match(json d) {
   if (d.contains("time") && d["time"].is_object()) d["time"].erase("end");
   return d;
@@ -584,6 +606,26 @@ double Simulation::check_restart(const Checkpoint& c) const {
       throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
                                 "needs the job of the run it continues (time.end, output.checkpoint_interval, "
                                 "output.checkpoint_at_end and output.compression may differ)");
+    // The same meshes, numbered alike (checkpoints before 0.24.0 have no
+    // prints: their meshes are those of the generators or of files in the
+    // files' order).
+    if (const auto* prints = c.find("meshes")) {
+      sdk::StateReader m(*prints);
+      const std::vector<unsigned char> ours = mesh_prints(parts_);
+      sdk::StateReader o(ours);
+      for (const auto& st : parts_) {
+        std::uint64_t a = 0, b = 0;
+        if (!m.get(a) || !o.get(b) || a != b)
+          throw JobError(st->def->pointer + "/mesh", what + "the mesh of part '" + st->def->name +
+                                                         "' is not the one of the checkpoint (did its file change?)");
+      }
+    } else {
+      for (const auto& st : parts_)
+        if (st->def->mesh.kind == MeshDef::Kind::File && st->def->mesh.reorder)
+          throw JobError(st->def->pointer + "/mesh/reorder",
+                         what + "the checkpoint was written by ThermoStamp 0.23 or earlier, which numbered the mesh "
+                                "file of part '" + st->def->name + "' otherwise; continue it with that version");
+    }
     sdk::StateReader r(c.section("run"));
     double t = 0;
     if (!r.get(t)) throw JobError("", what + "the checkpoint's run section is truncated");
@@ -645,6 +687,7 @@ void Simulation::save_state(Checkpoint& c) {
   sdk::StateWriter w;
   state_io(w);
   c.add("kernel", std::move(w.bytes()));
+  c.add("meshes", mesh_prints(parts_));
   auto plugin = [&](const std::string& name, auto&& save) {
     sdk::StateWriter pw;
     if (auto st = save(pw); !st) throw RunError("checkpoint of " + name + ": " + st.message);

@@ -10,6 +10,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <array>
 #include <csignal>
 #include <cstring>
 #include <fstream>
@@ -410,6 +411,67 @@ TEST(Restart, RefusesWhatItCannotContinue) {
   const auto bad = thermostamp("validate " + q(job) + " --set output.checkpoint_interval=-1");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("/output/checkpoint_interval"), std::string::npos) << bad.err;
+}
+
+// Plies meshed in files in a shuffled order, taken in the order of
+// `mesh.reorder`: the run continues bit for bit (the order is the same at
+// every reading of the file). A file that changed since the checkpoint
+// (here the same mesh written in another order, which the run numbers
+// otherwise) is refused at the part's mesh, and so is a checkpoint without
+// the meshes' prints (as ThermoStamp 0.23 and earlier wrote them, whose
+// numbering of a mesh file was the file's order) where a part reads a file
+// in the order of `reorder`.
+TEST(Restart, MeshFilesContinueAndAnotherNumberingIsRefused) {
+  const auto meshes = temp_dir("restart_mesh_files_meshes");
+  json j = coarse_hemisphere("hemisphere_ud_2ply.json");
+  j["time"]["end"] = 0.5;
+  for (auto& p : j["parts"]) {
+    const auto& m = p["mesh"];
+    const ShellMesh rect = rectangle_mesh(m["origin"].get<std::array<double, 3>>(),
+                                          m["size"].get<std::array<double, 2>>(),
+                                          m["divisions"].get<std::array<int, 2>>(), m.value("pattern", "") == "crossed");
+    const auto file = meshes / (p["name"].get<std::string>() + ".msh");
+    write_shuffled_gmsh(file, rect, 5);
+    p["mesh"] = {{"file", file.string()}};
+  }
+  std::filesystem::path dir;
+  check_restart("mesh_files", j, 0.2, "", &dir);
+  const auto out = dir / "with";
+  const auto job = dir / "job.json";
+  ASSERT_TRUE(std::filesystem::exists(job));
+  // The lower ply's file in another order.
+  {
+    const json p = coarse_hemisphere("hemisphere_ud_2ply.json")["parts"][0]["mesh"];
+    const ShellMesh rect = rectangle_mesh(p["origin"].get<std::array<double, 3>>(), p["size"].get<std::array<double, 2>>(),
+                                          p["divisions"].get<std::array<int, 2>>(), p.value("pattern", "") == "crossed");
+    std::filesystem::copy_file(meshes / "ply_bottom.msh", meshes / "kept.msh");
+    write_shuffled_gmsh(meshes / "ply_bottom.msh", rect, 6);
+  }
+  const auto changed = run_cli(job, out, 1, "--restart");
+  EXPECT_EQ(changed.exit_code, 2);
+  EXPECT_NE(changed.err.find("error: /parts/0/mesh: --restart: the mesh of part 'ply_bottom' is not the one of the "
+                             "checkpoint (did its file change?)"),
+            std::string::npos)
+      << changed.err;
+  std::filesystem::copy_file(meshes / "kept.msh", meshes / "ply_bottom.msh",
+                             std::filesystem::copy_options::overwrite_existing);
+  // A checkpoint without prints.
+  const Checkpoint c = read_checkpoint(out / "checkpoint.bin");
+  Checkpoint old;
+  for (const auto& [name, bytes] : c.sections)
+    if (name != "meshes") old.add(name, bytes);
+  ASSERT_EQ(old.sections.size() + 1, c.sections.size());
+  write_checkpoint(out / "checkpoint.bin", old);
+  const auto earlier = run_cli(job, out, 1, "--restart");
+  EXPECT_EQ(earlier.exit_code, 2);
+  EXPECT_NE(earlier.err.find("error: /parts/0/mesh/reorder: --restart: the checkpoint was written by ThermoStamp 0.23 "
+                             "or earlier, which numbered the mesh file of part 'ply_bottom' otherwise; continue it "
+                             "with that version"),
+            std::string::npos)
+      << earlier.err;
+  // The prints back: it continues.
+  write_checkpoint(out / "checkpoint.bin", c);
+  EXPECT_EQ(run_cli(job, out, 1, "--restart").exit_code, 0);
 }
 
 // The lines of a CSV file (header aside) whose first column, the time, is
