@@ -62,7 +62,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.23.0 (plugin SDK 0.19.0, ABI 19)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.24.0 (plugin SDK 0.19.0, ABI 19)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
