@@ -206,6 +206,7 @@ int cmd_run(const Args& a, bool validate_only) {
                     rounded(job.t_end / dm), job.t_end);
       std::cout << line;
     }
+    for (const std::string& l : sim.mesh_file_lines()) std::cout << l << "\n";
     for (const auto& m : job.materials)
       if (const auto card = ts::material_card_file(job, m); !card.empty())
         std::cout << "material '" << m.name << "': from the material card " << card.string() << "\n";

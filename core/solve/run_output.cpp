@@ -234,12 +234,7 @@ void Simulation::Run::log_start() const {
   else
     log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s), subnormals {}", job.name, parts.size(),
               sim.tools_.size(), threads, subnormals);
-  for (const auto& st : parts)
-    if (st->def->mesh.kind == MeshDef::Kind::File)
-      log->info("part '{}': {} triangles, {} nodes from {}, {} (neighbouring triangles at most {} places apart)",
-                st->def->name, st->mesh.num_elements(), st->mesh.num_nodes(), st->def->mesh.file.string(),
-                st->def->mesh.reorder ? "numbered so that neighbours are close (mesh.reorder)" : "in the file's order",
-                element_bandwidth(st->mesh));
+  for (const std::string& line : sim.mesh_file_lines()) log->info("{}", line);
   for (const auto& m : job.materials)
     if (const auto card = material_card_file(job, m); !card.empty())
       log->info("material '{}': from the material card {}", m.name, card.string());

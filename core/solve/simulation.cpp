@@ -255,6 +255,20 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) try : job_(job)
 
 Simulation::~Simulation() = default;
 
+std::vector<std::string> Simulation::mesh_file_lines() const {
+  std::vector<std::string> lines;
+  for (const auto& st : parts_) {
+    const MeshDef& m = st->def->mesh;
+    if (m.kind != MeshDef::Kind::File) continue;
+    lines.push_back("part '" + st->def->name + "': " + std::to_string(st->mesh.num_elements()) + " triangles, " +
+                    std::to_string(st->mesh.num_nodes()) + " nodes from " + m.file.string() + ", " +
+                    (m.reorder ? "numbered so that neighbours are close (mesh.reorder)" : "in the file's order") +
+                    " (neighbouring triangles at most " + std::to_string(element_bandwidth(st->mesh)) +
+                    " places apart)");
+  }
+  return lines;
+}
+
 void Simulation::build_parts() {
   for (std::size_t p = 0; p < job_.parts.size(); ++p) {
     const PartDef& def = job_.parts[p];

@@ -1391,6 +1391,17 @@ TEST(MeshOrder, FileMeshesRunAlikeInEitherOrderAndChainByTags) {
   };
   ASSERT_EQ(run(j, "stamped").exit_code, 0);
   ASSERT_EQ(run(in_file_order(j), "stamped_file_order").exit_code, 0);
+  // validate and the log say how each mesh file is taken.
+  for (const auto& [name, order] : {std::pair<std::string, std::string>{"stamped", "numbered so that neighbours are "
+                                                                                    "close (mesh.reorder)"},
+                                    {"stamped_file_order", "in the file's order"}}) {
+    const std::string line = "part 'ply_bottom': 144 triangles, 85 nodes from " + (dir / "ply_bottom.msh").string() +
+                             ", " + order + " (neighbouring triangles at most ";
+    EXPECT_NE(thermostamp("validate " + q(dir / (name + ".json"))).out.find(line), std::string::npos) << name;
+    std::stringstream log;
+    log << std::ifstream(dir / name / "log.txt").rdbuf();
+    EXPECT_NE(log.str().find(line), std::string::npos) << name;
+  }
   // A frame's field of a part, by tag: tag -> values.
   auto by_tag = [](const std::filesystem::path& h5, const std::string& part, const std::string& frame,
                    const std::string& field) {
