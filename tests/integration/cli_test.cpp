@@ -1361,10 +1361,11 @@ TEST(Output, ThermalOnlyToolRowsAtTheSeriesRows) {
 //   terms in another order (measured: 1e-11 at most). In the stamping
 //   itself the two orders part by more, up to 8e-5 of the largest
 //   displacement: the plies' matching meshes put each node of one ply over a
-//   node of the other, where several triangles are equally near, and the
-//   ply/ply node-to-surface contact takes the first it finds, whose normal
-//   differs; the order of the elements decides which. Without the ply/ply
-//   contact the stamping too differs by round-off (8e-12);
+//   node of the other, as near to each triangle around it but for
+//   round-off, so that round-off picks the triangle whose normal the ply/ply
+//   node-to-surface contact takes (the normals of a bent ply differ from
+//   triangle to triangle). Without the ply/ply contact the stamping too
+//   differs by round-off (8e-12);
 // - a results file without tags (ThermoStamp 0.23 and earlier) is taken in
 //   order, and refused where its triangles are not this mesh's, as are tags
 //   of another mesh.
