@@ -233,12 +233,25 @@ void parse_mixture(const json& v, const std::string& ptr, MaterialDef& m) {
 }
 
 // materials.<m>.crystallisation: the Nakamura kinetics of the matrix.
-MaterialDef::Crystallisation parse_crystallisation(const json& v, const std::string& ptr) {
+// matrix_mass_fraction: the matrix's share of the ply's mass where the
+// material has a mixture, else negative.
+MaterialDef::Crystallisation parse_crystallisation(const json& v, const std::string& ptr, double matrix_mass_fraction) {
   MaterialDef::Crystallisation c;
   c.present = true;
   c.pointer = ptr;
   ObjectReader r(v, ptr);
-  c.latent_heat = r.real("latent_heat", std::nullopt, 0.0);
+  if (r.has("matrix_latent_heat")) {
+    if (r.has("latent_heat"))
+      throw JobError(r.at("matrix_latent_heat"),
+                     "give either latent_heat (J/kg of ply) or matrix_latent_heat (J/kg of matrix), not both");
+    if (matrix_mass_fraction < 0)
+      throw JobError(r.at("matrix_latent_heat"), "needs the material's 'mixture' (the matrix's share of the ply's "
+                                                 "mass); without one, give latent_heat in J/kg of ply");
+    c.matrix_latent_heat = r.real("matrix_latent_heat", std::nullopt, 0.0);
+    c.latent_heat = c.matrix_latent_heat * matrix_mass_fraction;
+  } else {
+    c.latent_heat = r.real("latent_heat", std::nullopt, 0.0);
+  }
   c.avrami_exponent = r.real("avrami_exponent", std::nullopt, 0.0, true, 10.0);
   c.initial = r.real("initial", 0.0, 0.0);
   if (!(c.initial <= 1.0)) throw JobError(r.at("initial"), "must be at most 1 (a relative crystallinity)");
@@ -638,7 +651,8 @@ void parse_job_into(Job& job) {
         m.conductivity = conductivity_or_rows(r, m.conductivity_table);
       }
       if (const json* v = r.optional_raw("crystallisation"))
-        m.crystallisation = parse_crystallisation(*v, r.at("crystallisation"));
+        m.crystallisation = parse_crystallisation(*v, r.at("crystallisation"),
+                                                  m.mixture_fibre_fraction >= 0 ? m.mixture_matrix_mass_fraction : -1.0);
       if (const json* v = r.optional_raw("membrane")) m.membrane = *v;
       if (const json* v = r.optional_raw("bending")) m.bending = *v;
       r.declare("source");

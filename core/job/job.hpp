@@ -49,6 +49,10 @@ struct MaterialDef {
     bool present = false;
     std::string pointer;
     double latent_heat = 0;      // J/kg of ply, released from relative crystallinity 0 to 1
+    // J/kg of matrix where the job gives it so (matrix_latent_heat, with a
+    // mixture: latent_heat is then it times the matrix's mass fraction);
+    // negative where the job gives latent_heat.
+    double matrix_latent_heat = -1;
     double avrami_exponent = 3;  // n
     // The rate K(T) (1/s): rows [T (degC), K] (linear between them, held
     // beyond), or, with the rows empty, Ziabicki's Gaussian

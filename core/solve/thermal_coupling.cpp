@@ -584,7 +584,11 @@ std::string describe_crystallisation(const MaterialDef& m) {
                                     c.melting_rows);
   std::ostringstream os;
   os << "crystallisation (Nakamura, n = " << fmt_g(c.avrami_exponent) << ", latent heat " << fmt_g(c.latent_heat)
-     << " J/kg), rate ";
+     << " J/kg";
+  if (c.matrix_latent_heat >= 0)
+    os << " of ply: " << fmt_g(c.matrix_latent_heat) << " J/kg of matrix x its mass fraction "
+       << fmt_g(m.mixture_matrix_mass_fraction, 4);
+  os << "), rate ";
   if (!c.rate_rows.empty()) {
     double k_max = 0;
     for (const auto& r : c.rate_rows) k_max = std::max(k_max, r[1]);

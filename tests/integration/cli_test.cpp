@@ -2449,6 +2449,12 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   json bad_mixture = mixture;  // three conductivities for the fibres
   bad_mixture["materials"]["pa66_cf_ud"]["mixture"]["fibre"]["conductivity"] = {9.4, 0.84, 0.84};
   std::ofstream(dir / "bad_mixture.json") << bad_mixture.dump();
+  json matrix_latent = mixture;  // a latent heat per kg of matrix
+  matrix_latent["materials"]["pa66_cf_ud"]["crystallisation"] = {
+      {"matrix_latent_heat", 7e4}, {"avrami_exponent", 3}, {"rate", {{150.0, 2.0}, {250.0, 0.0}}}};
+  std::ofstream(dir / "matrix_latent.json") << matrix_latent.dump();
+  matrix_latent["materials"]["pa66_cf_ud"]["crystallisation"]["latent_heat"] = 3e4;  // both
+  std::ofstream(dir / "both_latent.json") << matrix_latent.dump();
   json mixture_and_density = mixture;  // both forms of the thermal data
   mixture_and_density["materials"]["pa66_cf_ud"]["density"] = 1294.0;
   std::ofstream(dir / "mixture_and_density.json") << mixture_and_density.dump();
@@ -2469,7 +2475,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
   good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " " + q(dir / "kinetics.json") + " " +
-          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " " + q(dir / "mesh_file.json") + " ";
+          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " " + q(dir / "mesh_file.json") + " " + q(dir / "matrix_latent.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_k_table.json") + " >/dev/null").c_str()), 0);
@@ -2481,6 +2487,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   EXPECT_NE(std::system((py + q(dir / "typo.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "probe.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "reorder_generator.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "both_latent.json") + " >/dev/null").c_str()), 0);
 }
 
 }  // namespace

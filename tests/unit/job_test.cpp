@@ -234,6 +234,48 @@ TEST(Mixture, RunsAsTheRowsItForms) {
 }
 
 
+// crystallisation.matrix_latent_heat: a heat of crystallisation per kg of
+// matrix, as a DSC run of the neat polymer gives it, taken per kg of ply by
+// the matrix's mass fraction (1 - V_f) rho_m / rho, written out here from
+// the card's constituents; the same material as with latent_heat given as
+// that product. Refused beside latent_heat, without a mixture, and below 0.
+TEST(Mixture, LatentHeatPerKilogramOfMatrix) {
+  json d = test::ply_job("adi", 8, 1.0, 0.1);
+  const json kin = {{"matrix_latent_heat", 70000.0}, {"avrami_exponent", 3.0}, {"rate", {{200.0, 1.0}, {250.0, 0.0}}}};
+  d["materials"]["ply"] = {{"mixture", test::pa66_carbon_mixture()}, {"crystallisation", kin}};
+  const Job j = parse_job(d, "job.json");
+  const double vf = 0.4, rho_m = 970, rho_f = 1780;
+  const double share = (1 - vf) * rho_m / (vf * rho_f + (1 - vf) * rho_m);
+  const auto& c = j.materials[0].crystallisation;
+  EXPECT_NEAR(c.latent_heat, 70000.0 * share, 1e-12 * 70000.0);
+  EXPECT_EQ(c.matrix_latent_heat, 70000.0);
+  const std::string said = describe_crystallisation(j.materials[0]);
+  EXPECT_NE(said.find(" J/kg of ply: 70000 J/kg of matrix x its mass fraction 0.4498), rate from 2 rows"),
+            std::string::npos)
+      << said;
+  json per_ply = d;
+  per_ply["materials"]["ply"]["crystallisation"].erase("matrix_latent_heat");
+  per_ply["materials"]["ply"]["crystallisation"]["latent_heat"] = c.latent_heat;
+  const auto& p = parse_job(per_ply, "job.json").materials[0].crystallisation;
+  EXPECT_EQ(p.latent_heat, c.latent_heat);
+  EXPECT_LT(p.matrix_latent_heat, 0.0);
+  EXPECT_EQ(describe_crystallisation(parse_job(per_ply, "job.json").materials[0]).find("of matrix"), std::string::npos);
+
+  json both = d;
+  both["materials"]["ply"]["crystallisation"]["latent_heat"] = 30000.0;
+  EXPECT_EQ(job_error(both), "/materials/ply/crystallisation/matrix_latent_heat: give either latent_heat (J/kg of ply) "
+                             "or matrix_latent_heat (J/kg of matrix), not both");
+  json no_mixture = test::ply_job("adi", 8, 1.0, 0.1);
+  no_mixture["materials"]["ply"]["crystallisation"] = kin;
+  EXPECT_EQ(job_error(no_mixture), "/materials/ply/crystallisation/matrix_latent_heat: needs the material's 'mixture' "
+                                   "(the matrix's share of the ply's mass); without one, give latent_heat in J/kg of "
+                                   "ply");
+  json negative = d;
+  negative["materials"]["ply"]["crystallisation"]["matrix_latent_heat"] = -1.0;
+  EXPECT_EQ(job_error(negative).rfind("/materials/ply/crystallisation/matrix_latent_heat: must be >= 0", 0), 0u)
+      << job_error(negative);
+}
+
 // materials.*.card: a material card (share/materials) whose keys a
 // material takes where it gives none itself, read relative to the job file.
 TEST(MaterialCard, TakesTheCardsValuesWhereTheMaterialGivesNone) {
