@@ -256,10 +256,10 @@ TEST(Mixture, LatentHeatPerKilogramOfMatrix) {
   json per_ply = d;
   per_ply["materials"]["ply"]["crystallisation"].erase("matrix_latent_heat");
   per_ply["materials"]["ply"]["crystallisation"]["latent_heat"] = c.latent_heat;
-  const auto& p = parse_job(per_ply, "job.json").materials[0].crystallisation;
-  EXPECT_EQ(p.latent_heat, c.latent_heat);
-  EXPECT_LT(p.matrix_latent_heat, 0.0);
-  EXPECT_EQ(describe_crystallisation(parse_job(per_ply, "job.json").materials[0]).find("of matrix"), std::string::npos);
+  const Job jp = parse_job(per_ply, "job.json");
+  EXPECT_EQ(jp.materials[0].crystallisation.latent_heat, c.latent_heat);
+  EXPECT_LT(jp.materials[0].crystallisation.matrix_latent_heat, 0.0);
+  EXPECT_EQ(describe_crystallisation(jp.materials[0]).find("of matrix"), std::string::npos);
 
   json both = d;
   both["materials"]["ply"]["crystallisation"]["latent_heat"] = 30000.0;
