@@ -76,8 +76,9 @@ struct MeshDef {
   std::array<int, 2> divisions{1, 1};
   bool crossed = false;  // rectangle: four triangles per cell around a centre node
   std::filesystem::path file;
-  // file: the elements renumbered so that neighbours are close in memory
-  // (reverse Cuthill-McKee); the nodes keep the file's order.
+  // file: the triangles taken so that neighbours are close in memory
+  // (reverse Cuthill-McKee) and the nodes numbered in the order they first
+  // use them; false: the file's order (its nodes numbered likewise).
   bool reorder = true;
 };
 
