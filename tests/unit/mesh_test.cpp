@@ -6,6 +6,7 @@
 #include <fstream>
 #include <numeric>
 #include <random>
+#include <set>
 
 #include <thermostamp/sdk/math.hpp>
 
@@ -91,6 +92,19 @@ TEST(Gmsh, ReadsVersions22And41Alike) {
   const auto aa = node_areas(a), ab = node_areas(b);
   EXPECT_NEAR(std::accumulate(aa.begin(), aa.end(), 0.0), 1.0, 1e-14);
   EXPECT_NEAR(std::accumulate(ab.begin(), ab.end(), 0.0), 1.0, 1e-14);
+  // Both keep the files' tags of the triangles and of the nodes they use
+  // (the point element and the line are left out), in either order.
+  for (const bool reorder : {false, true}) {
+    const ShellMesh ra = read_gmsh(dir / "a.msh", reorder), rb = read_gmsh(dir / "b.msh", reorder);
+    using Tags = std::set<long long>;
+    EXPECT_EQ(Tags(ra.element_tags.begin(), ra.element_tags.end()), (Tags{3, 4, 5, 6})) << reorder;
+    EXPECT_EQ(Tags(rb.element_tags.begin(), rb.element_tags.end()), (Tags{2, 3, 4, 5})) << reorder;
+    EXPECT_EQ(Tags(ra.node_tags.begin(), ra.node_tags.end()), (Tags{1, 2, 3, 4, 9})) << reorder;
+    EXPECT_EQ(Tags(rb.node_tags.begin(), rb.node_tags.end()), (Tags{1, 2, 3, 4, 9})) << reorder;
+    for (const ShellMesh* m : {&ra, &rb})  // the centre node, tag 9, at (0.5, 0.5)
+      for (int i = 0; i < m->num_nodes(); ++i)
+        if (m->node_tags[i] == 9) EXPECT_EQ(m->x[3 * i] + m->x[3 * i + 1], 1.0);
+  }
 }
 
 // The largest distance in index between the two nodes of an edge (beside
