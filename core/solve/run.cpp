@@ -55,8 +55,6 @@ json restart_document(const json& doc) {
   return d;
 }
 
-// What a restart compares: the stored document without time.end (a restart
-// may move the end, to extend a finished run).
 // Each part's mesh as the run numbers it (FNV-1a of its counts, triangles
 // and node tags): a checkpoint holds them, so that a restart refuses a mesh
 // file that changed, or that another version numbered otherwise.
@@ -79,6 +77,8 @@ std::vector<unsigned char> mesh_prints(const std::vector<std::unique_ptr<PartSta
   return std::move(w.bytes());
 }
 
+// What a restart compares: the stored document without time.end (a restart
+// may move the end, to extend a finished run).
 json restart_match(json d) {
   if (d.contains("time") && d["time"].is_object()) d["time"].erase("end");
   return d;
