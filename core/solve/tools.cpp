@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <unordered_map>
 
 #include <thermostamp/sdk/math.hpp>
 #include <thermostamp/sdk/simd.hpp>
@@ -286,59 +288,163 @@ RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
     if (tri.empty()) throw JobError(ptr, "the tool mesh '" + s.file.string() + "' has no triangles");
     if (s.flip)
       for (std::size_t e = 0; e < tri.size(); e += 3) std::swap(tri[e + 1], tri[e + 2]);
+    check_orientation(xyz, tri, ptr);
     build_mesh(xyz, tri);
   }
 }
 
+void RigidTool::check_orientation(const std::vector<double>& xyz, const std::vector<int>& tri, const std::string& ptr) {
+  // Corners at the same point are one vertex (an STL file repeats them).
+  struct Hash {
+    std::size_t operator()(const std::array<double, 3>& p) const {
+      std::size_t h = 1469598103934665603ull;
+      for (const double c : p) {
+        std::uint64_t b;
+        std::memcpy(&b, &c, 8);
+        h = (h ^ b) * 1099511628211ull;
+      }
+      return h;
+    }
+  };
+  std::unordered_map<std::array<double, 3>, int, Hash> ids;
+  std::vector<int> vid(tri.size());
+  for (std::size_t k = 0; k < tri.size(); ++k) {
+    const double* c = &xyz[3 * static_cast<std::size_t>(tri[k])];
+    vid[k] = ids.try_emplace({c[0] + 0.0, c[1] + 0.0, c[2] + 0.0}, static_cast<int>(ids.size())).first->second;
+  }
+  // Each edge: the first triangle that has it, the way that one walks it,
+  // and how many triangles have it. Two triangles on the same side of the
+  // surface walk their common edge in opposite ways.
+  struct Use {
+    int triangle, count;
+    bool forward;
+  };
+  std::unordered_map<std::uint64_t, Use> edges;
+  edges.reserve(tri.size());
+  mesh_info_ = {};
+  mesh_info_.triangles = tri.size() / 3;
+  mesh_info_.vertices = ids.size();
+  for (std::size_t e = 0; e < tri.size() / 3; ++e)
+    for (int k = 0; k < 3; ++k) {
+      const int a = vid[3 * e + k], b = vid[3 * e + (k + 1) % 3];
+      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+      auto [it, fresh] = edges.try_emplace(key, Use{static_cast<int>(e), 1, a < b});
+      if (fresh) continue;
+      if (++it->second.count == 2 && it->second.forward == (a < b))
+        throw JobError(ptr, "the tool mesh '" + def_->surface.file.string() + "' faces both ways: its triangles " +
+                                std::to_string(it->second.triangle + 1) + " and " + std::to_string(e + 1) +
+                                " (counted from 1 in the file) walk their common edge the same way, so one of them "
+                                "faces into the tool; orient every triangle to the outside (counter-clockwise seen "
+                                "from outside)");
+    }
+  for (const auto& [key, use] : edges)
+    (use.count == 1 ? mesh_info_.open_edges : use.count == 2 ? mesh_info_.shared_edges : mesh_info_.other_edges)++;
+}
+
+std::string RigidTool::describe() const {
+  if (kind_ != Kind::Mesh) return {};
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "tool '%s': %zu triangles, %zu vertices from %s; edges %.3g to %.3g mm; %zu edges between two "
+                "triangles (all facing the same side), %zu free, %zu shared by more than two",
+                def_->name.c_str(), mesh_info_.triangles, mesh_info_.vertices, def_->surface.file.string().c_str(),
+                1e3 * mesh_info_.shortest_edge, 1e3 * scale_, mesh_info_.shared_edges, mesh_info_.open_edges,
+                mesh_info_.other_edges);
+  return line;
+}
+
 void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri) {
   const std::size_t nt = tri.size() / 3;
-  mx_.resize(9 * nt);
-  mn_.resize(3 * nt);
-  Vec3 lo = {kInf, kInf, kInf}, hi = {-kInf, -kInf, -kInf};
+  std::vector<double> vx(9 * nt), centre(3 * nt);
   double h = 0;
   for (std::size_t e = 0; e < nt; ++e) {
     Vec3 v[3];
     for (int k = 0; k < 3; ++k) {
       v[k] = sdk::load3(xyz.data(), tri[3 * e + k]);
-      for (int d = 0; d < 3; ++d) {
-        mx_[9 * e + 3 * k + d] = v[k][d];
-        lo[d] = std::min(lo[d], v[k][d]);
-        hi[d] = std::max(hi[d], v[k][d]);
-      }
+      for (int d = 0; d < 3; ++d) vx[9 * e + 3 * k + d] = v[k][d];
     }
-    for (int k = 0; k < 3; ++k) h = std::max(h, sdk::norm(sdk::sub(v[k], v[(k + 1) % 3])));
-    const Vec3 n = sdk::cross(sdk::sub(v[1], v[0]), sdk::sub(v[2], v[0]));
-    const double l = sdk::norm(n);
-    if (!(l > 0)) throw JobError(def_->pointer + "/surface/file", "the tool mesh has a degenerate triangle (" + std::to_string(e) + ")");
-    for (int d = 0; d < 3; ++d) mn_[3 * e + d] = n[d] / l;
+    for (int k = 0; k < 3; ++k) {
+      const double l = sdk::norm(sdk::sub(v[k], v[(k + 1) % 3]));
+      h = std::max(h, l);
+      mesh_info_.shortest_edge = std::min(mesh_info_.shortest_edge, l);
+    }
+    if (!(sdk::norm(sdk::cross(sdk::sub(v[1], v[0]), sdk::sub(v[2], v[0]))) > 0))
+      throw JobError(def_->pointer + "/surface/file", "the tool mesh has a degenerate triangle (" + std::to_string(e) + ")");
+    for (int d = 0; d < 3; ++d) centre[3 * e + d] = (v[0][d] + v[1][d] + v[2][d]) / 3.0;
   }
-  cell_ = sdk::bucket_grid(lo, hi, std::max(h, 1e-9), gn_.data());
-  glo_ = lo;
-  const std::size_t ncell = static_cast<std::size_t>(gn_[0]) * gn_[1] * gn_[2];
-  std::vector<std::array<int, 6>> range(nt);
-  cell_start_.assign(ncell + 1, 0);
-  for (std::size_t e = 0; e < nt; ++e) {
+  scale_ = std::max(h, 1e-9);
+  double size = 0;
+  for (const double c : vx) size = std::max(size, std::abs(c));
+  tol_ = 1e-12 * (size + scale_);
+  // The tree: each box split at the median of its triangles' centres along
+  // the box's longest side (so at most log2(n) levels), down to leaves of
+  // kLeaf triangles. The boxes bound the corners exactly.
+  constexpr int kLeaf = 4;
+  morig_.resize(nt);
+  for (std::size_t e = 0; e < nt; ++e) morig_[e] = static_cast<int>(e);
+  boxes_.clear();
+  boxes_.reserve(2 * (nt / kLeaf + 1));
+  auto bound = [&](int begin, int end, BoxNode& b) {
     for (int d = 0; d < 3; ++d) {
-      double a = kInf, b = -kInf;
-      for (int k = 0; k < 3; ++k) {
-        a = std::min(a, mx_[9 * e + 3 * k + d]);
-        b = std::max(b, mx_[9 * e + 3 * k + d]);
-      }
-      range[e][d] = sdk::bucket_index(a, glo_[d], cell_, gn_[d]);
-      range[e][3 + d] = sdk::bucket_index(b, glo_[d], cell_, gn_[d]);
+      b.lo[d] = kInf;
+      b.hi[d] = -kInf;
     }
-    for (int i = range[e][0]; i <= range[e][3]; ++i)
-      for (int j = range[e][1]; j <= range[e][4]; ++j)
-        for (int k = range[e][2]; k <= range[e][5]; ++k) ++cell_start_[(static_cast<std::size_t>(k) * gn_[1] + j) * gn_[0] + i + 1];
+    for (int q = begin; q < end; ++q)
+      for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 3; ++d) {
+          const double c = vx[9 * static_cast<std::size_t>(morig_[q]) + 3 * k + d];
+          b.lo[d] = std::min(b.lo[d], c);
+          b.hi[d] = std::max(b.hi[d], c);
+        }
+  };
+  auto build = [&](auto&& self, int begin, int end) -> void {
+    const std::size_t at = boxes_.size();
+    boxes_.push_back({});
+    bound(begin, end, boxes_[at]);
+    if (end - begin <= kLeaf) {
+      boxes_[at].first = begin;
+      boxes_[at].count = end - begin;
+      return;
+    }
+    int axis = 0;
+    for (int d = 1; d < 3; ++d)
+      if (boxes_[at].hi[d] - boxes_[at].lo[d] > boxes_[at].hi[axis] - boxes_[at].lo[axis]) axis = d;
+    const int mid = begin + (end - begin) / 2;
+    std::nth_element(morig_.begin() + begin, morig_.begin() + mid, morig_.begin() + end, [&](int p, int q) {
+      const double cp = centre[3 * static_cast<std::size_t>(p) + axis], cq = centre[3 * static_cast<std::size_t>(q) + axis];
+      return cp < cq || (cp == cq && p < q);
+    });
+    self(self, begin, mid);
+    boxes_[at].first = static_cast<int>(boxes_.size());
+    boxes_[at].count = 0;
+    self(self, mid, end);
+  };
+  build(build, 0, static_cast<int>(nt));
+  // The triangles in the order of the leaves, with their unit normal n and
+  // the gradients g1, g2 of the barycentric weights w1, w2 of a point's
+  // projection (w_k = (x - p0) . g_k, w0 = 1 - w1 - w2, g0 = -g1 - g2) and
+  // 1 / |g_k|^2 of the three.
+  mx_.resize(9 * nt);
+  mn_.resize(kGeo * nt);
+  for (std::size_t q = 0; q < nt; ++q) {
+    const double* v = &vx[9 * static_cast<std::size_t>(morig_[q])];
+    std::copy(v, v + 9, &mx_[9 * q]);
+    const Vec3 p0{v[0], v[1], v[2]}, e1 = sdk::sub(Vec3{v[3], v[4], v[5]}, p0), e2 = sdk::sub(Vec3{v[6], v[7], v[8]}, p0);
+    const Vec3 c = sdk::cross(e1, e2);
+    const double l = sdk::norm(c);
+    const Vec3 n = {c[0] / l, c[1] / l, c[2] / l};
+    const Vec3 g1 = sdk::scale(sdk::cross(e2, n), 1.0 / l), g2 = sdk::scale(sdk::cross(n, e1), 1.0 / l);
+    const Vec3 g0 = sdk::scale(sdk::add(g1, g2), -1.0);
+    double* g = &mn_[kGeo * q];
+    for (int d = 0; d < 3; ++d) {
+      g[d] = n[d];
+      g[3 + d] = g1[d];
+      g[6 + d] = g2[d];
+    }
+    g[9] = 1.0 / sdk::dot(g0, g0);
+    g[10] = 1.0 / sdk::dot(g1, g1);
+    g[11] = 1.0 / sdk::dot(g2, g2);
   }
-  for (std::size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
-  cell_tri_.assign(cell_start_[ncell], 0);
-  std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
-  for (std::size_t e = 0; e < nt; ++e)
-    for (int i = range[e][0]; i <= range[e][3]; ++i)
-      for (int j = range[e][1]; j <= range[e][4]; ++j)
-        for (int k = range[e][2]; k <= range[e][5]; ++k)
-          cell_tri_[fill[(static_cast<std::size_t>(k) * gn_[1] + j) * gn_[0] + i]++] = static_cast<int>(e);
 }
 
 void RigidTool::query(std::size_t n, const double* points, double cutoff, double* distance, double* normal) const {
@@ -459,55 +565,91 @@ void RigidTool::query_revolved(const double* p, double& dist, double* nout) cons
   for (int d = 0; d < 3; ++d) nout[d] = n2[0] * er[d] + n2[1] * axis_[d];
 }
 
+namespace {
+
+// Squared distance from x to a box, a lower bound of the distance to
+// anything inside it.
+double box_distance2(const double* x, const double* lo, const double* hi) {
+  double s = 0;
+  for (int d = 0; d < 3; ++d) {
+    const double g = std::max({lo[d] - x[d], 0.0, x[d] - hi[d]});
+    s += g * g;
+  }
+  return s;
+}
+
+}  // namespace
+
 void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double* nout) const {
   const Vec3 x = {p[0], p[1], p[2]};
-  const double reach = std::isfinite(cutoff) ? cutoff : cell_;
-  int c0[3], c1[3];
-  for (int d = 0; d < 3; ++d) {
-    const double lo = (x[d] - reach - glo_[d]) / cell_, hi = (x[d] + reach - glo_[d]) / cell_;
-    if (hi < 0 || lo > gn_[d]) {
-      dist = kInf;
-      nout[0] = nout[1] = 0;
-      nout[2] = 1;
-      return;
-    }
-    c0[d] = sdk::bucket_cell(std::floor(lo), gn_[d]);
-    c1[d] = sdk::bucket_cell(std::floor(hi), gn_[d]);
-  }
-  double best = reach * reach;
-  int best_e = -1;
-  Vec3 best_q{};
-  for (int k = c0[2]; k <= c1[2]; ++k)
-    for (int j = c0[1]; j <= c1[1]; ++j)
-      for (int i = c0[0]; i <= c1[0]; ++i) {
-        const std::size_t c = (static_cast<std::size_t>(k) * gn_[1] + j) * gn_[0] + i;
-        for (int q = cell_start_[c]; q < cell_start_[c + 1]; ++q) {
-          const int e = cell_tri_[q];
-          const double* v = &mx_[9 * static_cast<std::size_t>(e)];
-          const Vec3 cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
-          const Vec3 dv = sdk::sub(x, cp);
-          const double d2 = sdk::dot(dv, dv);
-          if (d2 < best || (d2 == best && best_e >= 0 && e < best_e)) {
-            best = d2;
-            best_e = e;
-            best_q = cp;
-          }
-        }
+  // The closest triangle nearer than the cutoff: of equal distances the
+  // file's first. Boxes and triangles whose lower bound (the distance to
+  // the box, to the triangle's plane) is farther than the best so far are
+  // skipped, with a margin of 1e-12 of the mesh's size for the round-off of
+  // the two distances, so that nothing the comparison below would take is
+  // skipped; the nearer child first.
+  double best = std::isfinite(cutoff) ? cutoff * cutoff : kInf;
+  double limit2 = std::isfinite(cutoff) ? (cutoff + tol_) * (cutoff + tol_) : kInf;
+  int best_q = -1;
+  Vec3 best_cp{};
+  int stack[128];
+  int top = 0;
+  if (!boxes_.empty() && !(box_distance2(p, boxes_[0].lo, boxes_[0].hi) > limit2)) stack[top++] = 0;
+  while (top > 0) {
+    const BoxNode& b = boxes_[stack[--top]];
+    if (b.count == 0) {
+      const int c1 = static_cast<int>(&b - boxes_.data()) + 1, c2 = b.first;
+      const double d1 = box_distance2(p, boxes_[c1].lo, boxes_[c1].hi);
+      const double d2 = box_distance2(p, boxes_[c2].lo, boxes_[c2].hi);
+      const bool f1 = d1 > limit2, f2 = d2 > limit2;
+      if (d1 <= d2) {  // the nearer child on top of the stack
+        if (!f2) stack[top++] = c2;
+        if (!f1) stack[top++] = c1;
+      } else {
+        if (!f1) stack[top++] = c1;
+        if (!f2) stack[top++] = c2;
       }
-  if (best_e < 0) {
+      continue;
+    }
+    if (box_distance2(p, b.lo, b.hi) > limit2) continue;  // the best moved since this box was stacked
+    for (int q = b.first; q < b.first + b.count; ++q) {
+      const double* v = &mx_[9 * static_cast<std::size_t>(q)];
+      const double* g = &mn_[kGeo * static_cast<std::size_t>(q)];
+      const double rx = x[0] - v[0], ry = x[1] - v[1], rz = x[2] - v[2];
+      const double plane = rx * g[0] + ry * g[1] + rz * g[2];
+      // Beyond the line of edge k (w_k < 0) the projection is at least
+      // -w_k / |g_k| away from the triangle.
+      const double w1 = rx * g[3] + ry * g[4] + rz * g[5], w2 = rx * g[6] + ry * g[7] + rz * g[8];
+      const double w0 = 1.0 - w1 - w2;
+      const double out = std::max({w0 < 0 ? w0 * w0 * g[9] : 0.0, w1 < 0 ? w1 * w1 * g[10] : 0.0,
+                                   w2 < 0 ? w2 * w2 * g[11] : 0.0});
+      if (plane * plane + out > limit2) continue;
+      const Vec3 cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
+      const Vec3 dv = sdk::sub(x, cp);
+      const double d2 = sdk::dot(dv, dv);
+      if (d2 < best || (d2 == best && best_q >= 0 && morig_[q] < morig_[best_q])) {
+        best = d2;
+        best_q = q;
+        best_cp = cp;
+        const double reach = std::sqrt(d2) + tol_;
+        limit2 = reach * reach;
+      }
+    }
+  }
+  if (best_q < 0) {
     dist = kInf;
     nout[0] = nout[1] = 0;
     nout[2] = 1;
     return;
   }
-  const Vec3 fn = sdk::load3(mn_.data(), best_e);
-  const Vec3 dv = sdk::sub(x, best_q);
+  const Vec3 fn = sdk::load3(&mn_[kGeo * static_cast<std::size_t>(best_q)], 0);
+  const Vec3 dv = sdk::sub(x, best_cp);
   const double len = std::sqrt(best);
   const double side = sdk::dot(dv, fn) >= 0 ? 1.0 : -1.0;
   dist = side * len;
   // Inside a triangle the direction is its normal; off an edge or a vertex
   // the direction from the closest point (folds act as rounded).
-  const Vec3 n = len > 1e-12 * cell_ && std::abs(sdk::dot(dv, fn)) < (1 - 1e-12) * len ? sdk::scale(dv, side / len) : fn;
+  const Vec3 n = len > 1e-12 * scale_ && std::abs(sdk::dot(dv, fn)) < (1 - 1e-12) * len ? sdk::scale(dv, side / len) : fn;
   for (int d = 0; d < 3; ++d) nout[d] = n[d];
 }
 

@@ -4,6 +4,8 @@
 // and of triangle meshes (Gmsh or STL), and their rigid translation
 // (constant velocity, displacement table, or driven by a force).
 #include <array>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "job/job.hpp"
@@ -16,10 +18,14 @@ class RigidTool {
   explicit RigidTool(const ToolDef& def);
 
   const ToolDef& def() const { return *def_; }
+  // A mesh tool's triangles, vertices, edge lengths and how its edges are
+  // shared, in a line for `validate` and the log; empty for the others.
+  std::string describe() const;
   // Signed distance (positive outside, where the outward normal points) and
   // outward unit normal of n points, in the tool's current position. Points
-  // farther than `cutoff` from a mesh surface get +infinity. Edges and the
-  // free ends of a profile act as rounded (distance to the edge point).
+  // as far as `cutoff` or farther from a mesh surface get +infinity (with an
+  // infinite cutoff every point gets its distance). Edges and the free ends
+  // of a profile act as rounded (distance to the edge point).
   void query(std::size_t n, const double* points, double cutoff, double* distance, double* normal) const;
   static void query_fn(const void* self, std::size_t n, const double* points, double cutoff, double* distance,
                        double* normal) {
@@ -51,6 +57,9 @@ class RigidTool {
   void query_revolved_run(std::size_t n, const double* points, double* distance, double* normal) const;
   void query_mesh(const double* p, double cutoff, double& d, double* n) const;
   void build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri);
+  // Throws JobError (at ptr) when two triangles with a common edge face
+  // opposite sides; counts the edges for describe().
+  void check_orientation(const std::vector<double>& xyz, const std::vector<int>& tri, const std::string& ptr);
 
   const ToolDef* def_;
   enum class Kind { Plane, Sphere, Revolved, Mesh } kind_ = Kind::Plane;  // from def_->surface.type, once
@@ -69,13 +78,27 @@ class RigidTool {
   // Per piece, for the vector passes: is_arc, centre (2), -orient / radius,
   // line normal (2), end normals (4).
   std::vector<double> piece_table_;
-  // mesh: triangles in the initial position and a uniform bucket grid
-  std::vector<double> mx_;  // 9 per triangle
-  std::vector<double> mn_;  // 3 per triangle (unit normal)
-  std::array<double, 3> glo_{0, 0, 0};
-  double cell_ = 1;
-  std::array<int, 3> gn_{1, 1, 1};
-  std::vector<int> cell_start_, cell_tri_;
+  // mesh: triangles in the initial position, in the order of the leaves of
+  // a tree of bounding boxes (each inner box holds its two children; a
+  // leaf a few triangles), so that a query visits only boxes within its
+  // reach and reads the triangles it tests from consecutive memory,
+  // whatever the sizes and the order of the file's triangles.
+  struct BoxNode {
+    double lo[3], hi[3];
+    int first;  // leaf: first triangle; inner: the second child (the first follows the node)
+    int count;  // leaf: number of triangles; inner: 0
+  };
+  std::vector<double> mx_;     // 9 per triangle
+  static constexpr int kGeo = 12;
+  std::vector<double> mn_;     // kGeo per triangle: unit normal, barycentric gradients g1, g2, 1 / |g_k|^2
+  std::vector<int> morig_;     // each triangle's index in the file (ties go to the lowest)
+  std::vector<BoxNode> boxes_;  // depth first, root at 0
+  double scale_ = 1;           // the longest edge
+  double tol_ = 0;             // round-off margin of the search's bounds (m)
+  struct MeshInfo {
+    std::size_t triangles = 0, vertices = 0, shared_edges = 0, open_edges = 0, other_edges = 0;
+    double shortest_edge = std::numeric_limits<double>::infinity();
+  } mesh_info_;
 };
 
 }  // namespace ts

@@ -1,10 +1,13 @@
 // Rigid tool surfaces against their closed-form distances, and tool motion.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <random>
+
+#include <thermostamp/sdk/math.hpp>
 
 #include "job/errors.hpp"
 #include "solve/tools.hpp"
@@ -226,6 +229,182 @@ TEST(Tools, MeshToolsAnswerLikeTheirPlane) {
   bad.surface.type = "mesh";
   bad.surface.file = dir / "nothing.stl";
   EXPECT_THROW(RigidTool{bad}, JobError);
+}
+
+// A meshed die as CAD exporters write one: its flat ring and its wall as
+// long thin triangles from edge to edge (0.21 m and 0.09 m long), its
+// fillet as fine ones (0.5 mm), over a quarter turn, in a shuffled order.
+// Every answer must be the one of a search through every triangle (the
+// closest, of equal distances the file's first; the same closest-point
+// function, so the same bits), near the surface and far from it, with the
+// contact's cutoff, a cutoff of 10 mm and none; and near the surface the
+// distance must be the revolved die's within the facets' chord (1e-5 m).
+TEST(Tools, MeshToolAnswersAsASearchOfEveryTriangle) {
+  using sdk::Vec3;
+  const double pi = std::acos(-1.0);
+  // The die's profile (r, z) as the hemisphere scene has it.
+  std::vector<std::array<double, 2>> prof = {{0.08, -0.1}, {0.08, -0.0075}};
+  const int fillet = 24;  // 90 degrees of a 7.5 mm radius
+  for (int k = 1; k <= fillet; ++k) {
+    const double a = pi - 0.5 * pi * k / fillet;  // from the wall (r = 0.08) to the ring (z = 0)
+    prof.push_back({0.0875 + 0.0075 * std::cos(a), -0.0075 + 0.0075 * std::sin(a)});
+  }
+  prof.back() = {0.0875, 0.0};
+  prof.push_back({0.3, 0.0});
+  const int sectors = 100;
+  std::vector<std::array<Vec3, 3>> tris;
+  auto at = [](std::array<double, 2> q, double t) { return Vec3{q[0] * std::cos(t), q[0] * std::sin(t), q[1]}; };
+  for (std::size_t k = 0; k + 1 < prof.size(); ++k)
+    for (int j = 0; j < sectors; ++j) {
+      const double t0 = -0.05 + (0.5 * pi + 0.1) * j / sectors, t1 = -0.05 + (0.5 * pi + 0.1) * (j + 1) / sectors;
+      // Outward normals, on the left of the profile's direction of travel:
+      // (b - a) x (c - a) = z x theta = -r on the wall.
+      const Vec3 a = at(prof[k], t0), b = at(prof[k + 1], t0), c = at(prof[k + 1], t1), d = at(prof[k], t1);
+      tris.push_back({a, b, c});
+      tris.push_back({a, c, d});
+    }
+  std::shuffle(tris.begin(), tris.end(), std::mt19937(5));
+  const auto dir = temp_dir("tool_mesh_cad");
+  {
+    std::ofstream s(dir / "die.stl");
+    s.precision(17);
+    s << "solid die\n";
+    for (const auto& t : tris) {
+      s << " facet normal 0 0 0\n  outer loop\n";
+      for (const Vec3& v : t) s << "   vertex " << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';
+      s << "  endloop\n endfacet\n";
+    }
+    s << "endsolid die\n";
+  }
+  ToolDef def;
+  def.name = "die";
+  def.pointer = "/tools/1";
+  def.surface.type = "mesh";
+  def.surface.file = dir / "die.stl";
+  const RigidTool tool(def);
+  ToolDef rdef = def;
+  rdef.surface.type = "revolved";
+  for (const auto& [a, b] : {std::pair{prof[0], prof[1]}, std::pair{prof[prof.size() - 2], prof.back()}}) {
+    ProfileSegment g;
+    g.a = a;
+    g.b = b;
+    rdef.surface.profile.push_back(g);
+  }
+  rdef.surface.profile.insert(rdef.surface.profile.begin() + 1, ProfileSegment{});
+  rdef.surface.profile[1].arc = true;
+  rdef.surface.profile[1].a = prof[1];
+  rdef.surface.profile[1].b = {0.0875, 0.0};
+  rdef.surface.profile[1].centre = {0.0875, -0.0075};
+  const RigidTool revolved(rdef);
+
+  auto every = [&](const Vec3& x, double cutoff, double& dist, Vec3& n) {
+    double best = std::isfinite(cutoff) ? cutoff * cutoff : std::numeric_limits<double>::infinity();
+    int be = -1;
+    Vec3 bcp{};
+    for (std::size_t e = 0; e < tris.size(); ++e) {
+      const Vec3 cp = sdk::closest_point_on_triangle(x, tris[e][0], tris[e][1], tris[e][2]);
+      const Vec3 dv = sdk::sub(x, cp);
+      const double d2 = sdk::dot(dv, dv);
+      if (d2 < best) {
+        best = d2;
+        be = static_cast<int>(e);
+        bcp = cp;
+      }
+    }
+    if (be < 0) {
+      dist = std::numeric_limits<double>::infinity();
+      return;
+    }
+    const auto& t = tris[static_cast<std::size_t>(be)];
+    const Vec3 c = sdk::cross(sdk::sub(t[1], t[0]), sdk::sub(t[2], t[0]));
+    const double l = sdk::norm(c);
+    const Vec3 fn = {c[0] / l, c[1] / l, c[2] / l};
+    const Vec3 dv = sdk::sub(x, bcp);
+    const double len = std::sqrt(best);
+    const double side = sdk::dot(dv, fn) >= 0 ? 1.0 : -1.0;
+    dist = side * len;
+    n = std::abs(sdk::dot(dv, fn)) < (1 - 1e-12) * len ? sdk::scale(dv, side / len) : fn;
+  };
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> ang(0.0, 0.5 * pi), u(-1.0, 1.0);
+  int near = 0, found = 0, beyond = 0;
+  for (int k = 0; k < 3000; ++k) {
+    // Near the surface (within 2 mm of a point of the profile), or anywhere over the die.
+    const std::array<double, 2> q = prof[static_cast<std::size_t>(k) % prof.size()];
+    const std::array<double, 2> on = k % 3 == 2 ? std::array<double, 2>{0.15 + 0.15 * u(rng), 0.05 * u(rng)}
+                                                : std::array<double, 2>{q[0] + 0.002 * u(rng), q[1] + 0.002 * u(rng)};
+    const Vec3 x = at(on, ang(rng));
+    for (const double cutoff : {0.0015, 0.01, std::numeric_limits<double>::infinity()}) {
+      Answer a = ask(tool, x, cutoff);
+      double d;
+      Vec3 n{};
+      every(x, cutoff, d, n);
+      ASSERT_EQ(std::memcmp(&a.d, &d, sizeof d), 0) << "point " << k << ", cutoff " << cutoff << ": " << a.d << " vs " << d;
+      if (std::isinf(d)) {
+        ++beyond;
+        continue;
+      }
+      ++found;
+      for (int j = 0; j < 3; ++j) ASSERT_EQ(std::memcmp(&a.n[j], &n[j], sizeof d), 0) << "point " << k;
+      if (std::isfinite(cutoff) || std::abs(d) > 0.002) continue;
+      ++near;
+      EXPECT_NEAR(d, ask(revolved, x).d, 1e-5) << "point " << k;
+    }
+  }
+  EXPECT_GT(near, 1000);
+  EXPECT_GT(beyond, 500);
+  EXPECT_GT(found, 5000);
+}
+
+// Two triangles with a common edge must face the same side: walked the
+// same way, one of them faces into the tool and the mesh is refused,
+// naming both (counted from 1 in the file); `flip` turns all of them, so a
+// consistent mesh stays consistent. describe() counts the edges.
+TEST(Tools, MeshToolFacingBothWaysIsRefused) {
+  const auto dir = temp_dir("tool_mesh_sides");
+  auto write = [&](const std::string& name, bool second_reversed) {
+    std::ofstream s(dir / name);
+    s << "solid sq\n";
+    // Three triangles: the unit square at z = 0 and one more beyond the edge x = 1.
+    const std::vector<std::array<double, 6>> tris = {
+        {0, 0, 1, 0, 1, 1}, second_reversed ? std::array<double, 6>{0, 0, 0, 1, 1, 1} : std::array<double, 6>{0, 0, 1, 1, 0, 1},
+        {1, 0, 2, 0, 1, 1}};
+    for (const auto& t : tris) {
+      s << " facet normal 0 0 1\n  outer loop\n";
+      for (int k = 0; k < 3; ++k) s << "   vertex " << t[2 * k] << ' ' << t[2 * k + 1] << " 0\n";
+      s << "  endloop\n endfacet\n";
+    }
+    s << "endsolid sq\n";
+  };
+  write("good.stl", false);
+  write("bad.stl", true);
+  ToolDef d;
+  d.name = "die";
+  d.pointer = "/tools/2";
+  d.surface.type = "mesh";
+  for (const bool flip : {false, true}) {
+    d.surface.file = dir / "good.stl";
+    d.surface.flip = flip;
+    const RigidTool t(d);
+    EXPECT_NE(t.describe().find("tool 'die': 3 triangles, 5 vertices from"), std::string::npos) << t.describe();
+    EXPECT_NE(t.describe().find("2 edges between two triangles (all facing the same side), 5 free, 0 shared by more"),
+              std::string::npos)
+        << t.describe();
+    EXPECT_NEAR(ask(t, {0.6, 0.3, 0.1}).d, flip ? -0.1 : 0.1, 1e-12);
+    d.surface.file = dir / "bad.stl";
+    try {
+      const RigidTool bad(d);
+      ADD_FAILURE() << "a mesh facing both ways was taken";
+    } catch (const JobError& e) {
+      EXPECT_EQ(e.pointer(), "/tools/2/surface/file");
+      EXPECT_NE(std::string(e.what()).find("faces both ways: its triangles 1 and 2 (counted from 1 in the file)"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  ToolDef plane;
+  plane.surface.type = "plane";
+  EXPECT_EQ(RigidTool(plane).describe(), "");
 }
 
 // Motion: a displacement table is interpolated linearly and held after its
