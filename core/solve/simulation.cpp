@@ -248,6 +248,7 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) try : job_(job)
     if (!contacts_.empty()) build_contact_tasks();
   }
   build_probes();
+  warn_plies_behind_tools();
 } catch (const JobError& e) {
   // A value a material took from its card: the error names the card.
   throw with_material_card(job, e);
@@ -266,6 +267,8 @@ std::vector<std::string> Simulation::mesh_file_lines() const {
                     " (neighbouring triangles at most " + std::to_string(element_bandwidth(st->mesh)) +
                     " places apart)");
   }
+  for (const auto& tool : tools_)
+    if (std::string line = tool->describe(); !line.empty()) lines.push_back(std::move(line));
   return lines;
 }
 
@@ -334,6 +337,34 @@ void Simulation::build_parts() {
     v.initial_temperature = st.def->initial_temperature;
     v.thermal = {mat.density,          mat.specific_heat, mat.conductivity[0], mat.conductivity[1],
                  mat.conductivity[2], !mat.conductivity_table.empty()};
+  }
+}
+
+// A ply whose mid-surface starts behind the surface of a tool it is in
+// contact with most often means a tool that faces the wrong way: the
+// penalty would push it further in.
+void Simulation::warn_plies_behind_tools() const {
+  for (const ContactDef& c : job_.contacts) {
+    if (c.first.is_tool == c.second.is_tool) continue;
+    const BodyDef& tb = c.first.is_tool ? c.first : c.second;
+    const BodyDef& pb = c.first.is_tool ? c.second : c.first;
+    const PartState& st = *parts_[static_cast<std::size_t>(pb.index)];
+    const RigidTool& tool = *tools_[static_cast<std::size_t>(tb.index)];
+    const std::size_t n = st.x0.size() / 3;
+    std::vector<double> d(n), normal(3 * n);
+    tool.query(n, st.x0.data(), kToolGapLimit, d.data(), normal.data());
+    std::size_t behind = 0;
+    double deepest = 0;
+    for (const double di : d)
+      if (std::isfinite(di) && di < 0) {
+        ++behind;
+        deepest = std::max(deepest, -di);
+      }
+    if (behind == 0) continue;
+    logger("job")->warn(
+        "{}: ply '{}' starts with {} of its {} nodes behind the surface of tool '{}' (up to {:.3g} mm deep): is the "
+        "tool's outside on the other side? (`flip` for a mesh; walk a revolved profile the other way)",
+        c.pointer, st.def->name, behind, n, job_.tools[static_cast<std::size_t>(tb.index)].name, 1e3 * deepest);
   }
 }
 

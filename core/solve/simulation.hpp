@@ -143,8 +143,9 @@ class Simulation {
   // without mechanics) and the thermal one (0 without thermal). Before run().
   double initial_mechanical_step();
   double thermal_step() const { return thermal_dt_; }
-  // One line per part meshed from a file: its counts, the file, its order
-  // (mesh.reorder) and how far apart neighbouring triangles are.
+  // One line per part meshed from a file (its counts, the file, its order
+  // (mesh.reorder) and how far apart neighbouring triangles are) and per
+  // meshed tool (RigidTool::describe()).
   std::vector<std::string> mesh_file_lines() const;
   // Heat stored in the plies, J, relative to 0 degC (sum of capacity x temperature;
   // with a specific heat table, of mass x int_0^T c).
@@ -172,6 +173,7 @@ class Simulation {
   struct Run;
   void build_parts();
   void build_tools();
+  void warn_plies_behind_tools() const;
   void build_thermal();
   // A specific heat table (solve/heat_capacity.hpp) or crystallisation
   // kinetics (solve/crystallisation.hpp): the temperatures before a thermal

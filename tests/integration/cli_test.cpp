@@ -62,7 +62,7 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.24.0 (plugin SDK 0.19.0, ABI 19)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.25.0 (plugin SDK 0.19.0, ABI 19)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -496,6 +496,56 @@ TEST(Cli, ValidateRunsNothing) {
   EXPECT_GT(dm, 0.88 * target) << h.out;
   EXPECT_LE(dm, target * (1 + 1e-9)) << h.out;
   EXPECT_NE(h.out.find("steps to t = 5 s"), std::string::npos) << h.out;
+}
+
+// validate describes a meshed tool; it warns of a ply whose mid-surface
+// starts behind the surface of a tool it is in contact with (the die's
+// plane 1 mm up, its outside +z: the lower ply 0.75 mm behind it), not
+// when `flip` turns the die's outside down; a mesh whose triangles face both
+// ways is refused, exit 2, naming the key.
+TEST(Cli, ValidateDescribesMeshToolsAndWarnsOfPliesBehindThem) {
+  const auto dir = temp_dir("tool_sides");
+  write_square_stl(dir / "die.stl", -0.01, 0.06, 0.001);
+  auto job_with = [&](const std::string& name, const std::string& file, bool flip) {
+    json j = read_job_document(small_job("tool_sides_" + name));
+    j["tools"][0]["surface"] = {{"type", "mesh"}, {"file", (dir / file).string()}, {"flip", flip}};
+    std::ofstream(dir / (name + ".json")) << j.dump(2);
+    return dir / (name + ".json");
+  };
+  const std::string warning = "/interactions/1: ply 'ply_bottom' starts with 81 of its 81 nodes behind the surface of "
+                              "tool 'die' (up to 0.75 mm deep): is the tool's outside on the other side?";
+  const auto r = thermostamp("validate " + q(job_with("behind", "die.stl", false)));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE((r.out + r.err).find(warning), std::string::npos) << r.out << r.err;
+  EXPECT_NE(r.out.find("tool 'die': 2 triangles, 4 vertices from " + (dir / "die.stl").string() + "; edges 70 to 99"),
+            std::string::npos)
+      << r.out;
+  const auto f = thermostamp("validate " + q(job_with("flipped", "die.stl", true)));
+  EXPECT_EQ(f.exit_code, 0) << f.err;
+  EXPECT_EQ((f.out + f.err).find("behind the surface"), std::string::npos) << f.out << f.err;
+  {
+    std::ofstream s(dir / "both.stl");
+    s << "solid both\n";
+    for (const char* t : {"0 0 0  1 0 0  1 1 0", "0 0 0  0 1 0  1 1 0"}) {  // the second walks the diagonal the same way
+      std::istringstream v(t);
+      s << " facet normal 0 0 1\n  outer loop\n";
+      for (int k = 0; k < 3; ++k) {
+        double x, y, z;
+        v >> x >> y >> z;
+        s << "   vertex " << x << ' ' << y << ' ' << z << "\n";
+      }
+      s << "  endloop\n endfacet\n";
+    }
+    s << "endsolid both\n";
+  }
+  const auto b = thermostamp("validate " + q(job_with("both", "both.stl", false)));
+  EXPECT_EQ(b.exit_code, 2);
+  EXPECT_EQ(b.err.substr(0, b.err.find('\n')),
+            "error: /tools/0/surface/file: the tool mesh '" + (dir / "both.stl").string() +
+                "' faces both ways: its triangles 1 and 2 (counted from 1 in the file) walk their common edge the "
+                "same way, so one of them faces into the tool; orient every triangle to the outside "
+                "(counter-clockwise seen from outside)")
+      << b.err;
 }
 
 TEST(Plugins, AnotherAbiIsRefusedNamingBothVersions) {

@@ -103,7 +103,9 @@ TEST(Gmsh, ReadsVersions22And41Alike) {
     EXPECT_EQ(Tags(rb.node_tags.begin(), rb.node_tags.end()), (Tags{1, 2, 3, 4, 9})) << reorder;
     for (const ShellMesh* m : {&ra, &rb})  // the centre node, tag 9, at (0.5, 0.5)
       for (int i = 0; i < m->num_nodes(); ++i)
-        if (m->node_tags[i] == 9) EXPECT_EQ(m->x[3 * i] + m->x[3 * i + 1], 1.0);
+        if (m->node_tags[i] == 9) {
+          EXPECT_EQ(m->x[3 * i] + m->x[3 * i + 1], 1.0);
+        }
   }
 }
 
