@@ -406,13 +406,28 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
       boxes_[at].count = end - begin;
       return;
     }
+    // Along the axis on which the centres spread the most; equal
+    // coordinates ordered by the other two, so that the halves stay apart
+    // where triangles line up (a tool's wall, rows of a revolved surface),
+    // whatever their order in the file.
+    double clo[3] = {kInf, kInf, kInf}, chi[3] = {-kInf, -kInf, -kInf};
+    for (int q = begin; q < end; ++q)
+      for (int d = 0; d < 3; ++d) {
+        clo[d] = std::min(clo[d], centre[3 * static_cast<std::size_t>(morig_[q]) + d]);
+        chi[d] = std::max(chi[d], centre[3 * static_cast<std::size_t>(morig_[q]) + d]);
+      }
     int axis = 0;
     for (int d = 1; d < 3; ++d)
-      if (boxes_[at].hi[d] - boxes_[at].lo[d] > boxes_[at].hi[axis] - boxes_[at].lo[axis]) axis = d;
+      if (chi[d] - clo[d] > chi[axis] - clo[axis]) axis = d;
     const int mid = begin + (end - begin) / 2;
     std::nth_element(morig_.begin() + begin, morig_.begin() + mid, morig_.begin() + end, [&](int p, int q) {
-      const double cp = centre[3 * static_cast<std::size_t>(p) + axis], cq = centre[3 * static_cast<std::size_t>(q) + axis];
-      return cp < cq || (cp == cq && p < q);
+      const double* cp = &centre[3 * static_cast<std::size_t>(p)];
+      const double* cq = &centre[3 * static_cast<std::size_t>(q)];
+      for (int k = 0; k < 3; ++k) {
+        const int d = (axis + k) % 3;
+        if (cp[d] != cq[d]) return cp[d] < cq[d];
+      }
+      return p < q;
     });
     self(self, begin, mid);
     boxes_[at].first = static_cast<int>(boxes_.size());
