@@ -79,7 +79,11 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
   res.frame = k;
   res.time = frames.times[k];
   const std::string group = "frames/" + frames.names[k];
-  const auto plies = members(file, group);
+  // The frame's plies (a frame also holds the moving tools' surfaces).
+  std::vector<std::string> plies;
+  const auto parts = members(file, "parts");
+  for (const auto& name : members(file, group))
+    if (std::find(parts.begin(), parts.end(), name) != parts.end()) plies.push_back(name);
   if (plies.empty()) throw std::runtime_error("frame " + frames.names[k] + " of '" + h5.string() + "' holds no ply");
   std::error_code ec;
   std::filesystem::create_directories(out, ec);

@@ -209,6 +209,7 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
   for (auto& v : kinds)
     for (auto& f : v) f.data = nullptr;
   frame_fields_.assign(times_.size(), kinds);
+  frame_tools_.assign(times_.size(), {});
   write_xdmf();
 }
 
@@ -216,9 +217,37 @@ ResultsWriter::~ResultsWriter() {
   if (file_ >= 0) H5Fclose(file_);
 }
 
+void ResultsWriter::set_tools(std::vector<WriterTool> tools) {
+  tools_ = std::move(tools);
+  if (H5Lexists(file_, "tools", H5P_DEFAULT) > 0) H5Ldelete(file_, "tools", H5P_DEFAULT);
+  if (!tools_.empty()) {
+    const hid_t g = make_group(file_, "tools");
+    for (const WriterTool& t : tools_) {
+      const hid_t tg = make_group(g, t.name);
+      write_dataset(tg, "nodes", t.nodes.data(), t.nodes.size() / 3, 3, compression_);
+      write_units(tg, "nodes", field_units("nodes"));
+      write_dataset(tg, "triangles", t.triangles.data(), t.triangles.size() / 3, 3, compression_);
+      H5Gclose(tg);
+    }
+    H5Gclose(g);
+  }
+  // The frames already in the file (a restart) show a moving tool where
+  // they hold its nodes, and not at all where they do not.
+  frame_tools_.assign(times_.size(), std::vector<char>(tools_.size(), 1));
+  for (std::size_t k = 0; k < times_.size(); ++k)
+    for (std::size_t t = 0; t < tools_.size(); ++t)
+      if (tools_[t].moves) {
+        const std::string path = "frames/" + frame_name(static_cast<int>(k)) + "/" + tools_[t].name;
+        frame_tools_[k][t] = H5Lexists(file_, path.c_str(), H5P_DEFAULT) > 0;
+      }
+  H5Fflush(file_, H5F_SCOPE_GLOBAL);
+  write_xdmf();
+}
+
 void ResultsWriter::write_frame(double time, const std::vector<const double*>& x,
                                 const std::vector<const double*>& normals,
-                                const std::vector<std::vector<FrameField>>& fields) {
+                                const std::vector<std::vector<FrameField>>& fields,
+                                const std::vector<std::array<double, 3>>& tool_displacements) {
   const int k = frames();
   const hid_t frames_g = H5Gopen2(file_, "frames", H5P_DEFAULT);
   const hid_t fg = make_group(frames_g, frame_name(k));
@@ -261,9 +290,21 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
     }
     H5Gclose(pg);
   }
+  for (std::size_t t = 0; t < tools_.size(); ++t) {
+    const WriterTool& wt = tools_[t];
+    if (!wt.moves) continue;
+    const std::array<double, 3> u = t < tool_displacements.size() ? tool_displacements[t] : std::array<double, 3>{};
+    std::vector<double> moved(wt.nodes);
+    for (std::size_t i = 0; i < moved.size(); ++i) moved[i] += u[i % 3];
+    const hid_t tg = make_group(fg, wt.name);
+    write_dataset(tg, "nodes", moved.data(), moved.size() / 3, 3, compression_);
+    write_units(tg, "nodes", field_units("nodes"));
+    H5Gclose(tg);
+  }
   H5Gclose(fg);
   H5Gclose(frames_g);
   H5Fflush(file_, H5F_SCOPE_GLOBAL);
+  frame_tools_.emplace_back(tools_.size(), 1);
   times_.push_back(time);
   std::vector<std::vector<FrameField>> kinds = fields;
   for (auto& v : kinds)
@@ -344,6 +385,20 @@ void ResultsWriter::write_xdmf() const {
         }
         x << "    </Grid>\n";
       }
+    }
+    // The tools, where they stand at this frame.
+    for (std::size_t t = 0; t < tools_.size(); ++t) {
+      const WriterTool& wt = tools_[t];
+      if (k < frame_tools_.size() && !frame_tools_[k][t]) continue;
+      const std::size_t nn = wt.nodes.size() / 3, nt = wt.triangles.size() / 3;
+      x << "    <Grid Name=\"" << wt.name << "\" GridType=\"Uniform\">\n";
+      x << "     <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << nt << "\">\n";
+      x << "      <DataItem Dimensions=\"" << nt << " 3\" NumberType=\"Int\" Format=\"HDF\">results.h5:/tools/"
+        << wt.name << "/triangles</DataItem>\n     </Topology>\n";
+      x << "     <Geometry GeometryType=\"XYZ\">\n      <DataItem Dimensions=\"" << nn
+        << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+        << (wt.moves ? fpath + "/" + wt.name : "results.h5:/tools/" + wt.name) << "/nodes</DataItem>\n     </Geometry>\n";
+      x << "    </Grid>\n";
     }
     x << "   </Grid>\n";
   }

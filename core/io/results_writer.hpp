@@ -2,6 +2,7 @@
 // results.h5 + results.xdmf: fields per frame, readable in ParaView as a time
 // series. Each frame is flushed to disk as soon as it is written and the
 // XDMF index is rewritten, so a run that fails keeps every frame so far.
+#include <array>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -18,6 +19,16 @@ struct WriterPart {
   // Each node's and triangle's tag in the mesh file, or its number from 1
   // (results.h5's /parts/<ply>/node_tags and element_tags).
   std::vector<long long> node_tags, element_tags;
+};
+
+// A tool's surface as the results show it: its triangulation in the
+// initial position (results.h5's /tools/<name>/nodes and triangles) and,
+// for a tool that moves, its nodes at each frame (/frames/<k>/<name>/nodes).
+struct WriterTool {
+  std::string name;
+  std::vector<double> nodes;  // 3 per vertex (m)
+  std::vector<int> triangles;
+  bool moves = false;
 };
 
 // The units of a frame's dataset (a field, "nodes" or "layer_nodes"), as
@@ -56,10 +67,16 @@ class ResultsWriter {
   ResultsWriter(const ResultsWriter&) = delete;
   ResultsWriter& operator=(const ResultsWriter&) = delete;
 
+  // The tools' surfaces, once, before the first frame written (a restarted
+  // run: again, replacing those of the file; its kept frames show the tools
+  // where they hold them).
+  void set_tools(std::vector<WriterTool> tools);
   // Geometry of one part for this frame: mid-surface nodes and node normals
-  // (for the extruded through-thickness mesh).
+  // (for the extruded through-thickness mesh); the displacement of each
+  // tool of set_tools() (m; none without tools).
   void write_frame(double time, const std::vector<const double*>& x, const std::vector<const double*>& normals,
-                   const std::vector<std::vector<FrameField>>& fields);
+                   const std::vector<std::vector<FrameField>>& fields,
+                   const std::vector<std::array<double, 3>>& tool_displacements = {});
   int frames() const { return static_cast<int>(times_.size()); }
   // A table of time series (rows x columns, row-major) under /series/<name>
   // with its column names; replaces an earlier one of the same name.
@@ -74,6 +91,10 @@ class ResultsWriter {
   long long file_ = -1;
   std::vector<double> times_;
   std::vector<std::vector<std::vector<FrameField>>> frame_fields_;  // names/kinds only
+  std::vector<WriterTool> tools_;
+  // Per frame, per tool: whether the frame holds the tool's nodes (a moving
+  // tool; frames of a run without tool surfaces do not).
+  std::vector<std::vector<char>> frame_tools_;
 };
 
 }  // namespace ts

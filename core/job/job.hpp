@@ -233,6 +233,7 @@ struct OutputDef {
   // first row at which some element was. One number, or by material.
   std::vector<double> shear_angle_limit;
   int compression = 0;              // gzip level of results.h5's datasets (with shuffle), 0: none
+  bool tool_surfaces = true;        // the tools' surfaces in results.h5 / results.xdmf
   std::vector<std::string> fields;
   std::vector<ProbeDef> probes;
 };

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 
 #include <nlohmann/json.hpp>
 
@@ -175,6 +176,24 @@ void Simulation::Run::open_output() {
     } catch (const std::runtime_error& e) {
       if (opt.restart) throw JobError("", std::string("--restart: ") + e.what());
       throw;
+    }
+    if (job.output.tool_surfaces && !sim.tools_.empty()) {
+      // A plane is drawn over the plies' initial box.
+      constexpr double inf = std::numeric_limits<double>::infinity();
+      std::array<double, 3> lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+      for (const auto& st : sim.parts_)
+        for (std::size_t i = 0; i < st->x0.size(); ++i) {
+          lo[i % 3] = std::min(lo[i % 3], st->x0[i]);
+          hi[i % 3] = std::max(hi[i % 3], st->x0[i]);
+        }
+      std::vector<WriterTool> wtools;
+      for (std::size_t t = 0; t < sim.tools_.size(); ++t) {
+        WriterTool& wt = wtools.emplace_back();
+        wt.name = job.tools[t].name;
+        wt.moves = job.mechanics && job.tools[t].motion.kind != MotionDef::Kind::Fixed;
+        sim.tools_[t]->display_mesh(lo, hi, wt.nodes, wt.triangles);
+      }
+      writer->set_tools(std::move(wtools));
     }
     open_series(probes_csv, "probes.csv", 0, "probe,quantity,time,z,value\n");
   }
@@ -376,7 +395,9 @@ void Simulation::Run::write_frame(double time) {
     xs.push_back(st->x.data());
     ns.push_back(st->normals.data());
   }
-  writer->write_frame(time, xs, ns, frame_fields());
+  std::vector<std::array<double, 3>> tool_u;
+  for (const auto& tool : sim.tools_) tool_u.push_back(tool->displacement());
+  writer->write_frame(time, xs, ns, frame_fields(), tool_u);
   frame_times.push_back(time);
 }
 

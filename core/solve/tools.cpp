@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <sstream>
 #include <unordered_map>
@@ -339,6 +340,101 @@ void RigidTool::check_orientation(const std::vector<double>& xyz, const std::vec
     }
   for (const auto& [key, use] : edges)
     (use.count == 1 ? mesh_info_.open_edges : use.count == 2 ? mesh_info_.shared_edges : mesh_info_.other_edges)++;
+  weld_xyz_.assign(3 * ids.size(), 0.0);
+  for (const auto& [p, id] : ids)
+    for (int d = 0; d < 3; ++d) weld_xyz_[3 * static_cast<std::size_t>(id) + d] = p[d];
+  weld_tri_ = std::move(vid);
+}
+
+void RigidTool::display_mesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi, std::vector<double>& xyz,
+                             std::vector<int>& tri) const {
+  xyz.clear();
+  tri.clear();
+  if (kind_ == Kind::Mesh) {
+    xyz = weld_xyz_;
+    tri = weld_tri_;
+    return;
+  }
+  const SurfaceDef& s = def_->surface;
+  // A grid of rows x cols points (row-major) joined by two triangles per
+  // cell, each turned to face the tool's outside at its centre; triangles
+  // with two corners at one point (a pole, the axis) left out.
+  auto grid = [&](int rows, int cols, const std::function<Vec3(int, int)>& at) {
+    const int base = static_cast<int>(xyz.size() / 3);
+    for (int i = 0; i < rows; ++i)
+      for (int j = 0; j < cols; ++j) {
+        const Vec3 p = at(i, j);
+        xyz.insert(xyz.end(), {p[0], p[1], p[2]});
+      }
+    auto add = [&](int a, int b, int c) {
+      const Vec3 pa = sdk::load3(xyz.data(), a), pb = sdk::load3(xyz.data(), b), pc = sdk::load3(xyz.data(), c);
+      const Vec3 n = sdk::cross(sdk::sub(pb, pa), sdk::sub(pc, pa));
+      const double size = std::max({sdk::norm(sdk::sub(pb, pa)), sdk::norm(sdk::sub(pc, pa)), 1e-300});
+      if (!(sdk::norm(n) > 1e-12 * size * size)) return;
+      const Vec3 m = sdk::scale(sdk::add(sdk::add(pa, pb), pc), 1.0 / 3.0);
+      // The outward normal there, in the initial position.
+      double dist = 0, out[3] = {plane_normal_[0], plane_normal_[1], plane_normal_[2]};
+      if (kind_ == Kind::Sphere)
+        for (int d = 0; d < 3; ++d) out[d] = m[d] - s.centre[d];
+      else if (kind_ == Kind::Revolved)
+        query_revolved(m.data(), dist, out);
+      if (sdk::dot(n, Vec3{out[0], out[1], out[2]}) >= 0)
+        tri.insert(tri.end(), {a, b, c});
+      else
+        tri.insert(tri.end(), {a, c, b});
+    };
+    for (int i = 0; i + 1 < rows; ++i)
+      for (int j = 0; j + 1 < cols; ++j) {
+        const int a = base + i * cols + j, b = a + 1, c = a + cols + 1, d = a + cols;
+        add(a, b, c);
+        add(a, c, d);
+      }
+  };
+  if (kind_ == Kind::Plane) {
+    const Vec3 n = plane_normal_;
+    const Vec3 trial = std::abs(n[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    const Vec3 u = sdk::normalized(sdk::sub(trial, sdk::scale(n, sdk::dot(trial, n))));
+    const Vec3 v = sdk::cross(n, u);
+    const Vec3 mid = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
+    const Vec3 p0 = {s.point[0], s.point[1], s.point[2]};
+    const Vec3 c = sdk::sub(mid, sdk::scale(n, sdk::dot(sdk::sub(mid, p0), n)));
+    const double a = std::max(0.6 * sdk::norm(sdk::sub(Vec3{hi[0], hi[1], hi[2]}, Vec3{lo[0], lo[1], lo[2]})), 1e-3);
+    grid(2, 2, [&](int i, int j) {
+      return sdk::add(c, sdk::add(sdk::scale(u, (2 * j - 1) * a), sdk::scale(v, (2 * i - 1) * a)));
+    });
+  } else if (kind_ == Kind::Sphere) {
+    const double pi = std::acos(-1.0);
+    grid(25, 49, [&](int i, int j) {
+      const double th = pi * i / 24, ph = 2 * pi * j / 48;
+      return Vec3{s.centre[0] + s.radius * std::sin(th) * std::cos(ph), s.centre[1] + s.radius * std::sin(th) * std::sin(ph),
+                  s.centre[2] + s.radius * std::cos(th)};
+    });
+  } else {  // revolved
+    const double pi = std::acos(-1.0);
+    const Vec3 e2 = sdk::cross(axis_, perp_);
+    for (std::size_t k = 0; k < s.profile.size(); ++k) {
+      const ProfileSegment& g = s.profile[k];
+      std::vector<std::array<double, 2>> pts = {g.a};
+      if (g.arc) {
+        const double t0 = std::atan2(g.a[1] - g.centre[1], g.a[0] - g.centre[0]);
+        double sweep = std::atan2(g.b[1] - g.centre[1], g.b[0] - g.centre[0]) - t0;
+        if (pieces_[k].orient > 0 && sweep < 0) sweep += 2 * pi;
+        if (pieces_[k].orient < 0 && sweep > 0) sweep -= 2 * pi;
+        const int n = std::max(1, static_cast<int>(std::ceil(std::abs(sweep) / (pi / 24))));
+        for (int i = 1; i < n; ++i)
+          pts.push_back({g.centre[0] + pieces_[k].radius * std::cos(t0 + sweep * i / n),
+                         g.centre[1] + pieces_[k].radius * std::sin(t0 + sweep * i / n)});
+      }
+      pts.push_back(g.b);
+      grid(static_cast<int>(pts.size()), 49, [&](int i, int j) {
+        const double ph = 2 * pi * (j % 48) / 48;
+        const Vec3 radial = sdk::add(sdk::scale(perp_, std::cos(ph)), sdk::scale(e2, std::sin(ph)));
+        return Vec3{s.axis_origin[0] + pts[i][0] * radial[0] + pts[i][1] * axis_[0],
+                    s.axis_origin[1] + pts[i][0] * radial[1] + pts[i][1] * axis_[1],
+                    s.axis_origin[2] + pts[i][0] * radial[2] + pts[i][1] * axis_[2]};
+      });
+    }
+  }
 }
 
 std::string RigidTool::describe() const {

@@ -18,6 +18,14 @@ class RigidTool {
   explicit RigidTool(const ToolDef& def);
 
   const ToolDef& def() const { return *def_; }
+  // A triangulation of the surface in the tool's initial position, for the
+  // results (3 coordinates per vertex, 3 vertices per triangle, outward
+  // normals by the right-hand rule): a mesh tool's own triangles; a plane
+  // as a square over the box [lo, hi] (the plies) and 20 % beyond it; a
+  // sphere in 24 x 48 pieces; a revolved tool's profile (lines as one
+  // segment, arcs in steps of at most 7.5 degrees) swept through 48 sectors.
+  void display_mesh(const std::array<double, 3>& lo, const std::array<double, 3>& hi, std::vector<double>& xyz,
+                    std::vector<int>& tri) const;
   // A mesh tool's triangles, vertices, edge lengths and how its edges are
   // shared, in a line for `validate` and the log; empty for the others.
   std::string describe() const;
@@ -95,6 +103,8 @@ class RigidTool {
   std::vector<BoxNode> boxes_;  // depth first, root at 0
   double scale_ = 1;           // the longest edge
   double tol_ = 0;             // round-off margin of the search's bounds (m)
+  std::vector<double> weld_xyz_;  // a mesh tool's vertices (corners at one point merged) and
+  std::vector<int> weld_tri_;     // triangles, as read (flip applied)
   struct MeshInfo {
     std::size_t triangles = 0, vertices = 0, shared_edges = 0, open_edges = 0, other_edges = 0;
     double shortest_edge = std::numeric_limits<double>::infinity();

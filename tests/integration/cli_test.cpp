@@ -548,6 +548,75 @@ TEST(Cli, ValidateDescribesMeshToolsAndWarnsOfPliesBehindThem) {
       << b.err;
 }
 
+// The results draw the tools: each tool's surface once under /tools (the
+// die's plane over the plies; the punch and holder of the hemisphere
+// revolved), each frame the nodes of the tools that move, where tools.csv
+// puts them (to the CSV's digits); results.xdmf has a grid per tool in
+// every frame, a fixed tool's on /tools. `output.tool_surfaces: false`
+// leaves them out.
+TEST(Output, ResultsDrawTheToolsWhereTheyStand) {
+  const auto dir = temp_dir("tool_surfaces");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = 0.01;
+  j["output"]["interval"] = 0.005;
+  j["output"].erase("probes");
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const hid_t file = H5Fopen((dir / "out" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  ASSERT_EQ(frame_count(file), 3);
+  std::map<std::string, std::array<double, 3>> u_end;  // the tools.csv row at the end
+  {
+    std::ifstream csv(dir / "out" / "tools.csv");
+    std::string line;
+    std::getline(csv, line);
+    while (std::getline(csv, line)) {
+      std::istringstream row(line);
+      std::string time, tool, ux, uy, uz;
+      std::getline(row, time, ',');
+      std::getline(row, tool, ',');
+      std::getline(row, ux, ',');
+      std::getline(row, uy, ',');
+      std::getline(row, uz, ',');
+      u_end[tool] = {std::stod(ux), std::stod(uy), std::stod(uz)};
+    }
+  }
+  EXPECT_NEAR(u_end["punch"][2], -1e-4, 1e-12) << "the punch at 10 mm/s for 0.01 s";
+  for (const std::string tool : {"punch", "die", "holder"}) {
+    const auto nodes = read_dataset<double>(file, "tools/" + tool + "/nodes");
+    const auto tris = read_dataset<int>(file, "tools/" + tool + "/triangles");
+    ASSERT_GT(tris.size(), 100u) << tool;
+    for (const int v : tris) ASSERT_LT(static_cast<std::size_t>(v), nodes.size() / 3) << tool;
+    const bool moves = tool != "die";
+    EXPECT_EQ(H5Lexists(file, ("frames/000002/" + tool).c_str(), H5P_DEFAULT) > 0, moves) << tool;
+    if (!moves) continue;
+    const auto at_end = read_dataset<double>(file, "frames/000002/" + tool + "/nodes");
+    ASSERT_EQ(at_end.size(), nodes.size()) << tool;
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      ASSERT_NEAR(at_end[i], nodes[i] + u_end[tool][i % 3], 1e-12) << tool << ", value " << i;
+  }
+  H5Fclose(file);
+  std::ostringstream xdmf;
+  xdmf << std::ifstream(dir / "out" / "results.xdmf").rdbuf();
+  const std::string x = xdmf.str();
+  EXPECT_NE(x.find("results.h5:/frames/000002/punch/nodes</DataItem>"), std::string::npos);
+  EXPECT_NE(x.find("results.h5:/frames/000002/holder/nodes</DataItem>"), std::string::npos);
+  std::size_t die = 0;
+  for (std::size_t at = x.find("results.h5:/tools/die/nodes</DataItem>"); at != std::string::npos;
+       at = x.find("results.h5:/tools/die/nodes</DataItem>", at + 1))
+    ++die;
+  EXPECT_EQ(die, 3u) << "the fixed die in each of the 3 frames";
+  const auto off = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "off") +
+                               " --quiet --set output.tool_surfaces=false");
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  const hid_t f2 = H5Fopen((dir / "off" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  EXPECT_EQ(H5Lexists(f2, "tools", H5P_DEFAULT), 0);
+  EXPECT_EQ(H5Lexists(f2, "frames/000002/punch", H5P_DEFAULT), 0);
+  H5Fclose(f2);
+}
+
 TEST(Plugins, AnotherAbiIsRefusedNamingBothVersions) {
   const auto job = small_job("badabi", [](json& j) {
     j["solvers"]["thermal"]["splitter"] = "badabi";

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <random>
 
 #include <thermostamp/sdk/math.hpp>
@@ -405,6 +406,70 @@ TEST(Tools, MeshToolFacingBothWaysIsRefused) {
   ToolDef plane;
   plane.surface.type = "plane";
   EXPECT_EQ(RigidTool(plane).describe(), "");
+}
+
+// The surfaces the results draw: every vertex on the surface (1e-12 m:
+// points computed on it), every triangle facing out (its normal against
+// the outward direction worked out here from the geometry: +z for the
+// plane, from the centre for the sphere, from the axis on the punch's
+// cylinder and from the hemisphere's centre below it), and areas within
+// 1 % of the exact ones (24 x 48 pieces of a sphere miss 0.3 % of it; 48
+// sectors of a cylinder 0.29 %). The plane covers the given box and 20 %
+// beyond; a mesh tool gives its own triangles. None moved by the tool's
+// displacement.
+TEST(Tools, DisplayMeshesLieOnTheSurfaceAndFaceOut) {
+  using sdk::Vec3;
+  const double pi = std::acos(-1.0);
+  auto check = [&](const RigidTool& t, const std::function<Vec3(const Vec3&)>& outward, double area, const char* what) {
+    std::vector<double> xyz;
+    std::vector<int> tri;
+    t.display_mesh({-0.05, -0.02, 0.0}, {0.05, 0.02, 0.001}, xyz, tri);
+    ASSERT_FALSE(tri.empty()) << what;
+    for (std::size_t i = 0; i < xyz.size() / 3; ++i) {
+      const Vec3 p = {xyz[3 * i] + t.displacement()[0], xyz[3 * i + 1] + t.displacement()[1],
+                      xyz[3 * i + 2] + t.displacement()[2]};
+      EXPECT_NEAR(ask(t, p, std::numeric_limits<double>::infinity()).d, 0.0, 1e-12) << what << ", vertex " << i;
+    }
+    double sum = 0;
+    for (std::size_t e = 0; e < tri.size() / 3; ++e) {
+      const Vec3 a = sdk::load3(xyz.data(), tri[3 * e]), b = sdk::load3(xyz.data(), tri[3 * e + 1]),
+                 c = sdk::load3(xyz.data(), tri[3 * e + 2]);
+      const Vec3 n = sdk::cross(sdk::sub(b, a), sdk::sub(c, a));
+      sum += 0.5 * sdk::norm(n);
+      const Vec3 m = sdk::scale(sdk::add(sdk::add(a, b), c), 1.0 / 3.0);
+      EXPECT_GT(sdk::dot(n, outward(m)), 0.0) << what << ", triangle " << e;
+    }
+    EXPECT_NEAR(sum, area, 0.01 * area) << what;
+  };
+  ToolDef plane;
+  plane.name = "plane";
+  plane.surface.type = "plane";
+  plane.surface.point = {0, 0, 0.002};
+  plane.surface.normal = {0, 0, 1};
+  const double side = 2 * 0.6 * std::sqrt(0.1 * 0.1 + 0.04 * 0.04 + 0.001 * 0.001);
+  check(RigidTool(plane), [](const Vec3&) { return Vec3{0, 0, 1}; }, side * side, "plane");
+  ToolDef ball;
+  ball.name = "ball";
+  ball.surface.type = "sphere";
+  ball.surface.centre = {0.01, 0.02, 0.03};
+  ball.surface.radius = 0.05;
+  check(RigidTool(ball), [&](const Vec3& m) { return sdk::sub(m, Vec3{0.01, 0.02, 0.03}); },
+        4 * pi * 0.05 * 0.05, "sphere");
+  ToolDef punch = punch_def(0.075);  // hemisphere (pole at z = R) on a cylinder down to z = -0.1
+  punch.motion.kind = MotionDef::Kind::Velocity;
+  punch.motion.velocity = {0, 0, -0.01};
+  RigidTool moved(punch);
+  moved.advance(0.0, 1.0, 1.0, {0, 0, 0});  // 10 mm down: the display stays where the tool started
+  check(moved,
+        [&](const Vec3& m) { return m[2] > 0 ? m : Vec3{m[0], m[1], 0.0}; },
+        2 * pi * 0.075 * 0.075 + 2 * pi * 0.075 * 0.1, "revolved punch");
+  const auto dir = temp_dir("tool_display");
+  write_square_stl(dir / "square.stl", -0.01, 0.06, 0.0);
+  ToolDef mesh;
+  mesh.name = "mesh";
+  mesh.surface.type = "mesh";
+  mesh.surface.file = dir / "square.stl";
+  check(RigidTool(mesh), [](const Vec3&) { return Vec3{0, 0, 1}; }, 0.07 * 0.07, "mesh");
 }
 
 // Motion: a displacement table is interpolated linearly and held after its
