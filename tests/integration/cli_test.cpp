@@ -59,6 +59,17 @@ std::filesystem::path small_job(const std::string& dir_name, const std::function
   return dir / "job.json";
 }
 
+// The hemisphere scene on 4 x 4 cells per ply, without probes, to `end`
+// (s) with frames every `interval` (s; 0: the end only).
+json tiny_hemisphere(double end, double interval = 0) {
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = end;
+  if (interval > 0) j["output"]["interval"] = interval;
+  j["output"].erase("probes");
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  return j;
+}
+
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
@@ -556,11 +567,7 @@ TEST(Cli, ValidateDescribesMeshToolsAndWarnsOfPliesBehindThem) {
 // leaves them out.
 TEST(Output, ResultsDrawTheToolsWhereTheyStand) {
   const auto dir = temp_dir("tool_surfaces");
-  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
-  j["time"]["end"] = 0.01;
-  j["output"]["interval"] = 0.005;
-  j["output"].erase("probes");
-  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  json j = tiny_hemisphere(0.01, 0.005);
   std::ofstream(dir / "job.json") << j.dump(2);
   const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out") + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -1314,11 +1321,7 @@ TEST(Cli, MechanicsUnusableStepIsAnInputError) {
   };
   for (const auto& c : cases) {
     const auto dir = temp_dir("unusable_" + c.name);
-    json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
-    j["time"]["end"] = 0.01;
-    j["output"]["interval"] = 0.01;
-    j["output"].erase("probes");
-    for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+    json j = tiny_hemisphere(0.01, 0.01);
     c.edit(j);
     std::ofstream(dir / "job.json") << j.dump(2);
     const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out"));
@@ -1329,10 +1332,7 @@ TEST(Cli, MechanicsUnusableStepIsAnInputError) {
   }
   // An end time shorter than a step is not one of them: the run lands on it.
   const auto dir = temp_dir("unusable_short_end");
-  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
-  j["time"]["end"] = 1e-30;
-  j["output"].erase("probes");
-  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  json j = tiny_hemisphere(1e-30);
   std::ofstream(dir / "job.json") << j.dump(2);
   const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out") + " --quiet");
   EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -2462,11 +2462,7 @@ TEST(Cli, ReportDrawsTwoRunsOnTheSameAxes) {
 // only an unstable step.
 TEST(Cli, AuditFailureNamesAStartInsideATool) {
   const auto dir = temp_dir("start_inside");
-  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
-  j["time"]["end"] = 0.005;
-  j["output"]["interval"] = 0.005;
-  j["output"].erase("probes");
-  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {4, 4};
+  json j = tiny_hemisphere(0.005, 0.005);
   j["parts"][0]["mesh"]["origin"][2] = 0.0;
   std::ofstream(dir / "job.json") << j.dump(2);
   const auto r = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out"));
