@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -214,6 +215,12 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
 }
 
 ResultsWriter::~ResultsWriter() {
+  if (xdmf_behind_) {
+    try {
+      write_xdmf();
+    } catch (...) {  // a destructor does not throw; results.h5 holds every frame
+    }
+  }
   if (file_ >= 0) H5Fclose(file_);
 }
 
@@ -310,7 +317,18 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
   for (auto& v : kinds)
     for (auto& f : v) f.data = nullptr;
   frame_fields_.push_back(std::move(kinds));
-  write_xdmf();
+  // The index names every frame, so rewriting it after each one costs in
+  // proportion to the frames so far: past the first 100 frames it is
+  // rewritten at most once a second of wall time (and when the writer
+  // closes, at the end of any run, failed or interrupted included).
+  const double now = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  if (times_.size() <= 100 || now - xdmf_written_at_ >= 1.0) {
+    write_xdmf();
+    xdmf_written_at_ = now;
+    xdmf_behind_ = false;
+  } else {
+    xdmf_behind_ = true;
+  }
 }
 
 void ResultsWriter::write_series(const std::string& name, const std::vector<std::string>& columns,

@@ -1,7 +1,8 @@
 #pragma once
 // results.h5 + results.xdmf: fields per frame, readable in ParaView as a time
 // series. Each frame is flushed to disk as soon as it is written and the
-// XDMF index is rewritten, so a run that fails keeps every frame so far.
+// XDMF index is rewritten (past 100 frames at most once a second, and when
+// the writer closes), so a run that fails keeps every frame so far.
 #include <array>
 #include <filesystem>
 #include <string>
@@ -92,6 +93,8 @@ class ResultsWriter {
   std::vector<double> times_;
   std::vector<std::vector<std::vector<FrameField>>> frame_fields_;  // names/kinds only
   std::vector<WriterTool> tools_;
+  bool xdmf_behind_ = false;       // frames written since results.xdmf was
+  double xdmf_written_at_ = -1e300;  // steady clock (s) of its last writing
   // Per frame, per tool: whether the frame holds the tool's nodes (a moving
   // tool; frames of a run without tool surfaces do not).
   std::vector<std::vector<char>> frame_tools_;

@@ -624,6 +624,35 @@ TEST(Output, ResultsDrawTheToolsWhereTheyStand) {
   H5Fclose(f2);
 }
 
+// A frame per step of a long run must not cost the square of the frames:
+// past 100 frames results.xdmf is rewritten at most once a second, and
+// when the writer closes it names every frame. 400 frames of a two-triangle
+// ply written in well under a second: while the writer is open the index
+// holds at least the first 100, once closed all 400 (also when the writer
+// goes out of scope by an exception, as in a failed run).
+TEST(Output, XdmfIndexFollowsManyFramesWithoutRewritingEachTime) {
+  const auto dir = temp_dir("many_frames");
+  const std::vector<int> tri = {0, 1, 2, 0, 2, 3};
+  const std::vector<double> x = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0}, n = {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
+  auto count = [&] {
+    std::ostringstream t;
+    t << std::ifstream(dir / "results.xdmf").rdbuf();
+    std::size_t k = 0;
+    for (std::size_t at = t.str().find("<Time "); at != std::string::npos; at = t.str().find("<Time ", at + 1)) ++k;
+    return k;
+  };
+  try {
+    ResultsWriter w(dir, {WriterPart{"ply", 4, 2, &tri, 0.001, 1, false, {1, 2, 3, 4}, {1, 2}}});
+    for (int k = 0; k < 400; ++k) w.write_frame(0.001 * k, {x.data()}, {n.data()}, {{}});
+    const std::size_t open = count();
+    EXPECT_GE(open, 100u);
+    EXPECT_LE(open, 400u);
+    throw std::runtime_error("a failed run");
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_EQ(count(), 400u);
+}
+
 TEST(Plugins, AnotherAbiIsRefusedNamingBothVersions) {
   const auto job = small_job("badabi", [](json& j) {
     j["solvers"]["thermal"]["splitter"] = "badabi";
