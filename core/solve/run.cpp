@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/checkpoint.hpp"
+#include "io/fnv1a.hpp"
 #include "io/logging.hpp"
 #include "solve/interrupt.hpp"
 #include "solve/simulation_internal.hpp"
@@ -61,13 +62,8 @@ json restart_document(const json& doc) {
 std::vector<unsigned char> mesh_prints(const std::vector<std::unique_ptr<PartState>>& parts) {
   sdk::StateWriter w;
   for (const auto& st : parts) {
-    std::uint64_t h = 1469598103934665603ULL;
-    auto mix = [&](long long v) {
-      for (int b = 0; b < 8; ++b) {
-        h ^= static_cast<unsigned char>(static_cast<unsigned long long>(v) >> (8 * b));
-        h *= 1099511628211ULL;
-      }
-    };
+    std::uint64_t h = kFnv1aOffset;
+    auto mix = [&](long long v) { fnv1a_mix(h, static_cast<std::uint64_t>(v)); };
     mix(st->mesh.num_nodes());
     mix(st->mesh.num_elements());
     for (const int t : st->mesh.triangles) mix(t);

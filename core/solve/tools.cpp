@@ -14,6 +14,7 @@
 #include <thermostamp/sdk/math.hpp>
 #include <thermostamp/sdk/simd.hpp>
 
+#include "io/fnv1a.hpp"
 #include "job/errors.hpp"
 #include "mesh/shell_mesh.hpp"
 
@@ -298,13 +299,13 @@ void RigidTool::check_orientation(const std::vector<double>& xyz, const std::vec
   // Corners at the same point are one vertex (an STL file repeats them).
   struct Hash {
     std::size_t operator()(const std::array<double, 3>& p) const {
-      std::size_t h = 1469598103934665603ull;
+      std::uint64_t h = kFnv1aOffset;
       for (const double c : p) {
         std::uint64_t b;
         std::memcpy(&b, &c, 8);
-        h = (h ^ b) * 1099511628211ull;
+        fnv1a_mix(h, b);
       }
-      return h;
+      return static_cast<std::size_t>(h);
     }
   };
   std::unordered_map<std::array<double, 3>, int, Hash> ids;
