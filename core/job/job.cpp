@@ -1045,7 +1045,17 @@ void parse_job_into(Job& job) {
     job.output.checkpoint_at_end = r.boolean("checkpoint_at_end", true);
     job.output.series_interval = r.real("series_interval", 0.0, 0.0);
     job.output.compression = static_cast<int>(r.integer("compression", 0, 0, 9));
-    job.output.tool_surfaces = r.boolean("tool_surfaces", true);
+    // true: the tools cut at the symmetry planes of the plies; "whole": as
+    // they are; false: none.
+    if (const json* v = r.optional_raw("tool_surfaces"); v && v->is_string()) {
+      if (v->get<std::string>() != "whole")
+        throw JobError(r.at("tool_surfaces"), "expected true, false or \"whole\", found \"" + v->get<std::string>() + "\"");
+      job.output.tool_surfaces_whole = true;
+    } else if (v && !v->is_boolean()) {
+      throw JobError(r.at("tool_surfaces"), "expected true, false or \"whole\", found " + json_type_name(*v));
+    } else {
+      job.output.tool_surfaces = r.boolean("tool_surfaces", true);
+    }
     // A number for every ply, or an object of numbers by material (every
     // material a part uses, no other), as a value per part; `check` throws
     // for a value out of range (its message, at the value's pointer).

@@ -234,6 +234,7 @@ struct OutputDef {
   std::vector<double> shear_angle_limit;
   int compression = 0;              // gzip level of results.h5's datasets (with shuffle), 0: none
   bool tool_surfaces = true;        // the tools' surfaces in results.h5 / results.xdmf
+  bool tool_surfaces_whole = false;  // ... whole, not cut at the plies' symmetry planes
   std::vector<std::string> fields;
   std::vector<ProbeDef> probes;
 };

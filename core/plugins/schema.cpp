@@ -357,7 +357,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
             {"checkpoint_at_end", {{"type", "boolean"}}},
             {"series_interval", {{"type", "number"}, {"minimum", 0}}},
             {"compression", {{"type", "integer"}, {"minimum", 0}, {"maximum", 9}}},
-            {"tool_surfaces", {{"type", "boolean"}}},
+            {"tool_surfaces", {{"anyOf", {{{"type", "boolean"}}, {{"enum", {"whole"}}}}}}},
             {"temperature_threshold", by_material({{"type", "number"}, {"exclusiveMinimum", -273.15}})},
             {"shear_angle_limit", by_material({{"type", "number"}, {"exclusiveMinimum", 0}, {"exclusiveMaximum", 90}})},
             {"fields", {{"type", "array"}, {"items", {{"enum", known_fields()}}}}},

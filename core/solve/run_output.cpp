@@ -186,12 +186,36 @@ void Simulation::Run::open_output() {
           lo[i % 3] = std::min(lo[i % 3], st->x0[i]);
           hi[i % 3] = std::max(hi[i % 3], st->x0[i]);
         }
+      // The symmetry planes that every ply has, with the side the plies
+      // lie on: the tools are drawn on that side only, as the plies are.
+      const double size = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+      std::vector<std::pair<int, double>> planes;  // axis, side
+      for (int d = 0; d < 3 && !job.output.tool_surfaces_whole; ++d) {
+        bool every_ply = true;
+        for (std::size_t p = 0; p < job.parts.size(); ++p)
+          every_ply = every_ply && std::any_of(job.constraints.begin(), job.constraints.end(), [&](const ConstraintDef& c) {
+                        return c.type == ConstraintDef::Type::Symmetry && c.plane == d &&
+                               std::find(c.parts.begin(), c.parts.end(), static_cast<int>(p)) != c.parts.end();
+                      });
+        if (!every_ply || job.parts.empty()) continue;
+        if (lo[d] >= -1e-6 * size)
+          planes.emplace_back(d, 1.0);
+        else if (hi[d] <= 1e-6 * size)
+          planes.emplace_back(d, -1.0);
+      }
       std::vector<WriterTool> wtools;
       for (std::size_t t = 0; t < sim.tools_.size(); ++t) {
         WriterTool& wt = wtools.emplace_back();
         wt.name = job.tools[t].name;
         wt.moves = job.mechanics && job.tools[t].motion.kind != MotionDef::Kind::Fixed;
         sim.tools_[t]->display_mesh(lo, hi, wt.nodes, wt.triangles);
+        std::vector<double> nodes = wt.nodes;
+        std::vector<int> triangles = wt.triangles;
+        for (const auto& [axis, sign] : planes) cut_display_mesh(nodes, triangles, axis, sign, 1e-9 * size);
+        if (!triangles.empty()) {  // a tool wholly beyond the planes is drawn whole
+          wt.nodes = std::move(nodes);
+          wt.triangles = std::move(triangles);
+        }
       }
       writer->set_tools(std::move(wtools));
     }

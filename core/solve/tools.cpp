@@ -8,6 +8,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <unordered_map>
 
@@ -436,6 +437,64 @@ void RigidTool::display_mesh(const std::array<double, 3>& lo, const std::array<d
       });
     }
   }
+}
+
+void cut_display_mesh(std::vector<double>& xyz, std::vector<int>& tri, int axis, double sign, double tol) {
+  const std::size_t nv = xyz.size() / 3;
+  std::vector<double> sd(nv);
+  std::vector<signed char> side(nv);  // +1 kept, 0 on the plane, -1 beyond
+  for (std::size_t i = 0; i < nv; ++i) {
+    sd[i] = sign * xyz[3 * i + axis];
+    side[i] = sd[i] > tol ? 1 : sd[i] < -tol ? -1 : 0;
+    if (side[i] == 0) {
+      xyz[3 * i + axis] = 0.0;
+      sd[i] = 0.0;
+    }
+  }
+  std::map<std::pair<int, int>, int> cuts;  // edge (lower vertex, higher) -> its cut point
+  auto cut = [&](int a, int b) {
+    if (a > b) std::swap(a, b);  // the same bits from either triangle
+    const auto [it, fresh] = cuts.try_emplace({a, b}, static_cast<int>(xyz.size() / 3));
+    if (fresh) {
+      const double t = sd[a] / (sd[a] - sd[b]);
+      double p[3];
+      for (int d = 0; d < 3; ++d) p[d] = xyz[3 * a + d] + t * (xyz[3 * b + d] - xyz[3 * a + d]);
+      p[axis] = 0.0;
+      xyz.insert(xyz.end(), {p[0], p[1], p[2]});
+    }
+    return it->second;
+  };
+  std::vector<int> out;
+  out.reserve(tri.size());
+  for (std::size_t e = 0; e + 2 < tri.size(); e += 3) {
+    const int v[3] = {tri[e], tri[e + 1], tri[e + 2]};
+    const bool any_in = side[v[0]] > 0 || side[v[1]] > 0 || side[v[2]] > 0;
+    const bool any_out = side[v[0]] < 0 || side[v[1]] < 0 || side[v[2]] < 0;
+    if (!any_out) {
+      out.insert(out.end(), v, v + 3);
+      continue;
+    }
+    if (!any_in) continue;
+    int poly[4], n = 0;  // a triangle cut by a plane keeps 3 or 4 corners
+    for (int k = 0; k < 3; ++k) {
+      const int a = v[k], b = v[(k + 1) % 3];
+      if (side[a] >= 0) poly[n++] = a;
+      if (side[a] * side[b] < 0) poly[n++] = cut(a, b);
+    }
+    for (int k = 1; k + 1 < n; ++k) out.insert(out.end(), {poly[0], poly[k], poly[k + 1]});
+  }
+  // Only the vertices the kept triangles use, in their order.
+  std::vector<int> renumber(xyz.size() / 3, -1);
+  std::vector<double> kept;
+  for (int& i : out) {
+    if (renumber[i] < 0) {
+      renumber[i] = static_cast<int>(kept.size() / 3);
+      kept.insert(kept.end(), {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]});
+    }
+    i = renumber[i];
+  }
+  xyz = std::move(kept);
+  tri = std::move(out);
 }
 
 std::string RigidTool::describe() const {

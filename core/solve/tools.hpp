@@ -111,4 +111,12 @@ class RigidTool {
   } mesh_info_;
 };
 
+// Keeps the part of a display mesh (3 coordinates per vertex, 3 vertices
+// per triangle) on the side sign * x[axis] >= 0 of the plane x[axis] = 0:
+// vertices within tol of the plane are put on it, triangles across it are
+// cut along it (a cut point shared by the triangles on both sides of its
+// edge), triangles beyond it dropped, and the vertices no longer used
+// removed. The triangles keep their orientation.
+void cut_display_mesh(std::vector<double>& xyz, std::vector<int>& tri, int axis, double sign, double tol);
+
 }  // namespace ts

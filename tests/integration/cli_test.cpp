@@ -15,6 +15,7 @@
 #include <type_traits>
 #include <vector>
 
+#include <thermostamp/sdk/math.hpp>
 #include <thermostamp/sdk/plugin.hpp>
 
 #include <csignal>
@@ -73,7 +74,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.25.0 (plugin SDK 0.19.0, ABI 19)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.26.0 (plugin SDK 0.19.0, ABI 19)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -450,6 +451,8 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"threshold_material_missing", [](json& j) { j["materials"]["other"] = j["materials"]["pa66_cf_ud"]; j["parts"][1]["material"] = "other"; j["output"]["temperature_threshold"] = {{"pa66_cf_ud", 270}}; }, "error: /output/temperature_threshold: no value for material 'other' of part 'ply_top'"},
       {"threshold_material_below_absolute_zero", [](json& j) { j["output"]["temperature_threshold"] = {{"pa66_cf_ud", -300}}; }, "error: /output/temperature_threshold/pa66_cf_ud: must be > -273.15, found -300"},
       {"threshold_material_text", [](json& j) { j["output"]["temperature_threshold"] = {{"pa66_cf_ud", "hot"}}; }, "error: /output/temperature_threshold/pa66_cf_ud: expected a number, found a string"},
+      {"tool_surfaces_text", [](json& j) { j["output"]["tool_surfaces"] = "half"; }, "error: /output/tool_surfaces: expected true, false or \"whole\", found \"half\""},
+      {"tool_surfaces_number", [](json& j) { j["output"]["tool_surfaces"] = 1; }, "error: /output/tool_surfaces: expected true, false or \"whole\", found a number"},
       {"shear_limit_without_mechanics", [](json& j) { j["output"]["shear_angle_limit"] = 30; }, "error: /output/shear_angle_limit: a shear angle limit needs the mechanics solver (solvers.mechanics is absent or null)"},
       {"shear_limit_zero", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 0; }, "error: /output/shear_angle_limit: must be > 0 and < 90 (degrees), found 0"},
       {"shear_limit_right_angle", [](json& j) { j = hemisphere_document(); j["output"]["shear_angle_limit"] = 90; }, "error: /output/shear_angle_limit: must be > 0 and < 90 (degrees), found 90"},
@@ -615,6 +618,47 @@ TEST(Output, ResultsDrawTheToolsWhereTheyStand) {
        at = x.find("results.h5:/tools/die/nodes</DataItem>", at + 1))
     ++die;
   EXPECT_EQ(die, 3u) << "the fixed die in each of the 3 frames";
+  // The quarter model's tools are cut at its symmetry planes x = 0 and
+  // y = 0; "whole" draws them whole. The punch's 48 sectors begin at the
+  // x axis: its quarter is a quarter of its area (to round-off).
+  auto punch_area = [](const std::filesystem::path& h5, double* x_min, double* y_min) {
+    const hid_t f = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    const auto nodes = read_dataset<double>(f, "tools/punch/nodes");
+    const auto tris = read_dataset<int>(f, "tools/punch/triangles");
+    H5Fclose(f);
+    *x_min = *y_min = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < nodes.size(); i += 3) {
+      *x_min = std::min(*x_min, nodes[i]);
+      *y_min = std::min(*y_min, nodes[i + 1]);
+    }
+    double a = 0;
+    for (std::size_t e = 0; e < tris.size(); e += 3) {
+      const sdk::Vec3 p = sdk::load3(nodes.data(), tris[e]), q = sdk::load3(nodes.data(), tris[e + 1]),
+                      r = sdk::load3(nodes.data(), tris[e + 2]);
+      a += 0.5 * sdk::norm(sdk::cross(sdk::sub(q, p), sdk::sub(r, p)));
+    }
+    return a;
+  };
+  double x_min = 0, y_min = 0;
+  const double quarter = punch_area(dir / "out" / "results.h5", &x_min, &y_min);
+  EXPECT_EQ(x_min, 0.0);
+  EXPECT_EQ(y_min, 0.0);
+  for (const std::string tool : {"die", "holder"}) {
+    const hid_t f = H5Fopen((dir / "out" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    const auto nodes = read_dataset<double>(f, "tools/" + tool + "/nodes");
+    H5Fclose(f);
+    for (std::size_t i = 0; i < nodes.size(); i += 3) {
+      ASSERT_GE(nodes[i], 0.0) << tool;
+      ASSERT_GE(nodes[i + 1], 0.0) << tool;
+    }
+  }
+  const auto whole = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "whole") +
+                                 " --quiet --set 'output.tool_surfaces=\"whole\"'");
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  const double full = punch_area(dir / "whole" / "results.h5", &x_min, &y_min);
+  EXPECT_LT(x_min, -0.07);
+  EXPECT_LT(y_min, -0.07);
+  EXPECT_NEAR(quarter, 0.25 * full, 1e-12 * full);
   const auto off = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "off") +
                                " --quiet --set output.tool_surfaces=false");
   ASSERT_EQ(off.exit_code, 0) << off.err;

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <random>
 
 #include <thermostamp/sdk/math.hpp>
@@ -470,6 +471,147 @@ TEST(Tools, DisplayMeshesLieOnTheSurfaceAndFaceOut) {
   mesh.surface.type = "mesh";
   mesh.surface.file = dir / "square.stl";
   check(RigidTool(mesh), [](const Vec3&) { return Vec3{0, 0, 1}; }, 0.07 * 0.07, "mesh");
+}
+
+// Cutting a display mesh at a symmetry plane. (a) A flat rectangle
+// [-0.07, 0.13] x [-0.04, 0.11] at z = 0.02 in 10 x 6 cells with jittered
+// inner vertices, cut at x = 0 and y = 0: the part kept is the rectangle
+// [0, 0.13] x [0, 0.11] (area to 1e-12 relative, round-off), every vertex
+// on its side exactly, every triangle still facing +z, no vertex twice;
+// the other side of x = 0 holds the rest of the area. (b) A closed sphere
+// (an icosahedron divided twice, 320 triangles), turned and moved so that
+// the planes cross its triangles anywhere: after the cuts every edge is
+// shared by two triangles, once in each direction, except those on a
+// plane (open, once each); the areas of the two sides of x = 0 add up to
+// the whole. (c) A vertex within the tolerance of the plane is put on it
+// and its triangles kept.
+TEST(Tools, CutDisplayMeshKeepsTheSideOfThePlies) {
+  using sdk::Vec3;
+  auto area = [](const std::vector<double>& xyz, const std::vector<int>& tri, double* nz_min = nullptr) {
+    double sum = 0, nz = std::numeric_limits<double>::infinity();
+    for (std::size_t e = 0; e < tri.size() / 3; ++e) {
+      const Vec3 a = sdk::load3(xyz.data(), tri[3 * e]), b = sdk::load3(xyz.data(), tri[3 * e + 1]),
+                 c = sdk::load3(xyz.data(), tri[3 * e + 2]);
+      const Vec3 n = sdk::cross(sdk::sub(b, a), sdk::sub(c, a));
+      sum += 0.5 * sdk::norm(n);
+      nz = std::min(nz, n[2] / sdk::norm(n));
+    }
+    if (nz_min) *nz_min = nz;
+    return sum;
+  };
+  auto distinct = [](const std::vector<double>& xyz) {
+    std::vector<std::array<double, 3>> v;
+    for (std::size_t i = 0; i < xyz.size() / 3; ++i) v.push_back({xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]});
+    std::sort(v.begin(), v.end());
+    return std::adjacent_find(v.begin(), v.end()) == v.end();
+  };
+  {  // (a)
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+    const int nx = 10, ny = 6;
+    std::vector<double> xyz;
+    std::vector<int> tri;
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) {
+        const bool inner = i > 0 && i < nx && j > 0 && j < ny;
+        xyz.insert(xyz.end(), {-0.07 + 0.02 * (i + (inner ? jitter(rng) : 0.0)),
+                               -0.04 + 0.025 * (j + (inner ? jitter(rng) : 0.0)), 0.02});
+      }
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const int a = j * (nx + 1) + i, b = a + 1, c = a + nx + 2, d = a + nx + 1;
+        if ((i + j) % 2)
+          tri.insert(tri.end(), {a, b, c, a, c, d});
+        else
+          tri.insert(tri.end(), {a, b, d, b, c, d});
+      }
+    ASSERT_NEAR(area(xyz, tri), 0.2 * 0.15, 1e-15);
+    auto kept_xyz = xyz;
+    auto kept_tri = tri;
+    cut_display_mesh(kept_xyz, kept_tri, 0, 1.0, 1e-12);
+    cut_display_mesh(kept_xyz, kept_tri, 1, 1.0, 1e-12);
+    double nz = 0;
+    EXPECT_NEAR(area(kept_xyz, kept_tri, &nz), 0.13 * 0.11, 1e-12 * 0.13 * 0.11);
+    EXPECT_GT(nz, 1 - 1e-12) << "every triangle facing +z";
+    for (std::size_t i = 0; i < kept_xyz.size() / 3; ++i) {
+      ASSERT_GE(kept_xyz[3 * i], 0.0) << i;
+      ASSERT_GE(kept_xyz[3 * i + 1], 0.0) << i;
+    }
+    EXPECT_TRUE(distinct(kept_xyz));
+    auto rest_xyz = xyz;
+    auto rest_tri = tri;
+    cut_display_mesh(rest_xyz, rest_tri, 0, -1.0, 1e-12);
+    EXPECT_NEAR(area(rest_xyz, rest_tri), 0.07 * 0.15, 1e-12 * 0.07 * 0.15);
+    for (std::size_t i = 0; i < rest_xyz.size() / 3; ++i) ASSERT_LE(rest_xyz[3 * i], 0.0) << i;
+  }
+  {  // (b)
+    const double g = (1 + std::sqrt(5.0)) / 2;
+    std::vector<double> xyz = {-1, g, 0, 1, g, 0, -1, -g, 0, 1, -g, 0, 0, -1, g, 0, 1, g,
+                               0, -1, -g, 0, 1, -g, g, 0, -1, g, 0, 1, -g, 0, -1, -g, 0, 1};
+    std::vector<int> tri = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6,
+                            7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+    for (int level = 0; level < 2; ++level) {  // each triangle into four, midpoints shared
+      std::map<std::pair<int, int>, int> mid;
+      auto at = [&](int a, int b) {
+        const auto [it, fresh] = mid.try_emplace({std::min(a, b), std::max(a, b)}, static_cast<int>(xyz.size() / 3));
+        if (fresh)
+          for (int d = 0; d < 3; ++d) xyz.push_back(0.5 * (xyz[3 * a + d] + xyz[3 * b + d]));
+        return it->second;
+      };
+      std::vector<int> finer;
+      for (std::size_t e = 0; e < tri.size(); e += 3) {
+        const int a = tri[e], b = tri[e + 1], c = tri[e + 2], ab = at(a, b), bc = at(b, c), ca = at(c, a);
+        finer.insert(finer.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
+      }
+      tri = std::move(finer);
+    }
+    ASSERT_EQ(tri.size(), 3u * 320u);
+    const double c1 = std::cos(0.7), s1 = std::sin(0.7), c2 = std::cos(0.3), s2 = std::sin(0.3);
+    for (std::size_t i = 0; i < xyz.size() / 3; ++i) {  // onto a sphere of 0.05 m, turned about z and x, moved
+      Vec3 p = sdk::load3(xyz.data(), static_cast<int>(i));
+      p = sdk::scale(p, 0.05 / sdk::norm(p));
+      p = {c1 * p[0] - s1 * p[1], s1 * p[0] + c1 * p[1], p[2]};
+      p = {p[0], c2 * p[1] - s2 * p[2], s2 * p[1] + c2 * p[2]};
+      xyz[3 * i] = p[0] + 0.013;
+      xyz[3 * i + 1] = p[1] - 0.007;
+      xyz[3 * i + 2] = p[2];
+    }
+    const double whole = area(xyz, tri);
+    auto kept_xyz = xyz;
+    auto kept_tri = tri;
+    cut_display_mesh(kept_xyz, kept_tri, 0, 1.0, 1e-12);
+    cut_display_mesh(kept_xyz, kept_tri, 1, 1.0, 1e-12);
+    EXPECT_TRUE(distinct(kept_xyz));
+    std::map<std::pair<int, int>, int> used;  // directed edges
+    for (std::size_t e = 0; e < kept_tri.size(); e += 3)
+      for (int k = 0; k < 3; ++k) ++used[{kept_tri[e + k], kept_tri[e + (k + 1) % 3]}];
+    int open = 0;
+    for (const auto& [edge, count] : used) {
+      ASSERT_EQ(count, 1) << "an edge used twice in one direction";
+      const auto [a, b] = edge;
+      const bool on_plane = (kept_xyz[3 * a] == 0 && kept_xyz[3 * b] == 0) ||
+                            (kept_xyz[3 * a + 1] == 0 && kept_xyz[3 * b + 1] == 0);
+      if (on_plane)
+        ++open;
+      else
+        EXPECT_EQ(used.count({b, a}), 1u) << "edge " << a << "-" << b << " open off the planes";
+    }
+    EXPECT_GT(open, 20) << "the cuts run through triangles";
+    auto a_xyz = xyz, b_xyz = xyz;
+    auto a_tri = tri, b_tri = tri;
+    cut_display_mesh(a_xyz, a_tri, 0, 1.0, 1e-12);
+    cut_display_mesh(b_xyz, b_tri, 0, -1.0, 1e-12);
+    EXPECT_NEAR(area(a_xyz, a_tri) + area(b_xyz, b_tri), whole, 1e-12 * whole);
+    EXPECT_GT(area(a_xyz, a_tri), 0.5 * whole) << "the centre is on the kept side";
+  }
+  {  // (c)
+    std::vector<double> xyz = {1e-13, 0, 0, 1, 0, 0, 1, 1, 0, -1e-13, 1, 0};
+    std::vector<int> tri = {0, 1, 2, 0, 2, 3};
+    cut_display_mesh(xyz, tri, 0, 1.0, 1e-9);
+    EXPECT_EQ(tri, (std::vector<int>{0, 1, 2, 0, 2, 3}));
+    EXPECT_EQ(xyz[0], 0.0);
+    EXPECT_EQ(xyz[9], 0.0);
+  }
 }
 
 // Motion: a displacement table is interpolated linearly and held after its
