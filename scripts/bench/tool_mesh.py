@@ -21,7 +21,7 @@ run, and the pole's displacement at the end, the largest punch force and
 the largest shear angle, to set beside those of the analytic tools.
 
 Usage: scripts/bench/tool_mesh.py [--end 0.5] [--size 0.002] [--chord 5e-5]
-                                  [--threads 1] [--variants a,b,...]
+                                  [--threads 1] [--variants a,b,...] [--keep DIR]
 (after a Release build). Variants: revolved, uniform, uniform-shuffled,
 cad, cad-shuffled.
 """
@@ -130,6 +130,7 @@ def main():
     ap.add_argument("--chord", type=float, default=5e-5)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--variants", default="revolved,uniform,uniform-shuffled,cad,cad-shuffled")
+    ap.add_argument("--keep", help="write the jobs, STL files and results to this folder and keep them")
     a = ap.parse_args()
     base = json.load(open(SCENE))
     base["time"]["end"] = a.end
@@ -138,7 +139,9 @@ def main():
         a.end, a.threads, a.size, a.chord))
     print("| tools | triangles (punch / die / holder) | contact (s) | wall (s) | pole u_z (mm) | punch force, largest (N) | shear angle, largest (deg) |")
     print("|---|---|---|---|---|---|---|")
-    with tempfile.TemporaryDirectory() as d:
+    with tempfile.TemporaryDirectory() as tmp:
+        d = a.keep or tmp
+        os.makedirs(d, exist_ok=True)
         for variant in a.variants.split(","):
             job = json.loads(json.dumps(base))
             counts = []
