@@ -35,7 +35,7 @@ constexpr const char* kUsage = R"(usage:
                   [--restart] [--checkpoint-minutes M]
   thermostamp report DIR [--against OTHER]   # PNG figures into DIR/figures (with OTHER: both runs on the same axes)
   thermostamp compare DIR_A DIR_B [--json] [--rtol R] [--from T]   # how far two runs' results are apart
-  thermostamp export DIR [--time T] [--out FOLDER]   # each ply of a frame as a Gmsh mesh with its fields
+  thermostamp export DIR [--time T] [--out FOLDER] [--whole]   # each ply of a frame as a Gmsh mesh with its fields
   thermostamp --version
 
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
@@ -62,7 +62,8 @@ export: writes FOLDER/<ply>.msh (default DIR/export) for each ply of the
 last frame (with --time T: the frame nearest to T), Gmsh 2.2 ASCII: the
 mid-surface at that frame's positions, the frame's node fields as $NodeData
 and its element fields (shear angle, fibre direction, stresses, strains,
-curvatures) as $ElementData; a mesh file a job can read
+curvatures) as $ElementData; a mesh file a job can read; --whole: a ply
+of a model reduced by symmetry planes mirrored into the whole ply
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -85,6 +86,7 @@ struct Args {
   std::string against;  // report: the other run's folder
   double from = -std::numeric_limits<double>::infinity();  // compare: the first time compared (s)
   std::optional<double> time;  // export: the frame's time (s; the last frame without it)
+  bool whole = false;          // export: mirrored at the symmetry planes
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -99,7 +101,7 @@ const std::map<std::string, std::vector<std::string>>& command_options() {
       {"study", {"--out", "--threads", "--quiet", "--keep-subnormals", "--restart", "--checkpoint-minutes"}},
       {"report", {"--against"}},
       {"compare", {"--json", "--rtol", "--from"}},
-      {"export", {"--time", "--out"}}};
+      {"export", {"--time", "--out", "--whole"}}};
   return m;
 }
 
@@ -156,6 +158,8 @@ Args parse(int argc, char** argv) {
       a.quiet = true;
     } else if (s == "--restart") {
       a.restart = true;
+    } else if (s == "--whole") {
+      a.whole = true;
     } else if (s == "--keep-subnormals") {
       a.keep_subnormals = true;
     } else if (s == "--json") {
@@ -360,7 +364,7 @@ int main(int argc, char** argv) {
       const std::filesystem::path dir = a.positional[0];
       ts::ExportResult r;
       try {
-        r = ts::export_gmsh(dir, a.time, a.out.empty() ? dir / "export" : std::filesystem::path(a.out));
+        r = ts::export_gmsh(dir, a.time, a.out.empty() ? dir / "export" : std::filesystem::path(a.out), a.whole);
       } catch (const std::exception& e) {  // 2: nothing to export as asked; 3: a file that cannot be read
         std::cerr << "error: export: " << e.what() << "\n";
         return dynamic_cast<const ts::ExportInputError*>(&e) ? 2 : 3;
@@ -368,7 +372,9 @@ int main(int argc, char** argv) {
       char at[120];
       std::snprintf(at, sizeof at, "t = %.6g s (frames/%06d of results.h5, %d frames)", r.time, r.frame, r.frames);
       for (const auto& p : r.plies) {
-        std::cout << p.file.string() << ": ply '" << p.name << "' at " << at << ", " << p.nodes << " nodes, "
+        std::cout << p.file.string() << ": ply '" << p.name << "' at " << at << ", "
+                  << (p.mirrored.empty() ? std::string() : "mirrored at " + ts::join(p.mirrored, " = 0, ") + " = 0, ")
+                  << p.nodes << " nodes, "
                   << p.triangles << " triangles; node data: "
                   << (p.node_data.empty() ? std::string("none") : ts::join(p.node_data))
                   << "; element data: " << (p.element_data.empty() ? std::string("none") : ts::join(p.element_data))

@@ -3,9 +3,13 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
+
+#include <nlohmann/json.hpp>
 
 #include "io/results_reader.hpp"
 #include "io/results_writer.hpp"
@@ -46,10 +50,167 @@ void write_data(std::ofstream& out, const char* section, const std::string& name
   out << "$End" << section << '\n';
 }
 
+// Each part's symmetry planes (0 x, 1 y, 2 z, in that order) and fibre
+// direction, from the run's job_as_run.json.
+struct PartSymmetry {
+  std::vector<int> planes;
+  std::array<double, 3> fibre{1, 0, 0};
+};
+
+std::map<std::string, PartSymmetry> symmetry_planes(const std::filesystem::path& dir) {
+  const auto path = dir / "job_as_run.json";
+  std::ifstream in(path);
+  if (!in)
+    throw ExportInputError("--whole: '" + dir.string() +
+                           "' holds no job_as_run.json, which gives the run's symmetry planes");
+  nlohmann::json job;
+  try {
+    in >> job;
+  } catch (const std::exception&) {
+    throw std::runtime_error("cannot read '" + path.string() + "'");
+  }
+  std::map<std::string, PartSymmetry> planes;
+  if (!job.contains("constraints") || !job["constraints"].is_array()) return planes;
+  std::map<std::string, std::array<double, 3>> fibre;
+  if (job.contains("parts") && job["parts"].is_array())
+    for (const auto& p : job["parts"])
+      if (p.is_object() && p.contains("fibre_direction") && p["fibre_direction"].is_array() &&
+          p["fibre_direction"].size() == 3) {
+        std::array<double, 3> a{};
+        for (int c = 0; c < 3; ++c)
+          a[c] = p["fibre_direction"][c].is_number() ? p["fibre_direction"][c].get<double>() : (c == 0 ? 1.0 : 0.0);
+        fibre[p.value("name", "")] = a;
+      }
+  for (const auto& c : job["constraints"]) {
+    if (!c.is_object() || c.value("type", "") != "symmetry") continue;
+    const std::string plane = c.value("plane", ""), part = c.value("part", "");
+    const int d = plane == "x" ? 0 : plane == "y" ? 1 : plane == "z" ? 2 : -1;
+    if (d < 0) continue;
+    std::vector<std::string> names;
+    if (part == "*") {
+      if (job.contains("parts") && job["parts"].is_array())
+        for (const auto& p : job["parts"])
+          if (p.is_object()) names.push_back(p.value("name", ""));
+    } else {
+      names.push_back(part);
+    }
+    for (const auto& n : names) {
+      auto& v = planes[n].planes;
+      if (std::find(v.begin(), v.end(), d) == v.end()) v.push_back(d);
+    }
+  }
+  for (auto& [name, ps] : planes) {
+    std::sort(ps.planes.begin(), ps.planes.end());
+    if (const auto it = fibre.find(name); it != fibre.end()) ps.fibre = it->second;
+  }
+  return planes;
+}
+
+long long power_of_ten_at_least(long long n) {
+  long long p = 1;
+  while (p < n) p *= 10;
+  return p;
+}
+
+// A field of a frame: its values and how many per node or element.
+struct Field {
+  std::string name;
+  bool cells = false;
+  int components = 1;
+  MirrorRule rule = MirrorRule::Keep;
+  std::vector<double> v;
+};
+
+// A ply as exported: positions (of the frame and of the first frame),
+// triangles by node index, numbers, fields.
+struct PlyData {
+  std::vector<double> x, x0;
+  std::vector<int> tri;
+  std::vector<long long> node_tag, element_tag;
+  std::vector<Field> fields;
+};
+
+// Mirrors the ply at the plane x_d = 0 (see export_gmsh); a0 is the ply's
+// fibre direction in the job.
+void mirror(PlyData& p, int d, const std::string& name, const std::array<double, 3>& a0) {
+  // Its mirror image's side: R a0 . a0 = |a0|^2 - 2 a0_d^2.
+  const double turn = a0[0] * a0[0] + a0[1] * a0[1] + a0[2] * a0[2] - 2 * a0[d] * a0[d] < 0 ? -1.0 : 1.0;
+  const std::size_t n = p.x0.size() / 3, m = p.tri.size() / 3;
+  double h = 0;
+  for (std::size_t e = 0; e < m; ++e)
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t a = static_cast<std::size_t>(p.tri[3 * e + k]), b = static_cast<std::size_t>(p.tri[3 * e + (k + 1) % 3]);
+      double l2 = 0;
+      for (int c = 0; c < 3; ++c) l2 += (p.x0[3 * a + c] - p.x0[3 * b + c]) * (p.x0[3 * a + c] - p.x0[3 * b + c]);
+      h = std::max(h, std::sqrt(l2));
+    }
+  const double tol = 1e-6 * h;
+  bool above = false, below = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    above = above || p.x0[3 * i + d] > tol;
+    below = below || p.x0[3 * i + d] < -tol;
+  }
+  const char* axis = d == 0 ? "x" : d == 1 ? "y" : "z";
+  if (above && below)
+    throw ExportInputError("--whole: ply '" + name + "' lies on both sides of its symmetry plane " + axis + " = 0");
+  std::vector<int> image(n);
+  const long long node_step = power_of_ten_at_least(*std::max_element(p.node_tag.begin(), p.node_tag.end()));
+  const long long element_step = power_of_ten_at_least(*std::max_element(p.element_tag.begin(), p.element_tag.end()));
+  std::vector<std::size_t> copied;  // the nodes off the plane, in order
+  for (std::size_t i = 0; i < n; ++i) {
+    if (std::abs(p.x0[3 * i + d]) <= tol) {
+      image[i] = static_cast<int>(i);
+      continue;
+    }
+    image[i] = static_cast<int>(n + copied.size());
+    copied.push_back(i);
+  }
+  for (const std::size_t i : copied) {
+    for (int c = 0; c < 3; ++c) {
+      p.x.push_back(c == d ? -p.x[3 * i + c] : p.x[3 * i + c]);
+      p.x0.push_back(c == d ? -p.x0[3 * i + c] : p.x0[3 * i + c]);
+    }
+    p.node_tag.push_back(p.node_tag[i] + node_step);
+  }
+  for (std::size_t e = 0; e < m; ++e) {
+    p.tri.insert(p.tri.end(), {image[static_cast<std::size_t>(p.tri[3 * e])], image[static_cast<std::size_t>(p.tri[3 * e + 2])],
+                               image[static_cast<std::size_t>(p.tri[3 * e + 1])]});
+    p.element_tag.push_back(p.element_tag[e] + element_step);
+  }
+  for (Field& f : p.fields) {
+    const std::size_t count = f.cells ? m : n;
+    std::vector<double> add;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (!f.cells && image[i] == static_cast<int>(i)) continue;  // a node on the plane
+      for (int c = 0; c < f.components; ++c) {
+        double v = f.v[i * f.components + c];
+        if ((f.rule == MirrorRule::Vector && c == d) || f.rule == MirrorRule::Negate ||
+            (f.rule == MirrorRule::Negate12 && c == 2))
+          v = -v;
+        if (f.rule == MirrorRule::Fibre) v = c == d ? -turn * v : turn * v;
+        add.push_back(v);
+      }
+    }
+    f.v.insert(f.v.end(), add.begin(), add.end());
+  }
+}
+
 }  // namespace
 
+std::optional<MirrorRule> mirror_rule(const std::string& field) {
+  if (field == "displacement" || field == "velocity") return MirrorRule::Vector;
+  if (field == "fibre_direction") return MirrorRule::Fibre;
+  if (field == "shear_angle") return MirrorRule::Negate;
+  if (field == "membrane_stress" || field == "membrane_strain" || field == "curvature") return MirrorRule::Negate12;
+  for (const char* f : {"temperature", "temperature_mean", "temperature_top", "temperature_bottom", "contact_status",
+                        "contact_pressure", "conductance_bottom", "conductance_top", "tool_gap", "below_threshold_from",
+                        "all_below_threshold_from", "crystallinity", "crystallinity_mean"})
+    if (field == f) return MirrorRule::Keep;
+  return std::nullopt;
+}
+
 ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double> time,
-                         const std::filesystem::path& out) {
+                         const std::filesystem::path& out, bool whole) {
   const auto h5 = dir / "results.h5";
   if (!std::filesystem::is_directory(dir))
     throw ExportInputError("'" + dir.string() + "' is not a folder");
@@ -88,46 +249,75 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) throw std::runtime_error("cannot create '" + out.string() + "': " + ec.message());
+  const auto planes = whole ? symmetry_planes(dir) : std::map<std::string, PartSymmetry>{};
+  const std::string first_group = "frames/" + frames.names.front();
   for (const auto& name : plies) {
     std::vector<hsize_t> tshape, xshape;
     const std::vector<double> tri = read_values(file, "parts/" + name + "/triangles", tshape);
-    const std::vector<double> x = read_values(file, group + "/" + name + "/nodes", xshape);
+    PlyData d;
+    d.x = read_values(file, group + "/" + name + "/nodes", xshape);
     if (tshape.size() != 2 || tshape[1] != 3 || xshape.size() != 2 || xshape[1] != 3)
       throw std::runtime_error("'" + h5.string() + "': the triangles or nodes of ply '" + name +
                                "' cannot be read (cut short?)");
+    const std::size_t nodes = xshape[0], triangles = tshape[0];
+    d.tri.resize(tri.size());
+    for (std::size_t k = 0; k < tri.size(); ++k) d.tri[k] = static_cast<int>(tri[k]);
+    d.node_tag = tags(file, "parts/" + name + "/node_tags", nodes);
+    d.element_tag = tags(file, "parts/" + name + "/element_tags", triangles);
+    for (const auto& field : members(file, group + "/" + name)) {
+      if (field == "nodes" || field == "layer_nodes") continue;
+      std::vector<hsize_t> shape;
+      Field f;
+      f.name = field;
+      f.v = read_values(file, group + "/" + name + "/" + field, shape);
+      if (shape.empty()) throw std::runtime_error("'" + h5.string() + "': field '" + field + "' of ply '" + name +
+                                                  "' cannot be read (cut short?)");
+      f.components = shape.size() > 1 ? static_cast<int>(shape[1]) : 1;
+      f.cells = field_on_elements(field);
+      // (the through-thickness `temperature` lies on the extruded mesh; its
+      // mean, top and bottom values are fields of their own in the frame)
+      if (shape[0] != static_cast<hsize_t>(f.cells ? triangles : nodes)) continue;
+      d.fields.push_back(std::move(f));
+    }
     ExportedPly ply;
     ply.name = name;
-    ply.nodes = static_cast<int>(xshape[0]);
-    ply.triangles = static_cast<int>(tshape[0]);
+    if (const auto it = planes.find(name); it != planes.end() && !it->second.planes.empty()) {
+      for (Field& f : d.fields) {
+        const auto rule = mirror_rule(f.name);
+        if (!rule) throw std::runtime_error("--whole: no mirror image known for the field '" + f.name + "'");
+        f.rule = *rule;
+      }
+      std::vector<hsize_t> shape0;
+      d.x0 = read_values(file, first_group + "/" + name + "/nodes", shape0);
+      if (d.x0.size() != d.x.size())
+        throw std::runtime_error("'" + h5.string() + "': the nodes of ply '" + name + "' in " + first_group +
+                                 " cannot be read (cut short?)");
+      for (const int a : it->second.planes) {
+        mirror(d, a, name, it->second.fibre);
+        ply.mirrored.push_back(a == 0 ? "x" : a == 1 ? "y" : "z");
+      }
+    }
+    ply.nodes = static_cast<int>(d.x.size() / 3);
+    ply.triangles = static_cast<int>(d.tri.size() / 3);
     ply.file = out / (name + ".msh");
-    const std::vector<long long> node_tag = tags(file, "parts/" + name + "/node_tags", ply.nodes),
-                                 element_tag = tags(file, "parts/" + name + "/element_tags", ply.triangles);
     std::ofstream m(ply.file);
     if (!m) throw std::runtime_error("cannot write '" + ply.file.string() + "'");
     m << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n1\n2 1 \"" << name << "\"\n$EndPhysicalNames\n";
     m << "$Nodes\n" << ply.nodes << '\n';
     for (std::size_t i = 0; i < static_cast<std::size_t>(ply.nodes); ++i)
-      m << node_tag[i] << ' ' << number(x[3 * i]) << ' ' << number(x[3 * i + 1]) << ' ' << number(x[3 * i + 2]) << '\n';
+      m << d.node_tag[i] << ' ' << number(d.x[3 * i]) << ' ' << number(d.x[3 * i + 1]) << ' ' << number(d.x[3 * i + 2])
+        << '\n';
     m << "$EndNodes\n$Elements\n" << ply.triangles << '\n';
     for (std::size_t e = 0; e < static_cast<std::size_t>(ply.triangles); ++e) {
-      m << element_tag[e] << " 2 2 1 1";
-      for (std::size_t c = 0; c < 3; ++c) m << ' ' << node_tag[static_cast<std::size_t>(tri[3 * e + c])];
+      m << d.element_tag[e] << " 2 2 1 1";
+      for (std::size_t c = 0; c < 3; ++c) m << ' ' << d.node_tag[static_cast<std::size_t>(d.tri[3 * e + c])];
       m << '\n';
     }
     m << "$EndElements\n";
-    for (const auto& field : members(file, group + "/" + name)) {
-      if (field == "nodes" || field == "layer_nodes") continue;
-      std::vector<hsize_t> shape;
-      const std::vector<double> v = read_values(file, group + "/" + name + "/" + field, shape);
-      if (shape.empty()) throw std::runtime_error("'" + h5.string() + "': field '" + field + "' of ply '" + name +
-                                                  "' cannot be read (cut short?)");
-      const int components = shape.size() > 1 ? static_cast<int>(shape[1]) : 1;
-      const bool cells = field_on_elements(field);
-      // (the through-thickness `temperature` lies on the extruded mesh; its
-      // mean, top and bottom values are fields of their own in the frame)
-      if (shape[0] != static_cast<hsize_t>(cells ? ply.triangles : ply.nodes)) continue;
-      write_data(m, cells ? "ElementData" : "NodeData", field, res.time, v, components, cells ? element_tag : node_tag);
-      (cells ? ply.element_data : ply.node_data).push_back(field);
+    for (const Field& f : d.fields) {
+      write_data(m, f.cells ? "ElementData" : "NodeData", f.name, res.time, f.v, f.components,
+                 f.cells ? d.element_tag : d.node_tag);
+      (f.cells ? ply.element_data : ply.node_data).push_back(f.name);
     }
     m.close();
     if (!m) throw std::runtime_error("cannot write '" + ply.file.string() + "'");

@@ -24,7 +24,22 @@ struct ExportedPly {
   std::filesystem::path file;
   int nodes = 0, triangles = 0;
   std::vector<std::string> node_data, element_data;  // the fields written
+  std::vector<std::string> mirrored;                  // whole: the planes mirrored at ("x", "y", "z")
 };
+
+// How a field's values change in the mirror image of a ply across a plane
+// normal to axis d: kept (scalars), the d-th component negated (vectors:
+// displacement, velocity), the fibre direction's mirror image, turned
+// end for end where the ply's fibre direction in the job points away from
+// its own mirror image (a direction is a line: a fibre along x mirrored at
+// x = 0 stays along +x, as a run of the mirrored ply gives it), the value
+// negated (the shear angle: the mirror image R of the material frame
+// (a, n x a) is (Ra, -R(n x a)), or (-Ra, R(n x a)) turned end for end), the
+// third component negated (the 12 component of a membrane stress, strain
+// or curvature given as [11, 22, 12] in that frame). None for a field the
+// export does not know.
+enum class MirrorRule { Keep, Vector, Fibre, Negate, Negate12 };
+std::optional<MirrorRule> mirror_rule(const std::string& field);
 
 struct ExportResult {
   double time = 0;  // s, of the frame exported
@@ -38,7 +53,16 @@ struct ExportResult {
 // between the first and the last frame's). Throws ExportInputError for a
 // folder without results.h5 or frames, or a time outside the frames';
 // std::runtime_error where the file cannot be read or the output written.
+//
+// whole: a ply held by `symmetry` constraints (read from the folder's
+// job_as_run.json) is written whole: mirrored at each of its planes in
+// turn (x, then y, then z), the nodes on a plane (within 1e-6 of the
+// longest edge in the first frame, as the run found them) shared by both
+// halves, the mirror images' triangles turned to keep the normals' side,
+// the fields changed by mirror_rule. The mirror images' nodes and
+// triangles are numbered from those of the half they mirror plus the
+// smallest power of 10 at least as large as that half's largest number.
 ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double> time,
-                         const std::filesystem::path& out);
+                         const std::filesystem::path& out, bool whole = false);
 
 }  // namespace ts
