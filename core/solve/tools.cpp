@@ -514,9 +514,16 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
   std::vector<double> vx(9 * nt), centre(3 * nt);
   double h = 0;
   for (std::size_t e = 0; e < nt; ++e) {
-    Vec3 v[3];
+    // Corners from the smallest (by x, then y, then z), in the file's
+    // turning order: a triangle's numbers do not depend on the corner the
+    // file starts it from.
+    Vec3 w[3], v[3];
+    for (int k = 0; k < 3; ++k) w[k] = sdk::load3(xyz.data(), tri[3 * e + k]);
+    int first = 0;
+    for (int k = 1; k < 3; ++k)
+      if (std::lexicographical_compare(w[k].begin(), w[k].end(), w[first].begin(), w[first].end())) first = k;
     for (int k = 0; k < 3; ++k) {
-      v[k] = sdk::load3(xyz.data(), tri[3 * e + k]);
+      v[k] = w[(first + k) % 3];
       for (int d = 0; d < 3; ++d) vx[9 * e + 3 * k + d] = v[k][d];
     }
     for (int k = 0; k < 3; ++k) {
@@ -536,8 +543,19 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
   // the box's longest side (so at most log2(n) levels), down to leaves of
   // kLeaf triangles. The boxes bound the corners exactly.
   constexpr int kLeaf = 4;
+  // Each triangle's rank among the triangles ordered by their corners
+  // (from the smallest, as above): of equally close triangles a query takes
+  // the lowest rank, so that the answers depend on the triangles, not on
+  // the order of the file (equal triangles keep the file's order). The tree
+  // is built from that order too.
   morig_.resize(nt);
   for (std::size_t e = 0; e < nt; ++e) morig_[e] = static_cast<int>(e);
+  std::stable_sort(morig_.begin(), morig_.end(), [&](int p, int q) {
+    return std::lexicographical_compare(&vx[9 * static_cast<std::size_t>(p)], &vx[9 * static_cast<std::size_t>(p) + 9],
+                                        &vx[9 * static_cast<std::size_t>(q)], &vx[9 * static_cast<std::size_t>(q) + 9]);
+  });
+  std::vector<int> rank(nt);
+  for (std::size_t i = 0; i < nt; ++i) rank[static_cast<std::size_t>(morig_[i])] = static_cast<int>(i);
   boxes_.clear();
   boxes_.reserve(2 * (nt / kLeaf + 1));
   auto bound = [&](int begin, int end, BoxNode& b) {
@@ -583,7 +601,7 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
         const int d = (axis + k) % 3;
         if (cp[d] != cq[d]) return cp[d] < cq[d];
       }
-      return p < q;
+      return rank[static_cast<std::size_t>(p)] < rank[static_cast<std::size_t>(q)];
     });
     self(self, begin, mid);
     boxes_[at].first = static_cast<int>(boxes_.size());
@@ -597,6 +615,8 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
   // 1 / |g_k|^2 of the three.
   mx_.resize(9 * nt);
   mn_.resize(kGeo * nt);
+  mrank_.resize(nt);
+  for (std::size_t q = 0; q < nt; ++q) mrank_[q] = rank[static_cast<std::size_t>(morig_[q])];
   for (std::size_t q = 0; q < nt; ++q) {
     const double* v = &vx[9 * static_cast<std::size_t>(morig_[q])];
     std::copy(v, v + 9, &mx_[9 * q]);
@@ -754,7 +774,7 @@ double box_distance2(const double* x, const double* lo, const double* hi) {
 void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double* nout) const {
   const Vec3 x = {p[0], p[1], p[2]};
   // The closest triangle nearer than the cutoff: of equal distances the
-  // file's first. Boxes and triangles whose lower bound (the distance to
+  // lowest rank. Boxes and triangles whose lower bound (the distance to
   // the box, to the triangle's plane) is farther than the best so far are
   // skipped, with a margin of 1e-12 of the mesh's size for the round-off of
   // the two distances, so that nothing the comparison below would take is
@@ -798,7 +818,7 @@ void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double*
       const Vec3 cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
       const Vec3 dv = sdk::sub(x, cp);
       const double d2 = sdk::dot(dv, dv);
-      if (d2 < best || (d2 == best && best_q >= 0 && morig_[q] < morig_[best_q])) {
+      if (d2 < best || (d2 == best && best_q >= 0 && mrank_[q] < mrank_[best_q])) {
         best = d2;
         best_q = q;
         best_cp = cp;

@@ -99,7 +99,8 @@ class RigidTool {
   std::vector<double> mx_;     // 9 per triangle
   static constexpr int kGeo = 12;
   std::vector<double> mn_;     // kGeo per triangle: unit normal, barycentric gradients g1, g2, 1 / |g_k|^2
-  std::vector<int> morig_;     // each triangle's index in the file (ties go to the lowest)
+  std::vector<int> morig_;     // each triangle's index in the file
+  std::vector<int> mrank_;     // its rank by its corners (ties go to the lowest)
   std::vector<BoxNode> boxes_;  // depth first, root at 0
   double scale_ = 1;           // the longest edge
   double tol_ = 0;             // round-off margin of the search's bounds (m)

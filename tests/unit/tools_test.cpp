@@ -299,15 +299,29 @@ TEST(Tools, MeshToolAnswersAsASearchOfEveryTriangle) {
   rdef.surface.profile[1].centre = {0.0875, -0.0075};
   const RigidTool revolved(rdef);
 
+  // Each triangle from its smallest corner (by x, y, z), in its turning
+  // order; of equally close triangles the one whose corners come first.
+  auto canon = tris;
+  for (auto& t : canon) {
+    int first = 0;
+    for (int k = 1; k < 3; ++k)
+      if (std::lexicographical_compare(t[k].begin(), t[k].end(), t[first].begin(), t[first].end())) first = k;
+    t = {t[first], t[(first + 1) % 3], t[(first + 2) % 3]};
+  }
+  auto before = [&](std::size_t a, std::size_t b) {
+    for (int k = 0; k < 3; ++k)
+      if (canon[a][k] != canon[b][k]) return canon[a][k] < canon[b][k];
+    return a < b;
+  };
   auto every = [&](const Vec3& x, double cutoff, double& dist, Vec3& n) {
     double best = std::isfinite(cutoff) ? cutoff * cutoff : std::numeric_limits<double>::infinity();
     int be = -1;
     Vec3 bcp{};
-    for (std::size_t e = 0; e < tris.size(); ++e) {
-      const Vec3 cp = sdk::closest_point_on_triangle(x, tris[e][0], tris[e][1], tris[e][2]);
+    for (std::size_t e = 0; e < canon.size(); ++e) {
+      const Vec3 cp = sdk::closest_point_on_triangle(x, canon[e][0], canon[e][1], canon[e][2]);
       const Vec3 dv = sdk::sub(x, cp);
       const double d2 = sdk::dot(dv, dv);
-      if (d2 < best) {
+      if (d2 < best || (d2 == best && be >= 0 && before(e, static_cast<std::size_t>(be)))) {
         best = d2;
         be = static_cast<int>(e);
         bcp = cp;
@@ -317,7 +331,7 @@ TEST(Tools, MeshToolAnswersAsASearchOfEveryTriangle) {
       dist = std::numeric_limits<double>::infinity();
       return;
     }
-    const auto& t = tris[static_cast<std::size_t>(be)];
+    const auto& t = canon[static_cast<std::size_t>(be)];
     const Vec3 c = sdk::cross(sdk::sub(t[1], t[0]), sdk::sub(t[2], t[0]));
     const double l = sdk::norm(c);
     const Vec3 fn = {c[0] / l, c[1] / l, c[2] / l};
@@ -356,6 +370,87 @@ TEST(Tools, MeshToolAnswersAsASearchOfEveryTriangle) {
   EXPECT_GT(near, 1000);
   EXPECT_GT(beyond, 500);
   EXPECT_GT(found, 5000);
+}
+
+// A mesh tool's answers depend on its triangles, not on the file: the
+// die above (a fillet of 24 facets between a wall and a ring, 60 sectors)
+// in rows, and shuffled with every triangle started from a random corner
+// (the same turning order), give the same bits for points at its vertices
+// and edge midpoints (equally close triangles all round: on the fillet
+// their faces differ), 1 um from them inside and outside along a few
+// directions, and for random points near it.
+TEST(Tools, MeshToolAnswersDoNotDependOnTheFilesOrder) {
+  using sdk::Vec3;
+  const double pi = std::acos(-1.0);
+  std::vector<std::array<double, 2>> prof = {{0.08, -0.02}, {0.08, -0.0075}};
+  for (int k = 1; k <= 24; ++k) {
+    const double a = pi - 0.5 * pi * k / 24;
+    prof.push_back({0.0875 + 0.0075 * std::cos(a), -0.0075 + 0.0075 * std::sin(a)});
+  }
+  prof.back() = {0.0875, 0.0};
+  prof.push_back({0.12, 0.0});
+  const int sectors = 60;
+  auto at = [](std::array<double, 2> q, double t) { return Vec3{q[0] * std::cos(t), q[0] * std::sin(t), q[1]}; };
+  std::vector<std::array<Vec3, 3>> rows;
+  for (std::size_t k = 0; k + 1 < prof.size(); ++k)
+    for (int j = 0; j < sectors; ++j) {
+      const double t0 = 0.5 * pi * j / sectors, t1 = 0.5 * pi * (j + 1) / sectors;
+      const Vec3 a = at(prof[k], t0), b = at(prof[k + 1], t0), c = at(prof[k + 1], t1), d = at(prof[k], t1);
+      rows.push_back({a, b, c});
+      rows.push_back({a, c, d});
+    }
+  auto shuffled = rows;
+  std::mt19937 rng(11);
+  std::shuffle(shuffled.begin(), shuffled.end(), rng);
+  for (auto& t : shuffled) {
+    const int r = static_cast<int>(rng() % 3);
+    t = {t[r], t[(r + 1) % 3], t[(r + 2) % 3]};
+  }
+  const auto dir = temp_dir("tool_mesh_order");
+  auto write = [&](const std::string& name, const std::vector<std::array<Vec3, 3>>& tris) {
+    std::ofstream s(dir / name);
+    s.precision(17);
+    s << "solid die\n";
+    for (const auto& t : tris) {
+      s << " facet normal 0 0 0\n  outer loop\n";
+      for (const Vec3& v : t) s << "   vertex " << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';
+      s << "  endloop\n endfacet\n";
+    }
+    s << "endsolid die\n";
+    ToolDef def;
+    def.name = "die";
+    def.pointer = "/tools/0";
+    def.surface.type = "mesh";
+    def.surface.file = dir / name;
+    return def;
+  };
+  const ToolDef d1 = write("rows.stl", rows), d2 = write("shuffled.stl", shuffled);
+  const RigidTool a(d1), b(d2);
+  std::vector<Vec3> points;
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Vec3 dirs[] = {{0, 0, 1}, {0, 0, -1}, {0.6, 0, 0.8}, {-0.6, 0.48, 0.64}, {0.3, -0.4, -0.866}};
+  for (const auto& t : rows)
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 mid = sdk::scale(sdk::add(t[k], t[(k + 1) % 3]), 0.5);
+      for (const Vec3& base : {t[k], mid}) {
+        points.push_back(base);
+        for (const Vec3& d : dirs) points.push_back(sdk::add(base, sdk::scale(d, 1e-6)));
+      }
+    }
+  for (int k = 0; k < 5000; ++k) {
+    const auto& q = prof[static_cast<std::size_t>(k) % prof.size()];
+    points.push_back(at({q[0] + 0.002 * u(rng), q[1] + 0.002 * u(rng)}, 0.25 * pi * (1 + u(rng))));
+  }
+  std::size_t differ = 0;
+  for (const double cutoff : {0.0015, std::numeric_limits<double>::infinity()}) {
+    std::vector<double> da(points.size()), db(points.size()), na(3 * points.size()), nb(3 * points.size());
+    a.query(points.size(), points[0].data(), cutoff, da.data(), na.data());
+    b.query(points.size(), points[0].data(), cutoff, db.data(), nb.data());
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (std::memcmp(&da[i], &db[i], sizeof(double)) != 0 || std::memcmp(&na[3 * i], &nb[3 * i], 3 * sizeof(double)) != 0)
+        ++differ;
+  }
+  EXPECT_EQ(differ, 0u) << "of " << 2 * points.size() << " answers";
 }
 
 // Two triangles with a common edge must face the same side: walked the
