@@ -131,8 +131,9 @@ struct PlyData {
 };
 
 // Mirrors the ply at the plane x_d = 0 (see export_gmsh); a0 is the ply's
-// fibre direction in the job.
-void mirror(PlyData& p, int d, const std::string& name, const std::array<double, 3>& a0) {
+// fibre direction in the job. False (nothing done) for a ply that lies in
+// the plane: it is its own mirror image.
+bool mirror(PlyData& p, int d, const std::string& name, const std::array<double, 3>& a0) {
   // Its mirror image's side: R a0 . a0 = |a0|^2 - 2 a0_d^2.
   const double turn = a0[0] * a0[0] + a0[1] * a0[1] + a0[2] * a0[2] - 2 * a0[d] * a0[d] < 0 ? -1.0 : 1.0;
   const std::size_t n = p.x0.size() / 3, m = p.tri.size() / 3;
@@ -153,6 +154,7 @@ void mirror(PlyData& p, int d, const std::string& name, const std::array<double,
   const char* axis = d == 0 ? "x" : d == 1 ? "y" : "z";
   if (above && below)
     throw ExportInputError("--whole: ply '" + name + "' lies on both sides of its symmetry plane " + axis + " = 0");
+  if (!above && !below) return false;
   std::vector<int> image(n);
   const long long node_step = power_of_ten_at_least(*std::max_element(p.node_tag.begin(), p.node_tag.end()));
   const long long element_step = power_of_ten_at_least(*std::max_element(p.element_tag.begin(), p.element_tag.end()));
@@ -193,6 +195,7 @@ void mirror(PlyData& p, int d, const std::string& name, const std::array<double,
     }
     f.v.insert(f.v.end(), add.begin(), add.end());
   }
+  return true;
 }
 
 }  // namespace
@@ -293,8 +296,7 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
         throw std::runtime_error("'" + h5.string() + "': the nodes of ply '" + name + "' in " + first_group +
                                  " cannot be read (cut short?)");
       for (const int a : it->second.planes) {
-        mirror(d, a, name, it->second.fibre);
-        ply.mirrored.push_back(a == 0 ? "x" : a == 1 ? "y" : "z");
+        if (mirror(d, a, name, it->second.fibre)) ply.mirrored.push_back(a == 0 ? "x" : a == 1 ? "y" : "z");
       }
     }
     ply.nodes = static_cast<int>(d.x.size() / 3);

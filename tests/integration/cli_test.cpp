@@ -1931,6 +1931,12 @@ TEST(Export, WholePlyOfASymmetryModelIsTheMirroredRuns) {
   EXPECT_NE(both.err.find("error: export: --whole: ply 'ply' lies on both sides of its symmetry plane x = 0"),
             std::string::npos)
       << both.err;
+  // A ply in its plane (z = 0) is its own mirror image: written as it is.
+  as_run["constraints"] = json::array({{{"type", "symmetry"}, {"part", "*"}, {"plane", "z"}}});
+  std::ofstream(dir / "across" / "job_as_run.json") << as_run.dump(2);
+  const auto flat = thermostamp("export " + q(dir / "across") + " --whole");
+  EXPECT_EQ(flat.exit_code, 0) << flat.err;
+  EXPECT_NE(flat.out.find(" frames), 85 nodes, 144 triangles;"), std::string::npos) << flat.out;
 }
 
 // `thermostamp export`: each ply of a frame as a Gmsh 2.2 mesh, its nodes at
