@@ -989,6 +989,7 @@ void parse_job_into(Job& job) {
         sr.finish();
       }
       md.damping = mr.real("damping", 0.0, 0.0);
+      md.damping_normal = mr.choice("damping_direction", {"all", "normal"}, std::string("all")) == "normal";
       const auto g = mr.reals("gravity", 3, std::vector<double>{0, 0, 0});
       md.gravity = {g[0], g[1], g[2]};
       md.energy_tolerance = mr.real("energy_tolerance", 0.05, 0.0, true);

@@ -196,6 +196,7 @@ struct MechanicsDef {
   double target_dt = 0;      // mass scaling to this step (0: none)
   double mass_factor = 1.0;  // uniform mass scaling factor
   double damping = 0;        // mass-proportional damping coefficient, 1/s
+  bool damping_normal = false;  // the damping acts on the velocity along each node's normal only
   std::array<double, 3> gravity{0, 0, 0};
   double energy_tolerance = 0.05;  // relative energy balance error that stops the run
   // How elements and contact share the threads: "auto" (timed), "beside"

@@ -62,9 +62,10 @@ namespace {
 // by lane (a fixed order, but not the one of a scalar loop). Instantiated
 // with and without contact forces and external forces (gravity, loads),
 // so that a run without them reads neither.
-template <bool kContact, bool kExternal>
+template <bool kContact, bool kExternal, bool kNormalDamping>
 [[gnu::always_inline]] inline void integrate_body(std::size_t n, double dt, double dt_prev, double dt_avg,
-                                                  double damping, const double* __restrict mass3,
+                                                  double damping, const double* __restrict damped_v,
+                                                  const double* __restrict mass3,
                                                   const double* __restrict gravity3, const double* __restrict load,
                                                   const double* __restrict f_int, const double* __restrict f_con,
                                                   const int* __restrict fixed, std::size_t nfixed,
@@ -80,7 +81,7 @@ template <bool kContact, bool kExternal>
     const double fi = f_int[k];
     const double f_ext = kExternal ? gravity3[k] + load[k] : 0.0;
     const double fc = kContact ? f_con[k] : 0.0;
-    const double f_damp = damping * mi * vo;
+    const double f_damp = damping * mi * (kNormalDamping ? damped_v[k] : vo);
     const double v_new = vo + dt_avg * (f_ext + fc - fi - f_damp) / mi;
     const double dxn = dt * v_new;
     const double xo = x[k], xn = xo + dxn;
@@ -133,26 +134,61 @@ template <bool kContact, bool kExternal>
   pending[2] = p_damp;
   pending[3] = p_con;
 }
-#define TS_INTEGRATE(NAME, CONTACT, EXTERNAL)                                                                        \
+#define TS_INTEGRATE(NAME, CONTACT, EXTERNAL, NORMAL)                                                                \
   TS_VECTOR_CLONES void NAME(std::size_t n, double dt, double dt_prev, double dt_avg, double damping,                \
-                             const double* mass3, const double* gravity3,                                            \
+                             const double* damped_v, const double* mass3, const double* gravity3,                   \
                              const double* load, const double* f_int, const double* f_con, const int* fixed,         \
                              std::size_t nfixed, const double* prescribed, double* v, double* x, double* pending,    \
                              double* sums) {                                                                         \
-    integrate_body<CONTACT, EXTERNAL>(n, dt, dt_prev, dt_avg, damping, mass3, gravity3, load, f_int, f_con,          \
-                                      fixed, nfixed, prescribed, v, x, pending, sums);                               \
+    integrate_body<CONTACT, EXTERNAL, NORMAL>(n, dt, dt_prev, dt_avg, damping, damped_v, mass3, gravity3, load,      \
+                                              f_int, f_con, fixed, nfixed, prescribed, v, x, pending, sums);         \
   }
-TS_INTEGRATE(integrate_dofs, false, false)
-TS_INTEGRATE(integrate_dofs_contact, true, false)
-TS_INTEGRATE(integrate_dofs_external, false, true)
-TS_INTEGRATE(integrate_dofs_contact_external, true, true)
+TS_INTEGRATE(integrate_dofs, false, false, false)
+TS_INTEGRATE(integrate_dofs_contact, true, false, false)
+TS_INTEGRATE(integrate_dofs_external, false, true, false)
+TS_INTEGRATE(integrate_dofs_contact_external, true, true, false)
+TS_INTEGRATE(integrate_dofs_normal, false, false, true)
+TS_INTEGRATE(integrate_dofs_contact_normal, true, false, true)
+TS_INTEGRATE(integrate_dofs_external_normal, false, true, true)
+TS_INTEGRATE(integrate_dofs_contact_external_normal, true, true, true)
 #undef TS_INTEGRATE
 using IntegrateDofs = void (*)(std::size_t, double, double, double, double, const double*, const double*,
-                               const double*, const double*, const double*, const int*,
+                               const double*, const double*, const double*, const double*, const int*,
                                std::size_t, const double*, double*, double*, double*, double*);
-// By [contact][external forces].
-constexpr IntegrateDofs kIntegrateDofs[2][2] = {{integrate_dofs, integrate_dofs_external},
-                                                {integrate_dofs_contact, integrate_dofs_contact_external}};
+// By [damping along the normals only][contact][external forces].
+constexpr IntegrateDofs kIntegrateDofs[2][2][2] = {
+    {{integrate_dofs, integrate_dofs_external}, {integrate_dofs_contact, integrate_dofs_contact_external}},
+    {{integrate_dofs_normal, integrate_dofs_external_normal},
+     {integrate_dofs_contact_normal, integrate_dofs_contact_external_normal}}};
+
+// The part of each node's velocity along its normal, per dof: the normal
+// of a node is the sum of the cross products (x1 - x0) x (x2 - x0) of its
+// triangles (twice their areas times their unit normals), made a unit
+// vector; the same for any thread count (one pass in triangle order).
+void normal_velocities(const ShellMesh& mesh, const double* x, const double* v, std::vector<double>& normal,
+                       std::vector<double>& out) {
+  const std::size_t nn = static_cast<std::size_t>(mesh.num_nodes());
+  normal.assign(3 * nn, 0.0);
+  out.resize(3 * nn);
+  const std::size_t ne = mesh.triangles.size() / 3;
+  for (std::size_t e = 0; e < ne; ++e) {
+    const int* t = &mesh.triangles[3 * e];
+    const double* a = &x[3 * static_cast<std::size_t>(t[0])];
+    const double* b = &x[3 * static_cast<std::size_t>(t[1])];
+    const double* c = &x[3 * static_cast<std::size_t>(t[2])];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) normal[3 * static_cast<std::size_t>(t[k]) + d] += cr[d];
+  }
+  for (std::size_t i = 0; i < nn; ++i) {
+    double* nrm = &normal[3 * i];
+    const double len = std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+    for (int d = 0; d < 3; ++d) nrm[d] = len > 0 ? nrm[d] / len : 0.0;  // (0, 0, 1) exactly on a flat ply
+    const double vn = v[3 * i] * nrm[0] + v[3 * i + 1] * nrm[1] + v[3 * i + 2] * nrm[2];
+    for (int d = 0; d < 3; ++d) out[3 * i + d] = vn * nrm[d];
+  }
+}
 
 // A spin-wait hint to the processor (a shorter wait on x86 than a plain
 // loop, and the sibling hyperthread gets the core).
@@ -1506,8 +1542,11 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     for (const int k : m.fixed_dofs)
       reactions[3 * m.constraint_of[k] + k % 3] += m.f_int[k] - (m.gravity3[k] + m.load[k]) - m.f_con[k];
     double sums_p[7];
-    kIntegrateDofs[contacts_.empty() ? 0 : 1][m.external ? 1 : 0](
-        n, dt, step == 0 ? 0.0 : last_mech_dt_, dt_avg, md.damping, m.mass3.data(), m.gravity3.data(),
+    const bool normal_damping = md.damping_normal && md.damping > 0;
+    if (normal_damping) normal_velocities(st.mesh, st.x.data(), m.v.data(), m.node_normal, m.normal_velocity);
+    kIntegrateDofs[normal_damping ? 1 : 0][contacts_.empty() ? 0 : 1][m.external ? 1 : 0](
+        n, dt, step == 0 ? 0.0 : last_mech_dt_, dt_avg, md.damping, normal_damping ? m.normal_velocity.data() : nullptr,
+        m.mass3.data(), m.gravity3.data(),
         m.load.data(), m.f_int.data(), m.f_con.data(), m.fixed_dofs.data(), m.fixed_dofs.size(), m.prescribed.data(),
         m.v.data(), st.x.data(), m.pending_work, sums_p);
     const double nonfinite = sums_p[6];

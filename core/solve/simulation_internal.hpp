@@ -47,6 +47,10 @@ struct MechPart {
   // Half of the next step's internal, external, damping and contact works,
   // known at this step (see integrate_body).
   double pending_work[4] = {0, 0, 0, 0};
+  // With solvers.mechanics.damping_direction "normal": each node's
+  // normal (area-weighted, of its triangles at t^n) and the part of its
+  // velocity v^{n-1/2} along it, per dof, which the damping acts on.
+  std::vector<double> node_normal, normal_velocity;
   // Per element block, reused every step.
   std::vector<int> block_fail;
   std::vector<std::string> block_error;

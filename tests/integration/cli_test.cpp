@@ -437,6 +437,7 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"mesh_reorder_text", [](json& j) { j["parts"][0]["mesh"] = {{"file", "."}, {"reorder", "yes"}}; }, "error: /parts/0/mesh/reorder: expected true or false, found a string"},
       {"mesh_reorder_generator", [](json& j) { j["parts"][0]["mesh"]["reorder"] = false; }, "error: /parts/0/mesh/reorder: only for a mesh read from a file: the rectangle generator numbers its triangles row by row"},
       {"mechanics_no_law", [](json& j) { j["solvers"]["mechanics"] = {{"dt_safety", 0.8}}; }, "error: /materials/pa66_cf_ud: material 'pa66_cf_ud' has no membrane law"},
+      {"damping_direction", [](json& j) { j["solvers"]["mechanics"] = {{"damping", 20.0}, {"damping_direction", "normals"}}; }, "error: /solvers/mechanics/damping_direction: unknown value 'normals'; did you mean 'normal'?; valid values are: all, normal"},
       {"bending_subcycles_zero", [](json& j) { j["solvers"]["mechanics"] = {{"bending_subcycles", 0}}; }, "error: /solvers/mechanics/bending_subcycles: must be >= 1, found 0"},
       {"explicit_dt", [](json& j) { j["solvers"]["thermal"]["through_thickness"] = "explicit"; j["solvers"]["thermal"]["dt"] = 0.1; }, "error: /solvers/thermal/dt: thermal step 0.1 s exceeds the stable step"},
       {"fibre_normal", [](json& j) { j["parts"][0]["fibre_direction"] = {0, 0, 1}; }, "error: /parts/0/fibre_direction: the fibre direction is normal to the ply"},
