@@ -161,33 +161,72 @@ constexpr IntegrateDofs kIntegrateDofs[2][2][2] = {
     {{integrate_dofs_normal, integrate_dofs_external_normal},
      {integrate_dofs_contact_normal, integrate_dofs_contact_external_normal}}};
 
-// The part of each node's velocity along its normal, per dof: the normal
-// of a node is the sum of the cross products (x1 - x0) x (x2 - x0) of its
-// triangles (twice their areas times their unit normals), made a unit
-// vector; the same for any thread count (one pass in triangle order).
-void normal_velocities(const ShellMesh& mesh, const double* x, const double* v, std::vector<double>& normal,
-                       std::vector<double>& out) {
-  const std::size_t nn = static_cast<std::size_t>(mesh.num_nodes());
-  normal.assign(3 * nn, 0.0);
-  out.resize(3 * nn);
-  const std::size_t ne = mesh.triangles.size() / 3;
-  for (std::size_t e = 0; e < ne; ++e) {
-    const int* t = &mesh.triangles[3 * e];
-    const double* a = &x[3 * static_cast<std::size_t>(t[0])];
-    const double* b = &x[3 * static_cast<std::size_t>(t[1])];
-    const double* c = &x[3 * static_cast<std::size_t>(t[2])];
-    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    const double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-    for (int k = 0; k < 3; ++k)
-      for (int d = 0; d < 3; ++d) normal[3 * static_cast<std::size_t>(t[k]) + d] += cr[d];
-  }
+// Each node's summed normal made a unit vector ((0, 0, 1) exactly on a
+// flat ply), and the part of its velocity along it, per dof. One vector pass.
+TS_VECTOR_CLONES void project_on_normals(std::size_t nn, double* __restrict normal, const double* __restrict v,
+                                         double* __restrict out) {
+#pragma omp simd
   for (std::size_t i = 0; i < nn; ++i) {
-    double* nrm = &normal[3 * i];
-    const double len = std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
-    for (int d = 0; d < 3; ++d) nrm[d] = len > 0 ? nrm[d] / len : 0.0;  // (0, 0, 1) exactly on a flat ply
-    const double vn = v[3 * i] * nrm[0] + v[3 * i + 1] * nrm[1] + v[3 * i + 2] * nrm[2];
-    for (int d = 0; d < 3; ++d) out[3 * i + d] = vn * nrm[d];
+    const double a = normal[3 * i], b = normal[3 * i + 1], c = normal[3 * i + 2];
+    const double len = std::sqrt(a * a + b * b + c * c);
+    const double na = len > 0 ? a / len : 0.0, nb = len > 0 ? b / len : 0.0, nc = len > 0 ? c / len : 0.0;
+    normal[3 * i] = na;
+    normal[3 * i + 1] = nb;
+    normal[3 * i + 2] = nc;
+    const double vn = v[3 * i] * na + v[3 * i + 1] * nb + v[3 * i + 2] * nc;
+    out[3 * i] = vn * na;
+    out[3 * i + 1] = vn * nb;
+    out[3 * i + 2] = vn * nc;
   }
+}
+
+// Each triangle's (x1 - x0) x (x2 - x0): twice its area times its unit
+// normal. One vector pass.
+TS_VECTOR_CLONES void triangle_cross(std::size_t ne, const int* __restrict tri, const double* __restrict x,
+                                     double* __restrict cross) {
+#pragma omp simd
+  for (std::size_t e = 0; e < ne; ++e) {
+    const std::size_t a = 3 * static_cast<std::size_t>(tri[3 * e]), b = 3 * static_cast<std::size_t>(tri[3 * e + 1]),
+                      c = 3 * static_cast<std::size_t>(tri[3 * e + 2]);
+    const double u0 = x[b] - x[a], u1 = x[b + 1] - x[a + 1], u2 = x[b + 2] - x[a + 2];
+    const double w0 = x[c] - x[a], w1 = x[c + 1] - x[a + 1], w2 = x[c + 2] - x[a + 2];
+    cross[3 * e] = u1 * w2 - u2 * w1;
+    cross[3 * e + 1] = u2 * w0 - u0 * w2;
+    cross[3 * e + 2] = u0 * w1 - u1 * w0;
+  }
+}
+
+// The part of each node's velocity along its normal, per dof: the normal
+// of a node is the sum of the cross products of its triangles (in
+// ascending order), made a unit vector; the same for any thread count.
+void normal_velocities(const ShellMesh& mesh, const double* x, const double* v, MechPart& m) {
+  const std::size_t nn = static_cast<std::size_t>(mesh.num_nodes()), ne = mesh.triangles.size() / 3;
+  if (m.node_tri_start.size() != nn + 1) {  // each node's triangles, once
+    m.node_tri_start.assign(nn + 1, 0);
+    for (const int i : mesh.triangles) ++m.node_tri_start[static_cast<std::size_t>(i) + 1];
+    for (std::size_t i = 0; i < nn; ++i) m.node_tri_start[i + 1] += m.node_tri_start[i];
+    m.node_tri.assign(mesh.triangles.size(), 0);
+    std::vector<int> fill(m.node_tri_start.begin(), m.node_tri_start.end() - 1);
+    for (std::size_t e = 0; e < ne; ++e)
+      for (int k = 0; k < 3; ++k) m.node_tri[static_cast<std::size_t>(fill[static_cast<std::size_t>(mesh.triangles[3 * e + k])]++)] = static_cast<int>(e);
+    m.tri_cross.resize(3 * ne);
+    m.node_normal.resize(3 * nn);
+    m.normal_velocity.resize(3 * nn);
+  }
+  triangle_cross(ne, mesh.triangles.data(), x, m.tri_cross.data());
+  for (std::size_t i = 0; i < nn; ++i) {
+    double a = 0, b = 0, c = 0;
+    for (int k = m.node_tri_start[i]; k < m.node_tri_start[i + 1]; ++k) {
+      const double* cr = &m.tri_cross[3 * static_cast<std::size_t>(m.node_tri[static_cast<std::size_t>(k)])];
+      a += cr[0];
+      b += cr[1];
+      c += cr[2];
+    }
+    m.node_normal[3 * i] = a;
+    m.node_normal[3 * i + 1] = b;
+    m.node_normal[3 * i + 2] = c;
+  }
+  project_on_normals(nn, m.node_normal.data(), v, m.normal_velocity.data());
 }
 
 // A spin-wait hint to the processor (a shorter wait on x86 than a plain
@@ -1543,7 +1582,7 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
       reactions[3 * m.constraint_of[k] + k % 3] += m.f_int[k] - (m.gravity3[k] + m.load[k]) - m.f_con[k];
     double sums_p[7];
     const bool normal_damping = md.damping_normal && md.damping > 0;
-    if (normal_damping) normal_velocities(st.mesh, st.x.data(), m.v.data(), m.node_normal, m.normal_velocity);
+    if (normal_damping) normal_velocities(st.mesh, st.x.data(), m.v.data(), m);
     kIntegrateDofs[normal_damping ? 1 : 0][contacts_.empty() ? 0 : 1][m.external ? 1 : 0](
         n, dt, step == 0 ? 0.0 : last_mech_dt_, dt_avg, md.damping, normal_damping ? m.normal_velocity.data() : nullptr,
         m.mass3.data(), m.gravity3.data(),

@@ -48,9 +48,15 @@ struct MechPart {
   // known at this step (see integrate_body).
   double pending_work[4] = {0, 0, 0, 0};
   // With solvers.mechanics.damping_direction "normal": each node's
-  // normal (area-weighted, of its triangles at t^n) and the part of its
-  // velocity v^{n-1/2} along it, per dof, which the damping acts on.
+  // unit normal (from the sum of its triangles' (x1 - x0) x (x2 - x0) at
+  // t^n) and the part of its velocity v^{n-1/2} along it, per dof, which
+  // the damping acts on.
   std::vector<double> node_normal, normal_velocity;
+  // ... and each node's triangles (CSR: node_tri[node_tri_start[i] ..
+  // node_tri_start[i + 1]) in ascending order), with each triangle's
+  // (x1 - x0) x (x2 - x0).
+  std::vector<int> node_tri_start, node_tri;
+  std::vector<double> tri_cross;
   // Per element block, reused every step.
   std::vector<int> block_fail;
   std::vector<std::string> block_error;
