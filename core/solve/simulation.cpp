@@ -162,7 +162,9 @@ constexpr IntegrateDofs kIntegrateDofs[2][2][2] = {
      {integrate_dofs_contact_normal, integrate_dofs_contact_external_normal}}};
 
 // Each node's summed normal made a unit vector ((0, 0, 1) exactly on a
-// flat ply), and the part of its velocity along it, per dof. One vector pass.
+// flat ply), and the part of its velocity along it, per dof. One vector
+// pass; the velocity's loads are not under a select (GCC 12.2 makes them
+// masked loads in the x86-64-v4 version and gets that version wrong).
 TS_VECTOR_CLONES void project_on_normals(std::size_t nn, double* __restrict normal, const double* __restrict v,
                                          double* __restrict out) {
 #pragma omp simd
