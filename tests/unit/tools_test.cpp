@@ -46,6 +46,27 @@ ToolDef punch_def(double R) {
   return d;
 }
 
+// An ASCII STL file of the triangles (their corners in the order given,
+// 17 digits), and a mesh tool named "die" of it.
+ToolDef stl_die(const std::filesystem::path& file, const std::vector<std::array<sdk::Vec3, 3>>& tris,
+                const std::string& pointer) {
+  std::ofstream s(file);
+  s.precision(17);
+  s << "solid die\n";
+  for (const auto& t : tris) {
+    s << " facet normal 0 0 0\n  outer loop\n";
+    for (const sdk::Vec3& v : t) s << "   vertex " << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';
+    s << "  endloop\n endfacet\n";
+  }
+  s << "endsolid die\n";
+  ToolDef def;
+  def.name = "die";
+  def.pointer = pointer;
+  def.surface.type = "mesh";
+  def.surface.file = file;
+  return def;
+}
+
 }  // namespace
 
 // A revolved quarter circle + line is a hemisphere on a cylinder: the
@@ -267,22 +288,7 @@ TEST(Tools, MeshToolAnswersAsASearchOfEveryTriangle) {
     }
   std::shuffle(tris.begin(), tris.end(), std::mt19937(5));
   const auto dir = temp_dir("tool_mesh_cad");
-  {
-    std::ofstream s(dir / "die.stl");
-    s.precision(17);
-    s << "solid die\n";
-    for (const auto& t : tris) {
-      s << " facet normal 0 0 0\n  outer loop\n";
-      for (const Vec3& v : t) s << "   vertex " << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';
-      s << "  endloop\n endfacet\n";
-    }
-    s << "endsolid die\n";
-  }
-  ToolDef def;
-  def.name = "die";
-  def.pointer = "/tools/1";
-  def.surface.type = "mesh";
-  def.surface.file = dir / "die.stl";
+  const ToolDef def = stl_die(dir / "die.stl", tris, "/tools/1");
   const RigidTool tool(def);
   ToolDef rdef = def;
   rdef.surface.type = "revolved";
@@ -407,24 +413,7 @@ TEST(Tools, MeshToolAnswersDoNotDependOnTheFilesOrder) {
     t = {t[r], t[(r + 1) % 3], t[(r + 2) % 3]};
   }
   const auto dir = temp_dir("tool_mesh_order");
-  auto write = [&](const std::string& name, const std::vector<std::array<Vec3, 3>>& tris) {
-    std::ofstream s(dir / name);
-    s.precision(17);
-    s << "solid die\n";
-    for (const auto& t : tris) {
-      s << " facet normal 0 0 0\n  outer loop\n";
-      for (const Vec3& v : t) s << "   vertex " << v[0] << ' ' << v[1] << ' ' << v[2] << '\n';
-      s << "  endloop\n endfacet\n";
-    }
-    s << "endsolid die\n";
-    ToolDef def;
-    def.name = "die";
-    def.pointer = "/tools/0";
-    def.surface.type = "mesh";
-    def.surface.file = dir / name;
-    return def;
-  };
-  const ToolDef d1 = write("rows.stl", rows), d2 = write("shuffled.stl", shuffled);
+  const ToolDef d1 = stl_die(dir / "rows.stl", rows, "/tools/0"), d2 = stl_die(dir / "shuffled.stl", shuffled, "/tools/0");
   const RigidTool a(d1), b(d2);
   std::vector<Vec3> points;
   std::uniform_real_distribution<double> u(-1.0, 1.0);
