@@ -197,7 +197,7 @@ void Simulation::Run::open_output() {
                         return c.type == ConstraintDef::Type::Symmetry && c.plane == d &&
                                std::find(c.parts.begin(), c.parts.end(), static_cast<int>(p)) != c.parts.end();
                       });
-        if (!every_ply || job.parts.empty()) continue;
+        if (!every_ply || job.parts.empty() || hi[d] - lo[d] <= 1e-6 * size) continue;  // (plies in the plane)
         if (lo[d] >= -1e-6 * size)
           planes.emplace_back(d, 1.0);
         else if (hi[d] <= 1e-6 * size)
