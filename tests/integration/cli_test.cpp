@@ -660,6 +660,28 @@ TEST(Output, ResultsDrawTheToolsWhereTheyStand) {
   EXPECT_LT(x_min, -0.07);
   EXPECT_LT(y_min, -0.07);
   EXPECT_NEAR(quarter, 0.25 * full, 1e-12 * full);
+  // A ply lying in a symmetry plane (here z = 0, its nodes held there) does
+  // not cut the tools at that plane: the die's wall still reaches down.
+  json flat = j;
+  flat["parts"].erase(1);
+  flat["interactions"] = json::array({flat["interactions"][2]});
+  flat["parts"][0]["mesh"]["origin"] = {0.0, 0.0, 0.0};
+  flat["constraints"].push_back({{"type", "symmetry"}, {"part", "*"}, {"plane", "z"}});
+  std::ofstream(dir / "flat.json") << flat.dump(2);
+  const auto in_plane = thermostamp("run " + q(dir / "flat.json") + " --out " + q(dir / "flat") + " --quiet");
+  ASSERT_EQ(in_plane.exit_code, 0) << in_plane.err;
+  {
+    const hid_t f = H5Fopen((dir / "flat" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    const auto die = read_dataset<double>(f, "tools/die/nodes");
+    H5Fclose(f);
+    double z_min = 0, x_min = 1;
+    for (std::size_t i = 0; i < die.size(); i += 3) {
+      z_min = std::min(z_min, die[i + 2]);
+      x_min = std::min(x_min, die[i]);
+    }
+    EXPECT_LT(z_min, -0.05);
+    EXPECT_EQ(x_min, 0.0) << "still cut at x = 0";
+  }
   const auto off = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "off") +
                                " --quiet --set output.tool_surfaces=false");
   ASSERT_EQ(off.exit_code, 0) << off.err;
