@@ -13,6 +13,7 @@
 
 #include "io/results_reader.hpp"
 #include "io/results_writer.hpp"
+#include "mesh/shell_mesh.hpp"
 
 namespace ts {
 
@@ -137,14 +138,10 @@ bool mirror(PlyData& p, int d, const std::string& name, const std::array<double,
   // Its mirror image's side: R a0 . a0 = |a0|^2 - 2 a0_d^2.
   const double turn = a0[0] * a0[0] + a0[1] * a0[1] + a0[2] * a0[2] - 2 * a0[d] * a0[d] < 0 ? -1.0 : 1.0;
   const std::size_t n = p.x0.size() / 3, m = p.tri.size() / 3;
-  double h = 0;
-  for (std::size_t e = 0; e < m; ++e)
-    for (int k = 0; k < 3; ++k) {
-      const std::size_t a = static_cast<std::size_t>(p.tri[3 * e + k]), b = static_cast<std::size_t>(p.tri[3 * e + (k + 1) % 3]);
-      double l2 = 0;
-      for (int c = 0; c < 3; ++c) l2 += (p.x0[3 * a + c] - p.x0[3 * b + c]) * (p.x0[3 * a + c] - p.x0[3 * b + c]);
-      h = std::max(h, std::sqrt(l2));
-    }
+  ShellMesh first;  // the ply in the first frame, for the run's own tolerance of a plane
+  first.x = p.x0;
+  first.triangles = p.tri;
+  const double h = max_edge_length(first);
   const double tol = 1e-6 * h;
   bool above = false, below = false;
   for (std::size_t i = 0; i < n; ++i) {
