@@ -18,7 +18,6 @@
 namespace ts {
 
 using detail::fmt_g;
-using detail::thickness_mean;
 
 void Simulation::build_thermal() {
   // Contact handlers: needed for the thermal contact map.
