@@ -463,6 +463,10 @@ void Simulation::build_tools() {
     v.query = &RigidTool::query_fn;
     v.velocity = tools_[t]->velocity().data();
     v.displacement = tools_[t]->displacement().data();
+    if (tools_[t]->is_mesh()) {
+      v.query_kept = &RigidTool::query_kept_fn;
+      v.kept_bytes = RigidTool::kKeptBytes;
+    }
     tool_views_.push_back(v);
   }
 }

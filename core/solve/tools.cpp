@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -771,6 +772,56 @@ double box_distance2(const double* x, const double* lo, const double* hi) {
 
 }  // namespace
 
+namespace {
+
+// The lower bound of triangle q's squared distance from x that the searches
+// skip it by: the distance to its plane, and beyond the line of edge k
+// (w_k < 0) the projection is at least -w_k / |g_k| away from the triangle.
+inline double triangle_bound2(const double* x, const double* v, const double* g) {
+  const double rx = x[0] - v[0], ry = x[1] - v[1], rz = x[2] - v[2];
+  const double plane = rx * g[0] + ry * g[1] + rz * g[2];
+  const double w1 = rx * g[3] + ry * g[4] + rz * g[5], w2 = rx * g[6] + ry * g[7] + rz * g[8];
+  const double w0 = 1.0 - w1 - w2;
+  const double out = std::max({w0 < 0 ? w0 * w0 * g[9] : 0.0, w1 < 0 ? w1 * w1 * g[10] : 0.0,
+                               w2 < 0 ? w2 * w2 * g[11] : 0.0});
+  return plane * plane + out;
+}
+
+// What a record of RigidTool::query_kept holds: where its list was made (in
+// the tool's initial position), for which cutoff (0: no list yet), the
+// triangles near that place (-1: more than fit, the tree is searched),
+// nearest first, and a lower bound of each one's distance from that place.
+struct KeptRecord {
+  static constexpr int kMax = static_cast<int>((RigidTool::kKeptBytes - 4 * sizeof(double) - sizeof(std::int32_t)) /
+                                               (sizeof(std::int32_t) + sizeof(float)));
+  double x[3];
+  double cutoff;
+  std::int32_t count;
+  std::int32_t tri[kMax];
+  float near[kMax];
+};
+static_assert(sizeof(KeptRecord) <= RigidTool::kKeptBytes);
+
+}  // namespace
+
+// Keeps triangle q if it is closer than the best so far, or as close with a
+// lower rank; the search's reach (limit2) follows the best.
+#define TS_MESH_TEST_TRIANGLE(q)                                                                                   \
+  do {                                                                                                             \
+    const double* v = &mx_[9 * static_cast<std::size_t>(q)];                                                      \
+    if (triangle_bound2(p, v, &mn_[kGeo * static_cast<std::size_t>(q)]) > limit2) break;                            \
+    const Vec3 cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}); \
+    const Vec3 dv = sdk::sub(x, cp);                                                                               \
+    const double d2 = sdk::dot(dv, dv);                                                                            \
+    if (d2 < best || (d2 == best && best_q >= 0 && mrank_[q] < mrank_[best_q])) {                                  \
+      best = d2;                                                                                                   \
+      best_q = q;                                                                                                  \
+      best_cp = cp;                                                                                                \
+      const double reach = std::sqrt(d2) + tol_;                                                                   \
+      limit2 = reach * reach;                                                                                      \
+    }                                                                                                              \
+  } while (false)
+
 void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double* nout) const {
   const Vec3 x = {p[0], p[1], p[2]};
   // The closest triangle nearer than the cutoff: of equal distances the
@@ -803,36 +854,39 @@ void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double*
       continue;
     }
     if (box_distance2(p, b.lo, b.hi) > limit2) continue;  // the best moved since this box was stacked
-    for (int q = b.first; q < b.first + b.count; ++q) {
-      const double* v = &mx_[9 * static_cast<std::size_t>(q)];
-      const double* g = &mn_[kGeo * static_cast<std::size_t>(q)];
-      const double rx = x[0] - v[0], ry = x[1] - v[1], rz = x[2] - v[2];
-      const double plane = rx * g[0] + ry * g[1] + rz * g[2];
-      // Beyond the line of edge k (w_k < 0) the projection is at least
-      // -w_k / |g_k| away from the triangle.
-      const double w1 = rx * g[3] + ry * g[4] + rz * g[5], w2 = rx * g[6] + ry * g[7] + rz * g[8];
-      const double w0 = 1.0 - w1 - w2;
-      const double out = std::max({w0 < 0 ? w0 * w0 * g[9] : 0.0, w1 < 0 ? w1 * w1 * g[10] : 0.0,
-                                   w2 < 0 ? w2 * w2 * g[11] : 0.0});
-      if (plane * plane + out > limit2) continue;
-      const Vec3 cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
-      const Vec3 dv = sdk::sub(x, cp);
-      const double d2 = sdk::dot(dv, dv);
-      if (d2 < best || (d2 == best && best_q >= 0 && mrank_[q] < mrank_[best_q])) {
-        best = d2;
-        best_q = q;
-        best_cp = cp;
-        const double reach = std::sqrt(d2) + tol_;
-        limit2 = reach * reach;
-      }
-    }
+    for (int q = b.first; q < b.first + b.count; ++q) TS_MESH_TEST_TRIANGLE(q);
   }
+  mesh_answer(p, best_q, best, best_cp, dist, nout);
+}
+
+void RigidTool::query_listed(const double* p, double cutoff, const std::int32_t* list, const float* near, int count,
+                             double moved, double& dist, double* nout) const {
+  const Vec3 x = {p[0], p[1], p[2]};
+  double best = cutoff * cutoff;
+  double limit2 = (cutoff + tol_) * (cutoff + tol_);
+  int best_q = -1;
+  Vec3 best_cp{};
+  for (int k = 0; k < count; ++k) {
+    // This triangle and the ones after it are at least near[k] - moved away.
+    const double lower = static_cast<double>(near[k]) - moved;
+    if (lower > 0 && lower * lower > limit2) break;
+    const int q = list[k];
+    TS_MESH_TEST_TRIANGLE(q);
+  }
+  mesh_answer(p, best_q, best, best_cp, dist, nout);
+}
+
+#undef TS_MESH_TEST_TRIANGLE
+
+void RigidTool::mesh_answer(const double* p, int best_q, double best, const Vec3& best_cp, double& dist,
+                            double* nout) const {
   if (best_q < 0) {
     dist = kInf;
     nout[0] = nout[1] = 0;
     nout[2] = 1;
     return;
   }
+  const Vec3 x = {p[0], p[1], p[2]};
   const Vec3 fn = sdk::load3(&mn_[kGeo * static_cast<std::size_t>(best_q)], 0);
   const Vec3 dv = sdk::sub(x, best_cp);
   const double len = std::sqrt(best);
@@ -842,6 +896,92 @@ void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double*
   // the direction from the closest point (folds act as rounded).
   const Vec3 n = len > 1e-12 * scale_ && std::abs(sdk::dot(dv, fn)) < (1 - 1e-12) * len ? sdk::scale(dv, side / len) : fn;
   for (int d = 0; d < 3; ++d) nout[d] = n[d];
+}
+
+int RigidTool::mesh_near(const double* p, double radius, std::int32_t* out, float* near, int max) const {
+  const double limit2 = radius * radius;
+  int count = 0;
+  int stack[128];
+  int top = 0;
+  if (!boxes_.empty() && !(box_distance2(p, boxes_[0].lo, boxes_[0].hi) > limit2)) stack[top++] = 0;
+  while (top > 0) {
+    const BoxNode& b = boxes_[stack[--top]];
+    if (b.count == 0) {
+      const int c1 = static_cast<int>(&b - boxes_.data()) + 1, c2 = b.first;
+      if (!(box_distance2(p, boxes_[c2].lo, boxes_[c2].hi) > limit2)) stack[top++] = c2;
+      if (!(box_distance2(p, boxes_[c1].lo, boxes_[c1].hi) > limit2)) stack[top++] = c1;
+      continue;
+    }
+    for (int q = b.first; q < b.first + b.count; ++q) {
+      if (triangle_bound2(p, &mx_[9 * static_cast<std::size_t>(q)], &mn_[kGeo * static_cast<std::size_t>(q)]) >
+          limit2)
+        continue;
+      if (count == max) return -1;
+      out[count++] = q;
+    }
+  }
+  // Nearest first, each with its distance less the round-off margin,
+  // rounded down to a float: a query from a point that has moved by m
+  // since stops at the first triangle at least m beyond its best so far.
+  const Vec3 x = {p[0], p[1], p[2]};
+  for (int k = 0; k < count; ++k) {
+    const double* v = &mx_[9 * static_cast<std::size_t>(out[k])];
+    const Vec3 dv = sdk::sub(x, sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}));
+    const double d = std::sqrt(sdk::dot(dv, dv)) - 2 * tol_;
+    float f = static_cast<float>(std::max(d, 0.0));
+    if (static_cast<double>(f) > d) f = std::nextafter(f, 0.0f);
+    near[k] = f;
+  }
+  for (int k = 1; k < count; ++k)
+    for (int m = k; m > 0 && near[m] < near[m - 1]; --m) {
+      std::swap(near[m], near[m - 1]);
+      std::swap(out[m], out[m - 1]);
+    }
+  return count;
+}
+
+int RigidTool::kept_listed(const void* record) {
+  const auto* r = static_cast<const KeptRecord*>(record);
+  return r->cutoff > 0 ? r->count : -2;
+}
+
+void RigidTool::query_kept(std::size_t n, const double* points, double cutoff, double* distance, double* normal,
+                           void* kept) const {
+  if (kind_ != Kind::Mesh || !(cutoff > 0) || !std::isfinite(cutoff)) {
+    query(n, points, cutoff, distance, normal);
+    return;
+  }
+  // A record's list holds every triangle within cutoff + skin (+ margins)
+  // of the place x_r where it was made. While the point p stays within
+  // skin - 2 tol of x_r, a triangle not listed is farther than cutoff +
+  // tol from p: the closest of the listed ones within the cutoff is the
+  // closest of all. The tools only translate, so the place is kept in the
+  // tool's initial position, where the tool's motion moves the point.
+  const double skin = 0.125 * cutoff;
+  const double stay = skin - 2 * tol_;
+  const double radius = cutoff + skin + 2 * tol_;
+  auto* rec = static_cast<KeptRecord*>(kept);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double p[3] = {points[3 * i] - u_[0], points[3 * i + 1] - u_[1], points[3 * i + 2] - u_[2]};
+    KeptRecord& r = rec[i];
+    const double dx = p[0] - r.x[0], dy = p[1] - r.x[1], dz = p[2] - r.x[2];
+    double moved2 = dx * dx + dy * dy + dz * dz;
+    if (!(r.cutoff == cutoff && moved2 <= stay * stay)) {
+      if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
+        query_mesh(p, cutoff, distance[i], normal + 3 * i);
+        continue;
+      }
+      for (int d = 0; d < 3; ++d) r.x[d] = p[d];
+      r.cutoff = cutoff;
+      r.count = mesh_near(p, radius, r.tri, r.near, KeptRecord::kMax);
+      moved2 = 0;
+    }
+    if (r.count < 0)
+      query_mesh(p, cutoff, distance[i], normal + 3 * i);
+    else
+      query_listed(p, cutoff, r.tri, r.near, r.count, std::sqrt(moved2) * (1 + 1e-12) + 2 * tol_, distance[i],
+                   normal + 3 * i);
+  }
 }
 
 std::array<double, 3> RigidTool::prescribed(double t) const {

@@ -4,6 +4,7 @@
 // and of triangle meshes (Gmsh or STL), and their rigid translation
 // (constant velocity, displacement table, or driven by a force).
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
@@ -40,6 +41,25 @@ class RigidTool {
     static_cast<const RigidTool*>(self)->query(n, points, cutoff, distance, normal);
   }
 
+  // A mesh tool's query for points asked again and again (a part's nodes,
+  // step after step): `kept` holds a record of kKeptBytes per point, which
+  // the caller keeps between calls (zero before the first call, 8-byte
+  // aligned). A record lists the triangles near the point where it was
+  // last searched; while the point stays near that place (in the tool's
+  // frame) only those are tested. The same answers as query(), to the bit.
+  static constexpr std::size_t kKeptBytes = 192;
+  void query_kept(std::size_t n, const double* points, double cutoff, double* distance, double* normal,
+                  void* kept) const;
+  static void query_kept_fn(const void* self, std::size_t n, const double* points, double cutoff, double* distance,
+                            double* normal, void* kept) {
+    static_cast<const RigidTool*>(self)->query_kept(n, points, cutoff, distance, normal, kept);
+  }
+  bool is_mesh() const { return kind_ == Kind::Mesh; }
+  // What a record holds: the number of triangles listed, -1 where more
+  // than fit (the point's queries then search the tree), -2 where it has
+  // no list yet.
+  static int kept_listed(const void* record);
+
   // A revolved tool's query of one point p (already moved back by the
   // tool's displacement), point by point; query() gives the same bits with
   // vector passes over the points.
@@ -64,6 +84,19 @@ class RigidTool {
  private:
   void query_revolved_run(std::size_t n, const double* points, double* distance, double* normal) const;
   void query_mesh(const double* p, double cutoff, double& d, double* n) const;
+  // The triangles whose distance from p may be at most `radius` (by the
+  // search's lower bounds), nearest first, into out[0 .. max), and a lower
+  // bound of each one's distance from p into near: their number, or -1
+  // where more than max are.
+  int mesh_near(const double* p, double radius, std::int32_t* out, float* near, int max) const;
+  // The closest of the listed triangles nearer than the cutoff, from a
+  // point at most `moved` from where the list was made: what query_mesh()
+  // answers where the list holds every triangle it could take.
+  void query_listed(const double* p, double cutoff, const std::int32_t* list, const float* near, int count,
+                    double moved, double& d, double* n) const;
+  // The signed distance and outward normal from the closest point cp of
+  // triangle q (squared distance d2; q < 0: none within the cutoff).
+  void mesh_answer(const double* p, int q, double d2, const std::array<double, 3>& cp, double& d, double* n) const;
   void build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri);
   // Throws JobError (at ptr) when two triangles with a common edge face
   // opposite sides; counts the edges for describe().

@@ -234,6 +234,20 @@ TEST(Restart, StickingFrictionContinuesBitForBit) {
   check_restart("sticking", j, 0.45);
 }
 
+// The tools as STL meshes (their revolved surfaces in steps of 3 degrees):
+// the contact handler keeps, per node, the tool's list of triangles near it
+// (ToolView::query_kept), not saved at the checkpoint but formed again.
+TEST(Restart, MeshedToolsContinueBitForBit) {
+  json j = coarse_hemisphere("hemisphere_ud_2ply_isothermal.json");
+  const auto dir = temp_dir("meshed_tools_stl");
+  for (auto& t : j["tools"]) {
+    const auto file = dir / (t["name"].get<std::string>() + ".stl");
+    write_revolved_stl(file, t["surface"], 3.0);
+    t["surface"] = {{"type", "mesh"}, {"file", file.string()}};
+  }
+  check_restart("meshed_tools", j, 0.45);
+}
+
 // Checkpoints by wall time (--checkpoint-minutes; here every 30 ms, so
 // that a run of about a second writes several): where they fall depends
 // on the machine, what the continued run gives does not.

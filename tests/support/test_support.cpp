@@ -168,6 +168,65 @@ void write_square_stl(const std::filesystem::path& file, double lo, double hi, d
   s << "endsolid square\n";
 }
 
+void write_revolved_stl(const std::filesystem::path& file, const json& surface, double step_deg) {
+  const double pi = std::acos(-1.0), step = step_deg * pi / 180;
+  const json origin = surface.contains("axis") ? surface["axis"].value("origin", json{0.0, 0.0, 0.0})
+                                               : json{0.0, 0.0, 0.0};
+  std::vector<std::array<double, 4>> segs;  // (ra, za, rb, zb)
+  for (const auto& piece : surface["profile"]) {
+    std::vector<std::array<double, 2>> pts;
+    if (piece.contains("line")) {
+      pts = {piece["line"][0].get<std::array<double, 2>>(), piece["line"][1].get<std::array<double, 2>>()};
+    } else {
+      const auto a = piece["arc"]["from"].get<std::array<double, 2>>(), b = piece["arc"]["to"].get<std::array<double, 2>>();
+      const auto c = piece["arc"]["centre"].get<std::array<double, 2>>();
+      const double rad = std::hypot(a[0] - c[0], a[1] - c[1]);
+      const double t0 = std::atan2(a[1] - c[1], a[0] - c[0]), t1 = std::atan2(b[1] - c[1], b[0] - c[0]);
+      const double cross = (a[0] - c[0]) * (b[1] - c[1]) - (a[1] - c[1]) * (b[0] - c[0]);
+      double sweep = t1 - t0;
+      if (cross > 0 && sweep < 0) sweep += 2 * pi;
+      if (cross < 0 && sweep > 0) sweep -= 2 * pi;
+      const int n = std::max(1, static_cast<int>(std::ceil(std::abs(sweep) / step)));
+      for (int k = 0; k <= n; ++k)
+        pts.push_back({c[0] + rad * std::cos(t0 + sweep * k / n), c[1] + rad * std::sin(t0 + sweep * k / n)});
+      pts.front() = a;
+      pts.back() = b;
+    }
+    for (std::size_t k = 0; k + 1 < pts.size(); ++k) segs.push_back({pts[k][0], pts[k][1], pts[k + 1][0], pts[k + 1][1]});
+  }
+  const double margin = 3.0 * pi / 180, span = pi / 2 + 2 * margin;
+  const int ns = static_cast<int>(std::ceil(span / step));
+  std::ofstream s(file);
+  s.precision(17);
+  s << "solid revolved\n";
+  auto xyz = [&](double r, double z, double t) {
+    return std::array<double, 3>{origin[0].get<double>() + r * std::cos(t), origin[1].get<double>() + r * std::sin(t),
+                                 origin[2].get<double>() + z};
+  };
+  for (const auto& g : segs)
+    for (int k = 0; k < ns; ++k) {
+      const double t0 = -margin + span * k / ns, t1 = -margin + span * (k + 1) / ns, tm = 0.5 * (t0 + t1);
+      const std::array<std::array<double, 3>, 4> q = {xyz(g[0], g[1], t0), xyz(g[2], g[3], t0), xyz(g[2], g[3], t1),
+                                                      xyz(g[0], g[1], t1)};
+      const std::array<double, 3> want = {-(g[3] - g[1]) * std::cos(tm), -(g[3] - g[1]) * std::sin(tm), g[2] - g[0]};
+      for (auto tri : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
+        std::array<double, 3> u{}, v{};
+        for (int d = 0; d < 3; ++d) {
+          u[d] = q[tri[1]][d] - q[tri[0]][d];
+          v[d] = q[tri[2]][d] - q[tri[0]][d];
+        }
+        const std::array<double, 3> n = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (len < 1e-14) continue;  // a corner on the axis
+        if (n[0] * want[0] + n[1] * want[1] + n[2] * want[2] < 0) std::swap(tri[1], tri[2]);
+        s << " facet normal 0 0 0\n  outer loop\n";
+        for (int c : tri) s << "   vertex " << q[c][0] << ' ' << q[c][1] << ' ' << q[c][2] << "\n";
+        s << "  endloop\n endfacet\n";
+      }
+    }
+  s << "endsolid revolved\n";
+}
+
 void slab_heat_flows(const std::vector<double>& T, double k, double e, double h, double Ta, std::vector<double>& q) {
   const std::size_t n = T.size() - 1;
   q.assign(n + 1, 0.0);

@@ -82,6 +82,12 @@ std::filesystem::path temp_dir(const std::string& name);
 // normal +z), for a meshed tool.
 void write_square_stl(const std::filesystem::path& file, double lo, double hi, double z);
 
+// An STL file of a revolved tool's `surface` (a job's, axis along z) over
+// the quarter x, y >= 0 and 3 degrees either side: lines as one segment,
+// arcs and the sectors around the axis in steps of at most `step_deg`;
+// outward normals as the revolved tool's (left of the profile's direction).
+void write_revolved_stl(const std::filesystem::path& file, const json& surface, double step_deg);
+
 // The mesh as a Gmsh 2.2 file as mesh generators leave them: its triangles
 // in an order shuffled by `seed` (0: in order), tagged 100 + their index in
 // `mesh`, the nodes tagged 7 + 3 x their index, listed from the last.

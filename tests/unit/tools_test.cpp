@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <fstream>
 #include <functional>
@@ -440,6 +441,73 @@ TEST(Tools, MeshToolAnswersDoNotDependOnTheFilesOrder) {
         ++differ;
   }
   EXPECT_EQ(differ, 0u) << "of " << 2 * points.size() << " answers";
+}
+
+// query_kept() answers a point from the triangles listed in its record
+// while the point (in the tool's frame) stays near where the list was made:
+// points walking in steps from 0.1 um to 0.6 mm over a die whose fillet is
+// finer than the search's reach, with the tool moving and the cutoff
+// changing half way, get the bits of the tree's answers at every step, from
+// lists (most records) and from the tree (records whose list would not
+// fit), near the surface, on both sides and beyond the cutoff.
+TEST(Tools, KeptRecordsGiveTheTreesAnswers) {
+  using sdk::Vec3;
+  const double pi = std::acos(-1.0);
+  std::vector<std::array<double, 2>> prof = {{0.08, -0.02}, {0.08, -0.0075}};
+  for (int k = 1; k <= 24; ++k) {
+    const double a = pi - 0.5 * pi * k / 24;
+    prof.push_back({0.0875 + 0.0075 * std::cos(a), -0.0075 + 0.0075 * std::sin(a)});
+  }
+  prof.back() = {0.0875, 0.0};
+  prof.push_back({0.10, 0.0});
+  prof.push_back({0.12, 0.0});
+  const int sectors = 90;
+  auto at = [](std::array<double, 2> q, double t) { return Vec3{q[0] * std::cos(t), q[0] * std::sin(t), q[1]}; };
+  std::vector<std::array<Vec3, 3>> tris;
+  for (std::size_t k = 0; k + 1 < prof.size(); ++k)
+    for (int j = 0; j < sectors; ++j) {
+      const double t0 = 0.5 * pi * j / sectors, t1 = 0.5 * pi * (j + 1) / sectors;
+      const Vec3 a = at(prof[k], t0), b = at(prof[k + 1], t0), c = at(prof[k + 1], t1), d = at(prof[k], t1);
+      tris.push_back({a, b, c});
+      tris.push_back({a, c, d});
+    }
+  const auto dir = temp_dir("tool_mesh_kept");
+  ToolDef def = stl_die(dir / "die.stl", tris, "/tools/0");
+  RigidTool tool(def);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const std::size_t n = 3000;
+  std::vector<Vec3> x(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& q = prof[i % prof.size()];
+    x[i] = at({q[0] + 0.003 * u(rng), q[1] + 0.003 * u(rng)}, 0.25 * pi * (1 + 0.9 * u(rng)));
+  }
+  std::vector<std::byte> kept(n * RigidTool::kKeptBytes, std::byte{0});
+  std::vector<double> dk(n), dt(n), nk(3 * n), nt(3 * n);
+  const double steps[] = {1e-7, 1e-5, 1e-4, 6e-4};
+  std::size_t differ = 0, answers = 0, listed = 0, searched = 0, within = 0;
+  for (int s = 0; s < 240; ++s) {
+    const double cutoff = s < 120 ? 0.0015 : 0.001;
+    tool.set_motion_state({0.0, 0.0, -2e-5 * s}, {0, 0, 0});
+    tool.query_kept(n, x[0].data(), cutoff, dk.data(), nk.data(), kept.data());
+    tool.query(n, x[0].data(), cutoff, dt.data(), nt.data());
+    for (std::size_t i = 0; i < n; ++i) {
+      ++answers;
+      if (std::memcmp(&dk[i], &dt[i], sizeof(double)) != 0 || std::memcmp(&nk[3 * i], &nt[3 * i], 3 * sizeof(double)) != 0)
+        ++differ;
+      if (std::isfinite(dt[i])) ++within;
+      const int c = RigidTool::kept_listed(&kept[i * RigidTool::kKeptBytes]);
+      if (c >= 0) ++listed;
+      if (c == -1) ++searched;
+      const double h = steps[(i + static_cast<std::size_t>(s) / 40) % 4];
+      x[i] = sdk::add(x[i], Vec3{h * u(rng), h * u(rng), h * u(rng)});
+    }
+  }
+  EXPECT_EQ(differ, 0u) << "of " << answers << " answers";
+  EXPECT_GT(within, answers / 4) << "answers within the cutoff";
+  EXPECT_LT(within, answers * 3 / 4);
+  EXPECT_GT(listed, answers / 2) << "answers from lists";
+  EXPECT_GT(searched, answers / 100) << "answers from the tree (lists that would not fit)";
 }
 
 // Two triangles with a common edge must face the same side: walked the

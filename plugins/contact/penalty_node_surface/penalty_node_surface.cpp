@@ -31,6 +31,7 @@
 // of the two facing faces (ply/ply), as of the last thermal step.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <limits>
 #include <string>
@@ -657,6 +658,9 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // run, no copies); where and when a node was asked is kept only for
     // nodes beyond the cutoff, the only ones that can be skipped next time.
     skip_.resize(n);
+    // The tool's records of the nodes (query_kept): a cache of the same
+    // answers, formed again after a restart rather than saved.
+    if (tool.query_kept && kept_.size() != n * tool.kept_bytes) kept_.assign(n * tool.kept_bytes, std::byte{0});
     if (tool.displacement)
       skip_flags(n, dist_.data(), sq_.data(), a.x.data(), xq_.data(), cutoff, tool_path_, skip_.data());
     else
@@ -669,7 +673,11 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       }
       std::size_t j = i + 1;
       while (j < n && !skip(j)) ++j;
-      tool.query(tool.context, j - i, &a.x[3 * i], 2 * cutoff, &dist_[i], &tn_[3 * i]);
+      if (tool.query_kept)
+        tool.query_kept(tool.context, j - i, &a.x[3 * i], 2 * cutoff, &dist_[i], &tn_[3 * i],
+                        kept_.data() + i * tool.kept_bytes);
+      else
+        tool.query(tool.context, j - i, &a.x[3 * i], 2 * cutoff, &dist_[i], &tn_[3 * i]);
       for (std::size_t k = i; k < j; ++k) {
         if (dist_[k] > cutoff) {
           sq_[k] = tool_path_;
@@ -1153,6 +1161,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // and the tool's path length then, sq_).
   std::vector<double> xq_, sq_;
   std::vector<double> skip_;  // per node: 1 if not asked at this query
+  std::vector<std::byte> kept_;  // per node: the tool's record (ToolView::query_kept)
   double tool_path_ = 0;
   Vec3 tool_u_ = {0, 0, 0};
 };
@@ -1163,7 +1172,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.10.0";
+  d.version = "0.11.0";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces; gives the contact pressure as penalty x penetration";
   d.params = {
@@ -1227,4 +1236,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.10.0", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.11.0", ts::contact::register_all)

@@ -53,6 +53,14 @@ struct PartView {
 // `displacement` its rigid translation from the initial position (m, 3
 // values): a handler can bound how far the surface has moved since it last
 // asked, and skip points that cannot have come within reach.
+// `query_kept` (nullptr for tools without one) answers as `query`, to the
+// bit, for points the caller asks about again and again (a part's nodes,
+// step after step): the caller keeps `kept_bytes` of memory per point
+// (8-byte aligned, zero before the first call, not shared between
+// threads), passes the batch's records with it, and the tool keeps there
+// what makes the next answers cheaper (a mesh tool: the triangles near the
+// point). Records need not be saved at a checkpoint: zeroed again, they
+// give the same answers.
 struct ToolView {
   int index = 0;
   std::string_view name;
@@ -62,6 +70,9 @@ struct ToolView {
                 double* normal) = nullptr;
   const double* velocity = nullptr;      // 3 values, kernel-owned, updated every step
   const double* displacement = nullptr;  // 3 values, kernel-owned, updated every step
+  void (*query_kept)(const void* context, std::size_t n, const double* points, double cutoff, double* distance,
+                     double* normal, void* kept) = nullptr;
+  std::size_t kept_bytes = 0;  // per point; a multiple of 8
 };
 
 }  // namespace ts::sdk
