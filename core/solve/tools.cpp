@@ -947,7 +947,9 @@ int RigidTool::kept_listed(const void* record) {
 
 void RigidTool::query_kept(std::size_t n, const double* points, double cutoff, double* distance, double* normal,
                            void* kept) const {
-  if (kind_ != Kind::Mesh || !(cutoff > 0) || !std::isfinite(cutoff)) {
+  // A cutoff within the round-off margins of the mesh leaves no room for
+  // a list: the tree answers.
+  if (kind_ != Kind::Mesh || !(0.125 * cutoff > 4 * tol_) || !std::isfinite(cutoff)) {
     query(n, points, cutoff, distance, normal);
     return;
   }
