@@ -822,18 +822,8 @@ static_assert(sizeof(KeptRecord) <= RigidTool::kKeptBytes);
     }                                                                                                              \
   } while (false)
 
-void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double* nout) const {
-  const Vec3 x = {p[0], p[1], p[2]};
-  // The closest triangle nearer than the cutoff: of equal distances the
-  // lowest rank. Boxes and triangles whose lower bound (the distance to
-  // the box, to the triangle's plane) is farther than the best so far are
-  // skipped, with a margin of 1e-12 of the mesh's size for the round-off of
-  // the two distances, so that nothing the comparison below would take is
-  // skipped; the nearer child first.
-  double best = std::isfinite(cutoff) ? cutoff * cutoff : kInf;
-  double limit2 = std::isfinite(cutoff) ? (cutoff + tol_) * (cutoff + tol_) : kInf;
-  int best_q = -1;
-  Vec3 best_cp{};
+template <class Leaf>
+void RigidTool::descend(const double* p, const double& limit2, Leaf&& leaf) const {
   int stack[128];
   int top = 0;
   if (!boxes_.empty() && !(box_distance2(p, boxes_[0].lo, boxes_[0].hi) > limit2)) stack[top++] = 0;
@@ -853,9 +843,26 @@ void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double*
       }
       continue;
     }
-    if (box_distance2(p, b.lo, b.hi) > limit2) continue;  // the best moved since this box was stacked
-    for (int q = b.first; q < b.first + b.count; ++q) TS_MESH_TEST_TRIANGLE(q);
+    if (box_distance2(p, b.lo, b.hi) > limit2) continue;  // the reach shrank since this box was stacked
+    leaf(b);
   }
+}
+
+void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double* nout) const {
+  const Vec3 x = {p[0], p[1], p[2]};
+  // The closest triangle nearer than the cutoff: of equal distances the
+  // lowest rank. Boxes and triangles whose lower bound (the distance to
+  // the box, to the triangle's plane) is farther than the best so far are
+  // skipped, with a margin of 1e-12 of the mesh's size for the round-off of
+  // the two distances, so that nothing the comparison below would take is
+  // skipped; the nearer child first.
+  double best = std::isfinite(cutoff) ? cutoff * cutoff : kInf;
+  double limit2 = std::isfinite(cutoff) ? (cutoff + tol_) * (cutoff + tol_) : kInf;
+  int best_q = -1;
+  Vec3 best_cp{};
+  descend(p, limit2, [&](const BoxNode& b) {
+    for (int q = b.first; q < b.first + b.count; ++q) TS_MESH_TEST_TRIANGLE(q);
+  });
   mesh_answer(p, best_q, best, best_cp, dist, nout);
 }
 
@@ -901,25 +908,19 @@ void RigidTool::mesh_answer(const double* p, int best_q, double best, const Vec3
 int RigidTool::mesh_near(const double* p, double radius, std::int32_t* out, float* near, int max) const {
   const double limit2 = radius * radius;
   int count = 0;
-  int stack[128];
-  int top = 0;
-  if (!boxes_.empty() && !(box_distance2(p, boxes_[0].lo, boxes_[0].hi) > limit2)) stack[top++] = 0;
-  while (top > 0) {
-    const BoxNode& b = boxes_[stack[--top]];
-    if (b.count == 0) {
-      const int c1 = static_cast<int>(&b - boxes_.data()) + 1, c2 = b.first;
-      if (!(box_distance2(p, boxes_[c2].lo, boxes_[c2].hi) > limit2)) stack[top++] = c2;
-      if (!(box_distance2(p, boxes_[c1].lo, boxes_[c1].hi) > limit2)) stack[top++] = c1;
-      continue;
-    }
-    for (int q = b.first; q < b.first + b.count; ++q) {
+  bool full = false;
+  descend(p, limit2, [&](const BoxNode& b) {
+    for (int q = b.first; q < b.first + b.count && !full; ++q) {
       if (triangle_bound2(p, &mx_[9 * static_cast<std::size_t>(q)], &mn_[kGeo * static_cast<std::size_t>(q)]) >
           limit2)
         continue;
-      if (count == max) return -1;
-      out[count++] = q;
+      if (count == max)
+        full = true;
+      else
+        out[count++] = q;
     }
-  }
+  });
+  if (full) return -1;
   // Nearest first, each with its distance less the round-off margin,
   // rounded down to a float: a query from a point that has moved by m
   // since stops at the first triangle at least m beyond its best so far.

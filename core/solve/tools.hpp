@@ -84,6 +84,10 @@ class RigidTool {
  private:
   void query_revolved_run(std::size_t n, const double* points, double* distance, double* normal) const;
   void query_mesh(const double* p, double cutoff, double& d, double* n) const;
+  // Walks the tree's boxes within sqrt(limit2) of p, the nearer child
+  // first, and hands each leaf to `leaf`, which may shrink limit2.
+  template <class Leaf>
+  void descend(const double* p, const double& limit2, Leaf&& leaf) const;
   // The triangles whose distance from p may be at most `radius` (by the
   // search's lower bounds), nearest first, into out[0 .. max), and a lower
   // bound of each one's distance from p into near: their number, or -1

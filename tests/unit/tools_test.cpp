@@ -379,6 +379,43 @@ TEST(Tools, MeshToolAnswersAsASearchOfEveryTriangle) {
   EXPECT_GT(found, 5000);
 }
 
+namespace {
+
+// A die's profile (r, z): a wall at r = 80 mm, a 7.5 mm fillet in 24
+// facets, a flat ring to r = 120 mm (in two pieces where `split_ring`),
+// and its triangles over a quarter turn in `sectors` sectors, ring after
+// ring.
+std::vector<std::array<double, 2>> die_profile(bool split_ring) {
+  const double pi = std::acos(-1.0);
+  std::vector<std::array<double, 2>> prof = {{0.08, -0.02}, {0.08, -0.0075}};
+  for (int k = 1; k <= 24; ++k) {
+    const double a = pi - 0.5 * pi * k / 24;
+    prof.push_back({0.0875 + 0.0075 * std::cos(a), -0.0075 + 0.0075 * std::sin(a)});
+  }
+  prof.back() = {0.0875, 0.0};
+  if (split_ring) prof.push_back({0.10, 0.0});
+  prof.push_back({0.12, 0.0});
+  return prof;
+}
+
+std::array<double, 3> on_die(std::array<double, 2> q, double t) { return {q[0] * std::cos(t), q[0] * std::sin(t), q[1]}; }
+
+std::vector<std::array<sdk::Vec3, 3>> die_rows(const std::vector<std::array<double, 2>>& prof, int sectors) {
+  const double pi = std::acos(-1.0);
+  std::vector<std::array<sdk::Vec3, 3>> rows;
+  for (std::size_t k = 0; k + 1 < prof.size(); ++k)
+    for (int j = 0; j < sectors; ++j) {
+      const double t0 = 0.5 * pi * j / sectors, t1 = 0.5 * pi * (j + 1) / sectors;
+      const sdk::Vec3 a = on_die(prof[k], t0), b = on_die(prof[k + 1], t0), c = on_die(prof[k + 1], t1),
+                      d = on_die(prof[k], t1);
+      rows.push_back({a, b, c});
+      rows.push_back({a, c, d});
+    }
+  return rows;
+}
+
+}  // namespace
+
 // A mesh tool's answers depend on its triangles, not on the file: the
 // die above (a fillet of 24 facets between a wall and a ring, 60 sectors)
 // in rows, and shuffled with every triangle started from a random corner
@@ -389,23 +426,9 @@ TEST(Tools, MeshToolAnswersAsASearchOfEveryTriangle) {
 TEST(Tools, MeshToolAnswersDoNotDependOnTheFilesOrder) {
   using sdk::Vec3;
   const double pi = std::acos(-1.0);
-  std::vector<std::array<double, 2>> prof = {{0.08, -0.02}, {0.08, -0.0075}};
-  for (int k = 1; k <= 24; ++k) {
-    const double a = pi - 0.5 * pi * k / 24;
-    prof.push_back({0.0875 + 0.0075 * std::cos(a), -0.0075 + 0.0075 * std::sin(a)});
-  }
-  prof.back() = {0.0875, 0.0};
-  prof.push_back({0.12, 0.0});
-  const int sectors = 60;
-  auto at = [](std::array<double, 2> q, double t) { return Vec3{q[0] * std::cos(t), q[0] * std::sin(t), q[1]}; };
-  std::vector<std::array<Vec3, 3>> rows;
-  for (std::size_t k = 0; k + 1 < prof.size(); ++k)
-    for (int j = 0; j < sectors; ++j) {
-      const double t0 = 0.5 * pi * j / sectors, t1 = 0.5 * pi * (j + 1) / sectors;
-      const Vec3 a = at(prof[k], t0), b = at(prof[k + 1], t0), c = at(prof[k + 1], t1), d = at(prof[k], t1);
-      rows.push_back({a, b, c});
-      rows.push_back({a, c, d});
-    }
+  const auto prof = die_profile(false);
+  const auto at = on_die;
+  const std::vector<std::array<Vec3, 3>> rows = die_rows(prof, 60);
   auto shuffled = rows;
   std::mt19937 rng(11);
   std::shuffle(shuffled.begin(), shuffled.end(), rng);
@@ -454,24 +477,9 @@ TEST(Tools, MeshToolAnswersDoNotDependOnTheFilesOrder) {
 TEST(Tools, KeptRecordsGiveTheTreesAnswers) {
   using sdk::Vec3;
   const double pi = std::acos(-1.0);
-  std::vector<std::array<double, 2>> prof = {{0.08, -0.02}, {0.08, -0.0075}};
-  for (int k = 1; k <= 24; ++k) {
-    const double a = pi - 0.5 * pi * k / 24;
-    prof.push_back({0.0875 + 0.0075 * std::cos(a), -0.0075 + 0.0075 * std::sin(a)});
-  }
-  prof.back() = {0.0875, 0.0};
-  prof.push_back({0.10, 0.0});
-  prof.push_back({0.12, 0.0});
-  const int sectors = 90;
-  auto at = [](std::array<double, 2> q, double t) { return Vec3{q[0] * std::cos(t), q[0] * std::sin(t), q[1]}; };
-  std::vector<std::array<Vec3, 3>> tris;
-  for (std::size_t k = 0; k + 1 < prof.size(); ++k)
-    for (int j = 0; j < sectors; ++j) {
-      const double t0 = 0.5 * pi * j / sectors, t1 = 0.5 * pi * (j + 1) / sectors;
-      const Vec3 a = at(prof[k], t0), b = at(prof[k + 1], t0), c = at(prof[k + 1], t1), d = at(prof[k], t1);
-      tris.push_back({a, b, c});
-      tris.push_back({a, c, d});
-    }
+  const auto prof = die_profile(true);
+  const auto at = on_die;
+  const auto tris = die_rows(prof, 90);
   const auto dir = temp_dir("tool_mesh_kept");
   ToolDef def = stl_die(dir / "die.stl", tris, "/tools/0");
   RigidTool tool(def);
