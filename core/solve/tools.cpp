@@ -7,7 +7,6 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
-#include <iterator>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -806,21 +805,21 @@ static_assert(sizeof(KeptRecord) <= RigidTool::kKeptBytes);
 
 // Keeps triangle q if it is closer than the best so far, or as close with a
 // lower rank; the search's reach (limit2) follows the best.
-#define TS_MESH_TEST_TRIANGLE(q)                                                                                   \
-  do {                                                                                                             \
-    const double* v = &mx_[9 * static_cast<std::size_t>(q)];                                                      \
-    if (triangle_bound2(p, v, &mn_[kGeo * static_cast<std::size_t>(q)]) > limit2) break;                            \
-    const Vec3 cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}); \
-    const Vec3 dv = sdk::sub(x, cp);                                                                               \
-    const double d2 = sdk::dot(dv, dv);                                                                            \
-    if (d2 < best || (d2 == best && best_q >= 0 && mrank_[q] < mrank_[best_q])) {                                  \
-      best = d2;                                                                                                   \
-      best_q = q;                                                                                                  \
-      best_cp = cp;                                                                                                \
-      const double reach = std::sqrt(d2) + tol_;                                                                   \
-      limit2 = reach * reach;                                                                                      \
-    }                                                                                                              \
-  } while (false)
+inline void RigidTool::test_triangle(const double* p, int q, Closest& c) const {
+  const double* v = &mx_[9 * static_cast<std::size_t>(q)];
+  if (triangle_bound2(p, v, &mn_[kGeo * static_cast<std::size_t>(q)]) > c.limit2) return;
+  const Vec3 x = {p[0], p[1], p[2]};
+  const Vec3 cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
+  const Vec3 dv = sdk::sub(x, cp);
+  const double d2 = sdk::dot(dv, dv);
+  if (d2 < c.best || (d2 == c.best && c.q >= 0 && mrank_[q] < mrank_[c.q])) {
+    c.best = d2;
+    c.q = q;
+    c.cp = cp;
+    const double reach = std::sqrt(d2) + tol_;
+    c.limit2 = reach * reach;
+  }
+}
 
 template <class Leaf>
 void RigidTool::descend(const double* p, const double& limit2, Leaf&& leaf) const {
@@ -849,41 +848,34 @@ void RigidTool::descend(const double* p, const double& limit2, Leaf&& leaf) cons
 }
 
 void RigidTool::query_mesh(const double* p, double cutoff, double& dist, double* nout) const {
-  const Vec3 x = {p[0], p[1], p[2]};
   // The closest triangle nearer than the cutoff: of equal distances the
   // lowest rank. Boxes and triangles whose lower bound (the distance to
   // the box, to the triangle's plane) is farther than the best so far are
   // skipped, with a margin of 1e-12 of the mesh's size for the round-off of
   // the two distances, so that nothing the comparison below would take is
   // skipped; the nearer child first.
-  double best = std::isfinite(cutoff) ? cutoff * cutoff : kInf;
-  double limit2 = std::isfinite(cutoff) ? (cutoff + tol_) * (cutoff + tol_) : kInf;
-  int best_q = -1;
-  Vec3 best_cp{};
-  descend(p, limit2, [&](const BoxNode& b) {
-    for (int q = b.first; q < b.first + b.count; ++q) TS_MESH_TEST_TRIANGLE(q);
+  Closest c;
+  c.best = std::isfinite(cutoff) ? cutoff * cutoff : kInf;
+  c.limit2 = std::isfinite(cutoff) ? (cutoff + tol_) * (cutoff + tol_) : kInf;
+  descend(p, c.limit2, [&](const BoxNode& b) {
+    for (int q = b.first; q < b.first + b.count; ++q) test_triangle(p, q, c);
   });
-  mesh_answer(p, best_q, best, best_cp, dist, nout);
+  mesh_answer(p, c.q, c.best, c.cp, dist, nout);
 }
 
 void RigidTool::query_listed(const double* p, double cutoff, const std::int32_t* list, const float* near, int count,
                              double moved, double& dist, double* nout) const {
-  const Vec3 x = {p[0], p[1], p[2]};
-  double best = cutoff * cutoff;
-  double limit2 = (cutoff + tol_) * (cutoff + tol_);
-  int best_q = -1;
-  Vec3 best_cp{};
+  Closest c;
+  c.best = cutoff * cutoff;
+  c.limit2 = (cutoff + tol_) * (cutoff + tol_);
   for (int k = 0; k < count; ++k) {
     // This triangle and the ones after it are at least near[k] - moved away.
     const double lower = static_cast<double>(near[k]) - moved;
-    if (lower > 0 && lower * lower > limit2) break;
-    const int q = list[k];
-    TS_MESH_TEST_TRIANGLE(q);
+    if (lower > 0 && lower * lower > c.limit2) break;
+    test_triangle(p, list[k], c);
   }
-  mesh_answer(p, best_q, best, best_cp, dist, nout);
+  mesh_answer(p, c.q, c.best, c.cp, dist, nout);
 }
-
-#undef TS_MESH_TEST_TRIANGLE
 
 void RigidTool::mesh_answer(const double* p, int best_q, double best, const Vec3& best_cp, double& dist,
                             double* nout) const {

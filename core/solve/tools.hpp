@@ -84,6 +84,14 @@ class RigidTool {
  private:
   void query_revolved_run(std::size_t n, const double* points, double* distance, double* normal) const;
   void query_mesh(const double* p, double cutoff, double& d, double* n) const;
+  // The closest triangle so far of a search (q < 0: none), its squared
+  // distance and closest point, and the reach of the search, squared.
+  struct Closest {
+    double best = 0, limit2 = 0;
+    int q = -1;
+    std::array<double, 3> cp{};
+  };
+  void test_triangle(const double* p, int q, Closest& c) const;
   // Walks the tree's boxes within sqrt(limit2) of p, the nearer child
   // first, and hands each leaf to `leaf`, which may shrink limit2.
   template <class Leaf>
