@@ -803,15 +803,22 @@ static_assert(sizeof(KeptRecord) <= RigidTool::kKeptBytes);
 
 }  // namespace
 
+// The closest point cp of triangle q to p, and its squared distance.
+inline double RigidTool::closest_on(const double* p, int q, Vec3& cp) const {
+  const double* v = &mx_[9 * static_cast<std::size_t>(q)];
+  const Vec3 x = {p[0], p[1], p[2]};
+  cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
+  const Vec3 dv = sdk::sub(x, cp);
+  return sdk::dot(dv, dv);
+}
+
 // Keeps triangle q if it is closer than the best so far, or as close with a
 // lower rank; the search's reach (limit2) follows the best.
 inline void RigidTool::test_triangle(const double* p, int q, Closest& c) const {
-  const double* v = &mx_[9 * static_cast<std::size_t>(q)];
-  if (triangle_bound2(p, v, &mn_[kGeo * static_cast<std::size_t>(q)]) > c.limit2) return;
-  const Vec3 x = {p[0], p[1], p[2]};
-  const Vec3 cp = sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]});
-  const Vec3 dv = sdk::sub(x, cp);
-  const double d2 = sdk::dot(dv, dv);
+  if (triangle_bound2(p, &mx_[9 * static_cast<std::size_t>(q)], &mn_[kGeo * static_cast<std::size_t>(q)]) > c.limit2)
+    return;
+  Vec3 cp;
+  const double d2 = closest_on(p, q, cp);
   if (d2 < c.best || (d2 == c.best && c.q >= 0 && mrank_[q] < mrank_[c.q])) {
     c.best = d2;
     c.q = q;
@@ -916,11 +923,9 @@ int RigidTool::mesh_near(const double* p, double radius, std::int32_t* out, floa
   // Nearest first, each with its distance less the round-off margin,
   // rounded down to a float: a query from a point that has moved by m
   // since stops at the first triangle at least m beyond its best so far.
-  const Vec3 x = {p[0], p[1], p[2]};
   for (int k = 0; k < count; ++k) {
-    const double* v = &mx_[9 * static_cast<std::size_t>(out[k])];
-    const Vec3 dv = sdk::sub(x, sdk::closest_point_on_triangle(x, {v[0], v[1], v[2]}, {v[3], v[4], v[5]}, {v[6], v[7], v[8]}));
-    const double d = std::sqrt(sdk::dot(dv, dv)) - 2 * tol_;
+    Vec3 cp;
+    const double d = std::sqrt(closest_on(p, out[k], cp)) - 2 * tol_;
     float f = static_cast<float>(std::max(d, 0.0));
     if (static_cast<double>(f) > d) f = std::nextafter(f, 0.0f);
     near[k] = f;

@@ -92,6 +92,7 @@ class RigidTool {
     std::array<double, 3> cp{};
   };
   void test_triangle(const double* p, int q, Closest& c) const;
+  double closest_on(const double* p, int q, std::array<double, 3>& cp) const;
   // Walks the tree's boxes within sqrt(limit2) of p, the nearer child
   // first, and hands each leaf to `leaf`, which may shrink limit2.
   template <class Leaf>
