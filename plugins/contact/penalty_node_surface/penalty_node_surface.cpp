@@ -35,6 +35,7 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <thermostamp/sdk/math.hpp>
@@ -129,8 +130,8 @@ void surface_geometry(const sdk::PartView& p, std::vector<double>& geo) {
 }
 
 // The normal force with its damper and the rate-regularised friction force
-// of one node (PenaltyNodeSurface::node_force() with friction > 0 and
-// slip_velocity > 0), written for vector loops as well: n the unit normal
+// of one node with friction > 0 and slip_velocity > 0, for vector loops
+// (force_body(), tool_force_body()): n the unit normal
 // pushing the node out, v its velocity relative to the target, k its
 // penalty stiffness, m its effective mass; damping2 = 2 damping,
 // half_share = share / 2 (share: this pair's share of the node's
@@ -144,7 +145,7 @@ void surface_geometry(const sdk::PartView& p, std::vector<double>& geo) {
 // such contacts reverse the slip every step: a vibration at the step's
 // frequency limit. Taken as a force per unit slip speed (mag / |v_t|), so
 // that one division follows the square root; its limit follows the penalty
-// (elastic) pressure only, as node_force() explains.
+// (elastic) pressure only, as force_body() explains.
 struct RateConstants {
   double damping2, friction, slip, half_share, dt;
 };
@@ -216,6 +217,102 @@ void tool_force_block_mu(int n, const double* __restrict dist, const double* __r
                          double* __restrict f, double* __restrict energy, double* __restrict ft) {
   tool_force_body<true>(n, dist, tn, v, area, mass, mu, vtool, h2, penalty, c, f, energy, ft);
 }
+
+// The friction models, as template arguments of the vector force passes.
+enum class Friction { kNone, kElastic, kRate };
+
+// The contact forces of n nodes, one vector lane per node: the normal
+// penalty force with its damper and the Coulomb friction force, from each
+// node's penetration pen (0 where it gets no force), penalty stiffness k,
+// effective mass m (the node's, against a tool), unit normal nrm pushing
+// it out, velocity relative to the target v and friction coefficient mu;
+// c from rate_constants(). Writes the force f and the stored spring energy
+// (0 where pen is 0).
+//
+// The normal force is k pen less a viscous damper, a fraction of the
+// critical value of the node on its spring; it never pulls. Friction:
+// - kRate: rate_force();
+// - kElastic: a tangential spring of the penalty stiffness, held at the
+//   Coulomb limit mu k pen while sliding; last step's spring ft, turned
+//   into the current tangent plane, is loaded by the tangential velocity
+//   over the step. The new springs go to ft_new (those of the nodes
+//   without force as they were in ft: the caller clears those it has to).
+//   The limit follows the penalty (elastic) pressure only: a limit that
+//   followed the damper would tie the tangential force to the normal
+//   velocity, a non-symmetric coupling that can feed vibrations;
+// - kNone: no tangential force.
+// Without springs (kNone, kRate) ft stays 0 and ft_new is not written.
+template <Friction kModel>
+[[gnu::always_inline]] inline void force_body(int n, const double* __restrict pen, const double* __restrict k,
+                                                  const double* __restrict m, const double* __restrict nrm,
+                                                  const double* __restrict v, const double* __restrict mu,
+                                                  RateConstants c, const double* __restrict ft,
+                                                  double* __restrict f, double* __restrict energy,
+                                                  double* __restrict ft_new) {
+  const double damping2 = c.damping2, slip = c.slip, half_share = c.half_share, dt = c.dt;
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
+    const double p = pen[i], kk = k[i], mm = m[i];
+    const double n0 = nrm[3 * i], n1 = nrm[3 * i + 1], n2 = nrm[3 * i + 2];
+    const double v0 = v[3 * i], v1 = v[3 * i + 1], v2 = v[3 * i + 2];
+    if constexpr (kModel == Friction::kRate) {
+      const RateForce r = rate_force(p, kk, mm, n0, n1, n2, v0, v1, v2, damping2, mu[i], slip, half_share, dt);
+      f[3 * i] = r.f0;
+      f[3 * i + 1] = r.f1;
+      f[3 * i + 2] = r.f2;
+      energy[i] = p > 0 ? r.energy : 0.0;
+    } else {
+      const double vn = v0 * n0 + v1 * n1 + v2 * n2;
+      const double fd = kk * p - damping2 * std::sqrt(kk * mm) * vn;
+      const double fn = 0.0 < fd ? fd : 0.0;  // std::max(0.0, fd)
+      double e = 0.5 * kk * p * p;
+      double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+      if constexpr (kModel == Friction::kElastic) {
+        const double o0 = ft[3 * i], o1 = ft[3 * i + 1], o2 = ft[3 * i + 2];
+        const double t0 = v0 - n0 * vn, t1 = v1 - n1 * vn, t2 = v2 - n2 * vn;
+        const double lim = mu[i] * kk * p;
+        // last step's spring turned into the current tangent plane
+        const double mag = std::sqrt(o0 * o0 + o1 * o1 + o2 * o2);
+        const double on_n = o0 * n0 + o1 * n1 + o2 * n2;
+        double q0 = o0 - n0 * on_n, q1 = o1 - n1 * on_n, q2 = o2 - n2 * on_n;
+        const double m2 = std::sqrt(q0 * q0 + q1 * q1 + q2 * q2);
+        const double turn = m2 > 0 ? mag / m2 : 1.0;  // x * 1.0 is x
+        q0 = q0 * turn;
+        q1 = q1 * turn;
+        q2 = q2 * turn;
+        const double kdt = kk * dt;
+        s0 = q0 - t0 * kdt;
+        s1 = q1 - t1 * kdt;
+        s2 = q2 - t2 * kdt;
+        const double len = std::sqrt(s0 * s0 + s1 * s1 + s2 * s2);
+        const double cap = len > lim ? lim / len : 1.0;
+        s0 = s0 * cap;
+        s1 = s1 * cap;
+        s2 = s2 * cap;
+        e = e + 0.5 * (s0 * s0 + s1 * s1 + s2 * s2) / kk;
+        ft_new[3 * i] = p > 0 ? s0 : o0;
+        ft_new[3 * i + 1] = p > 0 ? s1 : o1;
+        ft_new[3 * i + 2] = p > 0 ? s2 : o2;
+      }
+      f[3 * i] = fn * n0 + s0;
+      f[3 * i + 1] = fn * n1 + s1;
+      f[3 * i + 2] = fn * n2 + s2;
+      energy[i] = p > 0 ? e : 0.0;
+    }
+  }
+}
+#define TS_FORCE_BLOCK(name, model)                                                                              \
+  TS_VECTOR_CLONES                                                                                                   \
+  void name(int n, const double* __restrict pen, const double* __restrict k, const double* __restrict m,             \
+            const double* __restrict nrm, const double* __restrict v, const double* __restrict mu,                   \
+            RateConstants c, const double* __restrict ft, double* __restrict f, double* __restrict energy,           \
+            double* __restrict ft_new) {                                                                             \
+    force_body<model>(n, pen, k, m, nrm, v, mu, c, ft, f, energy, ft_new);                                       \
+  }
+TS_FORCE_BLOCK(force_block_none, Friction::kNone)
+TS_FORCE_BLOCK(force_block_elastic, Friction::kElastic)
+TS_FORCE_BLOCK(force_block_rate, Friction::kRate)
+#undef TS_FORCE_BLOCK
 
 // Candidate target elements of every node of body A: a uniform bucket grid
 // over B's triangles (inflated by the reach), flat arrays, rebuilt only when
@@ -408,6 +505,11 @@ struct Pass {
   std::uint64_t version = 0;
   bool faces_differ = false;
   std::vector<double> mu2, nn_now, mu;
+  // Per node of a, from its projection for the vector force pass: penalty
+  // stiffness, effective mass, unit normal and velocity relative to the
+  // target (3 each), and the tangential springs it forms (ft's next
+  // values).
+  std::vector<double> stiff, meff, nrm, vrel, ft_new;
 };
 
 class PenaltyNodeSurface final : public sdk::ContactHandler {
@@ -833,72 +935,8 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     return best;
   }
 
-  // Normal penalty force with its damper and the Coulomb friction force on
-  // one node (elastic slip, or rate-regularised with a slip velocity:
-  // rate_force()): n is the unit normal pushing the node out, vrel the
-  // velocity relative to the target, m the effective mass, share this
-  // pair's share of the node's friction (0.5 for each of the two ply/ply
-  // passes), mu the node's friction coefficient. Updates the node's
-  // tangential spring (none with a slip velocity); returns the stored
-  // spring energy.
-  double node_force(std::vector<double>& ftv, int i, double pen, double k, double m, double share, double mu,
-                    const Vec3& n, const Vec3& vrel, double dt, double* f) {
-    if (has_friction_ && slip_velocity_ > 0) {  // rate-regularised Coulomb friction
-      const RateConstants c = rate_constants(share, dt);
-      const RateForce r = rate_force(pen, k, m, n[0], n[1], n[2], vrel[0], vrel[1], vrel[2], c.damping2, mu, c.slip,
-                                     c.half_share, c.dt);
-      for (int d = 0; d < 3; ++d) ftv[3 * static_cast<std::size_t>(i) + d] = 0.0;
-      f[0] = r.f0;
-      f[1] = r.f1;
-      f[2] = r.f2;
-      return r.energy;
-    }
-    const double vn = sdk::dot(vrel, n);  // < 0 while approaching
-    // Viscous normal damping, a fraction of the critical value of the node on
-    // its penalty spring; the normal force never pulls.
-    const double fn = std::max(0.0, k * pen - damping_ * 2.0 * std::sqrt(k * m) * vn);
-    double energy = 0.5 * k * pen * pen;
-    Vec3 ft = {0, 0, 0};
-    if (has_friction_) {
-      const Vec3 vt = sdk::sub(vrel, sdk::scale(n, vn));
-      // The limit follows the penalty (elastic) pressure only: a limit that
-      // followed the damper would tie the tangential force to the normal
-      // velocity, a non-symmetric coupling that can feed vibrations.
-      const double lim = mu * k * pen;
-      // Elastic slip: a tangential spring, held at the Coulomb limit while
-      // sliding; last step's spring rotated into the current tangent plane.
-      Vec3 old = sdk::load3(ftv.data(), i);
-      const double mag = sdk::norm(old);
-      old = sdk::sub(old, sdk::scale(n, sdk::dot(old, n)));
-      const double m2 = sdk::norm(old);
-      if (m2 > 0) old = sdk::scale(old, mag / m2);
-      Vec3 spring = sdk::sub(old, sdk::scale(vt, k * dt));
-      const double len = sdk::norm(spring);
-      if (len > lim) spring = sdk::scale(spring, lim / len);
-      ft = spring;
-      energy += 0.5 * sdk::dot(spring, spring) / k;
-      for (int d = 0; d < 3; ++d) ftv[3 * static_cast<std::size_t>(i) + d] = spring[d];
-    }
-    for (int d = 0; d < 3; ++d) f[d] = fn * n[d] + ft[d];
-    return energy;
-  }
-
-  // One node against the tool (any friction model).
-  void tool_node(const sdk::ContactForceInput& in, const sdk::PartView& a, const Vec3& vtool, double h2, int i) {
-    const double pen = h2 - dist_[i];
-    if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
-      for (int d = 0; d < 3; ++d) pass_[0].ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
-      pass_[0].energy[i] = 0.0;
-      return;
-    }
-    const Vec3 n = sdk::load3(tn_.data(), i);
-    const Vec3 vrel = sdk::sub(sdk::load3(in.velocity[a.index].data(), i), vtool);
-    const double mu = mu_t_.empty() ? friction_ : pass_[0].mu[i];
-    pass_[0].energy[i] = node_force(pass_[0].ft, i, pen, penalty_ * in.node_area[a.index][i], in.mass[a.index][i],
-                                    1.0, mu, n, vrel, in.dt, &pass_[0].scratch[3 * static_cast<std::size_t>(i)]);
-  }
-
-  // node_force()'s constants for rate_force().
+  // The constants of rate_force() and the vector force passes; share: this
+  // pair's share of the node's friction (0.5 for each ply/ply pass).
   RateConstants rate_constants(double share, double dt) const {
     return {damping_ * 2.0, friction_, slip_velocity_, 0.5 * share, dt};
   }
@@ -940,8 +978,33 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
           tool_force_block(m, &dist_[i0], &tn_[3 * i0], &v[3 * i0], &area[i0], &in.mass[a.index][i0], vtool.data(),
                            h2, penalty_, c, &scratch[3 * i0], &energy[i0], &pass_[0].ft[3 * i0]);
       });
-    } else {
-      sdk::for_each_index(a.num_nodes, a.num_nodes > 256, kChunk, [&](int i) { tool_node(in, a, vtool, h2, i); });
+    } else {  // elastic slip or no friction: each chunk's penetrations, then its forces in vector lanes
+      Pass& ps = pass_[0];
+      ps.pen.resize(a.num_nodes);
+      ps.stiff.resize(a.num_nodes);
+      ps.vrel.resize(3 * static_cast<std::size_t>(a.num_nodes));
+      ps.ft_new.resize(ps.ft.size());
+      if (!table) ps.mu.assign(a.num_nodes, friction_);
+      auto* block = has_friction_ ? force_block_elastic : force_block_none;
+      const RateConstants c = rate_constants(1.0, in.dt);
+      const int chunks = (a.num_nodes + kChunk - 1) / kChunk;
+      sdk::for_each_index(chunks, a.num_nodes > 256, 1, [&](int ch) {
+        const int i0 = ch * kChunk, m = std::min(kChunk, a.num_nodes - i0);
+        for (int i = i0; i < i0 + m; ++i) {
+          double pen = h2 - dist_[i];
+          if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
+            pen = 0.0;
+            for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
+          }
+          ps.pen[i] = pen;
+          ps.stiff[i] = penalty_ * area[i];
+          for (int d = 0; d < 3; ++d) ps.vrel[3 * static_cast<std::size_t>(i) + d] = v[3 * i + d] - vtool[d];
+        }
+        const std::size_t j = static_cast<std::size_t>(i0);
+        block(m, &ps.pen[j], &ps.stiff[j], &in.mass[a.index][j], &tn_[3 * j], &ps.vrel[3 * j], &ps.mu[j], c,
+              &ps.ft[3 * j], &scratch[3 * j], &energy[j], &ps.ft_new[3 * j]);
+      });
+      if (has_friction_) std::swap(ps.ft, ps.ft_new);
     }
     // Fixed-order sums: the same results for any thread count.
     auto f = out.force[a.index];
@@ -1017,12 +1080,19 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // faces are read directly).
     const std::vector<double>* nn = nullptr;
     if (table) nn = &friction_faces(ps, in, a, &ps == &pass_[0] ? nn_a_ : nn_b_);
-    // The nodes of a, dealt to the threads in interleaved chunks: the cost
-    // of a node differs with where it lies (corner or centre of a cell, in
-    // contact or not), and a mesh numbers such nodes in runs.
-    sdk::for_each_index(a.num_nodes, a.num_nodes > 256, kChunk, [&](int i) {
+    // Per node: what the force needs (the vector pass below), and the target.
+    ps.stiff.resize(a.num_nodes);
+    ps.meff.resize(a.num_nodes);
+    ps.nrm.resize(3 * static_cast<std::size_t>(a.num_nodes));
+    ps.vrel.resize(3 * static_cast<std::size_t>(a.num_nodes));
+    ps.mu.resize(a.num_nodes);
+    ps.ft_new.resize(ps.ft.size());
+    // The projection of node i and what its force needs; pen 0 where it
+    // gets none.
+    auto node = [&](int i) {
       double* tg = &target[4 * static_cast<std::size_t>(i)];
       tg[0] = -1;
+      pen_of[i] = 0.0;
       Projection pr;
       if (full) {
         pr = project(ps, a, b, i, track);
@@ -1061,7 +1131,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       }
       double mb = 0;
       for (int j = 0; j < 3; ++j) mb += pr.w[j] * in.mass[b.index][t[j]];
-      const double ma = in.mass[a.index][i], m_eff = ma * mb / (ma + mb);
+      const double ma = in.mass[a.index][i];
       double mu = friction_;
       if (table) {  // at the mean of the two facing faces' temperatures (the faces of thermal_contacts)
         const double c = nn->empty() ? 1.0 : sdk::dot(sdk::load3(nn->data(), i), ne);
@@ -1072,14 +1142,37 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         for (int j = 0; j < 3; ++j) tb += pr.w[j] * face_temperature(in, b.index, t[j], face_b);
         mu = friction_at(0.5 * (face_temperature(in, a.index, i, face_a) + tb));
       }
-      energy[i] = node_force(ps.ft, i, pen, scale * penalty_ * area[i], m_eff, scale, mu, sdk::scale(ne, ps.side[i]),
-                              vrel, in.dt, &scratch[3 * static_cast<std::size_t>(i)]);
-      tg[0] = pr.element;
       pen_of[i] = pen;
+      ps.stiff[i] = scale * penalty_ * area[i];
+      ps.meff[i] = ma * mb / (ma + mb);
+      ps.mu[i] = mu;
+      const Vec3 n = sdk::scale(ne, ps.side[i]);
+      for (int d = 0; d < 3; ++d) {
+        ps.nrm[3 * static_cast<std::size_t>(i) + d] = n[d];
+        ps.vrel[3 * static_cast<std::size_t>(i) + d] = vrel[d];
+      }
+      tg[0] = pr.element;
       tg[1] = pr.w[0];
       tg[2] = pr.w[1];
       tg[3] = pr.w[2];
+    };
+    auto* block = !has_friction_ ? force_block_none
+                  : slip_velocity_ > 0 ? force_block_rate
+                                       : force_block_elastic;
+    const RateConstants rc = rate_constants(scale, in.dt);
+    // The nodes of a, dealt to the threads in interleaved chunks: the cost
+    // of a node differs with where it lies (corner or centre of a cell, in
+    // contact or not), and a mesh numbers such nodes in runs. Each chunk's
+    // projections, then its forces in one vector pass.
+    const int chunks = (a.num_nodes + kChunk - 1) / kChunk;
+    sdk::for_each_index(chunks, a.num_nodes > 256, 1, [&](int ch) {
+      const int i0 = ch * kChunk, m = std::min(kChunk, a.num_nodes - i0);
+      for (int i = i0; i < i0 + m; ++i) node(i);
+      const std::size_t j = static_cast<std::size_t>(i0);
+      block(m, &pen_of[j], &ps.stiff[j], &ps.meff[j], &ps.nrm[3 * j], &ps.vrel[3 * j], &ps.mu[j], rc, &ps.ft[3 * j],
+            &scratch[3 * j], &energy[j], &ps.ft_new[3 * j]);
     });
+    if (has_friction_ && !(slip_velocity_ > 0)) std::swap(ps.ft, ps.ft_new);
     if (full && search_interval_ > 1) {
       // The triangles kept, each once, in increasing order, and each node's
       // place in that list.
@@ -1172,7 +1265,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.11.0";
+  d.version = "0.11.1";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces; gives the contact pressure as penalty x penetration";
   d.params = {
@@ -1236,4 +1329,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.11.0", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.11.1", ts::contact::register_all)
