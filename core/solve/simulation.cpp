@@ -957,10 +957,11 @@ double Simulation::finish_elements() {
     double bend_dt = std::numeric_limits<double>::infinity();
     for (int b = 0; b < m.blocks; ++b) {
       if (!m.block_error[b].empty())
-        throw RunError("element '" + st.def->element + "' of part '" + st.def->name + "': " + m.block_error[b]);
+        throw RunError("element '" + st.def->element + "' of part '" + st.def->name + "' at t = " + fmt_g(forces_t_) +
+                       " s: " + m.block_error[b]);
       if (m.block_fail[b] >= 0)
         throw RunError("degenerate (collapsed or inverted) " + element_label(st.mesh, m.block_fail[b]) + " in part '" +
-                       st.def->name + "'");
+                       st.def->name + "' at t = " + fmt_g(forces_t_) + " s");
       dt = std::min(dt, m.block_dt[b]);
       bend_dt = std::min(bend_dt, m.block_bdt[b]);
     }
@@ -1268,6 +1269,7 @@ void Simulation::choose_bending_weight() {
 // by more than the factor kByPartMargin), and times them again every kRecheck
 // calls; "beside", "in_turn" and "by_part" fix the way.
 double Simulation::forces_and_stable_dt(double t, double dt) {
+  forces_t_ = t;
   choose_bending_weight();
 #ifdef _OPENMP
   const int threads = omp_get_max_threads();

@@ -258,6 +258,8 @@ class Simulation {
   // Raised whenever the node temperatures the elements see change
   // (ElementForceInput::temperature_version; 0 before the first).
   std::uint64_t temperature_version_ = 0;
+  // The time of the positions whose forces are being formed (messages).
+  double forces_t_ = 0;
   // Bending evaluated less often than the membrane (bending_subcycles):
   // the weight of the coming evaluation's bending forces, the evaluations
   // still to come without bending, how many carried it and the most steps

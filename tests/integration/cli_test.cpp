@@ -863,6 +863,41 @@ TEST(Plugins, ContactFailureStopsTheRunOnAnyThreadCount) {
   }
 }
 
+// A square of two triangles whose right edge is driven across its held
+// left edge at 20 m/s: both triangles collapse when the edges meet, at
+// 10 mm / 20 m/s = 0.5 ms. The run stops with exit 3, naming the element,
+// the part and the time (one or two steps of 1 us late at most), and
+// keeps the frames before it (every 0.1 ms: 0 to 0.4 ms).
+TEST(Cli, CollapsedElementStopsTheRunWithItsTime) {
+  const auto dir = temp_dir("collapsed_element");
+  const json j = json::parse(R"({
+    "format": "thermostamp-job/1", "name": "crush", "time": { "end": 0.001 },
+    "materials": { "ud": { "density": 1294.0,
+                           "membrane": { "law": "ud_hyperelastic", "k_fibre": 1.0e5, "p_ct": 50.0, "k_sh": [18.5, 0, 0] } } },
+    "parts": [ { "name": "square", "mesh": { "generator": "rectangle", "size": [0.01, 0.01], "divisions": [1, 1] },
+                 "thickness": 0.0005, "material": "ud", "fibre_direction": [1, 0, 0] } ],
+    "constraints": [
+      { "type": "fix", "part": "square", "box": [[-1e-6, -1, -1], [1e-6, 1, 1]] },
+      { "type": "velocity", "part": "square", "box": [[0.0099, -1, -1], [1, 1, 1]], "velocity": [-20.0, 0.0, 0.0] } ],
+    "solvers": { "mechanics": { "dt_safety": 0.8 }, "thermal": null },
+    "output": { "interval": 0.0001, "fields": ["displacement"] } })");
+  for (int threads : {1, 2}) {
+    const auto r = run_job_in(dir, j, threads);
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    const std::string head = "error: run failed: degenerate (collapsed or inverted) element ";
+    const auto at = r.err.find(head);
+    ASSERT_NE(at, std::string::npos) << r.err;
+    const auto part = r.err.find(" in part 'square' at t = ", at);
+    ASSERT_NE(part, std::string::npos) << r.err;
+    const double t = std::stod(r.err.substr(part + std::string(" in part 'square' at t = ").size()));
+    EXPECT_GE(t, 0.0005 - 1e-12) << r.err;
+    EXPECT_LE(t, 0.0005 + 2e-6) << r.err;
+    const json s = json::parse(std::ifstream(dir / "out" / "summary.json"));
+    EXPECT_EQ(s["status"], "failed");
+    EXPECT_EQ(s["frames"], 5);  // 0, 0.1, 0.2, 0.3 and 0.4 ms
+  }
+}
+
 // A ply/ply handler that computes its pair whole (sides() 1) and ties the
 // plies node to node, with the top ply lifted at 10 mm/s and no other
 // contact: the bottom ply, held by nothing else, must follow the top one

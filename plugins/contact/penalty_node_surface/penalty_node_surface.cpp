@@ -314,6 +314,17 @@ TS_FORCE_BLOCK(force_block_elastic, Friction::kElastic)
 TS_FORCE_BLOCK(force_block_rate, Friction::kRate)
 #undef TS_FORCE_BLOCK
 
+// What a force pass reads of a chunk of nodes besides the nodes' own
+// arrays (force_body()'s pen, k, m, nrm, v, mu): a buffer per thread, so
+// that it stays in the cache from the chunk's projections to its forces.
+struct ChunkScratch {
+  alignas(64) double pen[kChunk], k[kChunk], m[kChunk], mu[kChunk], nrm[3 * kChunk], v[3 * kChunk];
+};
+ChunkScratch& chunk_scratch() {
+  thread_local ChunkScratch s;
+  return s;
+}
+
 // Candidate target elements of every node of body A: a uniform bucket grid
 // over B's triangles (inflated by the reach), flat arrays, rebuilt only when
 // a node of A or B has moved more than half the margin since the last build.
@@ -505,11 +516,8 @@ struct Pass {
   std::uint64_t version = 0;
   bool faces_differ = false;
   std::vector<double> mu2, nn_now, mu;
-  // Per node of a, from its projection for the vector force pass: penalty
-  // stiffness, effective mass, unit normal and velocity relative to the
-  // target (3 each), and the tangential springs it forms (ft's next
-  // values).
-  std::vector<double> stiff, meff, nrm, vrel, ft_new;
+  // The tangential springs of the vector force pass (ft's next values).
+  std::vector<double> ft_new;
 };
 
 class PenaltyNodeSurface final : public sdk::ContactHandler {
@@ -980,29 +988,28 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       });
     } else {  // elastic slip or no friction: each chunk's penetrations, then its forces in vector lanes
       Pass& ps = pass_[0];
-      ps.pen.resize(a.num_nodes);
-      ps.stiff.resize(a.num_nodes);
-      ps.vrel.resize(3 * static_cast<std::size_t>(a.num_nodes));
       ps.ft_new.resize(ps.ft.size());
-      if (!table) ps.mu.assign(a.num_nodes, friction_);
       auto* block = has_friction_ ? force_block_elastic : force_block_none;
       const RateConstants c = rate_constants(1.0, in.dt);
       const int chunks = (a.num_nodes + kChunk - 1) / kChunk;
       sdk::for_each_index(chunks, a.num_nodes > 256, 1, [&](int ch) {
         const int i0 = ch * kChunk, m = std::min(kChunk, a.num_nodes - i0);
-        for (int i = i0; i < i0 + m; ++i) {
+        ChunkScratch& s = chunk_scratch();
+        for (int l = 0; l < m; ++l) {
+          const int i = i0 + l;
           double pen = h2 - dist_[i];
           if (!(pen > 0) || pen > 2 * h2) {  // apart, or through the tool (no force from the far side)
             pen = 0.0;
             for (int d = 0; d < 3; ++d) ps.ft[3 * static_cast<std::size_t>(i) + d] = 0.0;
           }
-          ps.pen[i] = pen;
-          ps.stiff[i] = penalty_ * area[i];
-          for (int d = 0; d < 3; ++d) ps.vrel[3 * static_cast<std::size_t>(i) + d] = v[3 * i + d] - vtool[d];
+          s.pen[l] = pen;
+          s.k[l] = penalty_ * area[i];
+          s.mu[l] = table ? ps.mu[i] : friction_;
+          for (int d = 0; d < 3; ++d) s.v[3 * l + d] = v[3 * i + d] - vtool[d];
         }
         const std::size_t j = static_cast<std::size_t>(i0);
-        block(m, &ps.pen[j], &ps.stiff[j], &in.mass[a.index][j], &tn_[3 * j], &ps.vrel[3 * j], &ps.mu[j], c,
-              &ps.ft[3 * j], &scratch[3 * j], &energy[j], &ps.ft_new[3 * j]);
+        block(m, s.pen, s.k, &in.mass[a.index][j], &tn_[3 * j], s.v, s.mu, c, &ps.ft[3 * j], &scratch[3 * j],
+              &energy[j], &ps.ft_new[3 * j]);
       });
       if (has_friction_) std::swap(ps.ft, ps.ft_new);
     }
@@ -1080,19 +1087,14 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // faces are read directly).
     const std::vector<double>* nn = nullptr;
     if (table) nn = &friction_faces(ps, in, a, &ps == &pass_[0] ? nn_a_ : nn_b_);
-    // Per node: what the force needs (the vector pass below), and the target.
-    ps.stiff.resize(a.num_nodes);
-    ps.meff.resize(a.num_nodes);
-    ps.nrm.resize(3 * static_cast<std::size_t>(a.num_nodes));
-    ps.vrel.resize(3 * static_cast<std::size_t>(a.num_nodes));
-    ps.mu.resize(a.num_nodes);
     ps.ft_new.resize(ps.ft.size());
-    // The projection of node i and what its force needs; pen 0 where it
-    // gets none.
-    auto node = [&](int i) {
+    // The projection of node i, its target, and what its force needs, at
+    // place l of the chunk's scratch s; pen 0 where it gets none.
+    auto node = [&](int i, ChunkScratch& s, int l) {
       double* tg = &target[4 * static_cast<std::size_t>(i)];
       tg[0] = -1;
       pen_of[i] = 0.0;
+      s.pen[l] = 0.0;
       Projection pr;
       if (full) {
         pr = project(ps, a, b, i, track);
@@ -1143,13 +1145,14 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         mu = friction_at(0.5 * (face_temperature(in, a.index, i, face_a) + tb));
       }
       pen_of[i] = pen;
-      ps.stiff[i] = scale * penalty_ * area[i];
-      ps.meff[i] = ma * mb / (ma + mb);
-      ps.mu[i] = mu;
+      s.pen[l] = pen;
+      s.k[l] = scale * penalty_ * area[i];
+      s.m[l] = ma * mb / (ma + mb);
+      s.mu[l] = mu;
       const Vec3 n = sdk::scale(ne, ps.side[i]);
       for (int d = 0; d < 3; ++d) {
-        ps.nrm[3 * static_cast<std::size_t>(i) + d] = n[d];
-        ps.vrel[3 * static_cast<std::size_t>(i) + d] = vrel[d];
+        s.nrm[3 * l + d] = n[d];
+        s.v[3 * l + d] = vrel[d];
       }
       tg[0] = pr.element;
       tg[1] = pr.w[0];
@@ -1167,10 +1170,10 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     const int chunks = (a.num_nodes + kChunk - 1) / kChunk;
     sdk::for_each_index(chunks, a.num_nodes > 256, 1, [&](int ch) {
       const int i0 = ch * kChunk, m = std::min(kChunk, a.num_nodes - i0);
-      for (int i = i0; i < i0 + m; ++i) node(i);
+      ChunkScratch& s = chunk_scratch();
+      for (int l = 0; l < m; ++l) node(i0 + l, s, l);
       const std::size_t j = static_cast<std::size_t>(i0);
-      block(m, &pen_of[j], &ps.stiff[j], &ps.meff[j], &ps.nrm[3 * j], &ps.vrel[3 * j], &ps.mu[j], rc, &ps.ft[3 * j],
-            &scratch[3 * j], &energy[j], &ps.ft_new[3 * j]);
+      block(m, s.pen, s.k, s.m, s.nrm, s.v, s.mu, rc, &ps.ft[3 * j], &scratch[3 * j], &energy[j], &ps.ft_new[3 * j]);
     });
     if (has_friction_ && !(slip_velocity_ > 0)) std::swap(ps.ft, ps.ft_new);
     if (full && search_interval_ > 1) {
