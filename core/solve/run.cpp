@@ -425,7 +425,7 @@ void Simulation::Run::mechanics_loop() {
       if (since_thermal >= subcycle || t >= t_end - eps_t) {
         tc = Clock::now();
         sim.update_element_fields();
-        sim.assemble_faces();
+        sim.assemble_faces(t);
         sim.update_far_temperatures(t_thermal, t);
         in.dt = t - t_thermal;
         in.geometry_changed = true;

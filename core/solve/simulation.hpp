@@ -203,7 +203,7 @@ class Simulation {
   };
   std::vector<LawUse> law_uses_;
   void update_element_fields();
-  void assemble_faces();
+  void assemble_faces(double t);
   // The far temperatures of the faces over the thermal step [t0, t1]:
   // tools whose temperature follows rows (their mean over the step, into
   // the tool views and the faces touching them), and the faces of heat

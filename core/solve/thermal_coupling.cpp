@@ -98,7 +98,7 @@ void Simulation::build_thermal() {
     st.top.assign(st.mesh.num_nodes(), 0.0);
     st.bottom.assign(st.mesh.num_nodes(), 0.0);
   }
-  assemble_faces();
+  assemble_faces(0.0);
   update_far_temperatures(0.0, 0.0);
   bool any_table = false;
   for (const auto& st : parts_) any_table = any_table || !st->kt.empty();
@@ -367,7 +367,7 @@ void Simulation::update_face_conductance() {
   }
 }
 
-void Simulation::assemble_faces() {
+void Simulation::assemble_faces(double t) {
   for (auto& st : parts_) {
     std::fill(st->h_bottom.begin(), st->h_bottom.end(), 0.0);
     std::fill(st->h_top.begin(), st->h_top.end(), 0.0);
@@ -409,7 +409,7 @@ void Simulation::assemble_faces() {
   for (auto& st : parts_) areas.emplace_back(st->area);
   for (std::size_t c = 0; c < contacts_.size(); ++c) {
     if (auto s = contacts_[c]->thermal_contacts(part_views_, tool_views_, areas, contact_map_); !s)
-      throw RunError("contact handler of " + job_.contacts[c].pointer + ": " + s.message);
+      throw RunError("contact handler of " + job_.contacts[c].pointer + " at t = " + fmt_g(t) + " s: " + s.message);
   }
   for (const auto& tc : contact_map_.tool_contacts) {
     PartState& st = *parts_[tc.part];

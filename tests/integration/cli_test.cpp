@@ -861,6 +861,20 @@ TEST(Plugins, ContactFailureStopsTheRunOnAnyThreadCount) {
     EXPECT_EQ(s["status"], "failed");
     EXPECT_EQ(s["frames"], 3);  // 0, 0.1, 0.2
   }
+  // Its thermal contacts failing at their third call (the first is at
+  // t = 0, then one per thermal step): the message names the time too.
+  const auto dir = temp_dir("contact_fail_thermal");
+  json j = small_hemisphere(0.5, 0.1);
+  j["output"]["probes"] = json::array();
+  j["interactions"][3] = {{"type", "contact"}, {"handler", "fail_after"}, {"between", {"ply_top", "ply_bottom"}},
+                          {"fail_time", 1.0}, {"thermal_fail_call", 3}};
+  const auto r = run_job_in(dir, j, 1);
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  const std::string head = "error: run failed: contact handler of /interactions/3 at t = ";
+  const auto at = r.err.find(head);
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_GT(std::stod(r.err.substr(at + head.size())), 0.0) << r.err;
+  EXPECT_NE(r.err.find("s: thermal contacts failed on purpose"), std::string::npos) << r.err;
 }
 
 // A square of two triangles whose right edge is driven across its held
