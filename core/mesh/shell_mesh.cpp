@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <queue>
 #include <sstream>
 #include <stdexcept>
@@ -106,6 +107,23 @@ void number_nodes_by_first_use(ShellMesh& m) {
   m.x = std::move(x);
   m.node_tags = std::move(tags);
 }
+// Gmsh's name of an element type (its manual's numbering).
+std::string gmsh_element_name(int type) {
+  switch (type) {
+    case 3: return "4-node quadrangles";
+    case 4: return "4-node tetrahedra";
+    case 5: return "8-node hexahedra";
+    case 6: return "6-node prisms";
+    case 7: return "5-node pyramids";
+    case 9: return "6-node triangles";
+    case 10: return "9-node quadrangles";
+    case 11: return "10-node tetrahedra";
+    case 16: return "8-node quadrangles";
+    case 20: return "9-node triangles";
+    case 21: return "10-node triangles";
+    default: return "elements";
+  }
+}
 }  // namespace
 
 ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder) {
@@ -126,6 +144,7 @@ ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder) {
   std::unordered_map<long long, int> node_index;
   ShellMesh m;
   std::vector<long long> tri_tags, node_tags;
+  std::map<int, long long> refused;  // element type -> count
   while (r.in) {
     std::string section;
     while (std::getline(r.in, section)) {
@@ -172,6 +191,12 @@ ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder) {
       if (r.next() != "$EndNodes") r.fail("expected $EndNodes");
     } else if (section == "$Elements") {
       std::istringstream hs(r.next());
+      // Points and lines (a surface's border, its corners) are left out;
+      // surface or volume elements other than 3-node triangles are
+      // counted and refused below.
+      auto other = [&](int type) {
+        if (type != 1 && type != 8 && type != 15 && type != 26 && type != 27 && type != 28) ++refused[type];
+      };
       auto add_tri = [&](long long a, long long b, long long c) {
         for (long long t : {a, b, c}) {
           auto it = node_index.find(t);
@@ -195,6 +220,8 @@ ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder) {
                               c = parse<long long>(r, es, "node");
               add_tri(a, bb, c);
               tri_tags.push_back(tag);
+            } else {
+              other(type);
             }
           }
         }
@@ -211,11 +238,23 @@ ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder) {
                             c = parse<long long>(r, es, "node");
             add_tri(a, b, c);
             tri_tags.push_back(tag);
+          } else {
+            other(type);
           }
         }
       }
       if (r.next() != "$EndElements") r.fail("expected $EndElements");
     }
+  }
+  if (!refused.empty()) {
+    std::string list;
+    for (const auto& [type, count] : refused) {
+      if (!list.empty()) list += ", ";
+      list += std::to_string(count) + " " + gmsh_element_name(type) + " (element type " + std::to_string(type) + ")";
+    }
+    throw std::runtime_error(file.string() + ": " + list +
+                             ": only 3-node triangles are taken (in Gmsh: no recombination into quadrangles, "
+                             "element order 1, a surface mesh)");
   }
   if (m.num_nodes() == 0) throw std::runtime_error(file.string() + ": no $Nodes section");
   if (m.num_elements() == 0) throw std::runtime_error(file.string() + ": no triangles (element type 2) found");

@@ -23,7 +23,8 @@ struct ShellMesh {
 ShellMesh rectangle_mesh(const std::array<double, 3>& origin, const std::array<double, 2>& size,
                          const std::array<int, 2>& divisions, bool crossed = false);
 
-// Gmsh ASCII 2.2 or 4.1, triangles only (other elements are ignored).
+// Gmsh ASCII 2.2 or 4.1: 3-node triangles; points and lines are left out,
+// any other element is refused (std::runtime_error naming their counts).
 // The nodes that the triangles use are numbered in the order in which the
 // triangles first use them (others are dropped); with `reorder`, the
 // triangles in locality_order and their nodes then numbered again so. Throws std::runtime_error with the line number

@@ -203,6 +203,32 @@ TEST(Gmsh, ReorderTakesEachPieceInTurn) {
   EXPECT_EQ(changes, 1);
 }
 
+// Surface elements other than 3-node triangles are refused, with their
+// counts by type (a mixed mesh would otherwise lose them and leave holes);
+// points and lines (borders, corners) are left out as before.
+TEST(Gmsh, ElementsOtherThanTrianglesAreRefused) {
+  const auto dir = test::temp_dir("gmsh_quads");
+  // 2.2: a triangle, two quadrangles, a line and a point.
+  std::ofstream(dir / "mixed.msh") << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n6\n1 0 0 0\n2 1 0 0\n3 1 1 0\n"
+                                      "4 0 1 0\n5 2 0 0\n6 2 1 0\n$EndNodes\n$Elements\n5\n1 15 2 0 1 1\n2 1 2 0 1 1 2\n"
+                                      "3 2 2 0 1 1 2 4\n4 3 2 0 1 2 5 6 3\n5 3 2 0 1 4 2 3 4\n$EndElements\n";
+  // 4.1: a block of two 6-node triangles.
+  std::ofstream(dir / "second.msh") << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 6 1 6\n2 1 0 6\n1\n2\n3\n4\n5\n6\n"
+                                       "0 0 0\n1 0 0\n0 1 0\n0.5 0 0\n0.5 0.5 0\n0 0.5 0\n$EndNodes\n$Elements\n1 2 1 2\n"
+                                       "2 1 9 2\n1 1 2 3 4 5 6\n2 1 2 3 4 5 6\n$EndElements\n";
+  const std::pair<const char*, const char*> cases[] = {
+      {"mixed.msh", ": 2 4-node quadrangles (element type 3): only 3-node triangles are taken"},
+      {"second.msh", ": 2 6-node triangles (element type 9): only 3-node triangles are taken"}};
+  for (const auto& [name, text] : cases) {
+    try {
+      read_gmsh(dir / name);
+      ADD_FAILURE() << name << " was read";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(name) + text), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Gmsh, MalformedFileNamesTheLine) {
   const auto dir = test::temp_dir("gmsh_bad");
   std::ofstream(dir / "c.msh") << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0\n";
