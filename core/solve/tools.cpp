@@ -289,14 +289,32 @@ RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
       throw JobError(ptr, "cannot read the tool mesh '" + s.file.string() + "': " + e.what());
     }
     if (tri.empty()) throw JobError(ptr, "the tool mesh '" + s.file.string() + "' has no triangles");
+    // Triangles of zero area (two corners at one point, or three on a
+    // line), which CAD exports write now and then, carry no surface: left
+    // out (counted in describe()); messages keep the file's numbers.
+    std::vector<int> kept, place;
+    kept.reserve(tri.size());
+    place.reserve(tri.size() / 3);
+    mesh_info_ = {};
+    for (std::size_t e = 0; e < tri.size() / 3; ++e) {
+      if (zero_area(xyz, &tri[3 * e])) {
+        ++mesh_info_.zero_area;
+        continue;
+      }
+      kept.insert(kept.end(), {tri[3 * e], tri[3 * e + 1], tri[3 * e + 2]});
+      place.push_back(static_cast<int>(e));
+    }
+    if (kept.empty()) throw JobError(ptr, "the tool mesh '" + s.file.string() + "' has no triangle of nonzero area");
+    tri = std::move(kept);
     if (s.flip)
       for (std::size_t e = 0; e < tri.size(); e += 3) std::swap(tri[e + 1], tri[e + 2]);
-    check_orientation(xyz, tri, ptr);
+    check_orientation(xyz, tri, place, ptr);
     build_mesh(xyz, tri);
   }
 }
 
-void RigidTool::check_orientation(const std::vector<double>& xyz, const std::vector<int>& tri, const std::string& ptr) {
+void RigidTool::check_orientation(const std::vector<double>& xyz, const std::vector<int>& tri,
+                                  const std::vector<int>& place, const std::string& ptr) {
   // Corners at the same point are one vertex (an STL file repeats them).
   struct Hash {
     std::size_t operator()(const std::array<double, 3>& p) const {
@@ -324,7 +342,6 @@ void RigidTool::check_orientation(const std::vector<double>& xyz, const std::vec
   };
   std::unordered_map<std::uint64_t, Use> edges;
   edges.reserve(tri.size());
-  mesh_info_ = {};
   mesh_info_.triangles = tri.size() / 3;
   mesh_info_.vertices = ids.size();
   for (std::size_t e = 0; e < tri.size() / 3; ++e)
@@ -335,7 +352,7 @@ void RigidTool::check_orientation(const std::vector<double>& xyz, const std::vec
       if (fresh) continue;
       if (++it->second.count == 2 && it->second.forward == (a < b))
         throw JobError(ptr, "the tool mesh '" + def_->surface.file.string() + "' faces both ways: its triangles " +
-                                std::to_string(it->second.triangle + 1) + " and " + std::to_string(e + 1) +
+                                std::to_string(place[it->second.triangle] + 1) + " and " + std::to_string(place[e] + 1) +
                                 " (counted from 1 in the file) walk their common edge the same way, so one of them "
                                 "faces into the tool; orient every triangle to the outside (counter-clockwise seen "
                                 "from outside)");
@@ -506,7 +523,22 @@ std::string RigidTool::describe() const {
                 def_->name.c_str(), mesh_info_.triangles, mesh_info_.vertices, def_->surface.file.string().c_str(),
                 1e3 * mesh_info_.shortest_edge, 1e3 * scale_, mesh_info_.shared_edges, mesh_info_.open_edges,
                 mesh_info_.other_edges);
-  return line;
+  std::string text = line;
+  if (mesh_info_.zero_area > 0)
+    text += "; " + std::to_string(mesh_info_.zero_area) + " triangle(s) of zero area in the file left out";
+  return text;
+}
+
+// Whether triangle t (3 vertex numbers into xyz) has zero area, with its
+// corners taken from the smallest, as build_mesh() takes them.
+bool RigidTool::zero_area(const std::vector<double>& xyz, const int* t) {
+  Vec3 w[3];
+  for (int k = 0; k < 3; ++k) w[k] = sdk::load3(xyz.data(), t[k]);
+  int first = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::lexicographical_compare(w[k].begin(), w[k].end(), w[first].begin(), w[first].end())) first = k;
+  const Vec3 a = w[first], b = w[(first + 1) % 3], c = w[(first + 2) % 3];
+  return !(sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a))) > 0);
 }
 
 void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri) {
@@ -531,8 +563,6 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
       h = std::max(h, l);
       mesh_info_.shortest_edge = std::min(mesh_info_.shortest_edge, l);
     }
-    if (!(sdk::norm(sdk::cross(sdk::sub(v[1], v[0]), sdk::sub(v[2], v[0]))) > 0))
-      throw JobError(def_->pointer + "/surface/file", "the tool mesh has a degenerate triangle (" + std::to_string(e) + ")");
     for (int d = 0; d < 3; ++d) centre[3 * e + d] = (v[0][d] + v[1][d] + v[2][d]) / 3.0;
   }
   scale_ = std::max(h, 1e-9);

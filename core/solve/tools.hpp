@@ -112,8 +112,11 @@ class RigidTool {
   void mesh_answer(const double* p, int q, double d2, const std::array<double, 3>& cp, double& d, double* n) const;
   void build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri);
   // Throws JobError (at ptr) when two triangles with a common edge face
-  // opposite sides; counts the edges for describe().
-  void check_orientation(const std::vector<double>& xyz, const std::vector<int>& tri, const std::string& ptr);
+  // opposite sides, naming them by their place in the file (place[e]:
+  // triangle e's, from 0); counts the edges for describe().
+  void check_orientation(const std::vector<double>& xyz, const std::vector<int>& tri, const std::vector<int>& place,
+                         const std::string& ptr);
+  static bool zero_area(const std::vector<double>& xyz, const int* t);
 
   const ToolDef* def_;
   enum class Kind { Plane, Sphere, Revolved, Mesh } kind_ = Kind::Plane;  // from def_->surface.type, once
@@ -154,6 +157,7 @@ class RigidTool {
   std::vector<int> weld_tri_;     // triangles, as read (flip applied)
   struct MeshInfo {
     std::size_t triangles = 0, vertices = 0, shared_edges = 0, open_edges = 0, other_edges = 0;
+    std::size_t zero_area = 0;  // triangles of zero area in the file, left out
     double shortest_edge = std::numeric_limits<double>::infinity();
   } mesh_info_;
 };

@@ -523,15 +523,21 @@ TEST(Tools, KeptRecordsGiveTheTreesAnswers) {
 // same way, one of them faces into the tool and the mesh is refused,
 // naming both (counted from 1 in the file); `flip` turns all of them, so a
 // consistent mesh stays consistent. describe() counts the edges.
+// Three triangles, then the second one reversed; with and without `flip`.
+// Then the same with two triangles of zero area ahead of them (a corner
+// twice, three corners on a line), as CAD exports write now and then: they
+// are left out and counted, the answers are the same, and the message
+// still names the triangles by their place in the file.
 TEST(Tools, MeshToolFacingBothWaysIsRefused) {
   const auto dir = temp_dir("tool_mesh_sides");
-  auto write = [&](const std::string& name, bool second_reversed) {
+  auto write = [&](const std::string& name, bool second_reversed, bool zero_area) {
     std::ofstream s(dir / name);
     s << "solid sq\n";
     // Three triangles: the unit square at z = 0 and one more beyond the edge x = 1.
-    const std::vector<std::array<double, 6>> tris = {
+    std::vector<std::array<double, 6>> tris = {
         {0, 0, 1, 0, 1, 1}, second_reversed ? std::array<double, 6>{0, 0, 0, 1, 1, 1} : std::array<double, 6>{0, 0, 1, 1, 0, 1},
         {1, 0, 2, 0, 1, 1}};
+    if (zero_area) tris.insert(tris.begin(), {{0, 0, 1, 1, 1, 1}, {0, 0, 0.5, 0.5, 1, 1}});
     for (const auto& t : tris) {
       s << " facet normal 0 0 1\n  outer loop\n";
       for (int k = 0; k < 3; ++k) s << "   vertex " << t[2 * k] << ' ' << t[2 * k + 1] << " 0\n";
@@ -539,30 +545,36 @@ TEST(Tools, MeshToolFacingBothWaysIsRefused) {
     }
     s << "endsolid sq\n";
   };
-  write("good.stl", false);
-  write("bad.stl", true);
   ToolDef d;
   d.name = "die";
   d.pointer = "/tools/2";
   d.surface.type = "mesh";
-  for (const bool flip : {false, true}) {
-    d.surface.file = dir / "good.stl";
-    d.surface.flip = flip;
-    const RigidTool t(d);
-    EXPECT_NE(t.describe().find("tool 'die': 3 triangles, 5 vertices from"), std::string::npos) << t.describe();
-    EXPECT_NE(t.describe().find("2 edges between two triangles (all facing the same side), 5 free, 0 shared by more"),
-              std::string::npos)
-        << t.describe();
-    EXPECT_NEAR(ask(t, {0.6, 0.3, 0.1}).d, flip ? -0.1 : 0.1, 1e-12);
-    d.surface.file = dir / "bad.stl";
-    try {
-      const RigidTool bad(d);
-      ADD_FAILURE() << "a mesh facing both ways was taken";
-    } catch (const JobError& e) {
-      EXPECT_EQ(e.pointer(), "/tools/2/surface/file");
-      EXPECT_NE(std::string(e.what()).find("faces both ways: its triangles 1 and 2 (counted from 1 in the file)"),
+  for (const bool zero_area : {false, true}) {
+    const std::string tag = zero_area ? "_zero" : "";
+    write("good" + tag + ".stl", false, zero_area);
+    write("bad" + tag + ".stl", true, zero_area);
+    for (const bool flip : {false, true}) {
+      d.surface.file = dir / ("good" + tag + ".stl");
+      d.surface.flip = flip;
+      const RigidTool t(d);
+      EXPECT_NE(t.describe().find("tool 'die': 3 triangles, 5 vertices from"), std::string::npos) << t.describe();
+      EXPECT_NE(t.describe().find("2 edges between two triangles (all facing the same side), 5 free, 0 shared by more"),
                 std::string::npos)
-          << e.what();
+          << t.describe();
+      EXPECT_EQ(t.describe().find("2 triangle(s) of zero area in the file left out") != std::string::npos, zero_area)
+          << t.describe();
+      EXPECT_NEAR(ask(t, {0.6, 0.3, 0.1}).d, flip ? -0.1 : 0.1, 1e-12);
+      d.surface.file = dir / ("bad" + tag + ".stl");
+      try {
+        const RigidTool bad(d);
+        ADD_FAILURE() << "a mesh facing both ways was taken";
+      } catch (const JobError& e) {
+        EXPECT_EQ(e.pointer(), "/tools/2/surface/file");
+        const std::string names = zero_area ? "its triangles 3 and 4" : "its triangles 1 and 2";
+        EXPECT_NE(std::string(e.what()).find("faces both ways: " + names + " (counted from 1 in the file)"),
+                  std::string::npos)
+            << e.what();
+      }
     }
   }
   ToolDef plane;
