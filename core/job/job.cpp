@@ -489,12 +489,15 @@ MeshDef parse_mesh(const json& j, const std::string& ptr, const std::filesystem:
     m.file = std::filesystem::path(f).is_absolute() ? std::filesystem::path(f) : base / f;
     if (!std::filesystem::exists(m.file)) throw JobError(r.at("file"), "mesh file '" + m.file.string() + "' not found");
     m.reorder = r.boolean("reorder", true);
+    m.scale = r.real("scale", 1.0, 0.0, true);
   } else {
     const std::string gen = r.choice("generator", {"rectangle"});
     (void)gen;
     if (r.has("reorder"))
       throw JobError(r.at("reorder"),
                      "only for a mesh read from a file: the rectangle generator numbers its triangles row by row");
+    if (r.has("scale"))
+      throw JobError(r.at("scale"), "only for a mesh read from a file: the rectangle generator's sizes are in metres");
     const auto o = r.reals("origin", 3, std::vector<double>{0, 0, 0});
     const auto s = r.reals("size", 2);
     for (int d = 0; d < 2; ++d)
@@ -790,6 +793,7 @@ void parse_job_into(Job& job) {
         const std::string f = s.text("file");
         t.surface.file = job.base_dir / f;
         t.surface.flip = s.boolean("flip", false);
+        t.surface.scale = s.real("scale", 1.0, 0.0, true);
         std::error_code ec;
         if (!std::filesystem::is_regular_file(t.surface.file, ec))
           throw JobError(s.at("file"), "cannot read the tool mesh '" + t.surface.file.string() + "'");

@@ -80,6 +80,9 @@ struct MeshDef {
   // (reverse Cuthill-McKee) and the nodes numbered in the order they first
   // use them; false: the file's order (its nodes numbered likewise).
   bool reorder = true;
+  // file: the factor its coordinates are taken times (0.001 for a file in
+  // millimetres).
+  double scale = 1.0;
 };
 
 struct PartDef {
@@ -115,6 +118,7 @@ struct SurfaceDef {
   std::vector<ProfileSegment> profile;                                   // revolved
   std::filesystem::path file;                                            // mesh
   bool flip = false;                                                     // mesh: reverse the normals
+  double scale = 1.0;                                                    // mesh: factor on the file's coordinates
 };
 
 struct MotionDef {

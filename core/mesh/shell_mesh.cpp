@@ -126,7 +126,18 @@ std::string gmsh_element_name(int type) {
 }
 }  // namespace
 
-ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder) {
+double box_span(const std::vector<double>& xyz) {
+  if (xyz.size() < 3) return 0.0;
+  double lo[3] = {xyz[0], xyz[1], xyz[2]}, hi[3] = {xyz[0], xyz[1], xyz[2]};
+  for (std::size_t k = 3; k + 2 < xyz.size(); k += 3)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], xyz[k + d]);
+      hi[d] = std::max(hi[d], xyz[k + d]);
+    }
+  return std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+}
+
+ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder, double scale) {
   LineReader r;
   r.path = file.string();
   r.in.open(file);
@@ -174,7 +185,7 @@ ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder) {
             (void)parametric;
             node_index[tags[k]] = m.num_nodes();
             node_tags.push_back(tags[k]);
-            m.x.insert(m.x.end(), {x, y, z});
+            m.x.insert(m.x.end(), {x * scale, y * scale, z * scale});
           }
         }
       } else {
@@ -185,7 +196,7 @@ ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder) {
           const double x = parse<double>(r, ns, "x"), y = parse<double>(r, ns, "y"), z = parse<double>(r, ns, "z");
           node_index[tag] = m.num_nodes();
           node_tags.push_back(tag);
-          m.x.insert(m.x.end(), {x, y, z});
+          m.x.insert(m.x.end(), {x * scale, y * scale, z * scale});
         }
       }
       if (r.next() != "$EndNodes") r.fail("expected $EndNodes");

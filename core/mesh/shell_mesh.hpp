@@ -25,11 +25,15 @@ ShellMesh rectangle_mesh(const std::array<double, 3>& origin, const std::array<d
 
 // Gmsh ASCII 2.2 or 4.1: 3-node triangles; points and lines are left out,
 // any other element is refused (std::runtime_error naming their counts).
+// The coordinates are taken times `scale`.
 // The nodes that the triangles use are numbered in the order in which the
 // triangles first use them (others are dropped); with `reorder`, the
 // triangles in locality_order and their nodes then numbered again so. Throws std::runtime_error with the line number
 // on malformed files.
-ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder = false);
+ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder = false, double scale = 1.0);
+
+// The largest side of the box around points (3 coordinates each); 0 for none.
+double box_span(const std::vector<double>& xyz);
 
 // Orients all triangles consistently (normal of the first one kept, or +z
 // for a mostly flat mesh) and fills the neighbour table. Throws if an edge

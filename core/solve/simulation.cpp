@@ -326,6 +326,7 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) try : job_(job)
   }
   build_probes();
   warn_plies_behind_tools();
+  warn_large_meshes();
 } catch (const JobError& e) {
   // A value a material took from its card: the error names the card.
   throw with_material_card(job, e);
@@ -356,7 +357,7 @@ void Simulation::build_parts() {
     st->def = &def;
     try {
       st->mesh = def.mesh.kind == MeshDef::Kind::File
-                     ? read_gmsh(def.mesh.file, def.mesh.reorder)
+                     ? read_gmsh(def.mesh.file, def.mesh.reorder, def.mesh.scale)
                      : rectangle_mesh(def.mesh.origin, def.mesh.size, def.mesh.divisions, def.mesh.crossed);
     } catch (const std::exception& e) {
       throw JobError(def.pointer + "/mesh", e.what());
@@ -415,6 +416,24 @@ void Simulation::build_parts() {
     v.thermal = {mat.density,          mat.specific_heat, mat.conductivity[0], mat.conductivity[1],
                  mat.conductivity[2], !mat.conductivity_table.empty()};
   }
+}
+
+// A mesh file more than 10 m across is most often one in millimetres (STL
+// files carry no unit, and CAD exports them in mm): a warning that names
+// its size and the `scale` that reads it in metres.
+void Simulation::warn_large_meshes() const {
+  constexpr double kLarge = 10.0;  // m
+  for (const auto& st : parts_)
+    if (st->def->mesh.kind == MeshDef::Kind::File)
+      if (const double s = box_span(st->mesh.x); s > kLarge)
+        logger("job")->warn("{}/mesh: the ply's mesh is {:.4g} m across: is '{}' in millimetres? (\"scale\": 0.001 "
+                            "reads it in metres)",
+                            st->def->pointer, s, st->def->mesh.file.filename().string());
+  for (std::size_t t = 0; t < tools_.size(); ++t)
+    if (const double s = tools_[t]->mesh_span(); s > kLarge)
+      logger("job")->warn("{}/surface: the tool's mesh is {:.4g} m across: is '{}' in millimetres? (\"scale\": "
+                          "0.001 reads it in metres)",
+                          job_.tools[t].pointer, s, job_.tools[t].surface.file.filename().string());
 }
 
 // A ply whose mid-surface starts behind the surface of a tool it is in

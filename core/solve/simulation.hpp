@@ -174,6 +174,7 @@ class Simulation {
   void build_parts();
   void build_tools();
   void warn_plies_behind_tools() const;
+  void warn_large_meshes() const;
   void build_thermal();
   // A specific heat table (solve/heat_capacity.hpp) or crystallisation
   // kinetics (solve/crystallisation.hpp): the temperatures before a thermal

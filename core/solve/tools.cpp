@@ -278,8 +278,9 @@ RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
     try {
       if (ext == ".stl") {
         read_stl(s.file, ptr, xyz, tri);
+        for (double& c : xyz) c *= s.scale;
       } else {
-        ShellMesh m = read_gmsh(s.file);
+        ShellMesh m = read_gmsh(s.file, false, s.scale);
         xyz = m.x;
         tri = m.triangles;
       }
@@ -513,6 +514,8 @@ void cut_display_mesh(std::vector<double>& xyz, std::vector<int>& tri, int axis,
   xyz = std::move(kept);
   tri = std::move(out);
 }
+
+double RigidTool::mesh_span() const { return kind_ == Kind::Mesh ? box_span(weld_xyz_) : 0.0; }
 
 std::string RigidTool::describe() const {
   if (kind_ != Kind::Mesh) return {};

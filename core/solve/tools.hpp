@@ -30,6 +30,8 @@ class RigidTool {
   // A mesh tool's triangles, vertices, edge lengths and how its edges are
   // shared, in a line for `validate` and the log; empty for the others.
   std::string describe() const;
+  // A mesh tool: the largest side of its box (m); 0 for the others.
+  double mesh_span() const;
   // Signed distance (positive outside, where the outward normal points) and
   // outward unit normal of n points, in the tool's current position. Points
   // as far as `cutoff` or farther from a mesh surface get +infinity (with an

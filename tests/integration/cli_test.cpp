@@ -563,6 +563,85 @@ TEST(Cli, ValidateDescribesMeshToolsAndWarnsOfPliesBehindThem) {
       << b.err;
 }
 
+// Mesh files in millimetres (a ply's Gmsh file, the die as STL): with
+// `scale` 0.001 the run is the run of the same files in metres (every
+// value within 1e-12 of its largest: x 0.001 and the file's metres differ
+// in the last bit; the heat balance error, round-off itself, aside);
+// without it, a warning for each file more than 10 m
+// across, naming the scale that reads it. `scale` on the rectangle
+// generator, or not above 0, is refused.
+TEST(Cli, MeshFilesInMillimetresTakeAScale) {
+  const auto dir = temp_dir("mesh_scale");
+  const json base = read_job_document(small_job("mesh_scale_base"));
+  const auto& ply = base["parts"][0]["mesh"];
+  for (const double unit : {1.0, 1000.0}) {
+    const std::string tag = unit == 1.0 ? "m" : "mm";
+    write_square_stl(dir / ("die_" + tag + ".stl"), -0.01 * unit, 0.06 * unit, 0.0);
+    const auto o = ply["origin"].get<std::array<double, 3>>();
+    const auto s = ply["size"].get<std::array<double, 2>>();
+    const ShellMesh m = rectangle_mesh({o[0] * unit, o[1] * unit, o[2] * unit}, {s[0] * unit, s[1] * unit},
+                                       ply["divisions"].get<std::array<int, 2>>());
+    write_shuffled_gmsh(dir / ("ply_" + tag + ".msh"), m, 5);
+  }
+  auto job_with = [&](const std::string& name, const std::string& tag, const json& scale) {
+    json j = base;
+    j["name"] = name;
+    j["parts"][0]["mesh"] = {{"file", (dir / ("ply_" + tag + ".msh")).string()}};
+    j["tools"][0]["surface"] = {{"type", "mesh"}, {"file", (dir / ("die_" + tag + ".stl")).string()}};
+    if (!scale.is_null()) {
+      j["parts"][0]["mesh"]["scale"] = scale;
+      j["tools"][0]["surface"]["scale"] = scale;
+    }
+    std::ofstream(dir / (name + ".json")) << j.dump(2);
+    return dir / (name + ".json");
+  };
+  const auto metres = job_with("metres", "m", nullptr), mm = job_with("mm", "mm", 0.001);
+  const auto unscaled = thermostamp("validate " + q(job_with("unscaled", "mm", nullptr)));
+  EXPECT_EQ(unscaled.exit_code, 0) << unscaled.err;
+  for (const std::string w : {"/parts/0/mesh: the ply's mesh is 50 m across: is 'ply_mm.msh' in millimetres? "
+                              "(\"scale\": 0.001 reads it in metres)",
+                              "/tools/0/surface: the tool's mesh is 70 m across: is 'die_mm.stl' in millimetres? "
+                              "(\"scale\": 0.001 reads it in metres)"})
+    EXPECT_NE((unscaled.out + unscaled.err).find(w), std::string::npos) << unscaled.out << unscaled.err;
+  for (const auto& job : {metres, mm}) {
+    const auto v = thermostamp("validate " + q(job));
+    EXPECT_EQ(v.exit_code, 0) << v.err;
+    EXPECT_EQ((v.out + v.err).find("millimetres"), std::string::npos) << v.out << v.err;
+    EXPECT_NE(v.out.find("2 triangles, 4 vertices from"), std::string::npos) << v.out;
+    EXPECT_NE(v.out.find("; edges 70 to 99"), std::string::npos) << v.out;
+    const auto r = thermostamp("run " + q(job) + " --out " + q(job.parent_path() / job.stem()) + " --quiet");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+  }
+  // Every field, probe and series, and the summary's figures but the
+  // balance errors (round-off themselves), within 1e-12 of their largest.
+  const auto c = thermostamp("compare " + q(dir / "metres") + " " + q(dir / "mm") + " --json");
+  const json cmp = json::parse(c.out);
+  int compared = 0;
+  for (const char* kind : {"fields", "probes", "series"})
+    for (const auto& q : cmp[kind]) {
+      EXPECT_LE(q["max_abs"].get<double>(), 1e-12 * q["scale"].get<double>()) << q.dump();
+      ++compared;
+    }
+  for (const auto& q : cmp["summary"])
+    if (q["what"].get<std::string>().find("balance_error") == std::string::npos) {
+      EXPECT_LE(q["max_abs"].get<double>(), 1e-12 * std::abs(q["a"].get<double>())) << q.dump();
+      ++compared;
+    }
+  EXPECT_GT(compared, 30);
+  // Refused: on the generator; zero; negative.
+  json gen = base;
+  gen["parts"][1]["mesh"]["scale"] = 0.001;
+  std::ofstream(dir / "gen.json") << gen.dump(2);
+  const auto g = thermostamp("validate " + q(dir / "gen.json"));
+  EXPECT_EQ(g.exit_code, 2);
+  EXPECT_NE(g.err.find("error: /parts/1/mesh/scale: only for a mesh read from a file"), std::string::npos) << g.err;
+  for (const double bad : {0.0, -0.001}) {
+    const auto b = thermostamp("validate " + q(job_with("bad", "mm", bad)));
+    EXPECT_EQ(b.exit_code, 2);
+    EXPECT_NE(b.err.find("error: /parts/0/mesh/scale: "), std::string::npos) << b.err;
+  }
+}
+
 // The results draw the tools: each tool's surface once under /tools (the
 // die's plane over the plies; the punch and holder of the hemisphere
 // revolved), each frame the nodes of the tools that move, where tools.csv
