@@ -340,7 +340,8 @@ std::vector<std::string> Simulation::mesh_file_lines() const {
     const MeshDef& m = st->def->mesh;
     if (m.kind != MeshDef::Kind::File) continue;
     lines.push_back("part '" + st->def->name + "': " + std::to_string(st->mesh.num_elements()) + " triangles, " +
-                    std::to_string(st->mesh.num_nodes()) + " nodes from " + m.file.string() + ", " +
+                    std::to_string(st->mesh.num_nodes()) + " nodes from " + m.file.string() +
+                    (m.scale != 1.0 ? " (its coordinates times " + fmt_g(m.scale) + ")" : std::string()) + ", " +
                     (m.reorder ? "numbered so that neighbours are close (mesh.reorder)" : "in the file's order") +
                     " (neighbouring triangles at most " + std::to_string(element_bandwidth(st->mesh)) +
                     " places apart)");

@@ -519,11 +519,14 @@ double RigidTool::mesh_span() const { return kind_ == Kind::Mesh ? box_span(weld
 
 std::string RigidTool::describe() const {
   if (kind_ != Kind::Mesh) return {};
-  char line[512];
+  char scaled[64] = "";
+  if (def_->surface.scale != 1.0) std::snprintf(scaled, sizeof scaled, " (its coordinates times %g)", def_->surface.scale);
+  char line[1024];
   std::snprintf(line, sizeof line,
-                "tool '%s': %zu triangles, %zu vertices from %s; edges %.3g to %.3g mm; %zu edges between two "
+                "tool '%s': %zu triangles, %zu vertices from %s%s; edges %.3g to %.3g mm; %zu edges between two "
                 "triangles (all facing the same side), %zu free, %zu shared by more than two",
                 def_->name.c_str(), mesh_info_.triangles, mesh_info_.vertices, def_->surface.file.string().c_str(),
+                scaled,
                 1e3 * mesh_info_.shortest_edge, 1e3 * scale_, mesh_info_.shared_edges, mesh_info_.open_edges,
                 mesh_info_.other_edges);
   std::string text = line;

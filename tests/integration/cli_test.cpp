@@ -609,6 +609,10 @@ TEST(Cli, MeshFilesInMillimetresTakeAScale) {
     EXPECT_EQ((v.out + v.err).find("millimetres"), std::string::npos) << v.out << v.err;
     EXPECT_NE(v.out.find("2 triangles, 4 vertices from"), std::string::npos) << v.out;
     EXPECT_NE(v.out.find("; edges 70 to 99"), std::string::npos) << v.out;
+    if (job == mm) {
+      for (const std::string f : {"ply_mm.msh (its coordinates times 0.001), ", "die_mm.stl (its coordinates times 0.001); "})
+        EXPECT_NE(v.out.find(f), std::string::npos) << v.out;
+    }
     const auto r = thermostamp("run " + q(job) + " --out " + q(job.parent_path() / job.stem()) + " --quiet");
     EXPECT_EQ(r.exit_code, 0) << r.err;
   }
