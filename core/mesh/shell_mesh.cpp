@@ -137,7 +137,7 @@ double box_span(const std::vector<double>& xyz) {
   return std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
 }
 
-ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder, double scale) {
+ShellMesh read_gmsh_triangles(const std::filesystem::path& file, double scale) {
   LineReader r;
   r.path = file.string();
   r.in.open(file);
@@ -271,6 +271,11 @@ ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder, double scal
   if (m.num_elements() == 0) throw std::runtime_error(file.string() + ": no triangles (element type 2) found");
   m.element_tags = std::move(tri_tags);
   m.node_tags = std::move(node_tags);
+  return m;
+}
+
+ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder, double scale) {
+  ShellMesh m = read_gmsh_triangles(file, scale);
   // Drop nodes no triangle uses (points, geometry vertices); the others in
   // the order in which the triangles first use them.
   number_nodes_by_first_use(m);

@@ -31,6 +31,10 @@ ShellMesh rectangle_mesh(const std::array<double, 3>& origin, const std::array<d
 // triangles in locality_order and their nodes then numbered again so. Throws std::runtime_error with the line number
 // on malformed files.
 ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder = false, double scale = 1.0);
+// The file's nodes and triangles (with their tags) as read_gmsh() takes
+// them, before it checks and orders them: nodes no triangle uses kept, no
+// neighbours, triangles of zero area kept (a meshed tool leaves those out).
+ShellMesh read_gmsh_triangles(const std::filesystem::path& file, double scale = 1.0);
 
 // The largest side of the box around points (3 coordinates each); 0 for none.
 double box_span(const std::vector<double>& xyz);

@@ -233,7 +233,16 @@ TEST(Tools, MeshToolsAnswerLikeTheirPlane) {
     s << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0.5\n2 1 0 0.5\n3 1 1 0.5\n4 0 1 0.5\n$EndNodes\n"
       << "$Elements\n2\n1 2 0 1 2 3\n2 2 0 1 3 4\n$EndElements\n";
   }
-  for (const char* name : {"square.stl", "square_bin.stl", "square.msh"}) {
+  {
+    // The same with a triangle of zero area (three corners on the
+    // diagonal) and a node no triangle uses: the tool leaves the first out
+    // (as from an STL file) and the second is not part of the surface.
+    std::ofstream s(dir / "square_zero.msh");
+    s << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n6\n1 0 0 0.5\n2 1 0 0.5\n3 1 1 0.5\n4 0 1 0.5\n"
+      << "5 0.5 0.5 0.5\n6 5 5 5\n$EndNodes\n"
+      << "$Elements\n3\n1 2 0 1 2 3\n2 2 0 1 5 3\n3 2 0 1 3 4\n$EndElements\n";
+  }
+  for (const char* name : {"square.stl", "square_bin.stl", "square.msh", "square_zero.msh"}) {
     ToolDef d;
     d.name = "m";
     d.pointer = "/tools/0";
@@ -247,6 +256,25 @@ TEST(Tools, MeshToolsAnswerLikeTheirPlane) {
     EXPECT_NEAR(a.d, -0.01, 1e-7) << name;
     a = ask(t, {0.5, 0.5, 0.9}, 0.1);
     EXPECT_TRUE(std::isinf(a.d)) << name;
+    EXPECT_NE(t.describe().find("2 triangles, 4 vertices"), std::string::npos) << t.describe();
+    EXPECT_EQ(t.describe().find("1 triangle(s) of zero area") != std::string::npos,
+              std::string(name) == "square_zero.msh")
+        << t.describe();
+  }
+  {
+    // A Gmsh tool faces where its triangles turn, as an STL one does: the
+    // square turned clockwise (seen from +z) has its outside below.
+    std::ofstream(dir / "square_down.msh")
+        << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0.5\n2 1 0 0.5\n3 1 1 0.5\n4 0 1 0.5\n$EndNodes\n"
+        << "$Elements\n2\n1 2 0 1 3 2\n2 2 0 1 4 3\n$EndElements\n";
+    ToolDef d;
+    d.name = "down";
+    d.pointer = "/tools/0";
+    d.surface.type = "mesh";
+    d.surface.file = dir / "square_down.msh";
+    const Answer a = ask(RigidTool(d), {0.3, 0.6, 0.52}, 0.1);
+    EXPECT_NEAR(a.d, -0.02, 1e-12);
+    EXPECT_NEAR(a.n[2], -1.0, 1e-12);
   }
   ToolDef bad;
   bad.pointer = "/tools/0";
