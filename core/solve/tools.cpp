@@ -535,16 +535,23 @@ std::string RigidTool::describe() const {
   return text;
 }
 
-// Whether triangle t (3 vertex numbers into xyz) has zero area, with its
-// corners taken from the smallest, as build_mesh() takes them.
-bool RigidTool::zero_area(const std::vector<double>& xyz, const int* t) {
+// Triangle t's corners (3 vertex numbers into xyz) from the smallest (by
+// x, then y, then z), in its turning order: its numbers do not depend on
+// the corner the file starts it from.
+static std::array<Vec3, 3> corners_from_smallest(const std::vector<double>& xyz, const int* t) {
   Vec3 w[3];
   for (int k = 0; k < 3; ++k) w[k] = sdk::load3(xyz.data(), t[k]);
   int first = 0;
   for (int k = 1; k < 3; ++k)
     if (std::lexicographical_compare(w[k].begin(), w[k].end(), w[first].begin(), w[first].end())) first = k;
-  const Vec3 a = w[first], b = w[(first + 1) % 3], c = w[(first + 2) % 3];
-  return !(sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a))) > 0);
+  return {w[first], w[(first + 1) % 3], w[(first + 2) % 3]};
+}
+
+// Whether triangle t has zero area, its corners taken as build_mesh() takes
+// them.
+bool RigidTool::zero_area(const std::vector<double>& xyz, const int* t) {
+  const auto v = corners_from_smallest(xyz, t);
+  return !(sdk::norm(sdk::cross(sdk::sub(v[1], v[0]), sdk::sub(v[2], v[0]))) > 0);
 }
 
 void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int>& tri) {
@@ -555,15 +562,9 @@ void RigidTool::build_mesh(const std::vector<double>& xyz, const std::vector<int
     // Corners from the smallest (by x, then y, then z), in the file's
     // turning order: a triangle's numbers do not depend on the corner the
     // file starts it from.
-    Vec3 w[3], v[3];
-    for (int k = 0; k < 3; ++k) w[k] = sdk::load3(xyz.data(), tri[3 * e + k]);
-    int first = 0;
-    for (int k = 1; k < 3; ++k)
-      if (std::lexicographical_compare(w[k].begin(), w[k].end(), w[first].begin(), w[first].end())) first = k;
-    for (int k = 0; k < 3; ++k) {
-      v[k] = w[(first + k) % 3];
+    const auto v = corners_from_smallest(xyz, &tri[3 * e]);
+    for (int k = 0; k < 3; ++k)
       for (int d = 0; d < 3; ++d) vx[9 * e + 3 * k + d] = v[k][d];
-    }
     for (int k = 0; k < 3; ++k) {
       const double l = sdk::norm(sdk::sub(v[k], v[(k + 1) % 3]));
       h = std::max(h, l);
