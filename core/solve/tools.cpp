@@ -214,6 +214,10 @@ void read_stl(const std::filesystem::path& file, const std::string& ptr, std::ve
 }  // namespace
 
 RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
+  // A displacement table places the tool at its first row from the start
+  // (a tool given in its closed position, as CAD draws it, and opened by
+  // the table's first row).
+  if (def.motion.kind == MotionDef::Kind::Displacement) u_ = prescribed(0.0);
   const SurfaceDef& s = def.surface;
   kind_ = s.type == "plane" ? Kind::Plane : s.type == "sphere" ? Kind::Sphere : s.type == "revolved" ? Kind::Revolved : Kind::Mesh;
   plane_normal_ = sdk::normalized({s.normal[0], s.normal[1], s.normal[2]});

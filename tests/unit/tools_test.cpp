@@ -832,4 +832,27 @@ TEST(Tools, DisplacementTableAndVelocity) {
   EXPECT_NEAR(a.d, 0.0375 - 0.01, 1e-12);
 }
 
+// A table whose first row is not zero places the tool there from the start:
+// the tool of a CAD file in its closed position, opened by the first row,
+// is answered at the open position before the first step (and, after it,
+// where the table says, with the table's slope for its velocity).
+TEST(Tools, DisplacementTableStartsAtItsFirstRow) {
+  ToolDef d = punch_def(0.01);
+  d.motion.kind = MotionDef::Kind::Displacement;
+  d.motion.table = {{0, 0, 0, 0.02}, {1, 0, 0, 0}};
+  RigidTool t(d);
+  EXPECT_EQ(t.displacement()[2], 0.02);
+  EXPECT_NEAR(ask(t, {0, 0, 0.05}).d, 0.05 - (0.02 + 0.01), 1e-15) << "the pole at z = 0.02 + R before any step";
+  t.advance(0, 0.25, 0.25, {0, 0, 0});
+  EXPECT_NEAR(t.displacement()[2], 0.015, 1e-15);
+  EXPECT_NEAR(t.velocity()[2], -0.02, 1e-12);
+  // A table that starts later holds its first row until then.
+  d.motion.table = {{0.5, 0.01, 0, 0}, {1, 0, 0, 0}};
+  RigidTool late(d);
+  EXPECT_EQ(late.displacement()[0], 0.01);
+  late.advance(0, 0.25, 0.25, {0, 0, 0});
+  EXPECT_EQ(late.displacement()[0], 0.01);
+  EXPECT_EQ(late.velocity()[0], 0.0);
+}
+
 }  // namespace ts::test
