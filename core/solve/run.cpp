@@ -449,6 +449,11 @@ void Simulation::Run::mechanics_loop() {
         sim.check_law_ranges(t);
       }
     }
+    // Where: the fastest node (the last step's speeds), for the messages below.
+    auto fastest = [&] {
+      const std::string f = sim.fastest_node();
+      return f.empty() ? f : "; fastest: " + f;
+    };
     // Energy audit: W_int + kinetic + damping = external work.
     // Relative to the largest energy seen so far (a vibrating body passes
     // through states where every energy is nearly zero).
@@ -460,7 +465,7 @@ void Simulation::Run::mechanics_loop() {
     if (audit.balance_error > md.energy_tolerance && scale > 1e-12 && mech_steps > 20)
       throw RunError("energy balance error " + fmt_g(audit.balance_error, 3) + " above energy_tolerance " +
                      fmt_g(md.energy_tolerance, 3) + " at t = " + fmt_g(t) + " s (mechanical step " +
-                     std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) + " s): " + unstable);
+                     std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) + " s): " + unstable + fastest());
     // Kinetic energy growth: the plies start at rest and stress free, so
     // their kinetic energy cannot exceed what loads, driven dofs and tools
     // have supplied (external work, plus the tools' work: the contact
@@ -473,7 +478,7 @@ void Simulation::Run::mechanics_loop() {
       throw RunError("kinetic energy " + fmt_g(audit.kinetic_half, 3) + " J grew above " +
                      fmt_g(kKineticGrowthLimit, 3) + " times the energy supplied by loads, driven dofs and tools (" +
                      fmt_g(supplied_max, 3) + " J) at t = " + fmt_g(t) + " s (mechanical step " +
-                     std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) + " s): " + unstable);
+                     std::to_string(mech_steps) + ", step " + fmt_g(dt, 3) + " s): " + unstable + fastest());
     if (t >= next_sample - eps_t) {
       sample_energy();
       if (!sim.tools_.empty()) sample_tools(t);

@@ -437,6 +437,30 @@ void Simulation::warn_large_meshes() const {
                           job_.tools[t].pointer, s, job_.tools[t].surface.file.filename().string());
 }
 
+std::string Simulation::fastest_node() const {
+  double best = -1;
+  int part = -1, node = -1;
+  for (std::size_t p = 0; p < mech_.size() && p < parts_.size(); ++p) {
+    const auto& v = mech_[p]->v;
+    for (std::size_t i = 0; 3 * i + 2 < v.size(); ++i) {
+      const double s2 = v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2];
+      if (s2 > best) {  // NaN never: the position check names those
+        best = s2;
+        part = static_cast<int>(p);
+        node = static_cast<int>(i);
+      }
+    }
+  }
+  if (part < 0) return {};
+  const PartState& st = *parts_[static_cast<std::size_t>(part)];
+  auto at = [&](const auto& x) {
+    const std::size_t k = 3 * static_cast<std::size_t>(node);
+    return "(" + fmt_g(x[k], 4) + ", " + fmt_g(x[k + 1], 4) + ", " + fmt_g(x[k + 2], 4) + ") m";
+  };
+  return node_label(st.mesh, node) + " of part '" + st.def->name + "' at " + at(st.x) + " (initially " + at(st.x0) +
+         "), " + fmt_g(std::sqrt(best), 3) + " m/s";
+}
+
 // A ply whose mid-surface starts behind the surface of a tool it is in
 // contact with most often means a tool that faces the wrong way: the
 // penalty would push it further in.

@@ -173,6 +173,11 @@ class Simulation {
   struct Run;
   void build_parts();
   void build_tools();
+  // Where a run that goes unstable is fastest: the node of the plies with
+  // the largest half-step speed, its part, position, initial position and
+  // speed ("node 12 of part 'ply' at (x, y, z) m, ..."; empty without
+  // mechanics).
+  std::string fastest_node() const;
   void warn_plies_behind_tools() const;
   void warn_large_meshes() const;
   void build_thermal();

@@ -125,6 +125,18 @@ TEST(Stability, KineticEnergyGrowthIsDetected) {
   EXPECT_FALSE(r.result.ok);
   EXPECT_NE(r.result.error.find("kinetic energy"), std::string::npos) << r.result.error;
   std::printf("dt_safety 1.6: %s\n", r.result.error.c_str());
+  // The message says where: the fastest node, its part, position and
+  // speed. That speed bounds the kinetic energy: KE <= M v^2 / 2 with M the
+  // strip's mass (no mass scaling).
+  const std::string& e = r.result.error;
+  const auto at = e.find("; fastest: node ");
+  ASSERT_NE(at, std::string::npos) << e;
+  EXPECT_NE(e.find(" of part 'strip' at (", at), std::string::npos) << e;
+  const double kinetic = std::stod(e.substr(e.find("kinetic energy ") + 15));
+  const double speed = std::stod(e.substr(e.rfind("), ") + 3));
+  EXPECT_EQ(e.substr(e.size() - 4), " m/s") << e;
+  const double mass = 1294.0 * kL * kW * 0.0005;
+  EXPECT_GE(0.5 * mass * speed * speed, kinetic) << e;
   j["solvers"]["mechanics"] = {{"dt_safety", 1.25}, {"energy_tolerance", 1e30}};
   const JobRun ok = run_json(j);
   EXPECT_TRUE(ok.result.ok) << ok.result.error;
