@@ -360,10 +360,13 @@ def plot_tools(folder, out):
         u = np.array([[float(r["ux"]), float(r["uy"]), float(r["uz"])] for r in rs])
         f = np.array([[float(r["fx"]), float(r["fy"]), float(r["fz"])] for r in rs])
         t = np.array([float(r["time"]) for r in rs])
-        travel = np.linalg.norm(u, axis=1)
-        if travel.max() > 1e-3:  # tools that travel (a force-controlled holder barely moves)
-            d = u[-1] / max(np.linalg.norm(u[-1]), 1e-300)
-            a1.plot(travel * 1e3, -(f @ d), label=name)  # force resisting the motion
+        # The travel from where the tool starts (a displacement table may
+        # start away from zero), along the direction of its largest excursion.
+        moved = u - u[0]
+        reach = np.linalg.norm(moved, axis=1)
+        if reach.max() > 1e-3:  # tools that travel (a force-controlled holder barely moves)
+            d = moved[int(np.argmax(reach))] / reach.max()
+            a1.plot(moved @ d * 1e3, -(f @ d), label=name)  # force resisting the motion
         a2.plot(t, [float(r["heat_J"]) for r in rs], label=name)
     a1.set_xlabel("tool travel (mm)")
     a1.set_ylabel("force resisting the tool's motion (N)")
