@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <vector>
 
 #include <thermostamp/sdk/math.hpp>
@@ -303,6 +304,47 @@ TEST(PlyPlySearch, SearchIntervalKeepsTheTriangleUntilTheNextSearch) {
   EXPECT_EQ(fz_b[1][2][3], 0.0);
   EXPECT_GT(std::abs(fz_b[1][3][3]), 0.0);
   EXPECT_GT(std::abs(fz_b[0][2][3]), 0.0);
+}
+
+// A node going round the free edge of the other ply: the plate's edge x =
+// 10 mm (triangle 0-1-2 has no neighbour there) acts as a rounded edge of
+// radius h = 0.5 mm (the two plies' half-thicknesses). The node walks a half
+// circle of radius 0.3 mm about it, from 80 degrees above the plate's plane
+// to 100 degrees below it (under the plate), at y = 5 mm, at rest. Round
+// the edge it is pushed away from the edge by the penalty force over h -
+// 0.3 mm, the same at every angle, along the line from the edge; under the
+// plate (beyond -90 degrees) away from its face, by the force over h less
+// its distance from the plane: a conservative force, continuous where it
+// passes from the edge to the face, so a node that goes round the edge and
+// back gains no energy. Before 0.28.1 the node kept the side it
+// came from: beyond the plate's plane it was pulled towards the edge with
+// the force over h + 0.3 mm (a jump of 2.5 times the force, energy for free
+// at every crossing). Required: the direction within 1e-9 and the
+// magnitude within 1e-9 relative, at each of 37 angles, with search
+// intervals 1 and 3.
+TEST(PlyPlySearch, NodeGoesRoundAFreeEdge) {
+  PluginRegistry registry;
+  const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");
+  const double rho = 0.0003, h = 0.0005;
+  const double exact = 0.5 * NodeOverPlate::kPenalty * NodeOverPlate::kArea * (h - rho);
+  for (const int k : {1, 3}) {
+    NodeOverPlate plate(r, k);
+    ASSERT_TRUE(plate.ok());
+    for (int step = 0; step <= 36; ++step) {
+      const double theta = (80.0 - 5.0 * step) * std::numbers::pi / 180.0;
+      const std::array<double, 3> radial = {std::cos(theta), 0.0, std::sin(theta)};
+      const std::array<double, 3> x = {0.01 + rho * radial[0], 0.005, rho * radial[2]};
+      std::array<double, 3> fa;
+      std::array<double, 12> fb;
+      ASSERT_TRUE(plate.step(x, {0, 0, 0}, 1e-5, fa, fb));
+      const bool under = x[0] < 0.01;  // under the plate's face: pushed along -z
+      const std::array<double, 3> expected =
+          under ? std::array<double, 3>{0, 0, -0.5 * NodeOverPlate::kPenalty * NodeOverPlate::kArea * (h + x[2])}
+                : std::array<double, 3>{exact * radial[0], 0, exact * radial[2]};
+      for (int d = 0; d < 3; ++d)
+        EXPECT_NEAR(fa[d], expected[d], 1e-9 * exact) << "k " << k << ", angle " << 80 - 5 * step << ", dof " << d;
+    }
+  }
 }
 
 // search_interval is a most: the next full search comes sooner where the

@@ -444,7 +444,33 @@ struct Projection {
   double d = 0;            // signed distance of the node from the target's mid-surface (+ on the side of n_e)
   Vec3 n = {0, 0, 1};      // unit direction of d, on the side of n_e
   double w[3] = {0, 0, 0};  // weights of the target point on the element's nodes
+  bool border = false;      // off the face at the target's free border (an edge without a neighbour or a vertex of one)
 };
+
+// The nodes of b on its free border (1), from its neighbours; once per
+// pass (a mesh keeps its topology).
+inline void border_nodes(const sdk::PartView& b, std::vector<char>& border) {
+  if (border.size() == static_cast<std::size_t>(b.num_nodes)) return;
+  border.assign(b.num_nodes, 0);
+  for (int e = 0; e < b.num_elements; ++e)
+    for (int k = 0; k < 3; ++k)
+      if (b.neighbours[3 * static_cast<std::size_t>(e) + k] < 0) {
+        border[b.triangles[3 * e + (k + 1) % 3]] = 1;
+        border[b.triangles[3 * e + (k + 2) % 3]] = 1;
+      }
+}
+
+// Whether the closest point of weights w on triangle e of b (off its face:
+// a weight 0 or 1) lies on b's free border: at a vertex on it (border, per
+// node) or on an edge without a neighbour.
+inline bool on_border(const sdk::PartView& b, const std::vector<char>& border, int e, const double* w) {
+  const int* t = &b.triangles[3 * static_cast<std::size_t>(e)];
+  for (int k = 0; k < 3; ++k)
+    if (w[k] == 1.0) return border[t[k]] != 0;
+  for (int k = 0; k < 3; ++k)
+    if (w[k] == 0.0) return b.neighbours[3 * static_cast<std::size_t>(e) + k] < 0;
+  return false;
+}
 
 // Plane distance of x from the triangle with per-element geometry g (kGeo
 // values) and first node p0, and the weights of x's projection on its
@@ -492,6 +518,7 @@ struct Pass {
   std::vector<signed char> side;  // per node of a: +1 above the target, -1 below, 0 not tracked
   std::vector<double> ft;         // per node of a: tangential spring force (N)
   std::vector<double> geo_b;  // surface_geometry of b, kGeo per element
+  std::vector<char> border_b;  // per node of b: 1 on its free border (an edge without a neighbour)
   Candidates cand;
   // Per node of a, written by the node's loop, read by the fixed-order sums:
   // its force (3), its spring energy, its target (element, 3 weights), its
@@ -608,12 +635,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       const sdk::PartView& b = parts[pair_.second.index];
       Pass& ps = pass_[0];
       surface_geometry(b, ps.geo_b);
+      border_nodes(b, ps.border_b);
       const double hsum2 = 0.5 * (a.thickness + b.thickness);
       refresh_candidates(ps, a, b, 2 * hsum2 + gap_tol_);
       for (int i = 0; i < a.num_nodes; ++i) {
         const Projection pr = project(ps, a, b, i, hsum2 + gap_tol_);
         if (pr.element < 0) continue;
-        const int s = ps.side[i] != 0 ? ps.side[i] : (pr.d >= 0 ? 1 : -1);
+        const int s = ps.side[i] != 0 && !pr.border ? ps.side[i] : (pr.d >= 0 ? 1 : -1);
         const double gap = s * pr.d - hsum2;
         if (gap > gap_tol_) continue;
         sdk::HeatLink l;
@@ -912,12 +940,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     best.n = sdk::load3(&ps.geo_b[kGeo * static_cast<std::size_t>(best.element)], 0);
     if (face) return best;  // d: the plane distance, n: the triangle's normal
     off_face(best, best_r, best_d2, best_dn);
+    best.border = on_border(b, ps.border_b, best.element, best.w);
     return best;
   }
 
   // The closest point of node i on triangle e of B alone, as project()
   // computes it for that one candidate (no target if farther than reach).
-  Projection project_on(const sdk::PartView& a, const sdk::PartView& b, int i, int e, const double* g,
+  Projection project_on(const Pass& ps, const sdk::PartView& a, const sdk::PartView& b, int i, int e, const double* g,
                         double reach) const {
     Projection best;
     const Vec3 x = sdk::load3(a.x.data(), i);
@@ -938,6 +967,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       if (d2 > reach2) return best;
       best.element = e;
       off_face(best, r, d2, sdk::dot(r, sdk::load3(g, 0)));
+      best.border = on_border(b, ps.border_b, e, w);
     }
     for (int k = 0; k < 3; ++k) best.w[k] = w[k];
     return best;
@@ -1051,6 +1081,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
     // triangle of the last one. The candidate lists serve the full searches
     // only, so they are checked (and rebuilt where nodes moved too far)
     // just before each.
+    border_nodes(b, ps.border_b);
     if (ps.kept.size() != static_cast<std::size_t>(a.num_nodes)) {
       ps.kept.assign(a.num_nodes, -1);
       ps.calls = 0;
@@ -1100,7 +1131,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
         pr = project(ps, a, b, i, track);
         ps.kept[i] = pr.element;
       } else if (ps.kept[i] >= 0) {
-        pr = project_on(a, b, i, ps.kept[i], &ps.geo_kept[kGeo * static_cast<std::size_t>(ps.slot[i])], track);
+        pr = project_on(ps, a, b, i, ps.kept[i], &ps.geo_kept[kGeo * static_cast<std::size_t>(ps.slot[i])], track);
       }
       if (pr.element < 0) {
         ps.side[i] = 0;
@@ -1112,7 +1143,13 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       Vec3 vt = {0, 0, 0};
       for (int j = 0; j < 3; ++j) vt = sdk::add(vt, sdk::scale(sdk::load3(vb.data(), t[j]), pr.w[j]));
       const Vec3 vrel = sdk::sub(sdk::load3(va.data(), i), vt);
-      if (ps.side[i] == 0) {
+      if (pr.border) {
+        // Round a free border (the rounded edge of the other ply) a node may
+        // pass from one side to the other: its side is where it is, so the
+        // penetration (half-thicknesses less the distance) and the force
+        // (away from the border) do not jump where it crosses the plane.
+        ps.side[i] = pr.d >= 0 ? 1 : -1;
+      } else if (ps.side[i] == 0) {
         const double g = sdk::dot(ne, vrel);
         if (std::abs(pr.d) >= hsum2 || std::abs(g) * in.dt < std::abs(pr.d)) {
           // Not touching, or it cannot have crossed the target's mid-surface
@@ -1268,7 +1305,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Contact;
   d.name = "penalty_node_surface";
-  d.version = "0.11.1";
+  d.version = "0.12.0";
   d.summary = "Node-to-surface penalty contact with shell thickness and Coulomb friction; carries heat between "
               "touching faces; gives the contact pressure as penalty x penetration";
   d.params = {
@@ -1332,4 +1369,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::contact
 
-THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.11.1", ts::contact::register_all)
+THERMOSTAMP_PLUGIN("contact_penalty_node_surface", "0.12.0", ts::contact::register_all)
