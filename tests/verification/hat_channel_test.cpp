@@ -1,0 +1,137 @@
+// The hat-channel example (examples/hat_channel/hat_channel.json) as a user
+// runs it: tools from CAD as STL files in millimetres, in their closed
+// position, the punch opened by the first row of its displacement table,
+// a force-controlled blank holder.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "test_support.hpp"
+
+namespace ts::test {
+namespace {
+
+// The die's section of examples/hat_channel/make_tools.py (mm): depth,
+// wall angle from the vertical, fillet radii (valley, crest).
+constexpr double kDepth = 20.0, kDraft = 20.0 * std::numbers::pi / 180.0, kRValley = 5.0, kRCrest = 5.0;
+
+// How much longer than its width the section is, along any curve at a
+// constant offset from it (mm): the arc of an offset curve is longer at
+// the crest by what it is shorter in the valley, so the offset drops out.
+double excess_length() {
+  const double turn = std::numbers::pi / 2 - kDraft;  // at each fillet
+  const double tangent = std::tan(turn / 2);          // tangent length over radius
+  const double wall = kDepth / std::cos(kDraft) - (kRValley + kRCrest) * tangent;  // its straight part
+  return wall + (kRValley + kRCrest) * turn - (kDepth * std::tan(kDraft) + (kRValley + kRCrest) * tangent);
+}
+
+// Probe values by (probe, quantity) at time t, from probes.csv.
+std::map<std::pair<std::string, std::string>, double> probe_values(const std::filesystem::path& file, double t) {
+  std::map<std::pair<std::string, std::string>, double> v;
+  std::ifstream in(file);
+  std::string line;
+  std::getline(in, line);  // probe,quantity,time,z,value
+  while (std::getline(in, line)) {
+    std::stringstream s(line);
+    std::string probe, quantity, time, z, value;
+    std::getline(s, probe, ',');
+    std::getline(s, quantity, ',');
+    std::getline(s, time, ',');
+    std::getline(s, z, ',');
+    std::getline(s, value, ',');
+    if (z.empty() && std::abs(std::stod(time) - t) < 1e-9) v[{probe, quantity}] = std::stod(value);
+  }
+  return v;
+}
+
+}  // namespace
+
+// The section's geometry first: the die file's vertices at one end, walked
+// in x from 0, give the excess length of the analytic section less what
+// its 16 facets per fillet cut off the arcs (under 0.01 mm).
+//
+// The top ply's fibres cross the channel and barely stretch, so its edge
+// is drawn in by the excess length of the path of its mid-surface: 12.217
+// mm at any offset from the die (excess_length()). The run gives a little
+// less: the ply's nodes follow the fillets on chords of 1.25 mm, which are
+// shorter than their arcs (by 0.035 mm over the two fillets at the ply's
+// radii 4.25 and 5.75 mm), its fibres stretch (the run's largest fibre
+// strain, 3e-4, over 70 mm: 0.02 mm) and the facets shorten the path (under
+// 0.01 mm). Required: the draw-in under the excess length and within
+// 0.08 mm of it (0.7 %; measured 0.044 mm). The bottom ply's fibres run
+// along the channel: across, it is drawn in less, as its soft transverse
+// direction stretches instead.
+//
+// The run takes the mass scaling of target_dt 1.4e-5 s, four times the
+// job's step (a quarter of the run time): the draw-in is geometric, 12.172
+// against 12.178 mm at the job's 3.5e-6 s.
+//
+// At the end the stack lies on the closed tools: every node of the lower
+// ply within 0.1 mm (a fifth of a ply) of the die, every node of the upper
+// one within 0.1 mm of the punch (measured 0.05 mm), and both plies down
+// 20 mm at the channel's bottom (within 0.05 mm, the penalty's
+// penetration). The job draws no warning (a punch left in its closed
+// position at the start would have had 93 nodes of the plies behind it),
+// and the energy balance error stays under 1e-4.
+TEST(HatChannel, FibresAcrossTheChannelDrawInByTheSectionsExcessLength) {
+  const auto example = source_dir() / "examples" / "hat_channel";
+  {
+    std::ifstream stl(example / "die.stl");
+    std::vector<std::pair<double, double>> section;  // (x, z) at y = -60 mm, x >= 0
+    std::string word;
+    while (stl >> word)
+      if (word == "vertex") {
+        double x, y, z;
+        stl >> x >> y >> z;
+        if (y == -60.0 && x >= 0.0) section.emplace_back(x, z);
+      }
+    std::sort(section.begin(), section.end());
+    section.erase(std::unique(section.begin(), section.end()), section.end());
+    ASSERT_GT(section.size(), 30u);
+    double length = 0;
+    for (std::size_t k = 1; k < section.size(); ++k)
+      length += std::hypot(section[k].first - section[k - 1].first, section[k].second - section[k - 1].second);
+    const double facets = length - section.back().first;
+    EXPECT_LT(facets, excess_length());
+    EXPECT_GT(facets, excess_length() - 0.01);
+  }
+  const auto out = temp_dir("hat_channel");
+  const auto r = thermostamp("run " + q(example / "hat_channel.json") + " --out " + q(out) +
+                             " --threads 2 --quiet --set solvers.mechanics.mass_scaling.target_dt=1.4e-5");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream log(out / "log.txt");
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.find("[warning]"), std::string::npos) << text;
+  const json summary = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_LT(std::abs(summary["energy"]["balance_error"].get<double>()), 1e-4) << summary["energy"].dump();
+
+  const auto v = probe_values(out / "probes.csv", 0.7);
+  const double drawn = -1e3 * v.at({"edge_90", "displacement_x"});
+  EXPECT_LT(drawn, excess_length());
+  EXPECT_GT(drawn, excess_length() - 0.08);
+  EXPECT_LT(-1e3 * v.at({"edge_0", "displacement_x"}), drawn - 1.0);
+  for (const char* p : {"bottom_0", "bottom_90"}) EXPECT_NEAR(v.at({p, "displacement_z"}), -0.020, 5e-5) << p;
+
+  const hid_t file = H5Fopen((out / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  char last[32];
+  std::snprintf(last, sizeof last, "frames/%06d/", frame_count(file) - 1);
+  for (const char* ply : {"ply_0", "ply_90"}) {
+    const std::vector<double> gap = read_dataset<double>(file, last + std::string(ply) + "/tool_gap");
+    double worst = 0;
+    for (const double g : gap) worst = std::max(worst, std::abs(g));
+    EXPECT_LT(worst, 1e-4) << ply;
+  }
+  H5Fclose(file);
+}
+
+}  // namespace ts::test
