@@ -35,19 +35,6 @@ json hemisphere_document() {
   return read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
 }
 
-// The cells of every line of a comma-separated file, header included.
-std::vector<std::vector<std::string>> csv_rows(const std::filesystem::path& file) {
-  std::ifstream csv(file);
-  std::vector<std::vector<std::string>> rows;
-  for (std::string line; std::getline(csv, line);) {
-    std::vector<std::string> cells;
-    std::stringstream ss(line);
-    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
-    rows.push_back(cells);
-  }
-  return rows;
-}
-
 // The demo job made small and short, written to a folder.
 std::filesystem::path small_job(const std::string& dir_name, const std::function<void(json&)>& edit = nullptr) {
   const auto dir = temp_dir(dir_name);
@@ -662,21 +649,9 @@ TEST(Output, ResultsDrawTheToolsWhereTheyStand) {
   ASSERT_GE(file, 0);
   ASSERT_EQ(frame_count(file), 3);
   std::map<std::string, std::array<double, 3>> u_end;  // the tools.csv row at the end
-  {
-    std::ifstream csv(dir / "out" / "tools.csv");
-    std::string line;
-    std::getline(csv, line);
-    while (std::getline(csv, line)) {
-      std::istringstream row(line);
-      std::string time, tool, ux, uy, uz;
-      std::getline(row, time, ',');
-      std::getline(row, tool, ',');
-      std::getline(row, ux, ',');
-      std::getline(row, uy, ',');
-      std::getline(row, uz, ',');
-      u_end[tool] = {std::stod(ux), std::stod(uy), std::stod(uz)};
-    }
-  }
+  const auto tools_csv = csv_rows(dir / "out" / "tools.csv");  // time, tool, ux, uy, uz, ...
+  for (std::size_t k = 1; k < tools_csv.size(); ++k)
+    u_end[tools_csv[k][1]] = {std::stod(tools_csv[k][2]), std::stod(tools_csv[k][3]), std::stod(tools_csv[k][4])};
   EXPECT_NEAR(u_end["punch"][2], -1e-4, 1e-12) << "the punch at 10 mm/s for 0.01 s";
   for (const std::string tool : {"punch", "die", "holder"}) {
     const auto nodes = read_dataset<double>(file, "tools/" + tool + "/nodes");

@@ -92,6 +92,18 @@ std::filesystem::path temp_dir(const std::string& name) {
   return d;
 }
 
+std::vector<std::vector<std::string>> csv_rows(const std::filesystem::path& file) {
+  std::ifstream csv(file);
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(csv, line);) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    rows.push_back(cells);
+  }
+  return rows;
+}
+
 static std::string slurp(const std::filesystem::path& p) {
   std::ifstream in(p);
   std::stringstream ss;

@@ -77,6 +77,9 @@ std::filesystem::path source_dir();
 // carbon fibres at a fibre volume fraction of 0.4.
 json pa66_carbon_mixture();
 std::filesystem::path temp_dir(const std::string& name);
+// The cells of every line of a comma-separated file, header included (an
+// empty cell between commas is kept, an empty last one is not).
+std::vector<std::vector<std::string>> csv_rows(const std::filesystem::path& file);
 
 // An STL file of the square [lo, hi]^2 in the plane z (two triangles,
 // normal +z), for a meshed tool.

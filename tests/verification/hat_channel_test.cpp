@@ -11,7 +11,6 @@
 #include <iterator>
 #include <map>
 #include <numbers>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -34,21 +33,14 @@ double excess_length() {
   return wall + (kRValley + kRCrest) * turn - (kDepth * std::tan(kDraft) + (kRValley + kRCrest) * tangent);
 }
 
-// Probe values by (probe, quantity) at time t, from probes.csv.
+// Probe values by (probe, quantity) at time t, from probes.csv (probe,
+// quantity, time, z, value; z empty for the values that are not profiles).
 std::map<std::pair<std::string, std::string>, double> probe_values(const std::filesystem::path& file, double t) {
   std::map<std::pair<std::string, std::string>, double> v;
-  std::ifstream in(file);
-  std::string line;
-  std::getline(in, line);  // probe,quantity,time,z,value
-  while (std::getline(in, line)) {
-    std::stringstream s(line);
-    std::string probe, quantity, time, z, value;
-    std::getline(s, probe, ',');
-    std::getline(s, quantity, ',');
-    std::getline(s, time, ',');
-    std::getline(s, z, ',');
-    std::getline(s, value, ',');
-    if (z.empty() && std::abs(std::stod(time) - t) < 1e-9) v[{probe, quantity}] = std::stod(value);
+  const auto rows = csv_rows(file);
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    const auto& row = rows[k];
+    if (row.size() == 5 && row[3].empty() && std::abs(std::stod(row[2]) - t) < 1e-9) v[{row[0], row[1]}] = std::stod(row[4]);
   }
   return v;
 }
