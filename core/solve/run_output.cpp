@@ -278,6 +278,7 @@ void Simulation::Run::log_start() const {
     log->info("job '{}': {} part(s), {} tool(s), isothermal, {} thread(s), subnormals {}", job.name, parts.size(),
               sim.tools_.size(), threads, subnormals);
   for (const std::string& line : sim.mesh_file_lines()) log->info("{}", line);
+  for (const std::string& line : sim.tool_motion_lines()) log->info("{}", line);
   for (const auto& m : job.materials)
     if (const auto card = material_card_file(job, m); !card.empty())
       log->info("material '{}': from the material card {}", m.name, card.string());

@@ -351,6 +351,34 @@ std::vector<std::string> Simulation::mesh_file_lines() const {
   return lines;
 }
 
+std::vector<std::string> Simulation::tool_motion_lines() const {
+  std::vector<std::string> lines;
+  if (!job_.mechanics) return lines;
+  auto vec = [](double x, double y, double z) {
+    return "(" + fmt_g(x, 4) + ", " + fmt_g(y, 4) + ", " + fmt_g(z, 4) + ")";
+  };
+  for (const ToolDef& t : job_.tools) {
+    const MotionDef& m = t.motion;
+    const std::string head = "tool '" + t.name + "': ";
+    if (m.kind == MotionDef::Kind::Velocity) {
+      lines.push_back(head + "moves at " + vec(m.velocity[0], m.velocity[1], m.velocity[2]) +
+                      " m/s from its surface's position");
+    } else if (m.kind == MotionDef::Kind::Displacement) {
+      const auto& a = m.table.front();
+      const auto& z = m.table.back();
+      std::string line = head + "displaced by " + vec(a[1], a[2], a[3]) + " m from its surface's position at t = 0";
+      if (m.table.size() > 1)
+        line += " (the first row), " + vec(z[1], z[2], z[3]) + " m from t = " + fmt_g(z[0], 4) + " s (the last of " +
+                std::to_string(m.table.size()) + " rows)";
+      lines.push_back(line);
+    } else if (m.kind == MotionDef::Kind::Force) {
+      lines.push_back(head + "pressed by " + vec(m.force[0], m.force[1], m.force[2]) + " N, mass " + fmt_g(m.mass, 4) +
+                      " kg, damper " + fmt_g(m.damping, 4) + " N s/m, from its surface's position");
+    }
+  }
+  return lines;
+}
+
 void Simulation::build_parts() {
   for (std::size_t p = 0; p < job_.parts.size(); ++p) {
     const PartDef& def = job_.parts[p];

@@ -147,6 +147,9 @@ class Simulation {
   // (mesh.reorder) and how far apart neighbouring triangles are) and per
   // meshed tool (RigidTool::describe()).
   std::vector<std::string> mesh_file_lines() const;
+  // One line per tool that moves (with mechanics): its velocity, the first
+  // and last rows of its displacement table, or its force, mass and damper.
+  std::vector<std::string> tool_motion_lines() const;
   // Heat stored in the plies, J, relative to 0 degC (sum of capacity x temperature;
   // with a specific heat table, of mass x int_0^T c).
   double stored_heat() const;

@@ -557,6 +557,28 @@ TEST(Cli, ValidateDescribesMeshToolsAndWarnsOfPliesBehindThem) {
 // without it, a warning for each file more than 10 m
 // across, naming the scale that reads it. `scale` on the rectangle
 // generator, or not above 0, is refused.
+// validate (and the log) tell how each tool moves: a displacement table's
+// first and last rows (the hat-channel punch opened from its closed
+// position), a velocity, a force with its mass and damper; nothing in a
+// thermal-only job, where tools do not move.
+TEST(Cli, ValidateTellsHowToolsMove) {
+  const auto hat = thermostamp("validate " + q(source_dir() / "examples" / "hat_channel" / "hat_channel.json"));
+  ASSERT_EQ(hat.exit_code, 0) << hat.err;
+  for (const std::string line :
+       {"tool 'punch': displaced by (0, 0, 0.022) m from its surface's position at t = 0 (the first row), (0, 0, 0) m "
+        "from t = 0.55 s (the last of 2 rows)\n",
+        "tool 'holder': pressed by (0, 0, -60) N, mass 2 kg, damper 4000 N s/m, from its surface's position\n"})
+    EXPECT_NE(hat.out.find(line), std::string::npos) << hat.out;
+  EXPECT_EQ(hat.out.find("tool 'die': displaced"), std::string::npos) << hat.out;
+  const auto hemi = thermostamp("validate " + q(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json"));
+  ASSERT_EQ(hemi.exit_code, 0) << hemi.err;
+  EXPECT_NE(hemi.out.find("tool 'punch': moves at (0, 0, -0.01) m/s from its surface's position\n"), std::string::npos)
+      << hemi.out;
+  const auto thermal = thermostamp("validate " + q(demo_job()));
+  ASSERT_EQ(thermal.exit_code, 0) << thermal.err;
+  EXPECT_EQ(thermal.out.find("from its surface's position"), std::string::npos) << thermal.out;
+}
+
 TEST(Cli, MeshFilesInMillimetresTakeAScale) {
   const auto dir = temp_dir("mesh_scale");
   const json base = read_job_document(small_job("mesh_scale_base"));
