@@ -34,6 +34,7 @@ namespace ts {
 
 using detail::Clock;
 using detail::fmt_g;
+using detail::fmt_vec3;
 using detail::seconds_since;
 using detail::thickness_mean;
 using sdk::Vec3;
@@ -354,25 +355,22 @@ std::vector<std::string> Simulation::mesh_file_lines() const {
 std::vector<std::string> Simulation::tool_motion_lines() const {
   std::vector<std::string> lines;
   if (!job_.mechanics) return lines;
-  auto vec = [](double x, double y, double z) {
-    return "(" + fmt_g(x, 4) + ", " + fmt_g(y, 4) + ", " + fmt_g(z, 4) + ")";
-  };
   for (const ToolDef& t : job_.tools) {
     const MotionDef& m = t.motion;
     const std::string head = "tool '" + t.name + "': ";
     if (m.kind == MotionDef::Kind::Velocity) {
-      lines.push_back(head + "moves at " + vec(m.velocity[0], m.velocity[1], m.velocity[2]) +
+      lines.push_back(head + "moves at " + fmt_vec3(m.velocity[0], m.velocity[1], m.velocity[2]) +
                       " m/s from its surface's position");
     } else if (m.kind == MotionDef::Kind::Displacement) {
       const auto& a = m.table.front();
       const auto& z = m.table.back();
-      std::string line = head + "displaced by " + vec(a[1], a[2], a[3]) + " m from its surface's position at t = 0";
+      std::string line = head + "displaced by " + fmt_vec3(a[1], a[2], a[3]) + " m from its surface's position at t = 0";
       if (m.table.size() > 1)
-        line += " (the first row), " + vec(z[1], z[2], z[3]) + " m from t = " + fmt_g(z[0], 4) + " s (the last of " +
+        line += " (the first row), " + fmt_vec3(z[1], z[2], z[3]) + " m from t = " + fmt_g(z[0], 4) + " s (the last of " +
                 std::to_string(m.table.size()) + " rows)";
       lines.push_back(line);
     } else if (m.kind == MotionDef::Kind::Force) {
-      lines.push_back(head + "pressed by " + vec(m.force[0], m.force[1], m.force[2]) + " N, mass " + fmt_g(m.mass, 4) +
+      lines.push_back(head + "pressed by " + fmt_vec3(m.force[0], m.force[1], m.force[2]) + " N, mass " + fmt_g(m.mass, 4) +
                       " kg, damper " + fmt_g(m.damping, 4) + " N s/m, from its surface's position");
     }
   }
@@ -483,7 +481,7 @@ std::string Simulation::fastest_node() const {
   const PartState& st = *parts_[static_cast<std::size_t>(part)];
   auto at = [&](const auto& x) {
     const std::size_t k = 3 * static_cast<std::size_t>(node);
-    return "(" + fmt_g(x[k], 4) + ", " + fmt_g(x[k + 1], 4) + ", " + fmt_g(x[k + 2], 4) + ") m";
+    return fmt_vec3(x[k], x[k + 1], x[k + 2]) + " m";
   };
   return node_label(st.mesh, node) + " of part '" + st.def->name + "' at " + at(st.x) + " (initially " + at(st.x0) +
          "), " + fmt_g(std::sqrt(best), 3) + " m/s";

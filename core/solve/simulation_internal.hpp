@@ -157,6 +157,11 @@ inline std::string fmt_g(double v, int prec = 6) {
   return s.str();
 }
 
+// A vector as the messages give it: "(x, y, z)", 4 digits each.
+inline std::string fmt_vec3(double x, double y, double z) {
+  return "(" + fmt_g(x, 4) + ", " + fmt_g(y, 4) + ", " + fmt_g(z, 4) + ")";
+}
+
 // The mean through the thickness h of a node's nz values (linear between
 // them), or its one value.
 inline double thickness_mean(const double* v, int nz, double h) {
