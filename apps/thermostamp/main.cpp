@@ -43,11 +43,12 @@ subnormals instead of flushing them to zero during the run (the default)
 --restart: continue the run from the checkpoint in its output folder
 (checkpoint.bin, written when a run is interrupted, every
 output.checkpoint_interval, every --checkpoint-minutes and at the end), with
-the same job and --set values but for time.end: a later time.end extends a
-finished run as a run to it would have gone on; the frames and time series
-up to the checkpoint are kept; with study: continue the study in its output
-folder (study_state.json), its completed runs not run again, a stopped one
-from its checkpoint
+the same job and --set values but for time.end and output.interval: a later
+time.end extends a finished run as a run to it would have gone on, another
+output.interval writes the frames after the checkpoint closer or further
+apart; the frames and time series up to the checkpoint are kept; with
+study: continue the study in its output folder (study_state.json), its
+completed runs not run again, a stopped one from its checkpoint
 --checkpoint-minutes M: also write a checkpoint after every M minutes of
 wall time (against machines that go down without a signal)
 
@@ -276,6 +277,11 @@ int cmd_run(const Args& a, bool validate_only) {
   if (!r.ok) {
     std::cerr << "error: run failed: " << r.error << "\n(frames and probes up to the failure are in "
               << opt.out_dir.string() << ")\n";
+    // A closer look: the same job from the checkpoint, with closer frames.
+    if (r.checkpoint_s >= 0)
+      std::cerr << "(its checkpoint at t = " << r.checkpoint_s
+                << " s remains: the same command with --restart --set output.interval=... runs on from it with "
+                   "closer frames)\n";
     return 3;
   }
   if (!a.quiet) std::cout << "results: " << opt.out_dir.string() << "\n";

@@ -147,7 +147,8 @@ Table read_table(const std::filesystem::path& file, bool keyed, bool& found) {
 // machine rather than on the run's results.
 void flatten(const json& j, const std::string& path, std::map<std::string, double>& out) {
   static const char* skip[] = {"wall_time_s", "wall_time_total_s", "peak_memory_MB", "timing_s", "threads",
-                               "contact_beside_elements", "contact_schedule_share", "restarted_from_s"};
+                               "contact_beside_elements", "contact_schedule_share", "restarted_from_s",
+                               "checkpoint_s"};
   if (j.is_number()) {
     out[path] = j.get<double>();
   } else if (j.is_object()) {

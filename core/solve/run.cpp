@@ -74,9 +74,11 @@ std::vector<unsigned char> mesh_prints(const std::vector<std::unique_ptr<PartSta
 }
 
 // What a restart compares: the stored document without time.end (a restart
-// may move the end, to extend a finished run).
+// may move the end, to extend a finished run) and output.interval (a
+// restart may write its frames closer or further apart).
 json restart_match(json d) {
   if (d.contains("time") && d["time"].is_object()) d["time"].erase("end");
+  if (d.contains("output") && d["output"].is_object()) d["output"].erase("interval");
   return d;
 }
 
@@ -296,6 +298,7 @@ void Simulation::Run::save_checkpoint(const char* what) {
   write_checkpoint(opt.out_dir / kCheckpointFile, c);
   sim.timing_[kTimeOutput] += seconds_since(tc);
   last_checkpoint_wall = Clock::now();
+  checkpoint_at = t;
   if (checkpoint_iv > 0 && t >= next_checkpoint - eps_t) advance_past(next_checkpoint, checkpoint_iv, t + eps_t);
   logger("solve")->info("checkpoint at t = {:.6g} s (mechanical step {}, thermal step {}{}): {}", t, mech_steps, steps,
                         what, (opt.out_dir / kCheckpointFile).string());
@@ -313,17 +316,27 @@ void Simulation::Run::restore() {
   if (!run_io(r) || !r.done()) throw JobError("", "--restart: the checkpoint does not fit this job (run state)");
   t = resume_t;
   restarted_from = t;
+  checkpoint_at = t;
   auto log = logger("solve");
   // Another time.end (a run extended, or ended earlier): where the row
-  // and frame intervals are time.end's defaults, the energy and tool
-  // rows and the frames go on at this run's.
-  if (const CheckpointTimes was = checkpoint_times(*opt.restart); was.t_end != t_end) {
+  // interval is time.end's default, the energy and tool rows go on at
+  // this run's. Another frame interval (set, or time.end's default): the
+  // frames after the checkpoint are at this run's multiples of it.
+  const CheckpointTimes was = checkpoint_times(*opt.restart);
+  if (was.t_end != t_end) {
     if (job.output.series_interval <= 0) {
       next_sample = 0;
       advance_past(next_sample, series_iv, t + eps_t);
     }
-    if (was.interval != interval) frame_index = static_cast<long long>(std::floor((t + eps_t) / interval)) + 1;
     log->info("time.end {:.6g} s instead of the checkpointed run's {:.6g} s", t_end, was.t_end);
+  }
+  if (was.interval != interval) {
+    frame_index = static_cast<long long>(std::floor((t + eps_t) / interval)) + 1;
+    // With the mechanics the thermal step is a number of mechanical steps
+    // (the checkpoint's), from the step aimed at by the checkpointed run.
+    if (job.mechanics && job.thermal) sim.land_thermal_step(std::min(was.interval, was.t_end));
+    log->info("frames every {:.6g} s from the checkpoint on, instead of the checkpointed run's {:.6g} s", interval,
+              was.interval);
   }
   if (checkpoint_iv > 0) {  // the interval of this run, from the checkpoint on
     next_checkpoint = 0;
@@ -605,8 +618,9 @@ double Simulation::check_restart(const Checkpoint& c) const {
     if (stored != restart_match(restart_document(job_.document_as_run)) &&
         stored != restart_match(restart_document(job_.document)))
       throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
-                                "needs the job of the run it continues (time.end, output.checkpoint_interval, "
-                                "output.checkpoint_at_end and output.compression may differ)");
+                                "needs the job of the run it continues (time.end, output.interval, "
+                                "output.checkpoint_interval, output.checkpoint_at_end and output.compression may "
+                                "differ)");
     // The same meshes, numbered alike (checkpoints before 0.24.0 have no
     // prints: their meshes are those of the generators or of files in the
     // files' order).

@@ -628,6 +628,7 @@ void Simulation::Run::finish() {
   result.error = failure;
   result.wall_time_s = seconds_since(wall0);
   result.wall_time_before_s = wall_before;
+  result.checkpoint_s = checkpoint_at;
   result.peak_memory_mb = peak_resident_mb();
   result.simulated_time_s = t;
   result.thermal_steps = steps;
@@ -773,6 +774,7 @@ void Simulation::Run::write_summary() const {
   summary["peak_memory_MB"] = result.peak_memory_mb > 0 ? json(result.peak_memory_mb) : json(nullptr);
   summary["simulated_time_s"] = t;
   summary["restarted_from_s"] = restarted_from >= 0 ? json(restarted_from) : json(nullptr);
+  summary["checkpoint_s"] = checkpoint_at >= 0 ? json(checkpoint_at) : json(nullptr);
   summary["steps"] = {{"mechanics", mech_steps}, {"thermal", steps}};
   summary["dt"] = {{"mechanics", job.mechanics ? json(mech_dt) : json(nullptr)},
                    {"thermal", job.thermal ? json(sim.thermal_dt_) : json(nullptr)}};

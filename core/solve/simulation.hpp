@@ -74,6 +74,9 @@ struct RunResult {
   // s, a restarted run: the wall time of the run up to its checkpoint (over
   // all its earlier parts); 0 for a run from the start.
   double wall_time_before_s = 0;
+  // s, the time of the checkpoint the output folder holds after the run
+  // (written by it, or the one it continued from); -1 where it holds none.
+  double checkpoint_s = -1;
   // The process's peak resident memory at the end of the run (MB; 0 where
   // the system does not report it). Over the process's life: in a study,
   // the largest of the runs so far.
@@ -416,6 +419,10 @@ class Simulation {
   std::vector<int> probe_node_;
   std::vector<std::vector<int>> probe_elements_;  // elements around each probe's node
   double thermal_stable_dt_ = 0, thermal_accurate_dt_ = 0, thermal_dt_ = 0;
+  double thermal_unlanded_dt_ = 0;  // the step before it is cut to land on the frames
+  // The thermal step: the unlanded one cut to an integer number of steps
+  // per frame interval (interval: the frame interval, at most time.end).
+  void land_thermal_step(double interval);
 };
 
 }  // namespace ts

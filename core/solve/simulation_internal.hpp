@@ -266,6 +266,7 @@ struct Simulation::Run {
   const double checkpoint_iv;
   double next_checkpoint = std::numeric_limits<double>::infinity();
   double restarted_from = -1;  // s, a restart's checkpoint time
+  double checkpoint_at = -1;   // s, the time of the output folder's checkpoint (written or continued from)
   detail::Clock::time_point last_checkpoint_wall;
   // The end checkpoint (output.checkpoint_at_end): the state before the
   // first step that depends on time.end (the mechanical steps that land on

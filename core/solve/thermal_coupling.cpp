@@ -151,9 +151,13 @@ void Simulation::build_thermal() {
                                    " steps to reach " + fmt_g(job_.t_end) +
                                    " s; the explicit scheme is limited by thin layers or high conductances here: "
                                    "use \"through_thickness\": \"implicit\"");
-  // Land on the frame times: an integer number of steps per output interval.
-  const double interval = std::min(job_.output.interval, job_.t_end);
-  const double per = std::ceil(interval / dt * (1 - 1e-12));
+  thermal_unlanded_dt_ = dt;
+  land_thermal_step(std::min(job_.output.interval, job_.t_end));
+}
+
+// Land on the frame times: an integer number of steps per output interval.
+void Simulation::land_thermal_step(double interval) {
+  const double per = std::ceil(interval / thermal_unlanded_dt_ * (1 - 1e-12));
   thermal_dt_ = interval / std::max(1.0, per);
 }
 

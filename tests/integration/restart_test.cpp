@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <fstream>
@@ -92,7 +93,7 @@ bool same_bits(const std::map<std::string, std::vector<double>>& a,
 json comparable_summary(const std::filesystem::path& dir) {
   json s = json::parse(std::ifstream(dir / "summary.json"));
   for (const char* k : {"wall_time_s", "wall_time_total_s", "peak_memory_MB", "timing_s", "threads",
-                        "contact_beside_elements", "contact_schedule_share", "restarted_from_s"})
+                        "contact_beside_elements", "contact_schedule_share", "restarted_from_s", "checkpoint_s"})
     s.erase(k);
   return s;
 }
@@ -375,8 +376,8 @@ TEST(Restart, RefusesWhatItCannotContinue) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << label << ": one line: " << r.err;
     unchanged(label);
   };
-  // Another job (another frame interval).
-  refused(run_cli(job, out, 1, "--restart --set output.interval=0.05"), "written by another job", "other job");
+  // Another job (another spacing of the time series' rows).
+  refused(run_cli(job, out, 1, "--restart --set output.series_interval=0.01"), "written by another job", "other job");
   // An end before the checkpoint.
   refused(run_cli(job, out, 1, "--restart --set time.end=0.12"), "not before time.end = 0.12 s", "earlier end");
   // No checkpoint in the folder.
@@ -622,6 +623,138 @@ TEST(Restart, ExtendsAFinishedRunAsARunToTheLaterEnd) {
   const json sn = json::parse(std::ifstream(tdir / "on" / "summary.json"));
   EXPECT_EQ(sn["restarted_from_s"].get<double>(), 2.0);
   expect_same_output(tdir / "direct", tdir / "on", "thermal, extended from 2 s");
+}
+
+// Each frame of a results file by its time: dataset name below the frame
+// (e.g. "ply_top/nodes") -> values.
+std::map<double, std::map<std::string, std::vector<double>>> frames_by_time(const std::filesystem::path& file) {
+  const auto all = results_contents(file);
+  std::map<std::string, double> time_of;  // "frames/000003" -> t
+  for (const auto& [name, v] : all)
+    if (name.ends_with("@time")) time_of[name.substr(0, name.size() - 5)] = v.at(0);
+  std::map<double, std::map<std::string, std::vector<double>>> out;
+  for (const auto& [name, v] : all) {
+    const auto slash = name.find('/', std::string("frames/").size());
+    if (name.rfind("frames/", 0) != 0 || slash == std::string::npos || name.ends_with("@time")) continue;
+    out[time_of.at(name.substr(0, slash))][name.substr(slash + 1)] = v;
+  }
+  return out;
+}
+
+// `--restart --set output.interval=...`: a run continued from a checkpoint
+// with closer frames. With the mechanics the frames change no step: every
+// frame of the run without the restart is there with the same bits, the
+// new ones fall at the multiples of the new interval, and the time series
+// and the summary's audits are those of the run without the restart. A
+// failed run names its checkpoint, and the restart with closer frames
+// fails again at the same step, with the frames before the failure. In a
+// thermal-only run the steps land on the new frames: the frames before the
+// checkpoint are kept, and the temperatures differ from the uninterrupted
+// run's by no more than the finer step alone makes them differ.
+TEST(Restart, CloserFramesFromACheckpoint) {
+  const auto dir = temp_dir("restart_closer");
+  const auto job = write_job(dir, coarse_hemisphere("hemisphere_ud_2ply.json"));  // frames every 0.25 s, to 1 s
+  ASSERT_EQ(run_cli(job, dir / "direct", 2).exit_code, 0);
+  const auto out = dir / "closer";
+  const std::string ck = "--set output.checkpoint_interval=0.5 --set output.checkpoint_at_end=false";
+  ASSERT_EQ(run_cli(job, out, 2, ck).exit_code, 0);
+  const auto r = run_cli(job, out, 1, ck + " --restart --set output.interval=0.05");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  const double from = s["restarted_from_s"].get<double>();
+  EXPECT_GE(from, 0.5);
+  EXPECT_LT(from, 0.501);
+  const auto direct = frames_by_time(dir / "direct" / "results.h5"), closer = frames_by_time(out / "results.h5");
+  ASSERT_EQ(direct.size(), 5u);
+  ASSERT_EQ(closer.size(), 3u + 10u) << "0, 0.25 and 0.5 s kept; 0.55 to 1 s every 0.05 s";
+  for (const auto& [t, fields] : direct) {
+    ASSERT_TRUE(closer.contains(t)) << "the frame at " << t << " s";
+    EXPECT_TRUE(same_bits(fields, closer.at(t))) << "the frame at " << t << " s";
+  }
+  const double dt = s["dt"]["mechanics"].get<double>();
+  int k = 11;  // the frames after the checkpoint: the first step at or after each multiple of 0.05 s
+  for (auto it = closer.upper_bound(from); it != closer.end(); ++it, ++k) {
+    EXPECT_GE(it->first, 0.05 * k - 1e-12) << k;
+    EXPECT_LT(it->first, 0.05 * k + 1.01 * dt) << k;
+  }
+  EXPECT_EQ(k, 21);
+  for (const char* f : {"probes.csv", "energy.csv", "tools.csv", "plies.csv"})
+    EXPECT_TRUE(file_text(dir / "direct" / f) == file_text(out / f)) << f;
+  json a = comparable_summary(dir / "direct"), b = comparable_summary(out);
+  EXPECT_EQ(a["frames"], 5);
+  EXPECT_EQ(b["frames"], 13);
+  a.erase("frames");
+  b.erase("frames");
+  EXPECT_EQ(a, b) << "the thermal step aimed at is the checkpointed run's (its subcycling goes on)";
+
+  // A run that fails (here: a balance error above a tight energy_tolerance
+  // at about 0.3 s) names its checkpoint; from it, with closer frames, it
+  // fails at the same step and keeps the frames up to there.
+  const std::string tight = "--set solvers.mechanics.energy_tolerance=1e-8 --set output.checkpoint_interval=0.1";
+  const auto failing = dir / "failing";
+  const auto f1 = run_cli(job, failing, 2, tight);
+  ASSERT_EQ(f1.exit_code, 3) << f1.err;
+  const json sf = json::parse(std::ifstream(failing / "summary.json"));
+  ASSERT_TRUE(sf["checkpoint_s"].is_number()) << f1.err;
+  const double at = sf["checkpoint_s"].get<double>(), failed_at = sf["simulated_time_s"].get<double>();
+  EXPECT_GE(at, 0.1);
+  EXPECT_LT(at, failed_at);
+  std::ostringstream at_text;  // as the message gives it (6 digits)
+  at_text << at;
+  EXPECT_NE(f1.err.find("(its checkpoint at t = " + at_text.str() +
+                        " s remains: the same command with --restart --set output.interval=... runs on from it with "
+                        "closer frames)"),
+            std::string::npos)
+      << f1.err;
+  const auto first_line = [](const std::string& e) { return e.substr(0, e.find('\n')); };
+  const auto f2 = run_cli(job, failing, 1, tight + " --restart --set output.interval=0.01");
+  ASSERT_EQ(f2.exit_code, 3) << f2.err;
+  EXPECT_EQ(first_line(f2.err), first_line(f1.err)) << "the same failure, at the same step";
+  const auto kept = frames_by_time(failing / "results.h5");
+  const auto after = std::count_if(kept.begin(), kept.end(), [&](const auto& kv) { return kv.first > at; });
+  EXPECT_EQ(after, static_cast<long>(std::floor(failed_at / 0.01) - std::floor(at / 0.01)))
+      << "a frame every 0.01 s from the checkpoint to the failure";
+
+  // Thermal only, a step of 0.01 s, frames every 1 s, to 4 s; continued from
+  // 3 s with frames every 0.015 s (two steps of 0.0075 s each).
+  json patch = read_job_document(source_dir() / "share" / "verification" / "patch_contact.json");
+  patch["solvers"]["thermal"]["dt"] = 0.01;
+  const auto tdir = temp_dir("restart_closer_thermal");
+  const auto tjob = write_job(tdir, patch);
+  ASSERT_EQ(run_cli(tjob, tdir / "direct", 2).exit_code, 0);
+  ASSERT_EQ(run_cli(tjob, tdir / "fine", 2, "--set output.interval=0.015").exit_code, 0);
+  const std::string tck = "--set output.checkpoint_interval=1.5 --set output.checkpoint_at_end=false";
+  ASSERT_EQ(run_cli(tjob, tdir / "closer", 2, tck).exit_code, 0);
+  const auto tr = run_cli(tjob, tdir / "closer", 1, tck + " --restart --set output.interval=0.015");
+  ASSERT_EQ(tr.exit_code, 0) << tr.err;
+  const json ts = json::parse(std::ifstream(tdir / "closer" / "summary.json"));
+  EXPECT_EQ(ts["restarted_from_s"].get<double>(), 3.0);
+  EXPECT_EQ(ts["dt"]["thermal"].get<double>(), 0.0075);
+  EXPECT_LT(ts["heat"]["balance_error"].get<double>(), 1e-9);
+  const auto td = frames_by_time(tdir / "direct" / "results.h5"), tf = frames_by_time(tdir / "fine" / "results.h5"),
+             tc = frames_by_time(tdir / "closer" / "results.h5");
+  ASSERT_EQ(tc.size(), 4u + 67u) << "0 to 3 s kept, then 3.015 to 4 s every 0.015 s and the end";
+  for (const double t : {0.0, 1.0, 2.0, 3.0}) EXPECT_TRUE(same_bits(td.at(t), tc.at(t))) << t;
+  int n = 0;
+  for (auto it = tc.upper_bound(3.0); std::next(it) != tc.end(); ++it)
+    EXPECT_NEAR(it->first, 0.015 * (201 + n++), 1e-12) << "steps land on the frames";
+  // At 4 s: the restarted run against the one with 0.01 s throughout, and
+  // the finer step alone (0.0075 s throughout) against the same.
+  ASSERT_TRUE(tc.contains(4.0) && td.contains(4.0) && tf.contains(4.0));
+  for (const char* ply : {"upper", "lower"}) {
+    const std::string f = std::string(ply) + "/temperature";
+    const auto &base = td.at(4.0).at(f), &cont = tc.at(4.0).at(f), &fine = tf.at(4.0).at(f);
+    double restarted = 0, step = 0;
+    for (std::size_t i = 0; i < base.size(); ++i) {
+      restarted = std::max(restarted, std::abs(cont[i] - base[i]));
+      step = std::max(step, std::abs(fine[i] - base[i]));
+    }
+    std::printf("%s at 4 s: restarted with 0.0075 s steps from 3 s %.3g K, 0.0075 s throughout %.3g K from the "
+                "run with 0.01 s\n",
+                ply, restarted, step);
+    EXPECT_GT(restarted, 0.0) << ply << ": the steps after the checkpoint are other steps";
+    EXPECT_LE(restarted, step) << ply;
+  }
 }
 
 // `thermostamp study --restart`: a study stopped by SIGTERM in the middle of
