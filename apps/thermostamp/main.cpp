@@ -241,6 +241,7 @@ int cmd_run(const Args& a, bool validate_only) {
         std::cout << line;
       }
     }
+    for (const std::string& l : sim.output_lines()) std::cout << l << "\n";
     return 0;
   }
   ts::RunOptions opt;

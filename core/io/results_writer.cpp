@@ -121,6 +121,30 @@ std::string series_column_units(const std::string& column) {
   return "J";  // the energies and works, the tools' heat
 }
 
+ResultsBytes results_bytes(const std::vector<WriterPart>& parts, const std::vector<std::vector<FrameField>>& fields,
+                           const std::vector<WriterTool>& tools) {
+  constexpr double d = sizeof(double), i = sizeof(int), ll = sizeof(long long);
+  ResultsBytes b;
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    const WriterPart& wp = parts[p];
+    const double nn = wp.num_nodes, ne = wp.num_elements, nl = extruded_levels(wp.nz);
+    b.once += 3 * ne * i + nn * ll + ne * ll;  // triangles, node_tags, element_tags
+    b.per_frame += 3 * nn * d;                 // nodes
+    if (wp.layers) {
+      b.once += 6 * ne * (nl - 1) * i;  // wedges
+      b.per_frame += 3 * nn * nl * d;   // layer_nodes
+    }
+    if (p < fields.size())
+      for (const FrameField& f : fields[p])
+        b.per_frame += (f.on_layers ? nn * nl : (f.on_cells ? ne : nn) * f.components) * d;
+  }
+  for (const WriterTool& t : tools) {
+    b.once += static_cast<double>(t.nodes.size()) * d + static_cast<double>(t.triangles.size()) * i;
+    if (t.moves) b.per_frame += static_cast<double>(t.nodes.size()) * d;
+  }
+  return b;
+}
+
 void ResultsWriter::check_compression() const {
   unsigned info = 0;
   if (compression_ > 0 && (H5Zfilter_avail(H5Z_FILTER_DEFLATE) <= 0 || H5Zfilter_avail(H5Z_FILTER_SHUFFLE) <= 0 ||

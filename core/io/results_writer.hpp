@@ -52,6 +52,18 @@ struct FrameField {
   bool on_layers = false;        // extruded through-thickness mesh
 };
 
+// The bytes of the values results.h5 holds (before compression, without
+// HDF5's own structures and the time series written at the end): those
+// written once (the plies' triangles, node and element tags and
+// through-thickness wedges, the tools' surfaces) and those of each frame
+// (the plies' positions, through-thickness positions and fields, the
+// moving tools' positions), for these parts, fields per part and tools.
+struct ResultsBytes {
+  double once = 0, per_frame = 0;
+};
+ResultsBytes results_bytes(const std::vector<WriterPart>& parts, const std::vector<std::vector<FrameField>>& fields,
+                           const std::vector<WriterTool>& tools);
+
 class ResultsWriter {
  public:
   // compression: the gzip level (1-9, with the shuffle filter) of the

@@ -159,66 +159,17 @@ void Simulation::Run::open_output() {
     // DIR/job_as_run.json` runs it again, from anywhere.
     if (std::ofstream jf(opt.out_dir / "job_as_run.json"); !(jf << job.document_as_run.dump(2) << '\n'))
       throw RunError("cannot write " + (opt.out_dir / "job_as_run.json").string());
-    std::vector<WriterPart> wparts;
-    const bool layers =
-        std::find(job.output.fields.begin(), job.output.fields.end(), "temperature") != job.output.fields.end();
-    for (const auto& st : sim.parts_) {
-      WriterPart& wp = wparts.emplace_back(WriterPart{st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(),
-                                                      &st->mesh.triangles, st->def->thickness, st->nz, layers, {}, {}});
-      for (int i = 0; i < wp.num_nodes; ++i) wp.node_tags.push_back(node_tag(st->mesh, i));
-      for (int e = 0; e < wp.num_elements; ++e) wp.element_tags.push_back(element_tag(st->mesh, e));
-    }
+    std::vector<WriterPart> wparts = sim.writer_parts();
     try {
       const int level = job.output.compression;
-      writer = opt.restart
-                   ? std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), frame_times, frame_fields(), level)
-                   : std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), level);
+      writer = opt.restart ? std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), frame_times,
+                                                             sim.frame_fields(), level)
+                           : std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), level);
     } catch (const std::runtime_error& e) {
       if (opt.restart) throw JobError("", std::string("--restart: ") + e.what());
       throw;
     }
-    if (job.output.tool_surfaces && !sim.tools_.empty()) {
-      // A plane is drawn over the plies' initial box.
-      constexpr double inf = std::numeric_limits<double>::infinity();
-      std::array<double, 3> lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-      for (const auto& st : sim.parts_)
-        for (std::size_t i = 0; i < st->x0.size(); ++i) {
-          lo[i % 3] = std::min(lo[i % 3], st->x0[i]);
-          hi[i % 3] = std::max(hi[i % 3], st->x0[i]);
-        }
-      // The symmetry planes that every ply has, with the side the plies
-      // lie on: the tools are drawn on that side only, as the plies are.
-      const double size = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
-      std::vector<std::pair<int, double>> planes;  // axis, side
-      for (int d = 0; d < 3 && !job.output.tool_surfaces_whole; ++d) {
-        bool every_ply = true;
-        for (std::size_t p = 0; p < job.parts.size(); ++p)
-          every_ply = every_ply && std::any_of(job.constraints.begin(), job.constraints.end(), [&](const ConstraintDef& c) {
-                        return c.type == ConstraintDef::Type::Symmetry && c.plane == d &&
-                               std::find(c.parts.begin(), c.parts.end(), static_cast<int>(p)) != c.parts.end();
-                      });
-        if (!every_ply || job.parts.empty() || hi[d] - lo[d] <= 1e-6 * size) continue;  // (plies in the plane)
-        if (lo[d] >= -1e-6 * size)
-          planes.emplace_back(d, 1.0);
-        else if (hi[d] <= 1e-6 * size)
-          planes.emplace_back(d, -1.0);
-      }
-      std::vector<WriterTool> wtools;
-      for (std::size_t t = 0; t < sim.tools_.size(); ++t) {
-        WriterTool& wt = wtools.emplace_back();
-        wt.name = job.tools[t].name;
-        wt.moves = job.mechanics && job.tools[t].motion.kind != MotionDef::Kind::Fixed;
-        sim.tools_[t]->display_mesh(lo, hi, wt.nodes, wt.triangles);
-        std::vector<double> nodes = wt.nodes;
-        std::vector<int> triangles = wt.triangles;
-        for (const auto& [axis, sign] : planes) cut_display_mesh(nodes, triangles, axis, sign, 1e-9 * size);
-        if (!triangles.empty()) {  // a tool wholly beyond the planes is drawn whole
-          wt.nodes = std::move(nodes);
-          wt.triangles = std::move(triangles);
-        }
-      }
-      writer->set_tools(std::move(wtools));
-    }
+    if (job.output.tool_surfaces && !sim.tools_.empty()) writer->set_tools(sim.writer_tools());
     open_series(probes_csv, "probes.csv", 0, "probe,quantity,time,z,value\n");
   }
 
@@ -328,68 +279,8 @@ void Simulation::Run::log_start() const {
         log->warn("probe '{}' has no interval: it records at every thermal step, up to {:.3g} samples; set "
                   "{}/interval for fewer",
                   job.output.probes[q].name, n, job.output.probes[q].pointer);
-}
-
-// The fields of a frame, per part (the same in every frame of a run).
-std::vector<std::vector<FrameField>> Simulation::Run::frame_fields() const {
-  const auto& mech = sim.mech_;
-  std::vector<std::vector<FrameField>> fields(sim.parts_.size());
-  for (std::size_t p = 0; p < sim.parts_.size(); ++p) {
-    PartState& st = *sim.parts_[p];
-    for (const auto& f : job.output.fields) {
-      if (f == "temperature") {
-        fields[p].push_back({"temperature", st.T.data(), 1, false, true});
-        fields[p].push_back({"temperature_mean", st.mean.data()});
-        fields[p].push_back({"temperature_top", st.top.data()});
-        fields[p].push_back({"temperature_bottom", st.bottom.data()});
-      } else if (f == "temperature_mean") {
-        fields[p].push_back({"temperature_mean", st.mean.data()});
-      } else if (f == "temperature_top") {
-        fields[p].push_back({"temperature_top", st.top.data()});
-      } else if (f == "temperature_bottom") {
-        fields[p].push_back({"temperature_bottom", st.bottom.data()});
-      } else if (f == "displacement") {
-        fields[p].push_back({"displacement", st.displacement.data(), 3});
-      } else if (f == "velocity" && p < mech.size()) {
-        // Half-step velocity v^{n-1/2} of the step that ended at the frame.
-        fields[p].push_back({"velocity", mech[p]->v.data(), 3});
-      } else if (f == "shear_angle") {
-        fields[p].push_back({"shear_angle", st.shear_angle.data(), 1, true});
-      } else if (f == "fibre_direction") {
-        fields[p].push_back({"fibre_direction", st.fibre.data(), 3, true});
-      } else if (f == "contact_status") {
-        fields[p].push_back({"contact_status", st.contact_status.data()});
-      } else if (f == "contact_pressure") {
-        fields[p].push_back({"contact_pressure", st.contact_pressure.data()});
-      } else if (f == "conductance") {
-        fields[p].push_back({"conductance_bottom", st.conductance_bottom.data()});
-        fields[p].push_back({"conductance_top", st.conductance_top.data()});
-      } else if (f == "tool_gap") {
-        fields[p].push_back({"tool_gap", st.tool_gap.data()});
-      } else if (f == "crystallinity" && !st.X.empty()) {
-        fields[p].push_back({"crystallinity", st.X.data(), 1, false, true});
-        fields[p].push_back({"crystallinity_mean", st.X_mean.data()});
-      } else if (f == "below_threshold_from") {
-        fields[p].push_back({"below_threshold_from", st.below_from.data()});
-        fields[p].push_back({"all_below_threshold_from", st.all_below_from.data()});
-      } else if ((f == "membrane_stress" || f == "curvature" || f == "membrane_strain") && p < mech.size()) {
-        // Material-frame components [11, 22, 12] per element, as vectors.
-        fields[p].push_back({f,
-                             f == "membrane_stress" ? mech[p]->stress.data()
-                             : f == "curvature"     ? mech[p]->curvature.data()
-                                                    : mech[p]->strain.data(),
-                             3, true});
-      }
-    }
-    // No field twice (e.g. "temperature" and "temperature_mean").
-    auto& v = fields[p];
-    std::vector<FrameField> unique;
-    for (const auto& ff : v)
-      if (std::none_of(unique.begin(), unique.end(), [&](const FrameField& u) { return u.name == ff.name; }))
-        unique.push_back(ff);
-    v = std::move(unique);
-  }
-  return fields;
+  if (!opt.restart)
+    for (const std::string& line : sim.output_lines()) log->info("{}", line);
 }
 
 // The per-node values derived from the temperatures (and crystallinities):
@@ -422,7 +313,7 @@ void Simulation::Run::write_frame(double time) {
   }
   std::vector<std::array<double, 3>> tool_u;
   for (const auto& tool : sim.tools_) tool_u.push_back(tool->displacement());
-  writer->write_frame(time, xs, ns, frame_fields(), tool_u);
+  writer->write_frame(time, xs, ns, sim.frame_fields(), tool_u);
   frame_times.push_back(time);
 }
 
@@ -968,6 +859,164 @@ void Simulation::Run::log_end() const {
   } else {
     log->error("run failed: {}", failure);
   }
+}
+
+// The fields of a frame, per part (output.fields; each with its values;
+// the same in every frame of a run).
+std::vector<std::vector<FrameField>> Simulation::frame_fields() const {
+  const auto& mech = mech_;
+  std::vector<std::vector<FrameField>> fields(parts_.size());
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    PartState& st = *parts_[p];
+    for (const auto& f : job_.output.fields) {
+      if (f == "temperature") {
+        fields[p].push_back({"temperature", st.T.data(), 1, false, true});
+        fields[p].push_back({"temperature_mean", st.mean.data()});
+        fields[p].push_back({"temperature_top", st.top.data()});
+        fields[p].push_back({"temperature_bottom", st.bottom.data()});
+      } else if (f == "temperature_mean") {
+        fields[p].push_back({"temperature_mean", st.mean.data()});
+      } else if (f == "temperature_top") {
+        fields[p].push_back({"temperature_top", st.top.data()});
+      } else if (f == "temperature_bottom") {
+        fields[p].push_back({"temperature_bottom", st.bottom.data()});
+      } else if (f == "displacement") {
+        fields[p].push_back({"displacement", st.displacement.data(), 3});
+      } else if (f == "velocity" && p < mech.size()) {
+        // Half-step velocity v^{n-1/2} of the step that ended at the frame.
+        fields[p].push_back({"velocity", mech[p]->v.data(), 3});
+      } else if (f == "shear_angle") {
+        fields[p].push_back({"shear_angle", st.shear_angle.data(), 1, true});
+      } else if (f == "fibre_direction") {
+        fields[p].push_back({"fibre_direction", st.fibre.data(), 3, true});
+      } else if (f == "contact_status") {
+        fields[p].push_back({"contact_status", st.contact_status.data()});
+      } else if (f == "contact_pressure") {
+        fields[p].push_back({"contact_pressure", st.contact_pressure.data()});
+      } else if (f == "conductance") {
+        fields[p].push_back({"conductance_bottom", st.conductance_bottom.data()});
+        fields[p].push_back({"conductance_top", st.conductance_top.data()});
+      } else if (f == "tool_gap") {
+        fields[p].push_back({"tool_gap", st.tool_gap.data()});
+      } else if (f == "crystallinity" && !st.X.empty()) {
+        fields[p].push_back({"crystallinity", st.X.data(), 1, false, true});
+        fields[p].push_back({"crystallinity_mean", st.X_mean.data()});
+      } else if (f == "below_threshold_from") {
+        fields[p].push_back({"below_threshold_from", st.below_from.data()});
+        fields[p].push_back({"all_below_threshold_from", st.all_below_from.data()});
+      } else if ((f == "membrane_stress" || f == "curvature" || f == "membrane_strain") && p < mech.size()) {
+        // Material-frame components [11, 22, 12] per element, as vectors.
+        fields[p].push_back({f,
+                             f == "membrane_stress" ? mech[p]->stress.data()
+                             : f == "curvature"     ? mech[p]->curvature.data()
+                                                    : mech[p]->strain.data(),
+                             3, true});
+      }
+    }
+    // No field twice (e.g. "temperature" and "temperature_mean").
+    auto& v = fields[p];
+    std::vector<FrameField> unique;
+    for (const auto& ff : v)
+      if (std::none_of(unique.begin(), unique.end(), [&](const FrameField& u) { return u.name == ff.name; }))
+        unique.push_back(ff);
+    v = std::move(unique);
+  }
+  return fields;
+}
+
+
+// results.h5's parts: each ply's mesh, thickness and through-thickness
+// values, with the through-thickness mesh where the frames show
+// "temperature".
+std::vector<WriterPart> Simulation::writer_parts() const {
+  std::vector<WriterPart> wparts;
+  const auto& fields = job_.output.fields;
+  const bool layers = std::find(fields.begin(), fields.end(), "temperature") != fields.end();
+  for (const auto& st : parts_) {
+    WriterPart& wp = wparts.emplace_back(WriterPart{st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(),
+                                                    &st->mesh.triangles, st->def->thickness, st->nz, layers, {}, {}});
+    for (int i = 0; i < wp.num_nodes; ++i) wp.node_tags.push_back(node_tag(st->mesh, i));
+    for (int e = 0; e < wp.num_elements; ++e) wp.element_tags.push_back(element_tag(st->mesh, e));
+  }
+  return wparts;
+}
+
+// The tools' surfaces as results.h5 shows them (output.tool_surfaces; none
+// without): each tool's display mesh over the plies' initial box, cut at
+// the symmetry planes of the plies.
+std::vector<WriterTool> Simulation::writer_tools() const {
+  if (!job_.output.tool_surfaces) return {};
+  // A plane is drawn over the plies' initial box.
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  std::array<double, 3> lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+  for (const auto& st : parts_)
+    for (std::size_t i = 0; i < st->x0.size(); ++i) {
+      lo[i % 3] = std::min(lo[i % 3], st->x0[i]);
+      hi[i % 3] = std::max(hi[i % 3], st->x0[i]);
+    }
+  // The symmetry planes that every ply has, with the side the plies
+  // lie on: the tools are drawn on that side only, as the plies are.
+  const double size = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+  std::vector<std::pair<int, double>> planes;  // axis, side
+  for (int d = 0; d < 3 && !job_.output.tool_surfaces_whole; ++d) {
+    bool every_ply = true;
+    for (std::size_t p = 0; p < job_.parts.size(); ++p)
+      every_ply = every_ply &&
+                  std::any_of(job_.constraints.begin(), job_.constraints.end(), [&](const ConstraintDef& c) {
+                    return c.type == ConstraintDef::Type::Symmetry && c.plane == d &&
+                           std::find(c.parts.begin(), c.parts.end(), static_cast<int>(p)) != c.parts.end();
+                  });
+    if (!every_ply || job_.parts.empty() || hi[d] - lo[d] <= 1e-6 * size) continue;  // (plies in the plane)
+    if (lo[d] >= -1e-6 * size)
+      planes.emplace_back(d, 1.0);
+    else if (hi[d] <= 1e-6 * size)
+      planes.emplace_back(d, -1.0);
+  }
+  std::vector<WriterTool> wtools;
+  for (std::size_t t = 0; t < tools_.size(); ++t) {
+    WriterTool& wt = wtools.emplace_back();
+    wt.name = job_.tools[t].name;
+    wt.moves = job_.mechanics && job_.tools[t].motion.kind != MotionDef::Kind::Fixed;
+    tools_[t]->display_mesh(lo, hi, wt.nodes, wt.triangles);
+    std::vector<double> nodes = wt.nodes;
+    std::vector<int> triangles = wt.triangles;
+    for (const auto& [axis, sign] : planes) cut_display_mesh(nodes, triangles, axis, sign, 1e-9 * size);
+    if (!triangles.empty()) {  // a tool wholly beyond the planes is drawn whole
+      wt.nodes = std::move(nodes);
+      wt.triangles = std::move(triangles);
+    }
+  }
+  return wtools;
+}
+
+
+long long Simulation::frame_count() const {
+  const double iv = job_.output.interval;
+  return 1 + static_cast<long long>(std::ceil(job_.t_end / iv * (1 - 1e-9)));
+}
+
+namespace {
+// A number of bytes as kB, MB or GB (10^3, 10^6, 10^9), 3 digits.
+std::string bytes_text(double b) {
+  if (b >= 1e9) return fmt_g(b / 1e9, 3) + " GB";
+  if (b >= 1e6) return fmt_g(b / 1e6, 3) + " MB";
+  return fmt_g(b / 1e3, 3) + " kB";
+}
+}  // namespace
+
+std::vector<std::string> Simulation::output_lines() const {
+  const ResultsBytes b = results_bytes(writer_parts(), frame_fields(), writer_tools());
+  const long long n = frame_count();
+  const double iv = job_.output.interval;
+  std::string times = n == 1   ? "at t = 0"
+                      : n == 2 ? "at t = 0 and " + fmt_g(job_.t_end) + " s"
+                               : "at t = 0, every " + fmt_g(iv) + " s and " + fmt_g(job_.t_end) + " s";
+  if (n > 2 && std::abs(iv * static_cast<double>(n - 1) - job_.t_end) <= 1e-9 * job_.t_end)
+    times = "at t = 0 and every " + fmt_g(iv) + " s to " + fmt_g(job_.t_end) + " s";
+  const int level = job_.output.compression;
+  return {"frames: " + std::to_string(n) + " " + times + ", " + bytes_text(b.per_frame) + " each: about " +
+          bytes_text(b.once + static_cast<double>(n) * b.per_frame) + " of results.h5" +
+          (level > 0 ? " before compression (level " + std::to_string(level) + ")" : "")};
 }
 
 }  // namespace ts

@@ -16,6 +16,7 @@
 #include <thermostamp/sdk/plugin.hpp>
 
 #include "io/checkpoint.hpp"
+#include "io/results_writer.hpp"
 #include "job/job.hpp"
 #include "mesh/shell_mesh.hpp"
 #include "plugins/registry.hpp"
@@ -153,6 +154,17 @@ class Simulation {
   // One line per tool that moves (with mechanics): its velocity, the first
   // and last rows of its displacement table, or its force, mass and damper.
   std::vector<std::string> tool_motion_lines() const;
+  // What the frames of results.h5 will take: their number and times, the
+  // bytes of each and of all (before compression).
+  std::vector<std::string> output_lines() const;
+  // The number of frames a run from the start writes: t = 0, each
+  // multiple of output.interval and time.end.
+  long long frame_count() const;
+  // results.h5's parts, the fields of a frame per part (with their
+  // values) and the tools' surfaces (output.tool_surfaces; none without).
+  std::vector<WriterPart> writer_parts() const;
+  std::vector<std::vector<FrameField>> frame_fields() const;
+  std::vector<WriterTool> writer_tools() const;
   // Heat stored in the plies, J, relative to 0 degC (sum of capacity x temperature;
   // with a specific heat table, of mass x int_0^T c).
   double stored_heat() const;

@@ -293,7 +293,6 @@ struct Simulation::Run {
   void open_output();  // results.h5, job_as_run.json and the time series files, with their columns
   void open_series(std::ofstream& out, const char* name, int k, const std::string& header);
   void log_start() const;
-  std::vector<std::vector<FrameField>> frame_fields() const;
   void update_derived();
   void write_frame(double time);
   void sample_probes(double time, std::size_t only = static_cast<std::size_t>(-1));

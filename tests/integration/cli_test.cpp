@@ -2448,6 +2448,71 @@ TEST(Output, CrystallinityInFramesSeriesSummaryAndExport) {
       << w.out << w.err;
 }
 
+// `validate` (and the log) give the frames a run writes and what they take
+// of results.h5: the count, and the bytes of the values written once and
+// per frame, which must be those of the datasets the run writes (HDF5's
+// storage sizes, exactly; the time series written at the end aside).
+// Three outputs: the hemisphere with every field and the tools' surfaces,
+// the same with positions only and no tools drawn, and a thermal-only job
+// with the through-thickness temperature on 9 levels.
+TEST(Output, ValidateGivesTheFramesAndTheirSize) {
+  json every = short_hemisphere(0.002, 0.0005, 4);
+  every_field(every);
+  every["output"]["tool_surfaces"] = true;
+  json bare = short_hemisphere(0.002, 0.0007, 4);  // frames at 0, 0.7, 1.4 and 2 ms
+  bare["output"]["fields"] = {"displacement"};
+  bare["output"]["tool_surfaces"] = false;
+  json thermal = read_job_document(source_dir() / "share" / "verification" / "patch_contact.json");
+  thermal["time"]["end"] = 0.5;
+  thermal["output"]["interval"] = 0.1;
+  const std::vector<std::pair<std::string, json>> cases = {{"every", every}, {"bare", bare}, {"thermal", thermal}};
+  const std::map<std::string, std::string> lines = {
+      {"every", "frames: 5 at t = 0 and every 0.0005 s to 0.002 s, "},
+      {"bare", "frames: 4 at t = 0, every 0.0007 s and 0.002 s, "},
+      {"thermal", "frames: 6 at t = 0 and every 0.1 s to 0.5 s, "}};
+  for (const auto& [label, j] : cases) {
+    const auto dir = temp_dir("output_size_" + label);
+    std::ofstream(dir / "job.json") << j.dump(2);
+    const Job job = parse_job(j, dir / "job.json");
+    PluginRegistry registry;
+    const Simulation sim(job, registry);
+    const ResultsBytes b = results_bytes(sim.writer_parts(), sim.frame_fields(), sim.writer_tools());
+    const long long n = sim.frame_count();
+    const auto v = thermostamp("validate " + q(dir / "job.json"));
+    ASSERT_EQ(v.exit_code, 0) << v.err;
+    EXPECT_NE(v.out.find(lines.at(label)), std::string::npos) << v.out;
+    const auto r = thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "out"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const json s = json::parse(std::ifstream(dir / "out" / "summary.json"));
+    EXPECT_EQ(s["frames"].get<long long>(), n) << label;
+    // The storage of every dataset but the series.
+    struct Sum {
+      double frames = 0, once = 0;
+    } sum;
+    const hid_t f = H5Fopen((dir / "out" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    H5Ovisit(
+        f, H5_INDEX_NAME, H5_ITER_INC,
+        [](hid_t file, const char* name, const H5O_info_t* info, void* data) -> herr_t {
+          if (info->type != H5O_TYPE_DATASET || std::string(name).rfind("series", 0) == 0) return 0;
+          const hid_t ds = H5Dopen2(file, name, H5P_DEFAULT);
+          auto& s = *static_cast<Sum*>(data);
+          const double bytes = static_cast<double>(H5Dget_storage_size(ds));
+          (std::string(name).rfind("frames", 0) == 0 ? s.frames : s.once) += bytes;
+          H5Dclose(ds);
+          return 0;
+        },
+        &sum);
+    H5Fclose(f);
+    std::printf("%s: %lld frames, %.0f + %lld x %.0f bytes estimated; %.0f + %.0f bytes in results.h5 (file %ju)\n",
+                label.c_str(), n, b.once, n, b.per_frame, sum.once, sum.frames,
+                static_cast<std::uintmax_t>(std::filesystem::file_size(dir / "out" / "results.h5")));
+    EXPECT_EQ(sum.once, b.once) << label;
+    EXPECT_EQ(sum.frames, static_cast<double>(n) * b.per_frame) << label;
+    EXPECT_GT(b.per_frame, 0) << label;
+  }
+}
+
 // Every dataset of a frame carries its units (attribute "units", the user
 // guide's table), and each series the units of its columns beside their
 // names: the hemisphere scene, coarse and short, with every field.
