@@ -74,18 +74,23 @@ std::vector<unsigned char> mesh_prints(const std::vector<std::unique_ptr<PartSta
 }
 
 // What a restart compares: the stored document without time.end (a restart
-// may move the end, to extend a finished run) and output.interval (a
-// restart may write its frames closer or further apart).
+// may move the end, to extend a finished run), output.interval and
+// output.series_interval (a restart may write its frames and rows closer
+// or further apart).
 json restart_match(json d) {
   if (d.contains("time") && d["time"].is_object()) d["time"].erase("end");
-  if (d.contains("output") && d["output"].is_object()) d["output"].erase("interval");
+  if (d.contains("output") && d["output"].is_object()) {
+    d["output"].erase("interval");
+    d["output"].erase("series_interval");
+  }
   return d;
 }
 
-// The time.end and frame interval (its output.interval, by default its
-// time.end) of the run that wrote a checkpoint, s; NaN where absent.
+// The time.end, frame interval (its output.interval, by default its
+// time.end) and row interval (output.series_interval, by default time.end
+// / 500) of the run that wrote a checkpoint, s; NaN where absent.
 struct CheckpointTimes {
-  double t_end, interval;
+  double t_end, interval, series;
 };
 CheckpointTimes checkpoint_times(const Checkpoint& c) {
   const auto& bytes = c.section("job");
@@ -96,7 +101,8 @@ CheckpointTimes checkpoint_times(const Checkpoint& c) {
     return std::numeric_limits<double>::quiet_NaN();
   };
   const double t_end = number("time", "end"), interval = number("output", "interval");
-  return {t_end, std::isnan(interval) ? t_end : interval};
+  const double series = number("output", "series_interval");
+  return {t_end, std::isnan(interval) ? t_end : interval, std::isnan(series) || series <= 0 ? t_end / 500 : series};
 }
 
 }  // namespace
@@ -318,17 +324,17 @@ void Simulation::Run::restore() {
   restarted_from = t;
   checkpoint_at = t;
   auto log = logger("solve");
-  // Another time.end (a run extended, or ended earlier): where the row
-  // interval is time.end's default, the energy and tool rows go on at
-  // this run's. Another frame interval (set, or time.end's default): the
-  // frames after the checkpoint are at this run's multiples of it.
+  // Another time.end (a run extended, or ended earlier), frame interval
+  // or row interval (set, or time.end's defaults): the frames and the rows
+  // of the time series after the checkpoint are at this run's multiples
+  // of its intervals.
   const CheckpointTimes was = checkpoint_times(*opt.restart);
-  if (was.t_end != t_end) {
-    if (job.output.series_interval <= 0) {
-      next_sample = 0;
-      advance_past(next_sample, series_iv, t + eps_t);
-    }
-    log->info("time.end {:.6g} s instead of the checkpointed run's {:.6g} s", t_end, was.t_end);
+  if (was.t_end != t_end) log->info("time.end {:.6g} s instead of the checkpointed run's {:.6g} s", t_end, was.t_end);
+  if (was.series != series_iv) {
+    next_sample = 0;
+    advance_past(next_sample, series_iv, t + eps_t);
+    log->info("rows every {:.6g} s from the checkpoint on, instead of the checkpointed run's {:.6g} s", series_iv,
+              was.series);
   }
   if (was.interval != interval) {
     frame_index = static_cast<long long>(std::floor((t + eps_t) / interval)) + 1;
@@ -619,8 +625,8 @@ double Simulation::check_restart(const Checkpoint& c) const {
         stored != restart_match(restart_document(job_.document)))
       throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
                                 "needs the job of the run it continues (time.end, output.interval, "
-                                "output.checkpoint_interval, output.checkpoint_at_end and output.compression may "
-                                "differ)");
+                                "output.series_interval, output.checkpoint_interval, output.checkpoint_at_end and "
+                                "output.compression may differ)");
     // The same meshes, numbered alike (checkpoints before 0.24.0 have no
     // prints: their meshes are those of the generators or of files in the
     // files' order).

@@ -376,8 +376,9 @@ TEST(Restart, RefusesWhatItCannotContinue) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << label << ": one line: " << r.err;
     unchanged(label);
   };
-  // Another job (another spacing of the time series' rows).
-  refused(run_cli(job, out, 1, "--restart --set output.series_interval=0.01"), "written by another job", "other job");
+  // Another job (another step).
+  refused(run_cli(job, out, 1, "--restart --set solvers.mechanics.dt_safety=0.7"), "written by another job",
+          "other job");
   // An end before the checkpoint.
   refused(run_cli(job, out, 1, "--restart --set time.end=0.12"), "not before time.end = 0.12 s", "earlier end");
   // No checkpoint in the folder.
@@ -707,13 +708,44 @@ TEST(Restart, CloserFramesFromACheckpoint) {
             std::string::npos)
       << f1.err;
   const auto first_line = [](const std::string& e) { return e.substr(0, e.find('\n')); };
-  const auto f2 = run_cli(job, failing, 1, tight + " --restart --set output.interval=0.01");
+  const std::string energy_before = file_text(failing / "energy.csv");
+  const auto f2 =
+      run_cli(job, failing, 1, tight + " --restart --set output.interval=0.01 --set output.series_interval=1e-3");
   ASSERT_EQ(f2.exit_code, 3) << f2.err;
   EXPECT_EQ(first_line(f2.err), first_line(f1.err)) << "the same failure, at the same step";
   const auto kept = frames_by_time(failing / "results.h5");
   const auto after = std::count_if(kept.begin(), kept.end(), [&](const auto& kv) { return kv.first > at; });
   EXPECT_EQ(after, static_cast<long>(std::floor(failed_at / 0.01) - std::floor(at / 0.01)))
       << "a frame every 0.01 s from the checkpoint to the failure";
+  // The energy rows: those of the first run up to the checkpoint (every
+  // 2 ms, time.end / 500), then one at the first step at or after each
+  // millisecond; the same values where both runs wrote a row.
+  auto by_time = [](const std::string& text) {  // each row of a CSV text by its time
+    std::map<double, std::string> rows;
+    std::istringstream in(text);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) rows[std::stod(line.substr(0, line.find(',')))] = line;
+    return rows;
+  };
+  const auto first_rows = by_time(energy_before), rows = by_time(file_text(failing / "energy.csv"));
+  int fine_rows = 0, common = 0;
+  double last = at;
+  for (const auto& [t, row] : rows) {
+    if (t > at) {
+      ++fine_rows;
+      EXPECT_LT(t - last, 1e-3 + 1.01 * sf["dt"]["mechanics"].get<double>()) << t;
+      last = t;
+    } else {
+      EXPECT_TRUE(first_rows.contains(t)) << "the first run's row at " << t << " s kept";
+    }
+    if (const auto it = first_rows.find(t); it != first_rows.end()) {
+      ++common;
+      EXPECT_EQ(it->second, row) << t;
+    }
+  }
+  EXPECT_EQ(fine_rows, static_cast<int>(std::floor(failed_at / 1e-3) - std::floor(at / 1e-3))) << "a row every ms";
+  EXPECT_GT(common, 100);
 
   // Thermal only, a step of 0.01 s, frames every 1 s, to 4 s; continued from
   // 3 s with frames every 0.015 s (two steps of 0.0075 s each).
