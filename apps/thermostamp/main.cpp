@@ -207,7 +207,8 @@ int cmd_run(const Args& a, bool validate_only) {
       return std::round(n / r) * r;
     };
     char line[512];
-    if (const double dm = sim.initial_mechanical_step(); dm > 0) {
+    const double dm = sim.initial_mechanical_step();
+    if (dm > 0) {
       std::snprintf(line, sizeof line, "mechanical step %.4g s at the start: about %.0f steps to t = %.4g s\n", dm,
                     rounded(job.t_end / dm), job.t_end);
       std::cout << line;
@@ -221,7 +222,13 @@ int cmd_run(const Args& a, bool validate_only) {
       if (const auto mix = ts::describe_mixture(m); !mix.empty())
         std::cout << "material '" << m.name << "': " << mix << "\n";
     if (const double dt = sim.thermal_step(); dt > 0) {
-      std::snprintf(line, sizeof line, "thermal step %.4g s: about %.0f steps\n", dt, rounded(job.t_end / dt));
+      // With the mechanics a thermal step is a number of mechanical steps.
+      if (dm > 0 && dt < dm)
+        std::snprintf(line, sizeof line,
+                      "thermal step %.4g s: one every mechanical step (the frames' interval %.4g s is below it)\n", dm,
+                      job.output.interval);
+      else
+        std::snprintf(line, sizeof line, "thermal step %.4g s: about %.0f steps\n", dt, rounded(job.t_end / dt));
       std::cout << line;
       for (const auto& m : job.materials) {
         if (m.crystallisation.present)
@@ -242,7 +249,7 @@ int cmd_run(const Args& a, bool validate_only) {
         std::cout << line;
       }
     }
-    for (const std::string& l : sim.output_lines()) std::cout << l << "\n";
+    for (const std::string& l : sim.output_lines(dm)) std::cout << l << "\n";
     return 0;
   }
   ts::RunOptions opt;

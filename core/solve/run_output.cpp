@@ -279,8 +279,9 @@ void Simulation::Run::log_start() const {
         log->warn("probe '{}' has no interval: it records at every thermal step, up to {:.3g} samples; set "
                   "{}/interval for fewer",
                   job.output.probes[q].name, n, job.output.probes[q].pointer);
-  if (!opt.restart)
-    for (const std::string& line : sim.output_lines()) log->info("{}", line);
+  // (With the mechanics, once the step at the start is known.)
+  if (!opt.restart && !job.mechanics)
+    for (const std::string& line : sim.output_lines(0.0)) log->info("{}", line);
 }
 
 // The per-node values derived from the temperatures (and crystallinities):
@@ -990,9 +991,8 @@ std::vector<WriterTool> Simulation::writer_tools() const {
 }
 
 
-long long Simulation::frame_count() const {
-  const double iv = job_.output.interval;
-  return 1 + static_cast<long long>(std::ceil(job_.t_end / iv * (1 - 1e-9)));
+double Simulation::frame_count() const {
+  return 1 + std::ceil(job_.t_end / job_.output.interval * (1 - 1e-9));
 }
 
 namespace {
@@ -1004,18 +1004,27 @@ std::string bytes_text(double b) {
 }
 }  // namespace
 
-std::vector<std::string> Simulation::output_lines() const {
+std::vector<std::string> Simulation::output_lines(double mech_step) const {
   const ResultsBytes b = results_bytes(writer_parts(), frame_fields(), writer_tools());
-  const long long n = frame_count();
+  double n = frame_count();
   const double iv = job_.output.interval;
-  std::string times = n == 1   ? "at t = 0"
-                      : n == 2 ? "at t = 0 and " + fmt_g(job_.t_end) + " s"
-                               : "at t = 0, every " + fmt_g(iv) + " s and " + fmt_g(job_.t_end) + " s";
-  if (n > 2 && std::abs(iv * static_cast<double>(n - 1) - job_.t_end) <= 1e-9 * job_.t_end)
+  std::string count = fmt_g(n, 15), times;
+  if (job_.mechanics && mech_step > 0 && iv < mech_step) {  // a frame after every step
+    n = 1 + std::ceil(job_.t_end / mech_step);
+    const double r = n >= 1000 ? std::pow(10.0, std::floor(std::log10(n)) - 2) : 1.0;  // three digits
+    count = "about " + fmt_g(std::round(n / r) * r, 15);
+    times = "at t = 0 and after every mechanical step (output.interval " + fmt_g(iv) + " s is below the step, " +
+            fmt_g(mech_step, 4) + " s at the start)";
+  } else if (n <= 2) {
+    times = n == 1 ? "at t = 0" : "at t = 0 and " + fmt_g(job_.t_end) + " s";
+  } else if (std::abs(iv * (n - 1) - job_.t_end) <= 1e-9 * job_.t_end) {
     times = "at t = 0 and every " + fmt_g(iv) + " s to " + fmt_g(job_.t_end) + " s";
+  } else {
+    times = "at t = 0, every " + fmt_g(iv) + " s and " + fmt_g(job_.t_end) + " s";
+  }
   const int level = job_.output.compression;
-  return {"frames: " + std::to_string(n) + " " + times + ", " + bytes_text(b.per_frame) + " each: about " +
-          bytes_text(b.once + static_cast<double>(n) * b.per_frame) + " of results.h5" +
+  return {"frames: " + count + " " + times + ", " + bytes_text(b.per_frame) + " each: about " +
+          bytes_text(b.once + n * b.per_frame) + " of results.h5" +
           (level > 0 ? " before compression (level " + std::to_string(level) + ")" : "")};
 }
 

@@ -155,11 +155,14 @@ class Simulation {
   // and last rows of its displacement table, or its force, mass and damper.
   std::vector<std::string> tool_motion_lines() const;
   // What the frames of results.h5 will take: their number and times, the
-  // bytes of each and of all (before compression).
-  std::vector<std::string> output_lines() const;
-  // The number of frames a run from the start writes: t = 0, each
-  // multiple of output.interval and time.end.
-  long long frame_count() const;
+  // bytes of each and of all (before compression). mech_step: the
+  // mechanical step at the start (s; 0 without mechanics), below which
+  // output.interval gives a frame after every step.
+  std::vector<std::string> output_lines(double mech_step) const;
+  // The number of frames a run from the start writes at output.interval:
+  // t = 0, each multiple of it and time.end (with the mechanics, at most
+  // one a step).
+  double frame_count() const;
   // results.h5's parts, the fields of a frame per part (with their
   // values) and the tools' surfaces (output.tool_surfaces; none without).
   std::vector<WriterPart> writer_parts() const;

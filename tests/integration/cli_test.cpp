@@ -2477,14 +2477,14 @@ TEST(Output, ValidateGivesTheFramesAndTheirSize) {
     PluginRegistry registry;
     const Simulation sim(job, registry);
     const ResultsBytes b = results_bytes(sim.writer_parts(), sim.frame_fields(), sim.writer_tools());
-    const long long n = sim.frame_count();
+    const double n = sim.frame_count();
     const auto v = thermostamp("validate " + q(dir / "job.json"));
     ASSERT_EQ(v.exit_code, 0) << v.err;
     EXPECT_NE(v.out.find(lines.at(label)), std::string::npos) << v.out;
     const auto r = thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "out"));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const json s = json::parse(std::ifstream(dir / "out" / "summary.json"));
-    EXPECT_EQ(s["frames"].get<long long>(), n) << label;
+    EXPECT_EQ(s["frames"].get<double>(), n) << label;
     // The storage of every dataset but the series.
     struct Sum {
       double frames = 0, once = 0;
@@ -2504,13 +2504,29 @@ TEST(Output, ValidateGivesTheFramesAndTheirSize) {
         },
         &sum);
     H5Fclose(f);
-    std::printf("%s: %lld frames, %.0f + %lld x %.0f bytes estimated; %.0f + %.0f bytes in results.h5 (file %ju)\n",
+    std::printf("%s: %.0f frames, %.0f + %.0f x %.0f bytes estimated; %.0f + %.0f bytes in results.h5 (file %ju)\n",
                 label.c_str(), n, b.once, n, b.per_frame, sum.once, sum.frames,
                 static_cast<std::uintmax_t>(std::filesystem::file_size(dir / "out" / "results.h5")));
     EXPECT_EQ(sum.once, b.once) << label;
-    EXPECT_EQ(sum.frames, static_cast<double>(n) * b.per_frame) << label;
+    EXPECT_EQ(sum.frames, n * b.per_frame) << label;
     EXPECT_GT(b.per_frame, 0) << label;
   }
+  // With the mechanics, an interval below the step gives a frame after
+  // every step: about time.end over the step at the start (no overflow for
+  // an interval of 1e-300 s).
+  const auto dir = temp_dir("output_size_every_step");
+  json tiny = short_hemisphere(0.002, 1e-300, 4);
+  std::ofstream(dir / "job.json") << tiny.dump(2);
+  const auto v = thermostamp("validate " + q(dir / "job.json"));
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const auto at = v.out.find("frames: about ");
+  ASSERT_NE(at, std::string::npos) << v.out;
+  EXPECT_NE(v.out.find(" at t = 0 and after every mechanical step (output.interval 1e-300 s is below the step, ", at),
+            std::string::npos)
+      << v.out;
+  const double step = std::stod(v.out.substr(v.out.find("mechanical step ") + 16));
+  const double about = std::stod(v.out.substr(at + 14));
+  EXPECT_NEAR(about, 1 + std::ceil(0.002 / step), 1.0) << v.out;
 }
 
 // Every dataset of a frame carries its units (attribute "units", the user
