@@ -368,6 +368,7 @@ def plot_tools(folder, out):
             d = moved[int(np.argmax(reach))] / reach.max()
             a1.plot(moved @ d * 1e3, -(f @ d), label=name)  # force resisting the motion
         a2.plot(t, [float(r["heat_J"]) for r in rs], label=name)
+    mark_stop([a2], stop_of(folder))
     a1.set_xlabel("tool travel (mm)")
     a1.set_ylabel("force resisting the tool's motion (N)")
     a1.set_title("tool force against travel")
@@ -381,6 +382,26 @@ def plot_tools(folder, out):
         if a.lines:
             a.legend(fontsize=8)
     return [save(fig, out, "tool_forces.png")]
+
+
+def stop_of(folder):
+    """(what, t): how and when a run that did not complete stopped ("failed" or
+    "interrupted", summary.json's simulated time), or None."""
+    try:
+        s = json.load(open(os.path.join(folder, "summary.json")))
+        if s.get("status") in ("failed", "interrupted") and isinstance(s.get("simulated_time_s"), (int, float)):
+            return s["status"], float(s["simulated_time_s"])
+    except (OSError, ValueError, AttributeError):
+        pass
+    return None
+
+
+def mark_stop(axes, stop):
+    """A red dashed line at the time a run failed or was interrupted, on axes of time."""
+    if stop is None:
+        return
+    for a in axes:
+        a.axvline(stop[1], color="red", ls="--", lw=1, label="%s at t = %.4g s" % stop)
 
 
 def ply_rows(folder):
@@ -437,7 +458,9 @@ def plot_plies(folder, out):
     if not panels:
         return []
     fig, axes = grid(len(panels), 5.0, 4.0, 2 if len(panels) == 4 else 3)
+    stop = stop_of(folder)
     for a, panel in zip(axes, panels):
+        mark_stop([a], stop)
         for k, (name, v) in enumerate(plies.items()):
             c = "C%d" % k
             if panel == "temperature":
@@ -515,6 +538,7 @@ def plot_energy(folder, out):
     a2.semilogy(t, np.abs(ratio), label="kinetic / internal")
     a2.semilogy(t, [max(float(r["balance_error"]), 1e-16) for r in rows], label="balance error")
     a2.axhline(0.05, color="grey", ls="--", lw=1)
+    mark_stop([a1, a2], stop_of(folder))
     a2.set_xlabel("time (s)")
     a2.legend(fontsize=8)
     a2.grid(alpha=0.3, which="both")
@@ -794,6 +818,10 @@ def main():
         made += pair
     for m in made:
         print(m)
+    stop = stop_of(folder)
+    if made and stop is not None:
+        print("the run %s at t = %.6g s: the figures over time mark it (red dashed line)"
+              % ("failed" if stop[0] == "failed" else "was interrupted", stop[1]))
     if not made and not failed:
         sys.stderr.write("error: report: nothing to plot in %s (no study.csv, probes.csv, results.h5, tools.csv, "
                          "plies.csv or energy.csv)\n" % folder)

@@ -2845,6 +2845,21 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   EXPECT_EQ(std::count(cut.err.begin(), cut.err.end(), '\n'), 1) << cut.err;
   EXPECT_TRUE(std::filesystem::exists(out / "figures" / "energy.png"));
   EXPECT_FALSE(std::filesystem::exists(out / "figures" / "map_ply_top.png"));
+  // A failed run (a balance error above a tight energy_tolerance): its
+  // figures over time mark the failure, and the report says so; none for
+  // the completed run.
+  EXPECT_EQ(r.out.find("the run failed"), std::string::npos) << r.out;
+  const auto failed = dir / "failed";
+  const auto f = thermostamp("run " + q(dir / "job.json") + " --out " + q(failed) +
+                             " --quiet --set solvers.mechanics.energy_tolerance=1e-12");
+  ASSERT_EQ(f.exit_code, 3) << f.err;
+  const double at = json::parse(std::ifstream(failed / "summary.json"))["simulated_time_s"].get<double>();
+  const auto fr = thermostamp("report " + q(failed));
+  ASSERT_EQ(fr.exit_code, 0) << fr.err;
+  std::ostringstream text;
+  text << "the run failed at t = " << at << " s: the figures over time mark it (red dashed line)\n";
+  EXPECT_NE(fr.out.find(text.str()), std::string::npos) << fr.out;
+  EXPECT_TRUE(std::filesystem::exists(failed / "figures" / "energy.png"));
   const auto empty = temp_dir("report_empty");
   const auto none = thermostamp("report " + q(empty));
   EXPECT_EQ(none.exit_code, 3);
