@@ -47,9 +47,9 @@ the same job and --set values but for time.end, output.interval and
 output.series_interval: a later time.end extends a finished run as a run to
 it would have gone on, other intervals write the frames and rows after the
 checkpoint closer or further apart; the frames and time series up to the
-checkpoint are kept; with
-study: continue the study in its output folder (study_state.json), its
-completed runs not run again, a stopped one from its checkpoint
+checkpoint are kept; with study: continue the study in its output folder
+(study_state.json), its completed runs not run again, a stopped one from its
+checkpoint
 --checkpoint-minutes M: also write a checkpoint after every M minutes of
 wall time (against machines that go down without a signal)
 

@@ -925,7 +925,6 @@ std::vector<std::vector<FrameField>> Simulation::frame_fields() const {
   return fields;
 }
 
-
 // results.h5's parts: each ply's mesh, thickness and through-thickness
 // values, with the through-thickness mesh where the frames show
 // "temperature".
@@ -989,7 +988,6 @@ std::vector<WriterTool> Simulation::writer_tools() const {
   }
   return wtools;
 }
-
 
 double Simulation::frame_count() const {
   return 1 + std::ceil(job_.t_end / job_.output.interval * (1 - 1e-9));
