@@ -1,11 +1,14 @@
 #include "io/checkpoint.hpp"
 
+#include <cerrno>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
 
 #include <thermostamp/sdk/plugin.hpp>
+
+#include "io/files.hpp"
 
 namespace ts {
 
@@ -37,9 +40,10 @@ const std::vector<unsigned char>& Checkpoint::section(const std::string& name) c
 void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
   auto tmp = file;
   tmp += ".tmp";
+  errno = 0;
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write " + tmp.string());
+    if (!out) throw std::runtime_error("cannot write " + tmp.string() + ": " + std::strerror(errno));
     out.write(kMagic, sizeof kMagic - 1);
     put(out, kFormat);
     put(out, static_cast<std::int32_t>(sdk::kAbiVersion));
@@ -49,7 +53,13 @@ void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {
       put_bytes(out, bytes.data(), bytes.size());
     }
     out.flush();
-    if (!out) throw std::runtime_error("cannot write " + tmp.string() + " (disk full?)");
+    if (!out) {  // the checkpoint before it, if any, stays
+      const std::string why = write_failure_reason(file.parent_path(), errno, "the stream failed");
+      out.close();
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw std::runtime_error("cannot write " + tmp.string() + ": " + why);
+    }
   }
   std::filesystem::rename(tmp, file);
 }

@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -10,9 +11,15 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "io/files.hpp"
+
 namespace ts {
 
 namespace {
+// No HDF5 clean-up at the process's exit: every file is closed where it is
+// written or read, and after a write that failed (a full disk) HDF5 1.10
+// crashes at exit closing the file again. (Before any HDF5 call.)
+const bool kNoHdf5AtExit = H5dont_atexit() >= 0;
 // A dataset of rows x cols values (a vector where cols is 1 and rank_2 is
 // false); with `level` > 0 and at least 256 values, stored as one chunk
 // through the shuffle and deflate filters (gzip at that level).
@@ -56,6 +63,25 @@ hid_t make_group(hid_t loc, const std::string& name) {
   const hid_t g = H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   if (g < 0) throw std::runtime_error("HDF5: cannot create group " + name);
   return g;
+}
+// Closes every object of the file that is still open (left by a write that
+// failed half way), so that closing the file, and the library at the
+// process's end, find none.
+void close_open_objects(hid_t file) {
+  const unsigned types = H5F_OBJ_DATASET | H5F_OBJ_GROUP | H5F_OBJ_DATATYPE | H5F_OBJ_ATTR | H5F_OBJ_LOCAL;
+  const ssize_t n = H5Fget_obj_count(file, types);
+  if (n <= 0) return;
+  std::vector<hid_t> ids(static_cast<std::size_t>(n));
+  const ssize_t got = H5Fget_obj_ids(file, types, static_cast<std::size_t>(n), ids.data());
+  for (ssize_t i = 0; i < got; ++i) {
+    const H5I_type_t type = H5Iget_type(ids[i]);
+    if (type == H5I_ATTR)
+      H5Aclose(ids[i]);
+    else if (type == H5I_DATATYPE)
+      H5Tclose(ids[i]);
+    else
+      H5Oclose(ids[i]);
+  }
 }
 std::string frame_name(int k) {
   char buf[32];
@@ -245,13 +271,33 @@ ResultsWriter::~ResultsWriter() {
     } catch (...) {  // a destructor does not throw; results.h5 holds every frame
     }
   }
-  if (file_ >= 0) H5Fclose(file_);
+  if (file_ >= 0) {
+    if (!failed_.empty()) close_open_objects(file_);
+    H5Fclose(file_);
+  }
+}
+
+template <class F>
+void ResultsWriter::guard(const std::string& what, F&& write) {
+  if (!failed_.empty()) throw std::runtime_error(failed_);
+  errno = 0;
+  try {
+    write();
+    if (H5Fflush(file_, H5F_SCOPE_GLOBAL) < 0) throw std::runtime_error("HDF5: cannot flush the file");
+  } catch (const std::runtime_error& e) {
+    const int err = errno;  // the system's reason, where a write of the file set one
+    close_open_objects(file_);
+    failed_ = "cannot write " + (dir_ / "results.h5").string() + " (" + what + "): " +
+              write_failure_reason(dir_, err, e.what());
+    throw std::runtime_error(failed_);
+  }
 }
 
 void ResultsWriter::set_tools(std::vector<WriterTool> tools) {
   tools_ = std::move(tools);
-  if (H5Lexists(file_, "tools", H5P_DEFAULT) > 0) H5Ldelete(file_, "tools", H5P_DEFAULT);
-  if (!tools_.empty()) {
+  guard("the tools' surfaces", [&] {
+    if (H5Lexists(file_, "tools", H5P_DEFAULT) > 0) H5Ldelete(file_, "tools", H5P_DEFAULT);
+    if (tools_.empty()) return;
     const hid_t g = make_group(file_, "tools");
     for (const WriterTool& t : tools_) {
       const hid_t tg = make_group(g, t.name);
@@ -261,7 +307,7 @@ void ResultsWriter::set_tools(std::vector<WriterTool> tools) {
       H5Gclose(tg);
     }
     H5Gclose(g);
-  }
+  });
   // The frames already in the file (a restart) show a moving tool where
   // they hold its nodes, and not at all where they do not.
   frame_tools_.assign(times_.size(), std::vector<char>(tools_.size(), 1));
@@ -271,7 +317,6 @@ void ResultsWriter::set_tools(std::vector<WriterTool> tools) {
         const std::string path = "frames/" + frame_name(static_cast<int>(k)) + "/" + tools_[t].name;
         frame_tools_[k][t] = H5Lexists(file_, path.c_str(), H5P_DEFAULT) > 0;
       }
-  H5Fflush(file_, H5F_SCOPE_GLOBAL);
   write_xdmf();
 }
 
@@ -280,61 +325,67 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
                                 const std::vector<std::vector<FrameField>>& fields,
                                 const std::vector<std::array<double, 3>>& tool_displacements) {
   const int k = frames();
-  const hid_t frames_g = H5Gopen2(file_, "frames", H5P_DEFAULT);
-  const hid_t fg = make_group(frames_g, frame_name(k));
-  {
-    const hid_t space = H5Screate(H5S_SCALAR);
-    const hid_t at = H5Acreate2(fg, "time", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT);
-    H5Awrite(at, H5T_NATIVE_DOUBLE, &time);
-    H5Aclose(at);
-    H5Sclose(space);
-  }
-  for (std::size_t p = 0; p < parts_.size(); ++p) {
-    const WriterPart& wp = parts_[p];
-    const hid_t pg = make_group(fg, wp.name);
-    write_dataset(pg, "nodes", x[p], wp.num_nodes, 3, compression_);
-    write_units(pg, "nodes", field_units("nodes"));
-    const int nl = extruded_levels(wp.nz);
-    if (wp.layers) {
-    std::vector<double> layer_nodes(static_cast<std::size_t>(3) * wp.num_nodes * nl);
-    for (int i = 0; i < wp.num_nodes; ++i)
-      for (int l = 0; l < nl; ++l) {
-        const double z = -0.5 * wp.thickness + wp.thickness * l / (nl - 1);
-        for (int d = 0; d < 3; ++d)
-          layer_nodes[3 * (static_cast<std::size_t>(i) * nl + l) + d] = x[p][3 * i + d] + z * normals[p][3 * i + d];
-      }
-    write_dataset(pg, "layer_nodes", layer_nodes.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 3, compression_);
-    write_units(pg, "layer_nodes", field_units("layer_nodes"));
+  char what[64];
+  std::snprintf(what, sizeof what, "the frame at t = %g s", time);
+  guard(what, [&] {
+    const hid_t frames_g = H5Gopen2(file_, "frames", H5P_DEFAULT);
+    const hid_t fg = make_group(frames_g, frame_name(k));
+    {
+      const hid_t space = H5Screate(H5S_SCALAR);
+      const hid_t at = H5Acreate2(fg, "time", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT);
+      H5Awrite(at, H5T_NATIVE_DOUBLE, &time);
+      H5Aclose(at);
+      H5Sclose(space);
     }
-    for (const auto& f : fields[p]) {
-      if (f.on_layers) {
-        // Values bottom to top; a single value per node is repeated on both levels.
-        std::vector<double> v(static_cast<std::size_t>(wp.num_nodes) * nl);
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      const WriterPart& wp = parts_[p];
+      const hid_t pg = make_group(fg, wp.name);
+      write_dataset(pg, "nodes", x[p], wp.num_nodes, 3, compression_);
+      write_units(pg, "nodes", field_units("nodes"));
+      const int nl = extruded_levels(wp.nz);
+      if (wp.layers) {
+        std::vector<double> layer_nodes(static_cast<std::size_t>(3) * wp.num_nodes * nl);
         for (int i = 0; i < wp.num_nodes; ++i)
-          for (int l = 0; l < nl; ++l) v[static_cast<std::size_t>(i) * nl + l] = f.data[static_cast<std::size_t>(i) * wp.nz + (wp.nz > 1 ? l : 0)];
-        write_dataset(pg, f.name, v.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 1, compression_);
-      } else {
-        const hsize_t rows = f.on_cells ? wp.num_elements : wp.num_nodes;
-        write_dataset(pg, f.name, f.data, rows, f.components, compression_);
+          for (int l = 0; l < nl; ++l) {
+            const double z = -0.5 * wp.thickness + wp.thickness * l / (nl - 1);
+            for (int d = 0; d < 3; ++d)
+              layer_nodes[3 * (static_cast<std::size_t>(i) * nl + l) + d] =
+                  x[p][3 * i + d] + z * normals[p][3 * i + d];
+          }
+        write_dataset(pg, "layer_nodes", layer_nodes.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 3,
+                      compression_);
+        write_units(pg, "layer_nodes", field_units("layer_nodes"));
       }
-      write_units(pg, f.name, field_units(f.name));
+      for (const auto& f : fields[p]) {
+        if (f.on_layers) {
+          // Values bottom to top; a single value per node is repeated on both levels.
+          std::vector<double> v(static_cast<std::size_t>(wp.num_nodes) * nl);
+          for (int i = 0; i < wp.num_nodes; ++i)
+            for (int l = 0; l < nl; ++l)
+              v[static_cast<std::size_t>(i) * nl + l] = f.data[static_cast<std::size_t>(i) * wp.nz + (wp.nz > 1 ? l : 0)];
+          write_dataset(pg, f.name, v.data(), static_cast<hsize_t>(wp.num_nodes) * nl, 1, compression_);
+        } else {
+          const hsize_t rows = f.on_cells ? wp.num_elements : wp.num_nodes;
+          write_dataset(pg, f.name, f.data, rows, f.components, compression_);
+        }
+        write_units(pg, f.name, field_units(f.name));
+      }
+      H5Gclose(pg);
     }
-    H5Gclose(pg);
-  }
-  for (std::size_t t = 0; t < tools_.size(); ++t) {
-    const WriterTool& wt = tools_[t];
-    if (!wt.moves) continue;
-    const std::array<double, 3> u = t < tool_displacements.size() ? tool_displacements[t] : std::array<double, 3>{};
-    std::vector<double> moved(wt.nodes);
-    for (std::size_t i = 0; i < moved.size(); ++i) moved[i] += u[i % 3];
-    const hid_t tg = make_group(fg, wt.name);
-    write_dataset(tg, "nodes", moved.data(), moved.size() / 3, 3, compression_);
-    write_units(tg, "nodes", field_units("nodes"));
-    H5Gclose(tg);
-  }
-  H5Gclose(fg);
-  H5Gclose(frames_g);
-  H5Fflush(file_, H5F_SCOPE_GLOBAL);
+    for (std::size_t t = 0; t < tools_.size(); ++t) {
+      const WriterTool& wt = tools_[t];
+      if (!wt.moves) continue;
+      const std::array<double, 3> u = t < tool_displacements.size() ? tool_displacements[t] : std::array<double, 3>{};
+      std::vector<double> moved(wt.nodes);
+      for (std::size_t i = 0; i < moved.size(); ++i) moved[i] += u[i % 3];
+      const hid_t tg = make_group(fg, wt.name);
+      write_dataset(tg, "nodes", moved.data(), moved.size() / 3, 3, compression_);
+      write_units(tg, "nodes", field_units("nodes"));
+      H5Gclose(tg);
+    }
+    H5Gclose(fg);
+    H5Gclose(frames_g);
+  });
   frame_tools_.emplace_back(tools_.size(), 1);
   times_.push_back(time);
   std::vector<std::vector<FrameField>> kinds = fields;
@@ -357,24 +408,25 @@ void ResultsWriter::write_frame(double time, const std::vector<const double*>& x
 
 void ResultsWriter::write_series(const std::string& name, const std::vector<std::string>& columns,
                                  const std::vector<double>& rows) {
-  if (H5Lexists(file_, "series", H5P_DEFAULT) <= 0) H5Gclose(make_group(file_, "series"));
-  const hid_t g = H5Gopen2(file_, "series", H5P_DEFAULT);
-  if (H5Lexists(g, name.c_str(), H5P_DEFAULT) > 0) H5Ldelete(g, name.c_str(), H5P_DEFAULT);
-  const hsize_t cols = columns.size(), nrows = cols ? rows.size() / cols : 0;
-  write_dataset(g, name, rows.data(), nrows, cols, compression_);
-  // Column names and their units as attributes: "time,kinetic,..." and
-  // "s,J,...".
-  std::string joined, units;
-  for (std::size_t i = 0; i < columns.size(); ++i) {
-    joined += (i ? "," : "") + columns[i];
-    units += (i ? "," : "") + series_column_units(columns[i]);
-  }
-  const hid_t ds = H5Dopen2(g, name.c_str(), H5P_DEFAULT);
-  write_text_attribute(ds, "columns", joined);
-  write_text_attribute(ds, "units", units);
-  H5Dclose(ds);
-  H5Gclose(g);
-  H5Fflush(file_, H5F_SCOPE_GLOBAL);
+  guard("the time series '" + name + "'", [&] {
+    if (H5Lexists(file_, "series", H5P_DEFAULT) <= 0) H5Gclose(make_group(file_, "series"));
+    const hid_t g = H5Gopen2(file_, "series", H5P_DEFAULT);
+    if (H5Lexists(g, name.c_str(), H5P_DEFAULT) > 0) H5Ldelete(g, name.c_str(), H5P_DEFAULT);
+    const hsize_t cols = columns.size(), nrows = cols ? rows.size() / cols : 0;
+    write_dataset(g, name, rows.data(), nrows, cols, compression_);
+    // Column names and their units as attributes: "time,kinetic,..." and
+    // "s,J,...".
+    std::string joined, units;
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      joined += (i ? "," : "") + columns[i];
+      units += (i ? "," : "") + series_column_units(columns[i]);
+    }
+    const hid_t ds = H5Dopen2(g, name.c_str(), H5P_DEFAULT);
+    write_text_attribute(ds, "columns", joined);
+    write_text_attribute(ds, "units", units);
+    H5Dclose(ds);
+    H5Gclose(g);
+  });
 }
 
 void ResultsWriter::write_xdmf() const {

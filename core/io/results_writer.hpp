@@ -98,6 +98,13 @@ class ResultsWriter {
  private:
   void write_xdmf() const;
   void check_compression() const;  // throws std::runtime_error where the library lacks the filters
+  // Runs `write` (HDF5 calls that throw std::runtime_error where one fails)
+  // and flushes the file. Where that fails (a full disk), closes what the
+  // write left open and throws "cannot write results.h5 (what): why"; every
+  // later write then throws the same without touching the file.
+  template <class F>
+  void guard(const std::string& what, F&& write);
+  std::string failed_;  // the first write that failed, or empty
   std::filesystem::path dir_;
   std::vector<WriterPart> parts_;
   int compression_ = 0;

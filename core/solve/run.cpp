@@ -301,7 +301,11 @@ void Simulation::Run::save_checkpoint(const char* what) {
   run_io(w);
   c.add("run", std::move(w.bytes()));
   sim.save_state(c);
-  write_checkpoint(opt.out_dir / kCheckpointFile, c);
+  try {
+    write_checkpoint(opt.out_dir / kCheckpointFile, c);
+  } catch (const std::runtime_error& e) {  // a full disk: the checkpoint before it, if any, stays
+    throw RunError(e.what());
+  }
   sim.timing_[kTimeOutput] += seconds_since(tc);
   last_checkpoint_wall = Clock::now();
   checkpoint_at = t;

@@ -5,6 +5,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/checkpoint.hpp"
+#include "io/files.hpp"
 #include "io/logging.hpp"
 #include "solve/interrupt.hpp"
 #include "solve/simulation_internal.hpp"
@@ -169,7 +171,10 @@ void Simulation::Run::open_output() {
       if (opt.restart) throw JobError("", std::string("--restart: ") + e.what());
       throw;
     }
-    if (job.output.tool_surfaces && !sim.tools_.empty()) writer->set_tools(sim.writer_tools());
+    const std::vector<WriterTool> tools =
+        job.output.tool_surfaces && !sim.tools_.empty() ? sim.writer_tools() : std::vector<WriterTool>{};
+    if (!tools.empty()) writer->set_tools(tools);
+    frame_bytes = results_bytes(sim.writer_parts(), sim.frame_fields(), tools).per_frame;
     open_series(probes_csv, "probes.csv", 0, "probe,quantity,time,z,value\n");
   }
 
@@ -314,8 +319,46 @@ void Simulation::Run::write_frame(double time) {
   }
   std::vector<std::array<double, 3>> tool_u;
   for (const auto& tool : sim.tools_) tool_u.push_back(tool->displacement());
-  writer->write_frame(time, xs, ns, sim.frame_fields(), tool_u);
+  check_space(time);
+  try {
+    writer->write_frame(time, xs, ns, sim.frame_fields(), tool_u);
+  } catch (const RunError&) {
+    throw;
+  } catch (const std::runtime_error& e) {  // a full disk: the frames so far stay
+    throw RunError(e.what());
+  }
   frame_times.push_back(time);
+  check_series_files();
+}
+
+void Simulation::Run::check_space(double time) const {
+  std::error_code ec;
+  const auto space = std::filesystem::space(opt.out_dir, ec);
+  if (ec || space.capacity == 0) return;  // (a file system that tells nothing of its space)
+  // The frame, the time series so far (into results.h5 at the end), HDF5's
+  // structures and summary.json: a tenth and a megabyte more.
+  const double series = 8.0 * static_cast<double>(energy_rows.size() + tool_rows.size() + ply_rows.size());
+  const double need = 1.1 * (frame_bytes + series) + 1e6, free = static_cast<double>(space.available);
+  if (free >= need) return;
+  throw RunError("the device of " + opt.out_dir.string() + " has " + fmt_g(free / 1e6, 3) +
+                 " MB free, too little for the frame at t = " + fmt_g(time) + " s and what follows it (about " +
+                 fmt_g(need / 1e6, 3) + " MB): the run stops before writing it; results.h5 holds the " +
+                 std::to_string(frame_times.size()) + " frame(s) before it");
+}
+
+void Simulation::Run::check_series_files() {
+  const char* names[4] = {"probes.csv", "energy.csv", "tools.csv", "plies.csv"};
+  std::ofstream* files[4] = {&probes_csv, &energy_csv, &tools_csv, &plies_csv};
+  for (int k = 0; k < 4; ++k) {
+    if (!files[k]->is_open()) continue;
+    errno = 0;
+    if (files[k]->flush(); !*files[k]) {
+      const int err = errno;
+      files[k]->close();  // nothing more into it
+      throw RunError("cannot write " + (opt.out_dir / names[k]).string() + ": " +
+                     write_failure_reason(opt.out_dir, err, "the stream failed"));
+    }
+  }
 }
 
 // The probes' samples at `time` (of probe `only`, or of every probe).
@@ -492,12 +535,20 @@ std::pair<double, double> Simulation::Run::quasi_static() const {
 void Simulation::Run::finish() {
   const auto& parts = sim.parts_;
   const auto& tools = sim.tools_;
-  if (writer && job.mechanics && energy_rows.size() % energy_cols.size() == 0)
-    writer->write_series("energy", energy_cols, energy_rows);
-  if (writer && !tools.empty() && tool_rows.size() % tool_cols.size() == 0 && !tool_rows.empty())
-    writer->write_series("tools", tool_cols, tool_rows);
-  if (writer && ply_series && ply_rows.size() % ply_cols.size() == 0 && !ply_rows.empty())
-    writer->write_series("plies", ply_cols, ply_rows);
+  // The time series into results.h5 and their files flushed; where the disk
+  // is full, the first file that could not be written is the failure (or
+  // the failure that stopped the run stays the one reported).
+  try {
+    if (writer && job.mechanics && energy_rows.size() % energy_cols.size() == 0)
+      writer->write_series("energy", energy_cols, energy_rows);
+    if (writer && !tools.empty() && tool_rows.size() % tool_cols.size() == 0 && !tool_rows.empty())
+      writer->write_series("tools", tool_cols, tool_rows);
+    if (writer && ply_series && ply_rows.size() % ply_cols.size() == 0 && !ply_rows.empty())
+      writer->write_series("plies", ply_cols, ply_rows);
+    check_series_files();
+  } catch (const std::runtime_error& e) {
+    if (failure.empty()) failure = e.what();
+  }
   const double stored_change = sim.stored_heat() - stored0;
   const double scale = std::max({std::abs(stored_change), std::abs(heat_in), 1e-300});
   if (failure.empty() && stop_signal != 0) {
@@ -610,7 +661,10 @@ void Simulation::Run::finish() {
 
   if (opt.write_files) {
     update_derived();
-    write_summary();
+    if (std::string why; !write_summary(why) && result.ok) {
+      result.ok = false;
+      result.error = failure = why;
+    }
   }
   log_end();
 }
@@ -650,7 +704,7 @@ json materials_summary(const Job& job) {
 }
 }  // namespace
 
-void Simulation::Run::write_summary() const {
+bool Simulation::Run::write_summary(std::string& why) const {
   const auto& parts = sim.parts_;
   const auto& mech = sim.mech_;
   const auto& timing = sim.timing_;
@@ -780,7 +834,12 @@ void Simulation::Run::write_summary() const {
   summary["parts"] = plies;
   summary["frames"] = writer ? writer->frames() : 0;
   summary["error"] = result.ok ? json(nullptr) : json(failure);
-  std::ofstream(opt.out_dir / "summary.json") << summary.dump(2) << '\n';
+  errno = 0;
+  std::ofstream out(opt.out_dir / "summary.json");
+  if (out << summary.dump(2) << '\n' && out.flush()) return true;
+  why = "cannot write " + (opt.out_dir / "summary.json").string() + ": " +
+        write_failure_reason(opt.out_dir, errno, "the stream failed");
+  return false;
 }
 
 void Simulation::Run::log_end() const {

@@ -210,6 +210,7 @@ struct Simulation::Run {
 
   // Output (run_output.cpp).
   std::unique_ptr<ResultsWriter> writer;
+  double frame_bytes = 0;  // the values of a frame in results.h5 (results_bytes)
   std::ofstream probes_csv, energy_csv, tools_csv, plies_csv;
   std::vector<double> energy_rows;  // the energy.csv table, also written to results.h5
   std::vector<double> tool_rows;    // the tools.csv table (wide), also written to results.h5
@@ -303,7 +304,16 @@ struct Simulation::Run {
   std::optional<double> threshold_of(std::size_t p) const;
   std::pair<double, double> quasi_static() const;
   void finish();  // the tables into results.h5, the result, summary.json and the log's last lines
-  void write_summary() const;
+  // Writes summary.json; false where it could not be written (its reason in `why`).
+  bool write_summary(std::string& why) const;
+  // Throws RunError naming the first time series file that could not be
+  // written (a full disk), after flushing them.
+  void check_series_files();
+  // Throws RunError where the output folder's device has too little space
+  // left for the frame about to be written at `time` and what the run
+  // writes after it (a frame written half way can leave results.h5
+  // unreadable; stopped before it, the file holds every frame so far).
+  void check_space(double time) const;
   void log_end() const;
 };
 

@@ -2529,6 +2529,89 @@ TEST(Output, ValidateGivesTheFramesAndTheirSize) {
   EXPECT_NEAR(about, 1 + std::ceil(0.002 / step), 1.0) << v.out;
 }
 
+// The frames a results file's index (results.xdmf) names, and the frame
+// groups results.h5 holds (-1 where the file cannot be read).
+std::pair<long, long> frames_listed_and_held(const std::filesystem::path& dir) {
+  std::ifstream x(dir / "results.xdmf");
+  long listed = 0;
+  for (std::string line; std::getline(x, line);) listed += line.find("<Time Value=") != std::string::npos;
+  long held = -1;
+  if (const hid_t f = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT); f >= 0) {
+    if (const hid_t g = H5Gopen2(f, "frames", H5P_DEFAULT); g >= 0) {
+      H5G_info_t info;
+      if (H5Gget_info(g, &info) >= 0) held = static_cast<long>(info.nlinks);
+      H5Gclose(g);
+    }
+    H5Fclose(f);
+  }
+  return {listed, held};
+}
+
+// A run whose results cannot be written stops with exit status 3 and the
+// reason, not a crash. A file size limit (ulimit -f, which makes a write
+// fail as a full disk or a quota would): "cannot write results.h5 (the
+// frame at t = ...): File too large (... free on its device)", the summary
+// written, the frames before it in the index. A full disk (a 3 MB tmpfs,
+// where this machine lets the test mount one): the run sees that the next
+// frame will not fit and stops before writing it, so that results.h5 holds
+// every frame so far and reads back whole.
+TEST(Output, AFullDiskStopsTheRunWithItsReason) {
+  const auto dir = temp_dir("full_disk");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j["time"]["end"] = 1.0;
+  j["output"]["interval"] = 0.05;
+  for (auto& p : j["parts"]) p["mesh"]["divisions"] = {10, 10};
+  j["solvers"]["mechanics"]["mass_scaling"]["target_dt"] = 1e-4;
+  std::ofstream(dir / "job.json") << j.dump(2);
+  const auto limited = dir / "limited";
+  const auto r = thermostamp_after("trap '' XFSZ; ulimit -f 1500; exec",
+                                   "run " + q(dir / "job.json") + " --quiet --out " + q(limited));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  // (The line after the log's "[error] ..." on the terminal.)
+  const std::string head = "\nerror: run failed: cannot write " + (limited / "results.h5").string() +
+                           " (the frame at t = ";
+  const auto at = r.err.find(head);
+  ASSERT_NE(at, std::string::npos) << r.err;
+  const std::string line = r.err.substr(at + 20, r.err.find('\n', at + 1) - at - 20);
+  EXPECT_NE(line.find("): File too large ("), std::string::npos) << line;
+  EXPECT_EQ(line.substr(line.size() - 20), " free on its device)") << line;
+  const json s = json::parse(std::ifstream(limited / "summary.json"));
+  EXPECT_EQ(s["status"], "failed");
+  EXPECT_EQ(s["error"].get<std::string>(), line);
+  const auto [listed, held] = frames_listed_and_held(limited);
+  EXPECT_GT(listed, 1);
+  EXPECT_EQ(s["frames"].get<long>(), listed);
+  std::printf("file size limit: %s; %ld frames listed, %ld groups in results.h5\n", s["error"].get<std::string>().c_str(),
+              listed, held);
+
+  const auto disk = dir / "disk";
+  std::filesystem::create_directories(disk);
+  if (std::system(("mount -t tmpfs -o size=3m tmpfs " + q(disk) + " 2>/dev/null").c_str()) != 0) {
+    std::printf("no tmpfs could be mounted here: the full-disk case is not run\n");
+    return;
+  }
+  struct Unmount {
+    std::string cmd;
+    ~Unmount() { [[maybe_unused]] const int rc = std::system(cmd.c_str()); }
+  } unmount{"umount " + q(disk)};
+  const auto full = thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(disk / "out"));
+  EXPECT_EQ(full.exit_code, 3) << full.err;
+  EXPECT_NE(full.err.find("\nerror: run failed: the device of " + (disk / "out").string() + " has "),
+            std::string::npos)
+      << full.err;
+  EXPECT_NE(full.err.find(" MB free, too little for the frame at t = "), std::string::npos) << full.err;
+  const json fs = json::parse(std::ifstream(disk / "out" / "summary.json"));
+  EXPECT_EQ(fs["status"], "failed");
+  const auto [flisted, fheld] = frames_listed_and_held(disk / "out");
+  EXPECT_GT(flisted, 1);
+  EXPECT_EQ(fheld, flisted) << "results.h5 reads back with every frame it lists";
+  EXPECT_EQ(fs["frames"].get<long>(), flisted);
+  EXPECT_NE(full.err.find("results.h5 holds the " + std::to_string(flisted) + " frame(s) before it"),
+            std::string::npos)
+      << full.err;
+  std::printf("3 MB disk: %s\n", fs["error"].get<std::string>().c_str());
+}
+
 // Every dataset of a frame carries its units (attribute "units", the user
 // guide's table), and each series the units of its columns beside their
 // names: the hemisphere scene, coarse and short, with every field.

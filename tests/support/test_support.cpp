@@ -111,15 +111,17 @@ static std::string slurp(const std::filesystem::path& p) {
   return ss.str();
 }
 
-CommandResult thermostamp(const std::string& args) {
+CommandResult thermostamp(const std::string& args) { return thermostamp_after("", args); }
+
+CommandResult thermostamp_after(const std::string& before, const std::string& args) {
   static int counter = 0;
   const auto dir = binary_dir() / "test_tmp" / "cmd";
   std::filesystem::create_directories(dir);
   const std::string tag = std::to_string(getpid()) + "_" + std::to_string(counter++);
   const auto out = dir / ("out" + tag + ".txt");
   const auto err = dir / ("err" + tag + ".txt");
-  const std::string cmd = (binary_dir() / "bin" / "thermostamp").string() + " " + args + " >" + out.string() +
-                          " 2>" + err.string() + " </dev/null";
+  const std::string cmd = before + " " + (binary_dir() / "bin" / "thermostamp").string() + " " + args + " >" +
+                          out.string() + " 2>" + err.string() + " </dev/null";
   const int rc = std::system(cmd.c_str());
   CommandResult r;
   r.exit_code = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;

@@ -70,6 +70,8 @@ struct CommandResult {
 inline std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 // Runs the thermostamp executable with arguments (shell-quoted by the caller).
 CommandResult thermostamp(const std::string& args);
+// The same, with shell commands before it (e.g. "ulimit -f 100; exec").
+CommandResult thermostamp_after(const std::string& before, const std::string& args);
 std::filesystem::path binary_dir();
 std::filesystem::path source_dir();
 
