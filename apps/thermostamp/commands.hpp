@@ -16,5 +16,9 @@ int run_study(const std::filesystem::path& study, const std::filesystem::path& o
 // empty, draws the two runs on the same axes); returns its exit status.
 int run_report(const std::filesystem::path& dir, const std::filesystem::path& against = {});
 std::filesystem::path share_dir();
+// Creates the output folder `dir` (and its parents); throws JobError
+// ("--out DIR: cannot create the output folder: reason", exit status 2)
+// where it cannot, before anything runs.
+void make_output_folder(const std::filesystem::path& dir);
 
 }  // namespace ts::cli

@@ -271,7 +271,7 @@ int cmd_run(const Args& a, bool validate_only) {
     restart_t = sim.check_restart(*checkpoint);
     opt.restart = &*checkpoint;
   }
-  std::filesystem::create_directories(opt.out_dir);
+  ts::cli::make_output_folder(opt.out_dir);
   ts::log_to_file(opt.out_dir / "log.txt", a.restart);
   if (a.restart)
     ts::logger("job")->info("restart from {} (t = {:.6g} s)", (opt.out_dir / ts::kCheckpointFile).string(), restart_t);

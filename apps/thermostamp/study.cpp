@@ -32,6 +32,14 @@ std::filesystem::path share_dir() {
   return THERMOSTAMP_SOURCE_SHARE_DIR;
 }
 
+void make_output_folder(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir))
+    throw JobError("", "cannot create the output folder " + dir.string() + " (--out): " +
+                           (ec ? ec.message() : std::string("a file of that name is there")));
+}
+
 int run_report(const std::filesystem::path& dir, const std::filesystem::path& against) {
   for (const auto& d : {dir, against}) {
     if (!d.empty() && !std::filesystem::is_directory(d)) {
@@ -366,7 +374,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
                              " was written; run the study anew (without --restart)");
     state["runs"] = saved["runs"];
   }
-  std::filesystem::create_directories(out);
+  make_output_folder(out);
   if (!restart) write_state(out, state);  // from the start: a stop in the first run can continue too
 
   if (!analytic.empty())

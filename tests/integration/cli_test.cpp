@@ -2529,6 +2529,27 @@ TEST(Output, ValidateGivesTheFramesAndTheirSize) {
   EXPECT_NEAR(about, 1 + std::ceil(0.002 / step), 1.0) << v.out;
 }
 
+// An output folder that cannot be made (here: under a file) is refused
+// before anything runs: exit status 2, one line, no file written.
+TEST(Cli, AnOutputFolderThatCannotBeMadeIsRefused) {
+  const auto dir = temp_dir("output_folder");
+  const auto job = small_job("output_folder_job");
+  std::ofstream(dir / "a_file") << "x";
+  const auto run = thermostamp("run " + q(job) + " --quiet --out " + q(dir / "a_file" / "out"));
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_EQ(run.err, "error: cannot create the output folder " + (dir / "a_file" / "out").string() +
+                         " (--out): Not a directory\n");
+  const auto study = thermostamp("study " + q(source_dir() / "share" / "studies" / "hemisphere_friction.json") +
+                                 " --quiet --out " + q(dir / "a_file"));
+  EXPECT_EQ(study.exit_code, 2) << study.err;
+  EXPECT_NE(study.err.find("cannot create the output folder " + (dir / "a_file").string() + " (--out): "),
+            std::string::npos)
+      << study.err;
+  EXPECT_EQ(std::count(study.err.begin(), study.err.end(), '\n'), 1) << study.err;
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()), 1)
+      << "nothing written";
+}
+
 // The frames a results file's index (results.xdmf) names, and the frame
 // groups results.h5 holds (-1 where the file cannot be read).
 std::pair<long, long> frames_listed_and_held(const std::filesystem::path& dir) {
