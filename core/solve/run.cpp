@@ -400,7 +400,7 @@ void Simulation::Run::mechanics_loop() {
           sim.contact_energy_, sim.contact_active_);
     }
     if (!std::isfinite(stable)) throw RunError("no element has a stiffness: the mechanical step is undefined");
-    for (const std::string& line : sim.output_lines(md.dt_safety * stable)) logger("solve")->info("{}", line);
+    announce_output(md.dt_safety * stable);
   }
   // The stresses and curvatures are asked of the elements only for the
   // frames that show them, and for the last frame of an interrupted run.

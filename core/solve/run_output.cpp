@@ -111,6 +111,14 @@ std::string csv_number(double v) {
   return buf;
 }
 
+// A number of bytes as kB, MB, GB or TB (10^3, 10^6, 10^9, 10^12), 3 digits.
+std::string bytes_text(double b) {
+  if (b >= 1e12) return fmt_g(b / 1e12, 3) + " TB";
+  if (b >= 1e9) return fmt_g(b / 1e9, 3) + " GB";
+  if (b >= 1e6) return fmt_g(b / 1e6, 3) + " MB";
+  return fmt_g(b / 1e3, 3) + " kB";
+}
+
 }  // namespace
 
 void detail::Progress::update(double t, long long steps, bool force) {
@@ -285,8 +293,21 @@ void Simulation::Run::log_start() const {
                   "{}/interval for fewer",
                   job.output.probes[q].name, n, job.output.probes[q].pointer);
   // (With the mechanics, once the step at the start is known.)
-  if (!opt.restart && !job.mechanics)
-    for (const std::string& line : sim.output_lines(0.0)) log->info("{}", line);
+  if (!job.mechanics) announce_output(0.0);
+}
+
+void Simulation::Run::announce_output(double mech_step) const {
+  if (opt.restart) return;
+  auto log = logger("solve");
+  for (const std::string& line : sim.output_lines(mech_step)) log->info("{}", line);
+  if (!writer) return;
+  std::error_code ec;
+  const auto space = std::filesystem::space(opt.out_dir, ec);
+  if (const double need = sim.results_estimate(mech_step), free = static_cast<double>(space.available);
+      !ec && space.capacity > 0 && need > free)
+    log->warn("the frames will take about {} of results.h5 and the device of {} has {} free: the run will stop "
+              "before the first frame that does not fit (fewer frames or fields, or output.compression, take less)",
+              bytes_text(need), opt.out_dir.string(), bytes_text(free));
 }
 
 // The per-node values derived from the temperatures (and crystallinities):
@@ -1052,22 +1073,22 @@ double Simulation::frame_count() const {
   return 1 + std::ceil(job_.t_end / job_.output.interval * (1 - 1e-9));
 }
 
-namespace {
-// A number of bytes as kB, MB or GB (10^3, 10^6, 10^9), 3 digits.
-std::string bytes_text(double b) {
-  if (b >= 1e9) return fmt_g(b / 1e9, 3) + " GB";
-  if (b >= 1e6) return fmt_g(b / 1e6, 3) + " MB";
-  return fmt_g(b / 1e3, 3) + " kB";
+double Simulation::frames_expected(double mech_step) const {
+  if (job_.mechanics && mech_step > 0 && job_.output.interval < mech_step)  // a frame after every step
+    return 1 + std::ceil(job_.t_end / mech_step);
+  return frame_count();
 }
-}  // namespace
+
+double Simulation::results_estimate(double mech_step) const {
+  const ResultsBytes b = results_bytes(writer_parts(), frame_fields(), writer_tools());
+  return b.once + frames_expected(mech_step) * b.per_frame;
+}
 
 std::vector<std::string> Simulation::output_lines(double mech_step) const {
   const ResultsBytes b = results_bytes(writer_parts(), frame_fields(), writer_tools());
-  double n = frame_count();
-  const double iv = job_.output.interval;
+  const double n = frames_expected(mech_step), iv = job_.output.interval;
   std::string count = fmt_g(n, 15), times;
   if (job_.mechanics && mech_step > 0 && iv < mech_step) {  // a frame after every step
-    n = 1 + std::ceil(job_.t_end / mech_step);
     const double r = n >= 1000 ? std::pow(10.0, std::floor(std::log10(n)) - 2) : 1.0;  // three digits
     count = "about " + fmt_g(std::round(n / r) * r, 15);
     times = "at t = 0 and after every mechanical step (output.interval " + fmt_g(iv) + " s is below the step, " +

@@ -159,10 +159,16 @@ class Simulation {
   // mechanical step at the start (s; 0 without mechanics), below which
   // output.interval gives a frame after every step.
   std::vector<std::string> output_lines(double mech_step) const;
+  // The bytes of all the frames a run from the start writes, with what
+  // results.h5 holds once (before compression); mech_step as above.
+  double results_estimate(double mech_step) const;
   // The number of frames a run from the start writes at output.interval:
   // t = 0, each multiple of it and time.end (with the mechanics, at most
   // one a step).
   double frame_count() const;
+  // frame_count(), or with the mechanics and output.interval below
+  // mech_step, about one a step.
+  double frames_expected(double mech_step) const;
   // results.h5's parts, the fields of a frame per part (with their
   // values) and the tools' surfaces (output.tool_surfaces; none without).
   std::vector<WriterPart> writer_parts() const;

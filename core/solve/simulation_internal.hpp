@@ -314,6 +314,10 @@ struct Simulation::Run {
   // writes after it (a frame written half way can leave results.h5
   // unreadable; stopped before it, the file holds every frame so far).
   void check_space(double time) const;
+  // Logs what the frames will take (Simulation::output_lines) and warns
+  // where that is more than the output folder's device has free. Not for
+  // a restart.
+  void announce_output(double mech_step) const;
   void log_end() const;
 };
 

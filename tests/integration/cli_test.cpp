@@ -2631,6 +2631,23 @@ TEST(Output, AFullDiskStopsTheRunWithItsReason) {
             std::string::npos)
       << full.err;
   std::printf("3 MB disk: %s\n", fs["error"].get<std::string>().c_str());
+
+  // Frames that cannot fit on the device at all (a frame after every step of
+  // 2000 s: about 150 million frames, 33 TB): the run says so at its start
+  // (here stopped by SIGTERM after 3 s).
+  json huge = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply_isothermal.json");
+  huge["time"]["end"] = 2000.0;
+  huge["output"]["interval"] = 1e-300;
+  std::ofstream(dir / "huge.json") << huge.dump(2);
+  const auto h = thermostamp_after("timeout -s TERM 3", "run " + q(dir / "huge.json") + " --quiet --out " +
+                                                            q(dir / "huge"));
+  EXPECT_EQ(h.exit_code, 124) << h.err;  // timeout's status where it sent the signal
+  EXPECT_NE(h.err.find("[warning] the frames will take about 33.2 TB of results.h5 and the device of " +
+                       (dir / "huge").string() + " has "),
+            std::string::npos)
+      << h.err;
+  EXPECT_NE(h.err.find(" free: the run will stop before the first frame that does not fit"), std::string::npos)
+      << h.err;
 }
 
 // Every dataset of a frame carries its units (attribute "units", the user
