@@ -343,8 +343,6 @@ void Simulation::Run::write_frame(double time) {
   check_space(time);
   try {
     writer->write_frame(time, xs, ns, sim.frame_fields(), tool_u);
-  } catch (const RunError&) {
-    throw;
   } catch (const std::runtime_error& e) {  // a full disk: the frames so far stay
     throw RunError(e.what());
   }
