@@ -1004,13 +1004,15 @@ std::vector<std::vector<FrameField>> Simulation::frame_fields() const {
 }
 
 // results.h5's parts: each ply's mesh, thickness and through-thickness
-// values, with the through-thickness mesh where the frames show
-// "temperature".
+// values, with the through-thickness mesh where the ply's frames show a
+// field on it ("temperature", or "crystallinity" for a ply with kinetics).
 std::vector<WriterPart> Simulation::writer_parts() const {
   std::vector<WriterPart> wparts;
-  const auto& fields = job_.output.fields;
-  const bool layers = std::find(fields.begin(), fields.end(), "temperature") != fields.end();
-  for (const auto& st : parts_) {
+  const std::vector<std::vector<FrameField>> fields = frame_fields();
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    const auto& st = parts_[p];
+    const bool layers =
+        std::any_of(fields[p].begin(), fields[p].end(), [](const FrameField& f) { return f.on_layers; });
     WriterPart& wp = wparts.emplace_back(WriterPart{st->def->name, st->mesh.num_nodes(), st->mesh.num_elements(),
                                                     &st->mesh.triangles, st->def->thickness, st->nz, layers, {}, {}});
     for (int i = 0; i < wp.num_nodes; ++i) wp.node_tags.push_back(node_tag(st->mesh, i));

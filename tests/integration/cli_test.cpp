@@ -2448,6 +2448,66 @@ TEST(Output, CrystallinityInFramesSeriesSummaryAndExport) {
       << w.out << w.err;
 }
 
+// results.xdmf names only datasets that results.h5 holds, with their
+// dimensions, for any choice of fields: the through-thickness mesh comes
+// with "crystallinity" alone as with "temperature" (before 0.30.0 an index
+// of "crystallinity" without "temperature" named wedges and positions the
+// file did not hold, and ParaView could not open it), and not with the
+// single-value fields alone; mechanical fields per node and per element,
+// tools drawn where they stand.
+TEST(Output, IndexNamesWhatTheFileHolds) {
+  const auto dir = temp_dir("index_resolves");
+  json thermal = read_job_document(source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json");
+  thermal["time"]["end"] = 0.5;
+  thermal["materials"]["pa66_cf_ud"]["crystallisation"] = {
+      {"latent_heat", 30000.0}, {"avrami_exponent", 3.0},
+      {"rate", {{"k_max", 50.0}, {"t_max", 150.0}, {"half_width", 50.0}}}};
+  json mech = read_job_document(source_dir() / "share" / "jobs" / "ud_strip_tension.json");
+  mech["time"]["end"] = 0.01;
+  mech["output"]["interval"] = 0.005;
+  const std::vector<std::pair<json, json>> cases = {
+      {thermal, {"crystallinity"}},
+      {thermal, {"temperature", "crystallinity"}},
+      {thermal, {"temperature_mean", "temperature_top", "conductance"}},
+      {thermal, json::array()},
+      {mech, {"displacement", "velocity", "shear_angle", "fibre_direction", "membrane_stress", "membrane_strain",
+              "curvature", "contact_status", "contact_pressure", "tool_gap"}},
+      {mech, {"temperature", "shear_angle"}}};
+  int k = 0;
+  for (const auto& [base, fields] : cases) {
+    json j = base;
+    j["output"]["fields"] = fields;
+    const std::string label = j["name"].get<std::string>() + " " + fields.dump();
+    const auto run = dir / ("run" + std::to_string(k++));
+    std::filesystem::create_directories(run);
+    std::ofstream(run / "job.json") << j.dump(2);
+    const auto r = thermostamp("run " + q(run / "job.json") + " --out " + q(run / "out") + " --quiet");
+    ASSERT_EQ(r.exit_code, 0) << label << ": " << r.err;
+    EXPECT_EQ(xdmf_mismatch(run / "out"), "") << label;
+    std::stringstream x;
+    x << std::ifstream(run / "out" / "results.xdmf").rdbuf();
+    const bool layers = fields.dump().find("temperature\"") != std::string::npos ||
+                        fields.dump().find("crystallinity") != std::string::npos;
+    EXPECT_EQ(x.str().find("_thickness\"") != std::string::npos, layers) << label;
+  }
+  // The check itself: an index naming a dataset the file lacks, or giving
+  // other dimensions, is found.
+  const auto out = dir / "run0" / "out";
+  std::stringstream x;
+  x << std::ifstream(out / "results.xdmf").rdbuf();
+  const std::string good = x.str();
+  const auto write_index = [&](const std::string& text) { std::ofstream(out / "results.xdmf") << text; };
+  std::string missing = good;
+  missing.replace(missing.find("/crystallinity_mean<"), 19, "/crystallinity_max");
+  write_index(missing);
+  EXPECT_NE(xdmf_mismatch(out).find("has no /frames/000000/ply_bottom/crystallinity_max"), std::string::npos)
+      << xdmf_mismatch(out);
+  std::string other = good;
+  other.replace(other.find("Dimensions=\"") + 12, 1, "9");
+  write_index(other);
+  EXPECT_NE(xdmf_mismatch(out).find("the index gives 9"), std::string::npos) << xdmf_mismatch(out);
+}
+
 // `validate` (and the log) give the frames a run writes and what they take
 // of results.h5: the count, and the bytes of the values written once and
 // per frame, which must be those of the datasets the run writes (HDF5's

@@ -52,6 +52,47 @@ json ply_job(const std::string& splitter, int layers, double t_end, double inter
   return j;
 }
 
+std::string xdmf_mismatch(const std::filesystem::path& dir) {
+  std::ifstream in(dir / "results.xdmf");
+  if (!in) return "no results.xdmf";
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string x = text.str();
+  const hid_t file = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return "cannot open results.h5";
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // a missing dataset is an answer, not an error to print
+  std::string problem;
+  int items = 0;
+  const std::string open = "<DataItem Dimensions=\"", prefix = "results.h5:";
+  for (std::size_t at = x.find(open); at != std::string::npos && problem.empty(); at = x.find(open, at + 1)) {
+    ++items;
+    const std::size_t d0 = at + open.size(), d1 = x.find('"', d0);
+    const std::size_t p0 = x.find('>', d1) + 1, p1 = x.find("</DataItem>", p0);
+    const std::string dims = x.substr(d0, d1 - d0), ref = x.substr(p0, p1 - p0);
+    if (ref.rfind(prefix, 0) != 0) {
+      problem = "DataItem '" + ref + "' not in results.h5";
+      break;
+    }
+    const std::string path = ref.substr(prefix.size());
+    if (H5Lexists(file, path.c_str(), H5P_DEFAULT) <= 0 || H5Oexists_by_name(file, path.c_str(), H5P_DEFAULT) <= 0) {
+      problem = "results.h5 has no " + path;
+      break;
+    }
+    const hid_t set = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+    const hid_t space = H5Dget_space(set);
+    hsize_t d[2] = {0, 0};
+    const int rank = H5Sget_simple_extent_dims(space, d, nullptr);
+    H5Sclose(space);
+    H5Dclose(set);
+    std::string have = std::to_string(d[0]);
+    if (rank > 1 && d[1] > 1) have += " " + std::to_string(d[1]);
+    if (have != dims) problem = path + " holds " + have + " values, the index gives " + dims;
+  }
+  H5Fclose(file);
+  if (problem.empty() && items == 0) problem = "no DataItem";
+  return problem;
+}
+
 const ProbeSample* JobRun::sample(int probe, const std::string& quantity, double t) const {
   const ProbeSample* best = nullptr;
   double bd = 1e300;

@@ -62,6 +62,12 @@ inline int frame_count(hid_t file) {
   return static_cast<int>(n);
 }
 
+// Where the results.xdmf of output folder `dir` names what its results.h5
+// does not hold: the first DataItem whose dataset is missing or whose
+// dimensions differ from those it gives ("" when every one resolves, as
+// ParaView needs), and "no DataItem" for an index that names none.
+std::string xdmf_mismatch(const std::filesystem::path& dir);
+
 struct CommandResult {
   int exit_code = -1;
   std::string out, err;
