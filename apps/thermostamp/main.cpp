@@ -43,11 +43,12 @@ subnormals instead of flushing them to zero during the run (the default)
 --restart: continue the run from the checkpoint in its output folder
 (checkpoint.bin, written when a run is interrupted, every
 output.checkpoint_interval, every --checkpoint-minutes and at the end), with
-the same job and --set values but for time.end, output.interval and
-output.series_interval: a later time.end extends a finished run as a run to
-it would have gone on, other intervals write the frames and rows after the
-checkpoint closer or further apart; the frames and time series up to the
-checkpoint are kept; with study: continue the study in its output folder
+the same job and --set values but for time.end, output.interval,
+output.series_interval and output.fields: a later time.end extends a finished
+run as a run to it would have gone on, other intervals write the frames and
+rows after the checkpoint closer or further apart, other fields are those of
+the frames after it; the frames and time series up to the checkpoint are
+kept; with study: continue the study in its output folder
 (study_state.json), its completed runs not run again, a stopped one from its
 checkpoint
 --checkpoint-minutes M: also write a checkpoint after every M minutes of

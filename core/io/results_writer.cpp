@@ -179,6 +179,24 @@ void ResultsWriter::check_compression() const {
     throw std::runtime_error("this HDF5 library cannot compress (no deflate filter): set output.compression to 0");
 }
 
+namespace {
+
+// A part's extruded through-thickness mesh (/parts/<ply>/wedges): wedges
+// between consecutive levels of the through-thickness values.
+void write_wedges(hid_t pg, const WriterPart& p, int compression) {
+  const int nl = extruded_levels(p.nz);
+  std::vector<int> wedges;
+  wedges.reserve(static_cast<std::size_t>(6) * p.num_elements * (nl - 1));
+  for (int l = 0; l + 1 < nl; ++l)
+    for (int e = 0; e < p.num_elements; ++e) {
+      for (int a = 0; a < 3; ++a) wedges.push_back((*p.triangles)[3 * e + a] * nl + l);
+      for (int a = 0; a < 3; ++a) wedges.push_back((*p.triangles)[3 * e + a] * nl + l + 1);
+    }
+  write_dataset(pg, "wedges", wedges.data(), static_cast<hsize_t>(p.num_elements) * (nl - 1), 6, compression);
+}
+
+}  // namespace
+
 ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts, int compression)
     : dir_(dir), parts_(std::move(parts)), compression_(compression) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
@@ -201,20 +219,7 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
     write_dataset(pg, "triangles", p.triangles->data(), p.num_elements, 3, compression_);
     write_dataset(pg, "node_tags", p.node_tags.data(), p.node_tags.size(), compression_);
     write_dataset(pg, "element_tags", p.element_tags.data(), p.element_tags.size(), compression_);
-    if (!p.layers) {
-      H5Gclose(pg);
-      continue;
-    }
-    // Extruded through-thickness mesh: wedges between consecutive levels.
-    const int nl = extruded_levels(p.nz);
-    std::vector<int> wedges;
-    wedges.reserve(static_cast<std::size_t>(6) * p.num_elements * (nl - 1));
-    for (int l = 0; l + 1 < nl; ++l)
-      for (int e = 0; e < p.num_elements; ++e) {
-        for (int a = 0; a < 3; ++a) wedges.push_back((*p.triangles)[3 * e + a] * nl + l);
-        for (int a = 0; a < 3; ++a) wedges.push_back((*p.triangles)[3 * e + a] * nl + l + 1);
-      }
-    write_dataset(pg, "wedges", wedges.data(), static_cast<hsize_t>(p.num_elements) * (nl - 1), 6, compression_);
+    if (p.layers) write_wedges(pg, p, compression_);
     H5Gclose(pg);
   }
   H5Gclose(g);
@@ -254,6 +259,16 @@ ResultsWriter::ResultsWriter(const std::filesystem::path& dir, std::vector<Write
   for (int k = kept; H5Lexists(frames_g, frame_name(k).c_str(), H5P_DEFAULT) > 0; ++k)
     H5Ldelete(frames_g, frame_name(k).c_str(), H5P_DEFAULT);
   H5Gclose(frames_g);
+  // The through-thickness mesh of a part whose frames to come show a field
+  // on it, where those before did not (a restart with other fields).
+  for (const WriterPart& p : parts_) {
+    const std::string wedges = "parts/" + p.name + "/wedges";
+    if (!p.layers || H5Lexists(file_, wedges.c_str(), H5P_DEFAULT) > 0) continue;
+    const hid_t pg = H5Gopen2(file_, ("parts/" + p.name).c_str(), H5P_DEFAULT);
+    if (pg < 0) refuse(-1, path + " has no part '" + p.name + "'");
+    write_wedges(pg, p, compression_);
+    H5Gclose(pg);
+  }
   H5Fflush(file_, H5F_SCOPE_GLOBAL);
   times_ = kept_times;
   std::vector<std::vector<FrameField>> kinds = fields;

@@ -71,7 +71,9 @@ class ResultsWriter {
   ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts, int compression = 0);
   // A restarted run (io/checkpoint.hpp): opens the results.h5 of the run in
   // dir, keeps its first frames (their times given, every frame with the
-  // fields of `fields`: names and kinds), removes the frames after them and
+  // fields of `fields`: names and kinds, those of the run that wrote them),
+  // removes the frames after them, adds the through-thickness mesh of the
+  // parts whose frames to come need it where the file lacks it, and
   // rewrites results.xdmf. Throws std::runtime_error when the file is not
   // there or holds fewer frames.
   ResultsWriter(const std::filesystem::path& dir, std::vector<WriterPart> parts, const std::vector<double>& kept_times,

@@ -76,12 +76,14 @@ std::vector<unsigned char> mesh_prints(const std::vector<std::unique_ptr<PartSta
 // What a restart compares: the stored document without time.end (a restart
 // may move the end, to extend a finished run), output.interval and
 // output.series_interval (a restart may write its frames and rows closer
-// or further apart).
+// or further apart) and output.fields (the frames after the checkpoint may
+// show other fields).
 json restart_match(json d) {
   if (d.contains("time") && d["time"].is_object()) d["time"].erase("end");
   if (d.contains("output") && d["output"].is_object()) {
     d["output"].erase("interval");
     d["output"].erase("series_interval");
+    d["output"].erase("fields");
   }
   return d;
 }
@@ -106,6 +108,21 @@ CheckpointTimes checkpoint_times(const Checkpoint& c) {
 }
 
 }  // namespace
+
+// The output.fields of the run that wrote a checkpoint (the job's default
+// where it gives none).
+std::vector<std::string> checkpoint_fields(const Checkpoint& c) {
+  const auto& bytes = c.section("job");
+  const json d = json::parse(bytes.begin(), bytes.end());
+  std::vector<std::string> fields;
+  if (d.contains("output") && d["output"].is_object() && d["output"].contains("fields") &&
+      d["output"]["fields"].is_array()) {
+    for (const auto& f : d["output"]["fields"])
+      if (f.is_string()) fields.push_back(f.get<std::string>());
+    return fields;
+  }
+  return {"temperature"};
+}
 
 RunResult Simulation::run(const RunOptions& opt) {
   const auto wall0 = Clock::now();
@@ -347,6 +364,15 @@ void Simulation::Run::restore() {
     if (job.mechanics && job.thermal) sim.land_thermal_step(std::min(was.interval, was.t_end));
     log->info("frames every {:.6g} s from the checkpoint on, instead of the checkpointed run's {:.6g} s", interval,
               was.interval);
+  }
+  if (const std::vector<std::string> fields = checkpoint_fields(*opt.restart); fields != job.output.fields) {
+    auto list = [](const std::vector<std::string>& v) {
+      std::string out;
+      for (const auto& f : v) out += (out.empty() ? "" : ", ") + f;
+      return out.empty() ? std::string("none") : out;
+    };
+    log->info("frames from the checkpoint on with the fields {} (the frames kept: {})", list(job.output.fields),
+              list(fields));
   }
   if (checkpoint_iv > 0) {  // the interval of this run, from the checkpoint on
     next_checkpoint = 0;
@@ -630,8 +656,18 @@ double Simulation::check_restart(const Checkpoint& c) const {
         stored != restart_match(restart_document(job_.document)))
       throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
                                 "needs the job of the run it continues (time.end, output.interval, "
-                                "output.series_interval, output.checkpoint_interval, output.checkpoint_at_end and "
-                                "output.compression may differ)");
+                                "output.series_interval, output.fields, output.checkpoint_interval, "
+                                "output.checkpoint_at_end and output.compression may differ)");
+    // Other fields, but not a node's first times below the threshold where
+    // the checkpointed run did not follow them.
+    const std::vector<std::string> was = checkpoint_fields(c);
+    const auto& fields = job_.output.fields;
+    for (std::size_t i = 0; i < fields.size(); ++i)
+      if (fields[i] == "below_threshold_from" && std::find(was.begin(), was.end(), fields[i]) == was.end())
+        throw JobError(pointer_append("/output/fields", i),
+                       what + "the run that wrote the checkpoint did not follow each node's first time below the "
+                              "threshold ('below_threshold_from' was not among its fields), and the times before "
+                              "the checkpoint are not in it: run the job from the start for this field");
     // The same meshes, numbered alike (checkpoints before 0.24.0 have no
     // prints: their meshes are those of the generators or of files in the
     // files' order).
@@ -676,6 +712,22 @@ double Simulation::check_restart(const Checkpoint& c) const {
 template <class A>
 bool Simulation::state_io(A& a) {
   constexpr bool saving = std::is_same_v<A, sdk::StateWriter>;
+  // An array whose length follows output.fields (a restart may ask for
+  // other fields, check_restart() tells which): read back where this run
+  // has it at the length it was saved, else left as this run made it.
+  const auto io_field = [&](std::vector<double>& v) {
+    if constexpr (saving) {
+      return a.io_vector(v);
+    } else {
+      std::vector<double> read;
+      if (!a.io_vector(read)) return false;
+      if (read.size() == v.size()) {
+        std::copy(read.begin(), read.end(), v.begin());
+        return true;
+      }
+      return read.empty() || v.empty();
+    }
+  };
   bool ok = a.io(last_mech_dt_) && a.io(bending_weight_) && a.io(bending_left_) && a.io(bending_largest_) &&
             a.io(bending_evaluations_) && a.io(last_stable_) && a.io(seen_min_) && a.io(seen_max_) &&
             a.io_array(below_from_) && a.io_array(all_below_from_) && a.io_array(over_from_) &&
@@ -687,8 +739,8 @@ bool Simulation::state_io(A& a) {
   for (std::size_t k = 0; k < warned.size(); ++k) law_uses_[k].warned = warned[k] != 0;
   for (auto& st : parts_)
     ok = ok && a.io_array(st->x) && a.io_array(st->T) && a.io_array(st->contact_status) &&
-         a.io_array(st->contact_pressure) && a.io_array(st->shear_angle) && a.io_array(st->below_from) &&
-         a.io_array(st->all_below_from) && a.io_array(st->theta) && a.io_array(st->X);
+         io_field(st->contact_pressure) && a.io_array(st->shear_angle) && io_field(st->below_from) &&
+         io_field(st->all_below_from) && a.io_array(st->theta) && a.io_array(st->X);
   for (auto& m : mech_)
     ok = ok && a.io_array(m->v) && a.io_array(m->f_int) && a.io_array(m->f_con) && a.io(m->pending_work) &&
          a.io_array(m->block_dt) && a.io_array(m->block_bdt) && a.io(m->bend_dt) && a.io_array(m->stress) &&
@@ -698,8 +750,8 @@ bool Simulation::state_io(A& a) {
     // them over (published); a continued run reads them from cross.
     ok = ok && a.io_array(saving && task.published ? task.cross_out : task.cross);
     if (!saving) task.published = false;
-    ok = ok && a.io_array(task.cross_status) && a.io_array(task.tool_force) && a.io_array(task.own_pressure) &&
-         a.io_array(task.cross_pressure) && a.io(task.energy) && a.io(task.active);
+    ok = ok && a.io_array(task.cross_status) && a.io_array(task.tool_force) && io_field(task.own_pressure) &&
+         io_field(task.cross_pressure) && a.io(task.energy) && a.io(task.active);
   }
   for (auto& tool : tools_) {
     std::array<double, 3> u = tool->displacement(), v = tool->velocity();

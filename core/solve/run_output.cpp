@@ -172,8 +172,9 @@ void Simulation::Run::open_output() {
     std::vector<WriterPart> wparts = sim.writer_parts();
     try {
       const int level = job.output.compression;
+      // The frames kept have the fields of the run that wrote them.
       writer = opt.restart ? std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), frame_times,
-                                                             sim.frame_fields(), level)
+                                                             sim.frame_fields(checkpoint_fields(*opt.restart)), level)
                            : std::make_unique<ResultsWriter>(opt.out_dir, std::move(wparts), level);
     } catch (const std::runtime_error& e) {
       if (opt.restart) throw JobError("", std::string("--restart: ") + e.what());
@@ -941,13 +942,15 @@ void Simulation::Run::log_end() const {
 }
 
 // The fields of a frame, per part (output.fields; each with its values;
-// the same in every frame of a run).
-std::vector<std::vector<FrameField>> Simulation::frame_fields() const {
+// the same in every frame of a run, but for a restart with other fields).
+std::vector<std::vector<FrameField>> Simulation::frame_fields() const { return frame_fields(job_.output.fields); }
+
+std::vector<std::vector<FrameField>> Simulation::frame_fields(const std::vector<std::string>& names) const {
   const auto& mech = mech_;
   std::vector<std::vector<FrameField>> fields(parts_.size());
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
-    for (const auto& f : job_.output.fields) {
+    for (const auto& f : names) {
       if (f == "temperature") {
         fields[p].push_back({"temperature", st.T.data(), 1, false, true});
         fields[p].push_back({"temperature_mean", st.mean.data()});

@@ -173,6 +173,8 @@ class Simulation {
   // values) and the tools' surfaces (output.tool_surfaces; none without).
   std::vector<WriterPart> writer_parts() const;
   std::vector<std::vector<FrameField>> frame_fields() const;
+  // The same for other output.fields (those of a checkpointed run).
+  std::vector<std::vector<FrameField>> frame_fields(const std::vector<std::string>& names) const;
   std::vector<WriterTool> writer_tools() const;
   // Heat stored in the plies, J, relative to 0 degC (sum of capacity x temperature;
   // with a specific heat table, of mass x int_0^T c).

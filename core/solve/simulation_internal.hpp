@@ -184,6 +184,10 @@ struct Progress {
 
 }  // namespace detail
 
+// The output.fields of the run that wrote a checkpoint (the job's default
+// where it gives none).
+std::vector<std::string> checkpoint_fields(const Checkpoint& c);
+
 // One call of Simulation::run(): the loop's state (what a checkpoint keeps
 // of it, run_io), the output files and the tables of the time series. The
 // set-up opens the output (or, for a restart, checks and reopens it); the

@@ -16,6 +16,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -786,6 +787,111 @@ TEST(Restart, CloserFramesFromACheckpoint) {
                 ply, restarted, step);
     EXPECT_GT(restarted, 0.0) << ply << ": the steps after the checkpoint are other steps";
     EXPECT_LE(restarted, step) << ply;
+  }
+}
+
+// `--restart --set output.fields=...`: the frames after the checkpoint show
+// other fields. From two fields (no through-thickness mesh, no contact
+// pressure, no stresses) to every field but one, and from every field to
+// two: each frame holds the fields of the run that wrote it, with the bits
+// of a run that had every field throughout; the index names what the file
+// holds; the time series and the summary are those of that run (the
+// fields change no step). A node's first times below the threshold, which
+// the checkpointed run did not follow, are refused before anything is
+// touched.
+TEST(Restart, OtherFieldsFromACheckpoint) {
+  const auto dir = temp_dir("restart_fields");
+  json j = coarse_hemisphere("hemisphere_ud_2ply.json");
+  for (auto& pr : j["output"]["probes"]) {  // the contact pressure only where the frames ask for it
+    json kept = json::array();
+    for (const auto& quantity : pr["quantities"])
+      if (quantity != "contact_pressure") kept.push_back(quantity);
+    pr["quantities"] = kept;
+  }
+  const json all = j["output"]["fields"];
+  json most = json::array();
+  for (const auto& f : all)
+    if (f != "below_threshold_from") most.push_back(f);
+  const json two = {"displacement", "shear_angle"};
+  const auto job = write_job(dir, j);
+  ASSERT_EQ(run_cli(job, dir / "direct", 2).exit_code, 0);
+  const auto direct = frames_by_time(dir / "direct" / "results.h5");
+  ASSERT_EQ(direct.size(), 5u);
+  std::set<std::string> plies;
+  for (const auto& p : j["parts"]) plies.insert(p["name"].get<std::string>());
+  // The datasets of a frame with these fields: each ply's positions and
+  // fields, and the moving tools' positions.
+  auto datasets = [&](const std::map<std::string, std::vector<double>>& frame, const json& fields) {
+    std::set<std::string> names = {"nodes"};
+    for (const auto& f : fields) {
+      const std::string s = f;
+      if (s == "temperature") {
+        names.insert({"temperature", "temperature_mean", "temperature_top", "temperature_bottom", "layer_nodes"});
+      } else if (s == "conductance") {
+        names.insert({"conductance_bottom", "conductance_top"});
+      } else if (s == "below_threshold_from") {
+        names.insert({"below_threshold_from", "all_below_threshold_from"});
+      } else {
+        names.insert(s);
+      }
+    }
+    std::map<std::string, std::vector<double>> out;
+    for (const auto& [name, v] : frame) {
+      const auto slash = name.find('/');
+      if (!plies.contains(name.substr(0, slash)) || names.contains(name.substr(slash + 1))) out[name] = v;
+    }
+    return out;
+  };
+  const std::string ck = "--set output.checkpoint_interval=0.5 --set output.checkpoint_at_end=false";
+  auto fields_set = [](const json& f) { return " --set " + q("output.fields=" + f.dump()); };
+  struct Case {
+    std::string name;
+    json before, after;
+  };
+  for (const Case& c : {Case{"more", two, most}, Case{"fewer", all, two}}) {
+    const auto out = dir / c.name;
+    ASSERT_EQ(run_cli(job, out, 2, ck + fields_set(c.before)).exit_code, 0) << c.name;
+    if (c.name == "more") {
+      // below_threshold_from needs each node's times since the start.
+      const std::string h5 = file_text(out / "results.h5");
+      const auto r = run_cli(job, out, 1, ck + fields_set(all) + " --restart");
+      EXPECT_EQ(r.exit_code, 2);
+      std::size_t at = 0;
+      while (all[at] != "below_threshold_from") ++at;
+      EXPECT_EQ(r.err.substr(0, r.err.find('\n')),
+                "error: /output/fields/" + std::to_string(at) +
+                    ": --restart: the run that wrote the checkpoint did not follow each node's first time below the "
+                    "threshold ('below_threshold_from' was not among its fields), and the times before the "
+                    "checkpoint are not in it: run the job from the start for this field")
+          << r.err;
+      EXPECT_TRUE(file_text(out / "results.h5") == h5) << "results.h5 untouched";
+    }
+    const auto r = run_cli(job, out, 1, ck + fields_set(c.after) + " --restart");
+    ASSERT_EQ(r.exit_code, 0) << c.name << ": " << r.err;
+    const json s = json::parse(std::ifstream(out / "summary.json"));
+    const double from = s["restarted_from_s"].get<double>();
+    EXPECT_GE(from, 0.5) << c.name;
+    EXPECT_LT(from, 0.501) << c.name;
+    const auto frames = frames_by_time(out / "results.h5");
+    ASSERT_EQ(frames.size(), direct.size()) << c.name;
+    for (const auto& [t, frame] : direct) {
+      ASSERT_TRUE(frames.contains(t)) << c.name << ": the frame at " << t << " s";
+      const auto want = datasets(frame, t <= from ? c.before : c.after);
+      std::string names;
+      for (const auto& [name, v] : frames.at(t)) names += name + " ";
+      EXPECT_EQ(frames.at(t).size(), want.size()) << c.name << " at " << t << " s: " << names;
+      EXPECT_TRUE(same_bits(want, frames.at(t))) << c.name << ": the frame at " << t << " s";
+    }
+    EXPECT_EQ(xdmf_mismatch(out), "") << c.name;
+    for (const char* f : {"probes.csv", "energy.csv", "tools.csv", "plies.csv"})
+      EXPECT_TRUE(file_text(dir / "direct" / f) == file_text(out / f)) << c.name << ": " << f;
+    EXPECT_EQ(comparable_summary(dir / "direct"), comparable_summary(out)) << c.name;
+    std::stringstream log;
+    log << std::ifstream(out / "log.txt").rdbuf();
+    EXPECT_NE(log.str().find("frames from the checkpoint on with the fields " +
+                             std::string(c.name == "more" ? "displacement, temperature" : "displacement, shear_angle (")),
+              std::string::npos)
+        << c.name;
   }
 }
 
