@@ -135,12 +135,15 @@ RunResult Simulation::run(const RunOptions& opt) {
 #endif
   const SubnormalsFlushed flushed(opt.flush_subnormals);  // on every thread of the run, until it returns
   Run r(*this, opt, wall0, threads, flushed.mode());
-  if (opt.restart) r.read_checkpoint();  // everything checked before any file is touched
+  if (opt.restart) {  // everything read and checked before any file is touched
+    r.read_checkpoint();
+    r.restore();
+  }
   r.open_output();
   r.log_start();
   try {
     if (r.resume)
-      r.restore();
+      r.log_restore();
     else
       r.start();
     if (job_.mechanics)
@@ -344,26 +347,27 @@ void Simulation::Run::restore() {
   t = resume_t;
   restarted_from = t;
   checkpoint_at = t;
-  auto log = logger("solve");
   // Another time.end (a run extended, or ended earlier), frame interval
   // or row interval (set, or time.end's defaults): the frames and the rows
   // of the time series after the checkpoint are at this run's multiples
   // of its intervals.
   const CheckpointTimes was = checkpoint_times(*opt.restart);
-  if (was.t_end != t_end) log->info("time.end {:.6g} s instead of the checkpointed run's {:.6g} s", t_end, was.t_end);
+  if (was.t_end != t_end)
+    restore_log.push_back(fmt::format("time.end {:.6g} s instead of the checkpointed run's {:.6g} s", t_end, was.t_end));
   if (was.series != series_iv) {
     next_sample = 0;
     advance_past(next_sample, series_iv, t + eps_t);
-    log->info("rows every {:.6g} s from the checkpoint on, instead of the checkpointed run's {:.6g} s", series_iv,
-              was.series);
+    restore_log.push_back(fmt::format(
+        "rows every {:.6g} s from the checkpoint on, instead of the checkpointed run's {:.6g} s", series_iv, was.series));
   }
   if (was.interval != interval) {
     frame_index = static_cast<long long>(std::floor((t + eps_t) / interval)) + 1;
     // With the mechanics the thermal step is a number of mechanical steps
     // (the checkpoint's), from the step aimed at by the checkpointed run.
     if (job.mechanics && job.thermal) sim.land_thermal_step(std::min(was.interval, was.t_end));
-    log->info("frames every {:.6g} s from the checkpoint on, instead of the checkpointed run's {:.6g} s", interval,
-              was.interval);
+    restore_log.push_back(fmt::format(
+        "frames every {:.6g} s from the checkpoint on, instead of the checkpointed run's {:.6g} s", interval,
+        was.interval));
   }
   if (const std::vector<std::string> fields = checkpoint_fields(*opt.restart); fields != job.output.fields) {
     auto list = [](const std::vector<std::string>& v) {
@@ -371,8 +375,8 @@ void Simulation::Run::restore() {
       for (const auto& f : v) out += (out.empty() ? "" : ", ") + f;
       return out.empty() ? std::string("none") : out;
     };
-    log->info("frames from the checkpoint on with the fields {} (the frames kept: {})", list(job.output.fields),
-              list(fields));
+    restore_log.push_back(fmt::format("frames from the checkpoint on with the fields {} (the frames kept: {})",
+                                      list(job.output.fields), list(fields)));
   }
   if (checkpoint_iv > 0) {  // the interval of this run, from the checkpoint on
     next_checkpoint = 0;
@@ -385,8 +389,13 @@ void Simulation::Run::restore() {
   // from the temperatures at the last thermal step, which are those of
   // the checkpoint).
   if (job.mechanics) sim.update_node_temperature();
-  log->info("restarted from the checkpoint at t = {:.6g} s (mechanical step {}, thermal step {}, {} frame(s) kept)", t,
-            mech_steps, steps, frame_times.size());
+  restore_log.push_back(
+      fmt::format("restarted from the checkpoint at t = {:.6g} s (mechanical step {}, thermal step {}, {} frame(s) kept)",
+                  t, mech_steps, steps, frame_times.size()));
+}
+
+void Simulation::Run::log_restore() const {
+  for (const std::string& line : restore_log) logger("solve")->info("{}", line);
 }
 
 void Simulation::Run::start() {

@@ -281,7 +281,12 @@ struct Simulation::Run {
 
   // run.cpp
   void read_checkpoint();  // a restart: the checkpoint's run section, checked against the output folder
-  void restore();          // a restart: the loop's and the model's state from the checkpoint
+  // A restart: the loop's and the model's state from the checkpoint (before
+  // the output is opened: a checkpoint that does not fit is refused with
+  // the folder as it was), and what it changed, into restore_log.
+  void restore();
+  void log_restore() const;  // restore_log into the log, after the run's first lines
+  std::vector<std::string> restore_log;
   void start();            // a new run: the first frame, rows and probe samples
   void mechanics_loop();
   void thermal_loop();

@@ -390,6 +390,20 @@ TEST(Restart, RefusesWhatItCannotContinue) {
   refused(run_cli(job, out, 1, "--restart"), "truncated", "truncated");
   std::ofstream(out / "checkpoint.bin", std::ios::binary) << "not a checkpoint";
   refused(run_cli(job, out, 1, "--restart"), "not a ThermoStamp checkpoint", "not a checkpoint");
+  // A checkpoint whose state does not fit the job (here the kernel's
+  // section cut short; so would a plugin whose state changed): refused
+  // before the frames after it are removed from results.h5 (before
+  // 0.30.0: exit status 3, "unexpected error", the frames gone).
+  {
+    std::ofstream(out / "checkpoint.bin", std::ios::binary) << ck;
+    Checkpoint c = read_checkpoint(out / "checkpoint.bin");
+    for (auto& [name, bytes] : c.sections)
+      if (name == "kernel") bytes.resize(bytes.size() - 8);
+    write_checkpoint(out / "checkpoint.bin", c);
+    const auto frames = results_contents(out / "results.h5");
+    refused(run_cli(job, out, 1, "--restart"), "the checkpoint does not fit this job (kernel state)", "kernel state");
+    EXPECT_TRUE(same_bits(results_contents(out / "results.h5"), frames)) << "every frame kept";
+  }
   // A time series shorter than at the checkpoint (another run's folder).
   std::ofstream(out / "checkpoint.bin", std::ios::binary) << ck;
   std::ofstream(out / "energy.csv") << "time\n";
