@@ -27,7 +27,7 @@ namespace {
 
 constexpr const char* kUsage = R"(usage:
   thermostamp run JOB.json [--out DIR] [--threads N] [--set PATH=VALUE ...] [--quiet] [--keep-subnormals]
-                  [--restart] [--checkpoint-minutes M]
+                  [--restart | --restart-at T] [--checkpoint-minutes M]
   thermostamp validate JOB.json [--set PATH=VALUE ...]
   thermostamp plugins [--json | --markdown]
   thermostamp schema                 # JSON Schema of job files, from the plugins found
@@ -51,6 +51,10 @@ the frames after it; the frames and time series up to the checkpoint are
 kept; with study: continue the study in its output folder
 (study_state.json), its completed runs not run again, a stopped one from its
 checkpoint
+--restart-at T: the same from the last checkpoint at or before T s (give or
+take T / 1000) that the run kept (output.keep_checkpoints:
+DIR/checkpoints/); the frames, rows and kept checkpoints after it are
+replaced
 --checkpoint-minutes M: also write a checkpoint after every M minutes of
 wall time (against machines that go down without a signal)
 
@@ -85,6 +89,7 @@ struct Args {
   int threads = 0;
   bool quiet = false, json = false, markdown = false, keep_subnormals = false, restart = false;
   double checkpoint_minutes = 0;
+  std::optional<double> restart_at;  // run: continue from the last kept checkpoint at or before it (s)
   double rtol = -1;  // compare: the relative tolerance (-1: exact)
   std::string against;  // report: the other run's folder
   double from = -std::numeric_limits<double>::infinity();  // compare: the first time compared (s)
@@ -97,7 +102,8 @@ struct Args {
 const std::map<std::string, std::vector<std::string>>& command_options() {
   static const std::map<std::string, std::vector<std::string>> m = {
       {"run",
-       {"--out", "--threads", "--set", "--quiet", "--keep-subnormals", "--restart", "--checkpoint-minutes"}},
+       {"--out", "--threads", "--set", "--quiet", "--keep-subnormals", "--restart", "--restart-at",
+        "--checkpoint-minutes"}},
       {"validate", {"--set"}},
       {"plugins", {"--json", "--markdown"}},
       {"schema", {}},
@@ -160,6 +166,9 @@ Args parse(int argc, char** argv) {
     } else if (s == "--quiet") {
       a.quiet = true;
     } else if (s == "--restart") {
+      a.restart = true;
+    } else if (s == "--restart-at") {
+      a.restart_at = finite_number(s, value(s), true, "a time of at least 0");
       a.restart = true;
     } else if (s == "--whole") {
       a.whole = true;
@@ -263,11 +272,38 @@ int cmd_run(const Args& a, bool validate_only) {
   // (checked before anything runs: a checkpoint of another job is refused).
   std::optional<ts::Checkpoint> checkpoint;
   double restart_t = 0;
+  std::filesystem::path restart_file = opt.out_dir / ts::kCheckpointFile;
+  if (a.restart_at) {
+    // The last kept checkpoint at or before that time, give or take a
+    // thousandth of it: a periodic checkpoint falls on the first step at or
+    // after its multiple of output.checkpoint_interval (2.00000107 s for 2 s).
+    const auto kept = ts::kept_checkpoints(opt.out_dir);
+    auto g = [](double v) {  // as the kept checkpoints' names give their times
+      char text[32];
+      std::snprintf(text, sizeof text, "%.9g", v);
+      return std::string(text);
+    };
+    const std::string what = "--restart-at " + g(*a.restart_at) + ": ";
+    if (kept.empty())
+      throw ts::JobError("", what + "no kept checkpoints in " + (opt.out_dir / ts::kKeptCheckpointFolder).string() +
+                                 " (a run keeps every checkpoint it writes with output.keep_checkpoints: true)");
+    const ts::KeptCheckpoint* pick = nullptr;
+    for (const auto& k : kept)
+      if (k.t <= *a.restart_at * (1 + 1e-3)) pick = &k;
+    if (!pick) {
+      std::string times;
+      for (const auto& k : kept) times += (times.empty() ? "" : ", ") + g(k.t);
+      throw ts::JobError("", what + "no kept checkpoint at or before it in " +
+                                 (opt.out_dir / ts::kKeptCheckpointFolder).string() + " (kept at t = " + times + " s)");
+    }
+    restart_file = pick->file;
+    opt.restart_kept = pick->file;
+  }
   if (a.restart) {
     try {
-      checkpoint = ts::read_checkpoint(opt.out_dir / ts::kCheckpointFile);
+      checkpoint = ts::read_checkpoint(restart_file);
     } catch (const std::exception& e) {
-      throw ts::JobError("", std::string("--restart: ") + e.what());
+      throw ts::JobError("", std::string(a.restart_at ? "--restart-at: " : "--restart: ") + e.what());
     }
     restart_t = sim.check_restart(*checkpoint);
     opt.restart = &*checkpoint;
@@ -275,7 +311,7 @@ int cmd_run(const Args& a, bool validate_only) {
   ts::cli::make_output_folder(opt.out_dir);
   ts::log_to_file(opt.out_dir / "log.txt", a.restart);
   if (a.restart)
-    ts::logger("job")->info("restart from {} (t = {:.6g} s)", (opt.out_dir / ts::kCheckpointFile).string(), restart_t);
+    ts::logger("job")->info("restart from {} (t = {:.6g} s)", restart_file.string(), restart_t);
   ts::logger("job")->info("thermostamp {} running {} -> {}", ts::kVersion, job.file.string(), opt.out_dir.string());
   for (const auto& s : a.sets) ts::logger("job")->info("override: {}", s);
   const ts::RunResult r = sim.run(opt);

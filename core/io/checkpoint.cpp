@@ -1,7 +1,11 @@
 #include "io/checkpoint.hpp"
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -35,6 +39,46 @@ const std::vector<unsigned char>* Checkpoint::find(const std::string& name) cons
 const std::vector<unsigned char>& Checkpoint::section(const std::string& name) const {
   if (const auto* s = find(name)) return *s;
   throw std::runtime_error("the checkpoint has no section '" + name + "'");
+}
+
+std::string kept_checkpoint_name(double t) {
+  char name[64];
+  std::snprintf(name, sizeof name, "checkpoint_%.9g.bin", t);
+  return name;
+}
+
+std::vector<KeptCheckpoint> kept_checkpoints(const std::filesystem::path& dir) {
+  std::vector<KeptCheckpoint> out;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir / kKeptCheckpointFolder, ec)) {
+    const std::string name = e.path().filename().string();
+    const std::string head = "checkpoint_", tail = ".bin";
+    if (name.size() <= head.size() + tail.size() || name.rfind(head, 0) != 0 || !name.ends_with(tail)) continue;
+    const std::string number = name.substr(head.size(), name.size() - head.size() - tail.size());
+    char* end = nullptr;
+    const double t = std::strtod(number.c_str(), &end);
+    if (end != number.c_str() + number.size() || !std::isfinite(t)) continue;
+    out.push_back({t, e.path()});
+  }
+  std::sort(out.begin(), out.end(), [](const KeptCheckpoint& a, const KeptCheckpoint& b) { return a.t < b.t; });
+  return out;
+}
+
+void keep_checkpoint(const std::filesystem::path& written, const std::filesystem::path& dir, double t) {
+  const auto folder = dir / kKeptCheckpointFolder;
+  const auto kept = folder / kept_checkpoint_name(t);
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec) throw std::runtime_error("cannot create " + folder.string() + ": " + ec.message());
+  std::filesystem::remove(kept, ec);
+  std::filesystem::create_hard_link(written, kept, ec);
+  if (!ec) return;
+  std::filesystem::copy_file(written, kept, std::filesystem::copy_options::overwrite_existing, ec);
+  if (ec) {
+    const std::string why = write_failure_reason(folder, ec.value(), ec.message().c_str());
+    std::filesystem::remove(kept, ec);
+    throw std::runtime_error("cannot write " + kept.string() + ": " + why);
+  }
 }
 
 void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {

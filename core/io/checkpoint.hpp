@@ -27,6 +27,22 @@ struct Checkpoint {
 };
 
 inline constexpr const char* kCheckpointFile = "checkpoint.bin";
+// Where a run with output.keep_checkpoints keeps each checkpoint it writes:
+// DIR/checkpoints/checkpoint_<t>.bin, t in s to 9 significant digits.
+inline constexpr const char* kKeptCheckpointFolder = "checkpoints";
+std::string kept_checkpoint_name(double t);
+
+struct KeptCheckpoint {
+  double t = 0;  // s, as its name gives it
+  std::filesystem::path file;
+};
+// The kept checkpoints of output folder `dir`, by time (none without the
+// folder; files of other names are left out).
+std::vector<KeptCheckpoint> kept_checkpoints(const std::filesystem::path& dir);
+// Keeps the checkpoint just written to `written` as the kept checkpoint of
+// time t in `dir` (a second name of the same file where the file system
+// allows it, else a copy). Throws std::runtime_error with the reason.
+void keep_checkpoint(const std::filesystem::path& written, const std::filesystem::path& dir, double t);
 
 void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c);
 // Throws std::runtime_error with a one-line reason (missing, not a

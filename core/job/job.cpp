@@ -1048,6 +1048,7 @@ void parse_job_into(Job& job) {
                                            " s (at most " + fmt_number(kMaxFrames) + ")");
     job.output.checkpoint_interval = r.real("checkpoint_interval", 0.0, 0.0);
     job.output.checkpoint_at_end = r.boolean("checkpoint_at_end", true);
+    job.output.keep_checkpoints = r.boolean("keep_checkpoints", false);
     job.output.series_interval = r.real("series_interval", 0.0, 0.0);
     job.output.compression = static_cast<int>(r.integer("compression", 0, 0, 9));
     // true: the tools cut at the symmetry planes of the plies; "whole": as

@@ -228,6 +228,7 @@ struct OutputDef {
   double interval = 0;
   double checkpoint_interval = 0;  // s of simulated time between checkpoints, 0: only when interrupted
   bool checkpoint_at_end = true;    // a checkpoint at time.end too (from which a later time.end extends the run)
+  bool keep_checkpoints = false;    // every checkpoint also kept as DIR/checkpoints/checkpoint_<t>.bin
   double series_interval = 0;       // s between the rows of energy.csv, tools.csv and plies.csv, 0: time.end / 500
   // Per part (empty: none asked for). degC: plies.csv and the summary give
   // each ply's share below it and the times its coldest and its hottest

@@ -358,6 +358,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
            {{"interval", {{"type", "number"}, {"exclusiveMinimum", 0}}},
             {"checkpoint_interval", {{"type", "number"}, {"minimum", 0}}},
             {"checkpoint_at_end", {{"type", "boolean"}}},
+            {"keep_checkpoints", {{"type", "boolean"}}},
             {"series_interval", {{"type", "number"}, {"minimum", 0}}},
             {"compression", {{"type", "integer"}, {"minimum", 0}, {"maximum", 9}}},
             {"tool_surfaces", {{"anyOf", {{{"type", "boolean"}}, {{"enum", {"whole"}}}}}}},

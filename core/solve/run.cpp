@@ -51,6 +51,7 @@ json restart_document(const json& doc) {
   if (d.contains("output") && d["output"].is_object()) {
     d["output"].erase("checkpoint_interval");
     d["output"].erase("checkpoint_at_end");
+    d["output"].erase("keep_checkpoints");
     d["output"].erase("compression");
   }
   return d;
@@ -323,6 +324,7 @@ void Simulation::Run::save_checkpoint(const char* what) {
   sim.save_state(c);
   try {
     write_checkpoint(opt.out_dir / kCheckpointFile, c);
+    if (job.output.keep_checkpoints) keep_checkpoint(opt.out_dir / kCheckpointFile, opt.out_dir, t);
   } catch (const std::runtime_error& e) {  // a full disk: the checkpoint before it, if any, stays
     throw RunError(e.what());
   }
@@ -666,7 +668,8 @@ double Simulation::check_restart(const Checkpoint& c) const {
       throw JobError("", what + "the checkpoint was written by another job (or with other --set values); a restart "
                                 "needs the job of the run it continues (time.end, output.interval, "
                                 "output.series_interval, output.fields, output.checkpoint_interval, "
-                                "output.checkpoint_at_end and output.compression may differ)");
+                                "output.checkpoint_at_end, output.keep_checkpoints and output.compression may "
+                                "differ)");
     // Other fields, but not a node's first times below the threshold where
     // the checkpointed run did not follow them.
     const std::vector<std::string> was = checkpoint_fields(c);

@@ -164,7 +164,10 @@ void Simulation::Run::open_output() {
     std::filesystem::create_directories(opt.out_dir);
     // A new run replaces the folder's results: a checkpoint of an earlier
     // run there no longer fits them.
-    if (!opt.restart) std::filesystem::remove(opt.out_dir / kCheckpointFile);
+    if (!opt.restart) {
+      std::filesystem::remove(opt.out_dir / kCheckpointFile);
+      std::filesystem::remove_all(opt.out_dir / kKeptCheckpointFolder);
+    }
     // The job as run (after --set, file paths absolute): `thermostamp run
     // DIR/job_as_run.json` runs it again, from anywhere.
     if (std::ofstream jf(opt.out_dir / "job_as_run.json"); !(jf << job.document_as_run.dump(2) << '\n'))
@@ -179,6 +182,23 @@ void Simulation::Run::open_output() {
     } catch (const std::runtime_error& e) {
       if (opt.restart) throw JobError("", std::string("--restart: ") + e.what());
       throw;
+    }
+    // A kept checkpoint continued (--restart-at) is the folder's checkpoint
+    // from now on; those after it continued the frames and rows just
+    // removed, and go.
+    if (!opt.restart_kept.empty()) {
+      const auto kept = kept_checkpoints(opt.out_dir);
+      const auto it = std::find_if(kept.begin(), kept.end(), [&](const KeptCheckpoint& k) {
+        return k.file.filename() == opt.restart_kept.filename();
+      });
+      std::error_code ec;
+      if (it != kept.end())
+        for (auto k = std::next(it); k != kept.end(); ++k) std::filesystem::remove(k->file, ec);
+      const auto latest = opt.out_dir / kCheckpointFile;
+      std::filesystem::remove(latest, ec);  // a name of the latest kept one, perhaps: the others stay
+      std::filesystem::create_hard_link(opt.restart_kept, latest, ec);
+      if (ec) std::filesystem::copy_file(opt.restart_kept, latest, ec);
+      if (ec) throw RunError("cannot write " + latest.string() + ": " + ec.message());
     }
     const std::vector<WriterTool> tools =
         job.output.tool_surfaces && !sim.tools_.empty() ? sim.writer_tools() : std::vector<WriterTool>{};

@@ -33,6 +33,11 @@ struct RunOptions {
   // with Simulation::check_restart) in out_dir, which holds that run's
   // output: its frames and time series up to the checkpoint are kept.
   const Checkpoint* restart = nullptr;
+  // The file `restart` was read from, where it is a kept checkpoint
+  // (DIR/checkpoints/..., `thermostamp run --restart-at`): once the run has
+  // opened its output, it becomes DIR/checkpoint.bin and the kept
+  // checkpoints after it are removed (they continued other frames).
+  std::filesystem::path restart_kept;
   // Also write a checkpoint whenever this much wall time (s) has passed
   // since the run's start or its last checkpoint; 0: not by wall time.
   double checkpoint_wall_s = 0;

@@ -909,6 +909,116 @@ TEST(Restart, OtherFieldsFromACheckpoint) {
   }
 }
 
+// `output.keep_checkpoints` and `--restart-at T`: a run keeps each
+// checkpoint it writes; a restart from the last kept one at or before T
+// runs on from there (here with closer frames) and gives what a restart
+// from that checkpoint gives. The kept checkpoints after it are replaced by
+// those of the continued run, from which a later `--restart-at` gives the
+// same output again. A time before every kept checkpoint, or a folder
+// without any, is refused before anything is touched; a new run in the
+// folder removes them.
+TEST(Restart, FromAKeptCheckpoint) {
+  const auto dir = temp_dir("restart_kept");
+  json j = coarse_hemisphere("hemisphere_ud_2ply.json");  // frames every 0.25 s, to 1 s
+  j["output"]["checkpoint_interval"] = 0.25;
+  j["output"]["keep_checkpoints"] = true;
+  const auto job = write_job(dir, j);
+  ASSERT_EQ(run_cli(job, dir / "direct", 2).exit_code, 0);
+  const auto direct = frames_by_time(dir / "direct" / "results.h5");
+  const auto kept = kept_checkpoints(dir / "direct");
+  ASSERT_EQ(kept.size(), 4u) << "0.25, 0.5 and 0.75 s, and the end checkpoint";
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_GE(kept[k].t, 0.25 * (k + 1)) << k;
+    EXPECT_LT(kept[k].t, 0.25 * (k + 1) + 1e-3) << k;
+    EXPECT_EQ(kept[k].file.filename().string(), kept_checkpoint_name(kept[k].t));
+  }
+  EXPECT_LT(kept[3].t, 1.0);
+  EXPECT_TRUE(file_text(kept[3].file) == file_text(dir / "direct" / "checkpoint.bin")) << "the latest";
+  const std::string at_half = file_text(kept[1].file);
+
+  // From the one at 0.5 s (asked for 0.5 s: it fell on the first step after
+  // 0.5 s), with frames every 0.05 s and checkpoints every 0.3 s.
+  const std::string closer_set = " --set output.interval=0.05 --set output.checkpoint_interval=0.3";
+  const auto out = dir / "closer";
+  std::filesystem::copy(dir / "direct", out, std::filesystem::copy_options::recursive);
+  ASSERT_GT(kept[1].t, 0.5);
+  const auto r = run_cli(job, out, 1, "--restart-at 0.5" + closer_set);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_NEAR(s["restarted_from_s"].get<double>(), kept[1].t, 1e-8) << "its name's 9 digits";
+  const auto closer = frames_by_time(out / "results.h5");
+  ASSERT_EQ(closer.size(), 3u + 10u) << "0, 0.25 and 0.5 s kept; 0.55 to 1 s every 0.05 s";
+  for (const auto& [t, fields] : direct) {
+    ASSERT_TRUE(closer.contains(t)) << "the frame at " << t << " s";
+    EXPECT_TRUE(same_bits(fields, closer.at(t))) << "the frame at " << t << " s";
+  }
+  for (const char* f : {"probes.csv", "energy.csv", "tools.csv", "plies.csv"})
+    EXPECT_TRUE(file_text(dir / "direct" / f) == file_text(out / f)) << f;
+  // The same as a restart from that checkpoint as the folder's latest.
+  const auto latest = dir / "latest";
+  std::filesystem::copy(dir / "direct", latest, std::filesystem::copy_options::recursive);
+  std::filesystem::remove_all(latest / "checkpoints");
+  std::ofstream(latest / "checkpoint.bin", std::ios::binary) << at_half;
+  ASSERT_EQ(run_cli(job, latest, 1, "--restart" + closer_set).exit_code, 0);
+  EXPECT_TRUE(same_bits(results_contents(out / "results.h5"), results_contents(latest / "results.h5")));
+  EXPECT_TRUE(file_text(out / "results.xdmf") == file_text(latest / "results.xdmf"));
+  // The kept checkpoints: the two up to the one continued, unchanged, and
+  // the continued run's at 0.6 and 0.9 s and its end; the first run's at
+  // 0.75 s is gone.
+  const auto now = kept_checkpoints(out);
+  ASSERT_EQ(now.size(), 5u);
+  EXPECT_TRUE(file_text(now[0].file) == file_text(kept[0].file));
+  EXPECT_TRUE(file_text(now[1].file) == at_half);
+  EXPECT_NEAR(now[2].t, 0.6, 1e-3);
+  EXPECT_NEAR(now[3].t, 0.9, 1e-3);
+  EXPECT_TRUE(file_text(now[4].file) == file_text(out / "checkpoint.bin"));
+  // From the new one at 0.6 s: the same output again.
+  const auto frames_before = results_contents(out / "results.h5");
+  const std::string energy_before = file_text(out / "energy.csv");
+  const auto again = run_cli(job, out, 2, "--restart-at 0.8" + closer_set);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NEAR(json::parse(std::ifstream(out / "summary.json"))["restarted_from_s"].get<double>(), now[2].t, 1e-8);
+  EXPECT_TRUE(same_bits(results_contents(out / "results.h5"), frames_before));
+  EXPECT_TRUE(file_text(out / "energy.csv") == energy_before);
+  // A continued run that writes no checkpoint (to 0.55 s, none at its end)
+  // leaves the one it continued as the folder's checkpoint: a plain
+  // restart goes on from it to the first run's output.
+  const auto shorter = dir / "shorter";
+  std::filesystem::copy(dir / "direct", shorter, std::filesystem::copy_options::recursive);
+  ASSERT_EQ(
+      run_cli(job, shorter, 1, "--restart-at 0.6 --set time.end=0.55 --set output.checkpoint_at_end=false").exit_code,
+      0);
+  EXPECT_EQ(kept_checkpoints(shorter).size(), 2u);
+  EXPECT_TRUE(file_text(shorter / "checkpoint.bin") == at_half);
+  ASSERT_EQ(run_cli(job, shorter, 2, "--restart").exit_code, 0);
+  expect_same_output(dir / "direct", shorter, "from the kept checkpoint, then the folder's");
+
+  // Refused, the folder as it was: a time before every kept checkpoint, a
+  // folder without kept checkpoints.
+  const std::string before = file_text(out / "energy.csv");
+  const auto early = run_cli(job, out, 1, "--restart-at 0.1");
+  EXPECT_EQ(early.exit_code, 2);
+  EXPECT_NE(early.err.find("error: --restart-at 0.1: no kept checkpoint at or before it in " +
+                           (out / "checkpoints").string() + " (kept at t = "),
+            std::string::npos)
+      << early.err;
+  std::filesystem::remove_all(latest / "checkpoints");  // those its restart kept
+  const auto none = run_cli(job, latest, 1, "--restart-at 0.6");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("error: --restart-at 0.6: no kept checkpoints in " + (latest / "checkpoints").string() +
+                          " (a run keeps every checkpoint it writes with output.keep_checkpoints: true)"),
+            std::string::npos)
+      << none.err;
+  EXPECT_TRUE(file_text(out / "energy.csv") == before);
+  EXPECT_EQ(kept_checkpoints(out).size(), 5u);
+  const auto usage = run_cli(job, out, 1, "--restart-at soon");
+  EXPECT_EQ(usage.exit_code, 2);
+  EXPECT_NE(usage.err.find("--restart-at expects a time of at least 0, found 'soon'"), std::string::npos) << usage.err;
+  // A new run in the folder removes them.
+  ASSERT_EQ(run_cli(job, out, 2, "--set output.keep_checkpoints=false").exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(out / "checkpoints"));
+}
+
 // `thermostamp study --restart`: a study stopped by SIGTERM in the middle of
 // a variant's run goes on from where it stopped: the reference, completed
 // before, is not run again, the stopped run continues from its checkpoint,
