@@ -94,11 +94,12 @@ void keep_from(double from, std::vector<double>& times, Beside&... beside) {
 
 // Records |a - b| of one value in d (a NaN difference, once seen, stays;
 // two NaN are the same value: a time that neither run reached).
-void take(Difference& d, double a, double b, double time) {
+void take(Difference& d, double a, double b, double time, double time_b) {
   const double diff = std::isnan(a) && std::isnan(b) ? 0.0 : std::abs(a - b);
   if (d.values == 0 || diff > d.max_abs || (std::isnan(diff) && !std::isnan(d.max_abs))) {
     d.max_abs = diff;
     d.at_time = time;
+    d.at_time_b = time_b;
   }
   d.scale = std::max(d.scale, std::abs(a));
   ++d.values;
@@ -245,7 +246,8 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
       // B's profile at A's points where the two differ (other layer counts)
       const bool same_points = za == zb && va.size() == vb.size();
       for (std::size_t i = 0; i < va.size(); ++i)
-        take(d, va[i], same_points ? vb[i] : profile_at(zb, vb, za.empty() ? 0.0 : za[i]), sa.times[k]);
+        take(d, va[i], same_points ? vb[i] : profile_at(zb, vb, za.empty() ? 0.0 : za[i]), sa.times[k],
+             sb.times[m[k]]);
       if (!same_points) d.note = "B's profile interpolated at A's points";
     }
     if (alone > 0 || sa.times.size() != sb.times.size()) {
@@ -319,7 +321,7 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
               unmatched();
               continue;
             }
-            for (std::size_t i = 0; i < va.size(); ++i) take(d, va[i], vb[i], ra.times[k]);
+            for (std::size_t i = 0; i < va.size(); ++i) take(d, va[i], vb[i], ra.times[k], rb.times[m[k]]);
           }
           for (const auto& field : fields_b) {  // and those B has, A not
             if (std::binary_search(fields_a.begin(), fields_a.end(), field)) continue;
@@ -368,7 +370,7 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
         d.what = std::string(file) + " " + (key.empty() ? "" : key + " ") + ta.columns[col];
         d.units = series_column_units((keyed ? "key_" : "") + ta.columns[col]);
         for (std::size_t k = 0; k < m.size(); ++k)
-          if (m[k] >= 0) take(d, rows_a[k][col], rows_b[m[k]][colb], times_a[k]);
+          if (m[k] >= 0) take(d, rows_a[k][col], rows_b[m[k]][colb], times_a[k], times_b[m[k]]);
         if (d.max_abs != 0 || std::isnan(d.max_abs)) c.identical = false;
         c.series.push_back(d);
       }
@@ -447,6 +449,7 @@ json Comparison::to_json() const {
         e["units"] = d.units;
         e["scale"] = d.scale;
         e["at_time_s"] = d.at_time;
+        e["at_time_b_s"] = d.at_time_b;
         e["values"] = d.values;
       }
       if (!d.note.empty()) e["note"] = d.note;
@@ -484,8 +487,9 @@ std::string Comparison::to_text(const std::filesystem::path& a, const std::files
       if (d.max_abs == 0)
         o << "equal (" << d.values << " values, largest |A| " << fmt(d.scale) << units << ")";
       else
-        o << "largest |A - B| " << fmt(d.max_abs) << units << " at t = " << fmt(d.at_time) << " s (largest |A| "
-          << fmt(d.scale) << units << ", " << d.values << " values)";
+        o << "largest |A - B| " << fmt(d.max_abs) << units << " at t = " << fmt(d.at_time) << " s"
+          << (fmt(d.at_time_b) != fmt(d.at_time) ? " against B's at " + fmt(d.at_time_b) + " s" : "")
+          << " (largest |A| " << fmt(d.scale) << units << ", " << d.values << " values)";
       if (!d.note.empty()) o << "; " << d.note;
       o << "\n";
     }

@@ -19,6 +19,7 @@ struct Difference {
   double max_abs = 0;  // the largest |A - B|
   double scale = 0;    // the largest |A| over the values compared (to judge max_abs against)
   double at_time = 0;  // s, A's time of the sample or frame with the largest difference
+  double at_time_b = 0;  // s, the time of B's sample or frame matched with it
   long long values = 0;  // values compared
   double a = 0, b = 0;   // summary figures: the two values
   std::string note;      // why it was not compared, if it was not

@@ -2916,6 +2916,31 @@ TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
   ASSERT_NE(df, nullptr);
   EXPECT_GT(field_max, 0.1);
   EXPECT_EQ(df->max_abs, field_max);
+  // Where it is: A's time, and that of B's sample matched with it (the two
+  // runs' steps differ, so their sample times a little); the text gives
+  // both where they differ in its 6 digits.
+  {
+    const Difference* dp = find(c.probes, "pole_top temperature_profile");
+    ASSERT_NE(dp, nullptr);
+    EXPECT_NE(dp->at_time_b, dp->at_time);
+    EXPECT_NEAR(dp->at_time_b, dp->at_time, 1e-4);
+    const auto text = thermostamp("compare " + q(dir / "adi") + " " + q(dir / "shell2d")).out;
+    auto line_of = [&](const std::string& what) {
+      const auto at = text.find("  " + what + ": largest |A - B| ");
+      return at == std::string::npos ? std::string() : text.substr(at, text.find('\n', at) - at);
+    };
+    char a[32], b[32];
+    std::snprintf(a, sizeof a, "%.6g", dp->at_time);
+    std::snprintf(b, sizeof b, "%.6g", dp->at_time_b);
+    EXPECT_NE(std::string(a), std::string(b)) << "here 0.250009 and 0.250008 s";
+    const std::string line = line_of("pole_top temperature_profile");
+    EXPECT_NE(line.find(" at t = " + std::string(a) + " s against B's at " + b + " s ("), std::string::npos) << line;
+    // A frame at the same time in both (the last, at time.end): A's time only.
+    EXPECT_EQ(df->at_time_b, df->at_time);
+    EXPECT_EQ(line_of("ply_top/temperature_mean").find("against"), std::string::npos);
+    EXPECT_EQ(thermostamp("compare " + q(dir / "adi") + " " + q(dir / "adi")).out.find("against B's"),
+              std::string::npos);
+  }
   const Difference* dl = find(c.fields, "ply_top/temperature");
   ASSERT_NE(dl, nullptr);
   EXPECT_NE(dl->note.find("not compared"), std::string::npos);
