@@ -50,7 +50,8 @@ rows after the checkpoint closer or further apart, other fields are those of
 the frames after it; the frames and time series up to the checkpoint are
 kept; with study: continue the study in its output folder
 (study_state.json), its completed runs not run again, a stopped one from its
-checkpoint
+checkpoint; the study file may have other variants (new and changed ones
+run, dropped ones are left out of study.csv)
 --restart-at T: the same from the last checkpoint at or before T s (give or
 take T / 1000) that the run kept (output.keep_checkpoints:
 DIR/checkpoints/); the frames, rows and kept checkpoints after it are

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include <boost/dll/runtime_symbol_info.hpp>
@@ -254,6 +255,16 @@ RunResult from_record(const json& rec, const std::string& quantity) {
     }
   return r;
 }
+// A variant's settings in a study document: its "set" ({} without one), or
+// null where the document has no variant of that label.
+json variant_set(const json& study_doc, const std::string& label) {
+  const auto it = study_doc.find("variants");
+  if (it == study_doc.end() || !it->is_array()) return nullptr;
+  for (const auto& v : *it)
+    if (v.is_object() && v.contains("label") && v["label"] == label) return v.contains("set") ? v["set"] : json::object();
+  return nullptr;
+}
+
 // Written to a temporary name, then renamed: a study stopped while writing
 // it keeps the state before.
 void write_state(const std::filesystem::path& out, const json& state) {
@@ -356,6 +367,7 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   // The state of a study stopped before its end: a restart goes on from it
   // (the same study file and job document, checked), a new study replaces it.
   json state = {{"format", kStudyStateFormat}, {"study", doc}, {"job", base_doc}, {"runs", json::object()}};
+  std::set<std::string> changed;  // a restart: variants new or changed since the state was written
   if (restart) {
     const auto path = out / kStudyStateFile;
     if (!std::filesystem::exists(path))
@@ -369,13 +381,48 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     if (!saved.is_object() || saved.value("format", "") != kStudyStateFormat || !saved.contains("runs") ||
         !saved["runs"].is_object())
       throw JobError("", "--restart: " + path.string() + " is not a study state of this version");
-    if (saved["study"] != doc || saved["job"] != base_doc)
-      throw JobError("", "--restart: the study file or its job changed since " + path.string() +
-                             " was written; run the study anew (without --restart)");
-    state["runs"] = saved["runs"];
+    // The same job and the same study but for its variants: the runs of
+    // the variants it had with the same settings are kept; new variants and
+    // those whose settings changed run from the start (a study extended by
+    // a variant runs only that one).
+    auto without_variants = [](json d) {
+      if (d.is_object()) {
+        d.erase("variants");
+        d.erase("description");
+      }
+      return d;
+    };
+    if (saved["job"] != base_doc || !saved.contains("study") ||
+        without_variants(saved["study"]) != without_variants(doc))
+      throw JobError("", "--restart: the " + std::string(saved["job"] != base_doc ? "job" : "study file") +
+                             " changed since " + path.string() +
+                             " was written (a restart may add, remove or change variants, nothing else); run the "
+                             "study anew (without --restart)");
+    std::set<std::string> labels;
+    for (const Variant& v : variants) {
+      labels.insert(v.label);
+      const json was = variant_set(saved["study"], v.label);
+      if (was.is_null() || was != v.set) {
+        changed.insert(v.label);
+        if (!quiet)
+          std::cerr << "study: variant '" << v.label << "' "
+                    << (was.is_null() ? "is new" : "has other settings than when the study state was written")
+                    << ": it runs from the start\n";
+      }
+    }
+    for (auto it = saved["runs"].begin(); it != saved["runs"].end(); ++it) {
+      if (it.key() == "reference" || (labels.count(it.key()) && !changed.count(it.key()))) {
+        state["runs"][it.key()] = it.value();
+      } else if (!labels.count(it.key()) && !quiet) {
+        std::cerr << "study: variant '" << it.key() << "' is no longer in the study: left out of study.csv (its "
+                  << "folder stays)\n";
+      }
+    }
   }
   make_output_folder(out);
-  if (!restart) write_state(out, state);  // from the start: a stop in the first run can continue too
+  // From the start (a stop in the first run can continue too), and on a
+  // restart with the study's variants as they are now.
+  write_state(out, state);
 
   if (!analytic.empty())
     for (std::size_t i = 1; i < jobs.size(); ++i) check_slab_robin(jobs[i], "/variants/" + std::to_string(i - 1));
@@ -421,7 +468,8 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
     if (completed == 0) {
       // A restart continues the run from its checkpoint where it has one.
       std::optional<Checkpoint> checkpoint;
-      if (restart && std::filesystem::exists(opt.out_dir / kCheckpointFile)) {
+      // (Not that of a variant whose settings changed: it runs anew.)
+      if (restart && !changed.count(label) && std::filesystem::exists(opt.out_dir / kCheckpointFile)) {
         try {
           checkpoint = read_checkpoint(opt.out_dir / kCheckpointFile);
           // One at the run's end (output.checkpoint_at_end): the run completed

@@ -1201,17 +1201,109 @@ TEST(Restart, StudyContinuesWhereItStopped) {
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_EQ(again.err.find("study: running"), std::string::npos) << again.err;
   EXPECT_EQ(table(out / "study.csv", true), before);
-  // Refused: no state in the folder; a study changed since.
+  // Refused: no state in the folder; a study changed since other than in
+  // its variants (those, Restart.StudyTakesNewAndChangedVariants).
   const auto none = thermostamp(study + q(dir / "elsewhere") + " --restart");
   EXPECT_EQ(none.exit_code, 2);
   EXPECT_NE(none.err.find("error: --restart: no study to continue in"), std::string::npos) << none.err;
-  st["variants"][1]["set"]["parts.*.thickness_layers"] = 6;
+  st["repeat"] = 3;
   std::ofstream(dir / "study.json") << st.dump(2);
   const auto changed = thermostamp(study + q(out) + " --restart");
   EXPECT_EQ(changed.exit_code, 2);
-  EXPECT_NE(changed.err.find("error: --restart: the study file or its job changed since"), std::string::npos)
-      << changed.err;
+  EXPECT_NE(changed.err.find("error: --restart: the study file changed since"), std::string::npos) << changed.err;
   EXPECT_EQ(table(out / "study.csv", true), before);
+}
+
+// `thermostamp study --restart` after the study file's variants changed:
+// the runs of the variants it kept with the same settings are not run
+// again (their rows, wall time included, are those of the first study),
+// new variants and those with other settings run, and those it dropped
+// are left out of study.csv; the table is that of the new study run from
+// the start, wall times aside. Another reference or job is refused.
+TEST(Restart, StudyTakesNewAndChangedVariants) {
+  const auto dir = temp_dir("restart_study_variants");
+  json j = read_job_document(source_dir() / "share" / "jobs" / "two_ply_thermal_demo.json");
+  j["time"]["end"] = 1.0;
+  write_job(dir, j);
+  auto variant = [](const std::string& label, int layers) {
+    return json{{"label", label}, {"set", {{"parts.*.thickness_layers", layers}}}};
+  };
+  json first = {{"format", "thermostamp-study/1"},
+                {"job", "job.json"},
+                {"reference", {{"set", {{"parts.*.thickness_layers", 16}}}}},
+                {"variants", {variant("adi-4", 4), variant("coarse", 2), variant("old", 6)}}};
+  json second = first;
+  second["variants"] = {variant("adi-4", 4), variant("coarse", 3), variant("adi-8", 8)};
+  std::ofstream(dir / "first.json") << first.dump(2);
+  std::ofstream(dir / "second.json") << second.dump(2);
+  auto study = [&](const std::string& file, const std::filesystem::path& out, const std::string& extra = "") {
+    return thermostamp("study " + q(dir / file) + " --threads 2 --out " + q(out) + " " + extra);
+  };
+  auto rows = [](const std::filesystem::path& csv, bool with_times) {
+    std::map<std::string, std::string> by_label;
+    std::ifstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      if (!with_times) {  // the second column, wall_time_s, left out
+        const auto a = line.find(','), b = line.find(',', a + 1);
+        line.erase(a, b - a);
+      }
+      by_label[line.substr(0, line.find(','))] = line;
+    }
+    return by_label;
+  };
+  const auto out = dir / "study";
+  ASSERT_EQ(study("first.json", out).exit_code, 0);
+  const auto before = rows(out / "study.csv", true);
+  ASSERT_EQ(before.size(), 4u);
+  const auto r = study("second.json", out, "--restart");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string& said :
+       {"study: reference completed before the restart", "study: adi-4 completed before the restart",
+        "study: variant 'coarse' has other settings than when the study state was written: it runs from the start",
+        "study: variant 'adi-8' is new: it runs from the start", "study: running coarse", "study: running adi-8",
+        "study: variant 'old' is no longer in the study: left out of study.csv (its folder stays)"})
+    EXPECT_NE(r.err.find(said), std::string::npos) << said << "\n" << r.err;
+  EXPECT_EQ(r.err.find("study: running adi-4"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("study: running reference"), std::string::npos) << r.err;
+  const auto after = rows(out / "study.csv", true);
+  ASSERT_EQ(after.size(), 4u);
+  EXPECT_EQ(after.at("adi-4"), before.at("adi-4")) << "its run kept, wall time included";
+  EXPECT_EQ(after.at("reference"), before.at("reference"));
+  EXPECT_FALSE(after.contains("old"));
+  EXPECT_TRUE(std::filesystem::exists(out / "old" / "summary.json"));
+  // The table of the second study run from the start, wall times aside.
+  ASSERT_EQ(study("second.json", dir / "fresh").exit_code, 0);
+  EXPECT_EQ(rows(out / "study.csv", false), rows(dir / "fresh" / "study.csv", false));
+  {
+    std::ifstream a(out / "study.csv"), b(dir / "fresh" / "study.csv");
+    std::string ha, hb;
+    std::getline(a, ha);
+    std::getline(b, hb);
+    EXPECT_EQ(ha, hb) << "the same columns";
+  }
+  // Again with nothing changed: nothing runs, the same table.
+  const auto again = study("second.json", out, "--restart");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.err.find("study: running"), std::string::npos) << again.err;
+  EXPECT_EQ(rows(out / "study.csv", true), after);
+  // Another reference, or another job: refused, the folder as it was.
+  json other = second;
+  other["reference"]["set"]["parts.*.thickness_layers"] = 12;
+  std::ofstream(dir / "other.json") << other.dump(2);
+  const auto ref = study("other.json", out, "--restart");
+  EXPECT_EQ(ref.exit_code, 2);
+  EXPECT_NE(ref.err.find("--restart: the study file changed since " + (out / "study_state.json").string() +
+                         " was written (a restart may add, remove or change variants, nothing else)"),
+            std::string::npos)
+      << ref.err;
+  j["time"]["end"] = 1.5;
+  write_job(dir, j);
+  const auto job = study("second.json", out, "--restart");
+  EXPECT_EQ(job.exit_code, 2);
+  EXPECT_NE(job.err.find("--restart: the job changed since"), std::string::npos) << job.err;
+  EXPECT_EQ(rows(out / "study.csv", true), after);
 }
 
 }  // namespace ts::test
