@@ -364,8 +364,9 @@ int run_study(const std::filesystem::path& study_file, const std::filesystem::pa
   const std::string study_name = doc.contains("name") && doc["name"].is_string() ? doc["name"].get<std::string>()
                                                                                   : study_file.stem().string();
   const std::filesystem::path out = out_arg.empty() ? std::filesystem::path("results") / study_name : out_arg;
-  // The state of a study stopped before its end: a restart goes on from it
-  // (the same study file and job document, checked), a new study replaces it.
+  // The state of a study stopped before its end (or finished): a restart
+  // goes on from it (the same job document, and the same study file but
+  // for its variants, checked), a new study replaces it.
   json state = {{"format", kStudyStateFormat}, {"study", doc}, {"job", base_doc}, {"runs", json::object()}};
   std::set<std::string> changed;  // a restart: variants new or changed since the state was written
   if (restart) {
