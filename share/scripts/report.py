@@ -369,6 +369,7 @@ def plot_tools(folder, out):
             a1.plot(moved @ d * 1e3, -(f @ d), label=name)  # force resisting the motion
         a2.plot(t, [float(r["heat_J"]) for r in rs], label=name)
     mark_stop([a2], stop_of(folder))
+    mark_restart([a2], restart_of(folder))
     a1.set_xlabel("tool travel (mm)")
     a1.set_ylabel("force resisting the tool's motion (N)")
     a1.set_title("tool force against travel")
@@ -394,6 +395,25 @@ def stop_of(folder):
     except (OSError, ValueError, AttributeError):
         pass
     return None
+
+
+def restart_of(folder):
+    """The time a restarted run continued from its checkpoint (summary.json's
+    restarted_from_s), or None."""
+    try:
+        t = json.load(open(os.path.join(folder, "summary.json"))).get("restarted_from_s")
+        return float(t) if isinstance(t, (int, float)) else None
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def mark_restart(axes, t):
+    """A grey dotted line at the checkpoint a restarted run continued from:
+    the rows before it are those of the run that wrote it."""
+    if t is None:
+        return
+    for a in axes:
+        a.axvline(t, color="grey", ls=":", lw=1, label="restarted from t = %.4g s" % t)
 
 
 def mark_stop(axes, stop):
@@ -458,9 +478,10 @@ def plot_plies(folder, out):
     if not panels:
         return []
     fig, axes = grid(len(panels), 5.0, 4.0, 2 if len(panels) == 4 else 3)
-    stop = stop_of(folder)
+    stop, restart = stop_of(folder), restart_of(folder)
     for a, panel in zip(axes, panels):
         mark_stop([a], stop)
+        mark_restart([a], restart)
         for k, (name, v) in enumerate(plies.items()):
             c = "C%d" % k
             if panel == "temperature":
@@ -539,6 +560,7 @@ def plot_energy(folder, out):
     a2.semilogy(t, [max(float(r["balance_error"]), 1e-16) for r in rows], label="balance error")
     a2.axhline(0.05, color="grey", ls="--", lw=1)
     mark_stop([a1, a2], stop_of(folder))
+    mark_restart([a1, a2], restart_of(folder))
     a2.set_xlabel("time (s)")
     a2.legend(fontsize=8)
     a2.grid(alpha=0.3, which="both")
@@ -822,6 +844,10 @@ def main():
     if made and stop is not None:
         print("the run %s at t = %.6g s: the figures over time mark it (red dashed line)"
               % ("failed" if stop[0] == "failed" else "was interrupted", stop[1]))
+    restart = restart_of(folder)
+    if made and restart is not None:
+        print("the run continued from its checkpoint at t = %.6g s: the figures over time mark it (grey dotted line)"
+              % restart)
     if not made and not failed:
         sys.stderr.write("error: report: nothing to plot in %s (no study.csv, probes.csv, results.h5, tools.csv, "
                          "plies.csv or energy.csv)\n" % folder)

@@ -3066,6 +3066,22 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   text << "the run failed at t = " << at << " s: the figures over time mark it (red dashed line)\n";
   EXPECT_NE(fr.out.find(text.str()), std::string::npos) << fr.out;
   EXPECT_TRUE(std::filesystem::exists(failed / "figures" / "energy.png"));
+  // A restarted run (here extended from 0.005 s to the job's end): the
+  // figures over time mark its checkpoint, and the report says so (from
+  // 0.30.0); none for a run that was not restarted.
+  EXPECT_EQ(r.out.find("the run continued"), std::string::npos) << r.out;
+  const auto extended = dir / "extended";
+  const std::string run = "run " + q(dir / "job.json") + " --out " + q(extended) + " --quiet";
+  ASSERT_EQ(thermostamp(run + " --set time.end=0.005").exit_code, 0);
+  ASSERT_EQ(thermostamp(run + " --restart").exit_code, 0);
+  const double from = json::parse(std::ifstream(extended / "summary.json"))["restarted_from_s"].get<double>();
+  EXPECT_GT(from, 0.0);
+  const auto er = thermostamp("report " + q(extended));
+  ASSERT_EQ(er.exit_code, 0) << er.err;
+  std::ostringstream restart_text;
+  restart_text << "the run continued from its checkpoint at t = " << from
+               << " s: the figures over time mark it (grey dotted line)\n";
+  EXPECT_NE(er.out.find(restart_text.str()), std::string::npos) << er.out;
   const auto empty = temp_dir("report_empty");
   const auto none = thermostamp("report " + q(empty));
   EXPECT_EQ(none.exit_code, 3);
