@@ -64,21 +64,25 @@ std::vector<KeptCheckpoint> kept_checkpoints(const std::filesystem::path& dir) {
   return out;
 }
 
+void link_or_copy(const std::filesystem::path& from, const std::filesystem::path& to) {
+  std::error_code ec;
+  std::filesystem::remove(to, ec);  // perhaps a name of another file: that file stays
+  std::filesystem::create_hard_link(from, to, ec);
+  if (!ec) return;
+  std::filesystem::copy_file(from, to, std::filesystem::copy_options::overwrite_existing, ec);
+  if (ec) {
+    const std::string why = write_failure_reason(to.parent_path(), ec.value(), ec.message());
+    std::filesystem::remove(to, ec);
+    throw std::runtime_error("cannot write " + to.string() + ": " + why);
+  }
+}
+
 void keep_checkpoint(const std::filesystem::path& written, const std::filesystem::path& dir, double t) {
   const auto folder = dir / kKeptCheckpointFolder;
-  const auto kept = folder / kept_checkpoint_name(t);
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   if (ec) throw std::runtime_error("cannot create " + folder.string() + ": " + ec.message());
-  std::filesystem::remove(kept, ec);
-  std::filesystem::create_hard_link(written, kept, ec);
-  if (!ec) return;
-  std::filesystem::copy_file(written, kept, std::filesystem::copy_options::overwrite_existing, ec);
-  if (ec) {
-    const std::string why = write_failure_reason(folder, ec.value(), ec.message().c_str());
-    std::filesystem::remove(kept, ec);
-    throw std::runtime_error("cannot write " + kept.string() + ": " + why);
-  }
+  link_or_copy(written, folder / kept_checkpoint_name(t));
 }
 
 void write_checkpoint(const std::filesystem::path& file, const Checkpoint& c) {

@@ -39,6 +39,10 @@ struct KeptCheckpoint {
 // The kept checkpoints of output folder `dir`, by time (none without the
 // folder; files of other names are left out).
 std::vector<KeptCheckpoint> kept_checkpoints(const std::filesystem::path& dir);
+// `to` as a second name of the file `from` where the file system allows it,
+// else as a copy (an existing `to` is replaced). Throws std::runtime_error
+// with the reason.
+void link_or_copy(const std::filesystem::path& from, const std::filesystem::path& to);
 // Keeps the checkpoint just written to `written` as the kept checkpoint of
 // time t in `dir` (a second name of the same file where the file system
 // allows it, else a copy). Throws std::runtime_error with the reason.

@@ -194,11 +194,11 @@ void Simulation::Run::open_output() {
       std::error_code ec;
       if (it != kept.end())
         for (auto k = std::next(it); k != kept.end(); ++k) std::filesystem::remove(k->file, ec);
-      const auto latest = opt.out_dir / kCheckpointFile;
-      std::filesystem::remove(latest, ec);  // a name of the latest kept one, perhaps: the others stay
-      std::filesystem::create_hard_link(opt.restart_kept, latest, ec);
-      if (ec) std::filesystem::copy_file(opt.restart_kept, latest, ec);
-      if (ec) throw RunError("cannot write " + latest.string() + ": " + ec.message());
+      try {
+        link_or_copy(opt.restart_kept, opt.out_dir / kCheckpointFile);
+      } catch (const std::runtime_error& e) {
+        throw RunError(e.what());
+      }
     }
     const std::vector<WriterTool> tools =
         job.output.tool_surfaces && !sim.tools_.empty() ? sim.writer_tools() : std::vector<WriterTool>{};
