@@ -235,9 +235,8 @@ int cmd_run(const Args& a, bool validate_only) {
     if (const double dt = sim.thermal_step(); dt > 0) {
       // With the mechanics a thermal step is a number of mechanical steps.
       if (dm > 0 && dt < dm)
-        std::snprintf(line, sizeof line,
-                      "thermal step %.4g s: one every mechanical step (the frames' interval %.4g s is below it)\n", dm,
-                      job.output.interval);
+        std::snprintf(line, sizeof line, "thermal step %.4g s: one every mechanical step (its own %.4g s is shorter)\n",
+                      dm, dt);
       else
         std::snprintf(line, sizeof line, "thermal step %.4g s: about %.0f steps\n", dt, rounded(job.t_end / dt));
       std::cout << line;

@@ -364,9 +364,6 @@ void Simulation::Run::restore() {
   }
   if (was.interval != interval) {
     frame_index = static_cast<long long>(std::floor((t + eps_t) / interval)) + 1;
-    // With the mechanics the thermal step is a number of mechanical steps
-    // (the checkpoint's), from the step aimed at by the checkpointed run.
-    if (job.mechanics && job.thermal) sim.land_thermal_step(std::min(was.interval, was.t_end));
     restore_log.push_back(fmt::format(
         "frames every {:.6g} s from the checkpoint on, instead of the checkpointed run's {:.6g} s", interval,
         was.interval));

@@ -447,10 +447,6 @@ class Simulation {
   std::vector<int> probe_node_;
   std::vector<std::vector<int>> probe_elements_;  // elements around each probe's node
   double thermal_stable_dt_ = 0, thermal_accurate_dt_ = 0, thermal_dt_ = 0;
-  double thermal_unlanded_dt_ = 0;  // the step before it is cut to land on the frames
-  // The thermal step: the unlanded one cut to an integer number of steps
-  // per frame interval (interval: the frame interval, at most time.end).
-  void land_thermal_step(double interval);
 };
 
 }  // namespace ts

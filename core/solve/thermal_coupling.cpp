@@ -151,14 +151,16 @@ void Simulation::build_thermal() {
                                    " steps to reach " + fmt_g(job_.t_end) +
                                    " s; the explicit scheme is limited by thin layers or high conductances here: "
                                    "use \"through_thickness\": \"implicit\"");
-  thermal_unlanded_dt_ = dt;
-  land_thermal_step(std::min(job_.output.interval, job_.t_end));
-}
-
-// Land on the frame times: an integer number of steps per output interval.
-void Simulation::land_thermal_step(double interval) {
-  const double per = std::ceil(interval / thermal_unlanded_dt_ * (1 - 1e-12));
-  thermal_dt_ = interval / std::max(1.0, per);
+  // Alone, the thermal solver lands its steps on the frames: a whole number
+  // of steps per frame interval (or per time.end, if shorter). With the
+  // mechanics a thermal step is a number of mechanical steps and the frames
+  // fall at mechanical steps, so the step aimed at is the one chosen here,
+  // whatever the frames: another frame interval changes no result.
+  thermal_dt_ = dt;
+  if (!job_.mechanics) {
+    const double interval = std::min(job_.output.interval, job_.t_end);
+    thermal_dt_ = interval / std::max(1.0, std::ceil(interval / dt * (1 - 1e-12)));
+  }
 }
 
 void Simulation::update_far_temperatures(double t0, double t1) {

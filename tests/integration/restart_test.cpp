@@ -657,6 +657,34 @@ std::map<double, std::map<std::string, std::vector<double>>> frames_by_time(cons
   return out;
 }
 
+// With the mechanics the frames fall at mechanical steps and a thermal
+// step is a number of mechanical steps, whatever the frames: the coarse
+// hemisphere (adi, four contact pairs) with frames every 0.25 s and every
+// 0.05 s gives the same frames where both write one (at the first step at
+// or after each multiple of 0.25 s), and the same time series and summary.
+// (Before 0.31.0 the thermal step was cut to a whole number per frame
+// interval: 0.0114 s and 0.01 s here.)
+TEST(Frames, AnotherIntervalChangesNoCoupledResult) {
+  const auto dir = temp_dir("frames_interval");
+  const auto job = write_job(dir, coarse_hemisphere("hemisphere_ud_2ply.json"));  // frames every 0.25 s, to 1 s
+  ASSERT_EQ(run_cli(job, dir / "coarse", 2).exit_code, 0);
+  const auto r = run_cli(job, dir / "close", 2, "--set output.interval=0.05");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto coarse = frames_by_time(dir / "coarse" / "results.h5"), close = frames_by_time(dir / "close" / "results.h5");
+  ASSERT_EQ(coarse.size(), 5u);
+  ASSERT_EQ(close.size(), 21u);
+  for (const auto& [t, fields] : coarse) {
+    ASSERT_TRUE(close.contains(t)) << "the frame at " << t << " s";
+    EXPECT_TRUE(same_bits(fields, close.at(t))) << "the frame at " << t << " s";
+  }
+  for (const char* f : {"probes.csv", "energy.csv", "tools.csv", "plies.csv"})
+    EXPECT_TRUE(file_text(dir / "coarse" / f) == file_text(dir / "close" / f)) << f;
+  json a = comparable_summary(dir / "coarse"), b = comparable_summary(dir / "close");
+  a.erase("frames");
+  b.erase("frames");
+  EXPECT_EQ(a, b);
+}
+
 // `--restart --set output.interval=...`: a run continued from a checkpoint
 // with closer frames. With the mechanics the frames change no step: every
 // frame of the run without the restart is there with the same bits, the
@@ -1259,7 +1287,7 @@ TEST(Restart, StudyTakesNewAndChangedVariants) {
   ASSERT_EQ(before.size(), 4u);
   const auto r = study("second.json", out, "--restart");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const std::string& said :
+  for (const char* said :
        {"study: reference completed before the restart", "study: adi-4 completed before the restart",
         "study: variant 'coarse' has other settings than when the study state was written: it runs from the start",
         "study: variant 'adi-8' is new: it runs from the start", "study: running coarse", "study: running adi-8",
