@@ -11,7 +11,7 @@ The answers that matter (temperatures, shear) should not depend on the
 mass added; the table shows by how much they do.
 Takes about 2 minutes on two cores with the default targets and damping
 (about 4 with --damping 20,5).
-Usage: scripts/bench/mass_scaling.py [--targets 5e-5,2.5e-5,1.5e-5] [--damping 20] [--threads 2] [--out DIR]
+Usage: scripts/bench/mass_scaling.py [--targets 5e-5,2.5e-5,1.3e-5] [--damping 20] [--threads 2] [--out DIR]
 (THERMOSTAMP_EXE selects another build of the executable.)
 """
 import argparse
@@ -47,7 +47,7 @@ def ratios(folder, times):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--targets", default="5e-5,2.5e-5,1.5e-5")
+    ap.add_argument("--targets", default="5e-5,2.5e-5,1.3e-5")
     ap.add_argument("--damping", default="20")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--out", default=None)
