@@ -1106,7 +1106,7 @@ void parse_job_into(Job& job) {
       throw JobError(r.at("series_interval"), "an interval of " + fmt_number(iv) + " s would write " +
                                                   fmt_number(job.t_end / iv) + " rows over " + fmt_number(job.t_end) +
                                                   " s (at most " + fmt_number(kMaxSeriesRows) + ")");
-    job.output.fields = r.texts("fields", std::vector<std::string>{"temperature"});
+    job.output.fields = r.texts("fields", OutputDef::default_fields());
     for (std::size_t i = 0; i < job.output.fields.size(); ++i) {
       const auto& f = job.output.fields[i];
       if (std::find(known_fields().begin(), known_fields().end(), f) == known_fields().end()) {
@@ -1171,7 +1171,7 @@ void parse_job_into(Job& job) {
     r.finish();
   } else {
     job.output.interval = job.t_end;
-    job.output.fields = {"temperature"};
+    job.output.fields = OutputDef::default_fields();
   }
   top.finish();
   // The document as run, its file paths made absolute: written to the

@@ -243,6 +243,8 @@ struct OutputDef {
   bool tool_surfaces_whole = false;  // ... whole, not cut at the plies' symmetry planes
   std::vector<std::string> fields;
   std::vector<ProbeDef> probes;
+  // The fields of a job that names none.
+  static std::vector<std::string> default_fields() { return {"temperature"}; }
 };
 
 struct Job {

@@ -122,7 +122,7 @@ std::vector<std::string> checkpoint_fields(const Checkpoint& c) {
       if (f.is_string()) fields.push_back(f.get<std::string>());
     return fields;
   }
-  return {"temperature"};
+  return OutputDef::default_fields();
 }
 
 RunResult Simulation::run(const RunOptions& opt) {
