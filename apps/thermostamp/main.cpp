@@ -233,7 +233,7 @@ int cmd_run(const Args& a, bool validate_only) {
       if (const auto mix = ts::describe_mixture(m); !mix.empty())
         std::cout << "material '" << m.name << "': " << mix << "\n";
     if (const double dt = sim.thermal_step(); dt > 0) {
-      // With the mechanics a thermal step is a number of mechanical steps.
+      // With the mechanics a thermal step ends at a mechanical step.
       if (dm > 0 && dt < dm)
         std::snprintf(line, sizeof line, "thermal step %.4g s: one every mechanical step (its own %.4g s is shorter)\n",
                       dm, dt);

@@ -305,6 +305,24 @@ bool Simulation::Run::checkpoint_due(int stop_seen) const {
          (opt.checkpoint_wall_s > 0 && seconds_since(last_checkpoint_wall) >= opt.checkpoint_wall_s);
 }
 
+// A thermal step ends at the first mechanical step at or after each
+// multiple of the thermal step: runs whose mechanical steps differ (another
+// mass scaling, bending subcycles, another mesh) sample the temperatures in
+// phase, and a step whose length drifts during the run (contact, mass
+// scaling) leaves the thermal step as chosen. A thermal step may so be up to
+// one mechanical step longer than the one aimed at; where that would pass
+// the stable step of an explicit scheme, it ends a mechanical step earlier.
+// A job that sets `subcycle` gets that many mechanical steps per thermal
+// step.
+bool Simulation::Run::thermal_due(double next_dt) const {
+  if (subcycle > 0) return since_thermal >= subcycle;
+  const double h = sim.thermal_dt_;
+  // The multiple after the one nearest to the last thermal step (which may
+  // have ended a mechanical step before its multiple).
+  const double next = (std::floor(t_thermal / h + 0.5) + 1) * h;
+  return t >= next - eps_t || t + next_dt - t_thermal > sim.thermal_stable_dt_;
+}
+
 void Simulation::Run::save_checkpoint(const char* what) {
   if (!writer) return;
   const auto tc = Clock::now();
@@ -479,8 +497,7 @@ void Simulation::Run::mechanics_loop() {
     bool thermal_stepped = false;  // a thermal step ended at t
     if (job.thermal) {
       ++since_thermal;
-      if (subcycle <= 0) subcycle = static_cast<int>(std::clamp(sim.thermal_dt_ / (md.dt_safety * stable), 1.0, 1e9));
-      if (since_thermal >= subcycle || t >= t_end - eps_t) {
+      if (thermal_due(md.dt_safety * stable) || t >= t_end - eps_t) {
         tc = Clock::now();
         sim.update_element_fields();
         sim.assemble_faces(t);

@@ -255,8 +255,9 @@ struct Simulation::Run {
   int stop_signal = 0;  // the signal of a stop request, once the loop has seen it
   double frame_t = 0;   // time of the last frame written
   // The mechanics loop's own state (explicit dynamics; the thermal
-  // splitter advances every `subcycle` mechanical steps over the time
-  // elapsed since its last step).
+  // splitter advances over the time elapsed since its last step, at the
+  // first mechanical step at or after each multiple of the thermal step,
+  // or every `subcycle` mechanical steps where the job sets it).
   double t_thermal = 0;
   long long since_thermal = 0;
   int subcycle = 0;
@@ -292,6 +293,7 @@ struct Simulation::Run {
   void thermal_loop();
   void finish_interrupted();  // a stopped run: the state reached, as a last frame, rows and samples
   bool checkpoint_due(int stop_seen) const;
+  bool thermal_due(double next_dt) const;  // a thermal step at t, the next mechanical step being next_dt
   void save_checkpoint(const char* what = "");
   void end_checkpoint(const char* what);
   template <class A>

@@ -153,9 +153,9 @@ void Simulation::build_thermal() {
                                    "use \"through_thickness\": \"implicit\"");
   // Alone, the thermal solver lands its steps on the frames: a whole number
   // of steps per frame interval (or per time.end, if shorter). With the
-  // mechanics a thermal step is a number of mechanical steps and the frames
-  // fall at mechanical steps, so the step aimed at is the one chosen here,
-  // whatever the frames: another frame interval changes no result.
+  // mechanics a thermal step ends at the first mechanical step at or after
+  // each multiple of the step chosen here (Run::thermal_due), whatever the
+  // frames: another frame interval changes no result.
   thermal_dt_ = dt;
   if (!job_.mechanics) {
     const double interval = std::min(job_.output.interval, job_.t_end);

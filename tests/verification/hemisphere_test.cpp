@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cmath>
+#include <fstream>
 #include <vector>
 #include <map>
 #include <utility>
@@ -296,6 +297,66 @@ TEST(Hemisphere, TemperaturesIndependentOfMassScaling) {
   EXPECT_LT(diff, 0.5);
   std::printf("mass scaling to 1e-4 s and 2e-4 s: %lld and %lld steps, largest temperature difference %.3f K\n",
               a.result.mechanical_steps, b.result.mechanical_steps, diff);
+}
+
+// Two clocks, in phase: a thermal step ends at the first mechanical step at
+// or after each multiple of the thermal step, whatever the mechanical step
+// (mass scaling to 1e-4 and 2e-4 s; a probe sampled at every thermal step
+// gives the times), so the k-th step ends in [k h, k h + one mechanical
+// step). (Counting mechanical steps per thermal step instead drifts: 134
+// steps of 8.54e-5 s are 3.5e-5 s short of h, and the 3rd step would be off
+// by more than a step.) With the explicit through-thickness scheme at its
+// stable step (thermal dt set to it), no thermal step is longer than that,
+// and the steps that end a mechanical step early to stay under it leave no
+// short step behind them.
+TEST(Hemisphere, ThermalStepsKeepTheirOwnClock) {
+  auto every_thermal_step = [](json j) {
+    j["time"]["end"] = 1.0;
+    j["output"]["probes"] = {{{"name", "pole_top"}, {"part", "ply_top"}, {"at", {0, 0, 0}}, {"quantities", {"temperature_mean"}}}};
+    return j;
+  };
+  auto times = [](const JobRun& r) {
+    std::vector<double> t;
+    for (const auto& s : r.result.probes) t.push_back(s.time);
+    return t;
+  };
+  std::vector<std::size_t> counts;
+  for (double target : {1e-4, 2e-4}) {
+    const JobRun r = run_json(every_thermal_step(coarse_scene("hemisphere_ud_2ply.json", target)));
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    const double h = r.result.thermal_dt;
+    const std::vector<double> t = times(r);
+    ASSERT_EQ(static_cast<long long>(t.size()), r.result.thermal_steps + 1) << "a sample at 0 and one per step";
+    double late = 0;
+    for (std::size_t k = 1; k < t.size() && k * h <= 1.0; ++k) {
+      EXPECT_GE(t[k], k * h * (1 - 1e-9)) << "thermal step " << k << " at mass scaling to " << target << " s";
+      EXPECT_LT(t[k], k * h + target) << "thermal step " << k << " at mass scaling to " << target << " s";
+      late = std::max(late, t[k] - k * h);
+    }
+    std::printf("mass scaling to %g s: %lld thermal steps of %.6g s, each ended at most %.3g s after its multiple "
+                "(mechanical step %.4g s)\n",
+                target, r.result.thermal_steps, h, late, r.result.mechanical_dt);
+    counts.push_back(t.size());
+  }
+  EXPECT_EQ(counts[0], counts[1]);
+
+  json j = every_thermal_step(coarse_scene());
+  j["solvers"]["thermal"]["through_thickness"] = "explicit";
+  const auto dir = temp_dir("thermal_clock");
+  ASSERT_TRUE(run_json(j, 0, dir).result.ok);
+  const double stable = json::parse(std::ifstream(dir / "summary.json"))["thermal"]["stable_dt"].get<double>();
+  j["solvers"]["thermal"]["dt"] = stable;
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const std::vector<double> t = times(r);
+  double longest = 0;
+  for (std::size_t k = 1; k < t.size(); ++k) longest = std::max(longest, t[k] - t[k - 1]);
+  std::printf("explicit scheme at its stable step %.6g s: %lld thermal steps, the longest %.6g s\n", stable,
+              r.result.thermal_steps, longest);
+  EXPECT_LE(longest, stable * (1 + 1e-9));
+  // and no short step after one ended early: one step per multiple, and the last at time.end
+  EXPECT_LE(r.result.thermal_steps, static_cast<long long>(std::ceil(1.0 / stable)) + 1);
+  EXPECT_GT(longest, stable - 2 * r.result.mechanical_dt);
 }
 
 // The paper's point: a plain thermal shell (one temperature through the
