@@ -18,7 +18,7 @@ namespace ts {
 
 namespace {
 constexpr char kMagic[] = "THERMOSTAMP-CHECKPOINT\n";
-constexpr std::uint32_t kFormat = 6;
+constexpr std::uint32_t kFormat = 7;
 
 template <class T>
 void put(std::ofstream& out, const T& v) {

@@ -1008,9 +1008,11 @@ void parse_job_into(Job& job) {
       th.splitter = tr.text("splitter");
       th.subcycle = static_cast<int>(tr.integer("subcycle", 0, 0, 1000000000));
       th.dt = tr.real("dt", 0.0, 0.0);
+      th.contact_samples = static_cast<int>(tr.integer("contact_samples", 8, 1, 1000));
       th.params = json::object();
       for (auto it = t->begin(); it != t->end(); ++it)
-        if (it.key() != "splitter" && it.key() != "subcycle" && it.key() != "dt") th.params[it.key()] = it.value();
+        if (it.key() != "splitter" && it.key() != "subcycle" && it.key() != "dt" && it.key() != "contact_samples")
+          th.params[it.key()] = it.value();
       job.thermal = th;
     }
     r.finish();

@@ -193,6 +193,10 @@ struct ThermalSolverDef {
   json params;  // validated by the splitter's descriptor
   int subcycle = 0;
   double dt = 0;  // 0: automatic
+  // With the mechanics: contact samples per thermal step, whose
+  // conductances are averaged over the step (1: the contact map of the
+  // step's end only).
+  int contact_samples = 8;
 };
 
 struct MechanicsDef {

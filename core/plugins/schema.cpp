@@ -79,7 +79,12 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
       case sdk::PluginKind::Thermal:
         extra = {{"splitter", {{"const", d.name}}},
                  {"subcycle", {{"type", "integer"}, {"minimum", 0}, {"description", "mechanical steps per thermal step (0: automatic)"}}},
-                 {"dt", {{"type", "number"}, {"minimum", 0}, {"description", "thermal step [s] (0: automatic)"}}}};
+                 {"dt", {{"type", "number"}, {"minimum", 0}, {"description", "thermal step [s] (0: automatic)"}}},
+                 {"contact_samples",
+                  {{"type", "integer"},
+                   {"minimum", 1},
+                   {"maximum", 1000},
+                   {"description", "contact samples per thermal step, their conductances averaged over the step (default 8)"}}}};
         defs[key] = plugin_schema(*r, extra);
         defs[key]["required"].push_back("splitter");
         thermal.push_back({{"$ref", "#/$defs/" + key}});

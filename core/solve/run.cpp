@@ -288,7 +288,7 @@ bool Simulation::Run::run_io(A& a) {
          a.io_array(stored0_part) && a.io_vector(energy_rows) && a.io_vector(tool_rows) && a.io_vector(ply_rows) &&
          a.io(audit.kinetic) && a.io(audit.internal) && a.io(audit.external) && a.io(audit.damping) &&
          a.io(audit.balance_error) && a.io(audit.contact) && a.io(audit.contact_stored) && a.io(audit.kinetic_half) &&
-         a.io_vector(audit.reactions) && a.io(t_thermal) && a.io(since_thermal) && a.io(subcycle) && a.io(stable) &&
+         a.io_vector(audit.reactions) && a.io(t_thermal) && a.io(t_sampled) && a.io(since_thermal) && a.io(subcycle) && a.io(stable) &&
          a.io(next_sample) && a.io(audit_scale) && a.io(supplied_max) && a.io(next_checkpoint) &&
          a.io_vector(unstable) && probes_io(a);
 }
@@ -497,10 +497,12 @@ void Simulation::Run::mechanics_loop() {
     bool thermal_stepped = false;  // a thermal step ended at t
     if (job.thermal) {
       ++since_thermal;
+      const int samples = job.thermal->contact_samples;
       if (thermal_due(md.dt_safety * stable) || t >= t_end - eps_t) {
         tc = Clock::now();
         sim.update_element_fields();
-        sim.assemble_faces(t);
+        sim.assemble_faces(t, samples > 1 ? t - t_sampled : -1.0);
+        t_sampled = t;
         sim.update_far_temperatures(t_thermal, t);
         in.dt = t - t_thermal;
         in.geometry_changed = true;
@@ -522,6 +524,17 @@ void Simulation::Run::mechanics_loop() {
         sim.check_field(t, steps);
         sim.update_node_temperature();
         sim.check_law_ranges(t);
+      } else if (samples > 1) {
+        // A contact sample at the first mechanical step at or after each
+        // multiple of thermal step / samples (after the one nearest to the
+        // last sample, as the thermal steps).
+        const double hs = sim.thermal_dt_ / samples;
+        if (t >= (std::floor(t_sampled / hs + 0.5) + 1) * hs - eps_t) {
+          tc = Clock::now();
+          sim.sample_contacts(t, t - t_sampled);
+          t_sampled = t;
+          timing[kTimeThermal] += seconds_since(tc);
+        }
       }
     }
     // Where: the fastest node (the last step's speeds), for the messages below.
@@ -758,7 +771,10 @@ bool Simulation::state_io(A& a) {
             a.io(bending_evaluations_) && a.io(last_stable_) && a.io(seen_min_) && a.io(seen_max_) &&
             a.io_array(below_from_) && a.io_array(all_below_from_) && a.io_array(over_from_) &&
             a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) && a.io(contact_energy_) &&
-            a.io(contact_active_);
+            a.io(contact_active_) && a.io_vector(contact_sums_.map.tool_contacts) &&
+            a.io_vector(contact_sums_.map.links) && a.io(contact_sums_.time) &&
+            a.io_vector(contact_last_.tool_contacts) && a.io_vector(contact_last_.links);
+  if constexpr (!saving) index_contact_sums();
   std::vector<char> warned;
   for (const auto& u : law_uses_) warned.push_back(u.warned ? 1 : 0);
   ok = ok && a.io_array(warned);

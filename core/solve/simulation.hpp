@@ -11,6 +11,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <thermostamp/sdk/plugin.hpp>
@@ -243,7 +244,15 @@ class Simulation {
   };
   std::vector<LawUse> law_uses_;
   void update_element_fields();
-  void assemble_faces(double t);
+  // The faces' conditions and the contact map for the thermal step ending
+  // at t. With contact samples (sampled >= 0: the time since the last
+  // sample, which this call takes at t), the conductance of each tool
+  // contact and link is its mean over the samples of the step, weighted by
+  // the time each stands for; without (sampled < 0), the map at t.
+  void assemble_faces(double t, double sampled = -1);
+  // A contact sample at t standing for the last w seconds (between two
+  // thermal steps; assemble_faces takes the last one).
+  void sample_contacts(double t, double w);
   // The far temperatures of the faces over the thermal step [t0, t1]:
   // tools whose temperature follows rows (their mean over the step, into
   // the tool views and the faces touching them), and the faces of heat
@@ -436,6 +445,18 @@ class Simulation {
   std::vector<std::unique_ptr<sdk::MaterialLaw>> laws_;
   std::vector<std::unique_ptr<sdk::ContactHandler>> contacts_;
   sdk::ThermalContactMap contact_map_;
+  // The contact samples of the thermal step under way: each tool contact
+  // and link found, in the order first found, its conductance the sum of
+  // conductance x the time its samples stand for (the geometry of a link:
+  // its last sample's); `time` the time they stand for in all.
+  struct ContactSums {
+    sdk::ThermalContactMap map;
+    double time = 0;
+    std::unordered_map<std::uint64_t, std::size_t> tool_at, link_at;  // key -> index into map
+  } contact_sums_;
+  sdk::ThermalContactMap contact_sample_;  // one sample (reused)
+  sdk::ThermalContactMap contact_last_;    // the last sample (from the start: the map at t = 0)
+  void index_contact_sums();               // contact_sums_'s keys, from its map
   struct ExchangeFace {
     int part = 0, node = 0, face = 0, exchange = 0;  // exchange: index into job_.heat_exchanges
   };

@@ -259,6 +259,7 @@ struct Simulation::Run {
   // first mechanical step at or after each multiple of the thermal step,
   // or every `subcycle` mechanical steps where the job sets it).
   double t_thermal = 0;
+  double t_sampled = 0;  // the last contact sample (solvers.thermal.contact_samples), or thermal step
   long long since_thermal = 0;
   int subcycle = 0;
   double stable = 0;

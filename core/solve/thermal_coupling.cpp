@@ -40,7 +40,7 @@ void Simulation::build_thermal() {
   }
   const ThermalSolverDef& th = *job_.thermal;
   const PluginRecord& rec = registry_.require(sdk::PluginKind::Thermal, th.splitter, th.pointer + "/splitter");
-  const sdk::Params params = validate_params(th.params, th.pointer, rec.descriptor, {"splitter", "subcycle", "dt"});
+  const sdk::Params params = validate_params(th.params, th.pointer, rec.descriptor, {"splitter", "subcycle", "dt", "contact_samples"});
   splitter_.reset(reinterpret_cast<sdk::ThermalSplitter* (*)()>(rec.create)());
   for (const auto& st : parts_) {
     const MaterialDef& mat = job_.materials[st->def->material];
@@ -99,6 +99,7 @@ void Simulation::build_thermal() {
     st.bottom.assign(st.mesh.num_nodes(), 0.0);
   }
   assemble_faces(0.0);
+  contact_last_ = contact_map_;  // the first contact sample's left end
   update_far_temperatures(0.0, 0.0);
   bool any_table = false;
   for (const auto& st : parts_) any_table = any_table || !st->kt.empty();
@@ -373,7 +374,71 @@ void Simulation::update_face_conductance() {
   }
 }
 
-void Simulation::assemble_faces(double t) {
+namespace {
+
+// Keys of the contact sums: a tool contact by its part, node, face and
+// tool; a link by the first ply's part, node and face and the second ply's
+// part and face (its triangle may change from sample to sample).
+std::uint64_t tool_key(const sdk::ToolHeatContact& c) {
+  return (static_cast<std::uint64_t>(c.part) << 44) | (static_cast<std::uint64_t>(c.tool) << 33) |
+         (static_cast<std::uint64_t>(c.face & 1) << 32) | static_cast<std::uint32_t>(c.node);
+}
+std::uint64_t link_key(const sdk::HeatLink& l) {
+  return (static_cast<std::uint64_t>(l.part_a) << 44) | (static_cast<std::uint64_t>(l.part_b) << 34) |
+         (static_cast<std::uint64_t>(l.face_a & 1) << 33) | (static_cast<std::uint64_t>(l.face_b & 1) << 32) |
+         static_cast<std::uint32_t>(l.node_a);
+}
+
+}  // namespace
+
+void Simulation::sample_contacts(double t, double w) {
+  if (parts_.size() >= 1024 || tool_views_.size() >= 1024)
+    throw RunError("contact samples: at most 1023 parts and 1023 tools (solvers.thermal.contact_samples 1 takes more)");
+  contact_sample_.tool_contacts.clear();
+  contact_sample_.links.clear();
+  std::vector<std::span<const double>> areas;
+  for (auto& st : parts_) areas.emplace_back(st->area);
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    if (auto s = contacts_[c]->thermal_contacts(part_views_, tool_views_, areas, contact_sample_); !s)
+      throw RunError("contact handler of " + job_.contacts[c].pointer + " at t = " + fmt_g(t) + " s: " + s.message);
+  }
+  // The trapezoidal rule over [t - w, t]: half of w with the last sample's
+  // conductances, half with this one's. A contact that begins between two
+  // samples so counts from the middle of their interval.
+  ContactSums& sums = contact_sums_;
+  auto add = [&](const sdk::ThermalContactMap& m, double weight) {
+    for (const sdk::ToolHeatContact& c : m.tool_contacts) {
+      const auto [at, fresh] = sums.tool_at.try_emplace(tool_key(c), sums.map.tool_contacts.size());
+      if (fresh) {
+        sums.map.tool_contacts.push_back(c);
+        sums.map.tool_contacts.back().conductance = 0;
+      }
+      sums.map.tool_contacts[at->second].conductance += c.conductance * weight;
+    }
+    for (const sdk::HeatLink& l : m.links) {
+      const auto [at, fresh] = sums.link_at.try_emplace(link_key(l), sums.map.links.size());
+      if (fresh) sums.map.links.push_back(l);
+      sdk::HeatLink& s = sums.map.links[at->second];
+      const double g = (fresh ? 0.0 : s.conductance) + l.conductance * weight;
+      s = l;  // the latest triangle and weights
+      s.conductance = g;
+    }
+  };
+  add(contact_last_, 0.5 * w);
+  add(contact_sample_, 0.5 * w);
+  std::swap(contact_last_, contact_sample_);
+  sums.time += w;
+}
+
+void Simulation::index_contact_sums() {
+  ContactSums& sums = contact_sums_;
+  sums.tool_at.clear();
+  sums.link_at.clear();
+  for (std::size_t k = 0; k < sums.map.tool_contacts.size(); ++k) sums.tool_at[tool_key(sums.map.tool_contacts[k])] = k;
+  for (std::size_t k = 0; k < sums.map.links.size(); ++k) sums.link_at[link_key(sums.map.links[k])] = k;
+}
+
+void Simulation::assemble_faces(double t, double sampled) {
   for (auto& st : parts_) {
     std::fill(st->h_bottom.begin(), st->h_bottom.end(), 0.0);
     std::fill(st->h_top.begin(), st->h_top.end(), 0.0);
@@ -411,11 +476,26 @@ void Simulation::assemble_faces(double t) {
   }
   contact_map_.tool_contacts.clear();
   contact_map_.links.clear();
-  std::vector<std::span<const double>> areas;
-  for (auto& st : parts_) areas.emplace_back(st->area);
-  for (std::size_t c = 0; c < contacts_.size(); ++c) {
-    if (auto s = contacts_[c]->thermal_contacts(part_views_, tool_views_, areas, contact_map_); !s)
-      throw RunError("contact handler of " + job_.contacts[c].pointer + " at t = " + fmt_g(t) + " s: " + s.message);
+  if (sampled >= 0) {  // the mean of the step's samples
+    sample_contacts(t, sampled);
+    ContactSums& sums = contact_sums_;
+    std::swap(contact_map_, sums.map);
+    if (sums.time > 0) {
+      for (auto& c : contact_map_.tool_contacts) c.conductance /= sums.time;
+      for (auto& l : contact_map_.links) l.conductance /= sums.time;
+    }
+    sums.map.tool_contacts.clear();
+    sums.map.links.clear();
+    sums.tool_at.clear();
+    sums.link_at.clear();
+    sums.time = 0;
+  } else {
+    std::vector<std::span<const double>> areas;
+    for (auto& st : parts_) areas.emplace_back(st->area);
+    for (std::size_t c = 0; c < contacts_.size(); ++c) {
+      if (auto s = contacts_[c]->thermal_contacts(part_views_, tool_views_, areas, contact_map_); !s)
+        throw RunError("contact handler of " + job_.contacts[c].pointer + " at t = " + fmt_g(t) + " s: " + s.message);
+    }
   }
   for (const auto& tc : contact_map_.tool_contacts) {
     PartState& st = *parts_[tc.part];

@@ -729,7 +729,7 @@ TEST(Restart, CloserFramesFromACheckpoint) {
   EXPECT_EQ(b["frames"], 13);
   a.erase("frames");
   b.erase("frames");
-  EXPECT_EQ(a, b) << "the thermal step aimed at is the checkpointed run's (its subcycling goes on)";
+  EXPECT_EQ(a, b) << "the thermal steps keep their clock";
 
   // A run that fails (here: a balance error above a tight energy_tolerance
   // at about 0.3 s) names its checkpoint; from it, with closer frames, it
@@ -775,7 +775,7 @@ TEST(Restart, CloserFramesFromACheckpoint) {
   int fine_rows = 0, common = 0;
   double last = at;
   for (const auto& [t, row] : rows) {
-    if (t > at) {
+    if (t > at + 1e-9) {  // (the checkpoint's own row, its time written to 10 digits, may read a little above it)
       ++fine_rows;
       EXPECT_LT(t - last, 1e-3 + 1.01 * sf["dt"]["mechanics"].get<double>()) << t;
       last = t;

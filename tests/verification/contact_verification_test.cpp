@@ -170,6 +170,63 @@ TEST(Contact, ApproachingToolIsFoundOnTime) {
               punch_fz, -die_fz, expected, r.result.mechanical_steps, mid->time - t_hit, mid->values[0], p_mid);
 }
 
+// A cold punch that arrives inside a thermal step. A ply at 300 degC (in-
+// plane fixed) lies on a die that exchanges no heat; a plane at 260 degC
+// (conductance h) comes down at v and is within the gap tolerance of the
+// ply's upper face from t_c = (gap - tol) / v on: 0.65 of a thermal step
+// (0.02 s) into a step, and exactly at a step's end. From t_c the ply is a
+// slab cooled by a Robin condition on one face: its mean follows the eigen
+// series started at t_c. With the contact map of the step's end only
+// (contact_samples 1) the step that first sees the punch cools the ply over
+// its whole length, up to a step early. With 8 samples a step (the
+// default), averaged by the trapezoidal rule, the arrival counts from the
+// middle of the two samples around it: at most half a sample interval
+// (0.00125 s) off, which at the arrival's flux h (300 - 260) moves the
+// mean by 0.044 K (rho c e = 1148 J/(m^2 K)), the bound required at every
+// probe sample after the arrival (0.2, 0.3 and 0.4 s). With 1 sample the
+// error must exceed 0.2 K (a whole step early: 0.45 K at the arrival).
+TEST(Contact, ToolArrivingInsideAThermalStep) {
+  const double v = 0.05, h = 1000.0, dt = 0.02, tol = 0.01 * kH;
+  const double alpha = 0.31 / (kRho * 1775.0), Bi = h * kH / 0.31;
+  for (double t_c : {7.65 * dt, 8.0 * dt}) {
+    const double gap = v * t_c + tol, t_end = t_c + 0.3;
+    json j = base_job(t_end);
+    j["parts"] = {ply("ply", 0.0, 300.0)};
+    j["tools"] = {plane("die", -0.5 * kH, 1), plane("punch", 0.5 * kH + gap, -1)};
+    // The punch comes down at v for gap + 5 um, then stays (5 um into the ply).
+    const double travel = gap + 5e-6;
+    j["tools"][1]["motion"] = {
+        {"displacement", {{0.0, 0.0, 0.0, 0.0}, {travel / v, 0.0, 0.0, -travel}, {t_end + 1, 0.0, 0.0, -travel}}}};
+    j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"conductance", 0.0}},
+                         {{"type", "contact"}, {"between", {"punch", "ply"}}, {"conductance", h}}};
+    j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+    j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", "implicit"}, {"dt", dt}};
+    j["output"]["probes"] = {{{"name", "centre"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
+                              {"quantities", {"temperature_mean"}}, {"interval", 0.1}}};
+    for (int samples : {8, 1}) {
+      j["solvers"]["thermal"]["contact_samples"] = samples;
+      const JobRun r = run_json(j);
+      ASSERT_TRUE(r.result.ok) << r.result.error;
+      double worst = 0;
+      int compared = 0;
+      for (const ProbeSample& s : r.result.probes) {
+        if (s.time <= t_c) continue;
+        const double exact = slab_robin_mean(s.time - t_c, kH, alpha, Bi, 300.0, 260.0);
+        worst = std::max(worst, std::abs(s.values[0] - exact));
+        ++compared;
+      }
+      std::printf("punch arriving at %.4f s, %d contact sample(s) per thermal step of %g s: the mean within %.4f K "
+                  "of the series at %d probe samples\n",
+                  t_c, samples, dt, worst, compared);
+      EXPECT_EQ(compared, 3);
+      if (samples == 8)
+        EXPECT_LT(worst, 0.044) << "arrival at " << t_c << " s";
+      else
+        EXPECT_GT(worst, 0.2) << "arrival at " << t_c << " s";
+    }
+  }
+}
+
 // A ply on a plane under gravity tilted by alpha (the plane stays z = 0):
 // with tan(alpha) > mu it slides with a = g (sin(alpha) - mu cos(alpha))
 // and the friction force is mu N; with tan(alpha) < mu it sticks.

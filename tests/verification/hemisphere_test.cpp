@@ -217,9 +217,15 @@ TEST(Hemisphere, OneAndTwoThreadsIdentical) {
 // The bending evaluated at most every 8th step (bending_subcycles, its
 // forces as impulses; on this scene the bending's stable step allows all
 // 8) against every step (8 is the jobs' own setting): the same forming
-// within 2 % (shear extrema of both plies) and 0.2 K (through-thickness
+// within 2 % (shear extrema of both plies) and 0.02 K (through-thickness
 // temperatures at the four probes, every second), with the scene's energy
-// balance under 2 %.
+// balance under 2 %. The temperatures must agree within 0.02 K: the
+// thermal steps fall at the same times in both runs, and the contact
+// samples (8 a step) resolve the punch's first touch at the pole, which
+// the bending moves by a few mechanical steps, to half a sample interval.
+// (With the contact map of each step's end only, the two runs saw that
+// touch in adjacent thermal steps: 3.6 K apart at the upper face at
+// 0.08 s, 0.12 K over the profile at 1 s.)
 TEST(Hemisphere, BendingSubcyclesKeepTheAnswer) {
   json j = coarse_scene();
   j["solvers"]["mechanics"]["bending_subcycles"] = 1;
@@ -232,11 +238,11 @@ TEST(Hemisphere, BendingSubcyclesKeepTheAnswer) {
   EXPECT_LT(b.result.bending_evaluations, b.result.mechanical_steps / 7);
   const auto [shear, temp] = apart(a, b);
   std::printf("bending every step / at most every 8th: %lld / %lld evaluations of %lld steps, shear extrema %.2e apart "
-              "(relative), temperatures %.3f K apart, energy balance %.2e / %.2e\n",
+              "(relative), temperatures %.4f K apart, energy balance %.2e / %.2e\n",
               a.result.mechanical_steps, b.result.bending_evaluations, b.result.mechanical_steps, shear, temp,
               a.result.energy.balance_error, b.result.energy.balance_error);
   EXPECT_LT(shear, 0.02);
-  EXPECT_LT(temp, 0.2);
+  EXPECT_LT(temp, 0.02);
   EXPECT_LT(b.result.energy.balance_error, 0.02);
 }
 
