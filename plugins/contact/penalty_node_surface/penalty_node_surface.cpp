@@ -737,7 +737,7 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
   // With a friction table: ps's coefficients at the faces of its nodes
   // (renewed when the face temperatures change), and the node normals that
   // choose the face where the two differ: those of the last
-  // thermal_contacts (every thermal step), else (no thermal solver) this
+  // thermal_contacts (every contact sample), else (no thermal solver) this
   // call's. Returns the normals to use (empty where no node's faces differ).
   const std::vector<double>& friction_faces(Pass& ps, const sdk::ContactForceInput& in, const sdk::PartView& a,
                                             const std::vector<double>& thermal_normals) {

@@ -102,7 +102,10 @@ class ContactHandler {
   virtual ~ContactHandler() = default;
   virtual Status configure(const Params& params, const ContactPair& pair,
                            std::span<const PartView> parts, std::span<const ToolView> tools) = 0;
-  // Node areas (m^2) per part are given so that links carry h_c * area.
+  // The contacts that carry heat at this moment: called at the start and,
+  // with the mechanics, at every contact sample (several a thermal step;
+  // the kernel averages their conductances over the step). Node areas
+  // (m^2) per part are given so that links carry h_c * area.
   virtual Status thermal_contacts(std::span<const PartView> parts, std::span<const ToolView> tools,
                                   std::span<const std::span<const double>> node_area,
                                   ThermalContactMap& out) = 0;
