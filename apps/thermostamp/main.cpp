@@ -240,6 +240,10 @@ int cmd_run(const Args& a, bool validate_only) {
       else
         std::snprintf(line, sizeof line, "thermal step %.4g s: about %.0f steps\n", dt, rounded(job.t_end / dt));
       std::cout << line;
+      if (const int n = job.thermal->contact_samples; dm > 0 && n > 1) {
+        std::snprintf(line, sizeof line, "contact samples: %d a thermal step, every %.3g s\n", n, dt / n);
+        std::cout << line;
+      }
       for (const auto& m : job.materials) {
         if (m.crystallisation.present)
           std::cout << "material '" << m.name << "': " << ts::describe_crystallisation(m) << "\n";

@@ -84,7 +84,8 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                   {{"type", "integer"},
                    {"minimum", 1},
                    {"maximum", 1000},
-                   {"description", "contact samples per thermal step, their conductances averaged over the step (default 8)"}}}};
+                   {"description",
+                    "contact samples per thermal step, their conductances averaged over the step (default 8)"}}}};
         defs[key] = plugin_schema(*r, extra);
         defs[key]["required"].push_back("splitter");
         thermal.push_back({{"$ref", "#/$defs/" + key}});

@@ -288,8 +288,8 @@ bool Simulation::Run::run_io(A& a) {
          a.io_array(stored0_part) && a.io_vector(energy_rows) && a.io_vector(tool_rows) && a.io_vector(ply_rows) &&
          a.io(audit.kinetic) && a.io(audit.internal) && a.io(audit.external) && a.io(audit.damping) &&
          a.io(audit.balance_error) && a.io(audit.contact) && a.io(audit.contact_stored) && a.io(audit.kinetic_half) &&
-         a.io_vector(audit.reactions) && a.io(t_thermal) && a.io(t_sampled) && a.io(since_thermal) && a.io(subcycle) && a.io(stable) &&
-         a.io(next_sample) && a.io(audit_scale) && a.io(supplied_max) && a.io(next_checkpoint) &&
+         a.io_vector(audit.reactions) && a.io(t_thermal) && a.io(t_sampled) && a.io(since_thermal) && a.io(subcycle) &&
+         a.io(stable) && a.io(next_sample) && a.io(audit_scale) && a.io(supplied_max) && a.io(next_checkpoint) &&
          a.io_vector(unstable) && probes_io(a);
 }
 

@@ -40,7 +40,8 @@ void Simulation::build_thermal() {
   }
   const ThermalSolverDef& th = *job_.thermal;
   const PluginRecord& rec = registry_.require(sdk::PluginKind::Thermal, th.splitter, th.pointer + "/splitter");
-  const sdk::Params params = validate_params(th.params, th.pointer, rec.descriptor, {"splitter", "subcycle", "dt", "contact_samples"});
+  const sdk::Params params =
+      validate_params(th.params, th.pointer, rec.descriptor, {"splitter", "subcycle", "dt", "contact_samples"});
   splitter_.reset(reinterpret_cast<sdk::ThermalSplitter* (*)()>(rec.create)());
   for (const auto& st : parts_) {
     const MaterialDef& mat = job_.materials[st->def->material];

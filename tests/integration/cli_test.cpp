@@ -481,7 +481,8 @@ TEST(Cli, NotJsonAndTruncatedFiles) {
 // validate also gives the steps the run starts with: the thermal demo's
 // thermal step, and for the hemisphere the mechanical step with mass
 // scaling (the job's target_dt, less at most the 12 % that the
-// contact springs' bound may take) and the steps it implies for the stroke.
+// contact springs' bound may take) and the steps it implies for the stroke,
+// and the contact samples of each thermal step (with the mechanics only).
 TEST(Cli, ValidateRunsNothing) {
   const auto r = thermostamp("validate " + q(demo_job()));
   EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -498,6 +499,8 @@ TEST(Cli, ValidateRunsNothing) {
   EXPECT_GT(dm, 0.88 * target) << h.out;
   EXPECT_LE(dm, target * (1 + 1e-9)) << h.out;
   EXPECT_NE(h.out.find("steps to t = 5 s"), std::string::npos) << h.out;
+  EXPECT_NE(h.out.find("contact samples: 8 a thermal step, every 0.00144 s"), std::string::npos) << h.out;
+  EXPECT_EQ(r.out.find("contact samples"), std::string::npos) << "none without the mechanics";
 }
 
 // validate describes a meshed tool; it warns of a ply whose mid-surface

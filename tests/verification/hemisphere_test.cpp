@@ -318,7 +318,8 @@ TEST(Hemisphere, TemperaturesIndependentOfMassScaling) {
 TEST(Hemisphere, ThermalStepsKeepTheirOwnClock) {
   auto every_thermal_step = [](json j) {
     j["time"]["end"] = 1.0;
-    j["output"]["probes"] = {{{"name", "pole_top"}, {"part", "ply_top"}, {"at", {0, 0, 0}}, {"quantities", {"temperature_mean"}}}};
+    j["output"]["probes"] = {
+        {{"name", "pole_top"}, {"part", "ply_top"}, {"at", {0, 0, 0}}, {"quantities", {"temperature_mean"}}}};
     return j;
   };
   auto times = [](const JobRun& r) {
