@@ -253,6 +253,8 @@ class Simulation {
   // A contact sample at t standing for the last w seconds (between two
   // thermal steps; assemble_faces takes the last one).
   void sample_contacts(double t, double w);
+  // Every contact handler's thermal contacts at t, into out (cleared first).
+  void thermal_contacts(double t, sdk::ThermalContactMap& out);
   // The far temperatures of the faces over the thermal step [t0, t1]:
   // tools whose temperature follows rows (their mean over the step, into
   // the tool views and the faces touching them), and the faces of heat

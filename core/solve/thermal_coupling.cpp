@@ -392,17 +392,21 @@ std::uint64_t link_key(const sdk::HeatLink& l) {
 
 }  // namespace
 
-void Simulation::sample_contacts(double t, double w) {
-  if (parts_.size() >= 1024 || tool_views_.size() >= 1024)
-    throw RunError("contact samples: at most 1023 parts and 1023 tools (solvers.thermal.contact_samples 1 takes more)");
-  contact_sample_.tool_contacts.clear();
-  contact_sample_.links.clear();
+void Simulation::thermal_contacts(double t, sdk::ThermalContactMap& out) {
+  out.tool_contacts.clear();
+  out.links.clear();
   std::vector<std::span<const double>> areas;
   for (auto& st : parts_) areas.emplace_back(st->area);
   for (std::size_t c = 0; c < contacts_.size(); ++c) {
-    if (auto s = contacts_[c]->thermal_contacts(part_views_, tool_views_, areas, contact_sample_); !s)
+    if (auto s = contacts_[c]->thermal_contacts(part_views_, tool_views_, areas, out); !s)
       throw RunError("contact handler of " + job_.contacts[c].pointer + " at t = " + fmt_g(t) + " s: " + s.message);
   }
+}
+
+void Simulation::sample_contacts(double t, double w) {
+  if (parts_.size() >= 1024 || tool_views_.size() >= 1024)
+    throw RunError("contact samples: at most 1023 parts and 1023 tools (solvers.thermal.contact_samples 1 takes more)");
+  thermal_contacts(t, contact_sample_);
   // The trapezoidal rule over [t - w, t]: half of w with the last sample's
   // conductances, half with this one's. A contact that begins between two
   // samples so counts from the middle of their interval.
@@ -475,12 +479,10 @@ void Simulation::assemble_faces(double t, double sampled) {
       }
     }
   }
-  contact_map_.tool_contacts.clear();
-  contact_map_.links.clear();
   if (sampled >= 0) {  // the mean of the step's samples
     sample_contacts(t, sampled);
     ContactSums& sums = contact_sums_;
-    std::swap(contact_map_, sums.map);
+    std::swap(contact_map_, sums.map);  // (the old map, cleared below, keeps its storage)
     if (sums.time > 0) {
       for (auto& c : contact_map_.tool_contacts) c.conductance /= sums.time;
       for (auto& l : contact_map_.links) l.conductance /= sums.time;
@@ -491,12 +493,7 @@ void Simulation::assemble_faces(double t, double sampled) {
     sums.link_at.clear();
     sums.time = 0;
   } else {
-    std::vector<std::span<const double>> areas;
-    for (auto& st : parts_) areas.emplace_back(st->area);
-    for (std::size_t c = 0; c < contacts_.size(); ++c) {
-      if (auto s = contacts_[c]->thermal_contacts(part_views_, tool_views_, areas, contact_map_); !s)
-        throw RunError("contact handler of " + job_.contacts[c].pointer + " at t = " + fmt_g(t) + " s: " + s.message);
-    }
+    thermal_contacts(t, contact_map_);
   }
   for (const auto& tc : contact_map_.tool_contacts) {
     PartState& st = *parts_[tc.part];
