@@ -227,6 +227,65 @@ TEST(Contact, ToolArrivingInsideAThermalStep) {
   }
 }
 
+// A cold plane leaving inside a thermal step. The plane at 260 degC
+// (conductance h) starts within the gap tolerance of the upper face of a
+// ply at 300 degC (in-plane fixed, on a die that exchanges no heat), so
+// the ply is a slab cooled on one face from t = 0; at t_off, 0.65 of a
+// thermal step (0.02 s) into the 18th step, the plane is lifted 1 mm at
+// 1 m/s, beyond the tolerance within 3 us. From then on the ply exchanges
+// no heat, so its mean stays at the eigen series' value at t_off. Required
+// at the probe samples after t_off (0.4 and 0.5 s): with 8 samples a step,
+// within 0.04 K (the departure counts to the middle of the two samples
+// around it: at most half a sample interval, 0.00125 s, of the face flux
+// at t_off, about 22 kW/m2, over rho c e = 1148 J/(m2 K): 0.024 K; and the
+// backward-Euler steps are up to 0.013 K off the series while it cools);
+// with 1 sample (the contacts of the step's end, which no longer see the
+// plane) more than 0.1 K too warm (the cooling of the step's first
+// 0.013 s lost: about 0.25 K).
+TEST(Contact, ToolLeavingInsideAThermalStep) {
+  const double h = 1000.0, dt = 0.02, tol = 0.01 * kH, t_off = 17.65 * dt, t_end = 0.5;
+  const double alpha = 0.31 / (kRho * 1775.0), Bi = h * kH / 0.31;
+  json j = base_job(t_end);
+  j["parts"] = {ply("ply", 0.0, 300.0)};
+  j["tools"] = {plane("die", -0.5 * kH, 1), plane("punch", 0.5 * kH + 0.5 * tol, -1)};
+  j["tools"][1]["motion"] = {{"displacement",
+                              {{0.0, 0.0, 0.0, 0.0},
+                               {t_off, 0.0, 0.0, 0.0},
+                               {t_off + 1e-3, 0.0, 0.0, 1e-3},
+                               {t_end + 1, 0.0, 0.0, 1e-3}}}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"conductance", 0.0}},
+                       {{"type", "contact"}, {"between", {"punch", "ply"}}, {"conductance", h}}};
+  j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+  j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", "implicit"}, {"dt", dt}};
+  j["output"]["probes"] = {{{"name", "centre"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
+                            {"quantities", {"temperature_mean"}}, {"interval", 0.1}}};
+  const double exact = slab_robin_mean(t_off, kH, alpha, Bi, 300.0, 260.0);
+  for (int samples : {8, 1}) {
+    j["solvers"]["thermal"]["contact_samples"] = samples;
+    const JobRun r = run_json(j);
+    ASSERT_TRUE(r.result.ok) << r.result.error;
+    double worst = 0, signed_err = 0, before = 0;
+    int compared = 0;
+    for (const ProbeSample& s : r.result.probes) {
+      if (s.time < t_off) {  // cooling: against the series at its own time
+        before = std::max(before, std::abs(s.values[0] - slab_robin_mean(s.time, kH, alpha, Bi, 300.0, 260.0)));
+        continue;
+      }
+      if (std::abs(s.values[0] - exact) >= worst) signed_err = s.values[0] - exact;
+      worst = std::max(worst, std::abs(s.values[0] - exact));
+      ++compared;
+    }
+    std::printf("plane leaving at %.4f s, %d contact sample(s) per thermal step of %g s: the mean %+.4f K from the "
+                "series' %.4f degC at t_off, at %d probe samples (within %.4f K of the series before)\n",
+                t_off, samples, dt, signed_err, exact, compared, before);
+    EXPECT_EQ(compared, 2);
+    if (samples == 8)
+      EXPECT_LT(worst, 0.04);
+    else
+      EXPECT_GT(signed_err, 0.1);
+  }
+}
+
 // A ply on a plane under gravity tilted by alpha (the plane stays z = 0):
 // with tan(alpha) > mu it slides with a = g (sin(alpha) - mu cos(alpha))
 // and the friction force is mu N; with tan(alpha) < mu it sticks.
