@@ -61,6 +61,25 @@ double tool_value(const RunResult& r, int tool, int d, bool force) {
   return force ? r.energy.tool_forces[3 * tool + d] : r.energy.tool_displacements[3 * tool + d];
 }
 
+// A ply at 300 degC (in-plane fixed) on a die that exchanges no heat, and
+// a plane "punch" at 260 degC (conductance h) whose lower side starts `gap`
+// above the ply's upper face and moves by `motion` (rows [t, ux, uy, uz]);
+// adi implicit with thermal step dt; probe "centre" gives the ply's mean
+// every 0.1 s.
+json chilled_ply_job(double t_end, double gap, const json& motion, double h, double dt) {
+  json j = base_job(t_end);
+  j["parts"] = {ply("ply", 0.0, 300.0)};
+  j["tools"] = {plane("die", -0.5 * kH, 1), plane("punch", 0.5 * kH + gap, -1)};
+  j["tools"][1]["motion"] = {{"displacement", motion}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"conductance", 0.0}},
+                       {{"type", "contact"}, {"between", {"punch", "ply"}}, {"conductance", h}}};
+  j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+  j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", "implicit"}, {"dt", dt}};
+  j["output"]["probes"] = {{{"name", "centre"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
+                            {"quantities", {"temperature_mean"}}, {"interval", 0.1}}};
+  return j;
+}
+
 }  // namespace
 
 // A ply between a fixed lower plane and an upper plane driven down by a
@@ -190,19 +209,10 @@ TEST(Contact, ToolArrivingInsideAThermalStep) {
   const double alpha = 0.31 / (kRho * 1775.0), Bi = h * kH / 0.31;
   for (double t_c : {7.65 * dt, 8.0 * dt}) {
     const double gap = v * t_c + tol, t_end = t_c + 0.3;
-    json j = base_job(t_end);
-    j["parts"] = {ply("ply", 0.0, 300.0)};
-    j["tools"] = {plane("die", -0.5 * kH, 1), plane("punch", 0.5 * kH + gap, -1)};
     // The punch comes down at v for gap + 5 um, then stays (5 um into the ply).
     const double travel = gap + 5e-6;
-    j["tools"][1]["motion"] = {
-        {"displacement", {{0.0, 0.0, 0.0, 0.0}, {travel / v, 0.0, 0.0, -travel}, {t_end + 1, 0.0, 0.0, -travel}}}};
-    j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"conductance", 0.0}},
-                         {{"type", "contact"}, {"between", {"punch", "ply"}}, {"conductance", h}}};
-    j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
-    j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", "implicit"}, {"dt", dt}};
-    j["output"]["probes"] = {{{"name", "centre"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
-                              {"quantities", {"temperature_mean"}}, {"interval", 0.1}}};
+    json j = chilled_ply_job(
+        t_end, gap, {{0.0, 0.0, 0.0, 0.0}, {travel / v, 0.0, 0.0, -travel}, {t_end + 1, 0.0, 0.0, -travel}}, h, dt);
     for (int samples : {8, 1}) {
       j["solvers"]["thermal"]["contact_samples"] = samples;
       const JobRun r = run_json(j);
@@ -245,20 +255,12 @@ TEST(Contact, ToolArrivingInsideAThermalStep) {
 TEST(Contact, ToolLeavingInsideAThermalStep) {
   const double h = 1000.0, dt = 0.02, tol = 0.01 * kH, t_off = 17.65 * dt, t_end = 0.5;
   const double alpha = 0.31 / (kRho * 1775.0), Bi = h * kH / 0.31;
-  json j = base_job(t_end);
-  j["parts"] = {ply("ply", 0.0, 300.0)};
-  j["tools"] = {plane("die", -0.5 * kH, 1), plane("punch", 0.5 * kH + 0.5 * tol, -1)};
-  j["tools"][1]["motion"] = {{"displacement",
-                              {{0.0, 0.0, 0.0, 0.0},
-                               {t_off, 0.0, 0.0, 0.0},
-                               {t_off + 1e-3, 0.0, 0.0, 1e-3},
-                               {t_end + 1, 0.0, 0.0, 1e-3}}}};
-  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"conductance", 0.0}},
-                       {{"type", "contact"}, {"between", {"punch", "ply"}}, {"conductance", h}}};
-  j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
-  j["solvers"]["thermal"] = {{"splitter", "adi"}, {"through_thickness", "implicit"}, {"dt", dt}};
-  j["output"]["probes"] = {{{"name", "centre"}, {"part", "ply"}, {"at", {kSide / 2, kSide / 2, 0}},
-                            {"quantities", {"temperature_mean"}}, {"interval", 0.1}}};
+  json j = chilled_ply_job(t_end, 0.5 * tol,
+                           {{0.0, 0.0, 0.0, 0.0},
+                            {t_off, 0.0, 0.0, 0.0},
+                            {t_off + 1e-3, 0.0, 0.0, 1e-3},
+                            {t_end + 1, 0.0, 0.0, 1e-3}},
+                           h, dt);
   const double exact = slab_robin_mean(t_off, kH, alpha, Bi, 300.0, 260.0);
   for (int samples : {8, 1}) {
     j["solvers"]["thermal"]["contact_samples"] = samples;
