@@ -1569,7 +1569,7 @@ TEST(Cli, MechanicsUnusableStepIsAnInputError) {
   json probe = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json")["output"]["probes"][0];
   probe["interval"] = 1e-30;
   probe["quantities"] = {"displacement_z"};
-  j["output"]["probes"] = {probe};
+  j["output"]["probes"] = json::array({probe});
   std::ofstream(dir / "job.json") << j.dump(2);
   const auto r2 = thermostamp("run " + q(dir / "job.json") + " --out " + q(dir / "out2") + " --quiet");
   ASSERT_EQ(r2.exit_code, 0) << r2.err;

@@ -267,7 +267,9 @@ TEST(MaterialLaws, ViscoelasticShearAgainstPronyClosedForm) {
   const std::vector<std::pair<std::string, std::function<double(double)>>> histories = {
       {"relaxation", [](double t) { return 1.25 * std::min(t, 0.4); }}, {"constant rate", [](double t) { return 0.5 * t; }}};
   for (double T : {260.0, 290.0}) {
-    for (const auto& [hname, gamma] : histories) {
+    for (const auto& history : histories) {
+      const std::string& hname = history.first;
+      const std::function<double(double)>& gamma = history.second;
       const double t_end = 2.0;
       // Reference at the output times.
       auto s0 = [&](double t) {

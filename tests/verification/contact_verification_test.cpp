@@ -68,7 +68,7 @@ double tool_value(const RunResult& r, int tool, int d, bool force) {
 // every 0.1 s.
 json chilled_ply_job(double t_end, double gap, const json& motion, double h, double dt) {
   json j = base_job(t_end);
-  j["parts"] = {ply("ply", 0.0, 300.0)};
+  j["parts"] = json::array({ply("ply", 0.0, 300.0)});
   j["tools"] = {plane("die", -0.5 * kH, 1), plane("punch", 0.5 * kH + gap, -1)};
   j["tools"][1]["motion"] = {{"displacement", motion}};
   j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"conductance", 0.0}},
@@ -90,7 +90,7 @@ json chilled_ply_job(double t_end, double gap, const json& motion, double h, dou
 TEST(Contact, PlyPressedBetweenTwoPlanes) {
   const double pressure = 0.4e6, area = kSide * kSide, F = pressure * area, penalty = 1.0e11;
   json j = base_job(0.01);
-  j["parts"] = {ply("ply", 0.0)};
+  j["parts"] = json::array({ply("ply", 0.0)});
   j["tools"] = {plane("die", -0.5 * kH, 1), plane("holder", 0.5 * kH, -1)};
   j["tools"][1]["motion"] = {{"force", {0, 0, -F}}, {"mass", 0.1}, {"damping", 2000.0}};
   j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}},
@@ -165,7 +165,7 @@ TEST(Contact, ApproachingToolIsFoundOnTime) {
   const double v = 0.05, gap = 0.003, squeeze_time = 5e-4, penalty = 1.0e11, area = kSide * kSide;
   const double t_hit = gap / v, t_end = t_hit + squeeze_time;
   json j = base_job(t_end);
-  j["parts"] = {ply("ply", 0.0)};
+  j["parts"] = json::array({ply("ply", 0.0)});
   j["tools"] = {plane("die", -0.5 * kH, 1), plane("punch", 0.5 * kH + gap, -1)};
   j["tools"][1]["motion"] = {{"velocity", {0, 0, -v}}};
   j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"penalty", penalty}},
@@ -298,8 +298,8 @@ TEST(Contact, CoulombSlideAndStickOnTiltedGravity) {
   for (const double alpha_deg : {30.0, 10.0}) {
     const double a = alpha_deg * M_PI / 180;
     json j = base_job(t_end);
-    j["parts"] = {ply("ply", 0.5 * kH)};
-    j["tools"] = {plane("die", 0.0, 1)};
+    j["parts"] = json::array({ply("ply", 0.5 * kH)});
+    j["tools"] = json::array({plane("die", 0.0, 1)});
     j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"friction", mu}}};
     j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};
     // Sticking, the ply rings on the tangential contact spring: mass damping
@@ -343,8 +343,8 @@ TEST(Contact, RegularisedFrictionSlidesAndCreeps) {
   for (const double alpha_deg : {30.0, 10.0}) {
     const double a = alpha_deg * M_PI / 180;
     json j = base_job(t_end);
-    j["parts"] = {ply("ply", 0.5 * kH)};
-    j["tools"] = {plane("die", 0.0, 1)};
+    j["parts"] = json::array({ply("ply", 0.5 * kH)});
+    j["tools"] = json::array({plane("die", 0.0, 1)});
     j["interactions"] = {
         {{"type", "contact"}, {"between", {"die", "ply"}}, {"friction", mu}, {"slip_velocity", v0}}};
     j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};
@@ -382,8 +382,8 @@ TEST(Contact, DroppedPlyCreatesNoEnergy) {
   const double g = 9.81, drop = 0.002, t_end = 0.045;
   for (const double safety : {0.8, 0.4, 0.2}) {
     json j = base_job(t_end);
-    j["parts"] = {ply("ply", 0.5 * kH + drop)};
-    j["tools"] = {plane("die", 0.0, 1)};
+    j["parts"] = json::array({ply("ply", 0.5 * kH + drop)});
+    j["tools"] = json::array({plane("die", 0.0, 1)});
     j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}}};
     j["solvers"]["mechanics"]["gravity"] = {0.0, 0.0, -g};
     j["solvers"]["mechanics"]["dt_safety"] = safety;
@@ -678,7 +678,7 @@ TEST(Contact, ConductanceFollowsThePressure) {
                              {{"type", "contact"}, {"between", {"holder", "up"}}, {"conductance", 0.0}},
                              table({{"between", {"up", "low"}}})};
       } else {
-        j["parts"] = {ply("ply", 0.0, 300.0)};
+        j["parts"] = json::array({ply("ply", 0.0, 300.0)});
         j["tools"] = {plane("die", -0.5 * kH, 1), plane("holder", 0.5 * kH, -1)};
         j["interactions"] = {table({{"between", {"die", "ply"}}}), table({{"between", {"holder", "ply"}}})};
       }
@@ -803,9 +803,9 @@ TEST(Contact, FrictionFollowsTheTemperature) {
     for (const double v0 : {0.0, 1e-3})
       for (const double T : {250.0, 290.0, 310.0}) {
         json j = base_job(t_end);
-        j["parts"] = {ply("ply", 0.5 * kH, T)};
-        j["tools"] = {plane("die", 0.0, 1)};
-        j["interactions"] = {contact("die", "ply", v0)};
+        j["parts"] = json::array({ply("ply", 0.5 * kH, T)});
+        j["tools"] = json::array({plane("die", 0.0, 1)});
+        j["interactions"] = json::array({contact("die", "ply", v0)});
         j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};
         j["output"]["probes"] = probe("ply", {"displacement_x"}, t_end / 10);
         const JobRun r = run_json(j);
@@ -824,9 +824,9 @@ TEST(Contact, FrictionFollowsTheTemperature) {
   {
     const double t_end = 0.2;
     json j = base_job(t_end);
-    j["parts"] = {ply("ply", 0.5 * kH, 300.0)};
-    j["tools"] = {plane("die", 0.0, 1, 260.0)};
-    j["interactions"] = {contact("die", "ply", 0.0)};
+    j["parts"] = json::array({ply("ply", 0.5 * kH, 300.0)});
+    j["tools"] = json::array({plane("die", 0.0, 1, 260.0)});
+    j["interactions"] = json::array({contact("die", "ply", 0.0)});
     j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};
     j["solvers"]["thermal"] = {{"splitter", "adi"}};
     j["output"]["probes"] = probe("ply", {"temperature_profile", "displacement_x"}, 0.0);
@@ -880,7 +880,7 @@ TEST(Contact, FrictionFollowsTheTemperature) {
     low["mesh"]["size"] = {0.05, 0.04};
     low["mesh"]["divisions"] = {10, 8};
     j["parts"] = {low, ply("up", 1.5 * kH, 300.0)};
-    j["interactions"] = {contact("up", "low", 0.0)};
+    j["interactions"] = json::array({contact("up", "low", 0.0)});
     j["constraints"] = {
         {{"type", "fix"}, {"part", "low"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y", "z"}}}};
     j["solvers"]["mechanics"]["gravity"] = {g * std::sin(a), 0.0, -g * std::cos(a)};

@@ -906,7 +906,7 @@ TEST(PlyHistory, NodeTimesBelowTheThresholdAgainstTheProbes) {
     j["solvers"]["thermal"]["dt"] = 0.01;
     json chill = {{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", 1000.0}, {"ambient", 200.0}};
     if (disc) chill["region"] = {{"circle", {{"centre", {0, 0}}, {"radius", 0.008}}}};
-    j["interactions"] = {chill};
+    j["interactions"] = json::array({chill});
     j["output"]["temperature_threshold"] = 280.0;
     j["output"]["fields"] = {"temperature_mean", "below_threshold_from"};
     j["output"]["probes"] = json::array();
