@@ -508,7 +508,10 @@ void skip_flags(std::size_t n, const double* __restrict dist, const double* __re
   for (std::size_t i = 0; i < n; ++i) {
     const double slack = dist[i] - cutoff - (path - sq[i]) * (1 + 1e-9) - 1e-9 * cutoff;
     const double dx = x[3 * i] - xq[3 * i], dy = x[3 * i + 1] - xq[3 * i + 1], dz = x[3 * i + 2] - xq[3 * i + 2];
-    skip[i] = (slack > 0) & (std::abs(dist[i]) < kInf) & (dx * dx + dy * dy + dz * dz < slack * slack) ? 1.0 : 0.0;
+    skip[i] = (static_cast<int>(slack > 0) & static_cast<int>(std::abs(dist[i]) < kInf) &
+               static_cast<int>(dx * dx + dy * dy + dz * dz < slack * slack))
+                  ? 1.0
+                  : 0.0;
   }
 }
 

@@ -83,11 +83,11 @@ template <LogForm kLog, bool kShear = true>
   const double xa = a - 1.0, xt = i3 / a - 1.0;  // as the SDK forms I3 / I41
   double e1, lt;
   if (kLog == kSmall) {
-    *in_range = (std::abs(xa) < 1e-2) & (std::abs(xt) < 1e-2) ? 1.0 : 0.0;
+    *in_range = (static_cast<int>(std::abs(xa) < 1e-2) & static_cast<int>(std::abs(xt) < 1e-2)) ? 1.0 : 0.0;
     e1 = 0.5 * log1p_series(xa);
     lt = 0.5 * log1p_series(xt);
   } else if (kLog == kWide) {
-    *in_range = (std::abs(xa) < kWideRange) & (std::abs(xt) < kWideRange) ? 1.0 : 0.0;
+    *in_range = (static_cast<int>(std::abs(xa) < kWideRange) & static_cast<int>(std::abs(xt) < kWideRange)) ? 1.0 : 0.0;
     e1 = 0.5 * log1p_wide(xa);
     lt = 0.5 * log1p_wide(xt);
   } else {
