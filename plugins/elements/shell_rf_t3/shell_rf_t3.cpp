@@ -150,14 +150,14 @@ struct HingeGeometry {
 // ShellRfT3::hinge_angle with the same operations in the same order. Hinge
 // j has its nodes (c, p, q, o) at x[ic[j]], x[ip[j]], ... (offsets 3 x
 // node). Where the angle is beyond atan2_small's range, dtheta[j] is NaN
-// (the caller evaluates it with the library); returns 1 if some is, 0
-// otherwise.
+// (the caller evaluates it with the library); returns how many are (a
+// sum rather than a maximum: Clang vectorises the one, not the other).
 TS_VECTOR_CLONES
 double hinge_angle_block(int h, const int* __restrict ic, const int* __restrict ip, const int* __restrict iq,
                          const int* __restrict io, const double* __restrict x, const double* __restrict theta0,
                          double* __restrict dtheta) {
   double beyond = 0.0;
-#pragma omp simd reduction(max : beyond)
+#pragma omp simd reduction(+ : beyond)
   for (int j = 0; j < h; ++j) {
     const HingeGeometry g = hinge_geometry(x, ic[j], ip[j], iq[j], io[j]);
     const double y = g.len * (g.o0 * g.ne0 + g.o1 * g.ne1 + g.o2 * g.ne2),
@@ -165,7 +165,7 @@ double hinge_angle_block(int h, const int* __restrict ic, const int* __restrict 
     const double d = atan2_small_approx(y, xx) - theta0[j];
     const bool in_range = (xx > 0) & (std::abs(y) <= 0.66 * xx);
     dtheta[j] = in_range ? d : std::numeric_limits<double>::quiet_NaN();
-    beyond = in_range ? beyond : 1.0;
+    beyond += in_range ? 0.0 : 1.0;
   }
   return beyond;
 }
@@ -286,14 +286,14 @@ void value_range(int n, const double* __restrict v, double& lo, double& hi) {
 // (component d of element q at ff[d ld + q] and ff[(3 + d) ld + q];
 // g1_1, g1_2, g2_1, g2_2 of element q at g[r gld + q], r = 0 .. 3, the
 // offset 3 i of its node a in x at off[a ols + q]) and
-// C = (F e1 . F e1, F e2 . F e2, F e1 . F e2) at C[3 q ..]. Returns 1 if
-// some element has det C <= 1e-12 or not a number (collapsed or inverted),
-// 0 otherwise. One vector pass; fields() forms F the same way.
+// C = (F e1 . F e1, F e2 . F e2, F e1 . F e2) at C[3 q ..]. Returns the
+// number of elements whose det C is <= 1e-12 or not a number (collapsed
+// or inverted). One vector pass; fields() forms F the same way.
 TS_VECTOR_CLONES
 double strain_block(int n, int ld, const int* __restrict off, int ols, const double* __restrict x,
                     const double* __restrict g, int gld, double* __restrict ff, double* __restrict C) {
   double bad = 0.0;
-#pragma omp simd reduction(max : bad)
+#pragma omp simd reduction(+ : bad)
   for (int q = 0; q < n; ++q) {
     const int i0 = off[q], i1 = off[ols + q], i2 = off[2 * ols + q];
     const double gb = g[q], gc = g[gld + q], hb = g[2 * gld + q], hc = g[3 * gld + q];
@@ -311,7 +311,7 @@ double strain_block(int n, int ld, const int* __restrict off, int ols, const dou
     C[3 * q + 1] = c1;
     C[3 * q + 2] = c2;
     const double det = c0 * c1 - c2 * c2;
-    bad = det > 1e-12 ? bad : 1.0;
+    bad += det > 1e-12 ? 0.0 : 1.0;
   }
   return bad;
 }
@@ -1752,7 +1752,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.8.0";
+  d.version = "0.8.1";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -1760,4 +1760,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.8.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.8.1", register_all)

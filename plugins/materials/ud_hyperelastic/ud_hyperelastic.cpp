@@ -113,19 +113,20 @@ template <LogForm kLog, bool kShear = true>
 
 // The law over n points by the series (kLog kSmall or kWide); redo[q] = 1
 // where C11 - 1 or det C / C11 - 1 is beyond the series' range.
-// Returns 1 if some point is to be evaluated again, 0 otherwise.
+// Returns the number of points to evaluate again (a sum, not a maximum:
+// Clang vectorises the one and not the other).
 template <LogForm kLog, bool kShear>
 [[gnu::always_inline]] inline double ud_body(std::size_t n, const double* __restrict C, double kf, double pct,
                                              const double* ksh, double* __restrict S, double* __restrict W,
                                              double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
   double any = 0.0;
-#pragma omp simd reduction(max : any)
+#pragma omp simd reduction(+ : any)
   for (std::size_t q = 0; q < n; ++q) {
     double in_range;
     ud_point<kLog, kShear>(C + 3 * q, kf, pct, k1, k2, k3, S + 3 * q, W + q, &in_range);
     redo[q] = 1.0 - in_range;
-    any = in_range != 0.0 ? any : 1.0;
+    any += 1.0 - in_range;
   }
   return any;
 }
@@ -213,7 +214,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "ud_hyperelastic";
-  d.version = "1.1.0";
+  d.version = "1.1.1";
   d.summary = "UD membrane: fibre elongation, transverse elongation I_lt = 1/2 ln(I3/I41), optional elastic shear";
   const ParamSpec ksh = list_param("k_sh", "[0, 0, 0]", "N/m",
                                    "elastic shear coefficients of w_sh = sum k_sh^i I_sh^(2i) (zero when viscoelastic_shear carries the shear)", 3);
@@ -225,4 +226,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.1.0", register_all)
+THERMOSTAMP_PLUGIN("material_ud_hyperelastic", "1.1.1", register_all)

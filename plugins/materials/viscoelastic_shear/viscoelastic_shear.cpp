@@ -244,11 +244,11 @@ template <int NB, bool kUd>
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
   const Lines<NB> l(lines);
   double any = 0.0;
-#pragma omp simd reduction(max : any)
+#pragma omp simd reduction(+ : any)
   for (std::size_t q = 0; q < n; ++q) {
     const Parameters<NB> p = parameters<NB>(l, temp[q]);
     const double rq = visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
-    any = rq > any ? rq : any;
+    any += rq;
   }
   return any;
 }
@@ -281,7 +281,7 @@ template <int NB, bool kUd>
                                                double* __restrict S, double* __restrict W, double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
   double any = 0.0;
-#pragma omp simd reduction(max : any)
+#pragma omp simd reduction(+ : any)
   for (std::size_t q = 0; q < n; ++q) {
     Parameters<NB> p;
     p.omega = cache[n + q];
@@ -291,7 +291,7 @@ template <int NB, bool kUd>
       p.inv_tau[i] = cache[(3 + NB + i) * n + q];
     }
     const double rq = visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
-    any = rq > any ? rq : any;
+    any += rq;
   }
   return any;
 }
@@ -300,8 +300,8 @@ TS_VECTOR_CLONES
 bool all_the_same(std::size_t n, const double* __restrict temp) {
   const double t0 = temp[0];
   double differ = 0;
-#pragma omp simd reduction(max : differ)
-  for (std::size_t q = 0; q < n; ++q) differ = temp[q] == t0 ? differ : 1.0;
+#pragma omp simd reduction(+ : differ)
+  for (std::size_t q = 0; q < n; ++q) differ += temp[q] == t0 ? 0.0 : 1.0;
   return differ == 0;
 }
 // Whether the cache's temperatures are those of temp (NaN at the start: no).
@@ -583,7 +583,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.3.0";
+  d.version = "1.3.1";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
@@ -606,4 +606,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.3.0", register_all)
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.3.1", register_all)
