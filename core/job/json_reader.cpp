@@ -178,7 +178,7 @@ std::string ObjectReader::text(const std::string& key, std::optional<std::string
 
 std::string ObjectReader::choice(const std::string& key, const std::vector<std::string>& choices,
                                  std::optional<std::string> def) {
-  const std::string s = text(key, def);
+  std::string s = text(key, std::move(def));
   if (std::find(choices.begin(), choices.end(), s) == choices.end()) {
     std::string msg = "unknown value '" + s + "'";
     const std::string dym = did_you_mean(s, choices);

@@ -338,7 +338,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
         {"interval", {{"type", "number"}, {"minimum", 0}}}}},
       {"required", {"name", "part", "at"}},
       {"additionalProperties", false}};
-  const json schema = {
+  json schema = {
       {"$schema", "https://json-schema.org/draft/2020-12/schema"},
       {"title", "ThermoStamp job (thermostamp-job/1)"},
       {"type", "object"},
