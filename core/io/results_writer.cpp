@@ -118,13 +118,14 @@ std::string field_units(const std::string& name) {
   if (name == "shear_angle") return "deg";
   if (name == "contact_pressure") return "Pa";
   if (name.rfind("conductance", 0) == 0) return "W/(m^2 K)";
-  if (name == "membrane_stress") return "N/m";
+  if (name == "membrane_stress" || name == "membrane_stability") return "N/m";
   if (name == "curvature") return "1/m";
   return "1";  // fibre_direction, contact_status, membrane_strain
 }
 
 bool field_on_elements(const std::string& name) {
-  for (const char* f : {"shear_angle", "fibre_direction", "membrane_stress", "membrane_strain", "curvature"})
+  for (const char* f :
+       {"shear_angle", "fibre_direction", "membrane_stress", "membrane_strain", "curvature", "membrane_stability"})
     if (name == f) return true;
   return false;
 }
@@ -137,8 +138,9 @@ std::string series_column_units(const std::string& column) {
   if (column == "time") return "s";
   if (column == "balance_error" || ends("fraction_below") || ends("fraction_over_shear_limit") ||
       ends("_crystallinity_min") || ends("_crystallinity_mean") || ends("_crystallinity_max") ||
-      ends("_fibre_strain_min") || ends("_fibre_strain_max"))
+      ends("_fibre_strain_min") || ends("_fibre_strain_max") || ends("_fraction_unstable"))
     return "1";
+  if (ends("_stability_min")) return "N/m";
   if (ends("_shear_angle_min") || ends("_shear_angle_max")) return "deg";
   if (ends("_temperature_min") || ends("_temperature_mean") || ends("_temperature_max") || ends("_temperature"))
     return "degC";

@@ -292,7 +292,8 @@ inline const std::vector<std::string>& known_fields() {
                                              "temperature_bottom", "displacement", "velocity", "shear_angle",
                                              "fibre_direction", "contact_status", "contact_pressure",
                                              "membrane_stress", "curvature", "membrane_strain", "conductance",
-                                             "tool_gap", "below_threshold_from", "crystallinity"};
+                                             "tool_gap", "below_threshold_from", "crystallinity",
+                                             "membrane_stability"};
   return f;
 }
 inline const std::vector<std::string>& known_probe_quantities() {

@@ -196,6 +196,8 @@ Simulation::Run::Run(Simulation& s, const RunOptions& o, Clock::time_point w0, i
   const std::size_t n_mech = sim.mech_.size();
   row_shear.resize(n_mech);
   row_strain.resize(n_mech);
+  row_q.resize(n_mech);
+  row_tol.resize(n_mech);
   elem_area.resize(n_mech);
   for (std::size_t p = 0; p < n_mech; ++p) {
     const std::size_t ne = static_cast<std::size_t>(parts[p]->mesh.num_elements());
@@ -209,6 +211,7 @@ Simulation::Run::Run(Simulation& s, const RunOptions& o, Clock::time_point w0, i
   sim.below_from_.assign(parts.size(), -1.0);
   sim.all_below_from_.assign(parts.size(), -1.0);
   sim.over_from_.assign(parts.size(), -1.0);
+  sim.unstable_from_.assign(parts.size(), -1.0);
   if (sim.want_below_from_)
     for (auto& st : parts) {
       st->below_from.assign(st->mesh.num_nodes(), std::numeric_limits<double>::quiet_NaN());
@@ -769,7 +772,7 @@ bool Simulation::state_io(A& a) {
   };
   bool ok = a.io(last_mech_dt_) && a.io(bending_weight_) && a.io(bending_left_) && a.io(bending_largest_) &&
             a.io(bending_evaluations_) && a.io(last_stable_) && a.io(seen_min_) && a.io(seen_max_) &&
-            a.io_array(below_from_) && a.io_array(all_below_from_) && a.io_array(over_from_) &&
+            a.io_array(below_from_) && a.io_array(all_below_from_) && a.io_array(over_from_) && a.io_array(unstable_from_) &&
             a.io_array(tool_force_) && a.io_array(tool_heat_) && a.io_array(link_heat_) && a.io(contact_energy_) &&
             a.io(contact_active_) && a.io_vector(contact_sums_.map.tool_contacts) &&
             a.io_vector(contact_sums_.map.links) && a.io(contact_sums_.time) &&

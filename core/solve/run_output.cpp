@@ -18,6 +18,7 @@
 #include "io/logging.hpp"
 #include "solve/interrupt.hpp"
 #include "solve/simulation_internal.hpp"
+#include "solve/stability.hpp"
 #include "solve/tools.hpp"
 #include "version.hpp"
 
@@ -230,6 +231,8 @@ void Simulation::Run::open_output() {
     for (const char* q : {"shear_angle_min", "shear_angle_max", "fibre_strain_min", "fibre_strain_max"})
       ply_fields.push_back(q);
     if (shear_limit) ply_fields.push_back("fraction_over_shear_limit");
+    ply_fields.push_back("fraction_unstable");
+    ply_fields.push_back("stability_min");
   }
   ply_per = ply_fields.size();
   ply_cols = {"time"};
@@ -486,10 +489,13 @@ std::optional<double> Simulation::Run::threshold_of(std::size_t p) const {
   return threshold ? std::optional<double>(job.output.temperature_threshold[p]) : std::nullopt;
 }
 
-// Part p's shear angle range, fibre strain range and share of its area
+// Part p's shear angle range, fibre strain range, share of its area
 // beyond the shear limit at the current positions (ElementKernel::fields,
-// as the frames show them); the first row beyond the limit is noted at time.
-std::array<double, 5> Simulation::Run::ply_mechanics(std::size_t p, double time) {
+// as the frames show them), share of its area whose long-term response is
+// unstable and the smallest long-term stiffness q (stability.hpp); the first
+// row beyond the limit and the first with an unstable element are noted at
+// time, the latter with a warning.
+std::array<double, 7> Simulation::Run::ply_mechanics(std::size_t p, double time) {
   sdk::ElementFields f;
   f.shear_angle = row_shear[p];
   f.strain = row_strain[p];
@@ -504,7 +510,52 @@ std::array<double, 5> Simulation::Run::ply_mechanics(std::size_t p, double time)
     if (shear_limit && std::abs(row_shear[p][e]) > job.output.shear_angle_limit[p]) over += elem_area[p][e];
   }
   if (shear_limit && over > 0 && sim.over_from_[p] < 0) sim.over_from_[p] = time;
-  return {*smn, *smx, fmn, fmx, over / total};
+  const MechPart& m = *sim.mech_[p];
+  const PartState& st = *sim.parts_[p];
+  if (const std::string e = ply_stability(m.membrane, st.mesh.triangles, m.node_temperature, row_strain[p], row_q[p],
+                                          row_tol[p]);
+      !e.empty())
+    throw RunError("material law of part '" + st.def->name + "' failed in the stability check at t = " +
+                   fmt_g(time) + " s: " + e);
+  double unstable = 0, q_min = std::numeric_limits<double>::infinity();
+  int worst = -1;
+  for (std::size_t e = 0; e < row_q[p].size(); ++e) {
+    const double q = row_q[p][e];
+    if (!(q < -row_tol[p][e])) continue;
+    unstable += elem_area[p][e];
+    if (q < q_min) {
+      q_min = q;
+      worst = static_cast<int>(e);
+    }
+  }
+  if (worst < 0)
+    for (double q : row_q[p])
+      if (q < q_min) q_min = q;
+  if (worst >= 0 && sim.unstable_from_[p] < 0) {
+    sim.unstable_from_[p] = time;
+    // The worst element: where it is, and the direction of the pattern
+    // that lowers its energy most (n, from its initial fibre direction).
+    const int* tri = &st.mesh.triangles[3 * static_cast<std::size_t>(worst)];
+    double c[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a)
+      for (int d = 0; d < 3; ++d) c[d] += st.x[3 * tri[a] + d] / 3.0;
+    const double* E = &row_strain[p][3 * static_cast<std::size_t>(worst)];
+    const double C[3] = {1 + 2 * E[0], 1 + 2 * E[1], 2 * E[2]};
+    const double T = m.node_temperature[tri[0]] / 3.0 + m.node_temperature[tri[1]] / 3.0 +
+                     m.node_temperature[tri[2]] / 3.0;
+    StabilityScratch sc;
+    double q = 0, theta = 0;
+    long_term_stability(m.membrane, 1, C, &T, &q, sc, &theta);
+    const double deg = theta * 180.0 / 3.14159265358979323846;
+    logger("solve")->warn(
+        "t = {} s: part '{}': the long-term (relaxed) response of its membrane law is unstable in {} % of its area "
+        "(down to {} N/m at element {}, {} m, {:.4g} degC, for a pattern varying at {:.0f} deg from the initial "
+        "fibre direction): there the law alone does not set the ply's in-plane shape (fibre waviness, shear); the "
+        "mesh, the step and the contact do (user guide, \"Material stability\")",
+        fmt_g(time, 4), st.def->name, fmt_g(100 * unstable / total, 3), fmt_g(q_min, 3), element_tag(st.mesh, worst),
+        detail::fmt_vec3(c[0], c[1], c[2]), T, deg > 90 ? 180 - deg : deg);
+  }
+  return {*smn, *smx, fmn, fmx, over / total, unstable / total, q_min};
 }
 
 // Each ply's row of plies.csv (ply_temperature, ply_crystallinity, ply_mechanics).
@@ -521,8 +572,9 @@ void Simulation::Run::sample_plies(double time) {
       }
     }
     if (job.mechanics) {
-      const std::array<double, 5> row = ply_mechanics(p, time);
+      const std::array<double, 7> row = ply_mechanics(p, time);
       ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + (shear_limit ? 5 : 4));
+      ply_rows.insert(ply_rows.end(), row.begin() + 5, row.end());
     }
     if (plies_csv.is_open()) {
       plies_csv << csv_number(time) << ',' << sim.parts_[p]->def->name;
@@ -601,9 +653,17 @@ void Simulation::Run::finish() {
   }
   // Each ply's share beyond the shear limit at the end (where the run
   // stopped; a first time beyond it found here is the end's).
+  // The same for the share whose long-term response is unstable.
   over_end.assign(parts.size(), 0.0);
-  if (shear_limit) try {
-      for (std::size_t p = 0; p < parts.size(); ++p) over_end[p] = ply_mechanics(p, t)[4];
+  unstable_end.assign(parts.size(), 0.0);
+  stability_min_end.assign(parts.size(), 0.0);
+  if (job.mechanics) try {
+      for (std::size_t p = 0; p < sim.mech_.size(); ++p) {
+        const std::array<double, 7> row = ply_mechanics(p, t);
+        over_end[p] = row[4];
+        unstable_end[p] = row[5];
+        stability_min_end[p] = row[6];
+      }
     } catch (const RunError& e) {
       if (failure.empty()) failure = e.what();
     }
@@ -692,12 +752,16 @@ void Simulation::Run::finish() {
         s.fibre_strain_min = v[2];
         s.fibre_strain_max = v[3];
         s.fraction_over_shear_limit = shear_limit ? v[4] : 0.0;
+        v += shear_limit ? 5 : 4;
+        s.fraction_unstable = v[0];
+        s.stability_min = v[1];
       }
       result.ply_history.push_back(s);
     }
   if (threshold) result.part_below_threshold_from_s = sim.below_from_;
   if (threshold) result.part_all_below_threshold_from_s = sim.all_below_from_;
   if (shear_limit) result.part_over_shear_limit_from_s = sim.over_from_;
+  if (job.mechanics) result.part_unstable_from_s = sim.unstable_from_;
 
   if (opt.write_files) {
     update_derived();
@@ -864,6 +928,9 @@ bool Simulation::Run::write_summary(std::string& why) const {
       ply["shear_angle_max_deg"] = result.part_shear_max_deg[p];
       ply["fibre_strain_min"] = result.part_fibre_strain_min[p];
       ply["fibre_strain_max"] = result.part_fibre_strain_max[p];
+      ply["fraction_unstable"] = unstable_end[p];
+      ply["stability_min_N_m"] = std::isfinite(stability_min_end[p]) ? json(stability_min_end[p]) : json(nullptr);
+      ply["unstable_from_s"] = sim.unstable_from_[p] >= 0 ? json(sim.unstable_from_[p]) : json(nullptr);
     }
     if (shear_limit) {
       ply["shear_angle_limit"] = shear_limits[p];
@@ -923,6 +990,12 @@ void Simulation::Run::log_end() const {
                 "to {:.3g}",
                 st.def->name, *mn, *mx, result.part_shear_min_deg[p], result.part_shear_max_deg[p], over,
                 result.part_fibre_strain_min[p], result.part_fibre_strain_max[p]);
+      if (sim.unstable_from_[p] >= 0)
+        log->warn("part '{}': long-term membrane response unstable from t = {} s, in {} % of its area at the end "
+                  "(down to {} N/m): the law alone does not set its in-plane shape there; compare with a finer mesh "
+                  "(user guide, \"Material stability\")",
+                  st.def->name, fmt_g(sim.unstable_from_[p], 4), fmt_g(100 * unstable_end[p], 3),
+                  fmt_g(stability_min_end[p], 3));
     }
     for (std::size_t q = 0; q < result.energy.tool_force_max.size(); ++q)
       log->info("tool '{}': largest force {:.4g} N at t = {} s", job.tools[q].name, result.energy.tool_force_max[q],
@@ -1006,6 +1079,12 @@ std::vector<std::vector<FrameField>> Simulation::frame_fields(const std::vector<
       } else if (f == "below_threshold_from") {
         fields[p].push_back({"below_threshold_from", st.below_from.data()});
         fields[p].push_back({"all_below_threshold_from", st.all_below_from.data()});
+      } else if (f == "membrane_stability" && p < mech.size()) {
+        // Sized at the first frame that shows it (update_element_fields).
+        if (mech[p]->stability.empty())
+          mech[p]->stability.assign(static_cast<std::size_t>(st.mesh.num_elements()),
+                                    std::numeric_limits<double>::quiet_NaN());
+        fields[p].push_back({f, mech[p]->stability.data(), 1, true});
       } else if ((f == "membrane_stress" || f == "curvature" || f == "membrane_strain") && p < mech.size()) {
         // Material-frame components [11, 22, 12] per element, as vectors.
         fields[p].push_back({f,

@@ -28,6 +28,7 @@
 #include <thermostamp/sdk/simd.hpp>
 
 #include "io/logging.hpp"
+#include "solve/stability.hpp"
 #include "solve/tools.hpp"
 
 namespace ts {
@@ -1731,6 +1732,12 @@ void Simulation::update_element_fields() {
     f.strain = m.strain;
     f.fibre = st.fibre;
     m.element->fields(f);
+    if (std::find(job_.output.fields.begin(), job_.output.fields.end(), "membrane_stability") !=
+        job_.output.fields.end())
+      if (const std::string e =
+              ply_stability(m.membrane, st.mesh.triangles, m.node_temperature, m.strain, m.stability, m.stability_tol);
+          !e.empty())
+        throw RunError("material law of part '" + st.def->name + "' failed in the stability check: " + e);
   }
 }
 

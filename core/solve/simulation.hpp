@@ -114,6 +114,8 @@ struct RunResult {
     double shear_min = 0, shear_max = 0;                // shear angle (degrees), over the elements
     double fibre_strain_min = 0, fibre_strain_max = 0;  // E11, over the elements
     double fraction_over_shear_limit = 0;  // of the initial area with |shear angle| > output.shear_angle_limit
+    double fraction_unstable = 0;          // of the initial area where the long-term response is unstable
+    double stability_min = 0;              // the smallest long-term stiffness q (N/m), over the elements
   };
   std::vector<PlySample> ply_history;  // a restarted run: those before its checkpoint too
   // per part, with output.temperature_threshold: the first time (s) a value
@@ -125,6 +127,9 @@ struct RunResult {
   // per part, with output.shear_angle_limit: the first row (s) at which an
   // element of the ply was sheared beyond it (-1: never)
   std::vector<double> part_over_shear_limit_from_s;
+  // per part, mechanics only: the first row (s) at which the long-term
+  // response of an element of the ply was unstable (-1: never)
+  std::vector<double> part_unstable_from_s;
   long long limited_node_steps = 0;  // bound-preserving corrections of the splitter
   std::vector<ProbeSample> probes;  // every sample (a restarted run: those before its checkpoint too)
   long long mechanical_steps = 0;
@@ -292,6 +297,7 @@ class Simulation {
   std::vector<double> below_from_;  // per part: first time below output.temperature_threshold (s), -1: not yet
   std::vector<double> all_below_from_;  // per part: first time all of it was below the threshold (s), -1: not yet
   std::vector<double> over_from_;   // per part: first row beyond output.shear_angle_limit (s), -1: not yet
+  std::vector<double> unstable_from_;  // per part: first row with a long-term unstable element (s), -1: not yet
   double last_mech_dt_ = 0;
   // Whether the element fields that only output frames show (stresses,
   // curvatures) are written after the force evaluation being done

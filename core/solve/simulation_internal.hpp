@@ -33,6 +33,9 @@ struct MechPart {
   std::vector<const sdk::MaterialLaw*> membrane;
   std::vector<double> curvature;
   std::vector<double> strain;  // Green-Lagrange membrane strain, 3 per element (ElementFields::strain)
+  // The field membrane_stability: the long-term stiffness q (N/m) per
+  // element (stability.hpp), where the frames show it.
+  std::vector<double> stability, stability_tol;
   std::vector<double> load;  // applied nodal forces at full value (N), 3 per node
   sdk::large_vector<double> f_con;  // contact forces (N)
   std::vector<double> k_contact;     // contact stiffness bound (N/m)
@@ -227,10 +230,16 @@ struct Simulation::Run {
   // The elements' shear angles and strains at a row, and their initial
   // areas (the weights of the share beyond the limit), per mechanics part.
   std::vector<std::vector<double>> row_shear, row_strain, elem_area;
+  // The elements' long-term stiffness q at a row and its tolerance
+  // (stability.hpp), per mechanics part.
+  std::vector<std::vector<double>> row_q, row_tol;
   // At the end: each ply's share beyond the shear limit, and (with the
   // thermal solver) its coldest, mean and hottest value and share below the
   // threshold (ply_temperature).
   std::vector<double> over_end;
+  // At the end: each ply's share of its area whose long-term response is
+  // unstable, and the smallest q (N/m), per mechanics part.
+  std::vector<double> unstable_end, stability_min_end;
   std::vector<std::array<double, 4>> ply_end;
 
   // The loop.
@@ -312,7 +321,7 @@ struct Simulation::Run {
   void sample_tools(double time);
   void sample_plies(double time);
   void sample_energy();
-  std::array<double, 5> ply_mechanics(std::size_t p, double time);
+  std::array<double, 7> ply_mechanics(std::size_t p, double time);
   std::optional<double> threshold_of(std::size_t p) const;
   std::pair<double, double> quasi_static() const;
   void finish();  // the tables into results.h5, the result, summary.json and the log's last lines

@@ -61,7 +61,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.32.1 (plugin SDK 0.20.0, ABI 20)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.33.0 (plugin SDK 0.20.0, ABI 20)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -2153,7 +2153,7 @@ TEST(Export, PliesOfAFrameAsGmshMeshes) {
   const hid_t file = H5Fopen((dir / "run" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
   const std::set<std::string> on_elements = {"shear_angle", "fibre_direction", "membrane_stress", "membrane_strain",
-                                             "curvature"};
+                                             "curvature", "membrane_stability"};
   for (const auto& part : j["parts"]) {
     const std::string name = part["name"];
     const auto msh = dir / "formed" / (name + ".msh");
@@ -2768,12 +2768,13 @@ TEST(Output, DatasetsCarryTheirUnits) {
   // and in the run's result.
   const auto pcols = split(text("series/plies", "columns")), punits = split(text("series/plies", "units"));
   ASSERT_EQ(pcols.size(), punits.size());
-  ASSERT_EQ(pcols.size(), 1 + 9 * j["parts"].size());
+  ASSERT_EQ(pcols.size(), 1 + 11 * j["parts"].size());
   EXPECT_EQ(pcols[1], j["parts"][0]["name"].get<std::string>() + "_temperature_min");
   EXPECT_EQ(pcols[9], j["parts"][0]["name"].get<std::string>() + "_fraction_over_shear_limit");
+  EXPECT_EQ(pcols[11], j["parts"][0]["name"].get<std::string>() + "_stability_min");
   for (std::size_t c = 1; c < pcols.size(); ++c)
-    EXPECT_EQ(punits[c],
-              std::vector<std::string>({"degC", "degC", "degC", "1", "deg", "deg", "1", "1", "1"})[(c - 1) % 9])
+    EXPECT_EQ(punits[c], std::vector<std::string>(
+                             {"degC", "degC", "degC", "1", "deg", "deg", "1", "1", "1", "1", "N/m"})[(c - 1) % 11])
         << pcols[c];
   const auto series = read_dataset<double>(file, "series/plies");
   H5Fclose(file);
@@ -2781,7 +2782,8 @@ TEST(Output, DatasetsCarryTheirUnits) {
   std::string line;
   std::getline(csv, line);
   EXPECT_EQ(line, "time,ply,temperature_min,temperature_mean,temperature_max,fraction_below,shear_angle_min,"
-                  "shear_angle_max,fibre_strain_min,fibre_strain_max,fraction_over_shear_limit");
+                  "shear_angle_max,fibre_strain_min,fibre_strain_max,fraction_over_shear_limit,fraction_unstable,"
+                  "stability_min");
   std::vector<std::vector<std::string>> rows;
   while (std::getline(csv, line)) rows.push_back(split(line));
   ASSERT_EQ(rows.size(), run.result.ply_history.size());
@@ -2789,16 +2791,17 @@ TEST(Output, DatasetsCarryTheirUnits) {
   ASSERT_GT(rows.size(), 10u);
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const auto& s = run.result.ply_history[r];
-    ASSERT_EQ(rows[r].size(), 11u);
+    ASSERT_EQ(rows[r].size(), 13u);
     EXPECT_EQ(rows[r][1], j["parts"][s.part]["name"].get<std::string>());
     EXPECT_NEAR(std::stod(rows[r][0]), s.time, 1e-9 * std::max(1.0, s.time));
     const double* wide = &series[(r / 2) * pcols.size()];
     EXPECT_EQ(wide[0], s.time);
-    const double values[9] = {s.min,       s.mean,      s.max,
-                              s.fraction_below, s.shear_min, s.shear_max,
-                              s.fibre_strain_min, s.fibre_strain_max, s.fraction_over_shear_limit};
-    for (int k = 0; k < 9; ++k) {
-      EXPECT_EQ(wide[1 + 9 * s.part + k], values[k]) << r << " " << k;
+    const double values[11] = {s.min,       s.mean,      s.max,
+                               s.fraction_below, s.shear_min, s.shear_max,
+                               s.fibre_strain_min, s.fibre_strain_max, s.fraction_over_shear_limit,
+                               s.fraction_unstable, s.stability_min};
+    for (int k = 0; k < 11; ++k) {
+      EXPECT_EQ(wide[1 + 11 * s.part + k], values[k]) << r << " " << k;
       EXPECT_NEAR(std::stod(rows[r][2 + k]), values[k], 1e-9 * std::max(1.0, std::abs(values[k]))) << r << " " << k;
     }
     EXPECT_LE(s.min, s.mean + 1e-9);  // the mean of equal values may differ from them by round-off

@@ -537,7 +537,13 @@ TEST(Restart, ExtendsAFinishedRunAsARunToTheLaterEnd) {
   const double from = s["restarted_from_s"].get<double>();
   EXPECT_LT(from, 0.5) << "the state before the last 100 steps of the first run";
   EXPECT_GT(from, 0.4);
-  EXPECT_EQ(comparable_summary(dir / "direct"), comparable_summary(out));
+  // The first row with an unstable element comes from the rows before the
+  // checkpoint, which keep the first run's spacing (see compare below).
+  auto without_row_times = [](json j) {
+    for (auto& p : j["parts"]) p.erase("unstable_from_s");
+    return j;
+  };
+  EXPECT_EQ(without_row_times(comparable_summary(dir / "direct")), without_row_times(comparable_summary(out)));
   for (const char* f : {"probes.csv", "results.xdmf"})
     EXPECT_TRUE(file_text(dir / "direct" / f) == file_text(out / f)) << f;
   auto frames = [](const std::filesystem::path& d) {
@@ -750,7 +756,12 @@ TEST(Restart, CloserFramesFromACheckpoint) {
                         "closer frames)"),
             std::string::npos)
       << f1.err;
-  const auto first_line = [](const std::string& e) { return e.substr(0, e.find('\n')); };
+  // The failure's line (the first run's warnings before the checkpoint are
+  // not given again).
+  const auto first_line = [](const std::string& e) {
+    const std::size_t at = e.find("[error]");
+    return at == std::string::npos ? std::string() : e.substr(at, e.find('\n', at) - at);
+  };
   const std::string energy_before = file_text(failing / "energy.csv");
   const auto f2 =
       run_cli(job, failing, 1, tight + " --restart --set output.interval=0.01 --set output.series_interval=1e-3");

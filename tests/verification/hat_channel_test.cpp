@@ -72,8 +72,19 @@ std::map<std::pair<std::string, std::string>, double> probe_values(const std::fi
 // one within 0.1 mm of the punch (measured 0.05 mm), and both plies down
 // 20 mm at the channel's bottom (within 0.05 mm, the penalty's
 // penetration). The job draws no warning (a punch left in its closed
-// position at the start would have had 93 nodes of the plies behind it),
-// and the energy balance error stays under 1e-4.
+// position at the start would have had 93 nodes of the plies behind it)
+// but the material stability ones, and the energy balance error stays
+// under 1e-4.
+//
+// Material stability: the lower ply crosses the channel across its
+// fibres and is drawn in by 4.3 of the section's 12.2 mm excess length;
+// the rest, about 8 mm over the 37 mm of its path in the channel (x < 30
+// mm, 43 % of its area), stretches it across the fibres by some 20 %, far
+// beyond the 5.3 % at which the card's long-term response at 300 degC
+// loses its stability (docs/mechanics-method.md). Required: the lower
+// ply's unstable share at the end above 0.4 (measured 0.54: the channel and
+// the flange next to the die's radius), the upper ply's, whose fibres take
+// the excess length by drawing in, under 0.05 (measured 0.018).
 TEST(HatChannel, FibresAcrossTheChannelDrawInByTheSectionsExcessLength) {
   const auto example = source_dir() / "examples" / "hat_channel";
   {
@@ -102,8 +113,24 @@ TEST(HatChannel, FibresAcrossTheChannelDrawInByTheSectionsExcessLength) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::ifstream log(out / "log.txt");
   const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
-  EXPECT_EQ(text.find("[warning]"), std::string::npos) << text;
+  for (std::size_t at = text.find("[warning]"); at != std::string::npos; at = text.find("[warning]", at + 1)) {
+    const std::string line = text.substr(at, text.find('\n', at) - at);
+    EXPECT_NE(line.find("(user guide, \"Material stability\")"), std::string::npos) << line;
+  }
+  EXPECT_NE(text.find("part 'ply_0': the long-term (relaxed) response of its membrane law is unstable"),
+            std::string::npos)
+      << text;
   const json summary = json::parse(std::ifstream(out / "summary.json"));
+  for (const auto& ply : summary["parts"]) {
+    const double share = ply["fraction_unstable"].get<double>();
+    if (ply["name"] == "ply_0") {
+      EXPECT_GT(share, 0.4);
+    } else {
+      EXPECT_LT(share, 0.05);
+    }
+    std::printf("%s: long-term response unstable in %.3f of the area at the end, from t = %s s\n",
+                ply["name"].get<std::string>().c_str(), share, ply["unstable_from_s"].dump().c_str());
+  }
   EXPECT_LT(std::abs(summary["energy"]["balance_error"].get<double>()), 1e-4) << summary["energy"].dump();
 
   const auto v = probe_values(out / "probes.csv", 0.7);

@@ -553,6 +553,66 @@ TEST(PlyHistory, ShearBandsAgainstPrescribedSimpleShear) {
               worst_angle, worst_strain, limit, from, t_star);
 }
 
+// A UD sheet (the card's laws: ud_hyperelastic, p_ct 50 N/m, and the
+// viscoelastic shear, g_inf 0.2 after relaxation) stretched across its
+// fibres at a prescribed rate r, every node moving with v_x = r x: C =
+// diag(1, lambda^2) in the fibre frame, lambda = 1 + r t, in every element.
+// The long-term stiffness against fibre waviness is then 2 g_inf omega(T)
+// k_sh^1 - 2 p_ct ln lambda (docs/mechanics-method.md, "Material
+// stability"), zero at lambda* = exp(g_inf omega k_sh^1 / p_ct) = 1.05318
+// at 300 degC. Required at every row of plies.csv: stability_min equal to
+// the closed form to 1e-6 of 2 p_ct (the finite differences of the check),
+// fraction_unstable 0 before t* = (lambda* - 1) / r and 1 after it (every
+// element alike); the first row with an unstable element, in summary.json,
+// is the first row after t*.
+TEST(MaterialStability, UdSheetStretchedAcrossTheFibresAgainstTheClosedForm) {
+  constexpr double L = 0.04, W = 0.02, T = 0.2, rate = 0.5, interval = 0.01, temp = 300.0;
+  constexpr double p_ct = 50.0, k1 = 18.5, g_inf = 0.2;
+  const double omega = 1.0 - 0.01 * (temp - 270.0);
+  const auto dir = temp_dir("stability_sheet");
+  json j = strip_job(90.0, 0.0, T);
+  j["materials"]["ud"]["membrane"] = {{{"law", "ud_hyperelastic"}, {"k_fibre", 1.0e6}, {"p_ct", p_ct}},
+                                      {{"law", "viscoelastic_shear"},
+                                       {"k_sh", {k1, 46.4, -21.3}},
+                                       {"omega_slope_below", -0.02},
+                                       {"omega_slope_above", -0.01},
+                                       {"g", {0.5, 0.3}},
+                                       {"tau", {0.2, 2.0}}}};
+  j["parts"][0]["mesh"] = {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {L, W}}, {"divisions", {4, 2}}};
+  j["parts"][0]["initial_temperature"] = temp;
+  json cons = json::array();
+  for (int i = 0; i <= 4; ++i) {
+    const double x = L * i / 4, e = 1e-7;
+    cons.push_back({{"type", "velocity"}, {"part", "strip"}, {"box", {{x - e, -1, -1}, {x + e, 1, 1}}},
+                    {"velocity", {rate * x, 0.0, 0.0}}});
+  }
+  j["constraints"] = cons;
+  j["output"] = {{"interval", T / 4}, {"series_interval", interval}, {"fields", {"membrane_stability"}}};
+  const JobRun r = run_json(j, 0, dir);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const double g = g_inf * omega * k1, t_star = (std::exp(g / p_ct) - 1) / rate;
+  double worst = 0;
+  ASSERT_GT(r.result.ply_history.size(), 15u);
+  for (const auto& s : r.result.ply_history) {
+    const double q = 2 * g - 2 * p_ct * std::log(1 + rate * s.time);
+    EXPECT_NEAR(s.stability_min, q, 1e-6 * 2 * p_ct) << s.time;
+    EXPECT_EQ(s.fraction_unstable, s.time > t_star ? 1.0 : 0.0) << s.time;
+    worst = std::max(worst, std::abs(s.stability_min - q));
+  }
+  const double due = std::ceil(t_star / interval) * interval, dt = r.result.mechanical_dt;
+  ASSERT_EQ(r.result.part_unstable_from_s.size(), 1u);
+  const double from = r.result.part_unstable_from_s[0];
+  EXPECT_GE(from, due - 1e-9);
+  EXPECT_LT(from, due + dt + 1e-9);
+  std::ifstream in(dir / "summary.json");
+  const json summary = json::parse(in);
+  EXPECT_EQ(summary["parts"][0]["unstable_from_s"].get<double>(), from);
+  EXPECT_EQ(summary["parts"][0]["fraction_unstable"].get<double>(), 1.0);
+  std::printf("sheet across the fibres: stability_min within %.2e N/m of the closed form over %zu rows; unstable "
+              "from the row of t = %.6g s (t* = %.6g s)\n",
+              worst, r.result.ply_history.size(), from, t_star);
+}
+
 }  // namespace ts::test
 
 namespace ts::test {
