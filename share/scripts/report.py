@@ -17,6 +17,9 @@ Writes into DIR/figures/:
                        frames have the field conductance
   tool_gap_<part>.png  the gap between each ply and its tools (mm), last
                        frame, where the frames have the field tool_gap
+  stability_<part>.png  the long-term stiffness of each ply's membrane law
+                       (N/m, red below 0: unstable), last frame, where
+                       the frames have the field membrane_stability
   crystallinity_<part>.png  the relative crystallinity of each ply (its
                        mean and its smallest value through the
                        thickness), last frame, where the frames have the
@@ -34,7 +37,9 @@ Writes into DIR/figures/:
                        it, and with crystallisation kinetics its
                        crystallinity; with the mechanics, the band of its
                        elements' shear angles and, with output.shear_angle_limit,
-                       the share of its area sheared beyond the limit
+                       the share of its area sheared beyond the limit,
+                       and where a ply's law lost its stability the share
+                       of its area that did
   energy.png           energy audit against time
   materials.png        the specific heat and the conductivity against the
                        temperature of every material whose values
@@ -268,6 +273,25 @@ def pressure_map(out, part, time, tri, xyz, vals):
     return save(fig, out, "pressure_%s.png" % part, dpi=110, tight=False)
 
 
+def stability_map(out, part, time, tri, xyz, q):
+    """The smallest long-term stiffness q of one ply's membrane law (per
+    element, N/m): diverging about 0, red where q < 0, where the law has
+    lost its stability (user guide, "Material stability"); grey where the
+    element had none (collapsed)."""
+    finite = q[np.isfinite(q)]
+    span = max(np.abs(finite).max() if finite.size else 1.0, 1e-12)
+    cmap = plt.get_cmap("RdBu").copy()
+    cmap.set_bad("lightgrey")
+    fig, ax = plt.subplots(figsize=(5.2, 4.4))
+    for mxy, mtri, v in mirrored(xyz[:, :2], tri, q, True):
+        pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.ma.masked_invalid(v),
+                          norm=matplotlib.colors.TwoSlopeNorm(vcenter=0.0, vmin=-span, vmax=span), cmap=cmap)
+    unstable = np.count_nonzero(finite < 0)
+    finish_map(fig, ax, pc, "%s: long-term membrane stiffness q, t = %.3g s\n%d of %d elements below 0 (red), "
+               "smallest %.3g N/m" % (part, time, unstable, q.size, finite.min() if finite.size else np.nan), "N/m")
+    return save(fig, out, "stability_%s.png" % part, dpi=110, tight=False)
+
+
 def threshold_of(folder, part):
     """The ply's output.temperature_threshold from summary.json, None if unknown."""
     try:
@@ -327,6 +351,8 @@ def plot_maps(folder, out):
                                             g["conductance_top"][()]))
             if "tool_gap" in g:
                 made.append(tool_gap_map(out, part, time, tri, xyz, 1e3 * g["tool_gap"][()]))
+            if "membrane_stability" in g:
+                made.append(stability_map(out, part, time, tri, xyz, g["membrane_stability"][()]))
             if "below_threshold_from" in g and "all_below_threshold_from" in g:
                 made.append(threshold_map(out, part, time, tri, xyz, g["below_threshold_from"][()],
                                           g["all_below_threshold_from"][()], threshold_of(folder, part)))
@@ -475,6 +501,9 @@ def plot_plies(folder, out):
         panels.append("shear")
         if all("fraction_over_shear_limit" in v for v in plies.values()):
             panels.append("over")
+    # the share whose long-term response is unstable, where some ply has one
+    if any("fraction_unstable" in v and np.nanmax(v["fraction_unstable"]) > 0 for v in plies.values()):
+        panels.append("unstable")
     if not panels:
         return []
     fig, axes = grid(len(panels), 5.0, 4.0, 2 if len(panels) == 4 else 3)
@@ -499,6 +528,9 @@ def plot_plies(folder, out):
                                    lw=0)
                     a.plot(v["time"], v["crystallinity_mean"], color=c,
                            label="%s: mean, band from smallest to largest" % name)
+            elif panel == "unstable":
+                if "fraction_unstable" in v:
+                    a.plot(v["time"], 100 * v["fraction_unstable"], color=c, label=name)
             else:
                 a.plot(v["time"], 100 * v["fraction_over_shear_limit"], color=c, label=name)
         if panel == "temperature":
@@ -525,6 +557,10 @@ def plot_plies(folder, out):
             a.set_ylabel("% of the ply's heat capacity")
             a.set_title("share below %s" % ("%g degC" % next(iter(threshold.values())) if common_t
                                              else "each ply's threshold"))
+            a.set_ylim(-2, 102)
+        elif panel == "unstable":
+            a.set_ylabel("% of the ply's initial area")
+            a.set_title("share whose long-term response is unstable")
             a.set_ylim(-2, 102)
         else:
             a.set_ylabel("% of the ply's initial area")
