@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <limits>
 
 namespace ts {
@@ -154,19 +155,19 @@ double acoustic_minimum(const double F[4], const double S[3], const double D[9],
     return std::numeric_limits<double>::quiet_NaN();
   }
   const double phi0 = jb * h;
-  double phi = phi0;
-  for (int it = 0; it < 8; ++it) {
-    double f, f1, f2;
-    curve.derivatives(phi, f, f1, f2);
-    if (!(f2 > 0)) break;
+  double phi = phi0, f, f1, f2;
+  curve.derivatives(phi, f, f1, f2);
+  for (int it = 0; it < 8 && f2 > 0; ++it) {
     const double next = phi - f1 / f2;
     if (!(std::abs(next - phi0) <= h)) break;
     double g, g1, g2;
     curve.derivatives(next, g, g1, g2);
     if (!(g <= best)) break;
-    const bool done = std::abs(next - phi) < 1e-12;
     best = g;
+    const bool done = std::abs(next - phi) < 1e-12;
     phi = next;
+    f1 = g1;
+    f2 = g2;
     if (done) break;
   }
   if (theta_min) {
@@ -210,7 +211,14 @@ std::string long_term_stability(std::span<const sdk::MaterialLaw* const> laws, s
       b.dt = kLongTermDt;
       b.state = std::span<double>(&s.state[ns * a], ns * len);
       b.stress = std::span<double>(&s.stress[3 * a], 3 * len);
-      if (auto st = law->evaluate(b); !st) return st.message;
+      // Called from the threads of ply_stability: nothing may escape.
+      try {
+        if (auto st = law->evaluate(b); !st) return st.message;
+      } catch (const std::exception& e) {
+        return e.what();
+      } catch (...) {
+        return "unknown error inside the law";
+      }
       p0 = p1;
     }
     for (std::size_t k = 0; k < 3 * m; ++k) s.sum[k] += s.stress[k];
