@@ -209,7 +209,7 @@ std::string long_term_stability(std::span<const sdk::MaterialLaw* const> laws, s
       if (law->uses_strain_old()) b.strain_old = b.strain;
       b.temperature = std::span<const double>(&s.temperature[a], len);
       b.dt = kLongTermDt;
-      b.state = std::span<double>(&s.state[ns * a], ns * len);
+      b.state = std::span<double>(s.state.data() + ns * a, ns * len);  // empty for a law without history
       b.stress = std::span<double>(&s.stress[3 * a], 3 * len);
       // Called from the threads of ply_stability: nothing may escape.
       try {
