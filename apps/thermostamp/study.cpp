@@ -165,6 +165,7 @@ double value_at(const PlySeries& m, double t) {
 // What the forming comes to in a run: per ply its mean temperature at the
 // end, with output.temperature_threshold the first time a value and every
 // value were below it, with the mechanics its largest |shear angle| at the
+// end, the share of its area whose long-term response is unstable at the
 // end and, with output.shear_angle_limit, the share of its area beyond it;
 // per tool the heat it gave to the plies. Pairs [column, value or null], in
 // column order.
@@ -188,6 +189,8 @@ json run_outcomes(const RunResult& r, const Job& job) {
     }
     if (mechanics && p < r.part_shear_max_deg.size())
       o.push_back({n + "_shear_max_deg", std::max(std::abs(r.part_shear_min_deg[p]), std::abs(r.part_shear_max_deg[p]))});
+    if (mechanics && p < r.part_shear_max_deg.size())
+      o.push_back({n + "_unstable_end", last ? json(last->fraction_unstable) : json(nullptr)});
     if (mechanics && !job.output.shear_angle_limit.empty())
       o.push_back({n + "_over_shear_limit", last ? json(last->fraction_over_shear_limit) : json(nullptr)});
   }

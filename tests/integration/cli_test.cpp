@@ -316,9 +316,11 @@ TEST(Cli, StudyGivesTheToolForces) {
     return it == rows[0].end() ? -1 : static_cast<int>(it - rows[0].begin());
   };
   const int die = col("die_force_max_N"), holder = col("holder_force_max_N"), shear = col("ply_shear_max_deg");
+  const int unstable = col("ply_unstable_end");
   ASSERT_GE(die, 0);
   ASSERT_GE(holder, 0);
   ASSERT_GE(shear, 0);
+  ASSERT_EQ(unstable, shear + 1);
   for (std::size_t k = 1; k < rows.size(); ++k) {
     const json s = json::parse(std::ifstream(dir / "out" / rows[k][0] / "summary.json"));
     for (const auto& [c, t] : {std::pair{die, 0}, std::pair{holder, 1}}) {
@@ -326,6 +328,8 @@ TEST(Cli, StudyGivesTheToolForces) {
       EXPECT_NEAR(std::stod(rows[k][c]), in_summary, 5e-6 * in_summary) << rows[k][0];  // the table's 6 digits
       EXPECT_GT(in_summary, 0.99 * F * k) << rows[k][0];
     }
+    const double share = s["parts"][0]["fraction_unstable"].get<double>();
+    EXPECT_NEAR(std::stod(rows[k][unstable]), share, 5e-6 * std::max(share, 1e-300)) << rows[k][0];
   }
 }
 
