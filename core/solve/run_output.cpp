@@ -531,6 +531,8 @@ std::array<double, 7> Simulation::Run::ply_mechanics(std::size_t p, double time)
   if (worst < 0)
     for (double q : row_q[p])
       if (q < q_min) q_min = q;
+  // No element with a value (every one collapsed): none, rather than infinity.
+  if (!std::isfinite(q_min)) q_min = std::numeric_limits<double>::quiet_NaN();
   if (worst >= 0 && sim.unstable_from_[p] < 0) {
     sim.unstable_from_[p] = time;
     // The worst element: where it is, and the direction of the pattern
