@@ -198,6 +198,7 @@ Simulation::Run::Run(Simulation& s, const RunOptions& o, Clock::time_point w0, i
   row_strain.resize(n_mech);
   row_q.resize(n_mech);
   row_tol.resize(n_mech);
+  row_theta.resize(n_mech);
   elem_area.resize(n_mech);
   for (std::size_t p = 0; p < n_mech; ++p) {
     const std::size_t ne = static_cast<std::size_t>(parts[p]->mesh.num_elements());

@@ -513,7 +513,7 @@ std::array<double, 7> Simulation::Run::ply_mechanics(std::size_t p, double time)
   const MechPart& m = *sim.mech_[p];
   const PartState& st = *sim.parts_[p];
   if (const std::string e = ply_stability(m.membrane, st.mesh.triangles, m.node_temperature, row_strain[p], row_q[p],
-                                          row_tol[p]);
+                                          row_tol[p], &row_theta[p]);
       !e.empty())
     throw RunError("material law of part '" + st.def->name + "' failed in the stability check at t = " +
                    fmt_g(time) + " s: " + e);
@@ -541,14 +541,9 @@ std::array<double, 7> Simulation::Run::ply_mechanics(std::size_t p, double time)
     double c[3] = {0, 0, 0};
     for (int a = 0; a < 3; ++a)
       for (int d = 0; d < 3; ++d) c[d] += st.x[3 * tri[a] + d] / 3.0;
-    const double* E = &row_strain[p][3 * static_cast<std::size_t>(worst)];
-    const double C[3] = {1 + 2 * E[0], 1 + 2 * E[1], 2 * E[2]};
     const double T = m.node_temperature[tri[0]] / 3.0 + m.node_temperature[tri[1]] / 3.0 +
                      m.node_temperature[tri[2]] / 3.0;
-    StabilityScratch sc;
-    double q = 0, theta = 0;
-    long_term_stability(m.membrane, 1, C, &T, &q, sc, &theta);
-    const double deg = theta * 180.0 / 3.14159265358979323846;
+    const double deg = row_theta[p][worst] * 180.0 / 3.14159265358979323846;
     logger("solve")->warn(
         "t = {} s: part '{}': the long-term (relaxed) response of its membrane law is unstable in {} % of its area "
         "(down to {} N/m at element {}, {} m, {:.4g} degC, for a pattern varying at {:.0f} deg from the initial "

@@ -230,9 +230,9 @@ struct Simulation::Run {
   // The elements' shear angles and strains at a row, and their initial
   // areas (the weights of the share beyond the limit), per mechanics part.
   std::vector<std::vector<double>> row_shear, row_strain, elem_area;
-  // The elements' long-term stiffness q at a row and its tolerance
-  // (stability.hpp), per mechanics part.
-  std::vector<std::vector<double>> row_q, row_tol;
+  // The elements' long-term stiffness q at a row, its tolerance and the
+  // angle of the worst direction (stability.hpp), per mechanics part.
+  std::vector<std::vector<double>> row_q, row_tol, row_theta;
   // At the end: each ply's share beyond the shear limit, and (with the
   // thermal solver) its coldest, mean and hottest value and share below the
   // threshold (ply_temperature).

@@ -255,9 +255,10 @@ double stability_tolerance(std::span<const sdk::MaterialLaw* const> laws, double
 
 std::string ply_stability(std::span<const sdk::MaterialLaw* const> laws, std::span<const int> triangles,
                           std::span<const double> node_temperature, std::span<const double> strain,
-                          std::vector<double>& q, std::vector<double>& tolerance) {
+                          std::vector<double>& q, std::vector<double>& tolerance, std::vector<double>* theta) {
   const int ne = static_cast<int>(triangles.size() / 3);
   q.assign(static_cast<std::size_t>(ne), std::numeric_limits<double>::quiet_NaN());
+  if (theta) theta->assign(static_cast<std::size_t>(ne), std::numeric_limits<double>::quiet_NaN());
   tolerance.assign(static_cast<std::size_t>(ne), 0.0);
   constexpr int kBlock = 256;
   const int blocks = (ne + kBlock - 1) / kBlock;
@@ -280,7 +281,8 @@ std::string ply_stability(std::span<const sdk::MaterialLaw* const> laws, std::sp
         T[i] = node_temperature[t[0]] / 3.0 + node_temperature[t[1]] / 3.0 + node_temperature[t[2]] / 3.0;
         tolerance[e] = stability_tolerance(laws, T[i]);
       }
-      errors[b] = long_term_stability(laws, static_cast<std::size_t>(n), C.data(), T.data(), &q[e0], s);
+      errors[b] = long_term_stability(laws, static_cast<std::size_t>(n), C.data(), T.data(), &q[e0], s,
+                                      theta ? theta->data() + e0 : nullptr);
     }
   }
   for (const auto& e : errors)

@@ -60,10 +60,13 @@ double stability_tolerance(std::span<const sdk::MaterialLaw* const> laws, double
 // q of each element of a ply from its Green-Lagrange membrane strains E
 // (3 per element, as ElementFields::strain gives them: C = I + 2 E) at the
 // mean of its nodes' temperatures, and the tolerance at that temperature;
-// over blocks of elements on the threads (the same values on any number).
-// Returns an empty string, or the message of a law that failed.
+// over blocks of elements on the threads (the same values on any number);
+// theta, where not null, the angle of each element's worst n (as
+// long_term_stability). Returns an empty string, or the message of a law
+// that failed.
 std::string ply_stability(std::span<const sdk::MaterialLaw* const> laws, std::span<const int> triangles,
                           std::span<const double> node_temperature, std::span<const double> strain,
-                          std::vector<double>& q, std::vector<double>& tolerance);
+                          std::vector<double>& q, std::vector<double>& tolerance,
+                          std::vector<double>* theta = nullptr);
 
 }  // namespace ts
