@@ -658,6 +658,11 @@ void parse_job_into(Job& job) {
                                                   m.mixture_fibre_fraction >= 0 ? m.mixture_matrix_mass_fraction : -1.0);
       if (const json* v = r.optional_raw("membrane")) m.membrane = *v;
       if (const json* v = r.optional_raw("bending")) m.bending = *v;
+      if (const json* v = r.optional_raw("in_plane_bending")) {
+        if (!r.has("bending"))
+          throw JobError(r.at("in_plane_bending"), "needs a bending law too (materials." + m.name + ".bending)");
+        m.in_plane_bending = *v;
+      }
       r.declare("source");
       r.declare("description");
       r.declare("card");  // taken in by resolve_material_cards

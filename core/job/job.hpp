@@ -42,7 +42,7 @@ struct MaterialDef {
   // `mixture` (matrix and fibre); negative when they were given.
   double mixture_fibre_fraction = -1;
   double mixture_matrix_mass_fraction = 0;  // (1 - V_f) rho_m / rho, with a mixture
-  json membrane, bending;  // null when absent
+  json membrane, bending, in_plane_bending;  // null when absent
   // The crystallisation kinetics of the matrix (Nakamura), see
   // solve/crystallisation.hpp; `present` false when the material has none.
   struct Crystallisation {

@@ -221,6 +221,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                               "the last (linear between rows): the crystals melt on heating, taking the latent heat"}}}}}}},
         {"membrane", {{"anyOf", {law, {{"type", "array"}, {"items", law}}}}}},
         {"bending", law},
+        {"in_plane_bending", law},
         {"description", {{"type", "string"}}},
         {"source", {{"type", "string"}}}}},
       {"not",

@@ -544,13 +544,36 @@ std::array<double, 7> Simulation::Run::ply_mechanics(std::size_t p, double time)
     const double T = m.node_temperature[tri[0]] / 3.0 + m.node_temperature[tri[1]] / 3.0 +
                      m.node_temperature[tri[2]] / 3.0;
     const double deg = row_theta[p][worst] * 180.0 / 3.14159265358979323846;
+    // With the fibres' in-plane bending (rigidity R at the element's
+    // temperature), a pattern of wavelength l along n costs q k^2 + R
+    // cos^4(theta) k^4 per amplitude squared (k = 2 pi / l): those shorter
+    // than 2 pi cos^2(theta) sqrt(R / |q|) are held.
+    std::string who = "the mesh, the step and the contact do";
+    if (m.in_plane_bending) {
+      double chi[3] = {1.0, 0.0, 0.0}, moment[3] = {0, 0, 0}, w = 0;
+      sdk::MaterialBlock blk;
+      blk.n = 1;
+      blk.strain = chi;
+      blk.temperature = std::span<const double>(&T, 1);
+      blk.stress = moment;
+      blk.energy = std::span<double>(&w, 1);
+      const double cth = std::cos(row_theta[p][worst]);
+      const double length = m.in_plane_bending->evaluate(blk) && moment[0] > 0
+                                ? 2 * 3.14159265358979323846 * cth * cth * std::sqrt(moment[0] / -q_min)
+                                : 0.0;
+      who = length > 0 ? fmt::format("its in-plane fibre bending (in_plane_bending) holds such patterns shorter than "
+                                     "{} mm there, the longer ones are the ply's own",
+                                     fmt_g(1e3 * length, 3))
+                       : "its in-plane fibre bending (in_plane_bending) does not hold this pattern; the mesh, the "
+                         "step and the contact do";
+    }
     logger("solve")->warn(
         "t = {} s: part '{}': the long-term (relaxed) response of its membrane law is unstable in {} % of its area "
         "(down to {} N/m at element {}, {} m, {:.4g} degC, for a pattern varying at {:.0f} deg from the initial "
-        "fibre direction): there the law alone does not set the ply's in-plane shape (fibre waviness, shear); the "
-        "mesh, the step and the contact do (user guide, \"Material stability\")",
+        "fibre direction): there the law alone does not set the ply's in-plane shape (fibre waviness, shear); {} "
+        "(user guide, \"Material stability\")",
         fmt_g(time, 4), st.def->name, fmt_g(100 * unstable / total, 3), fmt_g(q_min, 3), element_tag(st.mesh, worst),
-        detail::fmt_vec3(c[0], c[1], c[2]), T, deg > 90 ? 180 - deg : deg);
+        detail::fmt_vec3(c[0], c[1], c[2]), T, deg > 90 ? 180 - deg : deg, who);
   }
   return {*smn, *smx, fmn, fmx, over / total, unstable / total, q_min};
 }
@@ -989,10 +1012,13 @@ void Simulation::Run::log_end() const {
                 result.part_fibre_strain_min[p], result.part_fibre_strain_max[p]);
       if (sim.unstable_from_[p] >= 0)
         log->warn("part '{}': long-term membrane response unstable from t = {} s, in {} % of its area at the end "
-                  "(down to {} N/m): the law alone does not set its in-plane shape there; compare with a finer mesh "
-                  "(user guide, \"Material stability\")",
+                  "(down to {} N/m): the law alone does not set its in-plane shape there; {} (user guide, "
+                  "\"Material stability\")",
                   st.def->name, fmt_g(sim.unstable_from_[p], 4), fmt_g(100 * unstable_end[p], 3),
-                  fmt_g(stability_min_end[p], 3));
+                  fmt_g(stability_min_end[p], 3),
+                  sim.mech_[p]->in_plane_bending
+                      ? "its in-plane fibre bending gives fibre waviness a length there; compare with a finer mesh"
+                      : "compare with a finer mesh");
     }
     for (std::size_t q = 0; q < result.energy.tool_force_max.size(); ++q)
       log->info("tool '{}': largest force {:.4g} N at t = {} s", job.tools[q].name, result.energy.tool_force_max[q],

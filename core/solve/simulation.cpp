@@ -575,26 +575,26 @@ void Simulation::build_mechanics() {
       law_uses_.push_back({law.get(), ptr, obj["law"].get<std::string>()});
       laws_.push_back(std::move(law));
     }
-    const sdk::MaterialLaw* bending = nullptr;
-    if (!mat.bending.is_null()) {
-      const std::string ptr = mat.pointer + "/bending";
-      if (auto it = made.find(ptr); it != made.end()) {
-        bending = it->second;
-      } else {
-        if (!mat.bending.is_object() || !mat.bending.contains("law") || !mat.bending["law"].is_string())
-          throw JobError(ptr + "/law", "required string, missing");
-        const PluginRecord& rec = registry_.require(sdk::PluginKind::Material, mat.bending["law"], ptr + "/law");
-        const sdk::Params params = validate_params(mat.bending, ptr, rec.descriptor, {"law"});
-        std::unique_ptr<sdk::MaterialLaw> law(reinterpret_cast<sdk::MaterialLaw* (*)()>(rec.create)());
-        if (auto s = law->configure(params); !s) throw JobError(ptr, "material law: " + s.message);
-        if (law->role() != sdk::LawRole::Bending)
-          throw JobError(ptr + "/law", "'" + mat.bending["law"].get<std::string>() + "' is not a bending law");
-        bending = law.get();
-        made[ptr] = law.get();
-        law_uses_.push_back({law.get(), ptr, mat.bending["law"].get<std::string>()});
-        laws_.push_back(std::move(law));
-      }
-    }
+    // Bending laws: the ply's bending and the fibres' bending in its plane.
+    const auto bending_law = [&](const json& obj, const std::string& ptr) -> const sdk::MaterialLaw* {
+      if (obj.is_null()) return nullptr;
+      if (auto it = made.find(ptr); it != made.end()) return it->second;
+      if (!obj.is_object() || !obj.contains("law") || !obj["law"].is_string())
+        throw JobError(ptr + "/law", "required string, missing");
+      const PluginRecord& rec = registry_.require(sdk::PluginKind::Material, obj["law"], ptr + "/law");
+      const sdk::Params params = validate_params(obj, ptr, rec.descriptor, {"law"});
+      std::unique_ptr<sdk::MaterialLaw> law(reinterpret_cast<sdk::MaterialLaw* (*)()>(rec.create)());
+      if (auto s = law->configure(params); !s) throw JobError(ptr, "material law: " + s.message);
+      if (law->role() != sdk::LawRole::Bending)
+        throw JobError(ptr + "/law", "'" + obj["law"].get<std::string>() + "' is not a bending law");
+      const sdk::MaterialLaw* made_law = law.get();
+      made[ptr] = made_law;
+      law_uses_.push_back({made_law, ptr, obj["law"].get<std::string>()});
+      laws_.push_back(std::move(law));
+      return made_law;
+    };
+    const sdk::MaterialLaw* bending = bending_law(mat.bending, mat.pointer + "/bending");
+    const sdk::MaterialLaw* in_plane = bending_law(mat.in_plane_bending, mat.pointer + "/in_plane_bending");
     const PluginRecord& rec = registry_.require(sdk::PluginKind::Element, def.element, def.pointer + "/element");
     const sdk::Params eparams = validate_params(json::object(), def.pointer + "/element", rec.descriptor);
     m->element.reset(reinterpret_cast<sdk::ElementKernel* (*)()>(rec.create)());
@@ -633,6 +633,8 @@ void Simulation::build_mechanics() {
     setup.edge_condition = m->edge_condition;
     setup.membrane = m->membrane;
     setup.bending = bending;
+    setup.in_plane_bending = in_plane;
+    m->in_plane_bending = in_plane;
     setup.density = mat.density;
     setup.temperature = st.t0;
     if (!(mat.density > 0)) throw JobError(mat.pointer + "/density", "a density > 0 is needed by the mechanics solver");

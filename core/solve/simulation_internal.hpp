@@ -31,6 +31,7 @@ namespace ts {
 struct MechPart {
   std::unique_ptr<sdk::ElementKernel> element;
   std::vector<const sdk::MaterialLaw*> membrane;
+  const sdk::MaterialLaw* in_plane_bending = nullptr;  // the material's in_plane_bending, or null
   std::vector<double> curvature;
   std::vector<double> strain;  // Green-Lagrange membrane strain, 3 per element (ElementFields::strain)
   // The field membrane_stability: the long-term stiffness q (N/m) per

@@ -61,7 +61,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.33.0 (plugin SDK 0.20.0, ABI 20)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.34.0 (plugin SDK 0.21.0, ABI 21)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -429,6 +429,8 @@ TEST(Cli, BadInputIsOneLineWithPointerAndExit2) {
       {"mesh_reorder_generator", [](json& j) { j["parts"][0]["mesh"]["reorder"] = false; }, "error: /parts/0/mesh/reorder: only for a mesh read from a file: the rectangle generator numbers its triangles row by row"},
       {"mechanics_no_law", [](json& j) { j["solvers"]["mechanics"] = {{"dt_safety", 0.8}}; }, "error: /materials/pa66_cf_ud: material 'pa66_cf_ud' has no membrane law"},
       {"damping_direction", [](json& j) { j["solvers"]["mechanics"] = {{"damping", 20.0}, {"damping_direction", "normals"}}; }, "error: /solvers/mechanics/damping_direction: unknown value 'normals'; did you mean 'normal'?; valid values are: all, normal"},
+      {"in_plane_bending_without_bending", [](json& j) { j["materials"]["pa66_cf_ud"]["in_plane_bending"] = {{"law", "thermo_linear_bending"}, {"beta1_B", 1e-3}, {"beta2_B", 0.0}}; }, "error: /materials/pa66_cf_ud/in_plane_bending: needs a bending law too (materials.pa66_cf_ud.bending)"},
+      {"in_plane_bending_membrane_law", [](json& j) { j["materials"]["pa66_cf_ud"]["membrane"] = {{"law", "ud_hyperelastic"}, {"k_fibre", 1e6}, {"p_ct", 50.0}}; j["materials"]["pa66_cf_ud"]["bending"] = {{"law", "thermo_linear_bending"}, {"beta1_B", 1e-3}, {"beta2_B", 1e-4}}; j["materials"]["pa66_cf_ud"]["in_plane_bending"] = {{"law", "ud_hyperelastic"}, {"k_fibre", 1e6}, {"p_ct", 50.0}}; j["solvers"]["mechanics"] = {{"dt_safety", 0.8}}; }, "error: /materials/pa66_cf_ud/in_plane_bending/law: 'ud_hyperelastic' is not a bending law"},
       {"bending_subcycles_zero", [](json& j) { j["solvers"]["mechanics"] = {{"bending_subcycles", 0}}; }, "error: /solvers/mechanics/bending_subcycles: must be >= 1, found 0"},
       {"explicit_dt", [](json& j) { j["solvers"]["thermal"]["through_thickness"] = "explicit"; j["solvers"]["thermal"]["dt"] = 0.1; }, "error: /solvers/thermal/dt: thermal step 0.1 s exceeds the stable step"},
       {"fibre_normal", [](json& j) { j["parts"][0]["fibre_direction"] = {0, 0, 1}; }, "error: /parts/0/fibre_direction: the fibre direction is normal to the ply"},

@@ -40,6 +40,27 @@
 // and own slopes; slopes, curvatures, moments and dW/ds; each element's
 // share of dW/dtheta of its hinges (which reads the neighbours' dW/ds);
 // membrane and bending forces (which read the neighbours' shares).
+//
+// In-plane bending of the fibres (optional, ElementSetup::in_plane_bending):
+// the same Morley curvature, of the displacement across the fibres in the
+// ply's plane. Across edge k of element e the slope jump is
+// phi_k = m . (F_j - F_e) nu_k (F in 3D over the initial plane, nu_k the
+// edge's outward normal, m = n x f across the current fibre f = F a0 /
+// |F a0|, n the element's normal), from the element's three nodes and the
+// neighbour's fourth; the mid-edge slopes s = omega r + (1 - omega)
+// (phi - r') with r = L phi the slopes of the element's own quadratic (the
+// quadratic through its patch's six nodes), as for the bending; the
+// fibres' in-plane curvature is K11 = (1 / A0) sum_k l_k s_k (nu_k . a0)^2,
+// exact for any quadratic field. The law gets chi = (K11, 0, 0); its M11
+// and w give dW/ds_k = A0 M11 l_k (nu_k . a0)^2 / A0 and the energy A0 w,
+// and the forces follow through the same four passes as the bending, at
+// every evaluation (whatever the bending weight: an impulse every few
+// steps on the in-plane motion, which the membrane already holds at its
+// stable step, is not stable). An
+// edge without a neighbour (free, held or on a symmetry plane) has a free
+// mid-edge slope, and the energy's minimum over it is K11 = 0 unless the
+// edge runs along the fibres: such elements carry no term (the fibres'
+// free ends take no moment).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -609,6 +630,10 @@ class ShellRfT3 final : public ElementKernel {
       part_ = s.part;
       laws_.assign(s.membrane.begin(), s.membrane.end());
       bending_ = s.bending;
+      in_plane_ = s.in_plane_bending;
+      if (in_plane_ && !bending_) return Status::failure("an in-plane bending law needs a bending law");
+      if (in_plane_ && (in_plane_->state_size() != 0 || in_plane_->uses_strain_old()))
+        return Status::failure("the in-plane bending law must keep no history (no state, no previous strains)");
       edge_condition_.assign(s.edge_condition.begin(), s.edge_condition.end());
       areal_mass_ = s.density * part_->thickness;
       const int ne = part_->num_elements;
@@ -646,6 +671,15 @@ class ShellRfT3 final : public ElementKernel {
       if (bending_) {
         setup_bending();
         if (auto st = setup_slopes(s.temperature); !st) return st;
+      }
+      if (in_plane_) {
+        setup_in_plane();
+        const std::size_t ne3 = 3 * static_cast<std::size_t>(part_->num_elements);
+        ipphi_.assign(ne3, 0.0);
+        ipr_.assign(ne3, 0.0);
+        ipm_.assign(ne3, 0.0);
+        ipg_.assign(ne3, 0.0);
+        ipe_.assign(part_->num_elements, 0.0);
       }
       // The previous strains are kept only for laws that read them.
       keep_old_ = std::any_of(laws_.begin(), laws_.end(), [](const MaterialLaw* l) { return l->uses_strain_old(); });
@@ -696,6 +730,7 @@ class ShellRfT3 final : public ElementKernel {
       const bool curvatures_only = bending_ && !bend && in.fields_due;
       if (bending_ && in.pass == 0) {
         if (bend || curvatures_only) slope_angles(in, in.range.begin, in.range.end);
+        if (in_plane_) in_plane_angles(in.range.begin, in.range.end);
         return Status::success();
       }
       if (bending_ && in.pass == 1) {
@@ -704,8 +739,17 @@ class ShellRfT3 final : public ElementKernel {
           curvature_only_block(in.range.end - in.range.begin, gld_, cs_.data() + in.range.begin, sv.nidx, sv.ld,
                                sv.eq, sv.rho_all, curv_.data() + 3 * static_cast<std::size_t>(in.range.begin));
         }
+        if (in_plane_ && !bend && !temperatures_kept(in, in.range.begin, in.range.end)) {
+          // (with the bending, slope_moments forms them)
+          element_temperature_block(in.range.end - in.range.begin, &part_->triangles[3 * in.range.begin],
+                                    in.node_temperature.data(), etemp_.data() + in.range.begin);
+          keep_temperatures(in, in.range.begin, in.range.end);
+        }
+        if (bend)
+          if (auto st = slope_moments(in, in.range.begin, in.range.end); !st) return st;
+        if (in_plane_)
+          if (auto st = in_plane_moments(in, in.range.begin, in.range.end); !st) return st;
         if (!bend) return Status::success();
-        if (auto st = slope_moments(in, in.range.begin, in.range.end); !st) return st;
         if (in.bending_weight != 1.0) {  // dW/ds times w: every hinge moment and bending force follows
           const StepValues sv = step_values(in);
           for (int k = 0; k < 3; ++k)
@@ -715,6 +759,7 @@ class ShellRfT3 final : public ElementKernel {
       }
       if (bending_ && in.pass == 2) {
         if (bend) hinge_moments(in, in.range.begin, in.range.end);
+        if (in_plane_) in_plane_shares(in.range.begin, in.range.end);
         return Status::success();
       }
       const int b = in.range.begin, n = in.range.end - in.range.begin;
@@ -797,6 +842,8 @@ class ShellRfT3 final : public ElementKernel {
           if (in.commit) block_angles_[b]->elapsed += in.dt;
         }
       }
+      // The fibres' in-plane bending, at every evaluation.
+      if (in_plane_) energy += in_plane_forces(in, b, in.range.end, dte, t_lo, t_hi, out, dt_min);
       if (!ri.ngroup.empty()) {
         const std::uint16_t *slots = ri.nslot.data(), *ent = ri.nent.data();
         for (const auto& [k, count] : ri.ngroup) {
@@ -965,6 +1012,305 @@ class ShellRfT3 final : public ElementKernel {
     grad[2] = add(grad[2], wq);
     grad[1] = sub(grad[1], wq);
     return theta;
+  }
+
+  // In-plane bending of the fibres (see the head of this file), set-up:
+  // per element and edge k (entry 3 e + k) the coefficients of the slope
+  // jump J_k = (F_j - F_e) nu_k on the element's three nodes and the
+  // neighbour's other node (ipb_, 4 values), the weight omega of the
+  // element's own quadratic (ipw_) and dK11/ds_k = l_k (nu_k . a0)^2 / A0
+  // (ipc_, zero for every edge of an element that carries no term); per
+  // element the map L from its slope jumps to the slopes of its own
+  // quadratic at its mid-edges (ipl_, 9 values, zero without one).
+  void setup_in_plane() {
+    const int ne = part_->num_elements;
+    const double* x0 = part_->x0.data();
+    ipb_.assign(12 * static_cast<std::size_t>(ne), 0.0);
+    ipw_.assign(3 * static_cast<std::size_t>(ne), 0.5);
+    ipc_.assign(3 * static_cast<std::size_t>(ne), 0.0);
+    ipl_.assign(9 * static_cast<std::size_t>(ne), 0.0);
+    std::vector<char> quad(ne, 0);
+    const auto grads = [&](int e, Vec3 gr[3], Vec3& n) {  // grad0 N_a (3D, in the initial plane)
+      const int* t = &part_->triangles[3 * e];
+      const Vec3 X[3] = {load3(x0, t[0]), load3(x0, t[1]), load3(x0, t[2])};
+      const Vec3 nn = cross(sub(X[1], X[0]), sub(X[2], X[0]));
+      const double two_a = norm(nn);
+      n = scale(nn, 1.0 / two_a);
+      for (int a = 0; a < 3; ++a) gr[a] = scale(cross(n, sub(X[(a + 2) % 3], X[(a + 1) % 3])), 1.0 / two_a);
+    };
+    for (int e = 0; e < ne; ++e) {
+      const int* t = &part_->triangles[3 * e];
+      Vec3 ge[3], n;
+      grads(e, ge, n);
+      const Vec3 f = load3(e1_.data(), e);
+      bool off = false;
+      int count = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 P = load3(x0, t[(k + 1) % 3]), Q = load3(x0, t[(k + 2) % 3]);
+        const Vec3 nu = normalized(cross(sub(Q, P), n));  // outward in the element's plane
+        const double l = norm(sub(Q, P)), nf = dot(nu, f);
+        const int nb = part_->neighbours[3 * e + k];
+        if (nb < 0) {
+          // No neighbour: the mid-edge slope is free, and the energy's
+          // minimum over it makes K11 zero unless the edge runs along the
+          // fibres.
+          if (nf * nf > 1e-6) off = true;
+          continue;
+        }
+        ++count;
+        ipc_[3 * e + k] = l * nf * nf / area0_[e];
+        Vec3 gj[3], nj;
+        grads(nb, gj, nj);
+        double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * k];
+        for (int a = 0; a < 3; ++a) bk[a] = -dot(ge[a], nu);
+        for (int j = 0; j < 3; ++j) {
+          const int node = part_->triangles[3 * nb + j];
+          const double v = dot(gj[j], nu);
+          if (node == t[(k + 1) % 3]) bk[(k + 1) % 3] += v;
+          else if (node == t[(k + 2) % 3]) bk[(k + 2) % 3] += v;
+          else bk[3] = v;
+        }
+      }
+      if (off)
+        for (int k = 0; k < 3; ++k) ipc_[3 * e + k] = 0.0;
+      if (count == 3) quad[e] = in_plane_quadratic(e, &ipl_[9 * static_cast<std::size_t>(e)]) ? 1 : 0;
+    }
+    for (int e = 0; e < ne; ++e)
+      for (int k = 0; k < 3; ++k) {
+        const int nb = part_->neighbours[3 * e + k];
+        if (nb < 0) continue;
+        ipw_[3 * e + k] = quad[e] && quad[nb] ? 0.5 : quad[e] ? 1.0 : quad[nb] ? 0.0 : 0.5;
+      }
+  }
+
+  // L of element e (row k: the slope at mid-edge k of the quadratic through
+  // the patch's six nodes, relative to the element's plane, per unit slope
+  // jump across edge i): the quadratic with 1 at the node across edge i and
+  // 0 at the other five has slope jump 1 / d_i across edge i (d_i that
+  // node's distance from the edge) and none across the others. False where
+  // the six nodes (nearly) lie on a conic.
+  bool in_plane_quadratic(int e, double* L) const {
+    const double* x0 = part_->x0.data();
+    const int* t = &part_->triangles[3 * e];
+    const Vec3 X0 = load3(x0, t[0]);
+    const Vec3 n = normalized(cross(sub(load3(x0, t[1]), X0), sub(load3(x0, t[2]), X0)));
+    const Vec3 f = load3(e1_.data(), e), m = cross(n, f);
+    const double h = std::sqrt(area0_[e]);
+    double P[6][2];
+    int nodes[6] = {t[0], t[1], t[2], opp_[3 * e], opp_[3 * e + 1], opp_[3 * e + 2]};
+    for (int sl = 0; sl < 6; ++sl) {
+      const Vec3 d = sub(load3(x0, nodes[sl]), X0);
+      P[sl][0] = dot(d, f) / h;
+      P[sl][1] = dot(d, m) / h;
+    }
+    // Inverse of the 6 x 6 matrix V (row: a node, columns: 1, u, v, u^2,
+    // uv, v^2), by Gauss-Jordan with partial pivoting.
+    double A[6][12] = {};
+    for (int r = 0; r < 6; ++r) {
+      const double u = P[r][0], v = P[r][1];
+      const double row[6] = {1, u, v, u * u, u * v, v * v};
+      for (int c = 0; c < 6; ++c) A[r][c] = row[c];
+      A[r][6 + r] = 1;
+    }
+    for (int c = 0; c < 6; ++c) {
+      int piv = c;
+      for (int r = c + 1; r < 6; ++r)
+        if (std::abs(A[r][c]) > std::abs(A[piv][c])) piv = r;
+      if (!(std::abs(A[piv][c]) > 1e-6)) return false;
+      std::swap(A[piv], A[c]);
+      const double inv = 1.0 / A[c][c];
+      for (int j = 0; j < 12; ++j) A[c][j] *= inv;
+      for (int r = 0; r < 6; ++r) {
+        if (r == c || A[r][c] == 0.0) continue;
+        const double fct = A[r][c];
+        for (int j = 0; j < 12; ++j) A[r][j] -= fct * A[c][j];
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      // Coefficients of the quadratic with 1 at node 3 + i: column 3 + i of
+      // V^-1 (scaled coordinates).
+      double a[6];
+      for (int r = 0; r < 6; ++r) a[r] = A[r][6 + 3 + i];
+      const int p = 3 + i;
+      // d_i: the node's distance from edge i (scaled).
+      const double* E1 = P[(i + 1) % 3];
+      const double* E2 = P[(i + 2) % 3];
+      const double ex = E2[0] - E1[0], ey = E2[1] - E1[1], el = std::hypot(ex, ey);
+      const double di = std::abs((P[p][0] - E1[0]) * ey - (P[p][1] - E1[1]) * ex) / el;
+      for (int k = 0; k < 3; ++k) {
+        const double* Q1 = P[(k + 1) % 3];
+        const double* Q2 = P[(k + 2) % 3];
+        const double qx = Q2[0] - Q1[0], qy = Q2[1] - Q1[1], ql = std::hypot(qx, qy);
+        const double nx = qy / ql, ny = -qx / ql;  // outward (counter-clockwise corners)
+        const double u = 0.5 * (Q1[0] + Q2[0]), v = 0.5 * (Q1[1] + Q2[1]);
+        const double du = a[1] + 2 * a[3] * u + a[4] * v, dv = a[2] + a[4] * u + 2 * a[5] * v;
+        // Slope in scaled units times the jump's scale: L is dimensionless.
+        L[3 * k + i] = (du * nx + dv * ny) * di;
+      }
+    }
+    for (int j = 0; j < 9; ++j)
+      if (!(std::abs(L[j]) <= kMaxSlopeMap)) {
+        for (int q = 0; q < 9; ++q) L[q] = 0.0;
+        return false;
+      }
+    return true;
+  }
+
+  // The element's current unit normal n, fibre f = F a0 / |F a0|, m = n x f,
+  // |F a0|, |N| (N = x10 x x20) and x10, x20.
+  struct InPlaneFrame {
+    Vec3 n, f, m, x10, x20;
+    double glen, nlen;
+  };
+  InPlaneFrame in_plane_frame(const double* x, int e) const {
+    InPlaneFrame fr;
+    const int* t = &part_->triangles[3 * e];
+    const Vec3 x0 = load3(x, t[0]);
+    fr.x10 = sub(load3(x, t[1]), x0);
+    fr.x20 = sub(load3(x, t[2]), x0);
+    const Vec3 g = add(scale(fr.x10, g_[e]), scale(fr.x20, g_[mld_ + e]));
+    fr.glen = norm(g);
+    fr.f = scale(g, 1.0 / fr.glen);
+    const Vec3 N = cross(fr.x10, fr.x20);
+    fr.nlen = norm(N);
+    fr.n = scale(N, 1.0 / fr.nlen);
+    fr.m = cross(fr.n, fr.f);
+    return fr;
+  }
+  // J_k of element e at positions x (zero without a neighbour).
+  Vec3 in_plane_jump(const double* x, int e, int k) const {
+    const int* t = &part_->triangles[3 * e];
+    const double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * k];
+    const Vec3 x0 = load3(x, t[0]);
+    // Relative to corner 0 (the four coefficients sum to zero).
+    Vec3 J = add(scale(sub(load3(x, t[1]), x0), bk[1]), scale(sub(load3(x, t[2]), x0), bk[2]));
+    return add(J, scale(sub(load3(x, opp_[3 * e + k]), x0), bk[3]));
+  }
+
+  // Pass 0: the slope jumps phi_k = m . J_k and the own quadratic's slopes
+  // r = L phi.
+  void in_plane_angles(int b, int end) {
+    const double* x = part_->x.data();
+    for (int e = b; e < end; ++e) {
+      const InPlaneFrame fr = in_plane_frame(x, e);
+      double* phi = &ipphi_[3 * static_cast<std::size_t>(e)];
+      for (int k = 0; k < 3; ++k)
+        phi[k] = part_->neighbours[3 * e + k] >= 0 ? dot(fr.m, in_plane_jump(x, e, k)) : 0.0;
+      const double* L = &ipl_[9 * static_cast<std::size_t>(e)];
+      for (int k = 0; k < 3; ++k) ipr_[3 * e + k] = L[3 * k] * phi[0] + L[3 * k + 1] * phi[1] + L[3 * k + 2] * phi[2];
+    }
+  }
+
+  // Pass 1: mid-edge slopes s_k = omega r_k + (1 - omega) (phi_k - r'_k),
+  // K11 = sum_k c_k s_k, the law, dW/ds_k = A0 M11 c_k into ipm_, and each
+  // element's A0 w into ipe_.
+  Status in_plane_moments(const ElementForceInput& in, int b, int end) {
+    const int n = end - b;
+    thread_local std::vector<double> chi, moment, w;
+    if (chi.size() < 3 * static_cast<std::size_t>(n)) {
+      chi.resize(3 * static_cast<std::size_t>(n));
+      moment.resize(3 * static_cast<std::size_t>(n));
+      w.resize(n);
+    }
+    for (int q = 0; q < n; ++q) {
+      const int e = b + q;
+      double kappa = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double c = ipc_[3 * e + k];
+        if (c == 0.0) continue;
+        const int nb = part_->neighbours[3 * e + k];
+        const double om = ipw_[3 * e + k];
+        const double rp = ipr_[3 * nb + partner_k_[3 * e + k]];
+        kappa += c * (om * ipr_[3 * e + k] + (1 - om) * (ipphi_[3 * e + k] - rp));
+      }
+      chi[3 * q] = kappa;
+      chi[3 * q + 1] = chi[3 * q + 2] = 0.0;
+    }
+    MaterialBlock blk;
+    blk.n = n;
+    blk.strain = std::span<const double>(chi.data(), 3 * static_cast<std::size_t>(n));
+    blk.temperature = std::span<const double>(etemp_.data() + b, n);
+    blk.dt = in.dt;
+    blk.stress = std::span<double>(moment.data(), 3 * static_cast<std::size_t>(n));
+    blk.energy = std::span<double>(w.data(), n);
+    if (auto st = in_plane_->evaluate(blk); !st) return st;
+    for (int q = 0; q < n; ++q) {
+      const int e = b + q;
+      const double a = area0_[e] * moment[3 * q];
+      for (int k = 0; k < 3; ++k) ipm_[3 * e + k] = a * ipc_[3 * e + k];
+      ipe_[e] = area0_[e] * w[q];
+    }
+    return Status::success();
+  }
+
+  // Pass 2: each element's dW/dphi_i = (1 - omega_i) m_i + sum_k L_ki
+  // omega_k (m_k - m'_k), m' the neighbour's dW/ds of the same edge.
+  void in_plane_shares(int b, int end) {
+    for (int e = b; e < end; ++e) {
+      const double* L = &ipl_[9 * static_cast<std::size_t>(e)];
+      double d[3];
+      for (int k = 0; k < 3; ++k) {
+        const int nb = part_->neighbours[3 * e + k];
+        const double mp = nb >= 0 ? ipm_[3 * nb + partner_k_[3 * e + k]] : 0.0;
+        d[k] = ipw_[3 * e + k] * (ipm_[3 * e + k] - mp);
+      }
+      for (int i = 0; i < 3; ++i)
+        ipg_[3 * e + i] = (1 - ipw_[3 * e + i]) * ipm_[3 * e + i] + L[i] * d[0] + L[3 + i] * d[1] + L[6 + i] * d[2];
+    }
+  }
+
+  // Pass 3: the forces sum_i g_i dphi_i/dx into the patch's slots, with
+  // dphi_i = m . dJ_i + J_i . dm and J . dm = dn . (f x J) + df . (J x n),
+  // df = (I - f f^T) dg / |g|, dn = (I - n n^T) dN / |N|; the range's
+  // energy; lowers the elements' steps dte (where given) or dt_floor with
+  // the term's (the bending's formula for rigidity R: it is evaluated at
+  // every step, also where the bending is not).
+  double in_plane_forces(const ElementForceInput& in, int b, int end, double* dte, double t_lo, double t_hi,
+                         ElementForceOutput& out, double& dt_floor) {
+    const double* x = part_->x.data();
+    double* nf = out.node_force.data();
+    double energy = 0;
+    for (int e = b; e < end; ++e) {
+      energy += ipe_[e];
+      const double* gi = &ipg_[3 * static_cast<std::size_t>(e)];
+      if (gi[0] == 0.0 && gi[1] == 0.0 && gi[2] == 0.0) continue;
+      const InPlaneFrame fr = in_plane_frame(x, e);
+      const int* slot = &in.patch_slot[6 * static_cast<std::size_t>(e - b)];
+      Vec3 own[3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, Jg{0, 0, 0};
+      for (int i = 0; i < 3; ++i) {
+        if (gi[i] == 0.0 || part_->neighbours[3 * e + i] < 0) continue;
+        const double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * i];
+        for (int a = 0; a < 3; ++a) own[a] = add(own[a], scale(fr.m, gi[i] * bk[a]));
+        if (slot[3 + i] >= 0)
+          for (int d = 0; d < 3; ++d) nf[3 * slot[3 + i] + d] += gi[i] * bk[3] * fr.m[d];
+        Jg = add(Jg, scale(in_plane_jump(x, e, i), gi[i]));
+      }
+      Vec3 kn = cross(Jg, fr.n);
+      kn = scale(sub(kn, scale(fr.f, dot(fr.f, kn))), 1.0 / fr.glen);
+      Vec3 v = cross(fr.f, Jg);
+      v = scale(sub(v, scale(fr.n, dot(fr.n, v))), 1.0 / fr.nlen);
+      const Vec3 t1 = cross(fr.x20, v), t2 = cross(v, fr.x10);
+      const double b1 = g_[e], b2 = g_[mld_ + e], b0 = -(b1 + b2);
+      own[0] = sub(add(own[0], scale(kn, b0)), add(t1, t2));
+      own[1] = add(add(own[1], scale(kn, b1)), t1);
+      own[2] = add(add(own[2], scale(kn, b2)), t2);
+      for (int a = 0; a < 3; ++a)
+        for (int d = 0; d < 3; ++d) nf[3 * slot[a] + d] += own[a][d];
+    }
+    const double rmax = std::max(in_plane_->max_stiffness(t_lo), in_plane_->max_stiffness(t_hi));
+    if (rmax > 0) {
+      // As the bending's: dt ~ d^2 sqrt(rho h / R) / 2.
+      const double c = 0.5 * std::sqrt(areal_mass_ / rmax);
+      const double* scale_f = in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b;
+      double lo = std::numeric_limits<double>::infinity();
+      for (int q = 0; q < end - b; ++q) {
+        const double dt = dmin2_[b + q] * c;
+        lo = std::min(lo, scale_f ? dt * scale_f[q] : dt);
+        if (dte) dte[q] = std::min(dte[q], dt);
+      }
+      if (!dte) dt_floor = std::min(dt_floor, lo);
+    }
+    return energy;
   }
 
   void setup_bending() {
@@ -1613,6 +1959,10 @@ class ShellRfT3 final : public ElementKernel {
   large_vector<int> ring_nidx_;
 
   const MaterialLaw* bending_ = nullptr;
+  const MaterialLaw* in_plane_ = nullptr;  // the fibres' in-plane bending (may be null)
+  // See setup_in_plane; per step: the slope jumps, own slopes, dW/ds and
+  // dW/dphi per element and edge, and per element A0 w.
+  std::vector<double> ipb_, ipw_, ipc_, ipl_, ipphi_, ipr_, ipm_, ipg_, ipe_;
   int gld_ = 0;
   std::vector<int> opp_, partner_k_, edge_condition_;  // partner_k_: the same edge's index in the neighbour
   std::vector<char> clamped_;
@@ -1752,12 +2102,12 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.8.1";
-  d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch)";
+  d.version = "0.9.0";
+  d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch), optional in-plane bending of the fibres (a material's in_plane_bending)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
 }
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.8.1", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.9.0", register_all)

@@ -17,6 +17,14 @@ struct ElementSetup {
   const PartView* part = nullptr;
   std::span<const MaterialLaw* const> membrane;  // laws whose stresses add
   const MaterialLaw* bending = nullptr;          // may be null
+  // May be null; only with a bending law. A bending law evaluated with the
+  // in-plane curvature of the fibres as chi11 (chi22 = chi12 = 0, 1/m),
+  // whose M11 (N m/m) and energy w (J/m^2) give the fibres' resistance to
+  // bending in the ply's plane (a second-gradient term: it gives fibre
+  // waviness an energy that grows with its wavenumber). The element
+  // evaluates it at every evaluation, whatever the bending_weight, and
+  // counts its step in the stable step.
+  const MaterialLaw* in_plane_bending = nullptr;
   double density = 0.0;                          // kg/m^3 (areal mass = density * thickness)
   // Per element, per edge k (opposite node k): kEdgeFree (interior or free
   // boundary), kEdgeClamped (boundary edge whose nodes are held: the slope

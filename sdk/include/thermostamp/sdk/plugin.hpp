@@ -22,8 +22,8 @@
 namespace ts::sdk {
 
 // Bump when any type of this SDK changes layout or meaning.
-inline constexpr int kAbiVersion = 20;
-inline constexpr const char* kSdkVersion = "0.20.0";
+inline constexpr int kAbiVersion = 21;
+inline constexpr const char* kSdkVersion = "0.21.0";
 
 enum class PluginKind { Element, Material, Thermal, Contact };
 
