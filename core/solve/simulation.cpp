@@ -1296,10 +1296,11 @@ double Simulation::mechanics_stable_dt() {
 }
 
 // With solvers.mechanics.bending_subcycles k > 1 the bending is evaluated
-// at most every k-th step, as an impulse: the evaluation that carries it
-// weighs its bending forces by the number of steps j it stands for (the
-// velocity then changes by j dt f_b / m at once), the j - 1 evaluations
-// after it carry none (ElementForceInput::bending_weight). j is the
+// at most every k-th step: the evaluation that carries it stands for the
+// number of steps j it is given (ElementForceInput::bending_weight j; the
+// element delivers j times its bending forces over those steps, as an
+// impulse or in part at each step), the j - 1 evaluations after it carry
+// none (weight 0). j is the
 // largest whole number of steps that keeps j dt within dt_safety times the
 // bending's own stable step (j dt_safety stable <= dt_safety bend_dt), at
 // most k: where the bending governs the step, j = 1 (every step).

@@ -40,7 +40,8 @@ Faces faces(const JobRun& r, int probe, double t) {
 // How far two runs of the coarse scene are apart: the largest relative
 // difference of the plies' shear extrema, and the largest difference of
 // the through-thickness temperatures at the four probes, every second (K).
-std::pair<double, double> apart(const JobRun& a, const JobRun& b) {
+std::pair<double, double> apart(const JobRun& a, const JobRun& b,
+                                const std::vector<double>& times = {1.0, 2.0, 3.0, 4.0, 5.0}) {
   double shear = 0, temp = 0;
   for (std::size_t p = 0; p < a.result.part_shear_max_deg.size(); ++p) {
     const double ma = a.result.part_shear_max_deg[p], mb = b.result.part_shear_max_deg[p];
@@ -48,7 +49,7 @@ std::pair<double, double> apart(const JobRun& a, const JobRun& b) {
     shear = std::max({shear, std::abs(mb - ma) / std::abs(ma), std::abs(nb - na) / std::abs(na)});
   }
   for (int probe = 0; probe < 4; ++probe)
-    for (double t : {1.0, 2.0, 3.0, 4.0, 5.0}) {
+    for (double t : times) {
       const auto& va = a.sample(probe, "temperature_profile", t)->values;
       const auto& vb = b.sample(probe, "temperature_profile", t)->values;
       for (std::size_t k = 0; k < va.size(); ++k) temp = std::max(temp, std::abs(va[k] - vb[k]));
@@ -214,18 +215,25 @@ TEST(Hemisphere, OneAndTwoThreadsIdentical) {
   }
 }
 
-// The bending evaluated at most every 8th step (bending_subcycles, its
-// forces as impulses; on this scene the bending's stable step allows all
-// 8) against every step (8 is the jobs' own setting): the same forming
-// within 2 % (shear extrema of both plies) and 0.02 K (through-thickness
-// temperatures at the four probes, every second), with the scene's energy
-// balance under 2 %. The temperatures must agree within 0.02 K: the
-// thermal steps fall at the same times in both runs, and the contact
-// samples (8 a step) resolve the punch's first touch at the pole, which
-// the bending moves by a few mechanical steps, to half a sample interval.
-// (With the contact map of each step's end only, the two runs saw that
-// touch in adjacent thermal steps: 3.6 K apart at the upper face at
-// 0.08 s, 0.12 K over the profile at 1 s.)
+// The bending evaluated at most every 8th step (bending_subcycles; on this
+// scene the bending's stable step allows all 8) against every step (8 is
+// the jobs' own setting): the same forming within 2 % (shear extrema of
+// both plies) and the same temperatures (through-thickness profiles at the
+// four probes, every second), with the scene's energy balance under 2 %.
+// The temperatures depend on the punch's first touch at the pole, which
+// the contact samples (8 a thermal step) resolve: on this coarse mesh at
+// its 1e-4 s step the pole's node bounces on the punch for some 0.04 s,
+// in contact at some samples and not at others, and the bending's
+// evaluations move those bounces by a few steps. One sample more in
+// contact in the thermal step that ends at 0.082 s (the run with the
+// held part of shell_rf_t3 0.10.0 against the one every step) is 0.6 K
+// at the upper face then, 0.027 K at 1 s, 0.013 K at 2 s and 0.009 K at 5
+// s. Required: within 0.05 K at 1 s (under two samples' worth) and 0.02 K
+// from 2 s on. (With the contact map of each step's end only, before
+// 0.32.0, the two runs saw that touch in adjacent thermal steps: 3.6 K
+// apart at the upper face at 0.08 s, 0.12 K over the profile at 1 s; with
+// the bending's forces as a bare impulse, before shell_rf_t3 0.10.0, the
+// bounces fell at the same samples: 0.0001 K.)
 TEST(Hemisphere, BendingSubcyclesKeepTheAnswer) {
   json j = coarse_scene();
   j["solvers"]["mechanics"]["bending_subcycles"] = 1;
@@ -236,12 +244,14 @@ TEST(Hemisphere, BendingSubcyclesKeepTheAnswer) {
   ASSERT_TRUE(b.result.ok) << b.result.error;
   EXPECT_EQ(b.result.bending_largest, 8);
   EXPECT_LT(b.result.bending_evaluations, b.result.mechanical_steps / 7);
-  const auto [shear, temp] = apart(a, b);
+  const auto [shear, temp] = apart(a, b, {2.0, 3.0, 4.0, 5.0});
+  const double first = apart(a, b, {1.0}).second;
   std::printf("bending every step / at most every 8th: %lld / %lld evaluations of %lld steps, shear extrema %.2e apart "
-              "(relative), temperatures %.4f K apart, energy balance %.2e / %.2e\n",
-              a.result.mechanical_steps, b.result.bending_evaluations, b.result.mechanical_steps, shear, temp,
+              "(relative), temperatures %.4f K apart at 1 s, %.4f K from 2 s on, energy balance %.2e / %.2e\n",
+              a.result.mechanical_steps, b.result.bending_evaluations, b.result.mechanical_steps, shear, first, temp,
               a.result.energy.balance_error, b.result.energy.balance_error);
   EXPECT_LT(shear, 0.02);
+  EXPECT_LT(first, 0.05);
   EXPECT_LT(temp, 0.02);
   EXPECT_LT(b.result.energy.balance_error, 0.02);
 }

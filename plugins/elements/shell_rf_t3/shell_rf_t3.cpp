@@ -97,7 +97,7 @@ inline int padded_ld(int n) {
 struct BlockScratch {
   // stress and curv: the stresses and curvatures of a step after which the
   // kernel writes no fields (ElementForceInput::fields_due).
-  std::vector<double> strain, ff, mf, law_stress, energy_tmp, energy, moment, benergy, stress, curv;
+  std::vector<double> strain, ff, mf, mfm, law_stress, energy_tmp, energy, moment, benergy, stress, curv;
   // The angle changes of the block's hinges in pass 0 (ShellRfT3::block_angles).
   std::vector<double> dth;
 };
@@ -109,6 +109,7 @@ BlockScratch& block_scratch(int n) {
     s.strain.resize(3 * m);
     s.ff.resize(6 * ld);
     s.mf.resize(9 * ld);
+    s.mfm.resize(9 * ld);
     s.law_stress.resize(3 * m);
     s.stress.resize(3 * m);
     s.curv.resize(3 * m);
@@ -133,6 +134,12 @@ struct BlockAngles {
   // evaluation's step (ElementForceInput::bending_weight 0 in between): the
   // bending law's history step is in.dt plus it.
   double elapsed = 0;
+  // Where one evaluation carries the bending of several steps
+  // (ElementForceInput::bending_weight > 1): the held part h of the
+  // bending's corner forces, component d of corner a of element q at
+  // held[(3 a + d) n + q] (n the block's elements), applied at every step;
+  // empty until the first such evaluation (see ShellRfT3::hold_bending).
+  std::vector<double> held;
 };
 
 // The size of the processor's per-core (level 2) cache, bytes: the
@@ -565,6 +572,18 @@ void hinge_moment_block(int n, int ld, const float* __restrict L, const float* _
   }
 }
 
+// The held part of the bending forces (see ShellRfT3::hold_bending): adds
+// h (held[r n + q], r = 3 a + d) to the corner forces mf[r ld + q].
+TS_VECTOR_CLONES
+void add_held(int n, int ld, const double* __restrict held, double* __restrict mf) {
+  for (int r = 0; r < 9; ++r) {
+    const double* h = held + static_cast<std::size_t>(r) * n;
+    double* f = mf + static_cast<std::size_t>(r) * ld;
+#pragma omp simd
+    for (int q = 0; q < n; ++q) f[q] += h[q];
+  }
+}
+
 // Adds the forces of n elements, component d of corner a of element q at
 // mf[(3 a + d) ld + q], into their corners' node slots (slot[6 q + a], the
 // kernel's patch_slot).
@@ -835,8 +854,18 @@ class ShellRfT3 final : public ElementKernel {
         dt_min = membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0,
                                         sv.hm, sv.nidx, gld_, sv.hm_all, sv.ld, mf, dte);
         energy += bending_forces(in, b, in.range.end, dte, t_lo, t_hi, mf, ld, ri, out, dt_min);
+        BlockAngles& ba = *block_angles_[b];
+        if (in.bending_weight > 1.0 || !ba.held.empty()) {
+          // The bending's corner forces (times the weight) are mf less the
+          // membrane's alone.
+          double* mfm = sc.mfm.data();
+          membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mfm, nullptr);
+          hold_bending(ba, n, ld, in.bending_weight, in.commit, mfm, mf);
+        }
       } else {
         dt_min = membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
+        if (bending_ && block_angles_[b] && block_angles_[b]->held.size() == 9 * static_cast<std::size_t>(n))
+          add_held(n, ld, block_angles_[b]->held.data(), mf);
         if (bending_ && block_angles_[b]) {
           energy += block_angles_[b]->bending_energy;  // of the last one with bending
           if (in.commit) block_angles_[b]->elapsed += in.dt;
@@ -913,6 +942,14 @@ class ShellRfT3 final : public ElementKernel {
       if (block_angles_[b])
         blocks.insert(blocks.end(), {static_cast<double>(b), block_angles_[b]->elapsed, block_angles_[b]->bending_energy});
     out.put_vector(blocks);
+    std::vector<double> held;  // per block with a held part: its first element, n, then its 9 n values
+    for (std::size_t b = 0; b < block_angles_.size(); ++b)
+      if (block_angles_[b] && !block_angles_[b]->held.empty()) {
+        held.push_back(static_cast<double>(b));
+        held.push_back(static_cast<double>(block_angles_[b]->held.size() / 9));
+        held.insert(held.end(), block_angles_[b]->held.begin(), block_angles_[b]->held.end());
+      }
+    out.put_vector(held);
     return Status::success();
   }
   Status load_state(StateReader& in) override {
@@ -934,6 +971,22 @@ class ShellRfT3 final : public ElementKernel {
       if (!slot) slot = std::make_unique<BlockAngles>();
       slot->elapsed = blocks[k + 1];
       slot->bending_energy = blocks[k + 2];
+    }
+    if (in.done()) return Status::success();  // (written before the held parts were kept)
+    std::vector<double> held;
+    if (!in.get_vector(held)) return mismatch();
+    for (std::size_t k = 0; k < held.size();) {
+      const double b = held[k];
+      if (!(b >= 0 && b < static_cast<double>(block_angles_.size())) || !block_angles_[static_cast<std::size_t>(b)])
+        return mismatch();
+      if (held.size() - k < 2) return mismatch();
+      const double n = held[k + 1];
+      if (!(n >= 1 && n <= static_cast<double>(block_angles_.size()) - 1 - b)) return mismatch();
+      const std::size_t m = 9 * static_cast<std::size_t>(n);
+      if (held.size() - k - 2 < m) return mismatch();
+      const auto from = held.begin() + static_cast<std::ptrdiff_t>(k + 2);
+      block_angles_[static_cast<std::size_t>(b)]->held.assign(from, from + static_cast<std::ptrdiff_t>(m));
+      k += 2 + m;
     }
     return Status::success();
   }
@@ -1905,6 +1958,38 @@ class ShellRfT3 final : public ElementKernel {
     return ba.bending_energy;
   }
 
+  // An evaluation that carries the bending of the next j steps
+  // (ElementForceInput::bending_weight j > 1) delivers their impulse j f_b
+  // in two parts: a held part h, applied at each of the j steps, and
+  // j (f_b - h) at once. h follows f_b through a first-order filter per
+  // evaluation, h += alpha (f_b - h) (alpha = kHeldAlpha, at committed
+  // evaluations), so that it carries the slowly varying bending forces
+  // (those that the contact or the membrane holds in balance) and the
+  // impulse only their recent change: an impulse j f_b against a force
+  // that balances f_b at every step would shake the nodes (the step's
+  // contact or membrane takes the extra velocity back over the next steps)
+  // and feed that vibration from the bending's impulses. Over the j steps
+  // the momentum is j f_b either way (docs/mechanics-method.md). With
+  // mfm the membrane's corner forces and mf those with the bending (times
+  // j): f_b = (mf - mfm) / j; mf becomes mfm + h + j (f_b - h) = mf - (j -
+  // 1) h. An evaluation with weight 1 after such evaluations (the
+  // bending's step has come to set the run's) updates h and applies f_b.
+  static constexpr double kHeldAlpha = 1.0 / 64.0;
+  static void hold_bending(BlockAngles& ba, int n, int ld, double j, bool commit, const double* mfm, double* mf) {
+    if (ba.held.size() != 9 * static_cast<std::size_t>(n)) ba.held.assign(9 * static_cast<std::size_t>(n), 0.0);
+    double* held = ba.held.data();
+    const double inv_j = 1.0 / j, keep = j - 1.0;
+    for (int r = 0; r < 9; ++r) {
+      double* h = held + static_cast<std::size_t>(r) * n;
+      double* f = mf + static_cast<std::size_t>(r) * ld;
+      const double* fm = mfm + static_cast<std::size_t>(r) * ld;
+      for (int q = 0; q < n; ++q) {
+        if (commit) h[q] += kHeldAlpha * ((f[q] - fm[q]) * inv_j - h[q]);
+        f[q] -= keep * h[q];
+      }
+    }
+  }
+
   // The per-step values of the elements' edges between the passes (eq,
   // rho, dW/ds, the shares of dW/dtheta) of the range in.range, edge k of
   // its element q at [k ld + q], and nidx (from the range's first element,
@@ -2102,7 +2187,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.9.0";
+  d.version = "0.10.0";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch), optional in-plane bending of the fibres (a material's in_plane_bending)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -2110,4 +2195,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.9.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.10.0", register_all)

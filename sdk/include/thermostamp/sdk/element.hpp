@@ -93,8 +93,12 @@ struct ElementForceInput {
   // (solvers.mechanics.bending_subcycles), 0 in the evaluations that carry
   // no bending (an element may skip its bending passes and then reports
   // the bending energy of its last evaluation with bending) and k in the
-  // one that carries the bending of the next k steps (its bending forces
-  // times k, an impulse). Elements without bending ignore it.
+  // one that carries the bending of the next k steps: over those steps the
+  // element delivers k times its bending forces, as an impulse in this
+  // evaluation or in part spread over the k steps (shell_rf_t3 applies a
+  // slowly varying part of its bending forces at every step and the rest
+  // as the impulse; docs/mechanics-method.md). Elements without bending
+  // ignore it.
   double bending_weight = 1.0;
   // Where the kernel runs the part's passes interleaved (see
   // ElementKernel::pass_reach; on one thread it does): the ranges are the
