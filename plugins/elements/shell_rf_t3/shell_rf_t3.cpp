@@ -97,7 +97,7 @@ inline int padded_ld(int n) {
 struct BlockScratch {
   // stress and curv: the stresses and curvatures of a step after which the
   // kernel writes no fields (ElementForceInput::fields_due).
-  std::vector<double> strain, ff, mf, mfm, law_stress, energy_tmp, energy, moment, benergy, stress, curv;
+  std::vector<double> strain, ff, mf, mfm, bslots, law_stress, energy_tmp, energy, moment, benergy, stress, curv;
   // The angle changes of the block's hinges in pass 0 (ShellRfT3::block_angles).
   std::vector<double> dth;
 };
@@ -136,9 +136,10 @@ struct BlockAngles {
   double elapsed = 0;
   // Where one evaluation carries the bending of several steps
   // (ElementForceInput::bending_weight > 1): the held part h of the
-  // bending's corner forces, component d of corner a of element q at
-  // held[(3 a + d) n + q] (n the block's elements), applied at every step;
-  // empty until the first such evaluation (see ShellRfT3::hold_bending).
+  // bending's nodal forces, xyz of the block's node slot i (as
+  // ElementForceOutput::node_force numbers them) at 3 i .. 3 i + 2,
+  // applied at every step; empty until the first such evaluation (see
+  // ShellRfT3::hold_bending).
   std::vector<double> held;
 };
 
@@ -572,18 +573,6 @@ void hinge_moment_block(int n, int ld, const float* __restrict L, const float* _
   }
 }
 
-// The held part of the bending forces (see ShellRfT3::hold_bending): adds
-// h (held[r n + q], r = 3 a + d) to the corner forces mf[r ld + q].
-TS_VECTOR_CLONES
-void add_held(int n, int ld, const double* __restrict held, double* __restrict mf) {
-  for (int r = 0; r < 9; ++r) {
-    const double* h = held + static_cast<std::size_t>(r) * n;
-    double* f = mf + static_cast<std::size_t>(r) * ld;
-#pragma omp simd
-    for (int q = 0; q < n; ++q) f[q] += h[q];
-  }
-}
-
 // Adds the forces of n elements, component d of corner a of element q at
 // mf[(3 a + d) ld + q], into their corners' node slots (slot[6 q + a], the
 // kernel's patch_slot).
@@ -849,6 +838,8 @@ class ShellRfT3 final : public ElementKernel {
       const bool steps = !in.dt_scale.empty() || !out.element_dt.empty();
       double* dte = steps ? sc.energy_tmp.data() : nullptr;  // free again after the laws
       double* mf = sc.mf.data();
+      BlockAngles* held_eval = nullptr;  // a block whose held part this evaluation updates
+      const double* held_add = nullptr;   // a held part to add (evaluations without bending)
       if (bend) {  // the membrane forces with the bending ones
         const StepValues sv = step_values(in);
         dt_min = membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0,
@@ -856,16 +847,22 @@ class ShellRfT3 final : public ElementKernel {
         energy += bending_forces(in, b, in.range.end, dte, t_lo, t_hi, mf, ld, ri, out, dt_min);
         BlockAngles& ba = *block_angles_[b];
         if (in.bending_weight > 1.0 || !ba.held.empty()) {
-          // The bending's corner forces (times the weight) are mf less the
-          // membrane's alone.
+          // The bending's corner forces (times the weight): mf less the
+          // membrane's alone, into mfm; their node sums into the block's
+          // slots (sc.bslots).
           double* mfm = sc.mfm.data();
           membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mfm, nullptr);
-          hold_bending(ba, n, ld, in.bending_weight, in.commit, mfm, mf);
+          for (std::size_t v = 0; v < 9 * static_cast<std::size_t>(ld); ++v) mfm[v] = mf[v] - mfm[v];
+          const std::size_t ns = out.node_force.size();
+          if (sc.bslots.size() < ns) sc.bslots.resize(ns);
+          std::fill(sc.bslots.begin(), sc.bslots.begin() + static_cast<std::ptrdiff_t>(ns), 0.0);
+          add_node_forces(in, ri, n, ld, mfm, sc.bslots.data());
+          held_eval = &ba;
         }
       } else {
         dt_min = membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mf, dte);
-        if (bending_ && block_angles_[b] && block_angles_[b]->held.size() == 9 * static_cast<std::size_t>(n))
-          add_held(n, ld, block_angles_[b]->held.data(), mf);
+        if (bending_ && block_angles_[b] && block_angles_[b]->held.size() == out.node_force.size())
+          held_add = block_angles_[b]->held.data();
         if (bending_ && block_angles_[b]) {
           energy += block_angles_[b]->bending_energy;  // of the last one with bending
           if (in.commit) block_angles_[b]->elapsed += in.dt;
@@ -873,16 +870,11 @@ class ShellRfT3 final : public ElementKernel {
       }
       // The fibres' in-plane bending, at every evaluation.
       if (in_plane_) energy += in_plane_forces(in, b, in.range.end, dte, t_lo, t_hi, out, dt_min);
-      if (!ri.ngroup.empty()) {
-        const std::uint16_t *slots = ri.nslot.data(), *ent = ri.nent.data();
-        for (const auto& [k, count] : ri.ngroup) {
-          node_forces(k, count, ld, mf, slots, ent, out.node_force.data());
-          slots += count;
-          ent += static_cast<std::size_t>(k) * count;
-        }
-      } else {
-        corner_forces(n, ld, mf, in.patch_slot.data(), out.node_force.data());
-      }
+      add_node_forces(in, ri, n, ld, mf, out.node_force.data());
+      if (held_eval)
+        hold_bending(*held_eval, in.bending_weight, in.commit, sc.bslots.data(), out.node_force);
+      else if (held_add)
+        add_into(static_cast<int>(out.node_force.size()), out.node_force.data(), held_add);
       energy += lane_dot(n, area0_.data() + b, energy_e);
       if (steps) dt_min = smallest_step(n, dte, in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b, dt_min);
       if (!out.element_dt.empty()) std::copy(dte, dte + n, out.element_dt.begin() + b);
@@ -942,11 +934,11 @@ class ShellRfT3 final : public ElementKernel {
       if (block_angles_[b])
         blocks.insert(blocks.end(), {static_cast<double>(b), block_angles_[b]->elapsed, block_angles_[b]->bending_energy});
     out.put_vector(blocks);
-    std::vector<double> held;  // per block with a held part: its first element, n, then its 9 n values
+    std::vector<double> held;  // per block with a held part: its first element, their count, then the values
     for (std::size_t b = 0; b < block_angles_.size(); ++b)
       if (block_angles_[b] && !block_angles_[b]->held.empty()) {
         held.push_back(static_cast<double>(b));
-        held.push_back(static_cast<double>(block_angles_[b]->held.size() / 9));
+        held.push_back(static_cast<double>(block_angles_[b]->held.size()));
         held.insert(held.end(), block_angles_[b]->held.begin(), block_angles_[b]->held.end());
       }
     out.put_vector(held);
@@ -980,10 +972,9 @@ class ShellRfT3 final : public ElementKernel {
       if (!(b >= 0 && b < static_cast<double>(block_angles_.size())) || !block_angles_[static_cast<std::size_t>(b)])
         return mismatch();
       if (held.size() - k < 2) return mismatch();
-      const double n = held[k + 1];
-      if (!(n >= 1 && n <= static_cast<double>(block_angles_.size()) - 1 - b)) return mismatch();
-      const std::size_t m = 9 * static_cast<std::size_t>(n);
-      if (held.size() - k - 2 < m) return mismatch();
+      const double count = held[k + 1];
+      if (!(count >= 1 && count <= static_cast<double>(held.size() - k - 2))) return mismatch();
+      const std::size_t m = static_cast<std::size_t>(count);
       const auto from = held.begin() + static_cast<std::ptrdiff_t>(k + 2);
       block_angles_[static_cast<std::size_t>(b)]->held.assign(from, from + static_cast<std::ptrdiff_t>(m));
       k += 2 + m;
@@ -1969,24 +1960,37 @@ class ShellRfT3 final : public ElementKernel {
   // that balances f_b at every step would shake the nodes (the step's
   // contact or membrane takes the extra velocity back over the next steps)
   // and feed that vibration from the bending's impulses. Over the j steps
-  // the momentum is j f_b either way (docs/mechanics-method.md). With
-  // mfm the membrane's corner forces and mf those with the bending (times
-  // j): f_b = (mf - mfm) / j; mf becomes mfm + h + j (f_b - h) = mf - (j -
-  // 1) h. An evaluation with weight 1 after such evaluations (the
-  // bending's step has come to set the run's) updates h and applies f_b.
+  // the momentum is j f_b either way (docs/mechanics-method.md). Per node
+  // slot of the block: jfb = j f_b (the bending's share of the slot's
+  // forces), and the slot's forces, which hold j f_b, become those of the
+  // membrane + h + j (f_b - h), i.e. less (j - 1) h. An evaluation with
+  // weight 1 after such evaluations (the bending's step has come to set
+  // the run's) updates h and applies f_b.
   static constexpr double kHeldAlpha = 1.0 / 64.0;
-  static void hold_bending(BlockAngles& ba, int n, int ld, double j, bool commit, const double* mfm, double* mf) {
-    if (ba.held.size() != 9 * static_cast<std::size_t>(n)) ba.held.assign(9 * static_cast<std::size_t>(n), 0.0);
-    double* held = ba.held.data();
+  static void hold_bending(BlockAngles& ba, double j, bool commit, const double* jfb, std::span<double> node_force) {
+    const std::size_t m = node_force.size();
+    if (ba.held.size() != m) ba.held.assign(m, 0.0);
+    double* __restrict h = ba.held.data();
+    double* __restrict f = node_force.data();
     const double inv_j = 1.0 / j, keep = j - 1.0;
-    for (int r = 0; r < 9; ++r) {
-      double* h = held + static_cast<std::size_t>(r) * n;
-      double* f = mf + static_cast<std::size_t>(r) * ld;
-      const double* fm = mfm + static_cast<std::size_t>(r) * ld;
-      for (int q = 0; q < n; ++q) {
-        if (commit) h[q] += kHeldAlpha * ((f[q] - fm[q]) * inv_j - h[q]);
-        f[q] -= keep * h[q];
+    if (commit)
+      for (std::size_t v = 0; v < m; ++v) h[v] += kHeldAlpha * (jfb[v] * inv_j - h[v]);
+    for (std::size_t v = 0; v < m; ++v) f[v] -= keep * h[v];
+  }
+
+  // Adds the corner forces mf (component d of corner a of element q at
+  // mf[(3 a + d) ld + q]) of the range's n elements into the node slots nf.
+  static void add_node_forces(const ElementForceInput& in, const RangeIndex& ri, int n, int ld, const double* mf,
+                              double* nf) {
+    if (!ri.ngroup.empty()) {
+      const std::uint16_t *slots = ri.nslot.data(), *ent = ri.nent.data();
+      for (const auto& [k, count] : ri.ngroup) {
+        node_forces(k, count, ld, mf, slots, ent, nf);
+        slots += count;
+        ent += static_cast<std::size_t>(k) * count;
       }
+    } else {
+      corner_forces(n, ld, mf, in.patch_slot.data(), nf);
     }
   }
 
