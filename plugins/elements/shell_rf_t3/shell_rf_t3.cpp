@@ -97,7 +97,7 @@ inline int padded_ld(int n) {
 struct BlockScratch {
   // stress and curv: the stresses and curvatures of a step after which the
   // kernel writes no fields (ElementForceInput::fields_due).
-  std::vector<double> strain, ff, mf, mfm, bslots, law_stress, energy_tmp, energy, moment, benergy, stress, curv;
+  std::vector<double> strain, ff, mf, mb, bslots, law_stress, energy_tmp, energy, moment, benergy, stress, curv;
   // The angle changes of the block's hinges in pass 0 (ShellRfT3::block_angles).
   std::vector<double> dth;
 };
@@ -109,7 +109,7 @@ BlockScratch& block_scratch(int n) {
     s.strain.resize(3 * m);
     s.ff.resize(6 * ld);
     s.mf.resize(9 * ld);
-    s.mfm.resize(9 * ld);
+    s.mb.resize(9 * ld);
     s.law_stress.resize(3 * m);
     s.stress.resize(3 * m);
     s.curv.resize(3 * m);
@@ -390,14 +390,14 @@ void element_temperature_block(int n, const int* __restrict tri, const double* _
 // taken from the smallest det C / max_a Q_a (the square root and the
 // product with inv_c, rounding included, keep the order: the same bits as
 // the smallest of the elements' steps, with one square root per block).
-template <bool kBend, bool kSteps>
+template <bool kBend, bool kSteps, bool kSplit = false>
 [[gnu::always_inline]] inline double membrane_body(int n, int ld, const double* __restrict C,
                                                    const double* __restrict ff, const double* __restrict S,
                                                    const double* __restrict area, const double* __restrict g, int gld,
                                                    double cmul, const double* __restrict hm,
                                                    const int* __restrict nidx, int nld,
                                                    const double* __restrict hm_all, int hld, double* __restrict mf,
-                                                   double* __restrict dte) {
+                                                   double* __restrict dte, double* __restrict mb = nullptr) {
   double rmin = std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(min : rmin)
   for (int q = 0; q < n; ++q) {
@@ -448,6 +448,12 @@ template <bool kBend, bool kSteps>
     mf[q] = -sum0;
     mf[ld + q] = -sum1;
     mf[2 * ld + q] = -sum2;
+    if (kSplit) {  // the bending's share of the corner forces alone
+      const double w0 = -(w1 + w2);
+      mb[q] = w0 * N0, mb[ld + q] = w0 * N1, mb[2 * ld + q] = w0 * N2;
+      mb[3 * ld + q] = w1 * N0, mb[4 * ld + q] = w1 * N1, mb[5 * ld + q] = w1 * N2;
+      mb[6 * ld + q] = w2 * N0, mb[7 * ld + q] = w2 * N1, mb[8 * ld + q] = w2 * N2;
+    }
     double qmax = Q0;
     qmax = qmax < Q1 ? Q1 : qmax;
     qmax = qmax < Q2 ? Q2 : qmax;
@@ -468,12 +474,20 @@ double membrane_block(int n, int ld, const double* C, const double* ff, const do
     return membrane_body<false, false>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, 0, nullptr, 0, mf, dte);
   return membrane_body<false, true>(n, ld, C, ff, S, area, g, gld, cmul, nullptr, nullptr, 0, nullptr, 0, mf, dte);
 }
-// The membrane and bending forces (see membrane_body).
+// The membrane and bending forces (see membrane_body); mb, if not null,
+// receives the bending's share of the corner forces alone.
 TS_VECTOR_CLONES
 double membrane_bending_block(int n, int ld, const double* C, const double* ff, const double* S, const double* area,
                               const double* g, int gld, double inv_c, bool has_stiffness, const double* hm,
-                              const int* nidx, int nld, const double* hm_all, int hld, double* mf, double* dte) {
+                              const int* nidx, int nld, const double* hm_all, int hld, double* mf, double* dte,
+                              double* mb) {
   const double cmul = has_stiffness ? inv_c : std::numeric_limits<double>::infinity();
+  if (mb) {
+    if (!dte)
+      return membrane_body<true, false, true>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte,
+                                              mb);
+    return membrane_body<true, true, true>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte, mb);
+  }
   if (!dte)
     return membrane_body<true, false>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte);
   return membrane_body<true, true>(n, ld, C, ff, S, area, g, gld, cmul, hm, nidx, nld, hm_all, hld, mf, dte);
@@ -842,21 +856,19 @@ class ShellRfT3 final : public ElementKernel {
       const double* held_add = nullptr;   // a held part to add (evaluations without bending)
       if (bend) {  // the membrane forces with the bending ones
         const StepValues sv = step_values(in);
-        dt_min = membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0,
-                                        sv.hm, sv.nidx, gld_, sv.hm_all, sv.ld, mf, dte);
-        energy += bending_forces(in, b, in.range.end, dte, t_lo, t_hi, mf, ld, ri, out, dt_min);
         BlockAngles& ba = *block_angles_[b];
-        if (in.bending_weight > 1.0 || !ba.held.empty()) {
-          // The bending's corner forces (times the weight): mf less the
-          // membrane's alone, into mfm; their node sums into the block's
-          // slots (sc.bslots).
-          double* mfm = sc.mfm.data();
-          membrane_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0, mfm, nullptr);
-          for (std::size_t v = 0; v < 9 * static_cast<std::size_t>(ld); ++v) mfm[v] = mf[v] - mfm[v];
+        // With a held part, the bending's corner forces (times the weight)
+        // also apart, into mb, and their node sums into the block's slots
+        // (sc.bslots).
+        double* mb = in.bending_weight > 1.0 || !ba.held.empty() ? sc.mb.data() : nullptr;
+        dt_min = membrane_bending_block(n, ld, C, ff, S, area0_.data() + b, g_.data() + b, mld_, inv_c, kmax > 0,
+                                        sv.hm, sv.nidx, gld_, sv.hm_all, sv.ld, mf, dte, mb);
+        energy += bending_forces(in, b, in.range.end, dte, t_lo, t_hi, mf, mb, ld, ri, out, dt_min);
+        if (mb) {
           const std::size_t ns = out.node_force.size();
           if (sc.bslots.size() < ns) sc.bslots.resize(ns);
           std::fill(sc.bslots.begin(), sc.bslots.begin() + static_cast<std::ptrdiff_t>(ns), 0.0);
-          add_node_forces(in, ri, n, ld, mfm, sc.bslots.data());
+          add_node_forces(in, ri, n, ld, mb, sc.bslots.data());
           held_eval = &ba;
         }
       } else {
@@ -1907,14 +1919,16 @@ class ShellRfT3 final : public ElementKernel {
 
   // Pass 3, after membrane_bending_block has added the interior hinges'
   // forces to the membrane forces mf (laid out as membrane_block writes
-  // them, leading dimension ld): the ghost hinges' forces into mf; returns
+  // them, leading dimension ld): the ghost hinges' forces into mf (and mb, if
+  // not null: the bending's share of the corner forces alone); returns
   // the bending energy (from pass 1) and lowers the elements' stable steps
   // dte (the membrane's) with the bending ones, or, where dte is null (the
   // elements' own steps are not formed: see internal_forces), lowers
   // dt_floor (the block's stable step so far) with the block's smallest
   // bending step; [t_lo, t_hi] is the block's temperature range.
   double bending_forces(const ElementForceInput& in, int b, int end, double* dte, double t_lo, double t_hi,
-                        double* mf, int ld, const RangeIndex& ri, ElementForceOutput& out, double& dt_floor) {
+                        double* mf, double* mb, int ld, const RangeIndex& ri, ElementForceOutput& out,
+                        double& dt_floor) {
     const int n = end - b;
     const BlockAngles& ba = *block_angles_[b];  // from passes 0 to 2
     const double rmax = std::max(bending_->max_stiffness(t_lo), bending_->max_stiffness(t_hi));
@@ -1944,6 +1958,8 @@ class ShellRfT3 final : public ElementKernel {
       for (int j = 0; j < 3; ++j) {
         const int a = (k + j) % 3;
         for (int d = 0; d < 3; ++d) mf[(3 * a + d) * ld + q] += m * gr[j][d];
+        if (mb)
+          for (int d = 0; d < 3; ++d) mb[(3 * a + d) * ld + q] += m * gr[j][d];
       }
     }
     return ba.bending_energy;
