@@ -827,8 +827,9 @@ std::unique_ptr<sdk::MaterialLaw> linear_bending(Patch& p, double r1, double r2 
 // The internal forces are the derivative of the energy (central differences,
 // h = 1e-8 m: truncation ~ h^2, round-off ~ 1e-16 E / h, both below 1e-6 of
 // the largest force), for an in-plane and out-of-plane quadratic field on
-// the irregular patch, in one range and split into 3 and 7; the same forces
-// and energy whatever the ranges.
+// the irregular patch (its left edge clamped, its lower edge on the
+// symmetry plane y = 0, fibres crossing both), in one range and split into
+// 3 and 7; the same forces and energy whatever the ranges.
 TEST(ShellRfT3, InPlaneBendingForcesAreTheDerivativeOfTheEnergy) {
   Patch p(0.5, true);
   auto zero = linear_bending(p, 0.0), in_plane = linear_bending(p, 2e-3);
@@ -848,9 +849,12 @@ TEST(ShellRfT3, InPlaneBendingForcesAreTheDerivativeOfTheEnergy) {
 }
 
 // Rigid motions and homogeneous deformations bend no fibre: no energy, no
-// force (to round-off), on the irregular patch with fibres at 0.5 rad.
+// force (to round-off), on the irregular patch with fibres at 0.5 rad and
+// free edges (a clamp or a mirror would take a rotation as a slope: see
+// InPlaneBendingAtClampedAndSymmetryEdges).
 TEST(ShellRfT3, InPlaneBendingIsFreeUnderRigidMotionsAndHomogeneousDeformations) {
   Patch p(0.5, true);
+  std::fill(p.edges.begin(), p.edges.end(), sdk::kEdgeFree);
   auto zero = linear_bending(p, 0.0), in_plane = linear_bending(p, 2e-3);
   p.configure_with({}, zero.get(), in_plane.get());
   // Reference: the forces of a curved state (the scale of "zero").
@@ -903,6 +907,55 @@ TEST(ShellRfT3, InPlaneBendingIgnoresTheBendingWeight) {
   EXPECT_EQ(e0, e1);
 }
 
+// The ghosts of boundary edges for the in-plane term, on the regular 4 x 3
+// patch (cells hx = 5 mm by hy = 3.33 mm, one triangle of each boundary cell
+// on the boundary) with a homogeneous deformation F: every slope jump
+// between elements is zero, so the energy is that of the boundary slopes
+// alone. At a clamped edge (the left, fibres along x, crossing it) the
+// ghost is the held grip: none for an F that keeps the fibre's initial
+// direction (F e_x = e_x), and for a shear y += g x the slope
+// s = g / sqrt(1 + g^2) (the fibre's rotation), each boundary element's
+// K11 = l s / A0 = 2 s / hx: energy 3 (hx hy / 2) R / 2 (2 s / hx)^2 =
+// 3 R s^2 hy / hx. On the symmetry plane y = 0 (the lower edge, fibres
+// along y) the ghost is the mirrored element: none for a stretch along the
+// axes, and for a shear x += g y the slope half the jump to the mirror,
+// the same s: energy 4 R s^2 hx / hy. Both to round-off.
+TEST(ShellRfT3, InPlaneBendingAtClampedAndSymmetryEdges) {
+  const double rig = 2e-3, g = 0.05, s = g / std::sqrt(1 + g * g), hx = 0.005, hy = 0.01 / 3;
+  for (const bool clamp : {true, false}) {
+    Patch p(clamp ? 0.0 : M_PI / 2, true, {4, 3}, false);
+    for (int e = 0; e < p.mesh.num_elements(); ++e)
+      for (int k = 0; k < 3; ++k)
+        if (p.edges[3 * e + k] != (clamp ? sdk::kEdgeClamped : sdk::kEdgeSymmetryX + 1)) p.edges[3 * e + k] = sdk::kEdgeFree;
+    auto zero = linear_bending(p, 0.0), in_plane = linear_bending(p, rig);
+    p.configure_with({}, zero.get(), in_plane.get());
+    const auto apply = [&](double a, double b, double c, double d) {  // x = a X + b Y, y = c X + d Y
+      for (int i = 0; i < p.mesh.num_nodes(); ++i) {
+        const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
+        p.x[3 * i] = a * X + b * Y;
+        p.x[3 * i + 1] = c * X + d * Y;
+      }
+    };
+    // Allowed: F e_x = e_x at the clamp; a stretch along the axes at the mirror.
+    if (clamp) apply(1.0, 0.3, 0.0, 0.9);
+    else apply(1.02, 0.0, 0.0, 0.97);
+    const double free_energy = p.energy();
+    double fmax = 0;
+    for (const double v : p.forces()) fmax = std::max(fmax, std::abs(v));
+    // A slope at the boundary.
+    if (clamp) apply(1.0, 0.0, g, 1.0);
+    else apply(1.0, g, 0.0, 1.0);
+    const double energy = p.energy(), exact = clamp ? 3 * rig * s * s * hy / hx : 4 * rig * s * s * hx / hy;
+    double fref = 0;
+    for (const double v : p.forces()) fref = std::max(fref, std::abs(v));
+    std::printf("%s: allowed F %.2e J, %.2e N; slope %.3f: %.9e J, closed form %.9e J\n", clamp ? "clamp" : "mirror",
+                free_energy, fmax, s, energy, exact);
+    EXPECT_LT(std::abs(free_energy), 1e-12 * exact);
+    EXPECT_LT(fmax, 1e-9 * fref);
+    EXPECT_NEAR(energy, exact, 1e-12 * exact);
+  }
+}
+
 // Fibres bent into concentric circles in the plane: the fibre at Y becomes
 // the circle of radius rho = r0 + Y about (0, -r0), x = rho sin(X / rho),
 // y = -r0 + rho cos(X / rho) (each fibre keeps its length; its curvature is
@@ -931,6 +984,7 @@ TEST(ShellRfT3, InPlaneBendingOfConcentricFibresAgainstTheClosedForm) {
     int level = 0;
     for (const std::array<int, 2> div : {std::array<int, 2>{8, 4}, std::array<int, 2>{16, 8}}) {
       Patch p(angle, true, div, false);
+      std::fill(p.edges.begin(), p.edges.end(), sdk::kEdgeFree);  // the map is neither mirrored nor held
       auto zero = linear_bending(p, 0.0), in_plane = linear_bending(p, rig);
       p.configure_with({}, zero.get(), in_plane.get());
       for (int i = 0; i < p.mesh.num_nodes(); ++i) {

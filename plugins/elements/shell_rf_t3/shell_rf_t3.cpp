@@ -56,11 +56,14 @@
 // and the forces follow through the same four passes as the bending, at
 // every evaluation (whatever the bending weight: an impulse every few
 // steps on the in-plane motion, which the membrane already holds at its
-// stable step, is not stable). An
-// edge without a neighbour (free, held or on a symmetry plane) has a free
-// mid-edge slope, and the energy's minimum over it is K11 = 0 unless the
-// edge runs along the fibres: such elements carry no term (the fibres'
-// free ends take no moment).
+// stable step, is not stable). Boundary edges: on a symmetry plane the
+// neighbour is the element mirrored in the plane (J = -(I + P) F_e nu,
+// P the mirror) and s = phi / 2, the fibre's angle to the plane's normal;
+// at a clamped edge it is the held grip (F = I: J = nu - F_e nu) and
+// s = phi, the fibre's rotation from its initial direction. A free edge
+// has a free mid-edge slope, and the energy's minimum over it is K11 = 0
+// unless the edge runs along the fibres: such elements carry no term (the
+// fibres' free ends take no moment).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -1085,6 +1088,8 @@ class ShellRfT3 final : public ElementKernel {
     ipw_.assign(3 * static_cast<std::size_t>(ne), 0.5);
     ipc_.assign(3 * static_cast<std::size_t>(ne), 0.0);
     ipl_.assign(9 * static_cast<std::size_t>(ne), 0.0);
+    ipk_.assign(3 * static_cast<std::size_t>(ne), static_cast<char>(kEdgeFree));
+    ipnu_.assign(9 * static_cast<std::size_t>(ne), 0.0);
     std::vector<char> quad(ne, 0);
     const auto grads = [&](int e, Vec3 gr[3], Vec3& n) {  // grad0 N_a (3D, in the initial plane)
       const int* t = &part_->triangles[3 * e];
@@ -1107,10 +1112,22 @@ class ShellRfT3 final : public ElementKernel {
         const double l = norm(sub(Q, P)), nf = dot(nu, f);
         const int nb = part_->neighbours[3 * e + k];
         if (nb < 0) {
-          // No neighbour: the mid-edge slope is free, and the energy's
-          // minimum over it makes K11 zero unless the edge runs along the
-          // fibres.
-          if (nf * nf > 1e-6) off = true;
+          const int ec = edge_condition_.empty() ? kEdgeFree : edge_condition_[3 * e + k];
+          if (ec == kEdgeFree) {
+            // The mid-edge slope is free, and the energy's minimum over it
+            // makes K11 zero unless the edge runs along the fibres.
+            if (nf * nf > 1e-6) off = true;
+            continue;
+          }
+          // A ghost: the mirrored element (s = phi / 2, omega 1/2 with no
+          // quadratic on either side) or the held grip (s = phi). bk: the
+          // coefficients of F_e nu on the element's nodes.
+          ipk_[3 * e + k] = static_cast<char>(ec);
+          ipc_[3 * e + k] = l * nf * nf / area0_[e];
+          ipw_[3 * e + k] = ec == kEdgeClamped ? 0.0 : 0.5;
+          double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * k];
+          for (int a = 0; a < 3; ++a) bk[a] = dot(ge[a], nu);
+          for (int d = 0; d < 3; ++d) ipnu_[9 * static_cast<std::size_t>(e) + 3 * k + d] = nu[d];
           continue;
         }
         ++count;
@@ -1233,14 +1250,30 @@ class ShellRfT3 final : public ElementKernel {
     fr.m = cross(fr.n, fr.f);
     return fr;
   }
-  // J_k of element e at positions x (zero without a neighbour).
+  // J_k of element e at positions x (zero at a free edge without a
+  // neighbour).
   Vec3 in_plane_jump(const double* x, int e, int k) const {
     const int* t = &part_->triangles[3 * e];
     const double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * k];
     const Vec3 x0 = load3(x, t[0]);
-    // Relative to corner 0 (the four coefficients sum to zero).
+    // Relative to corner 0 (the coefficients sum to zero).
     Vec3 J = add(scale(sub(load3(x, t[1]), x0), bk[1]), scale(sub(load3(x, t[2]), x0), bk[2]));
-    return add(J, scale(sub(load3(x, opp_[3 * e + k]), x0), bk[3]));
+    const int kind = ipk_[3 * e + k];
+    if (kind == kEdgeFree) {
+      if (part_->neighbours[3 * e + k] < 0) return {0, 0, 0};
+      return add(J, scale(sub(load3(x, opp_[3 * e + k]), x0), bk[3]));
+    }
+    // A ghost: J holds F_e nu.
+    if (kind == kEdgeClamped) return sub(load3(ipnu_.data(), 3 * e + k), J);
+    J[kind - kEdgeSymmetryX] = 0.0;
+    return scale(J, -2.0);
+  }
+  // d(m . J_k) / d(F_e nu) for a ghost edge of kind `kind`: -m at a clamp,
+  // -(I + P) m = -2 m without its component normal to a symmetry plane.
+  static Vec3 ghost_jump_row(int kind, Vec3 m) {
+    if (kind == kEdgeClamped) return scale(m, -1.0);
+    m[kind - kEdgeSymmetryX] = 0.0;
+    return scale(m, -2.0);
   }
 
   // Pass 0: the slope jumps phi_k = m . J_k and the own quadratic's slopes
@@ -1250,8 +1283,7 @@ class ShellRfT3 final : public ElementKernel {
     for (int e = b; e < end; ++e) {
       const InPlaneFrame fr = in_plane_frame(x, e);
       double* phi = &ipphi_[3 * static_cast<std::size_t>(e)];
-      for (int k = 0; k < 3; ++k)
-        phi[k] = part_->neighbours[3 * e + k] >= 0 ? dot(fr.m, in_plane_jump(x, e, k)) : 0.0;
+      for (int k = 0; k < 3; ++k) phi[k] = dot(fr.m, in_plane_jump(x, e, k));
       const double* L = &ipl_[9 * static_cast<std::size_t>(e)];
       for (int k = 0; k < 3; ++k) ipr_[3 * e + k] = L[3 * k] * phi[0] + L[3 * k + 1] * phi[1] + L[3 * k + 2] * phi[2];
     }
@@ -1276,7 +1308,7 @@ class ShellRfT3 final : public ElementKernel {
         if (c == 0.0) continue;
         const int nb = part_->neighbours[3 * e + k];
         const double om = ipw_[3 * e + k];
-        const double rp = ipr_[3 * nb + partner_k_[3 * e + k]];
+        const double rp = nb >= 0 ? ipr_[3 * nb + partner_k_[3 * e + k]] : 0.0;
         kappa += c * (om * ipr_[3 * e + k] + (1 - om) * (ipphi_[3 * e + k] - rp));
       }
       chi[3 * q] = kappa;
@@ -1334,10 +1366,12 @@ class ShellRfT3 final : public ElementKernel {
       const int* slot = &in.patch_slot[6 * static_cast<std::size_t>(e - b)];
       Vec3 own[3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, Jg{0, 0, 0};
       for (int i = 0; i < 3; ++i) {
-        if (gi[i] == 0.0 || part_->neighbours[3 * e + i] < 0) continue;
+        const int kind = ipk_[3 * e + i];
+        if (gi[i] == 0.0 || (kind == kEdgeFree && part_->neighbours[3 * e + i] < 0)) continue;
         const double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * i];
-        for (int a = 0; a < 3; ++a) own[a] = add(own[a], scale(fr.m, gi[i] * bk[a]));
-        if (slot[3 + i] >= 0)
+        const Vec3 row = kind == kEdgeFree ? fr.m : ghost_jump_row(kind, fr.m);
+        for (int a = 0; a < 3; ++a) own[a] = add(own[a], scale(row, gi[i] * bk[a]));
+        if (kind == kEdgeFree && slot[3 + i] >= 0)
           for (int d = 0; d < 3; ++d) nf[3 * slot[3 + i] + d] += gi[i] * bk[3] * fr.m[d];
         Jg = add(Jg, scale(in_plane_jump(x, e, i), gi[i]));
       }
@@ -2068,6 +2102,11 @@ class ShellRfT3 final : public ElementKernel {
   // See setup_in_plane; per step: the slope jumps, own slopes, dW/ds and
   // dW/dphi per element and edge, and per element A0 w.
   std::vector<double> ipb_, ipw_, ipc_, ipl_, ipphi_, ipr_, ipm_, ipg_, ipe_;
+  // Per element and edge: kEdgeFree (a neighbour or a free edge) or the
+  // ghost's kind (kEdgeClamped, kEdgeSymmetryX + axis), and the edge's
+  // initial outward normal nu at ghost edges (3 values).
+  std::vector<char> ipk_;
+  std::vector<double> ipnu_;
   int gld_ = 0;
   std::vector<int> opp_, partner_k_, edge_condition_;  // partner_k_: the same edge's index in the neighbour
   std::vector<char> clamped_;
@@ -2207,7 +2246,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.10.0";
+  d.version = "0.11.0";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch), optional in-plane bending of the fibres (a material's in_plane_bending)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -2215,4 +2254,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.10.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.11.0", register_all)
