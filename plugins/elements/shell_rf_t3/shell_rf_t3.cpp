@@ -593,6 +593,163 @@ void hinge_moment_block(int n, int ld, const float* __restrict L, const float* _
 // Adds the forces of n elements, component d of corner a of element q at
 // mf[(3 a + d) ld + q], into their corners' node slots (slot[6 q + a], the
 // kernel's patch_slot).
+// The fibres' in-plane bending (see the head of this file) in vector
+// passes over n elements. Per element q: its corners' offsets 3 i in x at
+// off[a mld + q], its g_1 row at g[q] and g[mld + q]; per edge k (rows of
+// stride ld): the offset of the node across it at oo[k ld + q] (corner 0's
+// where there is none), the coefficients of J_k on x1 - x0, x2 - x0 and
+// xo - x0 at B[(3 k + j) ld + q], L at L[(3 k + i) ld + q]. The frame:
+// f = g / |g|, g = g_1 x10 + g_2 x20 (the current fibre), n = N / |N|,
+// N = x10 x x20, m = n x f.
+struct InPlaneFrameV {
+  double a0, a1, a2, c0, c1, c2;  // x10, x20
+  double f0, f1, f2, n0, n1, n2, m0, m1, m2, inv_glen, inv_nlen;
+};
+[[gnu::always_inline]] inline InPlaneFrameV in_plane_frame_v(const double* __restrict x, int i0, int i1, int i2,
+                                                            double gb, double gc) {
+  InPlaneFrameV r;
+  const double X0 = x[i0], X1 = x[i0 + 1], X2 = x[i0 + 2];
+  r.a0 = x[i1] - X0, r.a1 = x[i1 + 1] - X1, r.a2 = x[i1 + 2] - X2;
+  r.c0 = x[i2] - X0, r.c1 = x[i2 + 1] - X1, r.c2 = x[i2 + 2] - X2;
+  const double G0 = gb * r.a0 + gc * r.c0, G1 = gb * r.a1 + gc * r.c1, G2 = gb * r.a2 + gc * r.c2;
+  r.inv_glen = 1.0 / std::sqrt(G0 * G0 + G1 * G1 + G2 * G2);
+  r.f0 = G0 * r.inv_glen, r.f1 = G1 * r.inv_glen, r.f2 = G2 * r.inv_glen;
+  const double N0 = r.a1 * r.c2 - r.a2 * r.c1, N1 = r.a2 * r.c0 - r.a0 * r.c2, N2 = r.a0 * r.c1 - r.a1 * r.c0;
+  r.inv_nlen = 1.0 / std::sqrt(N0 * N0 + N1 * N1 + N2 * N2);
+  r.n0 = N0 * r.inv_nlen, r.n1 = N1 * r.inv_nlen, r.n2 = N2 * r.inv_nlen;
+  r.m0 = r.n1 * r.f2 - r.n2 * r.f1, r.m1 = r.n2 * r.f0 - r.n0 * r.f2, r.m2 = r.n0 * r.f1 - r.n1 * r.f0;
+  return r;
+}
+
+// Pass 0: the slope jumps phi_k = m . J_k (phi[k ld + q]), the own
+// quadratic's slopes r = L phi (r[k ld + q]) and m (mv[d ld + q]).
+TS_VECTOR_CLONES
+void in_plane_angle_block(int n, const int* __restrict off, const double* __restrict g, int mld,
+                          const int* __restrict oo, const double* __restrict B, const double* __restrict L, int ld,
+                          const double* __restrict x, double* __restrict phi, double* __restrict r,
+                          double* __restrict mv) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const int i0 = off[q];
+    const InPlaneFrameV fr = in_plane_frame_v(x, i0, off[mld + q], off[2 * mld + q], g[q], g[mld + q]);
+    mv[q] = fr.m0, mv[ld + q] = fr.m1, mv[2 * ld + q] = fr.m2;
+    double p[3];
+    for (int k = 0; k < 3; ++k) {
+      const int io = oo[k * ld + q];
+      const double o0 = x[io] - x[i0], o1 = x[io + 1] - x[i0 + 1], o2 = x[io + 2] - x[i0 + 2];
+      const double b0 = B[3 * k * ld + q], b1 = B[(3 * k + 1) * ld + q], b2 = B[(3 * k + 2) * ld + q];
+      const double J0 = b0 * fr.a0 + b1 * fr.c0 + b2 * o0, J1 = b0 * fr.a1 + b1 * fr.c1 + b2 * o1,
+                   J2 = b0 * fr.a2 + b1 * fr.c2 + b2 * o2;
+      p[k] = fr.m0 * J0 + fr.m1 * J1 + fr.m2 * J2;
+      phi[k * ld + q] = p[k];
+    }
+    for (int k = 0; k < 3; ++k)
+      r[k * ld + q] = L[3 * k * ld + q] * p[0] + L[(3 * k + 1) * ld + q] * p[1] + L[(3 * k + 2) * ld + q] * p[2];
+  }
+}
+
+// Pass 1, before the law: K11 = sum_k c_k (w_k r_k + (1 - w_k) (phi_k -
+// r'_k)) into chi[3 q] (chi[3 q + 1], chi[3 q + 2] zero), r' the
+// neighbour's own slope of the same edge (r_all[nidx[k ld + q]]; the entry
+// past the arrays, zero, where there is none).
+TS_VECTOR_CLONES
+void in_plane_curvature_block(int n, int ld, const double* __restrict c, const double* __restrict w,
+                              const double* __restrict phi, const double* __restrict r, const int* __restrict nidx,
+                              const double* __restrict r_all, double* __restrict chi) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    double kappa = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const int i = k * ld + q;
+      kappa += c[i] * (w[i] * r[i] + (1.0 - w[i]) * (phi[i] - r_all[nidx[i]]));
+    }
+    chi[3 * q] = kappa;
+    chi[3 * q + 1] = 0.0;
+    chi[3 * q + 2] = 0.0;
+  }
+}
+
+// Pass 2: each element's dW/dphi_i = (1 - w_i) m_i + sum_k L_ki w_k (m_k -
+// m'_k) into gs[i ld + q] (m = dW/ds, mm[k ld + q], m' the neighbour's of
+// the same edge, m_all[nidx[..]]), and for the node across each edge its
+// force g_k B_k2 m (og0/og1/og2[k ld + q], components of m at mv[d ld +
+// q]), which the neighbour adds to its corner in pass 3.
+TS_VECTOR_CLONES
+void in_plane_share_block(int n, int ld, const double* __restrict w, const double* __restrict L,
+                          const double* __restrict mm, const int* __restrict nidx, const double* __restrict m_all,
+                          const double* __restrict B, const double* __restrict mv, double* __restrict gs,
+                          double* __restrict og0, double* __restrict og1, double* __restrict og2) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    double d[3];
+    for (int k = 0; k < 3; ++k) {
+      const int i = k * ld + q;
+      d[k] = w[i] * (mm[i] - m_all[nidx[i]]);
+    }
+    for (int i = 0; i < 3; ++i) {
+      const int e = i * ld + q;
+      const double gi =
+          (1.0 - w[e]) * mm[e] + L[i * ld + q] * d[0] + L[(3 + i) * ld + q] * d[1] + L[(6 + i) * ld + q] * d[2];
+      gs[e] = gi;
+      const double t = gi * B[(3 * i + 2) * ld + q];
+      og0[e] = t * mv[q], og1[e] = t * mv[ld + q], og2[e] = t * mv[2 * ld + q];
+    }
+  }
+}
+
+// Pass 3: the forces sum_i g_i dphi_i/dx on the element's corners, with
+// dphi_i = m . dJ_i + J_i . dm and J . dm = dn . (f x J) + df . (J x n),
+// df = (I - f f^T) dg / |g|, dn = (I - n n^T) dN / |N|, g_i taken times
+// mask[i ld + q] (zero at ghost edges, which the caller adds apart); and
+// each corner k the force of the neighbour across edge k on it (og*_all at
+// nidx[k ld + q]). Added into mf (component d of corner a at
+// mf[(3 a + d) mld_f + q]).
+TS_VECTOR_CLONES
+void in_plane_force_block(int n, const int* __restrict off, const double* __restrict g, int mld,
+                          const int* __restrict oo, const double* __restrict B, int ld, const double* __restrict gs,
+                          const double* __restrict mask, const int* __restrict nidx, const double* __restrict og0,
+                          const double* __restrict og1, const double* __restrict og2, const double* __restrict x,
+                          double* __restrict mf, int fld) {
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const int i0 = off[q];
+    const double gb = g[q], gc = g[mld + q];
+    const InPlaneFrameV fr = in_plane_frame_v(x, i0, off[mld + q], off[2 * mld + q], gb, gc);
+    double S1 = 0.0, S2 = 0.0, S3 = 0.0, Jg0 = 0.0, Jg1 = 0.0, Jg2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double gk = gs[k * ld + q] * mask[k * ld + q];
+      const int io = oo[k * ld + q];
+      const double o0 = x[io] - x[i0], o1 = x[io + 1] - x[i0 + 1], o2 = x[io + 2] - x[i0 + 2];
+      const double b0 = gk * B[3 * k * ld + q], b1 = gk * B[(3 * k + 1) * ld + q], b2 = gk * B[(3 * k + 2) * ld + q];
+      S1 += b0, S2 += b1, S3 += b2;
+      Jg0 += b0 * fr.a0 + b1 * fr.c0 + b2 * o0;
+      Jg1 += b0 * fr.a1 + b1 * fr.c1 + b2 * o1;
+      Jg2 += b0 * fr.a2 + b1 * fr.c2 + b2 * o2;
+    }
+    // kn = (I - f f^T)(Jg x n) / |g|, v = (I - n n^T)(f x Jg) / |N|
+    double k0 = Jg1 * fr.n2 - Jg2 * fr.n1, k1 = Jg2 * fr.n0 - Jg0 * fr.n2, k2 = Jg0 * fr.n1 - Jg1 * fr.n0;
+    const double fk = fr.f0 * k0 + fr.f1 * k1 + fr.f2 * k2;
+    k0 = (k0 - fr.f0 * fk) * fr.inv_glen, k1 = (k1 - fr.f1 * fk) * fr.inv_glen, k2 = (k2 - fr.f2 * fk) * fr.inv_glen;
+    double v0 = fr.f1 * Jg2 - fr.f2 * Jg1, v1 = fr.f2 * Jg0 - fr.f0 * Jg2, v2 = fr.f0 * Jg1 - fr.f1 * Jg0;
+    const double nv = fr.n0 * v0 + fr.n1 * v1 + fr.n2 * v2;
+    v0 = (v0 - fr.n0 * nv) * fr.inv_nlen, v1 = (v1 - fr.n1 * nv) * fr.inv_nlen, v2 = (v2 - fr.n2 * nv) * fr.inv_nlen;
+    // t1 = x20 x v, t2 = v x x10
+    const double t10 = fr.c1 * v2 - fr.c2 * v1, t11 = fr.c2 * v0 - fr.c0 * v2, t12 = fr.c0 * v1 - fr.c1 * v0;
+    const double t20 = v1 * fr.a2 - v2 * fr.a1, t21 = v2 * fr.a0 - v0 * fr.a2, t22 = v0 * fr.a1 - v1 * fr.a0;
+    const double c1 = gb, c2 = gc, c0 = -(gb + gc), s0 = -(S1 + S2 + S3);
+    const int n0 = nidx[q], n1 = nidx[ld + q], n2 = nidx[2 * ld + q];
+    mf[q] += fr.m0 * s0 + k0 * c0 - (t10 + t20) + og0[n0];
+    mf[fld + q] += fr.m1 * s0 + k1 * c0 - (t11 + t21) + og1[n0];
+    mf[2 * fld + q] += fr.m2 * s0 + k2 * c0 - (t12 + t22) + og2[n0];
+    mf[3 * fld + q] += fr.m0 * S1 + k0 * c1 + t10 + og0[n1];
+    mf[4 * fld + q] += fr.m1 * S1 + k1 * c1 + t11 + og1[n1];
+    mf[5 * fld + q] += fr.m2 * S1 + k2 * c1 + t12 + og2[n1];
+    mf[6 * fld + q] += fr.m0 * S2 + k0 * c2 + t20 + og0[n2];
+    mf[7 * fld + q] += fr.m1 * S2 + k1 * c2 + t21 + og1[n2];
+    mf[8 * fld + q] += fr.m2 * S2 + k2 * c2 + t22 + og2[n2];
+  }
+}
+
 void corner_forces(int n, int ld, const double* __restrict mf, const int* __restrict slot, double* __restrict nf) {
   for (int q = 0; q < n; ++q)
     for (int a = 0; a < 3; ++a) {
@@ -699,12 +856,16 @@ class ShellRfT3 final : public ElementKernel {
       }
       if (in_plane_) {
         setup_in_plane();
-        const std::size_t ne3 = 3 * static_cast<std::size_t>(part_->num_elements);
-        ipphi_.assign(ne3, 0.0);
-        ipr_.assign(ne3, 0.0);
-        ipm_.assign(ne3, 0.0);
-        ipg_.assign(ne3, 0.0);
-        ipe_.assign(part_->num_elements, 0.0);
+        // Rows of gld_ per edge; ipr_ and ipm_ with a zero past the rows
+        // (read for edges without a neighbour), ipog_ three such arrays.
+        const std::size_t rows = 3 * static_cast<std::size_t>(gld_);
+        ipphi_.assign(rows, 0.0);
+        ipr_.assign(rows + 1, 0.0);
+        ipm_.assign(rows + 1, 0.0);
+        ipg_.assign(rows, 0.0);
+        ipfm_.assign(rows, 0.0);
+        ipog_.assign(3 * (rows + 1), 0.0);
+        ipe_.assign(gld_, 0.0);
       }
       // The previous strains are kept only for laws that read them.
       keep_old_ = std::any_of(laws_.begin(), laws_.end(), [](const MaterialLaw* l) { return l->uses_strain_old(); });
@@ -884,7 +1045,7 @@ class ShellRfT3 final : public ElementKernel {
         }
       }
       // The fibres' in-plane bending, at every evaluation.
-      if (in_plane_) energy += in_plane_forces(in, b, in.range.end, dte, t_lo, t_hi, out, dt_min);
+      if (in_plane_) energy += in_plane_forces(in, b, in.range.end, dte, t_lo, t_hi, mf, ld, dt_min);
       add_node_forces(in, ri, n, ld, mf, out.node_force.data());
       if (held_eval)
         hold_bending(*held_eval, in.bending_weight, in.commit, sc.bslots.data(), out.node_force);
@@ -1074,22 +1235,31 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   // In-plane bending of the fibres (see the head of this file), set-up:
-  // per element and edge k (entry 3 e + k) the coefficients of the slope
-  // jump J_k = (F_j - F_e) nu_k on the element's three nodes and the
-  // neighbour's other node (ipb_, 4 values), the weight omega of the
-  // element's own quadratic (ipw_) and dK11/ds_k = l_k (nu_k . a0)^2 / A0
-  // (ipc_, zero for every edge of an element that carries no term); per
-  // element the map L from its slope jumps to the slopes of its own
-  // quadratic at its mid-edges (ipl_, 9 values, zero without one).
+  // per element e and edge k (rows of stride gld_: [k gld_ + e]) the
+  // coefficients of the slope jump J_k = (F_j - F_e) nu_k on x1 - x0,
+  // x2 - x0 and xo - x0 (ipb_, row 3 k + j; xo the neighbour's other node,
+  // at offset ipo_), the weight omega of the element's own quadratic (ipw_)
+  // and dK11/ds_k = l_k (nu_k . a0)^2 / A0 (ipc_, zero for every edge of an
+  // element that carries no term); per element the map L from its slope
+  // jumps to the slopes of its own quadratic at its mid-edges (ipl_, row
+  // 3 k + i, zero without one). At a ghost edge (clamped, symmetry) ipb_
+  // holds the coefficients of F_e nu (none on xo), ipmask_ is zero and the
+  // edge is listed in ipghost_ (by element, from ipgstart_), the passes
+  // adding its terms apart.
   void setup_in_plane() {
     const int ne = part_->num_elements;
+    const std::size_t gld = static_cast<std::size_t>(gld_);
     const double* x0 = part_->x0.data();
-    ipb_.assign(12 * static_cast<std::size_t>(ne), 0.0);
-    ipw_.assign(3 * static_cast<std::size_t>(ne), 0.5);
-    ipc_.assign(3 * static_cast<std::size_t>(ne), 0.0);
-    ipl_.assign(9 * static_cast<std::size_t>(ne), 0.0);
+    ipb_.assign(9 * gld, 0.0);
+    ipl_.assign(9 * gld, 0.0);
+    ipw_.assign(3 * gld, 0.5);
+    ipc_.assign(3 * gld, 0.0);
+    ipmask_.assign(3 * gld, 1.0);
+    ipo_.assign(3 * gld, 0);
     ipk_.assign(3 * static_cast<std::size_t>(ne), static_cast<char>(kEdgeFree));
     ipnu_.assign(9 * static_cast<std::size_t>(ne), 0.0);
+    ipghost_.clear();
+    ipgstart_.assign(ne + 1, 0);
     std::vector<char> quad(ne, 0);
     const auto grads = [&](int e, Vec3 gr[3], Vec3& n) {  // grad0 N_a (3D, in the initial plane)
       const int* t = &part_->triangles[3 * e];
@@ -1100,6 +1270,7 @@ class ShellRfT3 final : public ElementKernel {
       for (int a = 0; a < 3; ++a) gr[a] = scale(cross(n, sub(X[(a + 2) % 3], X[(a + 1) % 3])), 1.0 / two_a);
     };
     for (int e = 0; e < ne; ++e) {
+      ipgstart_[e] = static_cast<int>(ipghost_.size());
       const int* t = &part_->triangles[3 * e];
       Vec3 ge[3], n;
       grads(e, ge, n);
@@ -1107,10 +1278,14 @@ class ShellRfT3 final : public ElementKernel {
       bool off = false;
       int count = 0;
       for (int k = 0; k < 3; ++k) {
+        const std::size_t ek = static_cast<std::size_t>(k) * gld + e;
+        ipo_[ek] = 3 * t[0];
         const Vec3 P = load3(x0, t[(k + 1) % 3]), Q = load3(x0, t[(k + 2) % 3]);
         const Vec3 nu = normalized(cross(sub(Q, P), n));  // outward in the element's plane
         const double l = norm(sub(Q, P)), nf = dot(nu, f);
         const int nb = part_->neighbours[3 * e + k];
+        // bk: the coefficients of J on the element's three nodes and xo.
+        double bk[4] = {0, 0, 0, 0};
         if (nb < 0) {
           const int ec = edge_condition_.empty() ? kEdgeFree : edge_condition_[3 * e + k];
           if (ec == kEdgeFree) {
@@ -1123,36 +1298,45 @@ class ShellRfT3 final : public ElementKernel {
           // quadratic on either side) or the held grip (s = phi). bk: the
           // coefficients of F_e nu on the element's nodes.
           ipk_[3 * e + k] = static_cast<char>(ec);
-          ipc_[3 * e + k] = l * nf * nf / area0_[e];
-          ipw_[3 * e + k] = ec == kEdgeClamped ? 0.0 : 0.5;
-          double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * k];
+          ipc_[ek] = l * nf * nf / area0_[e];
+          ipw_[ek] = ec == kEdgeClamped ? 0.0 : 0.5;
+          ipmask_[ek] = 0.0;
+          ipghost_.push_back(3 * e + k);
           for (int a = 0; a < 3; ++a) bk[a] = dot(ge[a], nu);
           for (int d = 0; d < 3; ++d) ipnu_[9 * static_cast<std::size_t>(e) + 3 * k + d] = nu[d];
-          continue;
+        } else {
+          ++count;
+          ipc_[ek] = l * nf * nf / area0_[e];
+          Vec3 gj[3], nj;
+          grads(nb, gj, nj);
+          for (int a = 0; a < 3; ++a) bk[a] = -dot(ge[a], nu);
+          for (int j = 0; j < 3; ++j) {
+            const int node = part_->triangles[3 * nb + j];
+            const double v = dot(gj[j], nu);
+            if (node == t[(k + 1) % 3]) bk[(k + 1) % 3] += v;
+            else if (node == t[(k + 2) % 3]) bk[(k + 2) % 3] += v;
+            else bk[3] = v;
+          }
+          ipo_[ek] = 3 * opp_[3 * e + k];
         }
-        ++count;
-        ipc_[3 * e + k] = l * nf * nf / area0_[e];
-        Vec3 gj[3], nj;
-        grads(nb, gj, nj);
-        double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * k];
-        for (int a = 0; a < 3; ++a) bk[a] = -dot(ge[a], nu);
-        for (int j = 0; j < 3; ++j) {
-          const int node = part_->triangles[3 * nb + j];
-          const double v = dot(gj[j], nu);
-          if (node == t[(k + 1) % 3]) bk[(k + 1) % 3] += v;
-          else if (node == t[(k + 2) % 3]) bk[(k + 2) % 3] += v;
-          else bk[3] = v;
-        }
+        // Relative to corner 0 (the four coefficients sum to zero).
+        for (int j = 0; j < 3; ++j) ipb_[(3 * k + j) * gld + e] = bk[j + 1];
       }
       if (off)
-        for (int k = 0; k < 3; ++k) ipc_[3 * e + k] = 0.0;
-      if (count == 3) quad[e] = in_plane_quadratic(e, &ipl_[9 * static_cast<std::size_t>(e)]) ? 1 : 0;
+        for (int k = 0; k < 3; ++k) ipc_[k * gld + e] = 0.0;
+      if (count == 3) {
+        double L[9];
+        quad[e] = in_plane_quadratic(e, L) ? 1 : 0;
+        if (quad[e])
+          for (int j = 0; j < 9; ++j) ipl_[j * gld + e] = L[j];
+      }
     }
+    ipgstart_[ne] = static_cast<int>(ipghost_.size());
     for (int e = 0; e < ne; ++e)
       for (int k = 0; k < 3; ++k) {
         const int nb = part_->neighbours[3 * e + k];
         if (nb < 0) continue;
-        ipw_[3 * e + k] = quad[e] && quad[nb] ? 0.5 : quad[e] ? 1.0 : quad[nb] ? 0.0 : 0.5;
+        ipw_[k * gld + e] = quad[e] && quad[nb] ? 0.5 : quad[e] ? 1.0 : quad[nb] ? 0.0 : 0.5;
       }
   }
 
@@ -1230,7 +1414,8 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   // The element's current unit normal n, fibre f = F a0 / |F a0|, m = n x f,
-  // |F a0|, |N| (N = x10 x x20) and x10, x20.
+  // |F a0|, |N| (N = x10 x x20) and x10, x20 (for the ghost edges, which
+  // the passes add apart; in_plane_frame_v forms the same for the blocks).
   struct InPlaneFrame {
     Vec3 n, f, m, x10, x20;
     double glen, nlen;
@@ -1250,20 +1435,12 @@ class ShellRfT3 final : public ElementKernel {
     fr.m = cross(fr.n, fr.f);
     return fr;
   }
-  // J_k of element e at positions x (zero at a free edge without a
-  // neighbour).
-  Vec3 in_plane_jump(const double* x, int e, int k) const {
-    const int* t = &part_->triangles[3 * e];
-    const double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * k];
-    const Vec3 x0 = load3(x, t[0]);
-    // Relative to corner 0 (the coefficients sum to zero).
-    Vec3 J = add(scale(sub(load3(x, t[1]), x0), bk[1]), scale(sub(load3(x, t[2]), x0), bk[2]));
+  // J_k at the ghost edge k of element e (ipk_ its kind) at positions x:
+  // from F_e nu = sum of ipb_'s coefficients on x1 - x0 and x2 - x0.
+  Vec3 ghost_jump(const InPlaneFrame& fr, int e, int k) const {
+    const std::size_t gld = static_cast<std::size_t>(gld_);
+    Vec3 J = add(scale(fr.x10, ipb_[3 * k * gld + e]), scale(fr.x20, ipb_[(3 * k + 1) * gld + e]));
     const int kind = ipk_[3 * e + k];
-    if (kind == kEdgeFree) {
-      if (part_->neighbours[3 * e + k] < 0) return {0, 0, 0};
-      return add(J, scale(sub(load3(x, opp_[3 * e + k]), x0), bk[3]));
-    }
-    // A ghost: J holds F_e nu.
     if (kind == kEdgeClamped) return sub(load3(ipnu_.data(), 3 * e + k), J);
     J[kind - kEdgeSymmetryX] = 0.0;
     return scale(J, -2.0);
@@ -1277,15 +1454,16 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   // Pass 0: the slope jumps phi_k = m . J_k and the own quadratic's slopes
-  // r = L phi.
+  // r = L phi (an element with a ghost edge has no quadratic: r = 0).
   void in_plane_angles(int b, int end) {
     const double* x = part_->x.data();
-    for (int e = b; e < end; ++e) {
+    const std::size_t gld = static_cast<std::size_t>(gld_);
+    in_plane_angle_block(end - b, off_.data() + b, g_.data() + b, mld_, ipo_.data() + b, ipb_.data() + b, ipl_.data() + b,
+                         gld_, x, ipphi_.data() + b, ipr_.data() + b, ipfm_.data() + b);
+    for (int h = ipgstart_[b]; h < ipgstart_[end]; ++h) {
+      const int e = ipghost_[h] / 3, k = ipghost_[h] % 3;
       const InPlaneFrame fr = in_plane_frame(x, e);
-      double* phi = &ipphi_[3 * static_cast<std::size_t>(e)];
-      for (int k = 0; k < 3; ++k) phi[k] = dot(fr.m, in_plane_jump(x, e, k));
-      const double* L = &ipl_[9 * static_cast<std::size_t>(e)];
-      for (int k = 0; k < 3; ++k) ipr_[3 * e + k] = L[3 * k] * phi[0] + L[3 * k + 1] * phi[1] + L[3 * k + 2] * phi[2];
+      ipphi_[k * gld + e] = dot(fr.m, ghost_jump(fr, e, k));
     }
   }
 
@@ -1294,26 +1472,15 @@ class ShellRfT3 final : public ElementKernel {
   // element's A0 w into ipe_.
   Status in_plane_moments(const ElementForceInput& in, int b, int end) {
     const int n = end - b;
+    const std::size_t gld = static_cast<std::size_t>(gld_);
     thread_local std::vector<double> chi, moment, w;
     if (chi.size() < 3 * static_cast<std::size_t>(n)) {
       chi.resize(3 * static_cast<std::size_t>(n));
       moment.resize(3 * static_cast<std::size_t>(n));
       w.resize(n);
     }
-    for (int q = 0; q < n; ++q) {
-      const int e = b + q;
-      double kappa = 0;
-      for (int k = 0; k < 3; ++k) {
-        const double c = ipc_[3 * e + k];
-        if (c == 0.0) continue;
-        const int nb = part_->neighbours[3 * e + k];
-        const double om = ipw_[3 * e + k];
-        const double rp = nb >= 0 ? ipr_[3 * nb + partner_k_[3 * e + k]] : 0.0;
-        kappa += c * (om * ipr_[3 * e + k] + (1 - om) * (ipphi_[3 * e + k] - rp));
-      }
-      chi[3 * q] = kappa;
-      chi[3 * q + 1] = chi[3 * q + 2] = 0.0;
-    }
+    in_plane_curvature_block(n, gld_, ipc_.data() + b, ipw_.data() + b, ipphi_.data() + b, ipr_.data() + b,
+                             nidx_.data() + b, ipr_.data(), chi.data());
     MaterialBlock blk;
     blk.n = n;
     blk.strain = std::span<const double>(chi.data(), 3 * static_cast<std::size_t>(n));
@@ -1322,59 +1489,48 @@ class ShellRfT3 final : public ElementKernel {
     blk.stress = std::span<double>(moment.data(), 3 * static_cast<std::size_t>(n));
     blk.energy = std::span<double>(w.data(), n);
     if (auto st = in_plane_->evaluate(blk); !st) return st;
-    for (int q = 0; q < n; ++q) {
-      const int e = b + q;
-      const double a = area0_[e] * moment[3 * q];
-      for (int k = 0; k < 3; ++k) ipm_[3 * e + k] = a * ipc_[3 * e + k];
-      ipe_[e] = area0_[e] * w[q];
+    for (int k = 0; k < 3; ++k) {
+      const double* c = ipc_.data() + k * gld + b;
+      double* m = ipm_.data() + k * gld + b;
+      for (int q = 0; q < n; ++q) m[q] = area0_[b + q] * moment[3 * q] * c[q];
     }
+    for (int q = 0; q < n; ++q) ipe_[b + q] = area0_[b + q] * w[q];
     return Status::success();
   }
 
   // Pass 2: each element's dW/dphi_i = (1 - omega_i) m_i + sum_k L_ki
-  // omega_k (m_k - m'_k), m' the neighbour's dW/ds of the same edge.
+  // omega_k (m_k - m'_k), m' the neighbour's dW/ds of the same edge, and the
+  // forces on the nodes across its edges.
   void in_plane_shares(int b, int end) {
-    for (int e = b; e < end; ++e) {
-      const double* L = &ipl_[9 * static_cast<std::size_t>(e)];
-      double d[3];
-      for (int k = 0; k < 3; ++k) {
-        const int nb = part_->neighbours[3 * e + k];
-        const double mp = nb >= 0 ? ipm_[3 * nb + partner_k_[3 * e + k]] : 0.0;
-        d[k] = ipw_[3 * e + k] * (ipm_[3 * e + k] - mp);
-      }
-      for (int i = 0; i < 3; ++i)
-        ipg_[3 * e + i] = (1 - ipw_[3 * e + i]) * ipm_[3 * e + i] + L[i] * d[0] + L[3 + i] * d[1] + L[6 + i] * d[2];
-    }
+    const std::size_t gld = static_cast<std::size_t>(gld_), w = 3 * gld + 1;
+    in_plane_share_block(end - b, gld_, ipw_.data() + b, ipl_.data() + b, ipm_.data() + b, nidx_.data() + b, ipm_.data(),
+                         ipb_.data() + b, ipfm_.data() + b, ipg_.data() + b, ipog_.data() + b, ipog_.data() + w + b,
+                         ipog_.data() + 2 * w + b);
   }
 
-  // Pass 3: the forces sum_i g_i dphi_i/dx into the patch's slots, with
-  // dphi_i = m . dJ_i + J_i . dm and J . dm = dn . (f x J) + df . (J x n),
-  // df = (I - f f^T) dg / |g|, dn = (I - n n^T) dN / |N|; the range's
-  // energy; lowers the elements' steps dte (where given) or dt_floor with
-  // the term's (the bending's formula for rigidity R: it is evaluated at
-  // every step, also where the bending is not).
+  // Pass 3: the forces sum_i g_i dphi_i/dx into the block's corner forces mf
+  // (component d of corner a of element q at mf[(3 a + d) ld + q]), the
+  // ghost edges' apart; the range's energy; lowers the elements' steps dte
+  // (where given) or dt_floor with the term's (the bending's formula for
+  // rigidity R: it is evaluated at every step, also where the bending is
+  // not).
   double in_plane_forces(const ElementForceInput& in, int b, int end, double* dte, double t_lo, double t_hi,
-                         ElementForceOutput& out, double& dt_floor) {
+                         double* mf, int ld, double& dt_floor) {
     const double* x = part_->x.data();
-    double* nf = out.node_force.data();
-    double energy = 0;
-    for (int e = b; e < end; ++e) {
-      energy += ipe_[e];
-      const double* gi = &ipg_[3 * static_cast<std::size_t>(e)];
-      if (gi[0] == 0.0 && gi[1] == 0.0 && gi[2] == 0.0) continue;
+    const std::size_t gld = static_cast<std::size_t>(gld_), w = 3 * gld + 1;
+    const int n = end - b;
+    in_plane_force_block(n, off_.data() + b, g_.data() + b, mld_, ipo_.data() + b, ipb_.data() + b, gld_,
+                         ipg_.data() + b, ipmask_.data() + b, nidx_.data() + b, ipog_.data(), ipog_.data() + w,
+                         ipog_.data() + 2 * w, x, mf, ld);
+    for (int h = ipgstart_[b]; h < ipgstart_[end]; ++h) {
+      const int e = ipghost_[h] / 3, i = ipghost_[h] % 3, q = e - b;
+      const double gi = ipg_[i * gld + e];
+      if (gi == 0.0) continue;
       const InPlaneFrame fr = in_plane_frame(x, e);
-      const int* slot = &in.patch_slot[6 * static_cast<std::size_t>(e - b)];
-      Vec3 own[3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, Jg{0, 0, 0};
-      for (int i = 0; i < 3; ++i) {
-        const int kind = ipk_[3 * e + i];
-        if (gi[i] == 0.0 || (kind == kEdgeFree && part_->neighbours[3 * e + i] < 0)) continue;
-        const double* bk = &ipb_[12 * static_cast<std::size_t>(e) + 4 * i];
-        const Vec3 row = kind == kEdgeFree ? fr.m : ghost_jump_row(kind, fr.m);
-        for (int a = 0; a < 3; ++a) own[a] = add(own[a], scale(row, gi[i] * bk[a]));
-        if (kind == kEdgeFree && slot[3 + i] >= 0)
-          for (int d = 0; d < 3; ++d) nf[3 * slot[3 + i] + d] += gi[i] * bk[3] * fr.m[d];
-        Jg = add(Jg, scale(in_plane_jump(x, e, i), gi[i]));
-      }
+      const Vec3 row = ghost_jump_row(ipk_[3 * e + i], fr.m);
+      const double c1 = gi * ipb_[3 * i * gld + e], c2 = gi * ipb_[(3 * i + 1) * gld + e];
+      Vec3 own[3] = {scale(row, -(c1 + c2)), scale(row, c1), scale(row, c2)};
+      const Vec3 Jg = scale(ghost_jump(fr, e, i), gi);
       Vec3 kn = cross(Jg, fr.n);
       kn = scale(sub(kn, scale(fr.f, dot(fr.f, kn))), 1.0 / fr.glen);
       Vec3 v = cross(fr.f, Jg);
@@ -1385,15 +1541,16 @@ class ShellRfT3 final : public ElementKernel {
       own[1] = add(add(own[1], scale(kn, b1)), t1);
       own[2] = add(add(own[2], scale(kn, b2)), t2);
       for (int a = 0; a < 3; ++a)
-        for (int d = 0; d < 3; ++d) nf[3 * slot[a] + d] += own[a][d];
+        for (int d = 0; d < 3; ++d) mf[(3 * a + d) * ld + q] += own[a][d];
     }
+    const double energy = lane_dot(n, ipe_.data() + b, nullptr);
     const double rmax = std::max(in_plane_->max_stiffness(t_lo), in_plane_->max_stiffness(t_hi));
     if (rmax > 0) {
       // As the bending's: dt ~ d^2 sqrt(rho h / R) / 2.
       const double c = 0.5 * std::sqrt(areal_mass_ / rmax);
       const double* scale_f = in.dt_scale.empty() ? nullptr : in.dt_scale.data() + b;
       double lo = std::numeric_limits<double>::infinity();
-      for (int q = 0; q < end - b; ++q) {
+      for (int q = 0; q < n; ++q) {
         const double dt = dmin2_[b + q] * c;
         lo = std::min(lo, scale_f ? dt * scale_f[q] : dt);
         if (dte) dte[q] = std::min(dte[q], dt);
@@ -2099,14 +2256,18 @@ class ShellRfT3 final : public ElementKernel {
 
   const MaterialLaw* bending_ = nullptr;
   const MaterialLaw* in_plane_ = nullptr;  // the fibres' in-plane bending (may be null)
-  // See setup_in_plane; per step: the slope jumps, own slopes, dW/ds and
-  // dW/dphi per element and edge, and per element A0 w.
-  std::vector<double> ipb_, ipw_, ipc_, ipl_, ipphi_, ipr_, ipm_, ipg_, ipe_;
-  // Per element and edge: kEdgeFree (a neighbour or a free edge) or the
-  // ghost's kind (kEdgeClamped, kEdgeSymmetryX + axis), and the edge's
-  // initial outward normal nu at ghost edges (3 values).
+  // See setup_in_plane; per step (rows of gld_): the slope jumps, own
+  // slopes, dW/ds and dW/dphi per element and edge, m per element, the
+  // forces on the nodes across the edges (ipog_), and per element A0 w.
+  std::vector<double> ipb_, ipw_, ipc_, ipl_, ipmask_, ipphi_, ipr_, ipm_, ipg_, ipfm_, ipog_, ipe_;
+  std::vector<int> ipo_;
+  // Per element and edge (3 e + k): kEdgeFree (a neighbour or a free edge)
+  // or the ghost's kind (kEdgeClamped, kEdgeSymmetryX + axis), and the
+  // edge's initial outward normal nu at ghost edges (3 values); the ghost
+  // edges (3 e + k) by element, those of element e from ipgstart_[e].
   std::vector<char> ipk_;
   std::vector<double> ipnu_;
+  std::vector<int> ipghost_, ipgstart_;
   int gld_ = 0;
   std::vector<int> opp_, partner_k_, edge_condition_;  // partner_k_: the same edge's index in the neighbour
   std::vector<char> clamped_;
@@ -2246,7 +2407,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Element;
   d.name = "shell_rf_t3";
-  d.version = "0.11.0";
+  d.version = "0.12.0";
   d.summary = "Three-node shell triangle, translational dofs: total-Lagrangian membrane, rotation-free bending (Morley mid-edge slopes from the 6-node patch), optional in-plane bending of the fibres (a material's in_plane_bending)";
   d.example = R"({ "element": "shell_rf_t3" })";
   r.add_element(d, &create);
@@ -2254,4 +2415,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.11.0", register_all)
+THERMOSTAMP_PLUGIN("element_shell_rf_t3", "0.12.0", register_all)
