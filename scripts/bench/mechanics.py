@@ -24,8 +24,12 @@ every bending value is zero). Every run's energies must equal the first's
 bit for bit (one and two threads, every repetition); the table says so in
 its last column.
 
+--in-plane-bending R adds the fibres' in-plane bending (the material's
+`in_plane_bending`, thermo_linear_bending of rigidity R N m): its cost is
+the difference to the same run without it.
+
 Usage: scripts/bench/mechanics.py [--quick] [--reps N] [--bending-subcycles K]
-       [--flat] [--keep-subnormals]
+       [--flat] [--keep-subnormals] [--in-plane-bending R]
 (after a Release build; --keep-subnormals is passed to thermostamp run).
 """
 import argparse
@@ -40,9 +44,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 EXE = os.environ.get("THERMOSTAMP_EXE", os.path.join(ROOT, "build", "bin", "thermostamp"))
 
 
-def job(n, steps, bending_subcycles=1, flat=False):
+def job(n, steps, bending_subcycles=1, flat=False, in_plane=0.0):
     size = n * 0.001
     card = json.load(open(os.path.join(ROOT, "share", "materials", "pa66_cf_ud.json")))
+    if in_plane > 0:
+        card["in_plane_bending"] = {"law": "thermo_linear_bending", "beta1_B": in_plane, "beta2_B": 0.0}
     dt_est = 0.8 * 0.7e-3 / (2 * 5.0e6 / (1294.0 * 0.0005)) ** 0.5
     t_end = steps * dt_est
     return {
@@ -104,12 +110,15 @@ def main():
                     help="solvers.mechanics.bending_subcycles of the job (1: the bending every step)")
     ap.add_argument("--flat", action="store_true", help="pull the edge in the plane only (no bending)")
     ap.add_argument("--keep-subnormals", action="store_true", help="run thermostamp with --keep-subnormals")
+    ap.add_argument("--in-plane-bending", type=float, default=0.0, metavar="R",
+                    help="the material's in_plane_bending with rigidity R (N m); 0: none")
     args = ap.parse_args()
     extra = ["--keep-subnormals"] if args.keep_subnormals else []
     sizes = [71, 224] if args.quick else [71, 224, 500]
-    print("### shell_rf_t3 (membrane + bending) + ud_hyperelastic + viscoelastic_shear + thermo_linear_bending, "
+    print("### shell_rf_t3 (membrane + bending) + ud_hyperelastic + viscoelastic_shear + thermo_linear_bending%s, "
           "cost per element per cycle (smallest of %d runs, bending_subcycles %d, %s plate, subnormals %s)\n"
-          % (args.reps, args.bending_subcycles, "flat" if args.flat else "bending",
+          % (" + in-plane bending (R = %g N m)" % args.in_plane_bending if args.in_plane_bending > 0 else "",
+             args.reps, args.bending_subcycles, "flat" if args.flat else "bending",
              "kept" if args.keep_subnormals else "flushed to zero"))
     print("| elements | threads | cycles | wall time (s) | ns per element-cycle | speed-up "
           "| bare loop -O3 -march=native (ns) | ratio | bare loop -O2 (ns) | ratio | ns at a 27 ns -O2 loop "
@@ -121,7 +130,7 @@ def main():
         best, bare, energies, scaled = {}, {}, [], []
         for _ in range(args.reps):
             for th in (1, 2):
-                s = run(job(n, 200, args.bending_subcycles, args.flat), th, extra)
+                s = run(job(n, 200, args.bending_subcycles, args.flat, args.in_plane_bending), th, extra)
                 energies.append(s["energy"])
                 if th == 1:
                     # the yardsticks right after the one-thread run, as many cycles, three

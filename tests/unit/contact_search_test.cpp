@@ -382,5 +382,89 @@ TEST(PlyPlySearch, SearchIntervalShortensForFastPlies) {
   EXPECT_GT(fz[1][calls - 1], 0.0);
 }
 
+// The full searches prune the candidates that distance bounds show to be
+// farther than each node's target of a recent search (prune_search, the
+// default). Ply a (15 x 11 nodes, its distance to the creased, curved ply b
+// varying over it and crossing b's mid-surface) and ply b both move every
+// call: a drift of 6 um per call and a wave of 3 um per call across them
+// (so that the bounds are formed again every few calls and the candidate
+// lists are rebuilt), 300 calls of both sides of the pair. With and
+// without pruning the forces on every node, the energy and the number of
+// nodes in contact must be the same bits at every call: the bounds may
+// skip only triangles farther than the target. (Bounds that leave out the
+// motions since the reference make 156 of the 300 calls differ; leaving
+// out only one of the node's two motion terms or the candidate's motion is
+// not caught here: the triangle inequality's bound has room to spare on
+// this surface.)
+TEST(PlyPlySearch, PrunedSearchFindsTheTargetsOfTheFullSearch) {
+  PluginRegistry registry;
+  const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");
+  const ShellMesh b0 = ply_mesh({0, 0, 0}, {0.06, 0.06}, {8, 8}, true, 0.0);
+  const ShellMesh a0 = ply_mesh({0.004, 0.007, 0}, {0.05, 0.05}, {14, 10}, false, 0.0009);
+  ShellMesh a = a0, b = b0;
+  const sdk::ContactPair pair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}};
+  std::unique_ptr<sdk::ContactHandler> h[2];
+  for (const int k : {0, 1}) {
+    h[k].reset(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
+    const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+    ASSERT_TRUE(h[k]->configure(validate_params(json{{"penalty", 1e10}, {"friction", 0.2}, {"prune_search", k == 0}},
+                                                "/c", r.descriptor),
+                                pair, parts, {})
+                    .ok);
+  }
+  const std::vector<double> area_a(a.num_nodes(), 1e-5), area_b(b.num_nodes(), 1e-5), ma(a.num_nodes(), 1e-3),
+      mb(b.num_nodes(), 1e-3);
+  std::vector<double> va(3 * a.num_nodes(), 0.0), vb(3 * b.num_nodes(), 0.0);
+  const double dt = 1e-4;
+  long long active = 0;
+  int differ = 0;
+  for (int call = 0; call < 300; ++call) {
+    for (int i = 0; i < a.num_nodes(); ++i) {
+      const double* p0 = &a0.x[3 * i];
+      double* p = &a.x[3 * i];
+      const double wave = 3e-6 * call * std::sin(0.05 * call + 300.0 * p0[0]);
+      p[0] = p0[0] + 6e-6 * call;
+      p[1] = p0[1] + wave;
+      p[2] = p0[2] + 0.5 * wave;
+    }
+    for (int i = 0; i < b.num_nodes(); ++i) {
+      const double* p0 = &b0.x[3 * i];
+      double* p = &b.x[3 * i];
+      p[0] = p0[0] - 2e-6 * call;
+      p[2] = p0[2] + 2e-6 * call * std::cos(0.03 * call + 200.0 * p0[1]);
+    }
+    const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+    const std::vector<std::span<const double>> vel = {va, vb}, areas = {area_a, area_b}, mass = {ma, mb};
+    std::vector<double> f[2][2];
+    double energy[2];
+    long long act[2];
+    for (const int k : {0, 1}) {
+      f[k][0].assign(3 * a.num_nodes(), 0.0);
+      f[k][1].assign(3 * b.num_nodes(), 0.0);
+      std::vector<double> tool_force;
+      const std::vector<std::span<double>> force = {f[k][0], f[k][1]};
+      sdk::ContactForceInput in;
+      in.parts = parts;
+      in.dt = dt;
+      in.velocity = vel;
+      in.node_area = areas;
+      in.mass = mass;
+      in.side = -1;  // both sides
+      sdk::ContactForceOutput out;
+      out.force = force;
+      out.tool_force = tool_force;
+      ASSERT_TRUE(h[k]->contact_forces(in, out).ok);
+      energy[k] = out.energy;
+      act[k] = out.active;
+    }
+    const bool same = f[0][0] == f[1][0] && f[0][1] == f[1][1] && energy[0] == energy[1] && act[0] == act[1];
+    differ += !same;
+    EXPECT_TRUE(same) << "call " << call;
+    active += act[0];
+  }
+  std::printf("300 calls, %lld node contacts in all, %d calls differ\n", active, differ);
+  EXPECT_GT(active, 300LL * a.num_nodes() / 10);  // many nodes in contact throughout
+}
+
 }  // namespace
 }  // namespace ts
