@@ -392,31 +392,40 @@ TEST(ShellRfT3, BendingForcesAreTheDerivativeOfTheEnergy) {
   expect_forces_are_the_energys_derivative(p, 1e-5);
 }
 
+// (defined below)
+std::unique_ptr<sdk::MaterialLaw> linear_bending(Patch& p, double r1, double r2);
+
 // Where the kernel interleaves the passes it gives a window of blocks
 // (ElementForceInput::pass_window) and the element keeps the values between
 // its passes in a ring of block buffers instead of arrays over the part:
-// the same forces and energy, bit for bit. (Called pass by pass here, with
-// a window of all the blocks: every block has its own buffer.)
+// the same forces and energy, bit for bit, with and without the fibres'
+// in-plane bending. (Called pass by pass here, with a window of all the
+// blocks: every block has its own buffer.)
 TEST(ShellRfT3, RingOfBlockBuffersGivesTheSameBits) {
-  Patch p(0.5, true, {6, 5});
-  for (int i = 0; i < p.mesh.num_nodes(); ++i) {
-    const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
-    p.x[3 * i] = 1.01 * X;
-    p.x[3 * i + 2] = 2.0 * X * X + 1.5 * X * Y - 3.0 * Y * Y + 1e-4 * std::sin(11 * i);
-  }
-  p.uniform_ranges = true;
-  for (const int blocks : {2, 4, 7}) {
-    p.blocks = blocks;
-    p.ring_window = 0;
-    std::vector<double> f_full, f_ring;
-    const double e_full = p.evaluate(f_full);
-    p.ring_window = blocks;
-    const double e_ring = p.evaluate(f_ring);
-    double fmax = 0;
-    for (const double v : f_full) fmax = std::max(fmax, std::abs(v));
-    EXPECT_GT(fmax, 0.0);
-    EXPECT_EQ(f_full, f_ring) << blocks << " blocks";
-    EXPECT_EQ(e_full, e_ring) << blocks << " blocks";
+  for (const bool in_plane : {false, true}) {
+    Patch p(0.5, true, {6, 5});
+    auto ipb = linear_bending(p, 2e-3, 0.0);
+    if (in_plane) p.configure_with(p.laws, nullptr, ipb.get());
+    for (int i = 0; i < p.mesh.num_nodes(); ++i) {
+      const double X = p.mesh.x[3 * i], Y = p.mesh.x[3 * i + 1];
+      p.x[3 * i] = 1.01 * X;
+      p.x[3 * i + 1] = Y + 0.3 * X * X;
+      p.x[3 * i + 2] = 2.0 * X * X + 1.5 * X * Y - 3.0 * Y * Y + 1e-4 * std::sin(11 * i);
+    }
+    p.uniform_ranges = true;
+    for (const int blocks : {2, 4, 7}) {
+      p.blocks = blocks;
+      p.ring_window = 0;
+      std::vector<double> f_full, f_ring;
+      const double e_full = p.evaluate(f_full);
+      p.ring_window = blocks;
+      const double e_ring = p.evaluate(f_ring);
+      double fmax = 0;
+      for (const double v : f_full) fmax = std::max(fmax, std::abs(v));
+      EXPECT_GT(fmax, 0.0);
+      EXPECT_EQ(f_full, f_ring) << blocks << " blocks, in-plane bending " << in_plane;
+      EXPECT_EQ(e_full, e_ring) << blocks << " blocks, in-plane bending " << in_plane;
+    }
   }
 }
 

@@ -621,18 +621,21 @@ struct InPlaneFrameV {
   return r;
 }
 
-// Pass 0: the slope jumps phi_k = m . J_k (phi[k ld + q]), the own
-// quadratic's slopes r = L phi (r[k ld + q]) and m (mv[d ld + q]).
+// The step's values (phi, r, mv, ... below) are in rows of stride sld,
+// the set-up's (oo, B, L, c, w, mask) and nidx in rows of stride ld.
+//
+// Pass 0: the slope jumps phi_k = m . J_k (phi[k sld + q]), the own
+// quadratic's slopes r = L phi (r[k sld + q]) and m (mv[d sld + q]).
 TS_VECTOR_CLONES
 void in_plane_angle_block(int n, const int* __restrict off, const double* __restrict g, int mld,
                           const int* __restrict oo, const double* __restrict B, const double* __restrict L, int ld,
-                          const double* __restrict x, double* __restrict phi, double* __restrict r,
+                          const double* __restrict x, int sld, double* __restrict phi, double* __restrict r,
                           double* __restrict mv) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     const int i0 = off[q];
     const InPlaneFrameV fr = in_plane_frame_v(x, i0, off[mld + q], off[2 * mld + q], g[q], g[mld + q]);
-    mv[q] = fr.m0, mv[ld + q] = fr.m1, mv[2 * ld + q] = fr.m2;
+    mv[q] = fr.m0, mv[sld + q] = fr.m1, mv[2 * sld + q] = fr.m2;
     double p[3];
     for (int k = 0; k < 3; ++k) {
       const int io = oo[k * ld + q];
@@ -641,10 +644,10 @@ void in_plane_angle_block(int n, const int* __restrict off, const double* __rest
       const double J0 = b0 * fr.a0 + b1 * fr.c0 + b2 * o0, J1 = b0 * fr.a1 + b1 * fr.c1 + b2 * o1,
                    J2 = b0 * fr.a2 + b1 * fr.c2 + b2 * o2;
       p[k] = fr.m0 * J0 + fr.m1 * J1 + fr.m2 * J2;
-      phi[k * ld + q] = p[k];
+      phi[k * sld + q] = p[k];
     }
     for (int k = 0; k < 3; ++k)
-      r[k * ld + q] = L[3 * k * ld + q] * p[0] + L[(3 * k + 1) * ld + q] * p[1] + L[(3 * k + 2) * ld + q] * p[2];
+      r[k * sld + q] = L[3 * k * ld + q] * p[0] + L[(3 * k + 1) * ld + q] * p[1] + L[(3 * k + 2) * ld + q] * p[2];
   }
 }
 
@@ -653,15 +656,15 @@ void in_plane_angle_block(int n, const int* __restrict off, const double* __rest
 // neighbour's own slope of the same edge (r_all[nidx[k ld + q]]; the entry
 // past the arrays, zero, where there is none).
 TS_VECTOR_CLONES
-void in_plane_curvature_block(int n, int ld, const double* __restrict c, const double* __restrict w,
+void in_plane_curvature_block(int n, int ld, const double* __restrict c, const double* __restrict w, int sld,
                               const double* __restrict phi, const double* __restrict r, const int* __restrict nidx,
                               const double* __restrict r_all, double* __restrict chi) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     double kappa = 0.0;
     for (int k = 0; k < 3; ++k) {
-      const int i = k * ld + q;
-      kappa += c[i] * (w[i] * r[i] + (1.0 - w[i]) * (phi[i] - r_all[nidx[i]]));
+      const int i = k * ld + q, j = k * sld + q;
+      kappa += c[i] * (w[i] * r[j] + (1.0 - w[i]) * (phi[j] - r_all[nidx[i]]));
     }
     chi[3 * q] = kappa;
     chi[3 * q + 1] = 0.0;
@@ -676,23 +679,23 @@ void in_plane_curvature_block(int n, int ld, const double* __restrict c, const d
 // q]), which the neighbour adds to its corner in pass 3.
 TS_VECTOR_CLONES
 void in_plane_share_block(int n, int ld, const double* __restrict w, const double* __restrict L,
-                          const double* __restrict mm, const int* __restrict nidx, const double* __restrict m_all,
-                          const double* __restrict B, const double* __restrict mv, double* __restrict gs,
+                          const int* __restrict nidx, const double* __restrict B, int sld, const double* __restrict mm,
+                          const double* __restrict m_all, const double* __restrict mv, double* __restrict gs,
                           double* __restrict og0, double* __restrict og1, double* __restrict og2) {
 #pragma omp simd
   for (int q = 0; q < n; ++q) {
     double d[3];
     for (int k = 0; k < 3; ++k) {
       const int i = k * ld + q;
-      d[k] = w[i] * (mm[i] - m_all[nidx[i]]);
+      d[k] = w[i] * (mm[k * sld + q] - m_all[nidx[i]]);
     }
     for (int i = 0; i < 3; ++i) {
-      const int e = i * ld + q;
+      const int e = i * ld + q, j = i * sld + q;
       const double gi =
-          (1.0 - w[e]) * mm[e] + L[i * ld + q] * d[0] + L[(3 + i) * ld + q] * d[1] + L[(6 + i) * ld + q] * d[2];
-      gs[e] = gi;
+          (1.0 - w[e]) * mm[j] + L[i * ld + q] * d[0] + L[(3 + i) * ld + q] * d[1] + L[(6 + i) * ld + q] * d[2];
+      gs[j] = gi;
       const double t = gi * B[(3 * i + 2) * ld + q];
-      og0[e] = t * mv[q], og1[e] = t * mv[ld + q], og2[e] = t * mv[2 * ld + q];
+      og0[j] = t * mv[q], og1[j] = t * mv[sld + q], og2[j] = t * mv[2 * sld + q];
     }
   }
 }
@@ -706,8 +709,9 @@ void in_plane_share_block(int n, int ld, const double* __restrict w, const doubl
 // mf[(3 a + d) mld_f + q]).
 TS_VECTOR_CLONES
 void in_plane_force_block(int n, const int* __restrict off, const double* __restrict g, int mld,
-                          const int* __restrict oo, const double* __restrict B, int ld, const double* __restrict gs,
-                          const double* __restrict mask, const int* __restrict nidx, const double* __restrict og0,
+                          const int* __restrict oo, const double* __restrict B, int ld, int sld,
+                          const double* __restrict gs, const double* __restrict mask, const int* __restrict nidx,
+                          const double* __restrict og0,
                           const double* __restrict og1, const double* __restrict og2, const double* __restrict x,
                           double* __restrict mf, int fld) {
 #pragma omp simd
@@ -717,7 +721,7 @@ void in_plane_force_block(int n, const int* __restrict off, const double* __rest
     const InPlaneFrameV fr = in_plane_frame_v(x, i0, off[mld + q], off[2 * mld + q], gb, gc);
     double S1 = 0.0, S2 = 0.0, S3 = 0.0, Jg0 = 0.0, Jg1 = 0.0, Jg2 = 0.0;
     for (int k = 0; k < 3; ++k) {
-      const double gk = gs[k * ld + q] * mask[k * ld + q];
+      const double gk = gs[k * sld + q] * mask[k * ld + q];
       const int io = oo[k * ld + q];
       const double o0 = x[io] - x[i0], o1 = x[io + 1] - x[i0 + 1], o2 = x[io + 2] - x[i0 + 2];
       const double b0 = gk * B[3 * k * ld + q], b1 = gk * B[(3 * k + 1) * ld + q], b2 = gk * B[(3 * k + 2) * ld + q];
@@ -916,7 +920,7 @@ class ShellRfT3 final : public ElementKernel {
       const bool curvatures_only = bending_ && !bend && in.fields_due;
       if (bending_ && in.pass == 0) {
         if (bend || curvatures_only) slope_angles(in, in.range.begin, in.range.end);
-        if (in_plane_) in_plane_angles(in.range.begin, in.range.end);
+        if (in_plane_) in_plane_angles(in, in.range.begin, in.range.end);
         return Status::success();
       }
       if (bending_ && in.pass == 1) {
@@ -945,7 +949,7 @@ class ShellRfT3 final : public ElementKernel {
       }
       if (bending_ && in.pass == 2) {
         if (bend) hinge_moments(in, in.range.begin, in.range.end);
-        if (in_plane_) in_plane_shares(in.range.begin, in.range.end);
+        if (in_plane_) in_plane_shares(in, in.range.begin, in.range.end);
         return Status::success();
       }
       const int b = in.range.begin, n = in.range.end - in.range.begin;
@@ -1453,17 +1457,45 @@ class ShellRfT3 final : public ElementKernel {
     return scale(m, -2.0);
   }
 
+  // The in-plane term's values of the step for the range in.range (edge k
+  // of its element q at [k ld + q], per element at [q]) and, through nidx
+  // (rows of gld_ from the range's first element), the neighbours' same
+  // edges in *_all: arrays over the whole part, or where the kernel
+  // interleaves the passes the ring of block buffers (as step_values).
+  struct InPlaneStep {
+    double *phi, *r, *m, *g, *fm, *og0, *og1, *og2, *e;
+    int ld;
+    const int* nidx;
+    const double *r_all, *m_all, *og0_all, *og1_all, *og2_all;
+  };
+  InPlaneStep in_plane_step(const ElementForceInput& in) {
+    const int b = in.range.begin;
+    if (in.pass_window > 0 && in.block_size > 0) {
+      if (in.pass_window != ring_w_ || in.block_size != ring_bs_) set_up_ring(in.pass_window, in.block_size);
+      const std::size_t o = static_cast<std::size_t>(in.block % ring_w_) * 3 * rld_, w = ring_ipr_.size();
+      double* og = ring_ipog_.data();
+      return {ring_ipphi_.data() + o, ring_ipr_.data() + o, ring_ipm_.data() + o, ring_ipg_.data() + o,
+              ring_ipfm_.data() + o, og + o, og + w + o, og + 2 * w + o, ring_ipe_.data() + o, rld_,
+              ring_nidx_.data() + b, ring_ipr_.data(), ring_ipm_.data(), og, og + w, og + 2 * w};
+    }
+    const std::size_t w = ipr_.size();
+    double* og = ipog_.data();
+    return {ipphi_.data() + b, ipr_.data() + b, ipm_.data() + b, ipg_.data() + b, ipfm_.data() + b, og + b,
+            og + w + b, og + 2 * w + b, ipe_.data() + b, gld_, nidx_.data() + b, ipr_.data(), ipm_.data(), og,
+            og + w, og + 2 * w};
+  }
+
   // Pass 0: the slope jumps phi_k = m . J_k and the own quadratic's slopes
   // r = L phi (an element with a ghost edge has no quadratic: r = 0).
-  void in_plane_angles(int b, int end) {
+  void in_plane_angles(const ElementForceInput& in, int b, int end) {
     const double* x = part_->x.data();
-    const std::size_t gld = static_cast<std::size_t>(gld_);
+    const InPlaneStep st = in_plane_step(in);
     in_plane_angle_block(end - b, off_.data() + b, g_.data() + b, mld_, ipo_.data() + b, ipb_.data() + b, ipl_.data() + b,
-                         gld_, x, ipphi_.data() + b, ipr_.data() + b, ipfm_.data() + b);
+                         gld_, x, st.ld, st.phi, st.r, st.fm);
     for (int h = ipgstart_[b]; h < ipgstart_[end]; ++h) {
       const int e = ipghost_[h] / 3, k = ipghost_[h] % 3;
       const InPlaneFrame fr = in_plane_frame(x, e);
-      ipphi_[k * gld + e] = dot(fr.m, ghost_jump(fr, e, k));
+      st.phi[k * st.ld + (e - b)] = dot(fr.m, ghost_jump(fr, e, k));
     }
   }
 
@@ -1473,14 +1505,15 @@ class ShellRfT3 final : public ElementKernel {
   Status in_plane_moments(const ElementForceInput& in, int b, int end) {
     const int n = end - b;
     const std::size_t gld = static_cast<std::size_t>(gld_);
+    const InPlaneStep st = in_plane_step(in);
     thread_local std::vector<double> chi, moment, w;
     if (chi.size() < 3 * static_cast<std::size_t>(n)) {
       chi.resize(3 * static_cast<std::size_t>(n));
       moment.resize(3 * static_cast<std::size_t>(n));
       w.resize(n);
     }
-    in_plane_curvature_block(n, gld_, ipc_.data() + b, ipw_.data() + b, ipphi_.data() + b, ipr_.data() + b,
-                             nidx_.data() + b, ipr_.data(), chi.data());
+    in_plane_curvature_block(n, gld_, ipc_.data() + b, ipw_.data() + b, st.ld, st.phi, st.r, st.nidx, st.r_all,
+                             chi.data());
     MaterialBlock blk;
     blk.n = n;
     blk.strain = std::span<const double>(chi.data(), 3 * static_cast<std::size_t>(n));
@@ -1491,21 +1524,20 @@ class ShellRfT3 final : public ElementKernel {
     if (auto st = in_plane_->evaluate(blk); !st) return st;
     for (int k = 0; k < 3; ++k) {
       const double* c = ipc_.data() + k * gld + b;
-      double* m = ipm_.data() + k * gld + b;
+      double* m = st.m + static_cast<std::size_t>(k) * st.ld;
       for (int q = 0; q < n; ++q) m[q] = area0_[b + q] * moment[3 * q] * c[q];
     }
-    for (int q = 0; q < n; ++q) ipe_[b + q] = area0_[b + q] * w[q];
+    for (int q = 0; q < n; ++q) st.e[q] = area0_[b + q] * w[q];
     return Status::success();
   }
 
   // Pass 2: each element's dW/dphi_i = (1 - omega_i) m_i + sum_k L_ki
   // omega_k (m_k - m'_k), m' the neighbour's dW/ds of the same edge, and the
   // forces on the nodes across its edges.
-  void in_plane_shares(int b, int end) {
-    const std::size_t gld = static_cast<std::size_t>(gld_), w = 3 * gld + 1;
-    in_plane_share_block(end - b, gld_, ipw_.data() + b, ipl_.data() + b, ipm_.data() + b, nidx_.data() + b, ipm_.data(),
-                         ipb_.data() + b, ipfm_.data() + b, ipg_.data() + b, ipog_.data() + b, ipog_.data() + w + b,
-                         ipog_.data() + 2 * w + b);
+  void in_plane_shares(const ElementForceInput& in, int b, int end) {
+    const InPlaneStep st = in_plane_step(in);
+    in_plane_share_block(end - b, gld_, ipw_.data() + b, ipl_.data() + b, st.nidx, ipb_.data() + b, st.ld, st.m,
+                         st.m_all, st.fm, st.g, st.og0, st.og1, st.og2);
   }
 
   // Pass 3: the forces sum_i g_i dphi_i/dx into the block's corner forces mf
@@ -1517,14 +1549,14 @@ class ShellRfT3 final : public ElementKernel {
   double in_plane_forces(const ElementForceInput& in, int b, int end, double* dte, double t_lo, double t_hi,
                          double* mf, int ld, double& dt_floor) {
     const double* x = part_->x.data();
-    const std::size_t gld = static_cast<std::size_t>(gld_), w = 3 * gld + 1;
+    const std::size_t gld = static_cast<std::size_t>(gld_);
     const int n = end - b;
-    in_plane_force_block(n, off_.data() + b, g_.data() + b, mld_, ipo_.data() + b, ipb_.data() + b, gld_,
-                         ipg_.data() + b, ipmask_.data() + b, nidx_.data() + b, ipog_.data(), ipog_.data() + w,
-                         ipog_.data() + 2 * w, x, mf, ld);
+    const InPlaneStep st = in_plane_step(in);
+    in_plane_force_block(n, off_.data() + b, g_.data() + b, mld_, ipo_.data() + b, ipb_.data() + b, gld_, st.ld, st.g,
+                         ipmask_.data() + b, st.nidx, st.og0_all, st.og1_all, st.og2_all, x, mf, ld);
     for (int h = ipgstart_[b]; h < ipgstart_[end]; ++h) {
       const int e = ipghost_[h] / 3, i = ipghost_[h] % 3, q = e - b;
-      const double gi = ipg_[i * gld + e];
+      const double gi = st.g[i * st.ld + q];
       if (gi == 0.0) continue;
       const InPlaneFrame fr = in_plane_frame(x, e);
       const Vec3 row = ghost_jump_row(ipk_[3 * e + i], fr.m);
@@ -1543,7 +1575,7 @@ class ShellRfT3 final : public ElementKernel {
       for (int a = 0; a < 3; ++a)
         for (int d = 0; d < 3; ++d) mf[(3 * a + d) * ld + q] += own[a][d];
     }
-    const double energy = lane_dot(n, ipe_.data() + b, nullptr);
+    const double energy = lane_dot(n, st.e, nullptr);
     const double rmax = std::max(in_plane_->max_stiffness(t_lo), in_plane_->max_stiffness(t_hi));
     if (rmax > 0) {
       // As the bending's: dt ~ d^2 sqrt(rho h / R) / 2.
@@ -2238,6 +2270,15 @@ class ShellRfT3 final : public ElementKernel {
     ring_rho_.assign(m + 1, 0.0);
     ring_em_.assign(m + 1, 0.0);
     ring_hm_.assign(m + 1, 0.0);
+    if (in_plane_) {  // the in-plane term's, alike
+      ring_ipphi_.assign(m, 0.0);
+      ring_ipr_.assign(m + 1, 0.0);
+      ring_ipm_.assign(m + 1, 0.0);
+      ring_ipg_.assign(m, 0.0);
+      ring_ipfm_.assign(m, 0.0);
+      ring_ipog_.assign(3 * (m + 1), 0.0);
+      ring_ipe_.assign(m, 0.0);
+    }
     const int ne = part_->num_elements;
     ring_nidx_.assign(nidx_.size(), static_cast<int>(m));
     for (int k = 0; k < 3; ++k)
@@ -2252,6 +2293,7 @@ class ShellRfT3 final : public ElementKernel {
   }
   int ring_w_ = 0, ring_bs_ = 0, rld_ = 0;
   std::vector<double> ring_eq_, ring_rho_, ring_em_, ring_hm_;
+  std::vector<double> ring_ipphi_, ring_ipr_, ring_ipm_, ring_ipg_, ring_ipfm_, ring_ipog_, ring_ipe_;
   large_vector<int> ring_nidx_;
 
   const MaterialLaw* bending_ = nullptr;
