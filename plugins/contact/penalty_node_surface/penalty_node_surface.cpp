@@ -913,8 +913,9 @@ class PenaltyNodeSurface final : public sdk::ContactHandler {
       bound = tr >= 0 ? pb.dref[i] + pb.da[i] + pb.dt[tr] : reach;
       bound = bound * (1 + 1e-9) + 1e-12 * reach + pb.da[i];
     }
-    // Skip candidate entry c (triangle e): farther than the bound.
-    auto far = [&](const int* it, int e) { return lb && lb[it - begin] - pb.dt[e] > bound; };
+    // Skip candidate *it (triangle e): farther than the bound.
+    const int* const first = begin;  // (a structured binding is not captured by Clang 14)
+    auto far = [&](const int* it, int e) { return lb && lb[it - first] - pb.dt[e] > bound; };
     // Plane distance and projection weights of x on candidate e.
     auto locate_on = [&](int e, const int* t, double* w, double& plane) {
       return locate(x, &ps.geo_b[kGeo * static_cast<std::size_t>(e)], &b.x[3 * static_cast<std::size_t>(t[0])], w,
