@@ -860,16 +860,7 @@ class ShellRfT3 final : public ElementKernel {
       }
       if (in_plane_) {
         setup_in_plane();
-        // Rows of gld_ per edge; ipr_ and ipm_ with a zero past the rows
-        // (read for edges without a neighbour), ipog_ three such arrays.
-        const std::size_t rows = 3 * static_cast<std::size_t>(gld_);
-        ipphi_.assign(rows, 0.0);
-        ipr_.assign(rows + 1, 0.0);
-        ipm_.assign(rows + 1, 0.0);
-        ipg_.assign(rows, 0.0);
-        ipfm_.assign(rows, 0.0);
-        ipog_.assign(3 * (rows + 1), 0.0);
-        ipe_.assign(gld_, 0.0);
+        ip_step_.assign(3 * static_cast<std::size_t>(gld_));  // rows of gld_ per edge
       }
       // The previous strains are kept only for laws that read them.
       keep_old_ = std::any_of(laws_.begin(), laws_.end(), [](const MaterialLaw* l) { return l->uses_strain_old(); });
@@ -1472,18 +1463,26 @@ class ShellRfT3 final : public ElementKernel {
     const int b = in.range.begin;
     if (in.pass_window > 0 && in.block_size > 0) {
       if (in.pass_window != ring_w_ || in.block_size != ring_bs_) set_up_ring(in.pass_window, in.block_size);
-      const std::size_t o = static_cast<std::size_t>(in.block % ring_w_) * 3 * rld_, w = ring_ipr_.size();
-      double* og = ring_ipog_.data();
-      return {ring_ipphi_.data() + o, ring_ipr_.data() + o, ring_ipm_.data() + o, ring_ipg_.data() + o,
-              ring_ipfm_.data() + o, og + o, og + w + o, og + 2 * w + o, ring_ipe_.data() + o, rld_,
-              ring_nidx_.data() + b, ring_ipr_.data(), ring_ipm_.data(), og, og + w, og + 2 * w};
+      return ring_ip_step_.view(static_cast<std::size_t>(in.block % ring_w_) * 3 * rld_, rld_, ring_nidx_.data() + b);
     }
-    const std::size_t w = ipr_.size();
-    double* og = ipog_.data();
-    return {ipphi_.data() + b, ipr_.data() + b, ipm_.data() + b, ipg_.data() + b, ipfm_.data() + b, og + b,
-            og + w + b, og + 2 * w + b, ipe_.data() + b, gld_, nidx_.data() + b, ipr_.data(), ipm_.data(), og,
-            og + w, og + 2 * w};
+    return ip_step_.view(b, gld_, nidx_.data() + b);
   }
+  // The arrays behind InPlaneStep: m values each (r, m and each third of
+  // og with a zero past them, read for edges without a neighbour).
+  struct InPlaneStepArrays {
+    std::vector<double> phi, r, m, g, fm, og, e;
+    void assign(std::size_t n) {
+      phi.assign(n, 0.0), r.assign(n + 1, 0.0), m.assign(n + 1, 0.0), g.assign(n, 0.0), fm.assign(n, 0.0);
+      og.assign(3 * (n + 1), 0.0), e.assign(n, 0.0);
+    }
+    // From offset o, rows of ld, nidx into the *_all arrays.
+    InPlaneStep view(std::size_t o, int ld, const int* nidx) {
+      const std::size_t w = r.size();
+      double* o3 = og.data();
+      return {phi.data() + o, r.data() + o, m.data() + o, g.data() + o, fm.data() + o, o3 + o, o3 + w + o,
+              o3 + 2 * w + o, e.data() + o, ld, nidx, r.data(), m.data(), o3, o3 + w, o3 + 2 * w};
+    }
+  };
 
   // Pass 0: the slope jumps phi_k = m . J_k and the own quadratic's slopes
   // r = L phi (an element with a ghost edge has no quadratic: r = 0).
@@ -1500,8 +1499,8 @@ class ShellRfT3 final : public ElementKernel {
   }
 
   // Pass 1: mid-edge slopes s_k = omega r_k + (1 - omega) (phi_k - r'_k),
-  // K11 = sum_k c_k s_k, the law, dW/ds_k = A0 M11 c_k into ipm_, and each
-  // element's A0 w into ipe_.
+  // K11 = sum_k c_k s_k, the law, and dW/ds_k = A0 M11 c_k and each
+  // element's A0 w into the step's values.
   Status in_plane_moments(const ElementForceInput& in, int b, int end) {
     const int n = end - b;
     const std::size_t gld = static_cast<std::size_t>(gld_);
@@ -2270,15 +2269,7 @@ class ShellRfT3 final : public ElementKernel {
     ring_rho_.assign(m + 1, 0.0);
     ring_em_.assign(m + 1, 0.0);
     ring_hm_.assign(m + 1, 0.0);
-    if (in_plane_) {  // the in-plane term's, alike
-      ring_ipphi_.assign(m, 0.0);
-      ring_ipr_.assign(m + 1, 0.0);
-      ring_ipm_.assign(m + 1, 0.0);
-      ring_ipg_.assign(m, 0.0);
-      ring_ipfm_.assign(m, 0.0);
-      ring_ipog_.assign(3 * (m + 1), 0.0);
-      ring_ipe_.assign(m, 0.0);
-    }
+    if (in_plane_) ring_ip_step_.assign(m);  // the in-plane term's, alike
     const int ne = part_->num_elements;
     ring_nidx_.assign(nidx_.size(), static_cast<int>(m));
     for (int k = 0; k < 3; ++k)
@@ -2293,15 +2284,16 @@ class ShellRfT3 final : public ElementKernel {
   }
   int ring_w_ = 0, ring_bs_ = 0, rld_ = 0;
   std::vector<double> ring_eq_, ring_rho_, ring_em_, ring_hm_;
-  std::vector<double> ring_ipphi_, ring_ipr_, ring_ipm_, ring_ipg_, ring_ipfm_, ring_ipog_, ring_ipe_;
+  InPlaneStepArrays ring_ip_step_;
   large_vector<int> ring_nidx_;
 
   const MaterialLaw* bending_ = nullptr;
   const MaterialLaw* in_plane_ = nullptr;  // the fibres' in-plane bending (may be null)
   // See setup_in_plane; per step (rows of gld_): the slope jumps, own
   // slopes, dW/ds and dW/dphi per element and edge, m per element, the
-  // forces on the nodes across the edges (ipog_), and per element A0 w.
-  std::vector<double> ipb_, ipw_, ipc_, ipl_, ipmask_, ipphi_, ipr_, ipm_, ipg_, ipfm_, ipog_, ipe_;
+  // forces on the nodes across the edges, and per element A0 w.
+  std::vector<double> ipb_, ipw_, ipc_, ipl_, ipmask_;
+  InPlaneStepArrays ip_step_;
   std::vector<int> ipo_;
   // Per element and edge (3 e + k): kEdgeFree (a neighbour or a free edge)
   // or the ghost's kind (kEdgeClamped, kEdgeSymmetryX + axis), and the
