@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include <thermostamp/sdk/math.hpp>
@@ -185,6 +186,35 @@ TEST(PlyPlySearch, LoneTriangleTargetsAreItsClosestPoints) {
   EXPECT_EQ(checked, 3 * 3 * 21 * 21);
 }
 
+// One call of a ply/ply handler's contact_forces() for parts (a, b) after a
+// step dt, side 0 or 1 (one search direction) or -1 (both), the forces on
+// each part's nodes added into fa and fb.
+struct PlyForces {
+  bool ok = false;
+  double energy = 0;
+  long long active = 0;
+};
+PlyForces ply_contact_forces(sdk::ContactHandler& h, std::span<const sdk::PartView> parts, double dt,
+                             std::span<const std::span<const double>> velocity,
+                             std::span<const std::span<const double>> node_area,
+                             std::span<const std::span<const double>> mass, int side, std::vector<double>& fa,
+                             std::vector<double>& fb) {
+  std::vector<double> tool_force;
+  const std::vector<std::span<double>> force = {fa, fb};
+  sdk::ContactForceInput in;
+  in.parts = parts;
+  in.dt = dt;
+  in.velocity = velocity;
+  in.node_area = node_area;
+  in.mass = mass;
+  in.side = side;
+  sdk::ContactForceOutput out;
+  out.force = force;
+  out.tool_force = tool_force;
+  const bool ok = h.contact_forces(in, out).ok;
+  return {ok, out.energy, out.active};
+}
+
 // One node (part 0) against a flat plate of two triangles (part 1: a 10 mm
 // square split along its diagonal 0-2, node 1 on one side of it and node 3
 // on the other), both plies 0.5 mm thick, through the handler's
@@ -218,19 +248,9 @@ class NodeOverPlate {
     const std::vector<double> va(v.begin(), v.end()), vb(12, 0.0), area_a(1, kArea), area_b(4, kArea),
         ma(1, 1e-3), mb(4, 1e-3);
     const std::vector<std::span<const double>> vel = {va, vb}, areas = {area_a, area_b}, mass = {ma, mb};
-    std::vector<double> f_a(3, 0.0), f_b(12, 0.0), tool_force;
-    const std::vector<std::span<double>> force = {f_a, f_b};
-    sdk::ContactForceInput in;
-    in.parts = parts;
-    in.dt = dt;
-    in.velocity = vel;
-    in.node_area = areas;
-    in.mass = mass;
-    in.side = 0;  // a's node against b's triangles
-    sdk::ContactForceOutput out;
-    out.force = force;
-    out.tool_force = tool_force;
-    if (!handler_->contact_forces(in, out).ok) return false;
+    std::vector<double> f_a(3, 0.0), f_b(12, 0.0);
+    // side 0: a's node against b's triangles
+    if (!ply_contact_forces(*handler_, parts, dt, vel, areas, mass, 0, f_a, f_b).ok) return false;
     std::copy(f_a.begin(), f_a.end(), fa.begin());
     std::copy(f_b.begin(), f_b.end(), fb.begin());
     return true;
@@ -441,19 +461,8 @@ TEST(PlyPlySearch, PrunedSearchFindsTheTargetsOfTheFullSearch) {
     for (const int k : {0, 1}) {
       f[k][0].assign(3 * a.num_nodes(), 0.0);
       f[k][1].assign(3 * b.num_nodes(), 0.0);
-      std::vector<double> tool_force;
-      const std::vector<std::span<double>> force = {f[k][0], f[k][1]};
-      sdk::ContactForceInput in;
-      in.parts = parts;
-      in.dt = dt;
-      in.velocity = vel;
-      in.node_area = areas;
-      in.mass = mass;
-      in.side = -1;  // both sides
-      sdk::ContactForceOutput out;
-      out.force = force;
-      out.tool_force = tool_force;
-      ASSERT_TRUE(h[k]->contact_forces(in, out).ok);
+      const PlyForces out = ply_contact_forces(*h[k], parts, dt, vel, areas, mass, -1, f[k][0], f[k][1]);  // both sides
+      ASSERT_TRUE(out.ok);
       energy[k] = out.energy;
       act[k] = out.active;
     }
