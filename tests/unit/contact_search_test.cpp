@@ -413,9 +413,8 @@ TEST(PlyPlySearch, SearchIntervalShortensForFastPlies) {
 // nodes in contact must be the same bits at every call: the bounds may
 // skip only triangles farther than the target. (Bounds that leave out the
 // motions since the reference make 156 of the 300 calls differ; leaving
-// out only one of the node's two motion terms or the candidate's motion is
-// not caught here: the triangle inequality's bound has room to spare on
-// this surface.)
+// out only one motion term is not caught here, where the bound has room to
+// spare: the next test catches each.)
 TEST(PlyPlySearch, PrunedSearchFindsTheTargetsOfTheFullSearch) {
   PluginRegistry registry;
   const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");
@@ -473,6 +472,75 @@ TEST(PlyPlySearch, PrunedSearchFindsTheTargetsOfTheFullSearch) {
   }
   std::printf("300 calls, %lld node contacts in all, %d calls differ\n", active, differ);
   EXPECT_GT(active, 300LL * a.num_nodes() / 10);  // many nodes in contact throughout
+}
+
+// The pruned search skips a candidate when its distance at the reference,
+// less the motions since, exceeds the reference target's distance plus
+// those motions; each motion term is needed. A node lies between the two
+// layers of a folded ply (a 10 mm square of two triangles at z = 0 and the
+// same square at z = H, facing it), 0.4 mm above the lower layer: its
+// reference target. Then one thing moves 0.04 mm (within the 5 % of the
+// 1.005 mm reach that the bounds serve) so that the upper layer becomes the
+// closer one, with the upper layer's bound between the target's distance
+// plus one motion term and plus all of them: the node moves up (H 0.86 mm:
+// 0.44 mm to the lower, 0.42 mm to the upper), the upper layer moves down
+// (H 0.83 mm: 0.39 mm against 0.40 mm), the lower layer moves down (H
+// 0.83 mm: 0.43 mm against 0.44 mm). Without the node's motion, the
+// candidate's or the target's, the pruned search would skip the upper
+// layer and keep the lower one.
+TEST(PlyPlySearch, PrunedSearchAllowsForTheMotionsOfTheNodeTheCandidateAndTheTarget) {
+  PluginRegistry registry;
+  const auto& r = registry.require(sdk::PluginKind::Contact, "penalty_node_surface", "/handler");
+  struct Case {
+    const char* what;
+    double height, node_dz, upper_dz, lower_dz;
+  };
+  const double z0 = 0.4e-3, move = 0.04e-3;
+  for (const Case& c : {Case{"the node moves up", 0.86e-3, move, 0, 0},
+                        Case{"the upper layer moves down", 0.83e-3, 0, -move, 0},
+                        Case{"the lower layer moves down", 0.83e-3, 0, 0, -move}}) {
+    SCOPED_TRACE(c.what);
+    ShellMesh a, b;
+    const double s = 0.01, h = c.height;
+    b.x = {0, 0, 0, s, 0, 0, s, s, 0, 0, s, 0, 0, 0, h, s, 0, h, s, s, h, 0, s, h};
+    b.triangles = {0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6};  // the upper layer faces down
+    b.neighbours = {-1, 1, -1, -1, -1, 0, -1, -1, 3, -1, 2, -1};  // across the edge opposite node k
+    a.x = {0.003, 0.007, z0};
+    std::unique_ptr<sdk::ContactHandler> hd[2];
+    const sdk::ContactPair pair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}};
+    for (const int k : {0, 1}) {
+      hd[k].reset(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)());
+      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+      ASSERT_TRUE(hd[k]->configure(validate_params(json{{"penalty", 1e10}, {"damping", 0.0}, {"prune_search", k == 0}},
+                                                   "/c", r.descriptor),
+                                   pair, parts, {})
+                      .ok);
+    }
+    const std::vector<double> va(3, 0.0), vb(24, 0.0), area_a(1, 1e-5), area_b(8, 1e-5), ma(1, 1e-3), mb(8, 1e-3);
+    const std::vector<std::span<const double>> vel = {va, vb}, areas = {area_a, area_b}, mass = {ma, mb};
+    for (int call = 0; call < 2; ++call) {
+      if (call == 1) {  // the motion
+        a.x[2] += c.node_dz;
+        for (int n = 0; n < 4; ++n) b.x[3 * n + 2] += c.lower_dz;
+        for (int n = 4; n < 8; ++n) b.x[3 * n + 2] += c.upper_dz;
+      }
+      const std::vector<sdk::PartView> parts = {test::part_view(a, 0, 0.0005), test::part_view(b, 1, 0.0005)};
+      std::vector<double> fa[2], fb[2];
+      for (const int k : {0, 1}) {
+        fa[k].assign(3, 0.0);
+        fb[k].assign(24, 0.0);
+        ASSERT_TRUE(ply_contact_forces(*hd[k], parts, 1e-6, vel, areas, mass, 0, fa[k], fb[k]).ok);  // the node's side
+      }
+      EXPECT_EQ(fa[0], fa[1]) << "call " << call;
+      EXPECT_EQ(fb[0], fb[1]) << "call " << call;
+      // The node's target: the lower layer at the reference, the upper one after the motion.
+      double lower = 0, upper = 0;
+      for (int n = 0; n < 4; ++n) lower += std::abs(fb[1][3 * n + 2]);
+      for (int n = 4; n < 8; ++n) upper += std::abs(fb[1][3 * n + 2]);
+      EXPECT_GT(call == 0 ? lower : upper, 0.0) << "call " << call;
+      EXPECT_EQ(call == 0 ? upper : lower, 0.0) << "call " << call;
+    }
+  }
 }
 
 }  // namespace
