@@ -227,7 +227,7 @@ class NodeOverPlate {
       : handler_(reinterpret_cast<sdk::ContactHandler* (*)()>(r.create)()) {
     b_.x = {0, 0, 0, 0.01, 0, 0, 0.01, 0.01, 0, 0, 0.01, 0};
     b_.triangles = {0, 1, 2, 0, 2, 3};
-    b_.neighbours = {-1, 1, -1, 0, -1, -1};
+    b_.neighbours = {-1, 1, -1, -1, -1, 0};  // across the edge opposite node k
     a_.x = {0, 0, 0};
     const std::vector<sdk::PartView> parts = {test::part_view(a_, 0, 0.0005), test::part_view(b_, 1, 0.0005)};
     const sdk::ContactPair pair{{sdk::BodyRef::Type::Part, 0}, {sdk::BodyRef::Type::Part, 1}};
