@@ -23,7 +23,7 @@ namespace ts::sdk {
 
 // Bump when any type of this SDK changes layout or meaning.
 inline constexpr int kAbiVersion = 21;
-inline constexpr const char* kSdkVersion = "0.21.0";
+inline constexpr const char* kSdkVersion = "0.21.1";
 
 enum class PluginKind { Element, Material, Thermal, Contact };
 
