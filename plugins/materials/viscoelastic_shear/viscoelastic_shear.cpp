@@ -94,15 +94,13 @@ struct ShearStress {
   const double dsh2 = 0.5 * ir;
   return shear_polynomial(sh, dsh0, dsh1, dsh2, k1, k2, k3, omega);
 }
-// The shear stress at point q: UD (kUd, no directions) or with the weft
-// direction dir2.
+// The shear stress of a point with right Cauchy-Green tensor (C0, C1, C2):
+// UD (kUd, no directions) or with the weft direction (d0, d1).
 template <bool kUd>
-[[gnu::always_inline]] inline ShearStress point_shear(std::size_t q, const double* __restrict C,
-                                                      const double* __restrict dir2, double k1, double k2, double k3,
-                                                      double omega) {
-  const double C0 = C[3 * q], C1 = C[3 * q + 1], C2 = C[3 * q + 2];
+[[gnu::always_inline]] inline ShearStress point_shear(double C0, double C1, double C2, double d0, double d1, double k1,
+                                                      double k2, double k3, double omega) {
   if constexpr (kUd) return ud_shear_stress(C0, C1, C2, k1, k2, k3, omega);
-  return shear_stress(C0, C1, C2, dir2[2 * q], dir2[2 * q + 1], k1, k2, k3, omega);
+  return shear_stress(C0, C1, C2, d0, d1, k1, k2, k3, omega);
 }
 
 // One Maxwell branch over a step (prony_step()'s update, same order):
@@ -138,6 +136,7 @@ struct Branch {
 template <int NB>
 struct Lines {
   double t_min, t_max, lo[4], lg[NB][4], lt[NB][4];
+  Lines() = default;
   explicit Lines(const double* lines) {
     t_min = lines[0];
     t_max = lines[1];
@@ -155,7 +154,7 @@ struct Lines {
 template <int NB>
 struct Parameters {
   double omega, g_inf, g[NB], inv_tau[NB];
-  double decay[NB], ramp[NB];  // the Prony factors, where given for the block (kGiven in visco_point)
+  double decay[NB], ramp[NB];  // the Prony factors, where given for the block (kGiven in visco_values)
 };
 template <int NB>
 [[gnu::always_inline]] inline Parameters<NB> parameters(const Lines<NB>& l, double T0) {
@@ -178,27 +177,35 @@ template <int NB>
   p.g_inf = 1.0 - g_sum;
   return p;
 }
-// The law at point q with parameters p; with parameters(), each step of
+// The law at one point with parameters p; with parameters(), each step of
 // the scalar path (ViscoelasticShear::at(), invariants(), even_polynomial(),
 // add_stress(), prony_factors_inv(), prony_step()) written out in the same
-// order so that the results are the same bits. State of a block: row k
-// (value k of every point, ld apart) holds S0 (rows 0-2), then H_i (rows
-// 3 + 3 i to 5 + 3 i). The new S0 and H_i replace the old ones in the
-// state, except where redo[q] = 1: dt / tau_i >= 1e-2 for some branch (the
-// state is left as it was). With kGiven the factors are p.decay and
-// p.ramp (computed once for a block at one temperature) and no point is
-// to be redone. Inlined into each vector clone below.
+// order so that the results are the same bits. In: the point's C (c0, c1,
+// c2), its weft direction (d0, d1; not read for UD) and its state st (S0,
+// then H_i: 3 + 3 NB values). Out: the new state nx, the stress (s0, s1,
+// s2) and the energy w; returns 1 where dt / tau_i >= 1e-2 for some branch
+// (the point is evaluated again by the scalar path, the state left as it
+// was), else 0. With kGiven the factors are p.decay and p.ramp (computed
+// once for a block at one temperature) and no point is to be redone. It
+// works on values only; visco_point or the loop (see there) does the loads
+// and stores of the block's arrays.
+template <int NB>
+struct PointIn {
+  double c0, c1, c2, d0, d1, st[3 + 3 * NB];
+};
+template <int NB>
+struct PointOut {
+  double nx[3 + 3 * NB], s0, s1, s2, w, rq;
+};
 template <int NB, bool kUd, bool kGiven = false>
-[[gnu::always_inline]] inline double visco_point(std::size_t q, std::size_t ld, const double* __restrict C,
-                                               const double* __restrict dir2, const Parameters<NB>& p, double dt,
-                                               double k1, double k2, double k3, double* __restrict state,
-                                               double* __restrict S, double* __restrict W, double* __restrict redo) {
-  double st[3 + 3 * NB];
-  for (int k = 0; k < 3 + 3 * NB; ++k) st[k] = state[k * ld + q];
-  const ShearStress ss = point_shear<kUd>(q, C, dir2, k1, k2, k3, p.omega);
+[[gnu::always_inline]] inline PointOut<NB> visco_values(const PointIn<NB> in, const Parameters<NB>& p, double dt,
+                                                      double k1, double k2, double k3) {
+  PointOut<NB> out;
+  const double* st = in.st;
+  double* nx = out.nx;
+  const ShearStress ss = point_shear<kUd>(in.c0, in.c1, in.c2, in.d0, in.d1, k1, k2, k3, p.omega);
   const double s00 = ss.s0, s01 = ss.s1, s02 = ss.s2;
   double o0 = p.g_inf * s00, o1 = p.g_inf * s01, o2 = p.g_inf * s02;
-  double nx[3 + 3 * NB];
   nx[0] = s00;
   nx[1] = s01;
   nx[2] = s02;
@@ -223,32 +230,106 @@ template <int NB, bool kUd, bool kGiven = false>
     take_branch(maxwell_branch(decay, p.g[i], ramp, st + 3 + 3 * i, s00 - st[0], s01 - st[1], s02 - st[2]),
                 nx + 3 + 3 * i, o0, o1, o2);
   }
-  const double rq = ok ? 0.0 : 1.0;
-  redo[q] = rq;
-  // A store in every case (contiguous rows: a select and a vector store):
-  // the old values where the point is evaluated again.
-  for (int k = 0; k < 3 + 3 * NB; ++k) state[k * ld + q] = rq == 0.0 ? nx[k] : st[k];
-  S[3 * q] = o0;
-  S[3 * q + 1] = o1;
-  S[3 * q + 2] = o2;
-  W[q] = ss.w;
-  return rq;
+  out.s0 = o0;
+  out.s1 = o1;
+  out.s2 = o2;
+  out.w = ss.w;
+  out.rq = ok ? 0.0 : 1.0;
+  return out;
 }
-// The law over n points, the parameters evaluated at each point's
-// temperature. Returns 1 if some point is to be evaluated again, else 0.
-template <int NB, bool kUd>
-[[gnu::always_inline]] inline double visco_body(std::size_t n, const double* __restrict C,
-                                              const double* __restrict dir2, const double* __restrict temp, double dt,
-                                              const double* ksh, const double* lines, double* __restrict state,
-                                              double* __restrict S, double* __restrict W, double* __restrict redo) {
+// One point's loads, law and stores (q of n points, rows n apart); returns
+// its redo flag. GCC vectorises the loop below with the point's arrays
+// inside this inlined function (in the loop's own body its `omp simd`
+// lowering gives them a copy per lane, and the loop stays scalar). Clang
+// 14 does not carry the loop's independence into the loads and stores of
+// a function it inlines there (it then checks the arrays' overlap at run
+// time, the checks fail and the loop runs scalar), so for Clang the loop
+// does them itself: the same operations, the same bits.
+template <int NB, bool kUd, bool kGiven>
+[[gnu::always_inline]] inline double visco_point(std::size_t q, std::size_t n, const double* __restrict C,
+                                               const double* __restrict dir2, const Parameters<NB>& p, double dt,
+                                               double k1, double k2, double k3, double* __restrict state,
+                                               double* __restrict S, double* __restrict W, double* __restrict redo) {
+  PointIn<NB> in;
+  in.c0 = C[3 * q];
+  in.c1 = C[3 * q + 1];
+  in.c2 = C[3 * q + 2];
+  in.d0 = 0.0;
+  in.d1 = 0.0;
+  if constexpr (!kUd) {
+    in.d0 = dir2[2 * q];
+    in.d1 = dir2[2 * q + 1];
+  }
+  for (int k = 0; k < 3 + 3 * NB; ++k) in.st[k] = state[k * n + q];
+  const PointOut<NB> out = visco_values<NB, kUd, kGiven>(in, p, dt, k1, k2, k3);
+  redo[q] = out.rq;
+  for (int k = 0; k < 3 + 3 * NB; ++k) state[k * n + q] = out.rq == 0.0 ? out.nx[k] : in.st[k];
+  S[3 * q] = out.s0;
+  S[3 * q + 1] = out.s1;
+  S[3 * q + 2] = out.s2;
+  W[q] = out.w;
+  return out.rq;
+}
+// Where a pass takes each point's parameters: evaluated at its
+// temperature from the lines, read from the cache (MaterialBlock::cache,
+// see visco_parameters), or given for the whole block (one temperature).
+enum class ParamSource { kEvaluated, kCached, kGiven };
+// The law over n points; returns 1 if some point is to be evaluated again,
+// else 0. State of a block: row k (value k of every point, n apart) holds
+// S0 (rows 0-2), then H_i (rows 3 + 3 i to 5 + 3 i). The new S0 and H_i
+// replace the old ones, except where redo[q] = 1 (a store in every case:
+// contiguous rows, a select and a vector store). Per source: temp and
+// lines (kEvaluated), cache (kCached: 3 + 2 NB rows, ld = n: the
+// temperature, omega, g_inf, g_i, 1 / tau_i), given (kGiven).
+template <int NB, bool kUd, ParamSource kSource>
+[[gnu::always_inline]] inline double visco_loop(std::size_t n, const double* __restrict C,
+                                              const double* __restrict dir2, const double* __restrict temp,
+                                              const double* lines, const double* __restrict cache,
+                                              const Parameters<NB>& given, double dt, const double* ksh,
+                                              double* __restrict state, double* __restrict S, double* __restrict W,
+                                              double* __restrict redo) {
   const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
-  const Lines<NB> l(lines);
+  Lines<NB> l;  // read only by kEvaluated
+  if constexpr (kSource == ParamSource::kEvaluated) l = Lines<NB>(lines);
   double any = 0.0;
 #pragma omp simd reduction(+ : any)
   for (std::size_t q = 0; q < n; ++q) {
-    const Parameters<NB> p = parameters<NB>(l, temp[q]);
-    const double rq = visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
-    any += rq;
+    Parameters<NB> p;
+    if constexpr (kSource == ParamSource::kEvaluated) {
+      p = parameters<NB>(l, temp[q]);
+    } else if constexpr (kSource == ParamSource::kCached) {
+      p.omega = cache[n + q];
+      p.g_inf = cache[2 * n + q];
+      for (int i = 0; i < NB; ++i) {
+        p.g[i] = cache[(3 + i) * n + q];
+        p.inv_tau[i] = cache[(3 + NB + i) * n + q];
+      }
+    } else {
+      p = given;
+    }
+#if defined(__clang__)
+    PointIn<NB> in;
+    in.c0 = C[3 * q];
+    in.c1 = C[3 * q + 1];
+    in.c2 = C[3 * q + 2];
+    in.d0 = 0.0;
+    in.d1 = 0.0;
+    if constexpr (!kUd) {
+      in.d0 = dir2[2 * q];
+      in.d1 = dir2[2 * q + 1];
+    }
+    for (int k = 0; k < 3 + 3 * NB; ++k) in.st[k] = state[k * n + q];
+    const PointOut<NB> out = visco_values<NB, kUd, kSource == ParamSource::kGiven>(in, p, dt, k1, k2, k3);
+    redo[q] = out.rq;
+    for (int k = 0; k < 3 + 3 * NB; ++k) state[k * n + q] = out.rq == 0.0 ? out.nx[k] : in.st[k];
+    S[3 * q] = out.s0;
+    S[3 * q + 1] = out.s1;
+    S[3 * q + 2] = out.s2;
+    W[q] = out.w;
+    any += out.rq;
+#else
+    any += visco_point<NB, kUd, kSource == ParamSource::kGiven>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
+#endif
   }
   return any;
 }
@@ -256,7 +337,7 @@ template <int NB, bool kUd>
 // The per-point parameters kept in MaterialBlock::cache, one value after
 // the other (ld = n apart): the temperature they are for, omega, g_inf,
 // g_i, 1 / tau_i (3 + 2 NB rows). visco_parameters writes them for the
-// temperatures temp; visco_cached is visco_body with them read instead of
+// temperatures temp; visco_cached is visco_block with them read instead of
 // evaluated (the same bits).
 template <int NB>
 [[gnu::always_inline]] inline void parameters_body(std::size_t n, const double* __restrict temp,
@@ -273,27 +354,6 @@ template <int NB>
       cache[(3 + NB + i) * n + q] = p.inv_tau[i];
     }
   }
-}
-template <int NB, bool kUd>
-[[gnu::always_inline]] inline double cached_body(std::size_t n, const double* __restrict C,
-                                               const double* __restrict dir2, const double* __restrict cache,
-                                               double dt, const double* ksh, double* __restrict state,
-                                               double* __restrict S, double* __restrict W, double* __restrict redo) {
-  const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
-  double any = 0.0;
-#pragma omp simd reduction(+ : any)
-  for (std::size_t q = 0; q < n; ++q) {
-    Parameters<NB> p;
-    p.omega = cache[n + q];
-    p.g_inf = cache[2 * n + q];
-    for (int i = 0; i < NB; ++i) {
-      p.g[i] = cache[(3 + i) * n + q];
-      p.inv_tau[i] = cache[(3 + NB + i) * n + q];
-    }
-    const double rq = visco_point<NB, kUd>(q, n, C, dir2, p, dt, k1, k2, k3, state, S, W, redo);
-    any += rq;
-  }
-  return any;
 }
 // Whether all n temperatures are temp[0] (one vector pass).
 TS_VECTOR_CLONES
@@ -323,7 +383,8 @@ bool same_temperatures(std::size_t n, const double* __restrict temp, const doubl
   TS_VECTOR_CLONES double visco_block##V##NB(std::size_t n, const double* C, const double* dir2, const double* temp, \
                                              double dt, const double* ksh, const double* lines, double* state,      \
                                              double* S, double* W, double* redo) {                                  \
-    return visco_body<NB, UD>(n, C, dir2, temp, dt, ksh, lines, state, S, W, redo);                                \
+    return visco_loop<NB, UD, ParamSource::kEvaluated>(n, C, dir2, temp, lines, nullptr, Parameters<NB>{}, dt, ksh, \
+                                                       state, S, W, redo);                                          \
   }
 TS_VISCO_VARIANTS(TS_VISCO_BLOCK)
 #undef TS_VISCO_BLOCK
@@ -340,11 +401,12 @@ TS_VISCO_PARAMETERS(2)
 TS_VISCO_PARAMETERS(3)
 TS_VISCO_PARAMETERS(4)
 #undef TS_VISCO_PARAMETERS
-#define TS_VISCO_CACHED(NB, V, UD)                                                                          \
-  TS_VECTOR_CLONES double visco_cached##V##NB(std::size_t n, const double* C, const double* dir2,             \
+#define TS_VISCO_CACHED(NB, V, UD)                                                                            \
+  TS_VECTOR_CLONES double visco_cached##V##NB(std::size_t n, const double* C, const double* dir2,               \
                                               const double* cache, double dt, const double* ksh, double* state, \
                                               double* S, double* W, double* redo) {                            \
-    return cached_body<NB, UD>(n, C, dir2, cache, dt, ksh, state, S, W, redo);                                \
+    return visco_loop<NB, UD, ParamSource::kCached>(n, C, dir2, nullptr, nullptr, cache, Parameters<NB>{}, dt, ksh, \
+                                                    state, S, W, redo);                                         \
   }
 TS_VISCO_VARIANTS(TS_VISCO_CACHED)
 #undef TS_VISCO_CACHED
@@ -364,7 +426,6 @@ template <int NB, bool kUd>
                                                       const double* decay, const double* ramp, const double* ksh,
                                                       double* __restrict state, double* __restrict S,
                                                       double* __restrict W, double* __restrict redo) {
-  const double k1 = ksh[0], k2 = ksh[1], k3 = ksh[2];
   Parameters<NB> p;
   p.omega = omega;
   double g_sum = 0;
@@ -376,8 +437,7 @@ template <int NB, bool kUd>
     g_sum += g[i];
   }
   p.g_inf = 1.0 - g_sum;
-#pragma omp simd
-  for (std::size_t q = 0; q < n; ++q) visco_point<NB, kUd, true>(q, n, C, dir2, p, 0.0, k1, k2, k3, state, S, W, redo);
+  visco_loop<NB, kUd, ParamSource::kGiven>(n, C, dir2, nullptr, nullptr, nullptr, p, 0.0, ksh, state, S, W, redo);
 }
 #define TS_VISCO_UNIFORM(NB, V, UD)                                                                               \
   TS_VECTOR_CLONES void visco_uniform##V##NB(std::size_t n, const double* C, const double* dir2, double omega, \
@@ -433,7 +493,7 @@ class ViscoelasticShear final : public MaterialLaw {
       }
       if (sum > 1.0)
         return Status::failure("the Maxwell weights g sum to " + std::to_string(sum) + " at t_break; it must be <= 1");
-      // The lines as the vector pass reads them (see visco_body).
+      // The lines as the vector pass reads them (see visco_loop).
       lines_ = {t_min_, t_max_, omega_.t_break, omega_.value_at_break, omega_.slope_below, omega_.slope_above};
       for (const auto* set : {&g_, &tau_})
         for (const BrokenLine& l : *set) lines_.insert(lines_.end(), {l.t_break, l.value_at_break, l.slope_below, l.slope_above});
@@ -583,7 +643,7 @@ void register_all(Registrar& r) {
   Descriptor d;
   d.kind = PluginKind::Material;
   d.name = "viscoelastic_shear";
-  d.version = "1.3.1";
+  d.version = "1.3.2";
   d.summary = "In-plane shear, temperature-dependent scale and Prony-series relaxation (adds to a membrane law)";
   d.params = {
       list_param("k_sh", "", "N/m", "shear coefficients of w_sh = omega(T) sum k_sh^i I_sh^(2i)", 3),
@@ -606,4 +666,4 @@ void register_all(Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.3.1", register_all)
+THERMOSTAMP_PLUGIN("material_viscoelastic_shear", "1.3.2", register_all)
