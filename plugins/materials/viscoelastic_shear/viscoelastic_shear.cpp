@@ -183,7 +183,7 @@ template <int NB>
 // order so that the results are the same bits. In: the point's C (c0, c1,
 // c2), its weft direction (d0, d1; not read for UD) and its state st (S0,
 // then H_i: 3 + 3 NB values). Out: the new state nx, the stress (s0, s1,
-// s2) and the energy w; returns 1 where dt / tau_i >= 1e-2 for some branch
+// s2), the energy w, and rq = 1 where dt / tau_i >= 1e-2 for some branch
 // (the point is evaluated again by the scalar path, the state left as it
 // was), else 0. With kGiven the factors are p.decay and p.ramp (computed
 // once for a block at one temperature) and no point is to be redone. It
