@@ -456,9 +456,11 @@ class Simulation {
   // The contact samples of the thermal step under way: each tool contact
   // and link found, in the order first found, its conductance the sum of
   // conductance x the time its samples stand for (the geometry of a link:
-  // its last sample's); `time` the time they stand for in all.
+  // its last sample's); `time` the time they stand for in all; `touched`,
+  // per tool contact of `map`, the time its samples stand for.
   struct ContactSums {
     sdk::ThermalContactMap map;
+    std::vector<double> touched;
     double time = 0;
     std::unordered_map<std::uint64_t, std::size_t> tool_at, link_at;  // key -> index into map
   } contact_sums_;
@@ -469,6 +471,27 @@ class Simulation {
     int part = 0, node = 0, face = 0, exchange = 0;  // exchange: index into job_.heat_exchanges
   };
   std::vector<ExchangeFace> exchange_faces_;  // from assemble_faces
+  // Per tool contact of contact_map_: the share of the thermal step its
+  // samples found it in contact (1 without samples).
+  std::vector<double> contact_touch_;
+  // A face whose condition mixes several sources over the thermal step:
+  // more than one tool, or a tool for part of the step and its heat
+  // exchange for the rest (`free`, the share of the step no tool touched
+  // it). Its tool contacts are mixed_contacts_[begin .. end) (indices into
+  // contact_map_.tool_contacts); exchange: the index into
+  // job_.heat_exchanges of an exchange that radiates or follows ambient
+  // rows (renewed at every step), else -1 and the face's constant exchange
+  // in h_ex (0 for none) and t_ex. The face takes h = sum h_c + free h_ex
+  // and the far temperature (sum h_c T_tool + free h_ex T_ambient) / h.
+  struct MixedFace {
+    int part = 0, node = 0, face = 0, exchange = -1, begin = 0, end = 0;
+    double free = 0, h_ex = 0, t_ex = 0;
+  };
+  std::vector<MixedFace> mixed_faces_;  // from assemble_faces
+  std::vector<int> mixed_contacts_;
+  // A mixed face's conductance and far temperature, its exchange's
+  // conductance being h_ex (W/(m^2 K)) to the ambient t_ex (degC).
+  void mix_face(const MixedFace& m, double h_ex, double t_ex);
   std::vector<sdk::FaceConditions> faces_;
   // Per part: its values of a conductivity table at the step's start, or
   // empty (sdk::ThermalStepInput::conductivity); none when no ply has a table.

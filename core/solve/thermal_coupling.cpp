@@ -180,16 +180,47 @@ void Simulation::update_far_temperatures(double t0, double t1) {
     }
   // Heat exchanges: the ambient, and radiation at the face's temperature.
   constexpr double kSigma = 5.670374419e-8, kKelvin = 273.15;  // W/(m^2 K^4), the Stefan-Boltzmann constant
+  // The conductance of exchange h at a face (part, node, face) over the step.
+  auto exchange_h = [&](const HeatExchangeDef& h, int part, int node, int face, double ambient) {
+    if (!(h.emissivity > 0)) return h.h;
+    const PartState& st = *parts_[part];
+    const std::size_t base = static_cast<std::size_t>(st.nz) * node;
+    const double T = st.T[base + (face == sdk::kTop ? st.nz - 1 : 0)] + kKelvin, Ta = ambient + kKelvin;
+    return h.h + h.emissivity * kSigma * (T * T + Ta * Ta) * (T + Ta);
+  };
   for (const ExchangeFace& f : exchange_faces_) {
     const HeatExchangeDef& h = job_.heat_exchanges[static_cast<std::size_t>(f.exchange)];
     PartState& st = *parts_[f.part];
     const double ambient = h.ambient_over(t0, t1);
     (f.face == sdk::kTop ? st.t_top : st.t_bottom)[f.node] = ambient;
-    if (!(h.emissivity > 0)) continue;
-    const std::size_t base = static_cast<std::size_t>(st.nz) * f.node;
-    const double T = st.T[base + (f.face == sdk::kTop ? st.nz - 1 : 0)] + kKelvin, Ta = ambient + kKelvin;
-    (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = h.h + h.emissivity * kSigma * (T * T + Ta * Ta) * (T + Ta);
+    if (h.emissivity > 0)
+      (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = exchange_h(h, f.part, f.node, f.face, ambient);
   }
+  for (const MixedFace& m : mixed_faces_) {
+    if (m.exchange < 0) {
+      mix_face(m, m.h_ex, m.t_ex);
+      continue;
+    }
+    const HeatExchangeDef& h = job_.heat_exchanges[static_cast<std::size_t>(m.exchange)];
+    const double ambient = h.ambient_over(t0, t1);
+    mix_face(m, exchange_h(h, m.part, m.node, m.face, ambient), ambient);
+  }
+}
+
+void Simulation::mix_face(const MixedFace& m, double h_ex, double t_ex) {
+  double h = 0, hT = 0;
+  for (int k = m.begin; k < m.end; ++k) {
+    const sdk::ToolHeatContact& tc = contact_map_.tool_contacts[static_cast<std::size_t>(mixed_contacts_[k])];
+    h += tc.conductance;
+    hT += tc.conductance * tool_views_[tc.tool].temperature;
+  }
+  const double g = m.free * h_ex;
+  h += g;
+  hT += g * t_ex;
+  PartState& st = *parts_[m.part];
+  const double first = tool_views_[contact_map_.tool_contacts[mixed_contacts_[m.begin]].tool].temperature;
+  (m.face == sdk::kTop ? st.h_top : st.h_bottom)[m.node] = h;
+  (m.face == sdk::kTop ? st.t_top : st.t_bottom)[m.node] = h > 0 ? hT / h : first;
 }
 
 void Simulation::load_initial_temperature(PartState& st) {
@@ -417,8 +448,10 @@ void Simulation::sample_contacts(double t, double w) {
       if (fresh) {
         sums.map.tool_contacts.push_back(c);
         sums.map.tool_contacts.back().conductance = 0;
+        sums.touched.push_back(0.0);
       }
       sums.map.tool_contacts[at->second].conductance += c.conductance * weight;
+      sums.touched[at->second] += weight;
     }
     for (const sdk::HeatLink& l : m.links) {
       const auto [at, fresh] = sums.link_at.try_emplace(link_key(l), sums.map.links.size());
@@ -483,31 +516,97 @@ void Simulation::assemble_faces(double t, double sampled) {
     sample_contacts(t, sampled);
     ContactSums& sums = contact_sums_;
     std::swap(contact_map_, sums.map);  // (the old map, cleared below, keeps its storage)
+    contact_touch_.assign(contact_map_.tool_contacts.size(), 1.0);
     if (sums.time > 0) {
       for (auto& c : contact_map_.tool_contacts) c.conductance /= sums.time;
       for (auto& l : contact_map_.links) l.conductance /= sums.time;
+      for (std::size_t k = 0; k < contact_touch_.size() && k < sums.touched.size(); ++k)
+        contact_touch_[k] = std::min(1.0, sums.touched[k] / sums.time);
     }
     sums.map.tool_contacts.clear();
     sums.map.links.clear();
+    sums.touched.clear();
     sums.tool_at.clear();
     sums.link_at.clear();
     sums.time = 0;
   } else {
     thermal_contacts(t, contact_map_);
+    contact_touch_.assign(contact_map_.tool_contacts.size(), 1.0);
   }
-  for (const auto& tc : contact_map_.tool_contacts) {
+  // The faces the tools touch. A face touched by one tool over the whole
+  // step takes its conductance and temperature; one touched by several, or
+  // by a tool for part of the step where a heat exchange covers it, mixes
+  // them (MixedFace).
+  mixed_faces_.clear();
+  mixed_contacts_.clear();
+  const std::size_t nc = contact_map_.tool_contacts.size();
+  std::vector<int> entry(nc);  // each contact's face, an index into `touched`
+  struct Touched {
+    int part, node, face, count = 0, exchange = -1, mixed = -1;
+    double h_ex = 0, t_ex = 0, share = 0;  // the face's exchange before the tools; the tools' shares summed
+  };
+  std::vector<Touched> touched;
+  {
+    std::vector<std::vector<int>> at(parts_.size());  // per part, 2 per node: the face's entry in `touched`
+    for (std::size_t c = 0; c < nc; ++c) {
+      const sdk::ToolHeatContact& tc = contact_map_.tool_contacts[c];
+      std::vector<int>& a = at[tc.part];
+      if (a.empty()) a.assign(2 * parts_[tc.part]->mesh.num_nodes(), -1);
+      const int slot = 2 * tc.node + (tc.face == sdk::kTop ? 1 : 0);
+      if (a[slot] < 0) {
+        a[slot] = static_cast<int>(touched.size());
+        const PartState& st = *parts_[tc.part];
+        Touched f{tc.part, tc.node, tc.face};
+        f.h_ex = (tc.face == sdk::kTop ? st.h_top : st.h_bottom)[tc.node];
+        f.t_ex = (tc.face == sdk::kTop ? st.t_top : st.t_bottom)[tc.node];
+        if (renewed) f.exchange = renews[tc.part][slot];
+        touched.push_back(f);
+      }
+      entry[c] = a[slot];
+      Touched& f = touched[static_cast<std::size_t>(a[slot])];
+      ++f.count;
+      f.share += contact_touch_[c];
+    }
+  }
+  for (Touched& f : touched) {
+    const bool exchanged = f.h_ex > 0 || f.exchange >= 0;
+    if (f.count > 1 || (exchanged && f.share < 1.0)) {
+      f.mixed = static_cast<int>(mixed_faces_.size());
+      MixedFace m;
+      m.part = f.part, m.node = f.node, m.face = f.face, m.free = std::max(0.0, 1.0 - f.share);
+      m.exchange = f.exchange;
+      if (m.exchange < 0) m.h_ex = f.h_ex, m.t_ex = f.t_ex;
+      mixed_faces_.push_back(m);
+    }
+  }
+  // The mixed faces' contacts, grouped by face.
+  for (MixedFace& m : mixed_faces_) m.begin = m.end = 0;
+  for (std::size_t c = 0; c < nc; ++c)
+    if (const int k = touched[static_cast<std::size_t>(entry[c])].mixed; k >= 0) ++mixed_faces_[k].end;
+  for (int k = 0, at = 0; k < static_cast<int>(mixed_faces_.size()); ++k) {
+    const int n = mixed_faces_[k].end;
+    mixed_faces_[k].begin = mixed_faces_[k].end = at;
+    at += n;
+  }
+  mixed_contacts_.resize(nc);
+  for (std::size_t c = 0; c < nc; ++c)
+    if (const int k = touched[static_cast<std::size_t>(entry[c])].mixed; k >= 0)
+      mixed_contacts_[mixed_faces_[k].end++] = static_cast<int>(c);
+  for (std::size_t c = 0; c < nc; ++c) {
+    const sdk::ToolHeatContact& tc = contact_map_.tool_contacts[c];
     PartState& st = *parts_[tc.part];
-    const double T = tool_views_[tc.tool].temperature;
-    if (tc.face == sdk::kTop) {
-      st.h_top[tc.node] = tc.conductance;
-      st.t_top[tc.node] = T;
-    } else {
-      st.h_bottom[tc.node] = tc.conductance;
-      st.t_bottom[tc.node] = T;
+    const Touched& f = touched[static_cast<std::size_t>(entry[c])];
+    if (f.mixed < 0) {
+      (tc.face == sdk::kTop ? st.h_top : st.h_bottom)[tc.node] = tc.conductance;
+      (tc.face == sdk::kTop ? st.t_top : st.t_bottom)[tc.node] = tool_views_[tc.tool].temperature;
     }
     if (renewed) renews[tc.part][2 * tc.node + (tc.face == sdk::kTop ? 1 : 0)] = -1;
     st.contact_status[tc.node] = std::max(st.contact_status[tc.node], 1.0);
   }
+  // The mixed faces' values (update_far_temperatures renews them, with the
+  // step's ambient and radiation).
+  for (const Touched& f : touched)
+    if (f.mixed >= 0) mix_face(mixed_faces_[static_cast<std::size_t>(f.mixed)], f.h_ex, f.t_ex);
   exchange_faces_.clear();
   for (std::size_t p = 0; p < renews.size(); ++p)
     for (std::size_t f = 0; f < renews[p].size(); ++f)

@@ -227,6 +227,36 @@ TEST(Restart, HemisphereContinuesBitForBit) {
   }
 }
 
+// A cold plane that arrives on a ply's upper face inside a thermal step,
+// where a heat exchange covers that face (adi, 8 contact samples per
+// step): the checkpoint at 0.155 s falls between the arrival (0.153 s)
+// and the end of the thermal step (0.16 s), so it carries contact samples
+// with and without the plane, and the continued run must weigh the
+// exchange over that step as the run without stop does.
+TEST(Restart, ToolArrivingOnAnExchangingFaceContinuesBitForBit) {
+  const double h = 0.0005, v = 0.05, t_c = 0.153, tol = 0.01 * h, gap = v * t_c + tol, travel = gap + 5e-6;
+  json j = ply_job("adi", 8, 0.25, 0.05);
+  j["materials"]["ply"]["membrane"] = {{"law", "ud_hyperelastic"}, {"k_fibre", 5.0e4}, {"p_ct", 5.0e3},
+                                       {"k_sh", {2.0e3, 0.0, 0.0}}};
+  j["parts"][0]["fibre_direction"] = {1, 0, 0};
+  j["solvers"]["mechanics"] = {{"dt_safety", 0.8}};
+  j["solvers"]["thermal"]["dt"] = 0.02;
+  auto plane = [](const std::string& name, double z, int up) {
+    return json{{"name", name},
+                {"surface", {{"type", "plane"}, {"point", {0, 0, z}}, {"normal", {0, 0, up}}}},
+                {"temperature", 260.0}};
+  };
+  j["tools"] = {plane("die", -0.5 * h, 1), plane("punch", 0.5 * h + gap, -1)};
+  j["tools"][1]["motion"] = {
+      {"displacement", {{0.0, 0.0, 0.0, 0.0}, {travel / v, 0.0, 0.0, -travel}, {1.0, 0.0, 0.0, -travel}}}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}, {"conductance", 0.0}},
+                       {{"type", "contact"}, {"between", {"punch", "ply"}}, {"conductance", 1000.0}},
+                       {{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", 1000.0},
+                        {"ambient", 220.0}}};
+  j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+  check_restart("arriving_tool", j, 0.155);
+}
+
 // Isothermal, with elastic-slip friction (tangential springs that carry
 // over from step to step) and the search every step.
 TEST(Restart, StickingFrictionContinuesBitForBit) {

@@ -288,6 +288,120 @@ TEST(Contact, ToolLeavingInsideAThermalStep) {
   }
 }
 
+// A tool and the air sharing a thermal step. The upper face of a ply at
+// 300 degC (in-plane fixed, on a die that exchanges no heat) has a heat
+// exchange with h = 1000 W/(m2 K) to air at 220 degC, and a plane at
+// 260 degC with the same conductance h either arrives on it 0.65 of a
+// thermal step (0.02 s) into the 8th step, or touches it from t = 0 and
+// leaves 0.65 into the 18th step. Where the plane touches the face it
+// replaces the exchange. Both conditions have the same h, so the ply is
+// a slab under one Robin condition whose far temperature steps from 220
+// to 260 degC (arrival) or from 260 to 220 degC (departure) at t_c: by
+// linearity its mean is the eigen series of the slab from 300 degC to the
+// first far temperature plus that from 0 to the jump, started at t_c.
+// Over the step of the arrival or departure the face takes the tool's
+// mean conductance and the exchange for the share of the step its samples
+// find no tool. Required at every probe sample, within 0.06 K: the
+// arrival or departure counts from the middle of the two samples around
+// it, at most half a sample interval (0.00125 s) of h x 40 K over
+// rho c e = 1148 J/(m2 K), 0.044 K, and the backward-Euler steps are up
+// to 0.013 K off the series. The ambient as a number and as rows of the
+// same value (an exchange renewed at every thermal step) must give the
+// same temperatures within 1e-9 K. (Without the exchange over the part of
+// the step without the tool, the face exchanging nothing there, the means
+// are 0.51 K off after the arrival and 0.30 K after the departure.)
+TEST(Contact, ToolAndHeatExchangeShareAThermalStep) {
+  const double v = 0.05, h = 1000.0, dt = 0.02, tol = 0.01 * kH, T_air = 220.0, T_tool = 260.0;
+  const double alpha = 0.31 / (kRho * 1775.0), Bi = h * kH / 0.31;
+  for (const bool arriving : {true, false}) {
+    const double t_c = arriving ? 7.65 * dt : 17.65 * dt, t_end = arriving ? t_c + 0.3 : 0.5;
+    json motion;
+    double gap = 0;
+    if (arriving) {  // down at v for gap + 5 um, then still (5 um into the ply)
+      gap = v * t_c + tol;
+      const double travel = gap + 5e-6;
+      motion = {{0.0, 0.0, 0.0, 0.0}, {travel / v, 0.0, 0.0, -travel}, {t_end + 1, 0.0, 0.0, -travel}};
+    } else {  // lifted 1 mm at 1 m/s from t_c, beyond the tolerance within 3 us
+      gap = 0.5 * tol;
+      motion = {{0.0, 0.0, 0.0, 0.0}, {t_c, 0.0, 0.0, 0.0}, {t_c + 1e-3, 0.0, 0.0, 1e-3}, {t_end + 1, 0.0, 0.0, 1e-3}};
+    }
+    json j = chilled_ply_job(t_end, gap, motion, h, dt);
+    const double first = arriving ? T_air : T_tool, jump = arriving ? T_tool - T_air : T_air - T_tool;
+    auto exact = [&](double t) {
+      return slab_robin_mean(t, kH, alpha, Bi, 300.0, first) +
+             (t > t_c ? slab_robin_mean(t - t_c, kH, alpha, Bi, 0.0, jump) : 0.0);
+    };
+    std::vector<double> means[2];
+    for (const bool rows : {false, true}) {
+      json exchange = {{"type", "heat_exchange"}, {"part", "ply"}, {"face", "top"}, {"h", h}, {"ambient", T_air}};
+      if (rows) exchange["ambient"] = {{0.0, T_air}, {t_end + 1, T_air}};
+      j["interactions"].push_back(exchange);
+      const JobRun r = run_json(j);
+      j["interactions"].erase(j["interactions"].size() - 1);
+      ASSERT_TRUE(r.result.ok) << r.result.error;
+      double worst = 0, after = 0;
+      for (const ProbeSample& s : r.result.probes) {
+        const double e = s.values[0] - exact(s.time);
+        worst = std::max(worst, std::abs(e));
+        if (s.time > t_c) after = std::abs(e) > std::abs(after) ? e : after;
+        means[rows].push_back(s.values[0]);
+      }
+      std::printf("tool %s at %.4f s on a face exchanging with air at %g degC (ambient %s): the mean within %.4f K "
+                  "of the series at %zu probe samples (%+.4f K after)\n",
+                  arriving ? "arriving" : "leaving", t_c, T_air, rows ? "as rows" : "a number", worst,
+                  r.result.probes.size(), after);
+      EXPECT_EQ(r.result.probes.size(), arriving ? 5u : 6u);
+      EXPECT_LT(worst, 0.06) << (arriving ? "arrival" : "departure") << (rows ? ", ambient as rows" : "");
+    }
+    ASSERT_EQ(means[0].size(), means[1].size());
+    for (std::size_t k = 0; k < means[0].size(); ++k) EXPECT_NEAR(means[0][k], means[1][k], 1e-9);
+  }
+}
+
+// Two tools on one face: planes at 260 and 220 degC with conductances 600
+// and 400 W/(m2 K), both within the gap tolerance of the upper face of a
+// ply at 300 degC (in-plane fixed, on a die that exchanges no heat) from
+// t = 0. The face exchanges with both: h = 1000 W/(m2 K) to
+// (600 x 260 + 400 x 220) / 1000 = 244 degC, and the ply's mean follows
+// that slab's eigen series, as does the same job with one plane of
+// 1000 W/(m2 K) at 244 degC. Required at every probe sample (0.1 s
+// apart): the means of that job within 2e-4 K (a thermal step ends at the
+// first mechanical step at or after each multiple of 0.02 s, and the two
+// planes' penalties make that step 2.2 us against one plane's 2.7 us: a
+// step's end may move by 2.7 us, at most 1.3e-4 K of the mean's fall at
+// its fastest, h x 56 K / (rho c e) = 49 K/s), and the series within
+// 0.03 K (the backward-Euler steps of 0.02 s: 0.013 K off for a 40 K jump
+// in the tests above, 0.018 K scaled to this 56 K one, and the first
+// probe sample only five steps in). (Before 0.37.0 the tool found last
+// took the face, here h = 400 to 220 degC: up to 3.6 K off.)
+TEST(Contact, TwoToolsOnOneFaceAddTheirConductances) {
+  const double dt = 0.02, tol = 0.01 * kH, t_end = 0.5;
+  json j = chilled_ply_job(t_end, 0.5 * tol, {{0.0, 0.0, 0.0, 0.0}, {t_end + 1, 0.0, 0.0, 0.0}}, 600.0, dt);
+  j["tools"].push_back(plane("platen", 0.5 * kH + 0.5 * tol, -1, 220.0));
+  j["interactions"].push_back({{"type", "contact"}, {"between", {"platen", "ply"}}, {"conductance", 400.0}});
+  const double h = 1000.0, T_far = (600.0 * 260.0 + 400.0 * 220.0) / h;
+  const double alpha = 0.31 / (kRho * 1775.0), Bi = h * kH / 0.31;
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  json one = chilled_ply_job(t_end, 0.5 * tol, {{0.0, 0.0, 0.0, 0.0}, {t_end + 1, 0.0, 0.0, 0.0}}, h, dt);
+  one["tools"][1]["temperature"] = T_far;
+  const JobRun r1 = run_json(one);
+  ASSERT_TRUE(r1.result.ok) << r1.result.error;
+  ASSERT_EQ(r.result.probes.size(), r1.result.probes.size());
+  double worst = 0, apart = 0;
+  for (std::size_t k = 0; k < r.result.probes.size(); ++k) {
+    const ProbeSample& s = r.result.probes[k];
+    worst = std::max(worst, std::abs(s.values[0] - slab_robin_mean(s.time, kH, alpha, Bi, 300.0, T_far)));
+    apart = std::max(apart, std::abs(s.values[0] - r1.result.probes[k].values[0]));
+  }
+  std::printf("two tools on one face (600 W/(m2 K) at 260 degC, 400 at 220): the mean within %.4f K of the series "
+              "for 1000 W/(m2 K) to %g degC at %zu probe samples, %.3g K from one such plane\n",
+              worst, T_far, r.result.probes.size(), apart);
+  EXPECT_EQ(r.result.probes.size(), 6u);
+  EXPECT_LT(apart, 2e-4);
+  EXPECT_LT(worst, 0.03);
+}
+
 // A ply on a plane under gravity tilted by alpha (the plane stays z = 0):
 // with tan(alpha) > mu it slides with a = g (sin(alpha) - mu cos(alpha))
 // and the friction force is mu N; with tan(alpha) < mu it sticks.
