@@ -812,11 +812,12 @@ void Simulation::save_state(Checkpoint& c) {
   state_io(w);
   c.add("kernel", std::move(w.bytes()));
   {
-    // The contact samples' time in contact, per tool contact summed so far
-    // (a section of its own: checkpoints written before it continue with
-    // every such contact counted over the whole step).
+    // The contact samples' time in contact, per tool contact and link
+    // summed so far (a section of its own: checkpoints written before it
+    // continue with every such contact counted over the whole step).
     sdk::StateWriter tw;
     tw.io_vector(contact_sums_.touched);
+    tw.io_vector(contact_sums_.link_touched);
     c.add("kernel/contact_touch", std::move(tw.bytes()));
   }
   c.add("meshes", mesh_prints(parts_));
@@ -839,12 +840,15 @@ void Simulation::load_state(const Checkpoint& c) {
   sdk::StateReader r(c.section("kernel"));
   if (!state_io(r) || !r.done()) fail("kernel state");
   contact_sums_.touched.assign(contact_sums_.map.tool_contacts.size(), contact_sums_.time);
+  contact_sums_.link_touched.assign(contact_sums_.map.links.size(), contact_sums_.time);
   if (const std::vector<unsigned char>* bytes = c.find("kernel/contact_touch")) {
     sdk::StateReader tr(*bytes);
-    std::vector<double> touched;
-    if (!tr.io_vector(touched) || !tr.done() || touched.size() != contact_sums_.touched.size())
+    std::vector<double> touched, link_touched;
+    if (!tr.io_vector(touched) || !tr.io_vector(link_touched) || !tr.done() ||
+        touched.size() != contact_sums_.touched.size() || link_touched.size() != contact_sums_.link_touched.size())
       fail("kernel/contact_touch");
     contact_sums_.touched = std::move(touched);
+    contact_sums_.link_touched = std::move(link_touched);
   }
   auto plugin = [&](const std::string& name, auto&& load) {
     const std::vector<unsigned char>* bytes = c.find(name);

@@ -456,11 +456,12 @@ class Simulation {
   // The contact samples of the thermal step under way: each tool contact
   // and link found, in the order first found, its conductance the sum of
   // conductance x the time its samples stand for (the geometry of a link:
-  // its last sample's); `time` the time they stand for in all; `touched`,
-  // per tool contact of `map`, the time its samples stand for.
+  // its last sample's); `time` the time they stand for in all; `touched`
+  // and `link_touched`, per tool contact and link of `map`, the time its
+  // samples stand for.
   struct ContactSums {
     sdk::ThermalContactMap map;
-    std::vector<double> touched;
+    std::vector<double> touched, link_touched;
     double time = 0;
     std::unordered_map<std::uint64_t, std::size_t> tool_at, link_at;  // key -> index into map
   } contact_sums_;
@@ -469,11 +470,12 @@ class Simulation {
   void index_contact_sums();               // contact_sums_'s keys, from its map
   struct ExchangeFace {
     int part = 0, node = 0, face = 0, exchange = 0;  // exchange: index into job_.heat_exchanges
+    double scale = 1;  // the share of the face no other ply covers over the step
   };
   std::vector<ExchangeFace> exchange_faces_;  // from assemble_faces
-  // Per tool contact of contact_map_: the share of the thermal step its
-  // samples found it in contact (1 without samples).
-  std::vector<double> contact_touch_;
+  // Per tool contact and per link of contact_map_: the share of the
+  // thermal step its samples found it in contact (1 without samples).
+  std::vector<double> contact_touch_, link_touch_;
   // A face whose condition mixes several sources over the thermal step:
   // more than one tool, or a tool for part of the step and its heat
   // exchange for the rest (`free`, the share of the step no tool touched
@@ -481,11 +483,13 @@ class Simulation {
   // contact_map_.tool_contacts); exchange: the index into
   // job_.heat_exchanges of an exchange that radiates or follows ambient
   // rows (renewed at every step), else -1 and the face's constant exchange
-  // in h_ex (0 for none) and t_ex. The face takes h = sum h_c + free h_ex
-  // and the far temperature (sum h_c T_tool + free h_ex T_ambient) / h.
+  // in h_ex (0 for none, and times the share no other ply covers) and
+  // t_ex; scale: that share, for a renewed exchange. The face takes
+  // h = sum h_c + free h_ex and the far temperature
+  // (sum h_c T_tool + free h_ex T_ambient) / h.
   struct MixedFace {
     int part = 0, node = 0, face = 0, exchange = -1, begin = 0, end = 0;
-    double free = 0, h_ex = 0, t_ex = 0;
+    double free = 0, h_ex = 0, t_ex = 0, scale = 1;
   };
   std::vector<MixedFace> mixed_faces_;  // from assemble_faces
   std::vector<int> mixed_contacts_;

@@ -194,7 +194,7 @@ void Simulation::update_far_temperatures(double t0, double t1) {
     const double ambient = h.ambient_over(t0, t1);
     (f.face == sdk::kTop ? st.t_top : st.t_bottom)[f.node] = ambient;
     if (h.emissivity > 0)
-      (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = exchange_h(h, f.part, f.node, f.face, ambient);
+      (f.face == sdk::kTop ? st.h_top : st.h_bottom)[f.node] = f.scale * exchange_h(h, f.part, f.node, f.face, ambient);
   }
   for (const MixedFace& m : mixed_faces_) {
     if (m.exchange < 0) {
@@ -203,7 +203,7 @@ void Simulation::update_far_temperatures(double t0, double t1) {
     }
     const HeatExchangeDef& h = job_.heat_exchanges[static_cast<std::size_t>(m.exchange)];
     const double ambient = h.ambient_over(t0, t1);
-    mix_face(m, exchange_h(h, m.part, m.node, m.face, ambient), ambient);
+    mix_face(m, m.scale * exchange_h(h, m.part, m.node, m.face, ambient), ambient);
   }
 }
 
@@ -455,11 +455,15 @@ void Simulation::sample_contacts(double t, double w) {
     }
     for (const sdk::HeatLink& l : m.links) {
       const auto [at, fresh] = sums.link_at.try_emplace(link_key(l), sums.map.links.size());
-      if (fresh) sums.map.links.push_back(l);
+      if (fresh) {
+        sums.map.links.push_back(l);
+        sums.link_touched.push_back(0.0);
+      }
       sdk::HeatLink& s = sums.map.links[at->second];
       const double g = (fresh ? 0.0 : s.conductance) + l.conductance * weight;
       s = l;  // the latest triangle and weights
       s.conductance = g;
+      sums.link_touched[at->second] += weight;
     }
   };
   add(contact_last_, 0.5 * w);
@@ -517,22 +521,62 @@ void Simulation::assemble_faces(double t, double sampled) {
     ContactSums& sums = contact_sums_;
     std::swap(contact_map_, sums.map);  // (the old map, cleared below, keeps its storage)
     contact_touch_.assign(contact_map_.tool_contacts.size(), 1.0);
+    link_touch_.assign(contact_map_.links.size(), 1.0);
     if (sums.time > 0) {
       for (auto& c : contact_map_.tool_contacts) c.conductance /= sums.time;
       for (auto& l : contact_map_.links) l.conductance /= sums.time;
       for (std::size_t k = 0; k < contact_touch_.size() && k < sums.touched.size(); ++k)
         contact_touch_[k] = std::min(1.0, sums.touched[k] / sums.time);
+      for (std::size_t k = 0; k < link_touch_.size() && k < sums.link_touched.size(); ++k)
+        link_touch_[k] = std::min(1.0, sums.link_touched[k] / sums.time);
     }
     sums.map.tool_contacts.clear();
     sums.map.links.clear();
     sums.touched.clear();
+    sums.link_touched.clear();
     sums.tool_at.clear();
     sums.link_at.clear();
     sums.time = 0;
   } else {
     thermal_contacts(t, contact_map_);
     contact_touch_.assign(contact_map_.tool_contacts.size(), 1.0);
+    link_touch_.assign(contact_map_.links.size(), 1.0);
   }
+  // Another ply covers a face as a tool does: a heat exchange there acts
+  // on the share of the face and step without that ply. The share covered
+  // (cover, per part 2 per node, empty where none): for a link's node, the
+  // share of the step its samples find the link; for the nodes of the
+  // facing triangle, that share times their weight in the link times the
+  // linked node's area over theirs (each node's area covered by the nodes
+  // that face it).
+  std::vector<std::vector<double>> cover;
+  if (!job_.heat_exchanges.empty() && !contact_map_.links.empty()) {
+    cover.resize(parts_.size());
+    auto add = [&](int part, int node, int face, double c) {
+      std::vector<double>& v = cover[part];
+      if (v.empty()) v.assign(2 * parts_[part]->mesh.num_nodes(), 0.0);
+      v[2 * node + (face == sdk::kTop ? 1 : 0)] += c;
+    };
+    for (std::size_t k = 0; k < contact_map_.links.size(); ++k) {
+      const sdk::HeatLink& l = contact_map_.links[k];
+      add(l.part_a, l.node_a, l.face_a, link_touch_[k]);
+      const double area_a = parts_[l.part_a]->area[l.node_a];
+      for (int j = 0; j < 3; ++j) {
+        const double area_b = parts_[l.part_b]->area[l.nodes_b[j]];
+        if (l.w_b[j] > 0 && area_b > 0)
+          add(l.part_b, l.nodes_b[j], l.face_b, link_touch_[k] * l.w_b[j] * area_a / area_b);
+      }
+    }
+    for (std::size_t p = 0; p < cover.size(); ++p) {
+      PartState& st = *parts_[p];
+      for (std::size_t f = 0; f < cover[p].size(); ++f) {
+        double& c = cover[p][f];
+        c = std::max(0.0, 1.0 - c);  // from here on: the share not covered
+        (f % 2 ? st.h_top : st.h_bottom)[f / 2] *= c;
+      }
+    }
+  }
+  auto uncovered = [&](int part, int slot) { return cover.empty() || cover[part].empty() ? 1.0 : cover[part][slot]; };
   // The faces the tools touch. A face touched by one tool over the whole
   // step takes its conductance and temperature; one touched by several, or
   // by a tool for part of the step where a heat exchange covers it, mixes
@@ -575,6 +619,7 @@ void Simulation::assemble_faces(double t, double sampled) {
       MixedFace m;
       m.part = f.part, m.node = f.node, m.face = f.face, m.free = std::max(0.0, 1.0 - f.share);
       m.exchange = f.exchange;
+      m.scale = uncovered(f.part, 2 * f.node + (f.face == sdk::kTop ? 1 : 0));
       if (m.exchange < 0) m.h_ex = f.h_ex, m.t_ex = f.t_ex;
       mixed_faces_.push_back(m);
     }
@@ -611,7 +656,8 @@ void Simulation::assemble_faces(double t, double sampled) {
   for (std::size_t p = 0; p < renews.size(); ++p)
     for (std::size_t f = 0; f < renews[p].size(); ++f)
       if (const int k = renews[p][f]; k >= 0)
-        exchange_faces_.push_back({static_cast<int>(p), static_cast<int>(f / 2), f % 2 ? sdk::kTop : sdk::kBottom, k});
+        exchange_faces_.push_back({static_cast<int>(p), static_cast<int>(f / 2), f % 2 ? sdk::kTop : sdk::kBottom, k,
+                                   uncovered(static_cast<int>(p), static_cast<int>(f))});
   for (const auto& l : contact_map_.links) {
     parts_[l.part_a]->contact_status[l.node_a] = 2.0;
     for (int j = 0; j < 3; ++j)

@@ -191,10 +191,15 @@ void check_restart(const std::string& label, json j, double interval, std::strin
 // follows the temperature (a peak inside the plies' range; heat balance of
 // the continued run under 1e-9), crystallisation kinetics with a rate in
 // the plies' range (the field crystallinity, every value's integral carried
-// by the checkpoint), and the field below_threshold_from (each node's
-// times, some from before the checkpoint).
+// by the checkpoint), the field below_threshold_from (each node's
+// times, some from before the checkpoint), and convection and radiation
+// on every face of the plies, which the tools and the other ply cover
+// for part of some thermal steps (the checkpoint carries each contact's
+// and link's time in contact over the step under way).
 TEST(Restart, HemisphereContinuesBitForBit) {
   json j = coarse_hemisphere("hemisphere_ud_2ply.json");
+  j["interactions"].push_back({{"type", "heat_exchange"}, {"part", "*"}, {"face", "both"}, {"h", 10.0},
+                               {"ambient", 20.0}, {"emissivity", 0.9}});
   j["materials"]["pa66_cf_ud"]["specific_heat"] = {{260.0, 1775.0}, {280.0, 2775.0}, {300.0, 1775.0}};
   j["materials"]["pa66_cf_ud"]["conductivity"] = {{260.0, 3.5, 0.25, 0.25}, {300.0, 3.89, 0.31, 0.35}};
   j["materials"]["pa66_cf_ud"]["crystallisation"] = {
@@ -232,8 +237,9 @@ TEST(Restart, HemisphereContinuesBitForBit) {
 // step): the checkpoint at 0.155 s falls between the arrival (0.153 s)
 // and the end of the thermal step (0.16 s), so it carries contact samples
 // with and without the plane, and the continued run must weigh the
-// exchange over that step as the run without stop does.
-TEST(Restart, ToolArrivingOnAnExchangingFaceContinuesBitForBit) {
+// exchange over that step as the run without stop does. The same for a
+// ply lifted off another.
+TEST(Restart, ContactSharesOfAThermalStepContinueBitForBit) {
   const double h = 0.0005, v = 0.05, t_c = 0.153, tol = 0.01 * h, gap = v * t_c + tol, travel = gap + 5e-6;
   json j = ply_job("adi", 8, 0.25, 0.05);
   j["materials"]["ply"]["membrane"] = {{"law", "ud_hyperelastic"}, {"k_fibre", 5.0e4}, {"p_ct", 5.0e3},
@@ -255,6 +261,24 @@ TEST(Restart, ToolArrivingOnAnExchangingFaceContinuesBitForBit) {
                         {"ambient", 220.0}}};
   j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
   check_restart("arriving_tool", j, 0.155);
+  // A ply lifted off another at a constant speed, beyond the gap tolerance
+  // at 0.153 s; an exchange on every face of both: the links between them
+  // end inside a thermal step.
+  json k = ply_job("adi", 8, 0.25, 0.05);
+  k["materials"]["ply"]["membrane"] = j["materials"]["ply"]["membrane"];
+  k["parts"][0]["fibre_direction"] = {1, 0, 0};
+  k["parts"].push_back(k["parts"][0]);
+  k["parts"][1]["name"] = "ply_top";
+  k["parts"][1]["mesh"]["origin"] = {0, 0, h};
+  k["solvers"]["mechanics"] = {{"dt_safety", 0.8}};
+  k["solvers"]["thermal"]["dt"] = 0.02;
+  k["interactions"] = {{{"type", "contact"}, {"between", {"ply_top", "ply"}}, {"conductance", 1000.0}},
+                       {{"type", "heat_exchange"}, {"part", "*"}, {"face", "both"}, {"h", 10.0}, {"ambient", 20.0},
+                        {"emissivity", 0.9}}};
+  const json everywhere = {{-1, -1, -1}, {1, 1, 1}};
+  k["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", everywhere}, {"dofs", {"x", "y", "z"}}},
+                      {{"type", "velocity"}, {"part", "ply_top"}, {"box", everywhere}, {"velocity", {0, 0, tol / t_c}}}};
+  check_restart("lifted_ply", k, 0.155);
 }
 
 // Isothermal, with elastic-slip friction (tangential springs that carry
