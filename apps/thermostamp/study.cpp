@@ -167,7 +167,8 @@ double value_at(const PlySeries& m, double t) {
 // value were below it, with the mechanics its largest |shear angle| at the
 // end, the share of its area whose long-term response is unstable at the
 // end and, with output.shear_angle_limit, the share of its area beyond it;
-// per tool the heat it gave to the plies. Pairs [column, value or null], in
+// per tool the heat it gave to the plies, and with heat exchanges the heat
+// they gave (exchanges_heat_J). Pairs [column, value or null], in
 // column order.
 json run_outcomes(const RunResult& r, const Job& job) {
   json o = json::array();
@@ -197,6 +198,7 @@ json run_outcomes(const RunResult& r, const Job& job) {
   if (thermal)
     for (std::size_t t = 0; t < job.tools.size() && t < r.energy.tool_heat.size(); ++t)
       o.push_back({job.tools[t].name + "_heat_J", r.energy.tool_heat[t]});
+  if (thermal && !job.heat_exchanges.empty()) o.push_back({"exchanges_heat_J", r.heat_from_exchanges});
   if (mechanics)
     for (std::size_t t = 0; t < job.tools.size() && t < r.energy.tool_force_max.size(); ++t)
       o.push_back({job.tools[t].name + "_force_max_N", r.energy.tool_force_max[t]});

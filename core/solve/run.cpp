@@ -178,6 +178,8 @@ Simulation::Run::Run(Simulation& s, const RunOptions& o, Clock::time_point w0, i
   stored0 = sim.stored_heat();
   for (std::size_t p = 0; p < parts.size(); ++p) stored0_part.push_back(sim.stored_heat(static_cast<int>(p)));
   sim.link_heat_.assign(parts.size(), 0.0);
+  sim.part_exchange_heat_.assign(parts.size(), 0.0);
+  sim.part_tool_heat_.assign(parts.size(), 0.0);
   next_probe.assign(job.output.probes.size(), 0.0);
   for (std::size_t q = 0; q < next_probe.size(); ++q) next_probe[q] = job.output.probes[q].interval;
   progress.tty = isatty(STDERR_FILENO) && !opt.quiet;
@@ -512,13 +514,13 @@ void Simulation::Run::mechanics_loop() {
         in.geometry_changed = true;
         in.links = sim.contact_map_.links;
         in.links_changed = true;
-        sdk::ThermalStepReport rep;
+        sdk::ThermalStepReport rep = sim.thermal_report();
         sim.keep_step_temperatures();
         if (auto st = sim.splitter_->advance(in, Tspans, &rep); !st)
           throw RunError("thermal plugin '" + job.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + st.message);
         heat_in += rep.heat_in;
         limited_total += rep.limited;
-        sim.accumulate_tool_heat(in.dt);
+        sim.accumulate_face_heat(in.dt, rep);
         sim.finish_thermal_step(in.dt);
         timing[kTimeThermal] += seconds_since(tc);
         ++steps;
@@ -619,12 +621,12 @@ void Simulation::Run::thermal_loop() {
       end_checkpoint(", before the step that lands on time.end");
     in.dt = step;
     sim.update_far_temperatures(t, t + step);
-    sdk::ThermalStepReport rep;
+    sdk::ThermalStepReport rep = sim.thermal_report();
     sim.keep_step_temperatures();
     if (auto s = sim.splitter_->advance(in, Tspans, &rep); !s)
       throw RunError("thermal plugin '" + job.thermal->splitter + "' failed at t = " + fmt_g(t) + " s: " + s.message);
     in.links_changed = false;
-    sim.accumulate_tool_heat(step);
+    sim.accumulate_face_heat(step, rep);
     sim.finish_thermal_step(step);
     ++steps;
     t += step;
@@ -820,6 +822,15 @@ void Simulation::save_state(Checkpoint& c) {
     tw.io_vector(contact_sums_.link_touched);
     c.add("kernel/contact_touch", std::move(tw.bytes()));
   }
+  {
+    // Each part's heat through its faces and the tools' share of it (a
+    // section of its own: checkpoints written before it continue with
+    // these counted from the checkpoint on).
+    sdk::StateWriter hw;
+    hw.io_vector(part_exchange_heat_);
+    hw.io_vector(part_tool_heat_);
+    c.add("kernel/heat_sources", std::move(hw.bytes()));
+  }
   c.add("meshes", mesh_prints(parts_));
   auto plugin = [&](const std::string& name, auto&& save) {
     sdk::StateWriter pw;
@@ -849,6 +860,17 @@ void Simulation::load_state(const Checkpoint& c) {
       fail("kernel/contact_touch");
     contact_sums_.touched = std::move(touched);
     contact_sums_.link_touched = std::move(link_touched);
+  }
+  heat_sources_partial_ = true;
+  if (const std::vector<unsigned char>* bytes = c.find("kernel/heat_sources")) {
+    sdk::StateReader hr(*bytes);
+    std::vector<double> faces, tools;
+    if (!hr.io_vector(faces) || !hr.io_vector(tools) || !hr.done() || faces.size() != parts_.size() ||
+        tools.size() != parts_.size())
+      fail("kernel/heat_sources");
+    part_exchange_heat_ = std::move(faces);
+    part_tool_heat_ = std::move(tools);
+    heat_sources_partial_ = false;
   }
   auto plugin = [&](const std::string& name, auto&& load) {
     const std::vector<unsigned char>* bytes = c.find(name);

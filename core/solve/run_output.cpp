@@ -700,6 +700,11 @@ void Simulation::Run::finish() {
   for (std::size_t p = 0; p < parts.size(); ++p) {
     result.part_heat_change.push_back(sim.stored_heat(static_cast<int>(p)) - stored0_part[p]);
     result.part_link_heat.push_back(sim.link_heat_.size() > p ? sim.link_heat_[p] : 0.0);
+    const double exchanges_p = sim.part_exchange_heat_.size() > p ? sim.part_exchange_heat_[p] : 0.0;
+    const double tools_p = sim.part_tool_heat_.size() > p ? sim.part_tool_heat_[p] : 0.0;
+    constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
+    result.part_tool_heat.push_back(sim.heat_sources_partial_ ? kUnknown : tools_p);
+    result.part_exchange_heat.push_back(sim.heat_sources_partial_ ? kUnknown : exchanges_p);
     // With mechanics, one range per part (every part has elements, so its
     // shear angles and strains are not empty).
     const auto& sa = parts[p]->shear_angle;
@@ -725,7 +730,13 @@ void Simulation::Run::finish() {
     result.energy.tool_displacements.insert(result.energy.tool_displacements.end(), u.begin(), u.end());
     for (int d = 0; d < 3; ++d) result.energy.tool_forces.push_back(sim.tool_force_[3 * q + d]);
     result.energy.tool_heat.push_back(sim.tool_heat_[q]);
+    result.heat_from_tools += sim.tool_heat_[q];
   }
+  // Over the parts; where they count from a checkpoint on only, what the
+  // faces took beyond the tools' heat.
+  result.heat_from_exchanges = 0;
+  for (double q : sim.part_exchange_heat_) result.heat_from_exchanges += q;
+  if (sim.heat_sources_partial_) result.heat_from_exchanges = heat_in - result.heat_from_tools;
   if (job.mechanics && !tools.empty()) {  // the press force: the largest over the rows
     const std::size_t nt = tools.size(), stride = 1 + 8 * nt;
     result.energy.tool_force_max.assign(nt, 0.0);
@@ -914,6 +925,8 @@ bool Simulation::Run::write_summary(std::string& why) const {
   }
   summary["heat"] = {{"stored_change_J", result.stored_change},
                      {"faces_in_J", heat_in},
+                     {"from_tools_J", result.heat_from_tools},
+                     {"from_exchanges_J", result.heat_from_exchanges},
                      {"balance_error", result.heat_balance_error}};
   const std::vector<double>& thresholds = job.output.temperature_threshold;
   const std::vector<double>& shear_limits = job.output.shear_angle_limit;
@@ -930,6 +943,20 @@ bool Simulation::Run::write_summary(std::string& why) const {
     json& ply = plies.back();
     if (job.thermal) {
       ply["temperature_mean"] = ply_end[p][1];
+      // The ply's heat audit (J, received): stored change = tools + heat
+      // exchanges + other plies.
+      const double dq = result.part_heat_change[p], tq = result.part_tool_heat[p],
+                   xq = result.part_exchange_heat[p], lq = result.part_link_heat[p];
+      const bool known = std::isfinite(tq) && std::isfinite(xq);
+      const double in_p = tq + xq + lq;
+      ply["heat_J"] = {{"stored_change", dq},
+                       {"from_tools", known ? json(tq) : json(nullptr)},
+                       {"from_exchanges", known ? json(xq) : json(nullptr)},
+                       {"from_plies", lq},
+                       {"balance_error", known ? json(std::abs(dq - in_p) /
+                                                      std::max({std::abs(dq), std::abs(tq) + std::abs(xq) +
+                                                                                  std::abs(lq), 1e-300}))
+                                               : json(nullptr)}};
       if (threshold) ply["fraction_below_threshold"] = ply_end[p][3];
       if (!st->X.empty()) {
         const std::array<double, 3> x = ply_crystallinity(*st);
@@ -1046,10 +1073,10 @@ void Simulation::Run::log_end() const {
     }
   }
   if (result.ok) {
-    log->info("completed: {} thermal steps in {:.3g} s wall; heat into the plies {:.6g} J, stored change {:.6g} J "
-              "(balance error {:.2e}); peak memory {:.0f} MB",
-              steps, result.wall_time_s, heat_in, result.stored_change, result.heat_balance_error,
-              result.peak_memory_mb);
+    log->info("completed: {} thermal steps in {:.3g} s wall; heat into the plies {:.6g} J (tools {:.6g} J, heat "
+              "exchanges {:.6g} J), stored change {:.6g} J (balance error {:.2e}); peak memory {:.0f} MB",
+              steps, result.wall_time_s, heat_in, result.heat_from_tools, result.heat_from_exchanges,
+              result.stored_change, result.heat_balance_error, result.peak_memory_mb);
   } else if (result.interrupted) {
     log->warn("{}", failure);
   } else {

@@ -665,23 +665,73 @@ void Simulation::assemble_faces(double t, double sampled) {
   }
 }
 
-// Heat given by every tool to the plies over the thermal step just taken
-// (conductance times the jump at the end of the step, as the implicit
-// face condition uses it).
-void Simulation::accumulate_tool_heat(double dt) {
-  for (const auto& tc : contact_map_.tool_contacts) {
-    const PartState& st = *parts_[tc.part];
-    const std::size_t base = static_cast<std::size_t>(st.nz) * tc.node;
-    const double Tf = tc.face == sdk::kTop ? st.T[base + st.nz - 1] : st.T[base];
-    tool_heat_[tc.tool] += tc.conductance * st.area[tc.node] * (tool_views_[tc.tool].temperature - Tf) * dt;
+sdk::ThermalStepReport Simulation::thermal_report() {
+  if (face_values_.size() != parts_.size()) {
+    face_values_.resize(parts_.size());
+    face_value_spans_.resize(parts_.size());
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+      face_values_[p].assign(2 * static_cast<std::size_t>(parts_[p]->mesh.num_nodes()), 0.0);
+      face_value_spans_[p] = face_values_[p];
+    }
   }
-  // Ply/ply: G (T_b - T_a) into a, out of b, with the facing surface values.
-  if (link_heat_.size() != parts_.size()) link_heat_.assign(parts_.size(), 0.0);
+  sdk::ThermalStepReport rep;
+  rep.face_values = face_value_spans_;
+  return rep;
+}
+
+// The heat through the faces and links over the thermal step just taken, at
+// the face values the splitter took them at (those at the end of the step
+// where it does not say): a face receives dt A h (t_ext - value), of which
+// each tool contact's dt A h_k (T_tool - value) and the heat exchange's
+// the rest (on a face without a tool, all of it). Where the splitter gives
+// its face values, the faces' sum is its heat_in and each part's stored
+// change is its tools', heat exchanges' and links' heat (to round-off).
+void Simulation::accumulate_face_heat(double dt, const sdk::ThermalStepReport& rep) {
+  const bool given = rep.face_values_filled && face_values_.size() == parts_.size();
   auto face_value = [&](int part, int node, int face) {
+    if (given) return face_values_[part][2 * static_cast<std::size_t>(node) + (face == sdk::kTop ? 1 : 0)];
     const PartState& st = *parts_[part];
     const std::size_t base = static_cast<std::size_t>(st.nz) * node;
     return face == sdk::kTop ? st.T[base + st.nz - 1] : st.T[base];
   };
+  if (part_exchange_heat_.size() != parts_.size()) part_exchange_heat_.assign(parts_.size(), 0.0);
+  if (part_tool_heat_.size() != parts_.size()) part_tool_heat_.assign(parts_.size(), 0.0);
+  // Per part, 2 per node: 1 where a tool alone gives the face its
+  // condition, 2 where tools and a heat exchange share it (MixedFace).
+  if (face_kind_.size() != parts_.size()) {
+    face_kind_.resize(parts_.size());
+    for (std::size_t p = 0; p < parts_.size(); ++p)
+      face_kind_[p].assign(2 * static_cast<std::size_t>(parts_[p]->mesh.num_nodes()), 0);
+  }
+  auto slot = [](int node, int face) { return 2 * static_cast<std::size_t>(node) + (face == sdk::kTop ? 1 : 0); };
+  for (const auto& tc : contact_map_.tool_contacts) face_kind_[tc.part][slot(tc.node, tc.face)] = 1;
+  for (const MixedFace& m : mixed_faces_) face_kind_[m.part][slot(m.node, m.face)] = 2;
+  std::vector<double> exchange(parts_.size(), 0.0);
+  for (std::size_t p = 0; p < parts_.size(); ++p) {
+    const PartState& st = *parts_[p];
+    const int part = static_cast<int>(p);
+    const char* kind = face_kind_[p].data();
+    double q = 0;
+    for (int i = 0; i < st.mesh.num_nodes(); ++i) {
+      if (st.h_bottom[i] != 0 && kind[2 * i] != 1)
+        q += st.area[i] * st.h_bottom[i] * (st.t_bottom[i] - face_value(part, i, sdk::kBottom));
+      if (st.h_top[i] != 0 && kind[2 * i + 1] != 1)
+        q += st.area[i] * st.h_top[i] * (st.t_top[i] - face_value(part, i, sdk::kTop));
+    }
+    exchange[p] = q;
+  }
+  for (const auto& tc : contact_map_.tool_contacts) {
+    const double w = parts_[tc.part]->area[tc.node] * tc.conductance *
+                     (tool_views_[tc.tool].temperature - face_value(tc.part, tc.node, tc.face));
+    tool_heat_[tc.tool] += w * dt;
+    part_tool_heat_[tc.part] += w * dt;
+    char& k = face_kind_[tc.part][slot(tc.node, tc.face)];
+    if (k == 2) exchange[tc.part] -= w;  // a mixed face: the exchange's share is the rest
+  }
+  for (std::size_t p = 0; p < parts_.size(); ++p) part_exchange_heat_[p] += exchange[p] * dt;
+  for (const auto& tc : contact_map_.tool_contacts) face_kind_[tc.part][slot(tc.node, tc.face)] = 0;
+  // Ply/ply: G (T_b - T_a) into a, out of b, with the facing surface values.
+  if (link_heat_.size() != parts_.size()) link_heat_.assign(parts_.size(), 0.0);
   for (const auto& l : contact_map_.links) {
     double Tb = 0;
     for (int j = 0; j < 3; ++j) Tb += l.w_b[j] * face_value(l.part_b, l.nodes_b[j], l.face_b);

@@ -61,7 +61,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.37.0 (plugin SDK 0.21.1, ABI 21)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.38.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -215,13 +215,15 @@ TEST(Cli, StudyWritesItsTable) {
   // the mean of each row of the variant's plies.csv and the slab's mean from
   // the eigen-series (slab_robin.json: 0.5 mm, k 0.31, rho c 1294 x 1775,
   // h 1000 on top, 300 -> 260 degC), to the table's 6 digits.
-  ASSERT_EQ(rows[0].size(), 10u);
+  ASSERT_EQ(rows[0].size(), 11u);
   EXPECT_EQ(rows[0][8], "error_ply_mean_K");
   EXPECT_EQ(rows[1][8], "0");
   // Then what each run comes to: the ply's mean temperature at the end (the
-  // last row of its plies.csv); none for the analytic reference.
+  // last row of its plies.csv) and the heat the heat exchange gave it; none
+  // for the analytic reference.
   EXPECT_EQ(rows[0][9], "ply_mean_end_degC");
-  EXPECT_EQ(rows[1].size(), 9u);
+  EXPECT_EQ(rows[0][10], "exchanges_heat_J");
+  for (std::size_t c = 9; c < rows[1].size(); ++c) EXPECT_TRUE(rows[1][c].empty()) << c;
   for (std::size_t r : {2u, 3u}) {
     std::ifstream plies(dir / "out" / rows[r][0] / "plies.csv");
     std::string row;
@@ -241,8 +243,13 @@ TEST(Cli, StudyWritesItsTable) {
     }
     EXPECT_EQ(n, 181) << rows[r][0];  // t = 0 and one per thermal step (180 steps of 11.4 ms, above the 4 ms spacing)
     EXPECT_NEAR(std::stod(rows[r][8]), largest, 1e-5 * largest + 1e-9) << rows[r][0];
-    ASSERT_EQ(rows[r].size(), 10u);
+    ASSERT_EQ(rows[r].size(), 11u);
     EXPECT_NEAR(std::stod(rows[r][9]), mean_end, 5e-6 * mean_end) << rows[r][0];  // the table's 6 digits
+    // The exchange's heat is the ply's stored change, rho c V (mean - 300),
+    // within the 6 digits of the mean (0.0005 K, 0.06 mJ here).
+    const double capacity = 1294.0 * 1775.0 * 0.01 * 0.01 * 0.0005;  // J/K
+    EXPECT_NEAR(std::stod(rows[r][10]), capacity * (mean_end - 300.0), capacity * 6e-4) << rows[r][0];
+    EXPECT_LT(std::stod(rows[r][10]), -1.0) << rows[r][0];
   }
   EXPECT_LT(std::stod(rows[2][8]), 0.1 * std::stod(rows[3][8]));
   // Each run's folder has its job as run, and no end checkpoint (its write

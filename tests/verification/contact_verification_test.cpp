@@ -352,6 +352,18 @@ TEST(Contact, ToolAndHeatExchangeShareAThermalStep) {
                   r.result.probes.size(), after);
       EXPECT_EQ(r.result.probes.size(), arriving ? 5u : 6u);
       EXPECT_LT(worst, 0.06) << (arriving ? "arrival" : "departure") << (rows ? ", ambient as rows" : "");
+      // The heat by source: the stored change is the tools' and the
+      // exchange's (1e-11); what the face took before t_c (from the air on
+      // arrival, from the tool on departure) is the capacity times the
+      // series' fall to t_c, within the mean's bound (0.06 K).
+      const RunResult& res = r.result;
+      const double dq = res.part_heat_change[0], tq = res.part_tool_heat[0], xq = res.part_exchange_heat[0];
+      EXPECT_NEAR(dq, tq + xq, 1e-11 * std::abs(dq));
+      const double capacity = kRho * 1775.0 * kH * kSide * kSide, before = capacity * (exact(t_c) - 300.0);
+      EXPECT_NEAR(arriving ? xq : tq, before, 0.06 * capacity);
+      std::printf("  heat: tool %.5f J, air %.5f J, stored change %.5f J; before t_c %.5f J against %.5f J "
+                  "from the series\n",
+                  tq, xq, dq, arriving ? xq : tq, before);
     }
     ASSERT_EQ(means[0].size(), means[1].size());
     for (std::size_t k = 0; k < means[0].size(); ++k) EXPECT_NEAR(means[0][k], means[1][k], 1e-9);
@@ -494,6 +506,96 @@ TEST(Contact, AnotherPlyCoversAFaceFromItsHeatExchange) {
       EXPECT_EQ(seen, 21);
     }
   }
+}
+
+// Each ply's heat by source. A lower ply (20 x 10 mm, 300 degC) on a die
+// at 200 degC (500 W/(m2 K)), an upper ply (10 x 10 mm, 280 degC) over
+// half of it (1000 W/(m2 K) between them), convection and radiation to air
+// at 20 degC on every face; thermal only, 1 s. The uncovered half of the
+// lower ply cools from its top as well: the in-plane gradients are steep,
+// and an ADI step's in-plane half moves the face values after the rods
+// took the face fluxes. Required, for every splitter and scheme:
+// - each ply's stored change equals the heat from the tools, the heat
+//   exchanges and the other ply, to 1e-9 of the largest term;
+// - the parts' tools and heat exchanges sum to the heat through the faces
+//   (the splitter's count), to 1e-12;
+// - the tools' heat by tool equals that by part, to 1e-12.
+// Then the same Robin condition written two ways: the upper ply's top
+// face exchanging with air at h = 25 W/(m2 K) (no radiation), and instead
+// touching a plane at 20 degC with conductance 25. The plies' temperatures
+// are the same (1e-9 K) and the plane's heat is the exchange's (1e-9).
+TEST(Contact, EachPlysHeatBySourceClosesItsAudit) {
+  const double t_end = 1.0;
+  auto job = [&](const std::string& splitter, const std::string& scheme) {
+    json j = base_job(t_end);
+    j["parts"] = json::array({ply("ply_bottom", 0.5 * kH, 300.0), ply("ply_top", 1.5 * kH, 280.0)});
+    j["parts"][0]["mesh"] = {{"generator", "rectangle"}, {"origin", {0, 0, 0.5 * kH}}, {"size", {0.02, 0.01}},
+                             {"divisions", {20, 10}}};
+    j["parts"][1]["mesh"] = {{"generator", "rectangle"}, {"origin", {0, 0, 1.5 * kH}}, {"size", {0.01, 0.01}},
+                             {"divisions", {10, 10}}};
+    j["tools"] = {plane("die", 0.0, 1, 200.0)};
+    j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply_bottom"}}, {"conductance", 500.0}},
+                         {{"type", "contact"}, {"between", {"ply_top", "ply_bottom"}}, {"conductance", 1000.0}},
+                         {{"type", "heat_exchange"}, {"part", "*"}, {"face", "both"}, {"h", 10.0},
+                          {"emissivity", 0.9}, {"ambient", 20.0}}};
+    j["solvers"] = {{"mechanics", nullptr}, {"thermal", {{"splitter", splitter}, {"through_thickness", scheme}}}};
+    j["output"] = {{"interval", t_end}, {"fields", {"temperature"}}, {"probes", json::array()}};
+    return j;
+  };
+  const std::array<std::pair<const char*, const char*>, 5> runs = {
+      {{"adi", "implicit"}, {"adi", "explicit"}, {"layered3d", "implicit"}, {"layered3d", "explicit"},
+       {"shell2d", "implicit"}}};
+  for (const auto& [splitter, scheme] : runs) {
+    const std::string label = std::string(splitter) + " " + scheme;
+    const JobRun r = run_json(job(splitter, scheme));
+    ASSERT_TRUE(r.result.ok) << label << ": " << r.result.error;
+    const RunResult& res = r.result;
+    ASSERT_EQ(res.part_tool_heat.size(), 2u);
+    double faces = 0, worst = 0;
+    for (std::size_t p = 0; p < 2; ++p) {
+      const double dq = res.part_heat_change[p], tq = res.part_tool_heat[p], xq = res.part_exchange_heat[p],
+                   lq = res.part_link_heat[p];
+      const double scale = std::max({std::abs(dq), std::abs(tq), std::abs(xq), std::abs(lq)});
+      worst = std::max(worst, std::abs(dq - (tq + xq + lq)) / scale);
+      EXPECT_NEAR(dq, tq + xq + lq, 1e-11 * scale) << label << ", part " << p;
+      EXPECT_LT(xq, 0.0) << label << ", part " << p;  // both lose heat to the air
+      faces += tq + xq;
+      std::printf("%s, %s: stored change %.6f J = tools %.6f J + heat exchanges %.6f J + other ply %.6f J "
+                  "(off by %.1e of the largest)\n",
+                  label.c_str(), p ? "upper ply" : "lower ply", dq, tq, xq, lq, std::abs(dq - (tq + xq + lq)) / scale);
+    }
+    EXPECT_LT(res.part_tool_heat[0], -1.0) << label;  // the die chills the lower ply
+    EXPECT_EQ(res.part_tool_heat[1], 0.0) << label;
+    EXPECT_GT(res.part_link_heat[1], 0.0) << label;  // the hotter lower ply warms the upper one at first
+    EXPECT_NEAR(res.part_link_heat[0], -res.part_link_heat[1], 1e-12 * std::abs(res.part_link_heat[0])) << label;
+    EXPECT_NEAR(faces, res.heat_in, 1e-12 * std::abs(res.heat_in)) << label;
+    ASSERT_EQ(res.energy.tool_heat.size(), 1u);
+    EXPECT_NEAR(res.energy.tool_heat[0], res.part_tool_heat[0], 1e-12 * std::abs(res.part_tool_heat[0])) << label;
+    EXPECT_NEAR(res.heat_from_tools + res.heat_from_exchanges, res.heat_in, 1e-12 * std::abs(res.heat_in)) << label;
+  }
+  // The same condition as an exchange and as a tool.
+  json exchange = job("adi", "implicit"), tool = exchange;
+  exchange["interactions"][2] = {{"type", "heat_exchange"}, {"part", "ply_bottom"}, {"face", "both"}, {"h", 10.0},
+                                 {"emissivity", 0.9}, {"ambient", 20.0}};
+  exchange["interactions"].push_back(
+      {{"type", "heat_exchange"}, {"part", "ply_top"}, {"face", "top"}, {"h", 25.0}, {"ambient", 20.0}});
+  tool["interactions"][2] = exchange["interactions"][2];
+  tool["tools"].push_back(plane("air", 2 * kH, -1, 20.0));
+  tool["interactions"].push_back({{"type", "contact"}, {"between", {"air", "ply_top"}}, {"conductance", 25.0}});
+  const JobRun a = run_json(exchange), b = run_json(tool);
+  ASSERT_TRUE(a.result.ok) << a.result.error;
+  ASSERT_TRUE(b.result.ok) << b.result.error;
+  ASSERT_EQ(b.result.energy.tool_heat.size(), 2u);
+  const double by_exchange = a.result.part_exchange_heat[1], by_tool = b.result.energy.tool_heat[1];
+  std::printf("upper ply's top face at 25 W/(m2 K) to 20 degC: %.9f J as a heat exchange, %.9f J as a tool\n",
+              by_exchange, by_tool);
+  EXPECT_LT(by_exchange, -0.1);
+  EXPECT_NEAR(by_tool, by_exchange, 1e-9 * std::abs(by_exchange));
+  EXPECT_NEAR(b.result.part_exchange_heat[1], 0.0, 1e-12 * std::abs(by_exchange));
+  EXPECT_NEAR(a.result.part_exchange_heat[0], b.result.part_exchange_heat[0],
+              1e-9 * std::abs(a.result.part_exchange_heat[0]));
+  EXPECT_NEAR(a.result.temperature_min, b.result.temperature_min, 1e-9);
+  EXPECT_NEAR(a.result.stored_change, b.result.stored_change, 1e-9 * std::abs(a.result.stored_change));
 }
 
 // A ply on a plane under gravity tilted by alpha (the plane stays z = 0):

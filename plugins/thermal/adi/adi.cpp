@@ -15,7 +15,7 @@ void register_all(ts::sdk::Registrar& r) {
   ts::sdk::Descriptor d;
   d.kind = ts::sdk::PluginKind::Thermal;
   d.name = "adi";
-  d.version = "1.1.0";
+  d.version = "1.2.0";
   d.summary = "ADI split: through-thickness rods at every node + in-plane conduction of the mean";
   d.params = ts::thermal::splitter_params(
       "1D rod scheme: implicit = backward Euler with a tridiagonal solve (unconditionally "
@@ -32,4 +32,4 @@ void register_all(ts::sdk::Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("thermal_adi", "1.1.0", register_all)
+THERMOSTAMP_PLUGIN("thermal_adi", "1.2.0", register_all)

@@ -554,6 +554,21 @@ double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<co
   return 0.0;
 }
 
+void SplitThermal::keep_face_values(std::span<const std::span<double>> T, sdk::ThermalStepReport* report) const {
+  if (!report || report->face_values.size() != plies_.size()) return;
+  for (std::size_t p = 0; p < plies_.size(); ++p) {
+    const int nz = plies_[p].nz, n = plies_[p].view->num_nodes;
+    const std::span<double> out = report->face_values[p];
+    if (out.size() != 2 * static_cast<std::size_t>(n)) return;
+    const double* t = T[p].data();
+    for (int i = 0; i < n; ++i) {
+      out[2 * static_cast<std::size_t>(i)] = t[static_cast<std::size_t>(nz) * i];
+      out[2 * static_cast<std::size_t>(i) + 1] = t[static_cast<std::size_t>(nz) * i + nz - 1];
+    }
+  }
+  report->face_values_filled = true;
+}
+
 sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T,
                                   sdk::ThermalStepReport* report) {
   return sdk::guarded([&] {
@@ -569,7 +584,9 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
         for (int j = 0; j < 3; ++j) linked_[l.part_b][l.nodes_b[j]] |= static_cast<char>(1 << l.face_b);
       }
       rods_implicit(in, T);
+      keep_face_values(T, report);  // the values the Robin terms and links were solved at
     } else {
+      keep_face_values(T, report);  // explicit: the values at the start of the step
       rods_explicit(in, T);
     }
     int substeps = 1;

@@ -115,6 +115,21 @@ class Layered3d final : public sdk::ThermalSplitter {
         }
         std::copy(t_new.begin() + offset_[p], t_new.begin() + offset_[p + 1], T[p].begin());
       }
+      if (report && report->face_values.size() == plies_.size()) {
+        bool sized = true;
+        for (std::size_t p = 0; p < plies_.size(); ++p)
+          sized = sized && report->face_values[p].size() == 2 * static_cast<std::size_t>(plies_[p].view->num_nodes);
+        for (std::size_t p = 0; sized && p < plies_.size(); ++p) {
+          const PlyThermal& ply = plies_[p];
+          double* out = report->face_values[p].data();
+          for (int i = 0; i < ply.view->num_nodes; ++i) {
+            const int o = offset_[p] + ply.nz * i;
+            out[2 * i] = tf[o];
+            out[2 * i + 1] = tf[o + ply.nz - 1];
+          }
+        }
+        report->face_values_filled = sized;
+      }
       if (report) {
         report->heat_in = heat;
         report->substeps = implicit_ ? last_iterations_ : 1;
@@ -387,7 +402,7 @@ void register_all(sdk::Registrar& r) {
   sdk::Descriptor d;
   d.kind = sdk::PluginKind::Thermal;
   d.name = "layered3d";
-  d.version = "1.0.0";
+  d.version = "1.1.0";
   d.summary = "Full 3D reference: every ply as a stack of prisms, in-plane and through-thickness conduction coupled";
   d.params = splitter_params(
       "implicit: backward Euler on the whole 3D system (conjugate gradients with exact "
@@ -400,4 +415,4 @@ void register_all(sdk::Registrar& r) {
 }  // namespace
 }  // namespace ts::thermal
 
-THERMOSTAMP_PLUGIN("thermal_layered3d", "1.0.0", ts::thermal::register_all)
+THERMOSTAMP_PLUGIN("thermal_layered3d", "1.1.0", ts::thermal::register_all)

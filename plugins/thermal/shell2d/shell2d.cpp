@@ -14,7 +14,7 @@ void register_all(ts::sdk::Registrar& r) {
   ts::sdk::Descriptor d;
   d.kind = ts::sdk::PluginKind::Thermal;
   d.name = "shell2d";
-  d.version = "1.0.0";
+  d.version = "1.1.0";
   d.summary = "Plain thermal shell: one temperature per node, face fluxes as sources";
   d.params = ts::thermal::splitter_params(
       "treatment of the face fluxes: implicit (backward Euler, unconditionally stable) or "
@@ -25,4 +25,4 @@ void register_all(ts::sdk::Registrar& r) {
 
 }  // namespace
 
-THERMOSTAMP_PLUGIN("thermal_shell2d", "1.0.0", register_all)
+THERMOSTAMP_PLUGIN("thermal_shell2d", "1.1.0", register_all)

@@ -22,8 +22,8 @@
 namespace ts::sdk {
 
 // Bump when any type of this SDK changes layout or meaning.
-inline constexpr int kAbiVersion = 21;
-inline constexpr const char* kSdkVersion = "0.21.1";
+inline constexpr int kAbiVersion = 22;
+inline constexpr const char* kSdkVersion = "0.22.0";
 
 enum class PluginKind { Element, Material, Thermal, Contact };
 

@@ -61,6 +61,19 @@ struct ThermalStepReport {
   double heat_in = 0.0;     // J that entered the plies through Robin faces during the step
   int substeps = 1;         // internal sub-steps taken (in-plane explicit sub-cycling, ...)
   long long limited = 0;    // nodes where a bound-preserving correction acted
+  // Room the kernel gives for the face values the step's face conditions and
+  // links were taken at: one span per part, 2 values per node (bottom, top;
+  // degC), or empty. A splitter that fills it sets face_values_filled; the
+  // kernel then splits the heat through each face exactly among the tools,
+  // the heat exchanges and the links: a face of area A with conductance h
+  // and far temperature t_ext received dt A h (t_ext - value), a link
+  // conductance (sum_j w_b[j] value_b[j] - value_a) dt. An implicit scheme
+  // gives the values its Robin terms were solved at (after the
+  // through-thickness solve, before an in-plane step that moves them), an
+  // explicit one those at the start of the step. A splitter that does not
+  // fill it leaves the kernel to use the values at the end of the step.
+  std::span<const std::span<double>> face_values;
+  bool face_values_filled = false;
 };
 
 class ThermalSplitter {
