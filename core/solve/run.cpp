@@ -823,9 +823,7 @@ void Simulation::save_state(Checkpoint& c) {
     c.add("kernel/contact_touch", std::move(tw.bytes()));
   }
   {
-    // Each part's heat through its faces and the tools' share of it (a
-    // section of its own: checkpoints written before it continue with
-    // these counted from the checkpoint on).
+    // Each part's heat from the heat exchanges and from the tools.
     sdk::StateWriter hw;
     hw.io_vector(part_exchange_heat_);
     hw.io_vector(part_tool_heat_);
@@ -861,16 +859,16 @@ void Simulation::load_state(const Checkpoint& c) {
     contact_sums_.touched = std::move(touched);
     contact_sums_.link_touched = std::move(link_touched);
   }
-  heat_sources_partial_ = true;
-  if (const std::vector<unsigned char>* bytes = c.find("kernel/heat_sources")) {
+  {
+    const std::vector<unsigned char>* bytes = c.find("kernel/heat_sources");
+    if (!bytes) fail("no section kernel/heat_sources");
     sdk::StateReader hr(*bytes);
-    std::vector<double> faces, tools;
-    if (!hr.io_vector(faces) || !hr.io_vector(tools) || !hr.done() || faces.size() != parts_.size() ||
+    std::vector<double> exchanges, tools;
+    if (!hr.io_vector(exchanges) || !hr.io_vector(tools) || !hr.done() || exchanges.size() != parts_.size() ||
         tools.size() != parts_.size())
       fail("kernel/heat_sources");
-    part_exchange_heat_ = std::move(faces);
+    part_exchange_heat_ = std::move(exchanges);
     part_tool_heat_ = std::move(tools);
-    heat_sources_partial_ = false;
   }
   auto plugin = [&](const std::string& name, auto&& load) {
     const std::vector<unsigned char>* bytes = c.find(name);

@@ -702,9 +702,8 @@ void Simulation::Run::finish() {
     result.part_link_heat.push_back(sim.link_heat_.size() > p ? sim.link_heat_[p] : 0.0);
     const double exchanges_p = sim.part_exchange_heat_.size() > p ? sim.part_exchange_heat_[p] : 0.0;
     const double tools_p = sim.part_tool_heat_.size() > p ? sim.part_tool_heat_[p] : 0.0;
-    constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
-    result.part_tool_heat.push_back(sim.heat_sources_partial_ ? kUnknown : tools_p);
-    result.part_exchange_heat.push_back(sim.heat_sources_partial_ ? kUnknown : exchanges_p);
+    result.part_tool_heat.push_back(tools_p);
+    result.part_exchange_heat.push_back(exchanges_p);
     // With mechanics, one range per part (every part has elements, so its
     // shear angles and strains are not empty).
     const auto& sa = parts[p]->shear_angle;
@@ -732,11 +731,8 @@ void Simulation::Run::finish() {
     result.energy.tool_heat.push_back(sim.tool_heat_[q]);
     result.heat_from_tools += sim.tool_heat_[q];
   }
-  // Over the parts; where they count from a checkpoint on only, what the
-  // faces took beyond the tools' heat.
   result.heat_from_exchanges = 0;
   for (double q : sim.part_exchange_heat_) result.heat_from_exchanges += q;
-  if (sim.heat_sources_partial_) result.heat_from_exchanges = heat_in - result.heat_from_tools;
   if (job.mechanics && !tools.empty()) {  // the press force: the largest over the rows
     const std::size_t nt = tools.size(), stride = 1 + 8 * nt;
     result.energy.tool_force_max.assign(nt, 0.0);
@@ -947,16 +943,12 @@ bool Simulation::Run::write_summary(std::string& why) const {
       // exchanges + other plies.
       const double dq = result.part_heat_change[p], tq = result.part_tool_heat[p],
                    xq = result.part_exchange_heat[p], lq = result.part_link_heat[p];
-      const bool known = std::isfinite(tq) && std::isfinite(xq);
-      const double in_p = tq + xq + lq;
+      const double scale_p = std::max({std::abs(dq), std::abs(tq) + std::abs(xq) + std::abs(lq), 1e-300});
       ply["heat_J"] = {{"stored_change", dq},
-                       {"from_tools", known ? json(tq) : json(nullptr)},
-                       {"from_exchanges", known ? json(xq) : json(nullptr)},
+                       {"from_tools", tq},
+                       {"from_exchanges", xq},
                        {"from_plies", lq},
-                       {"balance_error", known ? json(std::abs(dq - in_p) /
-                                                      std::max({std::abs(dq), std::abs(tq) + std::abs(xq) +
-                                                                                  std::abs(lq), 1e-300}))
-                                               : json(nullptr)}};
+                       {"balance_error", std::abs(dq - (tq + xq + lq)) / scale_p}};
       if (threshold) ply["fraction_below_threshold"] = ply_end[p][3];
       if (!st->X.empty()) {
         const std::array<double, 3> x = ply_crystallinity(*st);

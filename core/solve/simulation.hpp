@@ -94,8 +94,7 @@ struct RunResult {
   double heat_in = 0, stored_change = 0, heat_balance_error = 0;
   std::vector<double> part_heat_change;  // per part: stored heat change (J)
   std::vector<double> part_link_heat;    // per part: heat received through ply/ply contact (J)
-  // per part: heat received from the tools and from the heat exchanges (J;
-  // NaN in a run continued from a checkpoint that did not keep them)
+  // per part: heat received from the tools and from the heat exchanges (J)
   std::vector<double> part_tool_heat, part_exchange_heat;
   double heat_from_tools = 0, heat_from_exchanges = 0;  // J, over the parts
   std::vector<double> part_shear_min_deg, part_shear_max_deg;  // per part, mechanics only: shear angle range at the end
@@ -341,12 +340,9 @@ class Simulation {
   std::vector<double> tool_heat_;   // per tool: heat given to the plies (J), cumulative
   std::vector<double> link_heat_;   // per part: net heat received through ply/ply contact (J), cumulative
   // Per part, cumulative (J): the heat received from the heat exchanges
-  // and from the tools. heat_sources_partial_: they count from the
-  // checkpoint on (a run continued from a checkpoint written before they
-  // were kept).
+  // and from the tools.
   std::vector<double> part_exchange_heat_, part_tool_heat_;
   std::vector<std::vector<char>> face_kind_;  // accumulate_face_heat's marks, per part 2 per node
-  bool heat_sources_partial_ = false;
   enum { kTimeElements, kTimeContact, kTimeThermal, kTimeIntegrate, kTimeOutput, kTimeCount };
   double timing_[kTimeCount] = {0, 0, 0, 0, 0};  // wall time per phase of the mechanics loop (s)
   // How forces_and_stable_dt shares out elements and contact (see there):
