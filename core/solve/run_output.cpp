@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -1061,6 +1062,13 @@ void Simulation::Run::log_end() const {
         line << std::setprecision(3) << ", relative crystallinity " << x[0] << " to " << x[2] << " (mean " << x[1]
              << ")";
       }
+      // The heat the ply received, by the sources the job has.
+      line << std::setprecision(2) << "; heat received " << result.part_heat_change[p] << " J";
+      const char* sep = ": ";
+      if (!job.tools.empty()) line << std::exchange(sep, ", ") << "tools " << result.part_tool_heat[p] << " J";
+      if (!job.heat_exchanges.empty())
+        line << std::exchange(sep, ", ") << "heat exchanges " << result.part_exchange_heat[p] << " J";
+      if (parts.size() > 1) line << std::exchange(sep, ", ") << "other plies " << result.part_link_heat[p] << " J";
       log->info("{}", line.str());
     }
   }
