@@ -235,6 +235,8 @@ void Simulation::Run::open_output() {
     ply_fields.push_back("fraction_unstable");
     ply_fields.push_back("stability_min");
   }
+  if (job.thermal)  // the heat the ply has received so far, by source (J)
+    for (const char* q : {"heat_from_tools", "heat_from_exchanges", "heat_from_plies"}) ply_fields.push_back(q);
   ply_per = ply_fields.size();
   ply_cols = {"time"};
   for (const auto& st : sim.parts_)
@@ -597,6 +599,12 @@ void Simulation::Run::sample_plies(double time) {
       ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + (shear_limit ? 5 : 4));
       ply_rows.insert(ply_rows.end(), row.begin() + 5, row.end());
     }
+    if (job.thermal) {
+      auto at_p = [p](const std::vector<double>& v) { return p < v.size() ? v[p] : 0.0; };
+      ply_rows.push_back(at_p(sim.part_tool_heat_));
+      ply_rows.push_back(at_p(sim.part_exchange_heat_));
+      ply_rows.push_back(at_p(sim.link_heat_));
+    }
     if (plies_csv.is_open()) {
       plies_csv << csv_number(time) << ',' << sim.parts_[p]->def->name;
       for (std::size_t k = at; k < ply_rows.size(); ++k) plies_csv << ',' << csv_number(ply_rows[k]);
@@ -783,6 +791,12 @@ void Simulation::Run::finish() {
         v += shear_limit ? 5 : 4;
         s.fraction_unstable = v[0];
         s.stability_min = v[1];
+        v += 2;
+      }
+      if (job.thermal) {
+        s.heat_from_tools = v[0];
+        s.heat_from_exchanges = v[1];
+        s.heat_from_plies = v[2];
       }
       result.ply_history.push_back(s);
     }

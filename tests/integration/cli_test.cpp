@@ -1161,12 +1161,13 @@ TEST(SharedJobs, PreheatWithMeltingCarriesTheCrystallinity) {
   const json s = json::parse(std::ifstream(dir / "preheat" / "summary.json"));
   EXPECT_LT(s["heat"]["balance_error"].get<double>(), 1e-10);
   for (const auto& part : s["parts"]) EXPECT_EQ(part["crystallinity_max"].get<double>(), 0.0);
-  // plies.csv: time, ply, temperature_min, _mean, _max, crystallinity_min, _mean, _max
+  // plies.csv: time, ply, temperature_min, _mean, _max, crystallinity_min, _mean, _max, heat_from_tools,
+  // _exchanges, _plies
   const auto a = csv_rows(dir / "table" / "plies.csv"), b = csv_rows(dir / "preheat" / "plies.csv");
   ASSERT_EQ(a.size(), b.size());
   double worst = 0, first_melting = -1;
   for (std::size_t r = 1; r < a.size(); ++r) {
-    ASSERT_EQ(b[r].size(), 8u);
+    ASSERT_EQ(b[r].size(), 11u);
     worst = std::max(worst, std::abs(std::stod(a[r][3]) - std::stod(b[r][3])));
     if (first_melting < 0 && std::stod(b[r][6]) < 1.0) first_melting = std::stod(b[r][0]);
   }
@@ -2407,13 +2408,13 @@ TEST(Output, CrystallinityInFramesSeriesSummaryAndExport) {
   std::string line, last_top, last_bottom;
   std::getline(csv, line);
   EXPECT_EQ(line, "time,ply,temperature_min,temperature_mean,temperature_max,crystallinity_min,crystallinity_mean,"
-                  "crystallinity_max");
+                  "crystallinity_max,heat_from_tools,heat_from_exchanges,heat_from_plies");
   while (std::getline(csv, line)) (line.find(",ply_top,") != std::string::npos ? last_top : last_bottom) = line;
   for (const auto& [name, row] : {std::pair{std::string("ply_top"), last_top}, {std::string("ply_bottom"), last_bottom}}) {
     std::vector<double> v;
     std::stringstream ss(row.substr(row.find(name) + name.size() + 1));
     for (std::string item; std::getline(ss, item, ',');) v.push_back(std::stod(item));
-    ASSERT_EQ(v.size(), 6u) << row;
+    ASSERT_EQ(v.size(), 9u) << row;
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(v[3 + k], range[name][k], 1e-9) << name << " " << k;
   }
   std::stringstream probes;
@@ -2431,7 +2432,7 @@ TEST(Output, CrystallinityInFramesSeriesSummaryAndExport) {
   const auto temps = read_dataset<double>(file, frame + "temperature");
   const std::string cols = units("series/plies");
   H5Fclose(file);
-  EXPECT_EQ(cols, "s,degC,degC,degC,1,1,1,degC,degC,degC,1,1,1");
+  EXPECT_EQ(cols, "s,degC,degC,degC,1,1,1,J,J,J,degC,degC,degC,1,1,1,J,J,J");
   ASSERT_EQ(layers.size(), temps.size());
   ASSERT_EQ(layers.size(), 11 * mean.size());  // 10 layers: 11 values per node
   double most = 0;
@@ -2783,13 +2784,13 @@ TEST(Output, DatasetsCarryTheirUnits) {
   // and in the run's result.
   const auto pcols = split(text("series/plies", "columns")), punits = split(text("series/plies", "units"));
   ASSERT_EQ(pcols.size(), punits.size());
-  ASSERT_EQ(pcols.size(), 1 + 11 * j["parts"].size());
+  ASSERT_EQ(pcols.size(), 1 + 14 * j["parts"].size());
   EXPECT_EQ(pcols[1], j["parts"][0]["name"].get<std::string>() + "_temperature_min");
   EXPECT_EQ(pcols[9], j["parts"][0]["name"].get<std::string>() + "_fraction_over_shear_limit");
   EXPECT_EQ(pcols[11], j["parts"][0]["name"].get<std::string>() + "_stability_min");
   for (std::size_t c = 1; c < pcols.size(); ++c)
     EXPECT_EQ(punits[c], std::vector<std::string>(
-                             {"degC", "degC", "degC", "1", "deg", "deg", "1", "1", "1", "1", "N/m"})[(c - 1) % 11])
+                             {"degC", "degC", "degC", "1", "deg", "deg", "1", "1", "1", "1", "N/m", "J", "J", "J"})[(c - 1) % 14])
         << pcols[c];
   const auto series = read_dataset<double>(file, "series/plies");
   H5Fclose(file);
@@ -2798,7 +2799,7 @@ TEST(Output, DatasetsCarryTheirUnits) {
   std::getline(csv, line);
   EXPECT_EQ(line, "time,ply,temperature_min,temperature_mean,temperature_max,fraction_below,shear_angle_min,"
                   "shear_angle_max,fibre_strain_min,fibre_strain_max,fraction_over_shear_limit,fraction_unstable,"
-                  "stability_min");
+                  "stability_min,heat_from_tools,heat_from_exchanges,heat_from_plies");
   std::vector<std::vector<std::string>> rows;
   while (std::getline(csv, line)) rows.push_back(split(line));
   ASSERT_EQ(rows.size(), run.result.ply_history.size());
@@ -2806,17 +2807,27 @@ TEST(Output, DatasetsCarryTheirUnits) {
   ASSERT_GT(rows.size(), 10u);
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const auto& s = run.result.ply_history[r];
-    ASSERT_EQ(rows[r].size(), 13u);
+    ASSERT_EQ(rows[r].size(), 16u);
     EXPECT_EQ(rows[r][1], j["parts"][s.part]["name"].get<std::string>());
     EXPECT_NEAR(std::stod(rows[r][0]), s.time, 1e-9 * std::max(1.0, s.time));
     const double* wide = &series[(r / 2) * pcols.size()];
     EXPECT_EQ(wide[0], s.time);
-    const double values[11] = {s.min,       s.mean,      s.max,
-                               s.fraction_below, s.shear_min, s.shear_max,
-                               s.fibre_strain_min, s.fibre_strain_max, s.fraction_over_shear_limit,
-                               s.fraction_unstable, s.stability_min};
-    for (int k = 0; k < 11; ++k) {
-      EXPECT_EQ(wide[1 + 11 * s.part + k], values[k]) << r << " " << k;
+    const double values[14] = {s.min,
+                               s.mean,
+                               s.max,
+                               s.fraction_below,
+                               s.shear_min,
+                               s.shear_max,
+                               s.fibre_strain_min,
+                               s.fibre_strain_max,
+                               s.fraction_over_shear_limit,
+                               s.fraction_unstable,
+                               s.stability_min,
+                               s.heat_from_tools,
+                               s.heat_from_exchanges,
+                               s.heat_from_plies};
+    for (int k = 0; k < 14; ++k) {
+      EXPECT_EQ(wide[1 + 14 * s.part + k], values[k]) << r << " " << k;
       EXPECT_NEAR(std::stod(rows[r][2 + k]), values[k], 1e-9 * std::max(1.0, std::abs(values[k]))) << r << " " << k;
     }
     EXPECT_LE(s.min, s.mean + 1e-9);  // the mean of equal values may differ from them by round-off
@@ -2836,7 +2847,14 @@ TEST(Output, DatasetsCarryTheirUnits) {
     EXPECT_EQ(s.fibre_strain_max, run.result.part_fibre_strain_max[s.part]);
     EXPECT_GT(s.fraction_over_shear_limit, 0.0);
     EXPECT_LT(s.fraction_over_shear_limit, 1.0);
+    EXPECT_EQ(s.heat_from_tools, run.result.part_tool_heat[s.part]);
+    EXPECT_EQ(s.heat_from_exchanges, run.result.part_exchange_heat[s.part]);
+    EXPECT_EQ(s.heat_from_plies, run.result.part_link_heat[s.part]);
   }
+  // The first rows: nothing received yet.
+  for (std::size_t k = 0; k < 2; ++k)
+    EXPECT_EQ(std::abs(end[k].heat_from_tools) + std::abs(end[k].heat_from_exchanges) + std::abs(end[k].heat_from_plies),
+              0.0);
 }
 
 // `thermostamp compare A B`: a run against itself is identical (exit 0);
