@@ -725,8 +725,8 @@ void Simulation::accumulate_face_heat(double dt, const sdk::ThermalStepReport& r
                      (tool_views_[tc.tool].temperature - face_value(tc.part, tc.node, tc.face));
     tool_heat_[tc.tool] += w * dt;
     part_tool_heat_[tc.part] += w * dt;
-    char& k = face_kind_[tc.part][slot(tc.node, tc.face)];
-    if (k == 2) exchange[tc.part] -= w;  // a mixed face: the exchange's share is the rest
+    if (face_kind_[tc.part][slot(tc.node, tc.face)] == 2)
+      exchange[tc.part] -= w;  // a mixed face: the exchange's share is the rest
   }
   for (std::size_t p = 0; p < parts_.size(); ++p) part_exchange_heat_[p] += exchange[p] * dt;
   for (const auto& tc : contact_map_.tool_contacts) face_kind_[tc.part][slot(tc.node, tc.face)] = 0;

@@ -533,7 +533,7 @@ TEST(Contact, EachPlysHeatBySourceClosesItsAudit) {
                              {"divisions", {20, 10}}};
     j["parts"][1]["mesh"] = {{"generator", "rectangle"}, {"origin", {0, 0, 1.5 * kH}}, {"size", {0.01, 0.01}},
                              {"divisions", {10, 10}}};
-    j["tools"] = {plane("die", 0.0, 1, 200.0)};
+    j["tools"] = json::array({plane("die", 0.0, 1, 200.0)});
     j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply_bottom"}}, {"conductance", 500.0}},
                          {{"type", "contact"}, {"between", {"ply_top", "ply_bottom"}}, {"conductance", 1000.0}},
                          {{"type", "heat_exchange"}, {"part", "*"}, {"face", "both"}, {"h", 10.0},
