@@ -34,7 +34,9 @@ Writes into DIR/figures/:
   plies.png            each ply's mean temperature against time, in a
                        band from its coldest to its hottest value, and
                        with output.temperature_threshold its share below
-                       it, and with crystallisation kinetics its
+                       it, the heat it has received from the tools, the
+                       heat exchanges and the other plies (from 0.38.0),
+                       and with crystallisation kinetics its
                        crystallinity; with the mechanics, the band of its
                        elements' shear angles and, with output.shear_angle_limit,
                        the share of its area sheared beyond the limit,
@@ -495,6 +497,13 @@ def plot_plies(folder, out):
         panels.append("temperature")
         if all("fraction_below" in v for v in plies.values()):
             panels.append("below")
+    # the heat each ply received, by source (the sources some ply has)
+    sources = [(q, lab, ls) for q, lab, ls in (("heat_from_tools", "tools", "-"),
+                                               ("heat_from_exchanges", "heat exchanges", "--"),
+                                               ("heat_from_plies", "other plies", ":"))
+               if any(q in v and np.nanmax(np.abs(v[q])) > 0 for v in plies.values())]
+    if sources:
+        panels.append("heat")
     if any("crystallinity_mean" in v and not np.all(np.isnan(v["crystallinity_mean"])) for v in plies.values()):
         panels.append("crystallinity")
     if all("shear_angle_max" in v for v in plies.values()):
@@ -522,6 +531,10 @@ def plot_plies(folder, out):
                 a.plot(v["time"], v["shear_angle_min"], color=c, lw=1)
             elif panel == "below":
                 a.plot(v["time"], 100 * v["fraction_below"], color=c, label=name)
+            elif panel == "heat":
+                for q, lab, ls in sources:
+                    if q in v:
+                        a.plot(v["time"], v[q], color=c, ls=ls, label="%s: from the %s" % (name, lab))
             elif panel == "crystallinity":
                 if "crystallinity_mean" in v and not np.all(np.isnan(v["crystallinity_mean"])):
                     a.fill_between(v["time"], v["crystallinity_min"], v["crystallinity_max"], color=c, alpha=0.2,
@@ -558,6 +571,10 @@ def plot_plies(folder, out):
             a.set_title("share below %s" % ("%g degC" % next(iter(threshold.values())) if common_t
                                              else "each ply's threshold"))
             a.set_ylim(-2, 102)
+        elif panel == "heat":
+            a.axhline(0, color="grey", lw=0.5)
+            a.set_ylabel("heat received so far (J)")
+            a.set_title("heat received by each ply, by source")
         elif panel == "unstable":
             a.set_ylabel("% of the ply's initial area")
             a.set_title("share whose long-term response is unstable")
