@@ -318,6 +318,7 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
     const double* cap = rf.cap.data();
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
+    double* face_out = face_out_[p];  // report->face_values, where given
     const char* linked = linked_[p].data();
     const RodGroupData d{nz, rf.gk.data(), cap, rf.inv_den.data(), rf.g_inv_den.data(), rf.id.data(), f.h_bottom.data(),
                          f.h_top.data(), f.t_bottom.data(), f.t_top.data(), t};
@@ -353,6 +354,10 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
         const double* ti = t + static_cast<std::size_t>(nz) * i;
         heat[i] = dt * ply.area[i] *
                   (f.h_bottom[i] * (f.t_bottom[i] - ti[0]) + f.h_top[i] * (f.t_top[i] - ti[nz - 1]));
+        if (face_out) {
+          face_out[2 * static_cast<std::size_t>(i)] = ti[0];
+          face_out[2 * static_cast<std::size_t>(i) + 1] = ti[nz - 1];
+        }
       }
     }
   }
@@ -487,6 +492,7 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
     const double* flux = fl.data();
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
+    double* face_out = face_out_[p];  // report->face_values, where given
     for (int i = 0; i < n; ++i) {
       const int ob = off[2 * i], ot = off[2 * i + 1];
       if (ob < 0 && ot < 0) continue;
@@ -498,6 +504,10 @@ double SplitThermal::rods_implicit(const sdk::ThermalStepInput& in, std::span<co
       const double ft = ot >= 0 && ot != ob ? flux[ot] / area[i] : 0.0;
       for (int k = 0; k < nz; ++k) ti[k] -= fb * vbi[k] + ft * vti[k];
       heat[i] = dt * area[i] * (hb[i] * (tb[i] - ti[0]) + ht[i] * (tt[i] - ti[nz - 1]));
+      if (face_out) {
+        face_out[2 * static_cast<std::size_t>(i)] = ti[0];
+        face_out[2 * static_cast<std::size_t>(i) + 1] = ti[nz - 1];
+      }
     }
   }
   return 0.0;
@@ -516,6 +526,7 @@ double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<co
     const auto& f = in.faces[p];
     double* t = T[p].data();
     double* heat = node_heat_[p].data();
+    double* face_out = face_out_[p];  // report->face_values, where given
 #pragma omp parallel for schedule(static) if (static_cast<long long>(n) * nz > kParallelValues)
     for (int i = 0; i < n; ++i) {
       double* ti = t + static_cast<std::size_t>(nz) * i;
@@ -536,6 +547,10 @@ double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<co
         ti[k] = old[k] - dt * q / (ply.rho_c * ply.w[k]);
       }
       heat[i] = dt * ply.area[i] * (hb * (f.t_bottom[i] - old[0]) + ht * (f.t_top[i] - old[nz - 1]));
+      if (face_out) {
+        face_out[2 * static_cast<std::size_t>(i)] = old[0];
+        face_out[2 * static_cast<std::size_t>(i) + 1] = old[nz - 1];
+      }
     }
   }
   for (const auto& l : in.links) {  // serial: deterministic order
@@ -554,19 +569,15 @@ double SplitThermal::rods_explicit(const sdk::ThermalStepInput& in, std::span<co
   return 0.0;
 }
 
-void SplitThermal::keep_face_values(std::span<const std::span<double>> T, sdk::ThermalStepReport* report) const {
-  if (!report || report->face_values.size() != plies_.size()) return;
-  for (std::size_t p = 0; p < plies_.size(); ++p) {
-    const int nz = plies_[p].nz, n = plies_[p].view->num_nodes;
-    const std::span<double> out = report->face_values[p];
-    if (out.size() != 2 * static_cast<std::size_t>(n)) return;
-    const double* t = T[p].data();
-    for (int i = 0; i < n; ++i) {
-      out[2 * static_cast<std::size_t>(i)] = t[static_cast<std::size_t>(nz) * i];
-      out[2 * static_cast<std::size_t>(i) + 1] = t[static_cast<std::size_t>(nz) * i + nz - 1];
-    }
-  }
-  report->face_values_filled = true;
+// Where the report gives room for every part's face values, the rod
+// passes write them (face_out_; null where not given).
+bool SplitThermal::take_face_values(sdk::ThermalStepReport* report) {
+  face_out_.assign(plies_.size(), nullptr);
+  if (!report || report->face_values.size() != plies_.size()) return false;
+  for (std::size_t p = 0; p < plies_.size(); ++p)
+    if (report->face_values[p].size() != 2 * static_cast<std::size_t>(plies_[p].view->num_nodes)) return false;
+  for (std::size_t p = 0; p < plies_.size(); ++p) face_out_[p] = report->face_values[p].data();
+  return true;
 }
 
 sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<const std::span<double>> T,
@@ -578,17 +589,17 @@ sdk::Status SplitThermal::advance(const sdk::ThermalStepInput& in, std::span<con
     if (static_cast<int>(thread_work_.size()) < max_threads())
       thread_work_.resize(max_threads(), std::vector<double>(5 * nz_max_, 0.0));
     for (auto& l : linked_) std::fill(l.begin(), l.end(), 0);
+    const bool filled = take_face_values(report);
     if (implicit_) {
       for (const auto& l : in.links) {
         linked_[l.part_a][l.node_a] |= static_cast<char>(1 << l.face_a);
         for (int j = 0; j < 3; ++j) linked_[l.part_b][l.nodes_b[j]] |= static_cast<char>(1 << l.face_b);
       }
-      rods_implicit(in, T);
-      keep_face_values(T, report);  // the values the Robin terms and links were solved at
+      rods_implicit(in, T);  // face values: those the Robin terms and links were solved at
     } else {
-      keep_face_values(T, report);  // explicit: the values at the start of the step
-      rods_explicit(in, T);
+      rods_explicit(in, T);  // face values: those at the start of the step
     }
+    if (filled && report) report->face_values_filled = true;
     int substeps = 1;
     long long limited_nodes = 0;
     for (std::size_t p = 0; p < plies_.size(); ++p) {

@@ -61,8 +61,10 @@ class SplitThermal : public sdk::ThermalSplitter {
   double dt_safety_ = 0.9;
   int nz_max_ = 1;
   std::vector<PlyThermal> plies_;
-  // The face values of every part into report->face_values, where given.
-  void keep_face_values(std::span<const std::span<double>> T, sdk::ThermalStepReport* report) const;
+  // Per part, where the report gives room for the face values (2 per node),
+  // else null; take_face_values sets them and says whether all are given.
+  bool take_face_values(sdk::ThermalStepReport* report);
+  std::vector<double*> face_out_;
   std::vector<std::vector<double>> node_heat_;   // per part, per node: J in this step
   std::vector<std::vector<double>> scratch_;     // per part
   std::vector<std::vector<double>> mean_;        // per part
