@@ -347,6 +347,7 @@ class Simulation {
   std::vector<double> part_exchange_heat_, part_tool_heat_;
   std::vector<std::vector<char>> face_kind_;  // accumulate_face_heat's marks, per part 2 per node
   std::vector<double> block_sums_;            // accumulate_face_heat's sums per block of nodes
+  std::vector<double> step_exchange_;         // accumulate_face_heat's exchange per part over the step
   enum { kTimeElements, kTimeContact, kTimeThermal, kTimeIntegrate, kTimeOutput, kTimeCount };
   double timing_[kTimeCount] = {0, 0, 0, 0, 0};  // wall time per phase of the mechanics loop (s)
   // How forces_and_stable_dt shares out elements and contact (see there):

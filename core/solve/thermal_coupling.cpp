@@ -709,7 +709,8 @@ void Simulation::accumulate_face_heat(double dt, const sdk::ThermalStepReport& r
   // The faces without a tool, summed in fixed blocks of nodes and the
   // blocks in order: the same bits for any thread count.
   constexpr int kBlock = 8192;
-  std::vector<double> exchange(parts_.size(), 0.0);
+  std::vector<double>& exchange = step_exchange_;  // per part, this step (W)
+  exchange.assign(parts_.size(), 0.0);
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     const PartState& st = *parts_[p];
     const int part = static_cast<int>(p), n = st.mesh.num_nodes(), blocks = (n + kBlock - 1) / kBlock;
