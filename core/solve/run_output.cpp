@@ -740,6 +740,7 @@ void Simulation::Run::finish() {
     result.energy.tool_heat.push_back(sim.tool_heat_[q]);
     result.heat_from_tools += sim.tool_heat_[q];
   }
+  result.heat_sources_at_step_end = sim.face_values_missing_;
   result.heat_from_exchanges = 0;
   for (double q : sim.part_exchange_heat_) result.heat_from_exchanges += q;
   if (job.mechanics && !tools.empty()) {  // the press force: the largest over the rows
@@ -938,6 +939,7 @@ bool Simulation::Run::write_summary(std::string& why) const {
                      {"faces_in_J", heat_in},
                      {"from_tools_J", result.heat_from_tools},
                      {"from_exchanges_J", result.heat_from_exchanges},
+                     {"by_source_at", result.heat_sources_at_step_end ? "end-of-step values" : "face values"},
                      {"balance_error", result.heat_balance_error}};
   const std::vector<double>& thresholds = job.output.temperature_threshold;
   const std::vector<double>& shear_limits = job.output.shear_angle_limit;

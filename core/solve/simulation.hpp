@@ -97,6 +97,9 @@ struct RunResult {
   // per part: heat received from the tools and from the heat exchanges (J)
   std::vector<double> part_tool_heat, part_exchange_heat;
   double heat_from_tools = 0, heat_from_exchanges = 0;  // J, over the parts
+  // the heat by source was taken at the end-of-step face values in some
+  // thermal step (a splitter that does not report its face values)
+  bool heat_sources_at_step_end = false;
   std::vector<double> part_shear_min_deg, part_shear_max_deg;  // per part, mechanics only: shear angle range at the end
   // per part, mechanics only: the range of E11 (membrane strain along the initial fibre direction) at the end
   std::vector<double> part_fibre_strain_min, part_fibre_strain_max;
@@ -348,6 +351,7 @@ class Simulation {
   std::vector<std::vector<char>> face_kind_;  // accumulate_face_heat's marks, per part 2 per node
   std::vector<double> block_sums_;            // accumulate_face_heat's sums per block of nodes
   std::vector<double> step_exchange_;         // accumulate_face_heat's exchange per part over the step
+  bool face_values_missing_ = false;          // a thermal step's splitter gave no face values
   enum { kTimeElements, kTimeContact, kTimeThermal, kTimeIntegrate, kTimeOutput, kTimeCount };
   double timing_[kTimeCount] = {0, 0, 0, 0, 0};  // wall time per phase of the mechanics loop (s)
   // How forces_and_stable_dt shares out elements and contact (see there):

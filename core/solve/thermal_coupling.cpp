@@ -738,6 +738,16 @@ void Simulation::accumulate_face_heat(double dt, const sdk::ThermalStepReport& r
       exchange[tc.part] -= w;  // a mixed face: the exchange's share is the rest
   }
   for (std::size_t p = 0; p < parts_.size(); ++p) part_exchange_heat_[p] += exchange[p] * dt;
+  if (!given && !face_values_missing_ &&
+      (!contact_map_.tool_contacts.empty() || !contact_map_.links.empty() ||
+       std::any_of(exchange.begin(), exchange.end(), [](double q) { return q != 0; }))) {
+    face_values_missing_ = true;
+    logger("solve")->warn(
+        "the thermal splitter '{}' does not report its face values (ThermalStepReport::face_values): the heat by "
+        "source (tools.csv heat_J, summary.json heat) is taken at the end-of-step face temperatures; each ply's "
+        "heat_J.balance_error in summary.json says how far off it is",
+        job_.thermal->splitter);
+  }
   for (const auto& tc : contact_map_.tool_contacts) face_kind_[tc.part][slot(tc.node, tc.face)] = 0;
   // Ply/ply: G (T_b - T_a) into a, out of b, with the facing surface values.
   if (link_heat_.size() != parts_.size()) link_heat_.assign(parts_.size(), 0.0);

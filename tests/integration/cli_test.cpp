@@ -939,6 +939,38 @@ CommandResult run_job_in(const std::filesystem::path& dir, const json& j, int th
 // path and the time, the frames before it kept, on one thread and on two
 // (the contact beside the element blocks on the first thread, or run by
 // the thread of the ply whose nodes it moves).
+// A splitter that does not report the face values of its step still runs;
+// the log says once that the heat by source is then taken at the end-of-step
+// values, and summary.json's heat says which values it was taken at. The
+// test splitter keeps every temperature: its plies store nothing, so each
+// ply's balance_error shows the whole split as off.
+TEST(Plugins, SplitterWithoutFaceValuesIsNamedOnce) {
+  const std::string warning = "the thermal splitter 'nan_after' does not report its face values";
+  const auto job = small_job("no_face_values", [](json& j) {
+    j["solvers"]["thermal"] = {{"splitter", "nan_after"}, {"fail_time", 1e9}};
+    j["plugin_paths"] = {THERMOSTAMP_TEST_PLUGIN_DIR};
+  });
+  const auto out = job.parent_path() / "out";
+  const auto r = thermostamp("run " + q(job) + " --out " + q(out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto first = r.err.find(warning);
+  ASSERT_NE(first, std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(warning, first + 1), std::string::npos) << "said more than once";
+  const json s = json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["heat"]["by_source_at"], "end-of-step values");
+  EXPECT_LT(s["heat"]["from_tools_J"].get<double>(), -1.0);
+  for (const json& part : s["parts"]) EXPECT_GT(part["heat_J"]["balance_error"].get<double>(), 0.5) << part["name"];
+
+  const auto adi = small_job("with_face_values");
+  const auto out_adi = adi.parent_path() / "out";
+  const auto r_adi = thermostamp("run " + q(adi) + " --out " + q(out_adi));
+  ASSERT_EQ(r_adi.exit_code, 0) << r_adi.err;
+  EXPECT_EQ(r_adi.err.find("does not report its face values"), std::string::npos) << r_adi.err;
+  const json s_adi = json::parse(std::ifstream(out_adi / "summary.json"));
+  EXPECT_EQ(s_adi["heat"]["by_source_at"], "face values");
+  for (const json& part : s_adi["parts"]) EXPECT_LT(part["heat_J"]["balance_error"].get<double>(), 1e-10) << part["name"];
+}
+
 TEST(Plugins, ContactFailureStopsTheRunOnAnyThreadCount) {
   const std::pair<int, const char*> cases[] = {{1, "auto"}, {2, "beside"}, {2, "by_part"}};
   for (const auto& [threads, way] : cases) {
