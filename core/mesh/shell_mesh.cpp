@@ -1,6 +1,7 @@
 #include "mesh/shell_mesh.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -274,10 +275,259 @@ ShellMesh read_gmsh_triangles(const std::filesystem::path& file, double scale) {
   return m;
 }
 
-ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder, double scale) {
-  ShellMesh m = read_gmsh_triangles(file, scale);
+namespace {
+std::string upper(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+// The comma-separated fields of a line, trimmed (an empty last field where
+// the line ends with a comma).
+std::vector<std::string> fields(const std::string& s) {
+  std::vector<std::string> out;
+  std::size_t b = 0;
+  for (;;) {
+    const auto e = s.find(',', b);
+    out.push_back(trim(s.substr(b, e == std::string::npos ? std::string::npos : e - b)));
+    if (e == std::string::npos) break;
+    b = e + 1;
+  }
+  return out;
+}
+// A keyword line's name (upper case, without the '*') and its parameters
+// (names upper case; values as written, without quotes).
+struct Keyword {
+  std::string name;
+  std::map<std::string, std::string> params;
+};
+Keyword keyword(const std::string& line) {
+  Keyword k;
+  const std::vector<std::string> f = fields(line.substr(1));
+  k.name = upper(f[0]);
+  for (std::size_t i = 1; i < f.size(); ++i) {
+    if (f[i].empty()) continue;
+    const auto eq = f[i].find('=');
+    std::string v = eq == std::string::npos ? std::string() : trim(f[i].substr(eq + 1));
+    if (v.size() >= 2 && v.front() == '"' && v.back() == '"') v = v.substr(1, v.size() - 2);
+    k.params[upper(trim(f[i].substr(0, eq)))] = v;
+  }
+  return k;
+}
+long long integer_field(const LineReader& r, const std::string& f, const char* what) {
+  std::size_t used = 0;
+  long long v = 0;
+  try {
+    v = std::stoll(f, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != f.size()) r.fail(std::string("expected ") + what + ", found '" + f + "'");
+  return v;
+}
+double real_field(const LineReader& r, const std::string& f, const char* what) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(f, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != f.size() || !std::isfinite(v)) r.fail(std::string("expected ") + what + ", found '" + f + "'");
+  return v;
+}
+// Abaqus element types by their nodes on the surface: 3-node triangles
+// (shells, membranes, surfaces, rigid facets, plane elements), the
+// 4-node quadrilaterals and second-order surface elements that are
+// refused with their counts, and lines, which are left out.
+int abaqus_corner_count(const std::string& type) {
+  for (const char* t : {"S3", "S3R", "S3RS", "STRI3", "DS3", "M3D3", "R3D3", "SFM3D3", "CPS3", "CPE3", "CAX3"})
+    if (type == t) return 3;
+  return 0;
+}
+bool abaqus_line(const std::string& type) {
+  for (const char* t : {"B31", "B32", "B21", "B22", "T3D2", "T2D2", "R3D2", "RAX2", "R2D2", "SPRINGA", "CONN3D2", "DASHPOTA"})
+    if (type == t) return true;
+  return false;
+}
+}  // namespace
+
+ShellMesh read_abaqus_triangles(const std::filesystem::path& file, double scale) {
+  LineReader r;
+  r.path = file.string();
+  r.in.open(file);
+  if (!r.in) throw std::runtime_error("cannot open mesh file '" + file.string() + "'");
+  // Node numbers are those of a part: each part's nodes apart ("" for
+  // those outside any *PART, such as an assembly's reference points).
+  struct PartNodes {
+    std::unordered_map<long long, int> index;
+    std::vector<double> x;
+    std::vector<long long> tags;
+  };
+  std::map<std::string, PartNodes> nodes;
+  struct Pending {
+    long long tag;
+    std::vector<long long> nodes;
+    int line;
+  };
+  std::map<std::string, std::vector<Pending>> tris;  // by part
+  std::map<std::string, long long> refused;          // element type -> count
+  std::string part;                                  // the *PART being read ("" outside one)
+  enum class Block { None, Node, Element, Instance, Other } block = Block::None;
+  std::string type;      // the *ELEMENT block's TYPE
+  int corners = 0;       // its corners (3), or 0
+  bool line_type = false;
+  std::string pending;   // an element's data line continued on the next line
+  int pending_line = 0;
+  auto element_line = [&](const std::string& text, int line) {
+    const std::vector<std::string> f = fields(text);
+    const long long tag = integer_field(r, f[0], "element number");
+    if (corners == 3) {
+      std::vector<long long> nodes;
+      for (std::size_t i = 1; i < f.size(); ++i)
+        if (!f[i].empty()) nodes.push_back(integer_field(r, f[i], "node number"));
+      if (nodes.size() != 3)
+        r.fail("element " + std::to_string(tag) + " of type " + type + " has " + std::to_string(nodes.size()) +
+               " nodes, expected 3");
+      tris[part].push_back({tag, nodes, line});
+    } else if (!line_type) {
+      ++refused[type];
+    }
+  };
+  std::string s;
+  while (std::getline(r.in, s)) {
+    ++r.line;
+    if (!s.empty() && s.back() == '\r') s.pop_back();
+    const std::string t = trim(s);
+    if (t.empty() || t.rfind("**", 0) == 0) continue;
+    if (!pending.empty()) {  // the rest of an element's node list
+      pending += t;
+      if (t.back() == ',') continue;
+      const int here = r.line;
+      r.line = pending_line;
+      element_line(pending, pending_line);
+      r.line = here;
+      pending.clear();
+      continue;
+    }
+    if (t[0] == '*') {
+      const Keyword k = keyword(t);
+      block = Block::Other;
+      if (k.name == "NODE") {
+        if (auto it = k.params.find("SYSTEM"); it != k.params.end() && upper(it->second) != "R")
+          r.fail("*NODE with SYSTEM=" + it->second + ": only rectangular coordinates (SYSTEM=R) are taken");
+        if (k.params.count("INPUT")) r.fail("*NODE with INPUT=: nodes from another file are not read; write them here");
+        block = Block::Node;
+      } else if (k.name == "ELEMENT") {
+        if (k.params.count("INPUT")) r.fail("*ELEMENT with INPUT=: elements from another file are not read; write them here");
+        auto it = k.params.find("TYPE");
+        if (it == k.params.end() || it->second.empty()) r.fail("*ELEMENT without TYPE=");
+        type = upper(it->second);
+        corners = abaqus_corner_count(type);
+        line_type = abaqus_line(type);
+        block = Block::Element;
+      } else if (k.name == "INCLUDE") {
+        r.fail("*INCLUDE: included files are not read; write the nodes and elements into this file");
+      } else if (k.name == "PART") {
+        part = k.params.count("NAME") ? k.params.at("NAME") : std::string("(unnamed)");
+      } else if (k.name == "END PART") {
+        part.clear();
+      } else if (k.name == "INSTANCE") {
+        block = Block::Instance;
+      }
+      continue;
+    }
+    switch (block) {
+      case Block::Node: {
+        const std::vector<std::string> f = fields(t);
+        if (f.size() < 3) r.fail("expected a node: number, x, y[, z]");
+        const long long tag = integer_field(r, f[0], "node number");
+        const double x = real_field(r, f[1], "x"), y = real_field(r, f[2], "y"),
+                     z = f.size() > 3 && !f[3].empty() ? real_field(r, f[3], "z") : 0.0;
+        PartNodes& pn = nodes[part];
+        if (!pn.index.emplace(tag, static_cast<int>(pn.tags.size())).second)
+          r.fail("node " + std::to_string(tag) + " given twice");
+        pn.tags.push_back(tag);
+        pn.x.insert(pn.x.end(), {x * scale, y * scale, z * scale});
+        break;
+      }
+      case Block::Element:
+        if (t.back() == ',') {
+          pending = t;
+          pending_line = r.line;
+        } else {
+          element_line(t, r.line);
+        }
+        break;
+      case Block::Instance:
+        r.fail("an *INSTANCE placed by a translation or rotation: write the mesh without them (the part's own "
+               "coordinates are read)");
+      default:
+        break;  // data of keywords that carry no mesh (sets, materials, steps, ...)
+    }
+  }
+  if (!pending.empty()) r.fail("an element's node list ends with a comma at the end of the file");
+  if (!refused.empty()) {
+    std::string list;
+    for (const auto& [name, count] : refused) list += (list.empty() ? "" : ", ") + std::to_string(count) + " " + name;
+    throw std::runtime_error(file.string() + ": " + list +
+                             " elements: only 3-node triangles are taken (S3, S3R, M3D3, R3D3, SFM3D3, ...; mesh "
+                             "with triangles, not quadrilaterals or second-order elements)");
+  }
+  if (tris.empty()) throw std::runtime_error(file.string() + ": no 3-node triangles (*ELEMENT, TYPE=S3, ...) found");
+  if (tris.size() > 1) {
+    std::string list;
+    for (const auto& [p, t] : tris) list += (list.empty() ? "" : ", ") + (p.empty() ? "outside a *PART" : p);
+    throw std::runtime_error(file.string() + ": triangles in " + std::to_string(tris.size()) + " parts (" + list +
+                             "): give each ply and each tool a file of its own");
+  }
+  const std::string& used = tris.begin()->first;
+  PartNodes& pn = nodes[used];
+  ShellMesh m;
+  std::vector<long long> tri_tags;
+  for (const Pending& e : tris.begin()->second) {
+    for (long long n : e.nodes) {
+      auto it = pn.index.find(n);
+      if (it == pn.index.end())
+        throw std::runtime_error(file.string() + ":" + std::to_string(e.line) + ": element " + std::to_string(e.tag) +
+                                 " refers to unknown node " + std::to_string(n));
+      m.triangles.push_back(it->second);
+    }
+    tri_tags.push_back(e.tag);
+  }
+  m.x = std::move(pn.x);
+  m.element_tags = std::move(tri_tags);
+  m.node_tags = std::move(pn.tags);
+  return m;
+}
+
+bool is_abaqus_file(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".inp";
+}
+
+ShellMesh read_mesh_triangles(const std::filesystem::path& file, double scale) {
+  return is_abaqus_file(file) ? read_abaqus_triangles(file, scale) : read_gmsh_triangles(file, scale);
+}
+
+ShellMesh read_mesh(const std::filesystem::path& file, bool reorder, double scale) {
+  ShellMesh m = read_mesh_triangles(file, scale);
   // Drop nodes no triangle uses (points, geometry vertices); the others in
   // the order in which the triangles first use them.
+  number_nodes_by_first_use(m);
+  finalize_mesh(m);
+  if (reorder) {
+    reorder_elements(m, locality_order(m));
+    number_nodes_by_first_use(m);
+  }
+  return m;
+}
+
+ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder, double scale) {
+  ShellMesh m = read_gmsh_triangles(file, scale);
   number_nodes_by_first_use(m);
   finalize_mesh(m);
   if (reorder) {

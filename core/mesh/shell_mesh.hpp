@@ -23,6 +23,26 @@ struct ShellMesh {
 ShellMesh rectangle_mesh(const std::array<double, 3>& origin, const std::array<double, 2>& size,
                          const std::array<int, 2>& divisions, bool crossed = false);
 
+// A ply's or a tool's mesh file by its extension: Abaqus input (.inp, see
+// read_abaqus_triangles) or Gmsh (any other), read as read_gmsh() reads
+// Gmsh files.
+ShellMesh read_mesh(const std::filesystem::path& file, bool reorder = false, double scale = 1.0);
+ShellMesh read_mesh_triangles(const std::filesystem::path& file, double scale = 1.0);
+bool is_abaqus_file(const std::filesystem::path& file);
+// Abaqus input file (.inp): the 3-node triangles of one part (or of a file
+// without *PART; nodes elsewhere, such as an assembly's reference points,
+// are left out) and that part's nodes, in rectangular coordinates (z 0
+// where left out), elements of 3-node triangle types (S3, S3R, S3RS, STRI3, DS3,
+// M3D3, R3D3, SFM3D3, CPS3, CPE3, CAX3), node lists continued on the next
+// line after a trailing comma; keywords and parameters in any case,
+// comment lines (**) and the data of other keywords (sets, materials,
+// steps) skipped. 2-node line elements are left out; any other element
+// type (quadrilaterals, second-order elements, solids) is refused with its
+// counts, as are triangles in more than one part, an *INSTANCE placed by a
+// translation or rotation, *INCLUDE and INPUT= (std::runtime_error naming
+// the file and line). Tags: the node and element numbers.
+ShellMesh read_abaqus_triangles(const std::filesystem::path& file, double scale = 1.0);
+
 // Gmsh ASCII 2.2 or 4.1: 3-node triangles; points and lines are left out,
 // any other element is refused (std::runtime_error naming their counts).
 // The coordinates are taken times `scale`.

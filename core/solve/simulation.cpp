@@ -385,7 +385,7 @@ void Simulation::build_parts() {
     st->def = &def;
     try {
       st->mesh = def.mesh.kind == MeshDef::Kind::File
-                     ? read_gmsh(def.mesh.file, def.mesh.reorder, def.mesh.scale)
+                     ? read_mesh(def.mesh.file, def.mesh.reorder, def.mesh.scale)
                      : rectangle_mesh(def.mesh.origin, def.mesh.size, def.mesh.divisions, def.mesh.crossed);
     } catch (const std::exception& e) {
       throw JobError(def.pointer + "/mesh", e.what());

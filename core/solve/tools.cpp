@@ -284,7 +284,7 @@ RigidTool::RigidTool(const ToolDef& def) : def_(&def) {
         read_stl(s.file, ptr, xyz, tri);
         for (double& c : xyz) c *= s.scale;
       } else {
-        ShellMesh m = read_gmsh_triangles(s.file, s.scale);
+        ShellMesh m = read_mesh_triangles(s.file, s.scale);
         xyz = m.x;
         tri = m.triangles;
       }

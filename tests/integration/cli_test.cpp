@@ -595,6 +595,76 @@ TEST(Cli, ValidateTellsHowToolsMove) {
   EXPECT_EQ(thermal.out.find("from its surface's position"), std::string::npos) << thermal.out;
 }
 
+// A ply and a tool meshed in Abaqus input files run as the same meshes in
+// Gmsh and STL files do (the same results to round-off: the tool's STL
+// facets are merged into vertices in another order); a file of
+// quadrilaterals is refused with the JSON path (exit status 2).
+TEST(Cli, AbaqusMeshFilesRunAsTheirGmshAndStlTwins) {
+  const auto dir = temp_dir("abaqus_job");
+  const json base = read_job_document(small_job("abaqus_base"));
+  const auto& ply = base["parts"][0]["mesh"];
+  const ShellMesh m = rectangle_mesh(ply["origin"].get<std::array<double, 3>>(), ply["size"].get<std::array<double, 2>>(),
+                                     ply["divisions"].get<std::array<int, 2>>());
+  write_shuffled_gmsh(dir / "ply.msh", m, 3);
+  write_shuffled_abaqus(dir / "ply.inp", m, 3);
+  const double lo = -0.01, hi = 0.06;
+  write_square_stl(dir / "die.stl", lo, hi, 0.0);
+  std::ofstream(dir / "die.inp") << "*Part, name=Die\n*Node\n1, " << lo << ", " << lo << ", 0\n2, " << hi << ", " << lo
+                                 << ", 0\n3, " << hi << ", " << hi << ", 0\n4, " << lo << ", " << hi
+                                 << ", 0\n*Element, type=R3D3\n1, 1, 2, 3\n2, 1, 3, 4\n*End Part\n";
+  std::ofstream(dir / "quads.inp") << "*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n"
+                                      "*Element, type=S4R\n1, 1, 2, 3, 4\n";
+  auto job_with = [&](const std::string& name, const std::string& ply_file, const std::string& die_file) {
+    json j = base;
+    j["name"] = name;
+    j["parts"][0]["mesh"] = {{"file", (dir / ply_file).string()}};
+    j["tools"][0]["surface"] = {{"type", "mesh"}, {"file", (dir / die_file).string()}};
+    std::ofstream(dir / (name + ".json")) << j.dump(2);
+    return dir / (name + ".json");
+  };
+  const auto gmsh = job_with("gmsh", "ply.msh", "die.stl"), abaqus = job_with("abaqus", "ply.inp", "die.inp");
+  const auto v = thermostamp("validate " + q(abaqus));
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  EXPECT_NE(v.out.find("2 triangles, 4 vertices from " + (dir / "die.inp").string()), std::string::npos) << v.out;
+  EXPECT_NE(v.out.find(std::to_string(m.num_elements()) + " triangles, " + std::to_string(m.num_nodes()) +
+                       " nodes from " + (dir / "ply.inp").string()),
+            std::string::npos)
+      << v.out;
+  for (const auto& job : {gmsh, abaqus}) {
+    const auto r = thermostamp("run " + q(job) + " --out " + q(dir / job.stem()) + " --quiet");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  const auto c = thermostamp("compare " + q(dir / "gmsh") + " " + q(dir / "abaqus") + " --json");
+  const json cmp = json::parse(c.out);
+  int compared = 0;
+  for (const char* kind : {"fields", "probes", "series"})
+    for (const auto& f : cmp[kind]) {
+      EXPECT_LE(f["max_abs"].get<double>(), 1e-12 * f["scale"].get<double>()) << f.dump();
+      ++compared;
+    }
+  EXPECT_GT(compared, 10);
+  // The formed ply keeps the file's numbers: the same in both.
+  const auto tags = [&](const std::string& run) {
+    const hid_t file = H5Fopen((dir / run / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    auto both = std::pair{read_dataset<double>(file, "parts/ply_bottom/node_tags"),
+                          read_dataset<double>(file, "parts/ply_bottom/element_tags")};
+    H5Fclose(file);
+    return both;
+  };
+  EXPECT_EQ(tags("gmsh"), tags("abaqus"));
+  EXPECT_EQ(tags("abaqus").second.size(), static_cast<std::size_t>(m.num_elements()));
+  const auto bad = thermostamp("validate " + q(job_with("quads", "quads.inp", "die.inp")));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("error: /parts/0/mesh: " + (dir / "quads.inp").string() +
+                         ": 1 S4R elements: only 3-node triangles are taken"),
+            std::string::npos)
+      << bad.err;
+  const auto bad_tool = thermostamp("validate " + q(job_with("quad_tool", "ply.inp", "quads.inp")));
+  EXPECT_EQ(bad_tool.exit_code, 2);
+  EXPECT_NE(bad_tool.err.find("error: /tools/0/surface/file: cannot read the tool mesh"), std::string::npos)
+      << bad_tool.err;
+}
+
 TEST(Cli, MeshFilesInMillimetresTakeAScale) {
   const auto dir = temp_dir("mesh_scale");
   const json base = read_job_document(small_job("mesh_scale_base"));

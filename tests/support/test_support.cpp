@@ -311,6 +311,31 @@ void write_shuffled_gmsh(const std::filesystem::path& file, const ShellMesh& mes
   f << "$EndElements\n";
 }
 
+void write_shuffled_abaqus(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed,
+                           const std::string& type) {
+  std::vector<int> order(mesh.num_elements());
+  for (int e = 0; e < mesh.num_elements(); ++e) order[e] = e;
+  if (seed != 0) std::shuffle(order.begin(), order.end(), std::mt19937(seed));
+  std::ofstream f(file);
+  f.precision(17);
+  f << "*Heading\n** Job name: ply Model name: Model-1\n*Preprint, echo=NO, model=NO, history=NO, contact=NO\n"
+       "**\n** PARTS\n**\n*Part, name=\"Ply\"\n*Node\n";
+  for (int i = mesh.num_nodes() - 1; i >= 0; --i)
+    f << "  " << shuffled_node_tag(i) << ", " << mesh.x[3 * i] << ", " << mesh.x[3 * i + 1] << ", " << mesh.x[3 * i + 2]
+      << '\n';
+  f << "*element, TYPE=" << type << ", elset=PLY\n";
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const int e = order[k];
+    f << shuffled_element_tag(e) << ", " << shuffled_node_tag(mesh.triangles[3 * e]) << ","
+      << (k % 7 == 3 ? "\n" : " ") << shuffled_node_tag(mesh.triangles[3 * e + 1]) << ", "
+      << shuffled_node_tag(mesh.triangles[3 * e + 2]) << '\n';
+  }
+  f << "*Nset, nset=EDGE\n " << shuffled_node_tag(0) << ", " << shuffled_node_tag(1) << "\n*Elset, elset=ALL, generate\n"
+    << " 1, 10000, 1\n*Shell Section, elset=PLY, material=PA66\n0.0003, 5\n*End Part\n**\n** ASSEMBLY\n**\n"
+       "*Assembly, name=Assembly\n*Instance, name=Ply-1, part=Ply\n*End Instance\n*Node\n      1, 5., 5., 5.\n"
+       "*Nset, nset=RP\n 1,\n*End Assembly\n*Material, name=PA66\n*Density\n 1500.,\n";
+}
+
 void write_parallelogram(const std::filesystem::path& file, double L, double W, double s, int nx, int ny) {
   std::ofstream f(file);
   f << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << (nx + 1) * (ny + 1) << "\n";

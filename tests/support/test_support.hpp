@@ -105,6 +105,13 @@ void write_revolved_stl(const std::filesystem::path& file, const json& surface, 
 void write_shuffled_gmsh(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed);
 inline long long shuffled_node_tag(int node) { return 7 + 3LL * node; }
 inline long long shuffled_element_tag(int element) { return 100 + element; }
+// The same nodes and triangles, tags and order as write_shuffled_gmsh, as
+// Abaqus writes an input file: a heading, comments, the mesh in a *Part
+// (element type `type`, every 7th element's node list continued on a second
+// line, keywords in mixed case), node and element sets, an assembly with
+// an instance and a reference point outside the part, and a material.
+void write_shuffled_abaqus(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed,
+                           const std::string& type = "S3R");
 
 // A Gmsh 2.2 mesh of the parallelogram x = xi + s y, xi in [0, L], y in
 // [0, W]: its slanted edges follow the level lines of cos(pi xi / L).

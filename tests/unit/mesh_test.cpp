@@ -240,5 +240,75 @@ TEST(Gmsh, MalformedFileNamesTheLine) {
   }
 }
 
+// An Abaqus input file as Abaqus/CAE writes one (a part, sets, an
+// assembly with a reference point outside the part, a material; node
+// lists continued on a second line) gives the mesh the same nodes and
+// triangles give as a Gmsh file: the same coordinates, corners, tags and
+// neighbours, bit for bit, in the file's order and reordered, and scaled.
+TEST(Abaqus, ReadsTheMeshGmshReads) {
+  const auto dir = test::temp_dir("abaqus");
+  const ShellMesh m = rectangle_mesh({0.01, -0.02, 0.003}, {0.12, 0.08}, {9, 6}, true);
+  test::write_shuffled_gmsh(dir / "ply.msh", m, 5);
+  test::write_shuffled_abaqus(dir / "ply.inp", m, 5);
+  test::write_shuffled_abaqus(dir / "PLY_M3D3.INP", m, 5, "M3D3");
+  EXPECT_TRUE(is_abaqus_file(dir / "PLY_M3D3.INP"));
+  EXPECT_FALSE(is_abaqus_file(dir / "ply.msh"));
+  for (const bool reorder : {false, true})
+    for (const double scale : {1.0, 0.001}) {
+      const ShellMesh g = read_mesh(dir / "ply.msh", reorder, scale);
+      for (const char* name : {"ply.inp", "PLY_M3D3.INP"}) {
+        const ShellMesh a = read_mesh(dir / name, reorder, scale);
+        EXPECT_EQ(a.num_elements(), m.num_elements()) << name;
+        EXPECT_EQ(a.x, g.x) << name << reorder << scale;
+        EXPECT_EQ(a.triangles, g.triangles) << name << reorder << scale;
+        EXPECT_EQ(a.neighbours, g.neighbours) << name << reorder << scale;
+        EXPECT_EQ(a.node_tags, g.node_tags) << name << reorder << scale;
+        EXPECT_EQ(a.element_tags, g.element_tags) << name << reorder << scale;
+      }
+    }
+  // The reference point (node 1 of the assembly) is not one of the mesh's.
+  const ShellMesh t = read_mesh_triangles(dir / "ply.inp");
+  EXPECT_EQ(t.num_nodes(), m.num_nodes());
+  EXPECT_LT(box_span(t.x), 0.2);
+}
+
+// What the reader cannot take is refused with the file, and the line where
+// there is one: quadrilaterals and second-order elements (counted by type),
+// triangles in two parts, an instance placed by a translation, included
+// files, other coordinate systems, a node given twice, an unknown node, a
+// malformed number, no triangles.
+TEST(Abaqus, RefusesWhatItCannotRead) {
+  const auto dir = test::temp_dir("abaqus_bad");
+  const std::string nodes = "*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {nodes + "*Element, type=S3\n1, 1, 2, 3\n*Element, type=S4R\n2, 1, 2, 3, 4\n3, 1, 2, 3, 4\n"
+               "*Element, type=STRI65\n4, 1, 2, 3, 1, 2, 3\n*Element, type=B31\n5, 1, 2\n",
+       "bad1.inp: 2 S4R, 1 STRI65 elements: only 3-node triangles are taken"},
+      {"*Part, name=A\n" + nodes + "*Element, type=S3\n1, 1, 2, 3\n*End Part\n*Part, name=B\n" + nodes +
+           "*Element, type=R3D3\n1, 1, 3, 4\n*End Part\n",
+       "bad2.inp: triangles in 2 parts (A, B): give each ply and each tool a file of its own"},
+      {"*Part, name=A\n" + nodes + "*Element, type=S3\n1, 1, 2, 3\n*End Part\n*Assembly, name=X\n"
+           "*Instance, name=A-1, part=A\n0.1, 0., 0.\n*End Instance\n",
+       "bad3.inp:12: an *INSTANCE placed by a translation or rotation"},
+      {"*INCLUDE, INPUT=mesh.inp\n", "bad4.inp:1: *INCLUDE: included files are not read"},
+      {"*Node, system=C\n1, 1, 0, 0\n", "bad5.inp:1: *NODE with SYSTEM=C: only rectangular coordinates"},
+      {nodes + "2, 5, 5, 5\n", "bad6.inp:6: node 2 given twice"},
+      {nodes + "*Element, type=S3\n1, 1, 2, 3\n2, 1, 3,\n 9\n", "bad7.inp:8: element 2 refers to unknown node 9"},
+      {"*Node\n1, 0, zero, 0\n", "bad8.inp:2: expected y, found 'zero'"},
+      {nodes + "*Element, type=S3\n1, 1, 2\n", "bad9.inp:7: element 1 of type S3 has 2 nodes, expected 3"},
+      {nodes, "bad10.inp: no 3-node triangles"}};
+  int k = 0;
+  for (const auto& [text, message] : cases) {
+    const std::string name = "bad" + std::to_string(++k) + ".inp";
+    std::ofstream(dir / name) << text;
+    try {
+      read_mesh(dir / name);
+      ADD_FAILURE() << name << " was read";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ts
