@@ -35,7 +35,7 @@ constexpr const char* kUsage = R"(usage:
                   [--restart] [--checkpoint-minutes M]
   thermostamp report DIR [--against OTHER]   # PNG figures into DIR/figures (with OTHER: both runs on the same axes)
   thermostamp compare DIR_A DIR_B [--json] [--rtol R] [--from T]   # how far two runs' results are apart
-  thermostamp export DIR [--time T] [--out FOLDER] [--whole]   # each ply of a frame as a Gmsh mesh with its fields
+  thermostamp export DIR [--time T] [--out FOLDER] [--whole] [--format gmsh|abaqus|calculix]   # each ply as a mesh
   thermostamp --version
 
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
@@ -71,7 +71,13 @@ last frame (with --time T: the frame nearest to T), Gmsh 2.2 ASCII: the
 mid-surface at that frame's positions, the frame's node fields as $NodeData
 and its element fields (shear angle, fibre direction, stresses, strains,
 curvatures) as $ElementData; a mesh file a job can read; --whole: a ply
-of a model reduced by symmetry planes mirrored into the whole ply
+of a model reduced by symmetry planes mirrored into the whole ply;
+--format abaqus: FOLDER/<ply>.inp instead, Abaqus input: the mid-surface
+as S3 shells in an element set named after the ply, each element's
+fibre direction as an *ORIENTATION (from a distribution) and each node's
+mean temperature as *INITIAL CONDITIONS, for a structural model; a mesh
+file a job can read too; --format calculix: the same for CalculiX (its
+distribution of orientations without Abaqus's default line)
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -96,6 +102,7 @@ struct Args {
   double from = -std::numeric_limits<double>::infinity();  // compare: the first time compared (s)
   std::optional<double> time;  // export: the frame's time (s; the last frame without it)
   bool whole = false;          // export: mirrored at the symmetry planes
+  std::string format = "gmsh";  // export: gmsh, abaqus or calculix
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -111,7 +118,7 @@ const std::map<std::string, std::vector<std::string>>& command_options() {
       {"study", {"--out", "--threads", "--quiet", "--keep-subnormals", "--restart", "--checkpoint-minutes"}},
       {"report", {"--against"}},
       {"compare", {"--json", "--rtol", "--from"}},
-      {"export", {"--time", "--out", "--whole"}}};
+      {"export", {"--time", "--out", "--whole", "--format"}}};
   return m;
 }
 
@@ -173,6 +180,10 @@ Args parse(int argc, char** argv) {
       a.restart = true;
     } else if (s == "--whole") {
       a.whole = true;
+    } else if (s == "--format") {
+      a.format = value(s);
+      if (a.format != "gmsh" && a.format != "abaqus" && a.format != "calculix")
+        throw UsageError("--format expects gmsh, abaqus or calculix, found '" + a.format + "'");
     } else if (s == "--keep-subnormals") {
       a.keep_subnormals = true;
     } else if (s == "--json") {
@@ -421,7 +432,10 @@ int main(int argc, char** argv) {
       const std::filesystem::path dir = a.positional[0];
       ts::ExportResult r;
       try {
-        r = ts::export_gmsh(dir, a.time, a.out.empty() ? dir / "export" : std::filesystem::path(a.out), a.whole);
+        r = ts::export_plies(dir, a.time, a.out.empty() ? dir / "export" : std::filesystem::path(a.out), a.whole,
+                             a.format == "abaqus"     ? ts::ExportFormat::Abaqus
+                             : a.format == "calculix" ? ts::ExportFormat::CalculiX
+                                                      : ts::ExportFormat::Gmsh);
       } catch (const std::exception& e) {  // 2: nothing to export as asked; 3: a file that cannot be read
         std::cerr << "error: export: " << e.what() << "\n";
         return dynamic_cast<const ts::ExportInputError*>(&e) ? 2 : 3;
@@ -431,11 +445,19 @@ int main(int argc, char** argv) {
       for (const auto& p : r.plies) {
         std::cout << p.file.string() << ": ply '" << p.name << "' at " << at << ", "
                   << (p.mirrored.empty() ? std::string() : "mirrored at " + ts::join(p.mirrored, " = 0, ") + " = 0, ")
-                  << p.nodes << " nodes, "
-                  << p.triangles << " triangles; node data: "
-                  << (p.node_data.empty() ? std::string("none") : ts::join(p.node_data))
-                  << "; element data: " << (p.element_data.empty() ? std::string("none") : ts::join(p.element_data))
-                  << "\n";
+                  << p.nodes << " nodes, " << p.triangles << " triangles";
+        if (a.format != "gmsh")
+          std::cout << " in element set " << p.elset << "; orientations: "
+                    << (p.orientation_from.empty() ? std::string("none (no fibre_direction in the frame)")
+                                                   : "from " + p.orientation_from + " (" + p.elset + "_ORIENTATION)")
+                    << "; initial temperatures: "
+                    << (p.temperature_from.empty() ? std::string("none (no temperature in the frame)")
+                                                   : "from " + p.temperature_from)
+                    << "\n";
+        else
+          std::cout << "; node data: " << (p.node_data.empty() ? std::string("none") : ts::join(p.node_data))
+                    << "; element data: "
+                    << (p.element_data.empty() ? std::string("none") : ts::join(p.element_data)) << "\n";
       }
       return 0;
     }

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <map>
 
@@ -195,7 +197,95 @@ bool mirror(PlyData& p, int d, const std::string& name, const std::array<double,
   return true;
 }
 
+// A number as Abaqus reads one: at most 20 characters (its limit for a
+// floating-point field, which CalculiX keeps too), with as many
+// significant digits as fit (15, at least 13).
+std::string abaqus_number(double v) {
+  char buf[40];
+  for (int digits = 15; digits > 13; --digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    if (std::strlen(buf) <= 20) return buf;
+  }
+  std::snprintf(buf, sizeof buf, "%.13g", v);
+  return buf;
+}
+
+// <ply>.inp (see ExportFormat). Returns false where the file cannot be
+// written.
+bool write_abaqus(const std::filesystem::path& file, const std::string& name, const PlyData& d, double time,
+                  const std::string& source, bool calculix, ExportedPly& ply) {
+  std::ofstream m(file);
+  if (!m) return false;
+  const std::string set = abaqus_name(name);
+  ply.elset = set;
+  const std::size_t nodes = d.x.size() / 3, triangles = d.tri.size() / 3;
+  m << "*Heading\n ply '" << name << "' at t = " << abaqus_number(time) << " s, from " << source << "\n"
+    << "** Written by thermostamp export --format " << (calculix ? "calculix" : "abaqus")
+    << ". Units: m, degC. The mid-surface at the frame's positions\n"
+    << "** as 3-node shells (element set " << set << "); give them a section, for instance\n"
+    << "**   *Shell Section, elset=" << set << ", material=..., orientation=" << set << "_ORIENTATION\n"
+    << "*Node, nset=" << set << "_NODES\n";
+  for (std::size_t i = 0; i < nodes; ++i)
+    m << d.node_tag[i] << ", " << abaqus_number(d.x[3 * i]) << ", " << abaqus_number(d.x[3 * i + 1]) << ", "
+      << abaqus_number(d.x[3 * i + 2])
+      << '\n';
+  m << "*Element, type=S3, elset=" << set << '\n';
+  for (std::size_t e = 0; e < triangles; ++e)
+    m << d.element_tag[e] << ", " << d.node_tag[static_cast<std::size_t>(d.tri[3 * e])] << ", "
+      << d.node_tag[static_cast<std::size_t>(d.tri[3 * e + 1])] << ", "
+      << d.node_tag[static_cast<std::size_t>(d.tri[3 * e + 2])] << '\n';
+  const Field* fibre = nullptr;
+  const Field* temperature = nullptr;
+  for (const Field& f : d.fields) {
+    if (f.name == "fibre_direction" && f.cells && f.components == 3) fibre = &f;
+    if (!f.cells && f.components == 1 && (f.name == "temperature_mean" || (f.name == "temperature" && !temperature)))
+      temperature = &f;
+  }
+  if (fibre) {
+    // The material frame of each element: the fibre direction a (1) and
+    // n x a (2), n the element's unit normal at the frame's positions.
+    ply.orientation_from = fibre->name;
+    m << "** Each element's material directions: 1 along the fibres, 2 = n x 1 in the element's plane\n"
+      << "*Distribution Table, name=" << set << "_FIBRES_TABLE\nCOORD3D, COORD3D\n"
+      << "*Distribution, name=" << set << "_FIBRES, location=ELEMENT, table=" << set << "_FIBRES_TABLE\n";
+    if (!calculix) m << ", 1., 0., 0., 0., 1., 0.\n";  // the default, which Abaqus asks for first
+    for (std::size_t e = 0; e < triangles; ++e) {
+      const double* p0 = &d.x[3 * static_cast<std::size_t>(d.tri[3 * e])];
+      const double* p1 = &d.x[3 * static_cast<std::size_t>(d.tri[3 * e + 1])];
+      const double* p2 = &d.x[3 * static_cast<std::size_t>(d.tri[3 * e + 2])];
+      const double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+      const double v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+      double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      const double ln = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      for (double& c : n) c = ln > 0 ? c / ln : 0.0;
+      const double* a = &fibre->v[3 * e];
+      const double b[3] = {n[1] * a[2] - n[2] * a[1], n[2] * a[0] - n[0] * a[2], n[0] * a[1] - n[1] * a[0]};
+      m << d.element_tag[e] << ", " << abaqus_number(a[0]) << ", " << abaqus_number(a[1]) << ", "
+        << abaqus_number(a[2]) << ", "
+        << abaqus_number(b[0]) << ", " << abaqus_number(b[1]) << ", " << abaqus_number(b[2]) << '\n';
+    }
+    m << "*Orientation, name=" << set << "_ORIENTATION\n" << set << "_FIBRES\n3, 0.\n";
+  }
+  if (temperature) {
+    ply.temperature_from = temperature->name;
+    m << "** The nodes' temperatures (" << temperature->name << ", degC) at t = " << abaqus_number(time) << " s\n"
+      << "*Initial Conditions, type=TEMPERATURE\n";
+    for (std::size_t i = 0; i < nodes; ++i) m << d.node_tag[i] << ", " << abaqus_number(temperature->v[i]) << '\n';
+  }
+  m.close();
+  return static_cast<bool>(m);
+}
+
 }  // namespace
+
+std::string abaqus_name(const std::string& ply) {
+  std::string s;
+  for (const char c : ply)
+    s += std::isalnum(static_cast<unsigned char>(c)) ? static_cast<char>(std::toupper(static_cast<unsigned char>(c)))
+                                                      : '_';
+  if (s.empty() || !std::isalpha(static_cast<unsigned char>(s[0]))) s = "P_" + s;
+  return s;
+}
 
 std::optional<MirrorRule> mirror_rule(const std::string& field) {
   if (field == "displacement" || field == "velocity") return MirrorRule::Vector;
@@ -211,6 +301,11 @@ std::optional<MirrorRule> mirror_rule(const std::string& field) {
 
 ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double> time,
                          const std::filesystem::path& out, bool whole) {
+  return export_plies(dir, time, out, whole, ExportFormat::Gmsh);
+}
+
+ExportResult export_plies(const std::filesystem::path& dir, std::optional<double> time,
+                          const std::filesystem::path& out, bool whole, ExportFormat format) {
   const auto h5 = dir / "results.h5";
   if (!std::filesystem::is_directory(dir))
     throw ExportInputError("'" + dir.string() + "' is not a folder");
@@ -298,6 +393,14 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
     }
     ply.nodes = static_cast<int>(d.x.size() / 3);
     ply.triangles = static_cast<int>(d.tri.size() / 3);
+    if (format != ExportFormat::Gmsh) {
+      ply.file = out / (name + ".inp");
+      if (!write_abaqus(ply.file, name, d, res.time, h5.string() + " (" + group + ")",
+                        format == ExportFormat::CalculiX, ply))
+        throw std::runtime_error("cannot write '" + ply.file.string() + "'");
+      res.plies.push_back(std::move(ply));
+      continue;
+    }
     ply.file = out / (name + ".msh");
     std::ofstream m(ply.file);
     if (!m) throw std::runtime_error("cannot write '" + ply.file.string() + "'");

@@ -25,7 +25,19 @@ struct ExportedPly {
   int nodes = 0, triangles = 0;
   std::vector<std::string> node_data, element_data;  // the fields written
   std::vector<std::string> mirrored;                  // whole: the planes mirrored at ("x", "y", "z")
+  // Abaqus: the element set's name, and the fields the orientations and
+  // the initial temperatures were written from ("" for none)
+  std::string elset, orientation_from, temperature_from;
 };
+
+// Gmsh 2.2 ASCII (<ply>.msh, every field), or Abaqus input (<ply>.inp: the
+// mesh as S3 shells in an element set named after the ply, each element's
+// material orientation from the frame's fibre direction as a distribution
+// and an *ORIENTATION, and each node's mean temperature as *INITIAL
+// CONDITIONS, type=TEMPERATURE), or the same for CalculiX (<ply>.inp,
+// its distribution without the default line that Abaqus asks for first:
+// CalculiX 2.20 gives that line's directions to every element).
+enum class ExportFormat { Gmsh, Abaqus, CalculiX };
 
 // How a field's values change in the mirror image of a ply across a plane
 // normal to axis d: kept (scalars), the d-th component negated (vectors:
@@ -64,5 +76,11 @@ struct ExportResult {
 // smallest power of 10 at least as large as that half's largest number.
 ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double> time,
                          const std::filesystem::path& out, bool whole = false);
+// The same in either format.
+ExportResult export_plies(const std::filesystem::path& dir, std::optional<double> time,
+                          const std::filesystem::path& out, bool whole, ExportFormat format);
+// An Abaqus name for a ply: letters, digits and underscores, upper case,
+// starting with a letter (P_ put before one that does not).
+std::string abaqus_name(const std::string& ply);
 
 }  // namespace ts

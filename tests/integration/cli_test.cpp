@@ -2328,6 +2328,20 @@ TEST(Export, PliesOfAFrameAsGmshMeshes) {
   EXPECT_EQ(last.exit_code, 0) << last.err;
   EXPECT_NE(last.out.find(" s (frames/000004 of results.h5, 5 frames)"), std::string::npos) << last.out;
   EXPECT_TRUE(std::filesystem::exists(dir / "run" / "export" / "ply_bottom.msh"));
+  // Another format, and what --format refuses.
+  const auto inp = thermostamp("export " + q(dir / "run") + " --format abaqus --out " + q(dir / "abaqus"));
+  EXPECT_EQ(inp.exit_code, 0) << inp.err;
+  const ShellMesh formed = read_mesh(dir / "abaqus" / "ply_top.inp");
+  const ShellMesh as_gmsh = read_mesh(dir / "run" / "export" / "ply_top.msh");
+  EXPECT_EQ(formed.element_tags, as_gmsh.element_tags);
+  EXPECT_EQ(formed.node_tags, as_gmsh.node_tags);
+  const auto nope = thermostamp("export " + q(dir / "run") + " --format vtk");
+  EXPECT_EQ(nope.exit_code, 2);
+  EXPECT_NE(nope.err.find("error: --format expects gmsh, abaqus or calculix, found 'vtk'"), std::string::npos)
+      << nope.err;
+  const auto elsewhere = thermostamp("validate " + q(dir / "job.json") + " --format abaqus");
+  EXPECT_EQ(elsewhere.exit_code, 2);
+  EXPECT_NE(elsewhere.err.find("error: --format does not apply to 'validate'"), std::string::npos) << elsewhere.err;
   // What cannot be exported: one line, exit status 2.
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"export " + q(dir / "run") + " --time 0.5",

@@ -17,6 +17,7 @@
 // order) and compared; so are the finest meshes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -28,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "mesh/shell_mesh.hpp"
 #include "test_support.hpp"
 
 namespace ts::test {
@@ -388,6 +390,162 @@ TEST(CalculiX, CornerLoadedPlateBendsInTwoDimensions) {
         EXPECT_LT(std::abs(e20), 0.75 * std::abs(e10)) << pattern << ", " << kPlateProbeName[k];
       }
     }
+  }
+}
+
+// `thermostamp export --format abaqus / calculix`: a formed ply into a
+// structural model. A flat 0.1 x 0.1 m ply (6 x 6 crossed cells, held, so
+// it stays flat) with its fibres at 30 degrees to x, exported after a few
+// thermal steps. The file holds the frame's nodes and triangles with their
+// numbers, each element's frame (1 along the fibres, 2 = n x 1) and each
+// node's mean temperature, as results.h5 has them (to the 15 significant
+// digits that fit Abaqus's 20 characters). CalculiX then loads the ply in
+// tension along x with an orthotropic material (E1 200 MPa, E2 20 MPa, G12
+// 8 MPa, no Poisson coupling) through the exported orientation: the
+// stress field is homogeneous, so linear triangles give the closed form of
+// the rotated compliance, u_x = sigma S11' x, u_y = sigma (S12' y + S16' x)
+// with the left edge held in x and its lower corner in y. An orientation
+// lost or turned shows in u_x (at 0 degrees 5.0e-5 m instead of 2.94e-4 m)
+// or in the sign of u_y (at -30 degrees). The Abaqus file is the CalculiX
+// one with the distribution's default line that Abaqus asks for first;
+// given to CalculiX 2.20, that line's directions go to every element
+// (checked: u_x 5.0e-5 m), so the two formats differ by that line only.
+TEST(CalculiX, ExportedPlyCarriesItsFibreFrameAndTemperatures) {
+  if (!have_ccx()) GTEST_SKIP() << "ccx not found (Debian package calculix-ccx; scripts/setup installs it)";
+  const auto dir = temp_dir("export_ccx");
+  const double L = 0.1, h = 0.0005, deg = 30.0, c = std::cos(deg * M_PI / 180), s = std::sin(deg * M_PI / 180);
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j = {{"format", "thermostamp-job/1"}, {"name", "flat"}, {"time", {{"end", 0.002}}}, {"materials", j["materials"]}};
+  j["parts"] = json::array({{{"name", "ply 1"},
+                             {"mesh",
+                              {{"generator", "rectangle"}, {"origin", {0.0, 0.0, 0.0}}, {"size", {L, L}},
+                               {"divisions", {6, 6}}, {"pattern", "crossed"}}},
+                             {"thickness", h}, {"material", "pa66_cf_ud"}, {"fibre_direction", {c, s, 0.0}},
+                             {"initial_temperature", 300.0}, {"thickness_layers", 4}}});
+  j["interactions"] = json::array(
+      {{{"type", "heat_exchange"}, {"part", "ply 1"}, {"face", "top"}, {"h", 2000.0}, {"ambient", 20.0}}});
+  j["constraints"] = json::array({{{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}},
+                                   {"dofs", {"x", "y", "z"}}}});
+  j["solvers"] = {{"mechanics", {{"mass_scaling", {{"target_dt", 1e-5}}}}}, {"thermal", {{"splitter", "adi"}}}};
+  j["output"] = {{"interval", 0.001}, {"fields", {"temperature_mean", "fibre_direction", "shear_angle"}}};
+  std::ofstream(dir / "flat.json") << j.dump(2);
+  ASSERT_EQ(thermostamp("run " + q(dir / "flat.json") + " --quiet --out " + q(dir / "run")).exit_code, 0);
+  for (const char* format : {"abaqus", "calculix"}) {
+    const auto r = thermostamp("export " + q(dir / "run") + " --format " + format + " --out " + q(dir / format));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("85 nodes, 144 triangles in element set PLY_1; orientations: from fibre_direction "
+                         "(PLY_1_ORIENTATION); initial temperatures: from temperature_mean"),
+              std::string::npos)
+        << r.out;
+  }
+  auto lines = [](const std::filesystem::path& f) {
+    std::vector<std::string> v;
+    std::ifstream in(f);
+    for (std::string l; std::getline(in, l);) v.push_back(l);
+    return v;
+  };
+  const auto abaqus = lines(dir / "abaqus" / "ply 1.inp"), calculix = lines(dir / "calculix" / "ply 1.inp");
+  ASSERT_EQ(abaqus.size(), calculix.size() + 1);
+  std::size_t differ = 0;
+  for (std::size_t i = 0, k = 0; i < abaqus.size(); ++i) {
+    if (abaqus[i] == ", 1., 0., 0., 0., 1., 0.") continue;
+    if (abaqus[i] != calculix[k]) {
+      ++differ;
+      EXPECT_NE(abaqus[i].find("--format abaqus"), std::string::npos) << abaqus[i];
+    }
+    ++k;
+  }
+  EXPECT_EQ(differ, 1u);  // the comment naming the format
+  // Nodes, triangles and numbers as results.h5 holds them.
+  const ShellMesh m = read_mesh_triangles(dir / "calculix" / "ply 1.inp");
+  const hid_t file = H5Fopen((dir / "run" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const auto x = read_dataset<double>(file, "frames/000002/ply 1/nodes");
+  const auto tri = read_dataset<int>(file, "parts/ply 1/triangles");
+  const auto tmean = read_dataset<double>(file, "frames/000002/ply 1/temperature_mean");
+  H5Fclose(file);
+  ASSERT_EQ(m.x.size(), x.size());
+  for (std::size_t k = 0; k < x.size(); ++k) EXPECT_NEAR(m.x[k], x[k], 1e-15 * L) << k;
+  ASSERT_EQ(m.triangles.size(), tri.size());
+  for (std::size_t k = 0; k < tri.size(); ++k) EXPECT_EQ(m.triangles[k], tri[k]);
+  // The element frames and the temperatures.
+  std::map<long long, std::array<double, 6>> frames;
+  std::map<long long, double> temperature;
+  int block = 0;
+  for (const std::string& l : calculix) {
+    if (l.rfind("*", 0) == 0) {
+      block = l.rfind("*Distribution,", 0) == 0 ? 1 : l.rfind("*Initial Conditions", 0) == 0 ? 2 : 0;
+      continue;
+    }
+    if (block == 0) continue;
+    std::vector<double> v;
+    std::stringstream in(l);
+    for (std::string f; std::getline(in, f, ',');) v.push_back(std::stod(f));
+    if (block == 1 && v.size() == 7) frames[std::llround(v[0])] = {v[1], v[2], v[3], v[4], v[5], v[6]};
+    if (block == 2 && v.size() == 2) temperature[std::llround(v[0])] = v[1];
+  }
+  ASSERT_EQ(frames.size(), 144u);
+  for (const auto& [e, f] : frames) {
+    const std::array<double, 6> want = {c, s, 0.0, -s, c, 0.0};
+    for (int k = 0; k < 6; ++k) EXPECT_NEAR(f[k], want[k], 1e-14) << "element " << e << " [" << k << "]";
+  }
+  ASSERT_EQ(temperature.size(), 85u);
+  double cooled = 0;
+  for (int i = 0; i < 85; ++i) {
+    EXPECT_NEAR(temperature.at(i + 1), tmean[i], 1e-13 * 300) << "node " << i + 1;
+    cooled = std::max(cooled, 300 - tmean[i]);
+  }
+  EXPECT_GT(cooled, 0.01) << "the exported temperatures are the frame's, not the initial ones";
+  // CalculiX through the exported orientation.
+  std::vector<long long> left, right;
+  std::map<long long, double> y_of;
+  long long corner = 0;
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const long long tag = m.node_tags[i];
+    if (std::abs(m.x[3 * i]) < 1e-9) left.push_back(tag);
+    if (std::abs(m.x[3 * i] - L) < 1e-9) {
+      right.push_back(tag);
+      y_of[tag] = m.x[3 * i + 1];
+    }
+    if (std::abs(m.x[3 * i]) < 1e-9 && std::abs(m.x[3 * i + 1]) < 1e-9) corner = tag;
+  }
+  std::sort(right.begin(), right.end(), [&](long long a, long long b) { return y_of[a] < y_of[b]; });
+  ASSERT_EQ(right.size(), 7u);
+  const double E1 = 2e8, E2 = 2e7, G12 = 8e6, sigma = 1e5;
+  // (CalculiX reads its lines without their spaces, file names too)
+  std::filesystem::copy_file(dir / "calculix" / "ply 1.inp", dir / "calculix" / "ply1.inp");
+  std::ofstream f(dir / "calculix" / "tension.inp");
+  f.precision(15);
+  f << "*Include, input=ply1.inp\n*Nset, nset=LEFT\n";
+  for (const long long n : left) f << n << "\n";
+  f << "*Nset, nset=RIGHT\n";
+  for (const long long n : right) f << n << "\n";
+  f << "*Material, name=UD\n*Elastic, type=ENGINEERING CONSTANTS\n"
+    << E1 << ", " << E2 << ", " << E2 << ", 0, 0, 0, " << G12 << ", " << G12 << ",\n" << G12 << "\n"
+    << "*Shell Section, elset=PLY_1, material=UD, orientation=PLY_1_ORIENTATION\n" << h << "\n"
+    << "*Step\n*Static\n*Boundary\nLEFT, 1, 1, 0\n" << corner << ", 2, 2, 0\nPLY_1_NODES, 3, 3, 0\n*Cload\n";
+  for (std::size_t k = 0; k < right.size(); ++k) {  // the consistent nodal forces of a uniform traction sigma h
+    const double below = k > 0 ? y_of[right[k]] - y_of[right[k - 1]] : 0.0;
+    const double above = k + 1 < right.size() ? y_of[right[k + 1]] - y_of[right[k]] : 0.0;
+    f << right[k] << ", 1, " << sigma * h * (below + above) / 2 << "\n";
+  }
+  f << "*Node Print, nset=RIGHT\nU\n*End Step\n";
+  f.close();
+  std::map<int, std::array<double, 3>> disp;
+  std::string msg;
+  ASSERT_TRUE(run_ccx_dat(dir / "calculix", "tension", nullptr, disp, msg)) << msg;
+  const double S11 = 1 / E1, S22 = 1 / E2, S66 = 1 / G12;
+  const double Sb11 = S11 * c * c * c * c + S66 * s * s * c * c + S22 * s * s * s * s;
+  const double Sb12 = (S11 + S22 - S66) * s * s * c * c;
+  const double Sb16 = (2 * S11 - S66) * c * c * c * s - (2 * S22 - S66) * c * s * s * s;
+  for (const long long n : right) {
+    ASSERT_TRUE(disp.count(static_cast<int>(n))) << "node " << n;
+    const auto& u = disp.at(static_cast<int>(n));
+    const double ux = sigma * Sb11 * L, uy = sigma * (Sb12 * y_of[n] + Sb16 * L);
+    std::printf("node %lld (y = %.4f m): CalculiX u = (%.6e, %.6e) m, closed form (%.6e, %.6e) m\n", n, y_of[n], u[0],
+                u[1], ux, uy);
+    EXPECT_NEAR(u[0], ux, 1e-5 * std::abs(ux)) << "node " << n;
+    EXPECT_NEAR(u[1], uy, 1e-5 * std::abs(uy)) << "node " << n;
   }
 }
 
