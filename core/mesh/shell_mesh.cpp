@@ -503,6 +503,169 @@ ShellMesh read_abaqus_triangles(const std::filesystem::path& file, double scale)
   return m;
 }
 
+namespace {
+// The fields of an LS-DYNA keyword data card: comma-separated (free
+// format) where the card has a comma, else in columns of `widths` (the
+// last width repeated); blank fields are empty strings.
+std::vector<std::string> dyna_fields(const std::string& card, const std::vector<int>& widths, std::size_t count) {
+  if (card.find(',') != std::string::npos) {
+    std::vector<std::string> f = fields(card);
+    f.resize(std::max(f.size(), count));
+    return f;
+  }
+  std::vector<std::string> f;
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::size_t w = static_cast<std::size_t>(widths[std::min(k, widths.size() - 1)]);
+    f.push_back(at < card.size() ? trim(card.substr(at, w)) : std::string());
+    at += w;
+  }
+  return f;
+}
+}  // namespace
+
+ShellMesh read_lsdyna_triangles(const std::filesystem::path& file, double scale) {
+  LineReader r;
+  r.path = file.string();
+  r.in.open(file);
+  if (!r.in) throw std::runtime_error("cannot open mesh file '" + file.string() + "'");
+  std::unordered_map<long long, int> node_index;
+  std::vector<double> x;
+  std::vector<long long> node_tags;
+  struct Pending {
+    long long tag, part;
+    std::array<long long, 3> nodes;
+    int line;
+  };
+  std::vector<Pending> tris;
+  std::map<long long, long long> quads;      // part -> quadrilaterals
+  std::map<std::string, long long> refused;  // other element keywords -> cards
+  enum class Block { None, Node, Shell, Other, Refused } block = Block::None;
+  std::string keyword_name;
+  // Column widths of integers and reals: 8 and 16 (standard), 20 and 20
+  // (*KEYWORD LONG=Y, or a keyword ending in +), 10 and 16 (a keyword
+  // ending in %).
+  bool long_all = false;
+  int int_w = 8, real_w = 16;
+  std::string s;
+  while (std::getline(r.in, s)) {
+    ++r.line;
+    if (!s.empty() && s.back() == '\r') s.pop_back();
+    if (s.empty() || s[0] == '$') continue;
+    if (s[0] == '*') {
+      std::string k = upper(trim(s.substr(1)));
+      int_w = long_all ? 20 : 8;
+      real_w = long_all ? 20 : 16;
+      if (!k.empty() && k.back() == '+') {  // "*NODE +" or "*NODE+"
+        int_w = real_w = 20;
+        k = trim(k.substr(0, k.size() - 1));
+      } else if (!k.empty() && k.back() == '%') {
+        int_w = 10;
+        real_w = 16;
+        k = trim(k.substr(0, k.size() - 1));
+      } else if (!k.empty() && k.back() == '-') {
+        int_w = 8;
+        real_w = 16;
+        k = trim(k.substr(0, k.size() - 1));
+      }
+      const auto space = k.find_first_of(" \t,");
+      const std::string rest = space == std::string::npos ? std::string() : k.substr(space);
+      k = k.substr(0, space);
+      keyword_name = k;
+      if (k == "KEYWORD") {
+        long_all = rest.find("LONG=Y") != std::string::npos || rest.find("LONG=S") != std::string::npos;
+        block = Block::None;
+      } else if (k == "END") {
+        break;
+      } else if (k == "NODE") {
+        block = Block::Node;
+      } else if (k == "ELEMENT_SHELL") {
+        block = Block::Shell;
+      } else if (k.rfind("INCLUDE", 0) == 0) {
+        r.fail("*" + k + ": included files are not read; write the nodes and elements into this file");
+      } else if (k.rfind("ELEMENT_", 0) == 0) {
+        block = Block::Refused;
+      } else {
+        block = Block::Other;
+      }
+      continue;
+    }
+    switch (block) {
+      case Block::Node: {
+        const std::vector<std::string> f = dyna_fields(s, {int_w, real_w}, 4);
+        const long long tag = integer_field(r, f[0], "node number");
+        const double px = f[1].empty() ? 0.0 : real_field(r, f[1], "x");
+        const double py = f[2].empty() ? 0.0 : real_field(r, f[2], "y");
+        const double pz = f[3].empty() ? 0.0 : real_field(r, f[3], "z");
+        if (!node_index.emplace(tag, static_cast<int>(node_tags.size())).second)
+          r.fail("node " + std::to_string(tag) + " given twice");
+        node_tags.push_back(tag);
+        x.insert(x.end(), {px * scale, py * scale, pz * scale});
+        break;
+      }
+      case Block::Shell: {
+        const std::vector<std::string> f = dyna_fields(s, {int_w}, 6);
+        const long long tag = integer_field(r, f[0], "element number");
+        const long long part = integer_field(r, f[1], "part number");
+        std::array<long long, 4> n{};
+        for (int k = 0; k < 4; ++k) n[k] = f[2 + k].empty() ? 0 : integer_field(r, f[2 + k], "node number");
+        if (n[0] == 0 || n[1] == 0 || n[2] == 0) r.fail("element " + std::to_string(tag) + " has fewer than 3 nodes");
+        if (n[3] != 0 && n[3] != n[2]) {
+          ++quads[part];
+          break;
+        }
+        tris.push_back({tag, part, {n[0], n[1], n[2]}, r.line});
+        break;
+      }
+      case Block::Refused:
+        ++refused[keyword_name];
+        break;
+      default:
+        break;  // cards of keywords that carry no mesh (parts, sections, materials, controls, ...)
+    }
+  }
+  if (!refused.empty() || !quads.empty()) {
+    std::string list;
+    long long q = 0;
+    for (const auto& [part, count] : quads) q += count;
+    if (q > 0) list = std::to_string(q) + " 4-node shells (*ELEMENT_SHELL with N4 other than N3)";
+    for (const auto& [name, count] : refused)
+      list += (list.empty() ? "" : ", ") + std::to_string(count) + " cards of *" + name;
+    throw std::runtime_error(file.string() + ": " + list +
+                             ": only 3-node shells are taken (*ELEMENT_SHELL with N4 = N3 or blank; mesh with "
+                             "triangles)");
+  }
+  if (tris.empty()) throw std::runtime_error(file.string() + ": no 3-node shells (*ELEMENT_SHELL, N4 = N3) found");
+  std::map<long long, long long> parts;
+  for (const Pending& e : tris) ++parts[e.part];
+  if (parts.size() > 1) {
+    std::string list;
+    for (const auto& [part, count] : parts) list += (list.empty() ? "" : ", ") + std::to_string(part);
+    throw std::runtime_error(file.string() + ": shells of " + std::to_string(parts.size()) + " parts (PID " + list +
+                             "): give each ply and each tool a file of its own");
+  }
+  ShellMesh m;
+  for (const Pending& e : tris) {
+    for (long long n : e.nodes) {
+      auto it = node_index.find(n);
+      if (it == node_index.end())
+        throw std::runtime_error(file.string() + ":" + std::to_string(e.line) + ": element " + std::to_string(e.tag) +
+                                 " refers to unknown node " + std::to_string(n));
+      m.triangles.push_back(it->second);
+    }
+    m.element_tags.push_back(e.tag);
+  }
+  m.x = std::move(x);
+  m.node_tags = std::move(node_tags);
+  return m;
+}
+
+bool is_lsdyna_file(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".k" || ext == ".key" || ext == ".dyn";
+}
+
 bool is_abaqus_file(const std::filesystem::path& file) {
   std::string ext = file.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -510,7 +673,9 @@ bool is_abaqus_file(const std::filesystem::path& file) {
 }
 
 ShellMesh read_mesh_triangles(const std::filesystem::path& file, double scale) {
-  return is_abaqus_file(file) ? read_abaqus_triangles(file, scale) : read_gmsh_triangles(file, scale);
+  if (is_abaqus_file(file)) return read_abaqus_triangles(file, scale);
+  if (is_lsdyna_file(file)) return read_lsdyna_triangles(file, scale);
+  return read_gmsh_triangles(file, scale);
 }
 
 ShellMesh read_mesh(const std::filesystem::path& file, bool reorder, double scale) {

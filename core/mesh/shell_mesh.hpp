@@ -24,7 +24,8 @@ ShellMesh rectangle_mesh(const std::array<double, 3>& origin, const std::array<d
                          const std::array<int, 2>& divisions, bool crossed = false);
 
 // A ply's or a tool's mesh file by its extension: Abaqus input (.inp, see
-// read_abaqus_triangles) or Gmsh (any other), read as read_gmsh() reads
+// read_abaqus_triangles), LS-DYNA keyword input (.k, .key, .dyn, see
+// read_lsdyna_triangles) or Gmsh (any other), read as read_gmsh() reads
 // Gmsh files.
 ShellMesh read_mesh(const std::filesystem::path& file, bool reorder = false, double scale = 1.0);
 ShellMesh read_mesh_triangles(const std::filesystem::path& file, double scale = 1.0);
@@ -42,6 +43,17 @@ bool is_abaqus_file(const std::filesystem::path& file);
 // translation or rotation, *INCLUDE and INPUT= (std::runtime_error naming
 // the file and line). Tags: the node and element numbers.
 ShellMesh read_abaqus_triangles(const std::filesystem::path& file, double scale = 1.0);
+// LS-DYNA keyword input (.k, .key, .dyn): *NODE and *ELEMENT_SHELL cards
+// in the standard columns (integers 8 characters wide, reals 16), in
+// 20-character columns (*KEYWORD LONG=Y, or a keyword ending in +), in
+// those of a keyword ending in % (integers 10, reals 16) or
+// comma-separated;
+// triangles are shells whose N4 equals N3 or is blank; comment cards ($)
+// and other keywords' cards skipped, reading ends at *END. 4-node shells
+// and other element keywords are refused with their counts, as are shells
+// of more than one part (PID) and *INCLUDE. Tags: NID and EID.
+ShellMesh read_lsdyna_triangles(const std::filesystem::path& file, double scale = 1.0);
+bool is_lsdyna_file(const std::filesystem::path& file);
 
 // Gmsh ASCII 2.2 or 4.1: 3-node triangles; points and lines are left out,
 // any other element is refused (std::runtime_error naming their counts).

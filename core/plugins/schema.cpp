@@ -235,7 +235,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
            {json{{"type", "object"},
                  {"required", {"file"}},
                  {"properties",
-                  {{"file", {{"type", "string"}, {"description", "Gmsh ASCII 2.2 or 4.1, or Abaqus input (.inp): 3-node triangles, relative to the job file"}}},
+                  {{"file", {{"type", "string"}, {"description", "Gmsh ASCII 2.2 or 4.1, Abaqus input (.inp) or LS-DYNA keywords (.k, .key, .dyn): 3-node triangles, relative to the job file"}}},
                    {"reorder", {{"type", "boolean"},
                                 {"description", "number the triangles so that neighbours are close in memory "
                                                 "(default true)"}}},
@@ -316,7 +316,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
            {"axis", {{"type", "object"}, {"properties", {{"origin", vec(3)}, {"direction", vec(3)}}}, {"additionalProperties", false}}},
            {"profile", {{"type", "array"}, {"items", piece}, {"minItems", 1}, {"description", "(r, z) pieces; the tool's outside is on the left"}}}}},
          {"additionalProperties", false}},
-        {{"type", "object"}, {"required", {"type", "file"}}, {"properties", {{"type", {{"const", "mesh"}}}, {"file", {{"type", "string"}, {"description", "STL, Gmsh or Abaqus input (.inp), relative to the job file"}}}, {"flip", {{"type", "boolean"}}}, {"scale", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "factor on the file's coordinates (0.001 for millimetres; default 1)"}}}}}, {"additionalProperties", false}}}}};
+        {{"type", "object"}, {"required", {"type", "file"}}, {"properties", {{"type", {{"const", "mesh"}}}, {"file", {{"type", "string"}, {"description", "STL, Gmsh, Abaqus input (.inp) or LS-DYNA keywords (.k, .key, .dyn), relative to the job file"}}}, {"flip", {{"type", "boolean"}}}, {"scale", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "factor on the file's coordinates (0.001 for millimetres; default 1)"}}}}}, {"additionalProperties", false}}}}};
   const json motion = {
       {"oneOf",
        {{{"type", "object"}, {"required", {"velocity"}}, {"properties", {{"velocity", vec(3)}}}, {"additionalProperties", false}},

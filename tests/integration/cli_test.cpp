@@ -595,11 +595,11 @@ TEST(Cli, ValidateTellsHowToolsMove) {
   EXPECT_EQ(thermal.out.find("from its surface's position"), std::string::npos) << thermal.out;
 }
 
-// A ply and a tool meshed in Abaqus input files run as the same meshes in
-// Gmsh and STL files do (the same results to round-off: the tool's STL
-// facets are merged into vertices in another order); a file of
+// A ply and a tool meshed in Abaqus or LS-DYNA input files run as the same
+// meshes in Gmsh and STL files do (the same results to round-off: the
+// tool's STL facets are merged into vertices in another order); a file of
 // quadrilaterals is refused with the JSON path (exit status 2).
-TEST(Cli, AbaqusMeshFilesRunAsTheirGmshAndStlTwins) {
+TEST(Cli, AbaqusAndLsDynaMeshFilesRunAsTheirGmshAndStlTwins) {
   const auto dir = temp_dir("abaqus_job");
   const json base = read_job_document(small_job("abaqus_base"));
   const auto& ply = base["parts"][0]["mesh"];
@@ -607,11 +607,15 @@ TEST(Cli, AbaqusMeshFilesRunAsTheirGmshAndStlTwins) {
                                      ply["divisions"].get<std::array<int, 2>>());
   write_shuffled_gmsh(dir / "ply.msh", m, 3);
   write_shuffled_abaqus(dir / "ply.inp", m, 3);
+  write_shuffled_lsdyna(dir / "ply.k", m, 3, "free");
   const double lo = -0.01, hi = 0.06;
   write_square_stl(dir / "die.stl", lo, hi, 0.0);
   std::ofstream(dir / "die.inp") << "*Part, name=Die\n*Node\n1, " << lo << ", " << lo << ", 0\n2, " << hi << ", " << lo
                                  << ", 0\n3, " << hi << ", " << hi << ", 0\n4, " << lo << ", " << hi
                                  << ", 0\n*Element, type=R3D3\n1, 1, 2, 3\n2, 1, 3, 4\n*End Part\n";
+  std::ofstream(dir / "die.k") << "*KEYWORD\n*NODE\n1," << lo << "," << lo << ",0\n2," << hi << "," << lo << ",0\n3,"
+                               << hi << "," << hi << ",0\n4," << lo << "," << hi
+                               << ",0\n*ELEMENT_SHELL\n1,1,1,2,3,3\n2,1,1,3,4,4\n*END\n";
   std::ofstream(dir / "quads.inp") << "*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n"
                                       "*Element, type=S4R\n1, 1, 2, 3, 4\n";
   auto job_with = [&](const std::string& name, const std::string& ply_file, const std::string& die_file) {
@@ -623,6 +627,7 @@ TEST(Cli, AbaqusMeshFilesRunAsTheirGmshAndStlTwins) {
     return dir / (name + ".json");
   };
   const auto gmsh = job_with("gmsh", "ply.msh", "die.stl"), abaqus = job_with("abaqus", "ply.inp", "die.inp");
+  const auto lsdyna = job_with("lsdyna", "ply.k", "die.k");
   const auto v = thermostamp("validate " + q(abaqus));
   ASSERT_EQ(v.exit_code, 0) << v.err;
   EXPECT_NE(v.out.find("2 triangles, 4 vertices from " + (dir / "die.inp").string()), std::string::npos) << v.out;
@@ -630,19 +635,21 @@ TEST(Cli, AbaqusMeshFilesRunAsTheirGmshAndStlTwins) {
                        " nodes from " + (dir / "ply.inp").string()),
             std::string::npos)
       << v.out;
-  for (const auto& job : {gmsh, abaqus}) {
+  for (const auto& job : {gmsh, abaqus, lsdyna}) {
     const auto r = thermostamp("run " + q(job) + " --out " + q(dir / job.stem()) + " --quiet");
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
-  const auto c = thermostamp("compare " + q(dir / "gmsh") + " " + q(dir / "abaqus") + " --json");
-  const json cmp = json::parse(c.out);
-  int compared = 0;
-  for (const char* kind : {"fields", "probes", "series"})
-    for (const auto& f : cmp[kind]) {
-      EXPECT_LE(f["max_abs"].get<double>(), 1e-12 * f["scale"].get<double>()) << f.dump();
-      ++compared;
-    }
-  EXPECT_GT(compared, 10);
+  for (const std::string other : {"abaqus", "lsdyna"}) {
+    const auto c = thermostamp("compare " + q(dir / "gmsh") + " " + q(dir / other) + " --json");
+    const json cmp = json::parse(c.out);
+    int compared = 0;
+    for (const char* kind : {"fields", "probes", "series"})
+      for (const auto& f : cmp[kind]) {
+        EXPECT_LE(f["max_abs"].get<double>(), 1e-12 * f["scale"].get<double>()) << other << " " << f.dump();
+        ++compared;
+      }
+    EXPECT_GT(compared, 10) << other;
+  }
   // The formed ply keeps the file's numbers: the same in both.
   const auto tags = [&](const std::string& run) {
     const hid_t file = H5Fopen((dir / run / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -652,6 +659,7 @@ TEST(Cli, AbaqusMeshFilesRunAsTheirGmshAndStlTwins) {
     return both;
   };
   EXPECT_EQ(tags("gmsh"), tags("abaqus"));
+  EXPECT_EQ(tags("gmsh"), tags("lsdyna"));
   EXPECT_EQ(tags("abaqus").second.size(), static_cast<std::size_t>(m.num_elements()));
   const auto bad = thermostamp("validate " + q(job_with("quads", "quads.inp", "die.inp")));
   EXPECT_EQ(bad.exit_code, 2);

@@ -336,6 +336,47 @@ void write_shuffled_abaqus(const std::filesystem::path& file, const ShellMesh& m
        "*Nset, nset=RP\n 1,\n*End Assembly\n*Material, name=PA66\n*Density\n 1500.,\n";
 }
 
+void write_shuffled_lsdyna(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed,
+                           const std::string& style) {
+  std::vector<int> order(mesh.num_elements());
+  for (int e = 0; e < mesh.num_elements(); ++e) order[e] = e;
+  if (seed != 0) std::shuffle(order.begin(), order.end(), std::mt19937(seed));
+  const bool free = style == "free", wide = style == "long", i10 = style == "i10";
+  const int iw = wide ? 20 : i10 ? 10 : 8, rw = wide ? 20 : 16, digits = wide ? 14 : 10;
+  const char* suffix = i10 ? " %" : "";
+  std::ofstream f(file);
+  char buf[64];
+  auto integer = [&](long long v) {
+    if (free) return std::to_string(v) + ",";
+    std::snprintf(buf, sizeof buf, "%*lld", iw, v);
+    return std::string(buf);
+  };
+  auto real = [&](double v) {
+    if (free) {
+      std::snprintf(buf, sizeof buf, "%.17g,", v);
+      return std::string(buf);
+    }
+    std::snprintf(buf, sizeof buf, "%*.*e", rw, digits - 1, v);
+    return std::string(buf);
+  };
+  f << (wide ? "*KEYWORD LONG=Y\n" : "*KEYWORD\n") << "*TITLE\nply for ThermoStamp\n$ a comment card\n"
+    << "*PART\nply\n" << integer(3) << integer(1) << integer(1) << "\n*SECTION_SHELL\n" << integer(1)
+    << integer(2) << "\n" << real(0.0005) << real(0.0005) << real(0.0005) << "\n"
+    << "*NODE" << suffix << "\n$#   nid               x               y               z\n";
+  for (int i = mesh.num_nodes() - 1; i >= 0; --i)
+    f << integer(shuffled_node_tag(i)) << real(mesh.x[3 * i]) << real(mesh.x[3 * i + 1]) << real(mesh.x[3 * i + 2])
+      << "\n";
+  f << "*ELEMENT_SHELL" << suffix << "\n";
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const int e = order[k];
+    f << integer(shuffled_element_tag(e)) << integer(3);
+    for (int c = 0; c < 3; ++c) f << integer(shuffled_node_tag(mesh.triangles[3 * e + c]));
+    if (k % 5 != 2) f << integer(shuffled_node_tag(mesh.triangles[3 * e + 2]));
+    f << "\n";
+  }
+  f << "*END\n*NODE\n       1     not read\n";
+}
+
 void write_parallelogram(const std::filesystem::path& file, double L, double W, double s, int nx, int ny) {
   std::ofstream f(file);
   f << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << (nx + 1) * (ny + 1) << "\n";

@@ -112,6 +112,14 @@ inline long long shuffled_element_tag(int element) { return 100 + element; }
 // an instance and a reference point outside the part, and a material.
 void write_shuffled_abaqus(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed,
                            const std::string& type = "S3R");
+// The same as an LS-DYNA keyword file, in the columns of `style`:
+// "standard" (I8, E16: 10 significant digits), "long" (*KEYWORD LONG=Y:
+// 20 characters, 14 digits), "i10" (keywords ending in %: I10, E16) or
+// "free" (comma-separated, 17 digits); with a title, a part, its section,
+// comment cards, every 5th triangle's N4 left blank (the others N4 = N3),
+// and cards after *END.
+void write_shuffled_lsdyna(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed,
+                           const std::string& style);
 
 // A Gmsh 2.2 mesh of the parallelogram x = xi + s y, xi in [0, L], y in
 // [0, W]: its slanted edges follow the level lines of cos(pi xi / L).

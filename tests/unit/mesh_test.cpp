@@ -310,5 +310,66 @@ TEST(Abaqus, RefusesWhatItCannotRead) {
   }
 }
 
+// An LS-DYNA keyword file in each of its column styles, and free format,
+// gives the mesh of the same nodes and triangles in a Gmsh file: the same
+// corners, tags and neighbours, in the file's order and reordered, the
+// positions to the digits each style holds (10 in the standard 16-column
+// reals, 14 in 20 columns, all 17 comma-separated).
+TEST(LsDyna, ReadsTheMeshGmshReads) {
+  const auto dir = test::temp_dir("lsdyna");
+  const ShellMesh m = rectangle_mesh({0.01, -0.02, 0.003}, {0.12, 0.08}, {9, 6}, true);
+  test::write_shuffled_gmsh(dir / "ply.msh", m, 5);
+  for (const std::string style : {"standard", "long", "i10", "free"})
+    test::write_shuffled_lsdyna(dir / ("ply_" + style + ".k"), m, 5, style);
+  EXPECT_TRUE(is_lsdyna_file(dir / "A.KEY"));
+  EXPECT_TRUE(is_lsdyna_file(dir / "a.dyn"));
+  EXPECT_FALSE(is_lsdyna_file(dir / "a.inp"));
+  for (const bool reorder : {false, true}) {
+    const ShellMesh g = read_mesh(dir / "ply.msh", reorder);
+    for (const std::string style : {"standard", "long", "i10", "free"}) {
+      const ShellMesh k = read_mesh(dir / ("ply_" + style + ".k"), reorder);
+      EXPECT_EQ(k.triangles, g.triangles) << style << reorder;
+      EXPECT_EQ(k.neighbours, g.neighbours) << style << reorder;
+      EXPECT_EQ(k.node_tags, g.node_tags) << style << reorder;
+      EXPECT_EQ(k.element_tags, g.element_tags) << style << reorder;
+      ASSERT_EQ(k.x.size(), g.x.size());
+      const double tol = style == "free" ? 0.0 : style == "long" ? 1e-13 : 1e-9;
+      for (std::size_t i = 0; i < g.x.size(); ++i)
+        EXPECT_NEAR(k.x[i], g.x[i], tol * 0.13) << style << " " << i;
+    }
+  }
+  const ShellMesh mm = read_mesh(dir / "ply_free.k", false, 0.001), metres = read_mesh(dir / "ply_free.k");
+  for (std::size_t i = 0; i < mm.x.size(); ++i) EXPECT_EQ(mm.x[i], metres.x[i] * 0.001);
+}
+
+// What the LS-DYNA reader refuses, with the file and the line where there
+// is one.
+TEST(LsDyna, RefusesWhatItCannotRead) {
+  const auto dir = test::temp_dir("lsdyna_bad");
+  const std::string nodes = "*NODE\n1,0,0,0\n2,1,0,0\n3,1,1,0\n4,0,1,0\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {nodes + "*ELEMENT_SHELL\n1,1,1,2,3,3\n2,1,1,2,3,4\n3,1,1,2,3,4\n*ELEMENT_SOLID\n4,1,1,2,3,4,1,2,3,4\n",
+       "bad1.k: 2 4-node shells (*ELEMENT_SHELL with N4 other than N3), 1 cards of *ELEMENT_SOLID: only 3-node "
+       "shells are taken"},
+      {nodes + "*ELEMENT_SHELL\n1,1,1,2,3,3\n2,2,1,3,4,4\n", "bad2.k: shells of 2 parts (PID 1, 2)"},
+      {"*INCLUDE\nmesh.k\n", "bad3.k:1: *INCLUDE: included files are not read"},
+      {nodes + "3,5,5,5\n", "bad4.k:6: node 3 given twice"},
+      {nodes + "*ELEMENT_SHELL\n1,1,1,2,3,3\n2,1,1,3,9,9\n", "bad5.k:8: element 2 refers to unknown node 9"},
+      {"*NODE\n       1            zero             0.0             0.0\n", "bad6.k:2: expected x, found 'zero'"},
+      {nodes + "*ELEMENT_SHELL\n1,1,1,2\n", "bad7.k:7: element 1 has fewer than 3 nodes"},
+      {nodes, "bad8.k: no 3-node shells"}};
+  int k = 0;
+  for (const auto& [text, message] : cases) {
+    const std::string name = "bad" + std::to_string(++k) + ".k";
+    std::ofstream(dir / name) << text;
+    try {
+      read_mesh(dir / name);
+      ADD_FAILURE() << name << " was read";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ts
