@@ -82,6 +82,14 @@ struct LineReader {
   }
 };
 
+LineReader open_mesh_file(const std::filesystem::path& file) {
+  LineReader r;
+  r.path = file.string();
+  r.in.open(file);
+  if (!r.in) throw std::runtime_error("cannot open mesh file '" + file.string() + "'");
+  return r;
+}
+
 template <class T>
 T parse(LineReader& r, std::istringstream& ss, const char* what) {
   T v;
@@ -139,10 +147,7 @@ double box_span(const std::vector<double>& xyz) {
 }
 
 ShellMesh read_gmsh_triangles(const std::filesystem::path& file, double scale) {
-  LineReader r;
-  r.path = file.string();
-  r.in.open(file);
-  if (!r.in) throw std::runtime_error("cannot open mesh file '" + file.string() + "'");
+  LineReader r = open_mesh_file(file);
   std::string s = r.next();
   if (s != "$MeshFormat") r.fail("not a Gmsh ASCII file (no $MeshFormat)");
   std::istringstream fs(r.next());
@@ -355,10 +360,7 @@ bool abaqus_line(const std::string& type) {
 }  // namespace
 
 ShellMesh read_abaqus_triangles(const std::filesystem::path& file, double scale) {
-  LineReader r;
-  r.path = file.string();
-  r.in.open(file);
-  if (!r.in) throw std::runtime_error("cannot open mesh file '" + file.string() + "'");
+  LineReader r = open_mesh_file(file);
   // Node numbers are those of a part: each part's nodes apart ("" for
   // those outside any *PART, such as an assembly's reference points).
   struct PartNodes {
@@ -525,10 +527,7 @@ std::vector<std::string> dyna_fields(const std::string& card, const std::vector<
 }  // namespace
 
 ShellMesh read_lsdyna_triangles(const std::filesystem::path& file, double scale) {
-  LineReader r;
-  r.path = file.string();
-  r.in.open(file);
-  if (!r.in) throw std::runtime_error("cannot open mesh file '" + file.string() + "'");
+  LineReader r = open_mesh_file(file);
   std::unordered_map<long long, int> node_index;
   std::vector<double> x;
   std::vector<long long> node_tags;
@@ -678,10 +677,12 @@ ShellMesh read_mesh_triangles(const std::filesystem::path& file, double scale) {
   return read_gmsh_triangles(file, scale);
 }
 
-ShellMesh read_mesh(const std::filesystem::path& file, bool reorder, double scale) {
-  ShellMesh m = read_mesh_triangles(file, scale);
-  // Drop nodes no triangle uses (points, geometry vertices); the others in
-  // the order in which the triangles first use them.
+namespace {
+// A file's triangles as a ply's mesh: the nodes no triangle uses (points,
+// geometry vertices, reference points) dropped, the others in the order in
+// which the triangles first use them; oriented, with neighbours; with
+// `reorder`, in locality_order.
+ShellMesh ply_mesh(ShellMesh m, bool reorder) {
   number_nodes_by_first_use(m);
   finalize_mesh(m);
   if (reorder) {
@@ -690,16 +691,14 @@ ShellMesh read_mesh(const std::filesystem::path& file, bool reorder, double scal
   }
   return m;
 }
+}  // namespace
+
+ShellMesh read_mesh(const std::filesystem::path& file, bool reorder, double scale) {
+  return ply_mesh(read_mesh_triangles(file, scale), reorder);
+}
 
 ShellMesh read_gmsh(const std::filesystem::path& file, bool reorder, double scale) {
-  ShellMesh m = read_gmsh_triangles(file, scale);
-  number_nodes_by_first_use(m);
-  finalize_mesh(m);
-  if (reorder) {
-    reorder_elements(m, locality_order(m));
-    number_nodes_by_first_use(m);
-  }
-  return m;
+  return ply_mesh(read_gmsh_triangles(file, scale), reorder);
 }
 
 void finalize_mesh(ShellMesh& m) {

@@ -240,6 +240,23 @@ TEST(Gmsh, MalformedFileNamesTheLine) {
   }
 }
 
+// Writes each case's text to dir/bad<k><ext> (k from 1) and expects
+// read_mesh to refuse it with a message holding the case's message.
+void expect_refused(const std::filesystem::path& dir, const std::vector<std::pair<std::string, std::string>>& cases,
+                    const std::string& ext) {
+  int k = 0;
+  for (const auto& [text, message] : cases) {
+    const std::string name = "bad" + std::to_string(++k) + ext;
+    std::ofstream(dir / name) << text;
+    try {
+      read_mesh(dir / name);
+      ADD_FAILURE() << name << " was read";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  }
+}
+
 // An Abaqus input file as Abaqus/CAE writes one (a part, sets, an
 // assembly with a reference point outside the part, a material; node
 // lists continued on a second line) gives the mesh the same nodes and
@@ -280,7 +297,7 @@ TEST(Abaqus, ReadsTheMeshGmshReads) {
 TEST(Abaqus, RefusesWhatItCannotRead) {
   const auto dir = test::temp_dir("abaqus_bad");
   const std::string nodes = "*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n";
-  const std::pair<std::string, std::string> cases[] = {
+  const std::vector<std::pair<std::string, std::string>> cases = {
       {nodes + "*Element, type=S3\n1, 1, 2, 3\n*Element, type=S4R\n2, 1, 2, 3, 4\n3, 1, 2, 3, 4\n"
                "*Element, type=STRI65\n4, 1, 2, 3, 1, 2, 3\n*Element, type=B31\n5, 1, 2\n",
        "bad1.inp: 2 S4R, 1 STRI65 elements: only 3-node triangles are taken"},
@@ -297,17 +314,7 @@ TEST(Abaqus, RefusesWhatItCannotRead) {
       {"*Node\n1, 0, zero, 0\n", "bad8.inp:2: expected y, found 'zero'"},
       {nodes + "*Element, type=S3\n1, 1, 2\n", "bad9.inp:7: element 1 of type S3 has 2 nodes, expected 3"},
       {nodes, "bad10.inp: no 3-node triangles"}};
-  int k = 0;
-  for (const auto& [text, message] : cases) {
-    const std::string name = "bad" + std::to_string(++k) + ".inp";
-    std::ofstream(dir / name) << text;
-    try {
-      read_mesh(dir / name);
-      ADD_FAILURE() << name << " was read";
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
-    }
-  }
+  expect_refused(dir, cases, ".inp");
 }
 
 // An LS-DYNA keyword file in each of its column styles, and free format,
@@ -347,7 +354,7 @@ TEST(LsDyna, ReadsTheMeshGmshReads) {
 TEST(LsDyna, RefusesWhatItCannotRead) {
   const auto dir = test::temp_dir("lsdyna_bad");
   const std::string nodes = "*NODE\n1,0,0,0\n2,1,0,0\n3,1,1,0\n4,0,1,0\n";
-  const std::pair<std::string, std::string> cases[] = {
+  const std::vector<std::pair<std::string, std::string>> cases = {
       {nodes + "*ELEMENT_SHELL\n1,1,1,2,3,3\n2,1,1,2,3,4\n3,1,1,2,3,4\n*ELEMENT_SOLID\n4,1,1,2,3,4,1,2,3,4\n",
        "bad1.k: 2 4-node shells (*ELEMENT_SHELL with N4 other than N3), 1 cards of *ELEMENT_SOLID: only 3-node "
        "shells are taken"},
@@ -358,17 +365,7 @@ TEST(LsDyna, RefusesWhatItCannotRead) {
       {"*NODE\n       1            zero             0.0             0.0\n", "bad6.k:2: expected x, found 'zero'"},
       {nodes + "*ELEMENT_SHELL\n1,1,1,2\n", "bad7.k:7: element 1 has fewer than 3 nodes"},
       {nodes, "bad8.k: no 3-node shells"}};
-  int k = 0;
-  for (const auto& [text, message] : cases) {
-    const std::string name = "bad" + std::to_string(++k) + ".k";
-    std::ofstream(dir / name) << text;
-    try {
-      read_mesh(dir / name);
-      ADD_FAILURE() << name << " was read";
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
-    }
-  }
+  expect_refused(dir, cases, ".k");
 }
 
 }  // namespace
