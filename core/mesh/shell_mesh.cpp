@@ -432,6 +432,9 @@ ShellMesh read_abaqus_triangles(const std::filesystem::path& file, double scale)
         block = Block::Element;
       } else if (k.name == "INCLUDE") {
         r.fail("*INCLUDE: included files are not read; write the nodes and elements into this file");
+      } else if (k.name == "NGEN" || k.name == "NFILL" || k.name == "NCOPY" || k.name == "NMAP" ||
+                 k.name == "ELGEN" || k.name == "ELCOPY") {
+        r.fail("*" + k.name + ": generated nodes and elements are not read; write every node and element out");
       } else if (k.name == "PART") {
         part = k.params.count("NAME") ? k.params.at("NAME") : std::string("(unnamed)");
       } else if (k.name == "END PART") {

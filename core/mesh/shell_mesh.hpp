@@ -40,7 +40,8 @@ bool is_abaqus_file(const std::filesystem::path& file);
 // steps) skipped. 2-node line elements are left out; any other element
 // type (quadrilaterals, second-order elements, solids) is refused with its
 // counts, as are triangles in more than one part, an *INSTANCE placed by a
-// translation or rotation, *INCLUDE and INPUT= (std::runtime_error naming
+// translation or rotation, *INCLUDE, INPUT= and generated nodes or
+// elements (*NGEN, *ELGEN, ...) (std::runtime_error naming
 // the file and line). Tags: the node and element numbers.
 ShellMesh read_abaqus_triangles(const std::filesystem::path& file, double scale = 1.0);
 // LS-DYNA keyword input (.k, .key, .dyn): *NODE and *ELEMENT_SHELL cards

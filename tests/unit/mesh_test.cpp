@@ -293,7 +293,7 @@ TEST(Abaqus, ReadsTheMeshGmshReads) {
 // there is one: quadrilaterals and second-order elements (counted by type),
 // triangles in two parts, an instance placed by a translation, included
 // files, other coordinate systems, a node given twice, an unknown node, a
-// malformed number, no triangles.
+// malformed number, no triangles, generated elements.
 TEST(Abaqus, RefusesWhatItCannotRead) {
   const auto dir = test::temp_dir("abaqus_bad");
   const std::string nodes = "*Node\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n";
@@ -313,7 +313,9 @@ TEST(Abaqus, RefusesWhatItCannotRead) {
       {nodes + "*Element, type=S3\n1, 1, 2, 3\n2, 1, 3,\n 9\n", "bad7.inp:8: element 2 refers to unknown node 9"},
       {"*Node\n1, 0, zero, 0\n", "bad8.inp:2: expected y, found 'zero'"},
       {nodes + "*Element, type=S3\n1, 1, 2\n", "bad9.inp:7: element 1 of type S3 has 2 nodes, expected 3"},
-      {nodes, "bad10.inp: no 3-node triangles"}};
+      {nodes, "bad10.inp: no 3-node triangles"},
+      {nodes + "*Element, type=S3\n1, 1, 2, 3\n*ELGEN, elset=ALL\n1, 10, 1, 1\n",
+       "bad11.inp:8: *ELGEN: generated nodes and elements are not read"}};
   expect_refused(dir, cases, ".inp");
 }
 
