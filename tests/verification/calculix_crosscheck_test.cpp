@@ -406,7 +406,8 @@ TEST(CalculiX, CornerLoadedPlateBendsInTwoDimensions) {
 // the rotated compliance, u_x = sigma S11' x, u_y = sigma (S12' y + S16' x)
 // with the left edge held in x and its lower corner in y. An orientation
 // lost or turned shows in u_x (at 0 degrees 5.0e-5 m instead of 2.94e-4 m)
-// or in the sign of u_y (at -30 degrees). The Abaqus file is the CalculiX
+// or in the sign of u_y (at -30 degrees). Then CalculiX cools the ply
+// freely from the exported temperatures to 20 degC. The Abaqus file is the CalculiX
 // one with the distribution's default line that Abaqus asks for first;
 // given to CalculiX 2.20, that line's directions go to every element
 // (checked: u_x 5.0e-5 m), so the two formats differ by that line only.
@@ -547,6 +548,42 @@ TEST(CalculiX, ExportedPlyCarriesItsFibreFrameAndTemperatures) {
     EXPECT_NEAR(u[0], ux, 1e-5 * std::abs(ux)) << "node " << n;
     EXPECT_NEAR(u[1], uy, 1e-5 * std::abs(uy)) << "node " << n;
   }
+  // The exported temperatures as CalculiX's initial ones: the ply cooled
+  // freely to 20 degC (expansion 1e-6 along the fibres, 5e-5 across) from
+  // its uniform temperature T0 strains by alpha_i (20 - T0) in its fibre
+  // frame; with the lower left corner held and the lower right held in y,
+  // u_x = e_xx x + 2 e_xy y and u_y = e_yy y (the rotation taken out). From
+  // 0 degC instead (temperatures not read) the strains would have the
+  // other sign and a fourteenth of the size.
+  const double T0 = tmean[0];
+  for (double t : tmean) ASSERT_NEAR(t, T0, 1e-9) << "a uniform ply";
+  long long lower_right = 0;
+  for (const long long n : right)
+    if (std::abs(y_of[n]) < 1e-9) lower_right = n;
+  std::ofstream g(dir / "calculix" / "cooling.inp");
+  g.precision(15);
+  g << "*Include, input=ply1.inp\n*Material, name=UD\n*Elastic, type=ENGINEERING CONSTANTS\n"
+    << E1 << ", " << E2 << ", " << E2 << ", 0, 0, 0, " << G12 << ", " << G12 << ",\n" << G12 << "\n"
+    << "*Expansion, type=ORTHO\n1e-6, 5e-5, 5e-5\n"
+    << "*Shell Section, elset=PLY_1, material=UD, orientation=PLY_1_ORIENTATION\n" << h << "\n"
+    << "*Step\n*Static\n*Boundary\n" << corner << ", 1, 2, 0\n" << lower_right << ", 2, 2, 0\nPLY_1_NODES, 3, 3, 0\n"
+    << "*Temperature\nPLY_1_NODES, 20.\n*Node Print, nset=PLY_1_NODES\nU\n*End Step\n";
+  g.close();
+  std::map<int, std::array<double, 3>> cooled_u;
+  ASSERT_TRUE(run_ccx_dat(dir / "calculix", "cooling", nullptr, cooled_u, msg)) << msg;
+  const double e1 = 1e-6 * (20 - T0), e2 = 5e-5 * (20 - T0);
+  const double exx = c * c * e1 + s * s * e2, eyy = s * s * e1 + c * c * e2, exy = c * s * (e1 - e2);
+  const double umax = (std::abs(exx) + 2 * std::abs(exy) + std::abs(eyy)) * L;
+  ASSERT_EQ(cooled_u.size(), static_cast<std::size_t>(m.num_nodes()));
+  double worst = 0;
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const double px = m.x[3 * i], py = m.x[3 * i + 1];
+    const auto& u = cooled_u.at(static_cast<int>(m.node_tags[i]));
+    worst = std::max({worst, std::abs(u[0] - (exx * px + 2 * exy * py)), std::abs(u[1] - eyy * py)});
+  }
+  std::printf("cooled from %.6f to 20 degC: largest displacement %.6e m, largest departure from the closed form %.3e m\n",
+              T0, umax, worst);
+  EXPECT_LT(worst, 1e-5 * umax);
 }
 
 }  // namespace ts::test
