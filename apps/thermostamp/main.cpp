@@ -102,7 +102,7 @@ struct Args {
   double from = -std::numeric_limits<double>::infinity();  // compare: the first time compared (s)
   std::optional<double> time;  // export: the frame's time (s; the last frame without it)
   bool whole = false;          // export: mirrored at the symmetry planes
-  std::string format = "gmsh";  // export: gmsh, abaqus or calculix
+  ts::ExportFormat format = ts::ExportFormat::Gmsh;  // export: --format
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -181,9 +181,11 @@ Args parse(int argc, char** argv) {
     } else if (s == "--whole") {
       a.whole = true;
     } else if (s == "--format") {
-      a.format = value(s);
-      if (a.format != "gmsh" && a.format != "abaqus" && a.format != "calculix")
-        throw UsageError("--format expects gmsh, abaqus or calculix, found '" + a.format + "'");
+      const std::string f = value(s);
+      if (f == "gmsh") a.format = ts::ExportFormat::Gmsh;
+      else if (f == "abaqus") a.format = ts::ExportFormat::Abaqus;
+      else if (f == "calculix") a.format = ts::ExportFormat::CalculiX;
+      else throw UsageError("--format expects gmsh, abaqus or calculix, found '" + f + "'");
     } else if (s == "--keep-subnormals") {
       a.keep_subnormals = true;
     } else if (s == "--json") {
@@ -433,9 +435,7 @@ int main(int argc, char** argv) {
       ts::ExportResult r;
       try {
         r = ts::export_plies(dir, a.time, a.out.empty() ? dir / "export" : std::filesystem::path(a.out), a.whole,
-                             a.format == "abaqus"     ? ts::ExportFormat::Abaqus
-                             : a.format == "calculix" ? ts::ExportFormat::CalculiX
-                                                      : ts::ExportFormat::Gmsh);
+                             a.format);
       } catch (const std::exception& e) {  // 2: nothing to export as asked; 3: a file that cannot be read
         std::cerr << "error: export: " << e.what() << "\n";
         return dynamic_cast<const ts::ExportInputError*>(&e) ? 2 : 3;
@@ -446,7 +446,7 @@ int main(int argc, char** argv) {
         std::cout << p.file.string() << ": ply '" << p.name << "' at " << at << ", "
                   << (p.mirrored.empty() ? std::string() : "mirrored at " + ts::join(p.mirrored, " = 0, ") + " = 0, ")
                   << p.nodes << " nodes, " << p.triangles << " triangles";
-        if (a.format != "gmsh")
+        if (a.format != ts::ExportFormat::Gmsh)
           std::cout << " in element set " << p.elset << "; orientations: "
                     << (p.orientation_from.empty() ? std::string("none (no fibre_direction in the frame)")
                                                    : "from " + p.orientation_from + " (" + p.elset + "_ORIENTATION)")

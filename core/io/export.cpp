@@ -227,8 +227,7 @@ bool write_abaqus(const std::filesystem::path& file, const std::string& name, co
     << "*Node, nset=" << set << "_NODES\n";
   for (std::size_t i = 0; i < nodes; ++i)
     m << d.node_tag[i] << ", " << abaqus_number(d.x[3 * i]) << ", " << abaqus_number(d.x[3 * i + 1]) << ", "
-      << abaqus_number(d.x[3 * i + 2])
-      << '\n';
+      << abaqus_number(d.x[3 * i + 2]) << '\n';
   m << "*Element, type=S3, elset=" << set << '\n';
   for (std::size_t e = 0; e < triangles; ++e)
     m << d.element_tag[e] << ", " << d.node_tag[static_cast<std::size_t>(d.tri[3 * e])] << ", "
@@ -260,9 +259,9 @@ bool write_abaqus(const std::filesystem::path& file, const std::string& name, co
       for (double& c : n) c = ln > 0 ? c / ln : 0.0;
       const double* a = &fibre->v[3 * e];
       const double b[3] = {n[1] * a[2] - n[2] * a[1], n[2] * a[0] - n[0] * a[2], n[0] * a[1] - n[1] * a[0]};
-      m << d.element_tag[e] << ", " << abaqus_number(a[0]) << ", " << abaqus_number(a[1]) << ", "
-        << abaqus_number(a[2]) << ", "
-        << abaqus_number(b[0]) << ", " << abaqus_number(b[1]) << ", " << abaqus_number(b[2]) << '\n';
+      m << d.element_tag[e];
+      for (const double c : {a[0], a[1], a[2], b[0], b[1], b[2]}) m << ", " << abaqus_number(c);
+      m << '\n';
     }
     m << "*Orientation, name=" << set << "_ORIENTATION\n" << set << "_FIBRES\n3, 0.\n";
   }
