@@ -113,7 +113,7 @@ std::string field_units(const std::string& name) {
   if (name.rfind("temperature", 0) == 0) return "degC";
   if (name == "nodes" || name == "layer_nodes" || name == "displacement") return "m";
   if (name == "velocity") return "m/s";
-  if (name == "tool_gap") return "m";
+  if (name == "tool_gap" || name == "thickness") return "m";
   if (name == "below_threshold_from" || name == "all_below_threshold_from") return "s";
   if (name == "shear_angle") return "deg";
   if (name == "contact_pressure") return "Pa";
@@ -125,7 +125,8 @@ std::string field_units(const std::string& name) {
 
 bool field_on_elements(const std::string& name) {
   for (const char* f :
-       {"shear_angle", "fibre_direction", "membrane_stress", "membrane_strain", "curvature", "membrane_stability"})
+       {"shear_angle", "fibre_direction", "membrane_stress", "membrane_strain", "curvature", "membrane_stability",
+        "thickness"})
     if (name == f) return true;
   return false;
 }

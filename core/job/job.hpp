@@ -293,14 +293,14 @@ inline const std::vector<std::string>& known_fields() {
                                              "fibre_direction", "contact_status", "contact_pressure",
                                              "membrane_stress", "curvature", "membrane_strain", "conductance",
                                              "tool_gap", "below_threshold_from", "crystallinity",
-                                             "membrane_stability"};
+                                             "membrane_stability", "thickness"};
   return f;
 }
 inline const std::vector<std::string>& known_probe_quantities() {
   static const std::vector<std::string> q = {"temperature_profile", "temperature_mean", "displacement_x",
                                              "displacement_y", "displacement_z", "shear_angle",
                                              "contact_pressure", "fibre_strain", "conductance", "tool_gap",
-                                             "crystallinity_profile"};
+                                             "crystallinity_profile", "thickness"};
   return q;
 }
 

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <queue>
 #include <sstream>
@@ -905,6 +906,16 @@ std::vector<double> element_areas(const ShellMesh& m) {
     area[e] = 0.5 * sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a)));
   }
   return area;
+}
+
+void constant_volume_thickness(const ShellMesh& m, const std::vector<double>& area0, const double* x, double h0,
+                               double* thickness) {
+  for (int e = 0; e < m.num_elements(); ++e) {
+    const int* t = &m.triangles[3 * e];
+    const Vec3 a = sdk::load3(x, t[0]), b = sdk::load3(x, t[1]), c = sdk::load3(x, t[2]);
+    const double area = 0.5 * sdk::norm(sdk::cross(sdk::sub(b, a), sdk::sub(c, a)));
+    thickness[e] = area > 0 ? h0 * (area0[e] / area) : std::numeric_limits<double>::quiet_NaN();
+  }
 }
 
 std::vector<double> node_areas(const ShellMesh& m) {

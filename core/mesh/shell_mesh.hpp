@@ -102,6 +102,11 @@ std::string node_label(const ShellMesh& mesh, int n);
 std::vector<double> element_areas(const ShellMesh& mesh);
 // Lumped (one third of each adjacent triangle) area per node, m^2.
 std::vector<double> node_areas(const ShellMesh& mesh);
+// The thickness each triangle would have at constant volume (m): h0 times
+// its area in `area0` over its area at the positions x (3 per node). A
+// triangle that has collapsed to no area gets NaN.
+void constant_volume_thickness(const ShellMesh& mesh, const std::vector<double>& area0, const double* x, double h0,
+                               double* thickness);
 
 double min_edge_length(const ShellMesh& mesh);
 double max_edge_length(const ShellMesh& mesh);

@@ -455,6 +455,10 @@ void Simulation::Run::sample_probes(double time, std::size_t only) {
         if (static_cast<std::size_t>(pr.part) < mech.size())
           for (int e : around) a += mech[pr.part]->strain[3 * static_cast<std::size_t>(e)];
         s.values.push_back(around.empty() ? 0.0 : a / around.size());
+      } else if (quantity == "thickness") {  // mean of the elements around the node
+        double a = 0;
+        for (int e : around) a += st.thickness[e];
+        s.values.push_back(around.empty() ? st.def->thickness : a / around.size());
       } else {  // shear_angle: mean of the elements around the node (0 without mechanics)
         double a = 0;
         for (int e : around) a += st.shear_angle[e];
@@ -723,6 +727,15 @@ void Simulation::Run::finish() {
       const auto [fmn, fmx] = fibre_strain_range(sim.mech_[p]->strain);
       result.part_fibre_strain_min.push_back(fmn);
       result.part_fibre_strain_max.push_back(fmx);
+      std::vector<double> h(elem_area[p].size());
+      constant_volume_thickness(parts[p]->mesh, elem_area[p], parts[p]->x.data(), parts[p]->def->thickness, h.data());
+      double hmn = std::numeric_limits<double>::infinity(), hmx = -hmn;  // NaN (a collapsed element) left out
+      for (const double v : h) {
+        hmn = std::fmin(hmn, v);
+        hmx = std::fmax(hmx, v);
+      }
+      result.part_thickness_min_m.push_back(hmn);
+      result.part_thickness_max_m.push_back(hmx);
     }
   }
   result.stored_change = stored_change;
@@ -984,6 +997,8 @@ bool Simulation::Run::write_summary(std::string& why) const {
       ply["shear_angle_max_deg"] = result.part_shear_max_deg[p];
       ply["fibre_strain_min"] = result.part_fibre_strain_min[p];
       ply["fibre_strain_max"] = result.part_fibre_strain_max[p];
+      ply["thickness_min_m"] = result.part_thickness_min_m[p];
+      ply["thickness_max_m"] = result.part_thickness_max_m[p];
       ply["fraction_unstable"] = unstable_end[p];
       ply["stability_min_N_m"] = std::isfinite(stability_min_end[p]) ? json(stability_min_end[p]) : json(nullptr);
       ply["unstable_from_s"] = sim.unstable_from_[p] >= 0 ? json(sim.unstable_from_[p]) : json(nullptr);
@@ -1043,9 +1058,10 @@ void Simulation::Run::log_end() const {
       else if (shear_limit)
         over = fmt::format(", never beyond {} deg", fmt_g(shear_limits[p]));
       log->info("part '{}': temperature {:.2f} to {:.2f} degC, shear angle {:.2f} to {:.2f} deg{}, fibre strain {:.3g} "
-                "to {:.3g}",
+                "to {:.3g}, thickness at constant volume {:.4g} to {:.4g} mm",
                 st.def->name, *mn, *mx, result.part_shear_min_deg[p], result.part_shear_max_deg[p], over,
-                result.part_fibre_strain_min[p], result.part_fibre_strain_max[p]);
+                result.part_fibre_strain_min[p], result.part_fibre_strain_max[p],
+                1e3 * result.part_thickness_min_m[p], 1e3 * result.part_thickness_max_m[p]);
       if (sim.unstable_from_[p] >= 0)
         log->warn("part '{}': long-term membrane response unstable from t = {} s, in {} % of its area at the end "
                   "(down to {} N/m): the law alone does not set its in-plane shape there; {} (user guide, "
@@ -1139,6 +1155,8 @@ std::vector<std::vector<FrameField>> Simulation::frame_fields(const std::vector<
         fields[p].push_back({"conductance_top", st.conductance_top.data()});
       } else if (f == "tool_gap") {
         fields[p].push_back({"tool_gap", st.tool_gap.data()});
+      } else if (f == "thickness" && !st.thickness.empty()) {
+        fields[p].push_back({"thickness", st.thickness.data(), 1, true});
       } else if (f == "crystallinity" && !st.X.empty()) {
         fields[p].push_back({"crystallinity", st.X.data(), 1, false, true});
         fields[p].push_back({"crystallinity_mean", st.X_mean.data()});

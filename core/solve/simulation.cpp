@@ -300,7 +300,11 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) try : job_(job)
                       job_.output.fields.end();
   want_pressure_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "contact_pressure") !=
                    job_.output.fields.end();
+  want_thickness_ = std::find(job_.output.fields.begin(), job_.output.fields.end(), "thickness") !=
+                    job_.output.fields.end();
   for (const auto& pr : job_.output.probes) {
+    want_thickness_ = want_thickness_ ||
+                      std::find(pr.quantities.begin(), pr.quantities.end(), "thickness") != pr.quantities.end();
     probe_pressure_.push_back(std::find(pr.quantities.begin(), pr.quantities.end(), "contact_pressure") !=
                               pr.quantities.end());
     want_pressure_ = want_pressure_ || probe_pressure_.back();
@@ -417,6 +421,10 @@ void Simulation::build_parts() {
     }
     st->displacement.assign(3 * nn, 0.0);
     st->shear_angle.assign(ne, 0.0);
+    if (want_thickness_) {
+      st->area0 = element_areas(st->mesh);
+      st->thickness.assign(ne, def.thickness);
+    }
     st->contact_status.assign(nn, 0.0);
     if (want_pressure_) st->contact_pressure.assign(nn, 0.0);
     for (auto* v : {&st->h_bottom, &st->t_bottom, &st->h_top, &st->t_top, &st->conductance_bottom,
@@ -1727,6 +1735,8 @@ void Simulation::update_element_fields() {
   update_contact_fields();
   for (std::size_t p = 0; p < parts_.size(); ++p) {
     PartState& st = *parts_[p];
+    if (want_thickness_)
+      constant_volume_thickness(st.mesh, st.area0, st.x.data(), st.def->thickness, st.thickness.data());
     MechPart& m = *mech_[p];
     sdk::ElementFields f;
     f.shear_angle = st.shear_angle;

@@ -103,6 +103,8 @@ struct RunResult {
   std::vector<double> part_shear_min_deg, part_shear_max_deg;  // per part, mechanics only: shear angle range at the end
   // per part, mechanics only: the range of E11 (membrane strain along the initial fibre direction) at the end
   std::vector<double> part_fibre_strain_min, part_fibre_strain_max;
+  // per part, mechanics only: the range of the thickness at constant volume (m) at the end
+  std::vector<double> part_thickness_min_m, part_thickness_max_m;
   double temperature_min = 0, temperature_max = 0;  // over every value and every step
   // The plies' history (plies.csv): one row per sample, by part.
   struct PlySample {
@@ -291,6 +293,7 @@ class Simulation {
   static constexpr double kToolGapLimit = 0.01;  // m
   bool want_tool_gap_ = false;  // the field `tool_gap` is written
   bool want_below_from_ = false;  // the field `below_threshold_from` is written
+  bool want_thickness_ = false;   // the field or a probe quantity `thickness` is written
   // The initial temperatures of a part from a frame of an earlier run
   // (PartDef::initial_results); JobError where that cannot be done.
   void load_initial_temperature(PartState& st);

@@ -137,6 +137,11 @@ struct PartState {
   // Per node, m: the gap from the ply's face to the nearest of its tools
   // (Simulation::update_tool_gap), for the field and probe quantity `tool_gap`.
   std::vector<double> tool_gap;
+  // Per element, m: the thickness at constant volume (the job's thickness
+  // times the element's initial area over its area; Simulation::
+  // update_element_fields), for the field and probe quantity `thickness`;
+  // area0 the initial areas (both empty unless asked for).
+  std::vector<double> thickness, area0;
   // Per node, s: the first time a value of the node, and every value, was
   // below output.temperature_threshold (NaN: not yet), for the field
   // `below_threshold_from` (empty unless asked for).

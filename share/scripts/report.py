@@ -20,6 +20,9 @@ Writes into DIR/figures/:
   stability_<part>.png  the long-term stiffness of each ply's membrane law
                        (N/m, red below 0: unstable), last frame, where
                        the frames have the field membrane_stability
+  thickness_<part>.png  the thickness at constant volume of each ply, as
+                       its change (%) from the first frame's, last frame,
+                       where the frames have the field thickness
   crystallinity_<part>.png  the relative crystallinity of each ply (its
                        mean and its smallest value through the
                        thickness), last frame, where the frames have the
@@ -275,6 +278,26 @@ def pressure_map(out, part, time, tri, xyz, vals):
     return save(fig, out, "pressure_%s.png" % part, dpi=110, tight=False)
 
 
+def thickness_map(out, part, time, tri, xyz, h, h0):
+    """The thickness at constant volume of one ply (per element): its change
+    in % from the first frame's (the job's thickness), thicker in red (a
+    sheared or compacted zone), thinner in blue (stretched across the
+    fibres); grey where an element had collapsed."""
+    change = 100.0 * (h / h0 - 1.0)
+    finite = change[np.isfinite(change)]
+    lim = max(np.abs(finite).max() if finite.size else 0.0, 1e-9)
+    cmap = plt.get_cmap("coolwarm").copy()
+    cmap.set_bad("lightgrey")
+    fig, ax = plt.subplots(figsize=(5.2, 4.4))
+    for mxy, mtri, v in mirrored(xyz[:, :2], tri, change, True):
+        pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.ma.masked_invalid(v), vmin=-lim,
+                          vmax=lim, cmap=cmap)
+    finish_map(fig, ax, pc, "%s: thickness at constant volume, t = %.3g s\n%.4g to %.4g mm (%+.1f to %+.1f %%)"
+               % (part, time, 1e3 * np.nanmin(h), 1e3 * np.nanmax(h), finite.min() if finite.size else np.nan,
+                  finite.max() if finite.size else np.nan), "% of the initial thickness")
+    return save(fig, out, "thickness_%s.png" % part, dpi=110, tight=False)
+
+
 def stability_map(out, part, time, tri, xyz, q):
     """The smallest long-term stiffness q of one ply's membrane law (per
     element, N/m): diverging about 0, red where q < 0, where the law has
@@ -355,6 +378,9 @@ def plot_maps(folder, out):
                 made.append(tool_gap_map(out, part, time, tri, xyz, 1e3 * g["tool_gap"][()]))
             if "membrane_stability" in g:
                 made.append(stability_map(out, part, time, tri, xyz, g["membrane_stability"][()]))
+            first = f["frames"][frames[0]][part]
+            if "thickness" in g and "thickness" in first:
+                made.append(thickness_map(out, part, time, tri, xyz, g["thickness"][()], first["thickness"][()]))
             if "below_threshold_from" in g and "all_below_threshold_from" in g:
                 made.append(threshold_map(out, part, time, tri, xyz, g["below_threshold_from"][()],
                                           g["all_below_threshold_from"][()], threshold_of(folder, part)))

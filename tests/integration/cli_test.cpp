@@ -61,7 +61,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.39.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.40.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -2279,7 +2279,7 @@ TEST(Export, PliesOfAFrameAsGmshMeshes) {
   const hid_t file = H5Fopen((dir / "run" / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
   const std::set<std::string> on_elements = {"shear_angle", "fibre_direction", "membrane_stress", "membrane_strain",
-                                             "curvature", "membrane_stability"};
+                                             "curvature", "membrane_stability", "thickness"};
   for (const auto& part : j["parts"]) {
     const std::string name = part["name"];
     const auto msh = dir / "formed" / (name + ".msh");
@@ -2614,7 +2614,7 @@ TEST(Output, IndexNamesWhatTheFileHolds) {
       {thermal, {"temperature_mean", "temperature_top", "conductance"}},
       {thermal, json::array()},
       {mech, {"displacement", "velocity", "shear_angle", "fibre_direction", "membrane_stress", "membrane_strain",
-              "curvature", "contact_status", "contact_pressure", "tool_gap"}},
+              "curvature", "contact_status", "contact_pressure", "tool_gap", "thickness"}},
       {mech, {"temperature", "shear_angle"}}};
   int k = 0;
   for (const auto& [base, fields] : cases) {
@@ -2875,7 +2875,8 @@ TEST(Output, DatasetsCarryTheirUnits) {
       {"displacement", "m"},   {"velocity", "m/s"},          {"shear_angle", "deg"},
       {"fibre_direction", "1"}, {"contact_status", "1"},     {"contact_pressure", "Pa"},
       {"membrane_stress", "N/m"}, {"membrane_strain", "1"},  {"curvature", "1/m"},
-      {"conductance_bottom", "W/(m^2 K)"}, {"conductance_top", "W/(m^2 K)"}, {"tool_gap", "m"}};
+      {"conductance_bottom", "W/(m^2 K)"}, {"conductance_top", "W/(m^2 K)"}, {"tool_gap", "m"},
+      {"thickness", "m"}};
   const hid_t file = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(file, 0);
   auto text = [&](const std::string& object, const char* name) { return h5_text(file, object, name); };

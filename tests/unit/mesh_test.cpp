@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <numeric>
@@ -65,6 +66,69 @@ TEST(Rectangle, CrossedPattern) {
       EXPECT_NEAR(std::abs(dy), 0.025, 1e-15);
     }
   }
+}
+
+// The thickness at constant volume under affine maps of a ply: a
+// triangle's area scales by the determinant of the map's in-plane part, so
+// every triangle of a mesh with irregular nodes has h0 / det, for stretches
+// along and across, in-plane shear and rigid rotations (180 degrees
+// included) carried out in 3D. Round-off only: 1e-13 relative.
+TEST(Thickness, ConstantVolumeUnderAffineMaps) {
+  ShellMesh m = rectangle_mesh({0.01, -0.02, 0.003}, {0.12, 0.08}, {7, 5});
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jiggle(-0.004, 0.004);
+  for (std::size_t i = 0; i < m.x.size(); i += 3) {  // irregular triangles, still in the plane z = 0.003
+    m.x[i] += jiggle(rng);
+    m.x[i + 1] += jiggle(rng);
+  }
+  const std::vector<double> area0 = element_areas(m);
+  const double h0 = 4.5e-4;
+  std::vector<double> h(m.num_elements());
+  constant_volume_thickness(m, area0, m.x.data(), h0, h.data());
+  for (const double v : h) EXPECT_EQ(v, h0);
+  // Rotation about the unit axis u by angle a (Rodrigues).
+  auto rotation = [](sdk::Vec3 u, double a) {
+    const double c = std::cos(a), s = std::sin(a);
+    std::array<std::array<double, 3>, 3> R{};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) R[i][j] = (i == j ? c : 0.0) + (1 - c) * u[i] * u[j];
+    R[0][1] -= s * u[2];
+    R[0][2] += s * u[1];
+    R[1][0] += s * u[2];
+    R[1][2] -= s * u[0];
+    R[2][0] -= s * u[1];
+    R[2][1] += s * u[0];
+    return R;
+  };
+  struct Case {
+    double fxx, fxy, fyx, fyy;  // the in-plane map
+    sdk::Vec3 axis;
+    double angle;
+  };
+  const sdk::Vec3 tilted = sdk::normalized({0.3, -0.5, 0.8});
+  for (const Case& c : {Case{1.2, 0, 0, 1, {0, 0, 1}, 0}, Case{1, 0, 0, 0.7, {0, 0, 1}, 0},
+                        Case{1, 0.4, 0, 1, {0, 0, 1}, 0},                          // simple shear: area kept
+                        Case{1, std::sin(0.5), 0, std::cos(0.5), {0, 0, 1}, 0},  // trellis: both families keep length
+                        Case{1.1, 0.2, -0.3, 0.9, tilted, 2.1}, Case{1, 0, 0, 1, {1, 0, 0}, M_PI},
+                        Case{0.8, -0.1, 0.25, 1.3, {0, 1, 0}, M_PI}, Case{1, 0, 0, 1, tilted, 0.5 * M_PI}}) {
+    const auto R = rotation(c.axis, c.angle);
+    std::vector<double> x(m.x.size());
+    for (std::size_t i = 0; i < m.x.size(); i += 3) {
+      const double p[3] = {c.fxx * m.x[i] + c.fxy * m.x[i + 1], c.fyx * m.x[i] + c.fyy * m.x[i + 1], m.x[i + 2]};
+      for (int d = 0; d < 3; ++d) x[i + d] = R[d][0] * p[0] + R[d][1] * p[1] + R[d][2] * p[2] + 0.05 * (d + 1);
+    }
+    constant_volume_thickness(m, area0, x.data(), h0, h.data());
+    const double want = h0 / (c.fxx * c.fyy - c.fxy * c.fyx);
+    for (int e = 0; e < m.num_elements(); ++e)
+      ASSERT_NEAR(h[e], want, 1e-13 * want) << "map " << c.fxx << " " << c.fxy << " " << c.fyx << " " << c.fyy
+                                            << ", rotation " << c.angle << ", element " << e;
+  }
+  // A triangle collapsed (a corner on another) has no thickness to give.
+  std::vector<double> x = m.x;
+  const int* t = &m.triangles[0];
+  for (int d = 0; d < 3; ++d) x[3 * t[2] + d] = x[3 * t[0] + d];
+  constant_volume_thickness(m, area0, x.data(), h0, h.data());
+  EXPECT_TRUE(std::isnan(h[0]));
 }
 
 TEST(Gmsh, ReadsVersions22And41Alike) {

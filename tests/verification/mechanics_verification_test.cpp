@@ -424,9 +424,11 @@ TEST(Strip, OffAxisHomogeneousUniaxialStress) {
     cons.push_back({{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}});
     j["constraints"] = cons;
     j["solvers"]["mechanics"] = {{"dt_safety", 0.8}, {"damping", 200.0}};
-    j["output"]["fields"] = {"displacement", "membrane_strain"};
-    j["output"]["probes"].push_back(
-        {{"name", "centre"}, {"part", "strip"}, {"at", {kL / 2, kW / 2, 0}}, {"quantities", {"fibre_strain"}}});
+    j["output"]["fields"] = {"displacement", "membrane_strain", "thickness"};
+    j["output"]["probes"].push_back({{"name", "centre"},
+                                     {"part", "strip"},
+                                     {"at", {kL / 2, kW / 2, 0}},
+                                     {"quantities", {"fibre_strain", "thickness"}}});
     const auto dir = temp_dir("offaxis" + std::to_string(static_cast<int>(deg)));
     const JobRun r = run_json(j, 0, dir);
     ASSERT_TRUE(r.result.ok) << r.result.error;
@@ -449,6 +451,7 @@ TEST(Strip, OffAxisHomogeneousUniaxialStress) {
     const hid_t file = H5Fopen((dir / "results.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
     ASSERT_GE(file, 0);
     const std::vector<double> E = read_dataset<double>(file, "frames/000004/strip/membrane_strain");
+    const std::vector<double> h = read_dataset<double>(file, "frames/000004/strip/thickness");
     double frame_time = 0;
     const hid_t at = H5Aopen_by_name(file, "frames/000004", "time", H5P_DEFAULT, H5P_DEFAULT);
     H5Aread(at, H5T_NATIVE_DOUBLE, &frame_time);
@@ -471,6 +474,33 @@ TEST(Strip, OffAxisHomogeneousUniaxialStress) {
     std::printf("%g deg: E in the material frame [%.5f, %.5f, %.5f], field within %.2e (%.3f %% of the largest), "
                 "probe E11 %.5f\n",
                 deg, Em[0], Em[1], Em[2], worst, 100 * worst / (tol / 1e-3), ps->values[0]);
+    // The thickness at constant volume: h0 / det F = h0 / (a d) in every
+    // element, within the same share of the strain as E (the area ratio is
+    // 1 + tr E to first order: tolerance h0 * 2 tol); the probe (mean of the
+    // elements around its node) and the run's range alike. And in each
+    // element exactly what its membrane strain says, (h0 / h)^2 = det C =
+    // det(I + 2 E): the kernel's areas and the element's C are two routes to
+    // the same stretch (round-off: 1e-12).
+    const double h0 = 0.0005, h_exact = h0 / (a * d);
+    ASSERT_EQ(h.size(), E.size() / 3);
+    double worst_h = 0, worst_c = 0;
+    for (std::size_t e = 0; e < h.size(); ++e) {
+      EXPECT_NEAR(h[e], h_exact, 2 * tol * h0) << deg << " deg, element " << e;
+      worst_h = std::max(worst_h, std::abs(h[e] - h_exact));
+      const double* Ee = &E[3 * e];
+      const double detC = (1 + 2 * Ee[0]) * (1 + 2 * Ee[1]) - 4 * Ee[2] * Ee[2];
+      worst_c = std::max(worst_c, std::abs((h0 / h[e]) * (h0 / h[e]) / detC - 1));
+    }
+    EXPECT_LT(worst_c, 1e-12) << deg << " deg";
+    const ProbeSample* ph = r.sample(2, "thickness", T);
+    ASSERT_NE(ph, nullptr);
+    EXPECT_NEAR(ph->values[0], h_exact, 2 * tol * h0) << deg << " deg";
+    ASSERT_EQ(r.result.part_thickness_min_m.size(), 1u);
+    EXPECT_EQ(r.result.part_thickness_min_m[0], *std::min_element(h.begin(), h.end()));
+    EXPECT_EQ(r.result.part_thickness_max_m[0], *std::max_element(h.begin(), h.end()));
+    std::printf("%g deg: thickness h0 / (a d) = %.6e m, field within %.2e m, (h0 / h)^2 against det C within %.1e, "
+                "probe %.6e m\n",
+                deg, h_exact, worst_h, worst_c, ph->values[0]);
   }
 }
 
