@@ -74,8 +74,10 @@ curvatures) as $ElementData; a mesh file a job can read; --whole: a ply
 of a model reduced by symmetry planes mirrored into the whole ply;
 --format abaqus: FOLDER/<ply>.inp instead, Abaqus input: the mid-surface
 as S3 shells in an element set named after the ply, each element's
-fibre direction as an *ORIENTATION (from a distribution) and each node's
-mean temperature as *INITIAL CONDITIONS, for a structural model; a mesh
+fibre direction as an *ORIENTATION (from a distribution), each node's
+mean temperature as *INITIAL CONDITIONS and, where the frame has the field
+thickness, each node's thickness as *NODAL THICKNESS, for a structural
+model; a mesh
 file a job can read too; --format calculix: the same for CalculiX (its
 distribution of orientations without Abaqus's default line)
 
@@ -453,6 +455,9 @@ int main(int argc, char** argv) {
                     << "; initial temperatures: "
                     << (p.temperature_from.empty() ? std::string("none (no temperature in the frame)")
                                                    : "from " + p.temperature_from)
+                    << "; nodal thicknesses: "
+                    << (p.thickness_from.empty() ? std::string("none (no thickness in the frame)")
+                                                 : "from " + p.thickness_from)
                     << "\n";
         else
           std::cout << "; node data: " << (p.node_data.empty() ? std::string("none") : ts::join(p.node_data))

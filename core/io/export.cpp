@@ -224,6 +224,7 @@ bool write_abaqus(const std::filesystem::path& file, const std::string& name, co
     << ". Units: m, degC. The mid-surface at the frame's positions\n"
     << "** as 3-node shells (element set " << set << "); give them a section, for instance\n"
     << "**   *Shell Section, elset=" << set << ", material=..., orientation=" << set << "_ORIENTATION\n"
+    << "** (with \"nodal thickness\" for the section to take the *Nodal Thickness below, where there is one)\n"
     << "*Node, nset=" << set << "_NODES\n";
   for (std::size_t i = 0; i < nodes; ++i)
     m << d.node_tag[i] << ", " << abaqus_number(d.x[3 * i]) << ", " << abaqus_number(d.x[3 * i + 1]) << ", "
@@ -235,8 +236,10 @@ bool write_abaqus(const std::filesystem::path& file, const std::string& name, co
       << d.node_tag[static_cast<std::size_t>(d.tri[3 * e + 2])] << '\n';
   const Field* fibre = nullptr;
   const Field* temperature = nullptr;
+  const Field* thickness = nullptr;
   for (const Field& f : d.fields) {
     if (f.name == "fibre_direction" && f.cells && f.components == 3) fibre = &f;
+    if (f.name == "thickness" && f.cells && f.components == 1) thickness = &f;
     if (!f.cells && f.components == 1 && (f.name == "temperature_mean" || (f.name == "temperature" && !temperature)))
       temperature = &f;
   }
@@ -264,6 +267,31 @@ bool write_abaqus(const std::filesystem::path& file, const std::string& name, co
       m << '\n';
     }
     m << "*Orientation, name=" << set << "_ORIENTATION\n" << set << "_FIBRES\n3, 0.\n";
+  }
+  if (thickness) {
+    // Each node's thickness: the mean of its elements', weighted by their
+    // areas at the frame (a collapsed element, NaN, left out).
+    std::vector<double> sum(nodes, 0.0), weight(nodes, 0.0);
+    for (std::size_t e = 0; e < triangles; ++e) {
+      if (!std::isfinite(thickness->v[e])) continue;
+      const int* t = &d.tri[3 * e];
+      const double* p0 = &d.x[3 * static_cast<std::size_t>(t[0])];
+      const double* p1 = &d.x[3 * static_cast<std::size_t>(t[1])];
+      const double* p2 = &d.x[3 * static_cast<std::size_t>(t[2])];
+      const double u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+      const double v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+      const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+      const double area = 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      for (int k = 0; k < 3; ++k) {
+        sum[static_cast<std::size_t>(t[k])] += area * thickness->v[e];
+        weight[static_cast<std::size_t>(t[k])] += area;
+      }
+    }
+    ply.thickness_from = thickness->name;
+    m << "** Each node's thickness at constant volume (m, from the field " << thickness->name
+      << "): the mean of its elements', weighted by their areas\n*Nodal Thickness\n";
+    for (std::size_t i = 0; i < nodes; ++i)
+      if (weight[i] > 0) m << d.node_tag[i] << ", " << abaqus_number(sum[i] / weight[i]) << '\n';
   }
   if (temperature) {
     ply.temperature_from = temperature->name;

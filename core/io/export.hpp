@@ -25,16 +25,19 @@ struct ExportedPly {
   int nodes = 0, triangles = 0;
   std::vector<std::string> node_data, element_data;  // the fields written
   std::vector<std::string> mirrored;                  // whole: the planes mirrored at ("x", "y", "z")
-  // Abaqus: the element set's name, and the fields the orientations and
-  // the initial temperatures were written from ("" for none)
-  std::string elset, orientation_from, temperature_from;
+  // Abaqus: the element set's name, and the fields the orientations, the
+  // initial temperatures and the nodal thicknesses were written from (""
+  // for none)
+  std::string elset, orientation_from, temperature_from, thickness_from;
 };
 
 // Gmsh 2.2 ASCII (<ply>.msh, every field), or Abaqus input (<ply>.inp: the
 // mesh as S3 shells in an element set named after the ply, each element's
 // material orientation from the frame's fibre direction as a distribution
-// and an *ORIENTATION, and each node's mean temperature as *INITIAL
-// CONDITIONS, type=TEMPERATURE), or the same for CalculiX (<ply>.inp,
+// and an *ORIENTATION, each node's mean temperature as *INITIAL
+// CONDITIONS, type=TEMPERATURE, and each node's thickness at constant
+// volume, the mean of its elements' weighted by their areas, as *NODAL
+// THICKNESS), or the same for CalculiX (<ply>.inp,
 // its distribution without the default line that Abaqus asks for first:
 // CalculiX 2.20 gives that line's directions to every element).
 enum class ExportFormat { Gmsh, Abaqus, CalculiX };

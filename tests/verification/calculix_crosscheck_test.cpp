@@ -586,4 +586,108 @@ TEST(CalculiX, ExportedPlyCarriesItsFibreFrameAndTemperatures) {
   EXPECT_LT(worst, 1e-5 * umax);
 }
 
+// The thickness a formed ply takes to a structural model. Every node of a
+// flat ply (0.1 m square, crossed 6 x 6 cells) is driven at v = (F - I) X /
+// T, so that at T its positions are F X to round-off, F = diag(1.05, 0.9):
+// the ply thins where stretched and thickens where compressed, at constant
+// volume h = h0 / det F = h0 / 0.945 = 0.52910 mm. The export writes that
+// at every node (*Nodal Thickness, 1e-12 relative). CalculiX then pulls the
+// exported plate (isotropic, E, nu = 0) with a total force P on its right
+// edge; with the section's "nodal thickness" its end moves by P L' / (E W'
+// h) (L', W' the stretched sides), to the 7 digits it prints (1e-5). The
+// section's own thickness h0 would give 0.945 of that: the mutation the
+// tolerance is set against.
+TEST(CalculiX, ExportedPlyCarriesItsThicknessAtConstantVolume) {
+  if (!have_ccx()) GTEST_SKIP() << "ccx not found (Debian package calculix-ccx; scripts/setup installs it)";
+  const auto dir = temp_dir("export_ccx_thickness");
+  const double L = 0.1, h0 = 0.0005, T = 0.002, fx = 1.05, fy = 0.9, h = h0 / (fx * fy);
+  json j = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  j = {{"format", "thermostamp-job/1"}, {"name", "stretched"}, {"time", {{"end", T}}}, {"materials", j["materials"]}};
+  j["parts"] = json::array({{{"name", "ply"},
+                             {"mesh",
+                              {{"generator", "rectangle"}, {"origin", {0.0, 0.0, 0.0}}, {"size", {L, L}},
+                               {"divisions", {6, 6}}, {"pattern", "crossed"}}},
+                             {"thickness", h0}, {"material", "pa66_cf_ud"}, {"fibre_direction", {1.0, 0.0, 0.0}},
+                             {"initial_temperature", 280.0}}});
+  const ShellMesh grid = rectangle_mesh({0, 0, 0}, {L, L}, {6, 6}, true);
+  json cons = json::array();
+  for (int i = 0; i < grid.num_nodes(); ++i) {
+    const double X = grid.x[3 * i], Y = grid.x[3 * i + 1], e = 1e-7;
+    cons.push_back({{"type", "velocity"}, {"part", "ply"}, {"box", {{X - e, Y - e, -1}, {X + e, Y + e, 1}}},
+                    {"velocity", {(fx - 1) * X / T, (fy - 1) * Y / T, 0.0}}});
+  }
+  j["constraints"] = cons;
+  j["solvers"] = {{"mechanics", {{"mass_scaling", {{"target_dt", 1e-5}}}}}};
+  j["output"] = {{"interval", T}, {"fields", {"fibre_direction", "thickness"}}};
+  std::ofstream(dir / "stretched.json") << j.dump(2);
+  const auto run = thermostamp("run " + q(dir / "stretched.json") + " --quiet --out " + q(dir / "run"));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto r = thermostamp("export " + q(dir / "run") + " --format calculix --out " + q(dir / "calculix"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("; nodal thicknesses: from thickness"), std::string::npos) << r.out;
+  std::map<long long, double> thickness;
+  {
+    std::ifstream in(dir / "calculix" / "ply.inp");
+    bool block = false;
+    for (std::string l; std::getline(in, l);) {
+      if (l.rfind("*", 0) == 0) {
+        block = l == "*Nodal Thickness";
+        continue;
+      }
+      if (!block) continue;
+      const auto comma = l.find(',');
+      thickness[std::stoll(l.substr(0, comma))] = std::stod(l.substr(comma + 1));
+    }
+  }
+  ASSERT_EQ(thickness.size(), static_cast<std::size_t>(grid.num_nodes()));
+  for (const auto& [n, v] : thickness) EXPECT_NEAR(v, h, 1e-12 * h) << "node " << n;
+  // CalculiX: the left edge held along x, its lower corner along y, every
+  // node along z; P on the right edge as the consistent nodal forces of a
+  // uniform line load.
+  const ShellMesh m = read_mesh_triangles(dir / "calculix" / "ply.inp");
+  const double Lx = fx * L, Wy = fy * L, E = 1e9, P = 200.0;
+  std::vector<long long> left, right;
+  std::map<long long, double> y_of;
+  long long corner = 0;
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const long long tag = m.node_tags[i];
+    if (std::abs(m.x[3 * i]) < 1e-9) left.push_back(tag);
+    if (std::abs(m.x[3 * i] - Lx) < 1e-9) {
+      right.push_back(tag);
+      y_of[tag] = m.x[3 * i + 1];
+    }
+    if (std::abs(m.x[3 * i]) < 1e-9 && std::abs(m.x[3 * i + 1]) < 1e-9) corner = tag;
+  }
+  std::sort(right.begin(), right.end(), [&](long long a, long long b) { return y_of[a] < y_of[b]; });
+  ASSERT_EQ(right.size(), 7u);
+  ASSERT_NE(corner, 0);
+  std::ofstream f(dir / "calculix" / "pull.inp");
+  f.precision(15);
+  f << "*Include, input=ply.inp\n*Nset, nset=LEFT\n";
+  for (const long long n : left) f << n << "\n";
+  f << "*Nset, nset=RIGHT\n";
+  for (const long long n : right) f << n << "\n";
+  f << "*Material, name=ISO\n*Elastic\n" << E << ", 0.\n"
+    << "*Shell Section, elset=PLY, material=ISO, nodal thickness\n" << h0 << "\n"
+    << "*Step\n*Static\n*Boundary\nLEFT, 1, 1, 0\n" << corner << ", 2, 2, 0\nPLY_NODES, 3, 3, 0\n*Cload\n";
+  for (std::size_t k = 0; k < right.size(); ++k) {
+    const double below = k > 0 ? y_of[right[k]] - y_of[right[k - 1]] : 0.0;
+    const double above = k + 1 < right.size() ? y_of[right[k + 1]] - y_of[right[k]] : 0.0;
+    f << right[k] << ", 1, " << P / Wy * (below + above) / 2 << "\n";
+  }
+  f << "*Node Print, nset=RIGHT\nU\n*End Step\n";
+  f.close();
+  std::map<int, std::array<double, 3>> disp;
+  std::string msg;
+  ASSERT_TRUE(run_ccx_dat(dir / "calculix", "pull", nullptr, disp, msg)) << msg;
+  const double u = P * Lx / (E * Wy * h);
+  for (const long long n : right) {
+    ASSERT_TRUE(disp.count(static_cast<int>(n))) << "node " << n;
+    EXPECT_NEAR(disp.at(static_cast<int>(n))[0], u, 1e-5 * u) << "node " << n;
+  }
+  std::printf("stretched by (%.2f, %.2f): exported thickness %.6e m (h0 / det F %.6e m); CalculiX end displacement "
+              "%.6e m, P L' / (E W' h) %.6e m (with h0: %.6e m)\n",
+              fx, fy, thickness.begin()->second, h, disp.at(static_cast<int>(right[0]))[0], u, P * Lx / (E * Wy * h0));
+}
+
 }  // namespace ts::test
