@@ -530,6 +530,28 @@ std::vector<std::string> dyna_fields(const std::string& card, const std::vector<
 }
 }  // namespace
 
+namespace {
+// Cards per element of *ELEMENT_SHELL and of its options whose extra cards
+// carry no mesh: THICKNESS, BETA and MCID (one card of nodal thicknesses
+// and an angle or a coordinate system), OFFSET (one card); 0 for another
+// keyword.
+int shell_cards(const std::string& k) {
+  if (k == "ELEMENT_SHELL") return 1;
+  if (k.rfind("ELEMENT_SHELL_", 0) != 0) return 0;
+  bool second = false, offset = false;
+  std::stringstream in(k.substr(14));
+  for (std::string t; std::getline(in, t, '_');) {
+    if (t == "THICKNESS" || t == "BETA" || t == "MCID")
+      second = true;
+    else if (t == "OFFSET")
+      offset = true;
+    else
+      return 0;
+  }
+  return 1 + (second ? 1 : 0) + (offset ? 1 : 0);
+}
+}  // namespace
+
 ShellMesh read_lsdyna_triangles(const std::filesystem::path& file, double scale) {
   LineReader r = open_mesh_file(file);
   std::unordered_map<long long, int> node_index;
@@ -550,12 +572,21 @@ ShellMesh read_lsdyna_triangles(const std::filesystem::path& file, double scale)
   // ending in %).
   bool long_all = false;
   int int_w = 8, real_w = 16;
+  // The shells' cards per element (shell_cards) and the cards of this block so far.
+  int cards = 1;
+  long long card = 0;
+  auto element_complete = [&]() {
+    if (block == Block::Shell && card % cards != 0)
+      r.fail("*" + keyword_name + ": the last element has " + std::to_string(card % cards) + " of its " +
+             std::to_string(cards) + " cards");
+  };
   std::string s;
   while (std::getline(r.in, s)) {
     ++r.line;
     if (!s.empty() && s.back() == '\r') s.pop_back();
     if (s.empty() || s[0] == '$') continue;
     if (s[0] == '*') {
+      element_complete();
       std::string k = upper(trim(s.substr(1)));
       int_w = long_all ? 20 : 8;
       real_w = long_all ? 20 : 16;
@@ -582,8 +613,10 @@ ShellMesh read_lsdyna_triangles(const std::filesystem::path& file, double scale)
         break;
       } else if (k == "NODE") {
         block = Block::Node;
-      } else if (k == "ELEMENT_SHELL") {
+      } else if (shell_cards(k) > 0) {
         block = Block::Shell;
+        cards = shell_cards(k);
+        card = 0;
       } else if (k.rfind("INCLUDE", 0) == 0) {
         r.fail("*" + k + ": included files are not read; write the nodes and elements into this file");
       } else if (k.rfind("ELEMENT_", 0) == 0) {
@@ -607,6 +640,7 @@ ShellMesh read_lsdyna_triangles(const std::filesystem::path& file, double scale)
         break;
       }
       case Block::Shell: {
+        if (card++ % cards != 0) break;  // thicknesses, an angle, an offset: the job gives its own
         const std::vector<std::string> f = dyna_fields(s, {int_w}, 6);
         const long long tag = integer_field(r, f[0], "element number");
         const long long part = integer_field(r, f[1], "part number");
@@ -627,6 +661,7 @@ ShellMesh read_lsdyna_triangles(const std::filesystem::path& file, double scale)
         break;  // cards of keywords that carry no mesh (parts, sections, materials, controls, ...)
     }
   }
+  element_complete();
   if (!refused.empty() || !quads.empty()) {
     std::string list;
     long long q = 0;

@@ -337,7 +337,7 @@ void write_shuffled_abaqus(const std::filesystem::path& file, const ShellMesh& m
 }
 
 void write_shuffled_lsdyna(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed,
-                           const std::string& style) {
+                           const std::string& style, const std::string& shell_option) {
   std::vector<int> order(mesh.num_elements());
   for (int e = 0; e < mesh.num_elements(); ++e) order[e] = e;
   if (seed != 0) std::shuffle(order.begin(), order.end(), std::mt19937(seed));
@@ -366,13 +366,19 @@ void write_shuffled_lsdyna(const std::filesystem::path& file, const ShellMesh& m
   for (int i = mesh.num_nodes() - 1; i >= 0; --i)
     f << integer(shuffled_node_tag(i)) << real(mesh.x[3 * i]) << real(mesh.x[3 * i + 1]) << real(mesh.x[3 * i + 2])
       << "\n";
-  f << "*ELEMENT_SHELL" << suffix << "\n";
+  f << "*ELEMENT_SHELL" << (shell_option.empty() ? "" : "_" + shell_option) << suffix << "\n";
+  const bool second = shell_option.find("THICKNESS") != std::string::npos ||
+                      shell_option.find("BETA") != std::string::npos || shell_option.find("MCID") != std::string::npos;
+  const bool offset = shell_option.find("OFFSET") != std::string::npos;
   for (std::size_t k = 0; k < order.size(); ++k) {
     const int e = order[k];
     f << integer(shuffled_element_tag(e)) << integer(3);
     for (int c = 0; c < 3; ++c) f << integer(shuffled_node_tag(mesh.triangles[3 * e + c]));
     if (k % 5 != 2) f << integer(shuffled_node_tag(mesh.triangles[3 * e + 2]));
     f << "\n";
+    if (k % 7 == 3) f << "$ a comment card between the cards of an element\n";
+    if (second) f << real(0.0005) << real(0.00051) << real(0.00052) << real(0.00052) << real(30.0 + k) << "\n";
+    if (offset) f << real(-0.00025) << "\n";
   }
   f << "*END\n*NODE\n       1     not read\n";
 }

@@ -117,9 +117,11 @@ void write_shuffled_abaqus(const std::filesystem::path& file, const ShellMesh& m
 // 20 characters, 14 digits), "i10" (keywords ending in %: I10, E16) or
 // "free" (comma-separated, 17 digits); with a title, a part, its section,
 // comment cards, every 5th triangle's N4 left blank (the others N4 = N3),
-// and cards after *END.
+// and cards after *END. With `shell_option` (THICKNESS, BETA_OFFSET, ...)
+// the shells as *ELEMENT_SHELL_<option>, each element with the cards the
+// option adds (nodal thicknesses and an angle, an offset).
 void write_shuffled_lsdyna(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed,
-                           const std::string& style);
+                           const std::string& style, const std::string& shell_option = "");
 
 // A Gmsh 2.2 mesh of the parallelogram x = xi + s y, xi in [0, L], y in
 // [0, W]: its slanted edges follow the level lines of cos(pi xi / L).

@@ -384,6 +384,8 @@ TEST(Abaqus, RefusesWhatItCannotRead) {
 }
 
 // An LS-DYNA keyword file in each of its column styles, and free format,
+// also with the shells as *ELEMENT_SHELL_THICKNESS, _BETA_OFFSET, _MCID and
+// _THICKNESS_OFFSET (their extra cards skipped, a comment card among them),
 // gives the mesh of the same nodes and triangles in a Gmsh file: the same
 // corners, tags and neighbours, in the file's order and reordered, the
 // positions to the digits each style holds (10 in the standard 16-column
@@ -392,15 +394,19 @@ TEST(LsDyna, ReadsTheMeshGmshReads) {
   const auto dir = test::temp_dir("lsdyna");
   const ShellMesh m = rectangle_mesh({0.01, -0.02, 0.003}, {0.12, 0.08}, {9, 6}, true);
   test::write_shuffled_gmsh(dir / "ply.msh", m, 5);
-  for (const std::string style : {"standard", "long", "i10", "free"})
-    test::write_shuffled_lsdyna(dir / ("ply_" + style + ".k"), m, 5, style);
+  // The styles, and options of *ELEMENT_SHELL whose cards carry no mesh.
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"standard", ""},          {"long", ""},         {"i10", ""},           {"free", ""},
+      {"standard", "THICKNESS"}, {"long", "BETA_OFFSET"}, {"i10", "MCID"}, {"free", "THICKNESS_OFFSET"}};
+  for (const auto& [style, option] : files)
+    test::write_shuffled_lsdyna(dir / ("ply_" + style + option + ".k"), m, 5, style, option);
   EXPECT_TRUE(is_lsdyna_file(dir / "A.KEY"));
   EXPECT_TRUE(is_lsdyna_file(dir / "a.dyn"));
   EXPECT_FALSE(is_lsdyna_file(dir / "a.inp"));
   for (const bool reorder : {false, true}) {
     const ShellMesh g = read_mesh(dir / "ply.msh", reorder);
-    for (const std::string style : {"standard", "long", "i10", "free"}) {
-      const ShellMesh k = read_mesh(dir / ("ply_" + style + ".k"), reorder);
+    for (const auto& [style, option] : files) {
+      const ShellMesh k = read_mesh(dir / ("ply_" + style + option + ".k"), reorder);
       EXPECT_EQ(k.triangles, g.triangles) << style << reorder;
       EXPECT_EQ(k.neighbours, g.neighbours) << style << reorder;
       EXPECT_EQ(k.node_tags, g.node_tags) << style << reorder;
@@ -430,7 +436,13 @@ TEST(LsDyna, RefusesWhatItCannotRead) {
       {nodes + "*ELEMENT_SHELL\n1,1,1,2,3,3\n2,1,1,3,9,9\n", "bad5.k:8: element 2 refers to unknown node 9"},
       {"*NODE\n       1            zero             0.0             0.0\n", "bad6.k:2: expected x, found 'zero'"},
       {nodes + "*ELEMENT_SHELL\n1,1,1,2\n", "bad7.k:7: element 1 has fewer than 3 nodes"},
-      {nodes, "bad8.k: no 3-node shells"}};
+      {nodes, "bad8.k: no 3-node shells"},
+      {nodes + "*ELEMENT_SHELL_THICKNESS\n1,1,1,2,3,3\n0.5,0.5,0.5,0.5\n2,1,1,3,4,4\n*END\n",
+       "bad9.k:10: *ELEMENT_SHELL_THICKNESS: the last element has 1 of its 2 cards"},
+      {nodes + "*ELEMENT_SHELL_BETA_OFFSET\n1,1,1,2,3,3\n,,,,30\n",
+       "bad10.k:8: *ELEMENT_SHELL_BETA_OFFSET: the last element has 2 of its 3 cards"},
+      {nodes + "*ELEMENT_SHELL\n1,1,1,2,3,3\n*ELEMENT_SHELL_COMPOSITE\n2,1,1,3,4,4\n1,0.5,0\n",
+       "bad11.k: 2 cards of *ELEMENT_SHELL_COMPOSITE: only 3-node shells are taken"}};
   expect_refused(dir, cases, ".k");
 }
 
