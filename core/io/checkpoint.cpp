@@ -18,7 +18,7 @@ namespace ts {
 
 namespace {
 constexpr char kMagic[] = "THERMOSTAMP-CHECKPOINT\n";
-constexpr std::uint32_t kFormat = 8;
+constexpr std::uint32_t kFormat = 9;
 
 template <class T>
 void put(std::ofstream& out, const T& v) {

@@ -146,7 +146,7 @@ std::string series_column_units(const std::string& column) {
   if (ends("_temperature_min") || ends("_temperature_mean") || ends("_temperature_max") || ends("_temperature"))
     return "degC";
   if (column.rfind("reaction", 0) == 0 || ends("_fx") || ends("_fy") || ends("_fz")) return "N";
-  if (ends("_ux") || ends("_uy") || ends("_uz")) return "m";
+  if (ends("_ux") || ends("_uy") || ends("_uz") || ends("_thickness_min") || ends("_thickness_max")) return "m";
   return "J";  // the energies and works, the tools' heat
 }
 

@@ -198,6 +198,7 @@ Simulation::Run::Run(Simulation& s, const RunOptions& o, Clock::time_point w0, i
   const std::size_t n_mech = sim.mech_.size();
   row_shear.resize(n_mech);
   row_strain.resize(n_mech);
+  row_thickness.resize(n_mech);
   row_q.resize(n_mech);
   row_tol.resize(n_mech);
   row_theta.resize(n_mech);

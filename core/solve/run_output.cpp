@@ -232,8 +232,8 @@ void Simulation::Run::open_output() {
     for (const char* q : {"shear_angle_min", "shear_angle_max", "fibre_strain_min", "fibre_strain_max"})
       ply_fields.push_back(q);
     if (shear_limit) ply_fields.push_back("fraction_over_shear_limit");
-    ply_fields.push_back("fraction_unstable");
-    ply_fields.push_back("stability_min");
+    for (const char* q : {"fraction_unstable", "stability_min", "thickness_min", "thickness_max"})
+      ply_fields.push_back(q);
   }
   if (job.thermal)  // the heat the ply has received so far, by source (J)
     for (const char* q : {"heat_from_tools", "heat_from_exchanges", "heat_from_plies"}) ply_fields.push_back(q);
@@ -502,7 +502,7 @@ std::optional<double> Simulation::Run::threshold_of(std::size_t p) const {
 // unstable and the smallest long-term stiffness q (stability.hpp); the first
 // row beyond the limit and the first with an unstable element are noted at
 // time, the latter with a warning.
-std::array<double, 7> Simulation::Run::ply_mechanics(std::size_t p, double time) {
+std::array<double, 9> Simulation::Run::ply_mechanics(std::size_t p, double time) {
   sdk::ElementFields f;
   f.shear_angle = row_shear[p];
   f.strain = row_strain[p];
@@ -582,7 +582,16 @@ std::array<double, 7> Simulation::Run::ply_mechanics(std::size_t p, double time)
         fmt_g(time, 4), st.def->name, fmt_g(100 * unstable / total, 3), fmt_g(q_min, 3), element_tag(st.mesh, worst),
         detail::fmt_vec3(c[0], c[1], c[2]), T, deg > 90 ? 180 - deg : deg, who);
   }
-  return {*smn, *smx, fmn, fmx, over / total, unstable / total, q_min};
+  // The thickness at constant volume (a collapsed element, NaN, left out).
+  std::vector<double>& h = row_thickness[p];
+  h.resize(elem_area[p].size());
+  constant_volume_thickness(st.mesh, elem_area[p], st.x.data(), st.def->thickness, h.data());
+  double hmn = std::numeric_limits<double>::infinity(), hmx = -hmn;
+  for (const double v : h) {
+    hmn = std::fmin(hmn, v);
+    hmx = std::fmax(hmx, v);
+  }
+  return {*smn, *smx, fmn, fmx, over / total, unstable / total, q_min, hmn, hmx};
 }
 
 // Each ply's row of plies.csv (ply_temperature, ply_crystallinity, ply_mechanics).
@@ -599,7 +608,7 @@ void Simulation::Run::sample_plies(double time) {
       }
     }
     if (job.mechanics) {
-      const std::array<double, 7> row = ply_mechanics(p, time);
+      const std::array<double, 9> row = ply_mechanics(p, time);
       ply_rows.insert(ply_rows.end(), row.begin(), row.begin() + (shear_limit ? 5 : 4));
       ply_rows.insert(ply_rows.end(), row.begin() + 5, row.end());
     }
@@ -690,12 +699,14 @@ void Simulation::Run::finish() {
   over_end.assign(parts.size(), 0.0);
   unstable_end.assign(parts.size(), 0.0);
   stability_min_end.assign(parts.size(), 0.0);
+  thickness_end.assign(parts.size(), {0.0, 0.0});
   if (job.mechanics) try {
       for (std::size_t p = 0; p < sim.mech_.size(); ++p) {
-        const std::array<double, 7> row = ply_mechanics(p, t);
+        const std::array<double, 9> row = ply_mechanics(p, t);
         over_end[p] = row[4];
         unstable_end[p] = row[5];
         stability_min_end[p] = row[6];
+        thickness_end[p] = {row[7], row[8]};
       }
     } catch (const RunError& e) {
       if (failure.empty()) failure = e.what();
@@ -727,15 +738,8 @@ void Simulation::Run::finish() {
       const auto [fmn, fmx] = fibre_strain_range(sim.mech_[p]->strain);
       result.part_fibre_strain_min.push_back(fmn);
       result.part_fibre_strain_max.push_back(fmx);
-      std::vector<double> h(elem_area[p].size());
-      constant_volume_thickness(parts[p]->mesh, elem_area[p], parts[p]->x.data(), parts[p]->def->thickness, h.data());
-      double hmn = std::numeric_limits<double>::infinity(), hmx = -hmn;  // NaN (a collapsed element) left out
-      for (const double v : h) {
-        hmn = std::fmin(hmn, v);
-        hmx = std::fmax(hmx, v);
-      }
-      result.part_thickness_min_m.push_back(hmn);
-      result.part_thickness_max_m.push_back(hmx);
+      result.part_thickness_min_m.push_back(thickness_end[p][0]);
+      result.part_thickness_max_m.push_back(thickness_end[p][1]);
     }
   }
   result.stored_change = stored_change;
@@ -805,7 +809,9 @@ void Simulation::Run::finish() {
         v += shear_limit ? 5 : 4;
         s.fraction_unstable = v[0];
         s.stability_min = v[1];
-        v += 2;
+        s.thickness_min = v[2];
+        s.thickness_max = v[3];
+        v += 4;
       }
       if (job.thermal) {
         s.heat_from_tools = v[0];

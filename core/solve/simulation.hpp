@@ -124,6 +124,7 @@ struct RunResult {
     double fraction_over_shear_limit = 0;  // of the initial area with |shear angle| > output.shear_angle_limit
     double fraction_unstable = 0;          // of the initial area where the long-term response is unstable
     double stability_min = 0;              // the smallest long-term stiffness q (N/m), over the elements
+    double thickness_min = 0, thickness_max = 0;  // the thickness at constant volume (m), over the elements
     // with thermal: the heat received so far from the tools, the heat
     // exchanges and the other plies (J)
     double heat_from_tools = 0, heat_from_exchanges = 0, heat_from_plies = 0;

@@ -233,9 +233,10 @@ struct Simulation::Run {
   bool threshold = false, shear_limit = false;  // output.temperature_threshold / shear_angle_limit given
   bool ply_series = false;                      // plies.csv is written (thermal or mechanics)
   bool crystallising = false;                   // some ply's material crystallises (the thermal solver on)
-  // The elements' shear angles and strains at a row, and their initial
-  // areas (the weights of the share beyond the limit), per mechanics part.
-  std::vector<std::vector<double>> row_shear, row_strain, elem_area;
+  // The elements' shear angles, strains and thicknesses at constant volume
+  // at a row, and their initial areas (the weights of the share beyond the
+  // limit), per mechanics part.
+  std::vector<std::vector<double>> row_shear, row_strain, row_thickness, elem_area;
   // The elements' long-term stiffness q at a row, its tolerance and the
   // angle of the worst direction (stability.hpp), per mechanics part.
   std::vector<std::vector<double>> row_q, row_tol, row_theta;
@@ -246,6 +247,8 @@ struct Simulation::Run {
   // At the end: each ply's share of its area whose long-term response is
   // unstable, and the smallest q (N/m), per mechanics part.
   std::vector<double> unstable_end, stability_min_end;
+  // At the end: each ply's thinnest and thickest element at constant volume (m).
+  std::vector<std::array<double, 2>> thickness_end;
   std::vector<std::array<double, 4>> ply_end;
 
   // The loop.
@@ -327,7 +330,7 @@ struct Simulation::Run {
   void sample_tools(double time);
   void sample_plies(double time);
   void sample_energy();
-  std::array<double, 7> ply_mechanics(std::size_t p, double time);
+  std::array<double, 9> ply_mechanics(std::size_t p, double time);
   std::optional<double> threshold_of(std::size_t p) const;
   std::pair<double, double> quasi_static() const;
   void finish();  // the tables into results.h5, the result, summary.json and the log's last lines

@@ -43,8 +43,9 @@ Writes into DIR/figures/:
                        crystallinity; with the mechanics, the band of its
                        elements' shear angles and, with output.shear_angle_limit,
                        the share of its area sheared beyond the limit,
-                       and where a ply's law lost its stability the share
-                       of its area that did
+                       where a ply's law lost its stability the share
+                       of its area that did, and (from 0.40.0) the band of
+                       its elements' thickness at constant volume
   energy.png           energy audit against time
   materials.png        the specific heat and the conductivity against the
                        temperature of every material whose values
@@ -536,6 +537,9 @@ def plot_plies(folder, out):
         panels.append("shear")
         if all("fraction_over_shear_limit" in v for v in plies.values()):
             panels.append("over")
+    # the thickness at constant volume (plies.csv of 0.40.0 on)
+    if all("thickness_min" in v for v in plies.values()):
+        panels.append("thickness")
     # the share whose long-term response is unstable, where some ply has one
     if any("fraction_unstable" in v and np.nanmax(v["fraction_unstable"]) > 0 for v in plies.values()):
         panels.append("unstable")
@@ -570,6 +574,12 @@ def plot_plies(folder, out):
             elif panel == "unstable":
                 if "fraction_unstable" in v:
                     a.plot(v["time"], 100 * v["fraction_unstable"], color=c, label=name)
+            elif panel == "thickness":
+                a.fill_between(v["time"], 1e3 * v["thickness_min"], 1e3 * v["thickness_max"], color=c, alpha=0.2,
+                               lw=0)
+                a.plot(v["time"], 1e3 * v["thickness_min"], color=c, lw=1, label="%s: band from thinnest to thickest"
+                       % name)
+                a.plot(v["time"], 1e3 * v["thickness_max"], color=c, lw=1)
             else:
                 a.plot(v["time"], 100 * v["fraction_over_shear_limit"], color=c, label=name)
         if panel == "temperature":
@@ -605,6 +615,9 @@ def plot_plies(folder, out):
             a.set_ylabel("% of the ply's initial area")
             a.set_title("share whose long-term response is unstable")
             a.set_ylim(-2, 102)
+        elif panel == "thickness":
+            a.set_ylabel("thickness (mm)")
+            a.set_title("thickness at constant volume of each ply's elements")
         else:
             a.set_ylabel("% of the ply's initial area")
             a.set_title("share sheared beyond %s" % ("+-%g deg" % next(iter(limit.values())) if common_l

@@ -2914,13 +2914,14 @@ TEST(Output, DatasetsCarryTheirUnits) {
   // and in the run's result.
   const auto pcols = split(text("series/plies", "columns")), punits = split(text("series/plies", "units"));
   ASSERT_EQ(pcols.size(), punits.size());
-  ASSERT_EQ(pcols.size(), 1 + 14 * j["parts"].size());
+  ASSERT_EQ(pcols.size(), 1 + 16 * j["parts"].size());
   EXPECT_EQ(pcols[1], j["parts"][0]["name"].get<std::string>() + "_temperature_min");
   EXPECT_EQ(pcols[9], j["parts"][0]["name"].get<std::string>() + "_fraction_over_shear_limit");
   EXPECT_EQ(pcols[11], j["parts"][0]["name"].get<std::string>() + "_stability_min");
+  EXPECT_EQ(pcols[12], j["parts"][0]["name"].get<std::string>() + "_thickness_min");
   for (std::size_t c = 1; c < pcols.size(); ++c)
-    EXPECT_EQ(punits[c], std::vector<std::string>(
-                             {"degC", "degC", "degC", "1", "deg", "deg", "1", "1", "1", "1", "N/m", "J", "J", "J"})[(c - 1) % 14])
+    EXPECT_EQ(punits[c], std::vector<std::string>({"degC", "degC", "degC", "1", "deg", "deg", "1", "1", "1", "1", "N/m",
+                                                   "m", "m", "J", "J", "J"})[(c - 1) % 16])
         << pcols[c];
   const auto series = read_dataset<double>(file, "series/plies");
   H5Fclose(file);
@@ -2929,7 +2930,7 @@ TEST(Output, DatasetsCarryTheirUnits) {
   std::getline(csv, line);
   EXPECT_EQ(line, "time,ply,temperature_min,temperature_mean,temperature_max,fraction_below,shear_angle_min,"
                   "shear_angle_max,fibre_strain_min,fibre_strain_max,fraction_over_shear_limit,fraction_unstable,"
-                  "stability_min,heat_from_tools,heat_from_exchanges,heat_from_plies");
+                  "stability_min,thickness_min,thickness_max,heat_from_tools,heat_from_exchanges,heat_from_plies");
   std::vector<std::vector<std::string>> rows;
   while (std::getline(csv, line)) rows.push_back(split(line));
   ASSERT_EQ(rows.size(), run.result.ply_history.size());
@@ -2937,12 +2938,12 @@ TEST(Output, DatasetsCarryTheirUnits) {
   ASSERT_GT(rows.size(), 10u);
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const auto& s = run.result.ply_history[r];
-    ASSERT_EQ(rows[r].size(), 16u);
+    ASSERT_EQ(rows[r].size(), 18u);
     EXPECT_EQ(rows[r][1], j["parts"][s.part]["name"].get<std::string>());
     EXPECT_NEAR(std::stod(rows[r][0]), s.time, 1e-9 * std::max(1.0, s.time));
     const double* wide = &series[(r / 2) * pcols.size()];
     EXPECT_EQ(wide[0], s.time);
-    const double values[14] = {s.min,
+    const double values[16] = {s.min,
                                s.mean,
                                s.max,
                                s.fraction_below,
@@ -2953,17 +2954,20 @@ TEST(Output, DatasetsCarryTheirUnits) {
                                s.fraction_over_shear_limit,
                                s.fraction_unstable,
                                s.stability_min,
+                               s.thickness_min,
+                               s.thickness_max,
                                s.heat_from_tools,
                                s.heat_from_exchanges,
                                s.heat_from_plies};
-    for (int k = 0; k < 14; ++k) {
-      EXPECT_EQ(wide[1 + 14 * s.part + k], values[k]) << r << " " << k;
+    for (int k = 0; k < 16; ++k) {
+      EXPECT_EQ(wide[1 + 16 * s.part + k], values[k]) << r << " " << k;
       EXPECT_NEAR(std::stod(rows[r][2 + k]), values[k], 1e-9 * std::max(1.0, std::abs(values[k]))) << r << " " << k;
     }
     EXPECT_LE(s.min, s.mean + 1e-9);  // the mean of equal values may differ from them by round-off
     EXPECT_LE(s.mean, s.max + 1e-9);
     EXPECT_LE(s.shear_min, s.shear_max);
     EXPECT_LE(s.fibre_strain_min, s.fibre_strain_max);
+    EXPECT_LE(s.thickness_min, s.thickness_max);
   }
   // The last rows against the run's end ranges (the last frame is at the end).
   const auto& end = run.result.ply_history;
@@ -2975,16 +2979,22 @@ TEST(Output, DatasetsCarryTheirUnits) {
     EXPECT_EQ(s.shear_max, run.result.part_shear_max_deg[s.part]);
     EXPECT_EQ(s.fibre_strain_min, run.result.part_fibre_strain_min[s.part]);
     EXPECT_EQ(s.fibre_strain_max, run.result.part_fibre_strain_max[s.part]);
+    EXPECT_EQ(s.thickness_min, run.result.part_thickness_min_m[s.part]);
+    EXPECT_EQ(s.thickness_max, run.result.part_thickness_max_m[s.part]);
+    EXPECT_LT(s.thickness_min, s.thickness_max);  // the plies have been pressed and drawn
     EXPECT_GT(s.fraction_over_shear_limit, 0.0);
     EXPECT_LT(s.fraction_over_shear_limit, 1.0);
     EXPECT_EQ(s.heat_from_tools, run.result.part_tool_heat[s.part]);
     EXPECT_EQ(s.heat_from_exchanges, run.result.part_exchange_heat[s.part]);
     EXPECT_EQ(s.heat_from_plies, run.result.part_link_heat[s.part]);
   }
-  // The first rows: nothing received yet.
-  for (std::size_t k = 0; k < 2; ++k)
+  // The first rows: nothing received yet, every element as thick as the ply.
+  for (std::size_t k = 0; k < 2; ++k) {
     EXPECT_EQ(std::abs(end[k].heat_from_tools) + std::abs(end[k].heat_from_exchanges) + std::abs(end[k].heat_from_plies),
               0.0);
+    EXPECT_EQ(end[k].thickness_min, j["parts"][end[k].part]["thickness"].get<double>());
+    EXPECT_EQ(end[k].thickness_max, j["parts"][end[k].part]["thickness"].get<double>());
+  }
 }
 
 // `thermostamp compare A B`: a run against itself is identical (exit 0);
