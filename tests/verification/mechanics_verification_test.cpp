@@ -554,7 +554,8 @@ TEST(PlyHistory, ShearBandsAgainstPrescribedSimpleShear) {
   ASSERT_TRUE(r.result.ok) << r.result.error;
   const double deg = 180 / M_PI, t_star = T * std::tan(limit / deg) / std::tan(40.0 / deg);
   const double dt = r.result.mechanical_dt;
-  double worst_angle = 0, worst_strain = 0, before = -1;
+  double worst_angle = 0, worst_strain = 0, worst_thickness = 0, before = -1;
+  const double h0 = j["parts"][0]["thickness"].get<double>();
   ASSERT_GT(r.result.ply_history.size(), 20u);
   for (const auto& s : r.result.ply_history) {
     const double lo = std::atan(r2 * s.time) * deg, hi = std::atan(r1 * s.time) * deg;
@@ -562,6 +563,11 @@ TEST(PlyHistory, ShearBandsAgainstPrescribedSimpleShear) {
     EXPECT_NEAR(s.shear_max, hi, 1e-9) << s.time;
     EXPECT_NEAR(s.fibre_strain_min, 0.0, 1e-12) << s.time;
     EXPECT_NEAR(s.fibre_strain_max, 0.0, 1e-12) << s.time;
+    // Simple shear keeps every element's area (det F = 1): the thickness
+    // at constant volume stays the ply's, to round-off.
+    EXPECT_NEAR(s.thickness_min, h0, 1e-12 * h0) << s.time;
+    EXPECT_NEAR(s.thickness_max, h0, 1e-12 * h0) << s.time;
+    worst_thickness = std::max({worst_thickness, std::abs(s.thickness_min - h0), std::abs(s.thickness_max - h0)});
     EXPECT_NEAR(s.fraction_over_shear_limit, s.time > t_star ? upper : 0.0, 1e-12) << s.time;
     if (s.time < t_star) before = std::max(before, s.time);
     worst_angle = std::max({worst_angle, std::abs(s.shear_min - lo), std::abs(s.shear_max - hi)});
@@ -578,9 +584,9 @@ TEST(PlyHistory, ShearBandsAgainstPrescribedSimpleShear) {
   const json summary = json::parse(in);
   EXPECT_NEAR(summary["parts"][0]["fraction_over_shear_limit"].get<double>(), upper, 1e-12);
   EXPECT_EQ(summary["parts"][0]["over_shear_limit_from_s"].get<double>(), from);
-  std::printf("shear bands: angles within %.2e deg, E11 within %.2e; beyond %g deg first at the row of t = %.6g s "
-              "(t* = %.6g s)\n",
-              worst_angle, worst_strain, limit, from, t_star);
+  std::printf("shear bands: angles within %.2e deg, E11 within %.2e, thickness within %.2e of h0; beyond %g deg "
+              "first at the row of t = %.6g s (t* = %.6g s)\n",
+              worst_angle, worst_strain, worst_thickness / h0, limit, from, t_star);
 }
 
 // A UD sheet (the card's laws: ud_hyperelastic, p_ct 50 N/m, and the
