@@ -321,7 +321,8 @@ std::optional<MirrorRule> mirror_rule(const std::string& field) {
   if (field == "membrane_stress" || field == "membrane_strain" || field == "curvature") return MirrorRule::Negate12;
   for (const char* f : {"temperature", "temperature_mean", "temperature_top", "temperature_bottom", "contact_status",
                         "contact_pressure", "conductance_bottom", "conductance_top", "tool_gap", "below_threshold_from",
-                        "all_below_threshold_from", "crystallinity", "crystallinity_mean", "membrane_stability", "thickness"})
+                        "all_below_threshold_from", "crystallinity", "crystallinity_mean", "membrane_stability",
+                        "thickness"})
     if (field == f) return MirrorRule::Keep;
   return std::nullopt;
 }

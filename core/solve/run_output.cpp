@@ -499,9 +499,10 @@ std::optional<double> Simulation::Run::threshold_of(std::size_t p) const {
 // Part p's shear angle range, fibre strain range, share of its area
 // beyond the shear limit at the current positions (ElementKernel::fields,
 // as the frames show them), share of its area whose long-term response is
-// unstable and the smallest long-term stiffness q (stability.hpp); the first
-// row beyond the limit and the first with an unstable element are noted at
-// time, the latter with a warning.
+// unstable, the smallest long-term stiffness q (stability.hpp) and its
+// thinnest and thickest element at constant volume; the first row beyond
+// the limit and the first with an unstable element are noted at time, the
+// latter with a warning.
 std::array<double, 9> Simulation::Run::ply_mechanics(std::size_t p, double time) {
   sdk::ElementFields f;
   f.shear_angle = row_shear[p];
@@ -586,7 +587,7 @@ std::array<double, 9> Simulation::Run::ply_mechanics(std::size_t p, double time)
   std::vector<double>& h = row_thickness[p];
   h.resize(elem_area[p].size());
   constant_volume_thickness(st.mesh, elem_area[p], st.x.data(), st.def->thickness, h.data());
-  double hmn = std::numeric_limits<double>::infinity(), hmx = -hmn;
+  double hmn = std::numeric_limits<double>::quiet_NaN(), hmx = hmn;  // NaN where every element has collapsed
   for (const double v : h) {
     hmn = std::fmin(hmn, v);
     hmx = std::fmax(hmx, v);
@@ -699,7 +700,8 @@ void Simulation::Run::finish() {
   over_end.assign(parts.size(), 0.0);
   unstable_end.assign(parts.size(), 0.0);
   stability_min_end.assign(parts.size(), 0.0);
-  thickness_end.assign(parts.size(), {0.0, 0.0});
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  thickness_end.assign(parts.size(), {kNaN, kNaN});  // none where the check below fails
   if (job.mechanics) try {
       for (std::size_t p = 0; p < sim.mech_.size(); ++p) {
         const std::array<double, 9> row = ply_mechanics(p, t);

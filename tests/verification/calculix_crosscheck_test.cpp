@@ -393,6 +393,46 @@ TEST(CalculiX, CornerLoadedPlateBendsInTwoDimensions) {
   }
 }
 
+
+// The edges of a flat plate read from an exported file, its left edge at
+// x = 0 and its right edge at x = right_x: the nodes of each (those on the
+// right by y) and the lower left corner.
+struct PlateEdges {
+  std::vector<long long> left, right;
+  std::map<long long, double> y_of;
+  long long corner = 0;
+};
+PlateEdges plate_edges(const ShellMesh& m, double right_x) {
+  PlateEdges e;
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const long long tag = m.node_tags[i];
+    if (std::abs(m.x[3 * i]) < 1e-9) e.left.push_back(tag);
+    if (std::abs(m.x[3 * i] - right_x) < 1e-9) {
+      e.right.push_back(tag);
+      e.y_of[tag] = m.x[3 * i + 1];
+    }
+    if (std::abs(m.x[3 * i]) < 1e-9 && std::abs(m.x[3 * i + 1]) < 1e-9) e.corner = tag;
+  }
+  std::sort(e.right.begin(), e.right.end(), [&](long long a, long long b) { return e.y_of[a] < e.y_of[b]; });
+  return e;
+}
+// The node sets LEFT and RIGHT of a CalculiX deck.
+void write_edge_sets(std::ostream& f, const PlateEdges& e) {
+  f << "*Nset, nset=LEFT\n";
+  for (const long long n : e.left) f << n << "\n";
+  f << "*Nset, nset=RIGHT\n";
+  for (const long long n : e.right) f << n << "\n";
+}
+// The consistent nodal forces along x (*Cload lines) of a uniform line
+// load q (N/m) on the right edge.
+void write_edge_load(std::ostream& f, const PlateEdges& e, double q) {
+  for (std::size_t k = 0; k < e.right.size(); ++k) {
+    const double below = k > 0 ? e.y_of.at(e.right[k]) - e.y_of.at(e.right[k - 1]) : 0.0;
+    const double above = k + 1 < e.right.size() ? e.y_of.at(e.right[k + 1]) - e.y_of.at(e.right[k]) : 0.0;
+    f << e.right[k] << ", 1, " << q * (below + above) / 2 << "\n";
+  }
+}
+
 // `thermostamp export --format abaqus / calculix`: a formed ply into a
 // structural model. A flat 0.1 x 0.1 m ply (6 x 6 crossed cells, held, so
 // it stays flat) with its fibres at 30 degrees to x, exported after a few
@@ -498,38 +538,23 @@ TEST(CalculiX, ExportedPlyCarriesItsFibreFrameAndTemperatures) {
   }
   EXPECT_GT(cooled, 0.01) << "the exported temperatures are the frame's, not the initial ones";
   // CalculiX through the exported orientation.
-  std::vector<long long> left, right;
-  std::map<long long, double> y_of;
-  long long corner = 0;
-  for (int i = 0; i < m.num_nodes(); ++i) {
-    const long long tag = m.node_tags[i];
-    if (std::abs(m.x[3 * i]) < 1e-9) left.push_back(tag);
-    if (std::abs(m.x[3 * i] - L) < 1e-9) {
-      right.push_back(tag);
-      y_of[tag] = m.x[3 * i + 1];
-    }
-    if (std::abs(m.x[3 * i]) < 1e-9 && std::abs(m.x[3 * i + 1]) < 1e-9) corner = tag;
-  }
-  std::sort(right.begin(), right.end(), [&](long long a, long long b) { return y_of[a] < y_of[b]; });
+  const PlateEdges edges = plate_edges(m, L);
+  const std::vector<long long>& right = edges.right;
+  const long long corner = edges.corner;
+  const std::map<long long, double>& y_of = edges.y_of;
   ASSERT_EQ(right.size(), 7u);
   const double E1 = 2e8, E2 = 2e7, G12 = 8e6, sigma = 1e5;
   // (CalculiX reads its lines without their spaces, file names too)
   std::filesystem::copy_file(dir / "calculix" / "ply 1.inp", dir / "calculix" / "ply1.inp");
   std::ofstream f(dir / "calculix" / "tension.inp");
   f.precision(15);
-  f << "*Include, input=ply1.inp\n*Nset, nset=LEFT\n";
-  for (const long long n : left) f << n << "\n";
-  f << "*Nset, nset=RIGHT\n";
-  for (const long long n : right) f << n << "\n";
+  f << "*Include, input=ply1.inp\n";
+  write_edge_sets(f, edges);
   f << "*Material, name=UD\n*Elastic, type=ENGINEERING CONSTANTS\n"
     << E1 << ", " << E2 << ", " << E2 << ", 0, 0, 0, " << G12 << ", " << G12 << ",\n" << G12 << "\n"
     << "*Shell Section, elset=PLY_1, material=UD, orientation=PLY_1_ORIENTATION\n" << h << "\n"
     << "*Step\n*Static\n*Boundary\nLEFT, 1, 1, 0\n" << corner << ", 2, 2, 0\nPLY_1_NODES, 3, 3, 0\n*Cload\n";
-  for (std::size_t k = 0; k < right.size(); ++k) {  // the consistent nodal forces of a uniform traction sigma h
-    const double below = k > 0 ? y_of[right[k]] - y_of[right[k - 1]] : 0.0;
-    const double above = k + 1 < right.size() ? y_of[right[k + 1]] - y_of[right[k]] : 0.0;
-    f << right[k] << ", 1, " << sigma * h * (below + above) / 2 << "\n";
-  }
+  write_edge_load(f, edges, sigma * h);  // a uniform traction sigma over the thickness h
   f << "*Node Print, nset=RIGHT\nU\n*End Step\n";
   f.close();
   std::map<int, std::array<double, 3>> disp;
@@ -542,8 +567,8 @@ TEST(CalculiX, ExportedPlyCarriesItsFibreFrameAndTemperatures) {
   for (const long long n : right) {
     ASSERT_TRUE(disp.count(static_cast<int>(n))) << "node " << n;
     const auto& u = disp.at(static_cast<int>(n));
-    const double ux = sigma * Sb11 * L, uy = sigma * (Sb12 * y_of[n] + Sb16 * L);
-    std::printf("node %lld (y = %.4f m): CalculiX u = (%.6e, %.6e) m, closed form (%.6e, %.6e) m\n", n, y_of[n], u[0],
+    const double ux = sigma * Sb11 * L, uy = sigma * (Sb12 * y_of.at(n) + Sb16 * L);
+    std::printf("node %lld (y = %.4f m): CalculiX u = (%.6e, %.6e) m, closed form (%.6e, %.6e) m\n", n, y_of.at(n), u[0],
                 u[1], ux, uy);
     EXPECT_NEAR(u[0], ux, 1e-5 * std::abs(ux)) << "node " << n;
     EXPECT_NEAR(u[1], uy, 1e-5 * std::abs(uy)) << "node " << n;
@@ -559,7 +584,7 @@ TEST(CalculiX, ExportedPlyCarriesItsFibreFrameAndTemperatures) {
   for (double t : tmean) ASSERT_NEAR(t, T0, 1e-9) << "a uniform ply";
   long long lower_right = 0;
   for (const long long n : right)
-    if (std::abs(y_of[n]) < 1e-9) lower_right = n;
+    if (std::abs(y_of.at(n)) < 1e-9) lower_right = n;
   std::ofstream g(dir / "calculix" / "cooling.inp");
   g.precision(15);
   g << "*Include, input=ply1.inp\n*Material, name=UD\n*Elastic, type=ENGINEERING CONSTANTS\n"
@@ -646,35 +671,18 @@ TEST(CalculiX, ExportedPlyCarriesItsThicknessAtConstantVolume) {
   // uniform line load.
   const ShellMesh m = read_mesh_triangles(dir / "calculix" / "ply.inp");
   const double Lx = fx * L, Wy = fy * L, E = 1e9, P = 200.0;
-  std::vector<long long> left, right;
-  std::map<long long, double> y_of;
-  long long corner = 0;
-  for (int i = 0; i < m.num_nodes(); ++i) {
-    const long long tag = m.node_tags[i];
-    if (std::abs(m.x[3 * i]) < 1e-9) left.push_back(tag);
-    if (std::abs(m.x[3 * i] - Lx) < 1e-9) {
-      right.push_back(tag);
-      y_of[tag] = m.x[3 * i + 1];
-    }
-    if (std::abs(m.x[3 * i]) < 1e-9 && std::abs(m.x[3 * i + 1]) < 1e-9) corner = tag;
-  }
-  std::sort(right.begin(), right.end(), [&](long long a, long long b) { return y_of[a] < y_of[b]; });
+  const PlateEdges edges = plate_edges(m, Lx);
+  const std::vector<long long>& right = edges.right;
   ASSERT_EQ(right.size(), 7u);
-  ASSERT_NE(corner, 0);
+  ASSERT_NE(edges.corner, 0);
   std::ofstream f(dir / "calculix" / "pull.inp");
   f.precision(15);
-  f << "*Include, input=ply.inp\n*Nset, nset=LEFT\n";
-  for (const long long n : left) f << n << "\n";
-  f << "*Nset, nset=RIGHT\n";
-  for (const long long n : right) f << n << "\n";
+  f << "*Include, input=ply.inp\n";
+  write_edge_sets(f, edges);
   f << "*Material, name=ISO\n*Elastic\n" << E << ", 0.\n"
     << "*Shell Section, elset=PLY, material=ISO, nodal thickness\n" << h0 << "\n"
-    << "*Step\n*Static\n*Boundary\nLEFT, 1, 1, 0\n" << corner << ", 2, 2, 0\nPLY_NODES, 3, 3, 0\n*Cload\n";
-  for (std::size_t k = 0; k < right.size(); ++k) {
-    const double below = k > 0 ? y_of[right[k]] - y_of[right[k - 1]] : 0.0;
-    const double above = k + 1 < right.size() ? y_of[right[k + 1]] - y_of[right[k]] : 0.0;
-    f << right[k] << ", 1, " << P / Wy * (below + above) / 2 << "\n";
-  }
+    << "*Step\n*Static\n*Boundary\nLEFT, 1, 1, 0\n" << edges.corner << ", 2, 2, 0\nPLY_NODES, 3, 3, 0\n*Cload\n";
+  write_edge_load(f, edges, P / Wy);
   f << "*Node Print, nset=RIGHT\nU\n*End Step\n";
   f.close();
   std::map<int, std::array<double, 3>> disp;
