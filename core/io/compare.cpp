@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "io/results_reader.hpp"
 #include "io/results_writer.hpp"
@@ -349,6 +350,12 @@ Comparison compare_outputs(const std::filesystem::path& a, const std::filesystem
       for (auto& [key, rows] : t->by_key) keep_from(from, rows.first, rows.second);
     if (in_a != in_b) note(std::string(file) + " only in " + (in_a ? a : b).string());
     if (!in_a || !in_b) continue;
+    // Columns one run has and the other has not (another version's, another output setting's).
+    for (const auto& [t, other, who] : {std::tuple<const Table*, const Table*, const char*>{&ta, &tb, "A"},
+                                        {&tb, &ta, "B"}})
+      for (const std::string& col : t->columns)
+        if (std::find(other->columns.begin(), other->columns.end(), col) == other->columns.end())
+          note(std::string(file) + ": column '" + col + "' only in " + who);
     for (const auto& [key, sa_rows] : ta.by_key) {
       const auto it = tb.by_key.find(key);
       if (it == tb.by_key.end()) {

@@ -3003,8 +3003,9 @@ TEST(Output, DatasetsCarryTheirUnits) {
 // largest differences that the test takes from the files itself (exit 1);
 // with a tolerance (--rtol), a run that differs a little passes at its
 // largest relative difference and fails below it; layered fields of other
-// layer counts are named as not compared, a field only one run wrote as
-// only in A or only in B; a folder without output is refused (exit 2).
+// layer counts are named as not compared, a field or a history's column
+// only one run wrote as only in A or only in B; a folder without output is
+// refused (exit 2).
 TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
   const auto dir = temp_dir("compare");
   json j = short_hemisphere(0.3, 0.1, 6);
@@ -3025,6 +3026,7 @@ TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
     extra["output"]["fields"] = {"temperature_mean"};
     ASSERT_TRUE(run_json(extra, 1, dir / "fewer").result.ok);
     extra["output"]["fields"] = {"temperature_mean", "tool_gap"};
+    extra["output"]["shear_angle_limit"] = 10.0;  // a column of plies.csv more
     ASSERT_TRUE(run_json(extra, 1, dir / "more").result.ok);
     for (const bool more_first : {true, false}) {
       const Comparison x = more_first ? compare_outputs(dir / "more", dir / "fewer")
@@ -3039,6 +3041,10 @@ TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
           EXPECT_EQ(d.max_abs, 0.0) << d.what;
         }
       EXPECT_EQ(named, 2) << "both plies";
+      // And a column of a history only one run has.
+      const std::string column =
+          std::string("plies.csv: column 'fraction_over_shear_limit' only in ") + (more_first ? "A" : "B");
+      EXPECT_EQ(std::count(x.notes.begin(), x.notes.end(), column), 1) << column;
     }
   }
 
