@@ -115,28 +115,10 @@ long long power_of_ten_at_least(long long n) {
   return p;
 }
 
-// A field of a frame: its values and how many per node or element.
-struct Field {
-  std::string name;
-  bool cells = false;
-  int components = 1;
-  MirrorRule rule = MirrorRule::Keep;
-  std::vector<double> v;
-};
-
-// A ply as exported: positions (of the frame and of the first frame),
-// triangles by node index, numbers, fields.
-struct PlyData {
-  std::vector<double> x, x0;
-  std::vector<int> tri;
-  std::vector<long long> node_tag, element_tag;
-  std::vector<Field> fields;
-};
-
 // Mirrors the ply at the plane x_d = 0 (see export_gmsh); a0 is the ply's
 // fibre direction in the job. False (nothing done) for a ply that lies in
 // the plane: it is its own mirror image.
-bool mirror(PlyData& p, int d, const std::string& name, const std::array<double, 3>& a0) {
+bool mirror(FramePly& p, int d, const std::string& name, const std::array<double, 3>& a0) {
   // Its mirror image's side: R a0 . a0 = |a0|^2 - 2 a0_d^2.
   const double turn = a0[0] * a0[0] + a0[1] * a0[1] + a0[2] * a0[2] - 2 * a0[d] * a0[d] < 0 ? -1.0 : 1.0;
   const std::size_t n = p.x0.size() / 3, m = p.tri.size() / 3;
@@ -178,7 +160,7 @@ bool mirror(PlyData& p, int d, const std::string& name, const std::array<double,
                                image[static_cast<std::size_t>(p.tri[3 * e + 1])]});
     p.element_tag.push_back(p.element_tag[e] + element_step);
   }
-  for (Field& f : p.fields) {
+  for (PlyField& f : p.fields) {
     const std::size_t count = f.cells ? m : n;
     std::vector<double> add;
     for (std::size_t i = 0; i < count; ++i) {
@@ -212,7 +194,7 @@ std::string abaqus_number(double v) {
 
 // <ply>.inp (see ExportFormat). Returns false where the file cannot be
 // written.
-bool write_abaqus(const std::filesystem::path& file, const std::string& name, const PlyData& d, double time,
+bool write_abaqus(const std::filesystem::path& file, const std::string& name, const FramePly& d, double time,
                   const std::string& source, bool calculix, ExportedPly& ply) {
   std::ofstream m(file);
   if (!m) return false;
@@ -234,10 +216,10 @@ bool write_abaqus(const std::filesystem::path& file, const std::string& name, co
     m << d.element_tag[e] << ", " << d.node_tag[static_cast<std::size_t>(d.tri[3 * e])] << ", "
       << d.node_tag[static_cast<std::size_t>(d.tri[3 * e + 1])] << ", "
       << d.node_tag[static_cast<std::size_t>(d.tri[3 * e + 2])] << '\n';
-  const Field* fibre = nullptr;
-  const Field* temperature = nullptr;
-  const Field* thickness = nullptr;
-  for (const Field& f : d.fields) {
+  const PlyField* fibre = nullptr;
+  const PlyField* temperature = nullptr;
+  const PlyField* thickness = nullptr;
+  for (const PlyField& f : d.fields) {
     if (f.name == "fibre_direction" && f.cells && f.components == 3) fibre = &f;
     if (f.name == "thickness" && f.cells && f.components == 1) thickness = &f;
     if (!f.cells && f.components == 1 && (f.name == "temperature_mean" || (f.name == "temperature" && !temperature)))
@@ -332,8 +314,7 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
   return export_plies(dir, time, out, whole, ExportFormat::Gmsh);
 }
 
-ExportResult export_plies(const std::filesystem::path& dir, std::optional<double> time,
-                          const std::filesystem::path& out, bool whole, ExportFormat format) {
+FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<double> time, bool whole, bool fields) {
   const auto h5 = dir / "results.h5";
   if (!std::filesystem::is_directory(dir))
     throw ExportInputError("'" + dir.string() + "' is not a folder");
@@ -348,7 +329,8 @@ ExportResult export_plies(const std::filesystem::path& dir, std::optional<double
   } close{file};
   const Frames frames = read_frames(file);
   if (frames.times.empty()) throw ExportInputError("'" + h5.string() + "' holds no frame");
-  ExportResult res;
+  FramePlies res;
+  res.h5 = h5;
   res.frames = static_cast<int>(frames.times.size());
   int k = res.frames - 1;
   if (time) {
@@ -362,35 +344,38 @@ ExportResult export_plies(const std::filesystem::path& dir, std::optional<double
   }
   res.frame = k;
   res.time = frames.times[k];
-  const std::string group = "frames/" + frames.names[k];
+  res.group = "frames/" + frames.names[k];
+  const std::string& group = res.group;
   // The frame's plies (a frame also holds the moving tools' surfaces).
   std::vector<std::string> plies;
   const auto parts = members(file, "parts");
   for (const auto& name : members(file, group))
     if (std::find(parts.begin(), parts.end(), name) != parts.end()) plies.push_back(name);
   if (plies.empty()) throw std::runtime_error("frame " + frames.names[k] + " of '" + h5.string() + "' holds no ply");
-  std::error_code ec;
-  std::filesystem::create_directories(out, ec);
-  if (ec) throw std::runtime_error("cannot create '" + out.string() + "': " + ec.message());
   const auto planes = whole ? symmetry_planes(dir) : std::map<std::string, PartSymmetry>{};
   const std::string first_group = "frames/" + frames.names.front();
   for (const auto& name : plies) {
-    std::vector<hsize_t> tshape, xshape;
+    std::vector<hsize_t> tshape, xshape, shape0;
     const std::vector<double> tri = read_values(file, "parts/" + name + "/triangles", tshape);
-    PlyData d;
+    FramePly d;
+    d.name = name;
     d.x = read_values(file, group + "/" + name + "/nodes", xshape);
     if (tshape.size() != 2 || tshape[1] != 3 || xshape.size() != 2 || xshape[1] != 3)
       throw std::runtime_error("'" + h5.string() + "': the triangles or nodes of ply '" + name +
                                "' cannot be read (cut short?)");
+    d.x0 = read_values(file, first_group + "/" + name + "/nodes", shape0);
+    if (d.x0.size() != d.x.size())
+      throw std::runtime_error("'" + h5.string() + "': the nodes of ply '" + name + "' in " + first_group +
+                               " cannot be read (cut short?)");
     const std::size_t nodes = xshape[0], triangles = tshape[0];
     d.tri.resize(tri.size());
     for (std::size_t k = 0; k < tri.size(); ++k) d.tri[k] = static_cast<int>(tri[k]);
     d.node_tag = tags(file, "parts/" + name + "/node_tags", nodes);
     d.element_tag = tags(file, "parts/" + name + "/element_tags", triangles);
-    for (const auto& field : members(file, group + "/" + name)) {
+    for (const auto& field : fields ? members(file, group + "/" + name) : std::vector<std::string>{}) {
       if (field == "nodes" || field == "layer_nodes") continue;
       std::vector<hsize_t> shape;
-      Field f;
+      PlyField f;
       f.name = field;
       f.v = read_values(file, group + "/" + name + "/" + field, shape);
       if (shape.empty()) throw std::runtime_error("'" + h5.string() + "': field '" + field + "' of ply '" + name +
@@ -402,29 +387,42 @@ ExportResult export_plies(const std::filesystem::path& dir, std::optional<double
       if (shape[0] != static_cast<hsize_t>(f.cells ? triangles : nodes)) continue;
       d.fields.push_back(std::move(f));
     }
-    ExportedPly ply;
-    ply.name = name;
     if (const auto it = planes.find(name); it != planes.end() && !it->second.planes.empty()) {
-      for (Field& f : d.fields) {
+      for (PlyField& f : d.fields) {
         const auto rule = mirror_rule(f.name);
         if (!rule) throw std::runtime_error("--whole: no mirror image known for the field '" + f.name + "'");
         f.rule = *rule;
       }
-      std::vector<hsize_t> shape0;
-      d.x0 = read_values(file, first_group + "/" + name + "/nodes", shape0);
-      if (d.x0.size() != d.x.size())
-        throw std::runtime_error("'" + h5.string() + "': the nodes of ply '" + name + "' in " + first_group +
-                                 " cannot be read (cut short?)");
       for (const int a : it->second.planes) {
-        if (mirror(d, a, name, it->second.fibre)) ply.mirrored.push_back(a == 0 ? "x" : a == 1 ? "y" : "z");
+        if (mirror(d, a, name, it->second.fibre)) d.mirrored.push_back(a == 0 ? "x" : a == 1 ? "y" : "z");
       }
     }
+    res.plies.push_back(std::move(d));
+  }
+  return res;
+}
+
+ExportResult export_plies(const std::filesystem::path& dir, std::optional<double> time,
+                          const std::filesystem::path& out, bool whole, ExportFormat format) {
+  FramePlies frame = read_frame_plies(dir, time, whole, true);
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) throw std::runtime_error("cannot create '" + out.string() + "': " + ec.message());
+  ExportResult res;
+  res.time = frame.time;
+  res.frame = frame.frame;
+  res.frames = frame.frames;
+  const std::string source = frame.h5.string() + " (" + frame.group + ")";
+  for (FramePly& d : frame.plies) {
+    const std::string& name = d.name;
+    ExportedPly ply;
+    ply.name = name;
+    ply.mirrored = d.mirrored;
     ply.nodes = static_cast<int>(d.x.size() / 3);
     ply.triangles = static_cast<int>(d.tri.size() / 3);
     if (format != ExportFormat::Gmsh) {
       ply.file = out / (name + ".inp");
-      if (!write_abaqus(ply.file, name, d, res.time, h5.string() + " (" + group + ")",
-                        format == ExportFormat::CalculiX, ply))
+      if (!write_abaqus(ply.file, name, d, res.time, source, format == ExportFormat::CalculiX, ply))
         throw std::runtime_error("cannot write '" + ply.file.string() + "'");
       res.plies.push_back(std::move(ply));
       continue;
@@ -444,7 +442,7 @@ ExportResult export_plies(const std::filesystem::path& dir, std::optional<double
       m << '\n';
     }
     m << "$EndElements\n";
-    for (const Field& f : d.fields) {
+    for (const PlyField& f : d.fields) {
       write_data(m, f.cells ? "ElementData" : "NodeData", f.name, res.time, f.v, f.components,
                  f.cells ? d.element_tag : d.node_tag);
       (f.cells ? ply.element_data : ply.node_data).push_back(f.name);

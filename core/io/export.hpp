@@ -56,6 +56,43 @@ enum class ExportFormat { Gmsh, Abaqus, CalculiX };
 enum class MirrorRule { Keep, Vector, Fibre, Negate, Negate12 };
 std::optional<MirrorRule> mirror_rule(const std::string& field);
 
+// A field of a frame: its values and how many per node or element.
+struct PlyField {
+  std::string name;
+  bool cells = false;
+  int components = 1;
+  MirrorRule rule = MirrorRule::Keep;
+  std::vector<double> v;
+};
+
+// A ply of a frame: its positions at the frame (x) and in the first frame
+// (x0: the mesh the run started from), triangles by node index, the
+// numbers of the mesh file and, when asked, the frame's fields of the ply.
+struct FramePly {
+  std::string name;
+  std::vector<double> x, x0;
+  std::vector<int> tri;
+  std::vector<long long> node_tag, element_tag;
+  std::vector<PlyField> fields;
+  std::vector<std::string> mirrored;  // whole: the planes mirrored at ("x", "y", "z")
+};
+
+struct FramePlies {
+  std::filesystem::path h5;  // the results file
+  std::string group;         // the frame's group in it ("frames/000004")
+  double time = 0;           // s
+  int frame = 0, frames = 0;
+  std::vector<FramePly> plies;
+};
+
+// The plies of the frame at `time` (the last frame without one; otherwise
+// the frame nearest to it, the time lying between the first and the last
+// frame's), with their fields when `fields`, each mirrored whole at its
+// symmetry planes when `whole` (see export_gmsh). Throws ExportInputError
+// for a folder without results.h5 or frames, or a time outside the
+// frames'; std::runtime_error where the file cannot be read.
+FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<double> time, bool whole, bool fields);
+
 struct ExportResult {
   double time = 0;  // s, of the frame exported
   int frame = 0;    // its index (0 the first)
