@@ -12,6 +12,7 @@
 #include <boost/dll/runtime_symbol_info.hpp>
 
 #include "commands.hpp"
+#include "io/blank.hpp"
 #include "io/compare.hpp"
 #include "io/export.hpp"
 #include "io/logging.hpp"
@@ -36,6 +37,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp report DIR [--against OTHER]   # PNG figures into DIR/figures (with OTHER: both runs on the same axes)
   thermostamp compare DIR_A DIR_B [--json] [--rtol R] [--from T]   # how far two runs' results are apart
   thermostamp export DIR [--time T] [--out FOLDER] [--whole] [--format gmsh|abaqus|calculix]   # each ply as a mesh
+  thermostamp blank DIR --trim SURFACE [--trim SURFACE ...] [--time T] [--out FOLDER] [--whole]   # cut patterns
   thermostamp --version
 
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
@@ -81,6 +83,17 @@ model; a mesh
 file a job can read too; --format calculix: the same for CalculiX (its
 distribution of orientations without Abaqus's default line)
 
+blank: the cut pattern of each ply of the last frame (--time T: the frame
+nearest to T): the region of the blank (the ply as the run started) that
+the forming carries into the part, which lies inside every --trim surface,
+given on the formed part in m: plane:X,Y,Z,NX,NY,NZ (a point, and the
+normal, which points into the part), cylinder:X,Y,Z,DX,DY,DZ,R (inside; a
+point on the axis, its direction, the radius) or sphere:X,Y,Z,R (inside);
+writes FOLDER/<ply>.csv (default DIR/blank: the pattern's outlines, each
+point in the blank and formed), FOLDER/<ply>.dxf where the blank is flat
+(the pattern and the blank's outline in its plane, mm) and
+FOLDER/blank.json (areas, lengths); --whole: mirrored as with export
+
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
 last frame, a checkpoint and summary.json; a second signal ends it at once)
@@ -105,6 +118,7 @@ struct Args {
   std::optional<double> time;  // export: the frame's time (s; the last frame without it)
   bool whole = false;          // export: mirrored at the symmetry planes
   ts::ExportFormat format = ts::ExportFormat::Gmsh;  // export: --format
+  std::vector<std::string> trims;    // blank: the --trim surfaces, as written
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -120,7 +134,8 @@ const std::map<std::string, std::vector<std::string>>& command_options() {
       {"study", {"--out", "--threads", "--quiet", "--keep-subnormals", "--restart", "--checkpoint-minutes"}},
       {"report", {"--against"}},
       {"compare", {"--json", "--rtol", "--from"}},
-      {"export", {"--time", "--out", "--whole", "--format"}}};
+      {"export", {"--time", "--out", "--whole", "--format"}},
+      {"blank", {"--trim", "--time", "--out", "--whole"}}};
   return m;
 }
 
@@ -180,6 +195,8 @@ Args parse(int argc, char** argv) {
     } else if (s == "--restart-at") {
       a.restart_at = finite_number(s, value(s), true, "a time of at least 0");
       a.restart = true;
+    } else if (s == "--trim") {
+      a.trims.push_back(value(s));
     } else if (s == "--whole") {
       a.whole = true;
     } else if (s == "--format") {
@@ -375,6 +392,46 @@ int cmd_plugins(const Args& a) {
   return 0;
 }
 
+// `thermostamp blank DIR --trim SURFACE ...`: the cut pattern of each ply.
+int cmd_blank(const Args& a) {
+  if (a.positional.size() != 1) throw UsageError("expected one output folder");
+  if (a.trims.empty()) throw UsageError("blank needs a --trim surface");
+  const std::filesystem::path dir = a.positional[0];
+  ts::BlankResult r;
+  try {
+    std::vector<ts::TrimSurface> trims;
+    for (const auto& t : a.trims) trims.push_back(ts::parse_trim(t));
+    r = ts::blank_plies(dir, a.time, a.out.empty() ? dir / "blank" : std::filesystem::path(a.out), a.whole, trims);
+  } catch (const std::exception& e) {  // 2: no pattern as asked; 3: a file that cannot be read or written
+    std::cerr << "error: blank: " << e.what() << "\n";
+    return dynamic_cast<const ts::ExportInputError*>(&e) ? 2 : 3;
+  }
+  char line[400];
+  for (const auto& p : r.plies) {
+    const auto& c = p.pattern;
+    std::size_t trimmed = 0;
+    double cut = 0;
+    for (const auto& o : c.outlines) {
+      trimmed += o.trim_length_blank > 0 ? 1 : 0;
+      cut += o.trim_length_blank;
+    }
+    std::snprintf(line, sizeof line,
+                  "ply '%s' at t = %.6g s (frames/%06d of results.h5, %d frames)%s: %zu outline%s, %.4g %% of the "
+                  "blank's %.6g m^2 (%.6g m^2 formed), trim line %.6g m in the blank",
+                  p.name.c_str(), r.time, r.frame, r.frames,
+                  p.mirrored.empty() ? "" : (", mirrored at " + ts::join(p.mirrored, " = 0, ") + " = 0").c_str(),
+                  c.outlines.size(), c.outlines.size() == 1 ? "" : "s",
+                  c.blank_area > 0 ? 100 * c.kept_blank_area / c.blank_area : 0.0, c.blank_area, c.kept_formed_area,
+                  cut);
+    std::cout << p.csv.string() << ": " << line;
+    if (c.outlines.empty()) std::cout << "; nothing of the ply lies inside the trim";
+    else if (trimmed == 0) std::cout << "; the trim does not cross the ply: the whole blank";
+    std::cout << (p.flat ? "; " + p.dxf.string() : std::string("; no DXF: the blank is not flat")) << "\n";
+  }
+  std::cout << r.json.string() << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -466,6 +523,7 @@ int main(int argc, char** argv) {
       }
       return 0;
     }
+    if (a.command == "blank") return cmd_blank(a);
     throw UsageError("unknown command '" + a.command + "'");
   } catch (const UsageError& e) {
     std::cerr << "error: " << e.what() << "\n" << kUsage;

@@ -20,6 +20,7 @@
 
 #include <csignal>
 
+#include "io/blank.hpp"
 #include "io/compare.hpp"
 #include "io/results_writer.hpp"
 #include "job/job.hpp"
@@ -2218,6 +2219,166 @@ TEST(Export, WholePlyOfASymmetryModelIsTheMirroredRuns) {
   const auto flat = thermostamp("export " + q(dir / "across") + " --whole");
   EXPECT_EQ(flat.exit_code, 0) << flat.err;
   EXPECT_NE(flat.out.find(" frames), 85 nodes, 144 triangles;"), std::string::npos) << flat.out;
+}
+
+// `thermostamp blank`: the cut pattern of each ply of a run of the
+// hemisphere (6 x 6 cells, 0.5 s: the punch 5 mm down, the plies drawn in),
+// trimmed by a cylinder r = 0.1 m about the punch's axis and a plane. Each
+// point of the CSV's outlines is found again from `export`'s mesh of the
+// same frame: on an edge of the blank (position less displacement) at a
+// fraction t of it, its formed position at the same t of that edge
+// formed (1e-12 m), the trim points on the trim surface (the plane
+// exactly, the cylinder within the chord's offset). Whole, the pattern is
+// four times the quarter's and one outline, all of it trim line. The DXF
+// file, read by ezdxf (Debian's python3-ezdxf, an independent reader),
+// has no error and holds the CSV's outlines in mm. Bad trims, a folder
+// without results and a time without a frame are refused with exit 2.
+TEST(Blank, CutPatternOfARunIsFoundOnItsMesh) {
+  const auto dir = temp_dir("blank");
+  json j = short_hemisphere(0.5, 0.25, 6);
+  j["output"]["fields"] = {"displacement"};
+  std::ofstream(dir / "job.json") << j.dump(2);
+  ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "run")).exit_code, 0);
+  ASSERT_EQ(thermostamp("export " + q(dir / "run") + " --out " + q(dir / "mesh")).exit_code, 0);
+  const std::string cylinder = "cylinder:0,0,0,0,0,1,0.1", plane = "plane:0.06,0,0,-1,0.2,0";
+  for (const std::string& trim : {cylinder, plane}) {
+    const auto r = thermostamp("blank " + q(dir / "run") + " --trim " + trim + " --out " + q(dir / "pattern"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find((dir / "pattern" / "ply_top.csv").string() +
+                         ": ply 'ply_top' at t = 0.5 s (frames/000002 of results.h5, 3 frames): 1 outline, "),
+              std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("; " + (dir / "pattern" / "ply_bottom.dxf").string() + "\n"), std::string::npos) << r.out;
+    const json doc = read_job_document(dir / "pattern" / "blank.json");
+    EXPECT_EQ(doc["trims"], json::array({trim}));
+    EXPECT_EQ(doc["frame"], "frames/000002");
+    const TrimSurface t = parse_trim(trim);
+    for (const std::string ply : {"ply_top", "ply_bottom"}) {
+      const GmshFile g = read_exported(dir / "mesh" / (ply + ".msh"));
+      std::vector<std::array<std::array<double, 3>, 2>> edge_ends[2];  // blank, formed
+      for (const auto& [e, c] : g.triangles)
+        for (int k = 0; k < 3; ++k) {
+          const long long a = c[static_cast<std::size_t>(k)], b = c[static_cast<std::size_t>((k + 1) % 3)];
+          std::array<double, 3> xa = g.nodes.at(a), xb = g.nodes.at(b), Xa = xa, Xb = xb;
+          for (int d = 0; d < 3; ++d) {
+            Xa[static_cast<std::size_t>(d)] -= g.data.at("displacement").at(a)[static_cast<std::size_t>(d)];
+            Xb[static_cast<std::size_t>(d)] -= g.data.at("displacement").at(b)[static_cast<std::size_t>(d)];
+          }
+          edge_ends[0].push_back({Xa, Xb});
+          edge_ends[1].push_back({xa, xb});
+        }
+      const auto rows = csv_rows(dir / "pattern" / (ply + ".csv"));
+      ASSERT_GT(rows.size(), 10u);
+      EXPECT_EQ(rows[0], (std::vector<std::string>{"outline", "point", "on_trim", "blank_x_m", "blank_y_m", "blank_z_m",
+                                                   "formed_x_m", "formed_y_m", "formed_z_m"}));
+      int on_trim = 0;
+      double offset = 0;
+      for (std::size_t i = 1; i < rows.size(); ++i) {
+        std::array<double, 3> X{}, x{};
+        for (int d = 0; d < 3; ++d) {
+          X[static_cast<std::size_t>(d)] = std::stod(rows[i][static_cast<std::size_t>(3 + d)]);
+          x[static_cast<std::size_t>(d)] = std::stod(rows[i][static_cast<std::size_t>(6 + d)]);
+        }
+        bool found = false;
+        for (std::size_t k = 0; k < edge_ends[0].size() && !found; ++k) {
+          const auto& [A, B] = edge_ends[0][k];
+          double ab2 = 0, t_num = 0;
+          for (int d = 0; d < 3; ++d) {
+            ab2 += (B[d] - A[d]) * (B[d] - A[d]);
+            t_num += (X[d] - A[d]) * (B[d] - A[d]);
+          }
+          const double tt = t_num / ab2;
+          if (tt < -1e-12 || tt > 1 + 1e-12) continue;
+          double off = 0;
+          for (int d = 0; d < 3; ++d) off = std::max(off, std::abs(A[d] + tt * (B[d] - A[d]) - X[d]));
+          if (off > 1e-12) continue;
+          found = true;
+          const auto& [a, b] = edge_ends[1][k];
+          for (int d = 0; d < 3; ++d) EXPECT_NEAR(x[d], a[d] + tt * (b[d] - a[d]), 1e-12) << ply << " row " << i;
+        }
+        EXPECT_TRUE(found) << ply << " row " << i << ": not on an edge of the blank";
+        if (rows[i][2] != "1") continue;
+        ++on_trim;
+        offset = std::max(offset, std::abs(trim_level({t}, x.data())));
+      }
+      EXPECT_GT(on_trim, 5) << ply;
+      // The cylinder: the chord's offset, h^2 / (8 (r - h)), h = 0.025 / cos 45 deg.
+      EXPECT_LE(offset, trim == plane ? 1e-15 : 0.035 * 0.035 / (8 * (0.1 - 0.035))) << ply;
+      // The DXF, by ezdxf.
+      std::ofstream(dir / "dxf.py") << R"(import csv, sys, ezdxf
+doc = ezdxf.readfile(sys.argv[1])
+auditor = doc.audit()
+assert not auditor.has_errors, auditor.errors
+assert doc.header["$INSUNITS"] == 4
+lines = [e for e in doc.modelspace() if e.dxftype() == "POLYLINE"]
+blank = [e for e in lines if e.dxf.layer == "BLANK"]
+pattern = [e for e in lines if e.dxf.layer == "PATTERN"]
+assert len(blank) == 1 and all(e.is_closed for e in lines), (len(blank), [e.is_closed for e in lines])
+rows = list(csv.DictReader(open(sys.argv[2])))
+points = [p for e in pattern for p in e.points()]
+assert len(points) == len(rows), (len(points), len(rows))
+worst = max(max(abs(p[0] - 1000 * float(r["blank_x_m"])), abs(p[1] - 1000 * float(r["blank_y_m"]))) for p, r in zip(points, rows))
+assert worst < 1e-6, worst
+xs = [p[0] for p in blank[0].points()]
+ys = [p[1] for p in blank[0].points()]
+assert abs(min(xs)) < 1e-9 and abs(max(xs) - 150) < 1e-9 and abs(max(ys) - 150) < 1e-9, (min(xs), max(xs), max(ys))
+print("ok")
+)";
+      EXPECT_EQ(std::system(("/usr/bin/python3 " + q(dir / "dxf.py") + " " + q(dir / "pattern" / (ply + ".dxf")) +
+                             " " + q(dir / "pattern" / (ply + ".csv")) + " >/dev/null")
+                                .c_str()),
+                0)
+          << ply << " " << trim;
+    }
+  }
+  // Whole: four times the quarter's pattern, one outline, all trim line.
+  ASSERT_EQ(thermostamp("blank " + q(dir / "run") + " --trim " + cylinder + " --out " + q(dir / "quarter")).exit_code, 0);
+  const auto w = thermostamp("blank " + q(dir / "run") + " --whole --trim " + cylinder + " --out " + q(dir / "whole"));
+  ASSERT_EQ(w.exit_code, 0) << w.err;
+  EXPECT_NE(w.out.find("ply 'ply_top' at t = 0.5 s (frames/000002 of results.h5, 3 frames), mirrored at x = 0, y = 0: "
+                       "1 outline, "),
+            std::string::npos)
+      << w.out;
+  const json quarter = read_job_document(dir / "quarter" / "blank.json");
+  const json whole = read_job_document(dir / "whole" / "blank.json");
+  for (const std::string ply : {"ply_top", "ply_bottom"}) {
+    const json& a = quarter["plies"][ply];
+    const json& b = whole["plies"][ply];
+    const double rounding = 1e-13 * 0.09;  // sums over 144 triangles
+    EXPECT_NEAR(b["blank_area_m2"].get<double>(), 4 * a["blank_area_m2"].get<double>(), rounding) << ply;
+    EXPECT_NEAR(b["kept_blank_area_m2"].get<double>(), 4 * a["kept_blank_area_m2"].get<double>(), rounding) << ply;
+    EXPECT_NEAR(b["kept_formed_area_m2"].get<double>(), 4 * a["kept_formed_area_m2"].get<double>(), rounding) << ply;
+    EXPECT_NEAR(b["blank_area_m2"].get<double>(), 0.09, rounding) << ply;
+    EXPECT_GT(b["kept_share"].get<double>(), 0.3) << ply;
+    EXPECT_LT(b["kept_share"].get<double>(), 0.35) << ply << ": about pi 0.1^2 / 0.3^2";
+    ASSERT_EQ(b["outlines"].size(), 1u) << ply;
+    EXPECT_NEAR(b["outlines"][0]["trim_length_blank_m"].get<double>(), b["outlines"][0]["length_blank_m"].get<double>(),
+                1e-15)
+        << ply;
+    EXPECT_NEAR(b["outlines"][0]["trim_length_blank_m"].get<double>(),
+                4 * a["outlines"][0]["trim_length_blank_m"].get<double>(), 1e-14)
+        << ply;
+    EXPECT_EQ(b["mirrored"], json::array({"x", "y"}));
+  }
+  // What cannot give a pattern.
+  auto refused = [&](const std::string& args) {
+    const auto r = thermostamp("blank " + args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    return r.err;
+  };
+  EXPECT_NE(refused(q(dir / "run")).find("error: blank needs a --trim surface"), std::string::npos);
+  EXPECT_EQ(refused(q(dir / "run") + " --trim cylinder:0,0,0,0,0,1"),
+            "error: blank: --trim 'cylinder:0,0,0,0,0,1': a cylinder takes 7 numbers (a point on its axis, the axis's "
+            "direction and the radius; m), found 6\n");
+  EXPECT_EQ(refused(q(dir / "job.json") + " --trim " + plane), "error: blank: '" + (dir / "job.json").string() +
+                                                                   "' is not a folder\n");
+  EXPECT_EQ(refused(q(dir / "mesh") + " --trim " + plane),
+            "error: blank: '" + (dir / "mesh").string() + "' holds no results.h5 (not the output folder of a run?)\n");
+  EXPECT_EQ(refused(q(dir / "run") + " --trim " + plane + " --time 0.7"),
+            "error: blank: no frame at t = 0.69999999999999996 s: the 3 frames are from t = 0 to 0.5 s\n");
+  EXPECT_NE(refused(q(dir / "run") + " --trim " + plane + " --format gmsh")
+                .find("error: --format does not apply to 'blank'; its options: --trim, --time, --out, --whole"),
+            std::string::npos);
 }
 
 // `thermostamp export`: each ply of a frame as a Gmsh 2.2 mesh, its nodes at

@@ -1,0 +1,433 @@
+#include "io/blank.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+#include <unordered_map>
+
+#include <nlohmann/json.hpp>
+
+#include "io/export.hpp"
+
+namespace ts {
+
+namespace {
+
+using Vec = std::array<double, 3>;
+
+Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec cross(const Vec& a, const Vec& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double norm(const Vec& a) { return std::sqrt(dot(a, a)); }
+Vec at(const std::vector<double>& x, std::size_t i) { return {x[3 * i], x[3 * i + 1], x[3 * i + 2]}; }
+
+std::string g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// The area of a plane polygon (its points in order).
+double polygon_area(const std::vector<Vec>& p) {
+  Vec s{0, 0, 0};
+  for (std::size_t k = 1; k + 1 < p.size(); ++k) {
+    const Vec c = cross(sub(p[k], p[0]), sub(p[k + 1], p[0]));
+    for (int d = 0; d < 3; ++d) s[d] += c[d];
+  }
+  return 0.5 * norm(s);
+}
+
+}  // namespace
+
+TrimSurface parse_trim(const std::string& text) {
+  const std::string what = "--trim '" + text + "': ";
+  const auto colon = text.find(':');
+  const std::string kind = text.substr(0, colon);
+  TrimSurface t;
+  t.text = text;
+  std::size_t count = 0;
+  std::string takes;
+  if (kind == "plane") {
+    t.kind = TrimSurface::Kind::Plane;
+    count = 6;
+    takes = "a plane takes 6 numbers (a point and the normal, which points into the part; m)";
+  } else if (kind == "cylinder") {
+    t.kind = TrimSurface::Kind::Cylinder;
+    count = 7;
+    takes = "a cylinder takes 7 numbers (a point on its axis, the axis's direction and the radius; m)";
+  } else if (kind == "sphere") {
+    t.kind = TrimSurface::Kind::Sphere;
+    count = 4;
+    takes = "a sphere takes 4 numbers (the centre and the radius; m)";
+  } else {
+    throw ExportInputError(what + "expected plane:X,Y,Z,NX,NY,NZ, cylinder:X,Y,Z,DX,DY,DZ,R or sphere:X,Y,Z,R (m)");
+  }
+  std::vector<double> v;
+  if (colon != std::string::npos) {
+    std::size_t from = colon + 1;
+    while (true) {
+      const auto comma = text.find(',', from);
+      const std::string item = text.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+      char* end = nullptr;
+      const double d = std::strtod(item.c_str(), &end);
+      if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d))
+        throw ExportInputError(what + "'" + item + "' is not a number");
+      v.push_back(d);
+      if (comma == std::string::npos) break;
+      from = comma + 1;
+    }
+  }
+  if (v.size() != count) throw ExportInputError(what + takes + ", found " + std::to_string(v.size()));
+  t.point = {v[0], v[1], v[2]};
+  if (t.kind != TrimSurface::Kind::Sphere) {
+    const Vec d{v[3], v[4], v[5]};
+    const double l = norm(d);
+    if (!(l > 0))
+      throw ExportInputError(what + (t.kind == TrimSurface::Kind::Plane ? "the normal" : "the axis's direction") +
+                             " is zero");
+    t.direction = {d[0] / l, d[1] / l, d[2] / l};
+  }
+  if (t.kind != TrimSurface::Kind::Plane) {
+    t.radius = v.back();
+    if (!(t.radius > 0)) throw ExportInputError(what + "the radius must be above 0, found " + g(t.radius));
+  }
+  return t;
+}
+
+double trim_level(const std::vector<TrimSurface>& trims, const double* x) {
+  double level = -std::numeric_limits<double>::infinity();
+  for (const TrimSurface& t : trims) {
+    const Vec r{x[0] - t.point[0], x[1] - t.point[1], x[2] - t.point[2]};
+    double f = 0;
+    switch (t.kind) {
+      case TrimSurface::Kind::Plane:
+        f = -dot(r, t.direction);
+        break;
+      case TrimSurface::Kind::Cylinder: {
+        const double a = dot(r, t.direction);
+        const Vec off{r[0] - a * t.direction[0], r[1] - a * t.direction[1], r[2] - a * t.direction[2]};
+        f = norm(off) - t.radius;
+        break;
+      }
+      case TrimSurface::Kind::Sphere:
+        f = norm(r) - t.radius;
+        break;
+    }
+    level = std::max(level, f);
+  }
+  return level;
+}
+
+CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
+                       const std::vector<TrimSurface>& trims) {
+  const std::size_t n = x0.size() / 3, m = tri.size() / 3;
+  if (x.size() != x0.size()) throw std::runtime_error("the blank and the formed ply have other numbers of nodes");
+  for (std::size_t k = 0; k < x0.size(); ++k)
+    if (!std::isfinite(x0[k]) || !std::isfinite(x[k]))
+      throw std::runtime_error("node " + std::to_string(k / 3) + " has a position that is not finite");
+  std::vector<double> level(n, -1.0);
+  if (!trims.empty())
+    for (std::size_t i = 0; i < n; ++i) level[i] = trim_level(trims, &x[3 * i]);
+  // The edges, each once (smaller node first), and how many triangles have it.
+  std::unordered_map<std::uint64_t, int> edge_id;
+  std::vector<std::array<int, 2>> edges;
+  std::vector<int> uses;
+  auto edge = [&](int a, int b) {
+    const int lo = std::min(a, b), hi = std::max(a, b);
+    const std::uint64_t key = (static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint32_t>(hi);
+    const auto [it, added] = edge_id.emplace(key, static_cast<int>(edges.size()));
+    if (added) {
+      edges.push_back({lo, hi});
+      uses.push_back(0);
+    }
+    return it->second;
+  };
+  for (std::size_t e = 0; e < m; ++e)
+    for (int k = 0; k < 3; ++k) ++uses[static_cast<std::size_t>(edge(tri[3 * e + k], tri[3 * e + (k + 1) % 3]))];
+  // Points: a node (key < n) or the crossing of an edge (key n + edge),
+  // placed from the edge's smaller node, so that both of its triangles
+  // place it alike.
+  const int nn = static_cast<int>(n);
+  auto point = [&](int key, const std::vector<double>& pos) -> Vec {
+    if (key < nn) return at(pos, static_cast<std::size_t>(key));
+    const auto& ed = edges[static_cast<std::size_t>(key - nn)];
+    const double la = level[static_cast<std::size_t>(ed[0])], lb = level[static_cast<std::size_t>(ed[1])];
+    const double t = la / (la - lb);
+    const Vec a = at(pos, static_cast<std::size_t>(ed[0])), b = at(pos, static_cast<std::size_t>(ed[1]));
+    return {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
+  };
+  CutPattern p;
+  std::vector<std::array<int, 2>> segments;  // directed, the pattern on their left
+  std::vector<Vec> poly0, poly;
+  for (std::size_t e = 0; e < m; ++e) {
+    const int c[3] = {tri[3 * e], tri[3 * e + 1], tri[3 * e + 2]};
+    bool in[3];
+    for (int k = 0; k < 3; ++k) in[k] = level[static_cast<std::size_t>(c[k])] <= 0;
+    p.blank_area += polygon_area({at(x0, static_cast<std::size_t>(c[0])), at(x0, static_cast<std::size_t>(c[1])),
+                                  at(x0, static_cast<std::size_t>(c[2]))});
+    poly0.clear();
+    poly.clear();
+    int leave = -1, enter = -1;  // the crossings where the walk round the triangle leaves and enters the part
+    for (int k = 0; k < 3; ++k) {
+      const int a = c[k], b = c[(k + 1) % 3];
+      const int cross_key = nn + edge(a, b);
+      if (in[k]) {
+        poly0.push_back(point(a, x0));
+        poly.push_back(point(a, x));
+      }
+      if (in[k] != in[(k + 1) % 3]) {
+        poly0.push_back(point(cross_key, x0));
+        poly.push_back(point(cross_key, x));
+        (in[k] ? leave : enter) = cross_key;
+      }
+      if (uses[static_cast<std::size_t>(cross_key - nn)] != 1) continue;  // not on the blank's edge
+      if (in[k] && in[(k + 1) % 3]) segments.push_back({a, b});
+      else if (in[k]) segments.push_back({a, cross_key});
+      else if (in[(k + 1) % 3]) segments.push_back({cross_key, b});
+    }
+    if (leave >= 0) segments.push_back({leave, enter});
+    if (poly0.size() >= 3) {
+      p.kept_blank_area += polygon_area(poly0);
+      p.kept_formed_area += polygon_area(poly);
+    }
+  }
+  // The segments joined into closed outlines, in the order of their
+  // triangles (where two outlines touch at a point, the first segment
+  // not yet taken out of it).
+  std::unordered_map<int, std::vector<int>> out_of;
+  for (std::size_t s = 0; s < segments.size(); ++s) out_of[segments[s][0]].push_back(static_cast<int>(s));
+  std::vector<char> taken(segments.size(), 0);
+  for (std::size_t s0 = 0; s0 < segments.size(); ++s0) {
+    if (taken[s0]) continue;
+    std::vector<int> keys;
+    int s = static_cast<int>(s0);
+    const int start = segments[s0][0];
+    while (true) {
+      taken[static_cast<std::size_t>(s)] = 1;
+      keys.push_back(segments[static_cast<std::size_t>(s)][0]);
+      const int next = segments[static_cast<std::size_t>(s)][1];
+      if (next == start) break;
+      int follow = -1;
+      if (const auto it = out_of.find(next); it != out_of.end())
+        for (const int t : it->second)
+          if (!taken[static_cast<std::size_t>(t)]) {
+            follow = t;
+            break;
+          }
+      if (follow < 0)
+        throw std::runtime_error("the outline does not close at " +
+                                 (next < nn ? "node " + std::to_string(next)
+                                            : "the edge of nodes " +
+                                                  std::to_string(edges[static_cast<std::size_t>(next - nn)][0]) +
+                                                  " and " + std::to_string(edges[static_cast<std::size_t>(next - nn)][1])) +
+                                 " (triangles not alike oriented?)");
+      s = follow;
+    }
+    Outline o;
+    for (const int k : keys) {
+      OutlinePoint q{point(k, x0), point(k, x), k >= nn};
+      if (!o.points.empty() && o.points.back().blank == q.blank) {  // a node on the trim surface
+        o.points.back().on_trim = o.points.back().on_trim || q.on_trim;
+        continue;
+      }
+      o.points.push_back(q);
+    }
+    while (o.points.size() > 1 && o.points.back().blank == o.points.front().blank) {
+      o.points.front().on_trim = o.points.front().on_trim || o.points.back().on_trim;
+      o.points.pop_back();
+    }
+    if (o.points.size() < 3) continue;  // a touch of the trim surface at a point or along an edge
+    for (std::size_t k = 0; k < o.points.size(); ++k) {
+      const OutlinePoint& a = o.points[k];
+      const OutlinePoint& b = o.points[(k + 1) % o.points.size()];
+      const double l0 = norm(sub(b.blank, a.blank));
+      o.length_blank += l0;
+      o.length_formed += norm(sub(b.formed, a.formed));
+      if (a.on_trim && b.on_trim) o.trim_length_blank += l0;
+    }
+    p.outlines.push_back(std::move(o));
+  }
+  return p;
+}
+
+namespace {
+
+// The blank's plane: flat when every node lies within 1e-6 of its
+// largest extent from the plane through the nodes' mean with the normal of
+// the triangles' summed area vectors.
+bool flat_blank(const std::vector<double>& x0, const std::vector<int>& tri, Vec& normal) {
+  const std::size_t n = x0.size() / 3, m = tri.size() / 3;
+  Vec s{0, 0, 0}, mean{0, 0, 0}, lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  for (std::size_t e = 0; e < m; ++e) {
+    const Vec a = at(x0, static_cast<std::size_t>(tri[3 * e]));
+    const Vec c = cross(sub(at(x0, static_cast<std::size_t>(tri[3 * e + 1])), a),
+                        sub(at(x0, static_cast<std::size_t>(tri[3 * e + 2])), a));
+    for (int d = 0; d < 3; ++d) s[d] += c[d];
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) {
+      mean[d] += x0[3 * i + d] / static_cast<double>(n);
+      lo[d] = std::min(lo[d], x0[3 * i + d]);
+      hi[d] = std::max(hi[d], x0[3 * i + d]);
+    }
+  const double l = norm(s);
+  if (!(l > 0)) return false;
+  normal = {s[0] / l, s[1] / l, s[2] / l};
+  double off = 0;
+  for (std::size_t i = 0; i < n; ++i) off = std::max(off, std::abs(dot(sub(at(x0, i), mean), normal)));
+  return off <= 1e-6 * norm(sub(hi, lo));
+}
+
+// In-plane coordinates of a flat blank for the DXF file: x and y where the
+// plane is normal to z (seen from +z); otherwise along e1, the global axis
+// least aligned with the normal n' (n turned to have its largest component
+// positive) projected into the plane, and e2 = n' x e1.
+std::array<Vec, 2> plane_axes(const Vec& n) {
+  if (std::abs(n[2]) >= 1 - 1e-9) return {Vec{1, 0, 0}, Vec{0, 1, 0}};
+  int big = 0, least = 0;
+  for (int d = 1; d < 3; ++d) {
+    if (std::abs(n[d]) > std::abs(n[big])) big = d;
+    if (std::abs(n[d]) < std::abs(n[least])) least = d;
+  }
+  const Vec nn = n[big] < 0 ? Vec{-n[0], -n[1], -n[2]} : n;
+  Vec a{0, 0, 0};
+  a[least] = 1;
+  const double an = dot(a, nn);
+  Vec e1{a[0] - an * nn[0], a[1] - an * nn[1], a[2] - an * nn[2]};
+  const double l = norm(e1);
+  for (double& c : e1) c /= l;
+  return {e1, cross(nn, e1)};
+}
+
+// A DXF file (AutoCAD R12, ASCII; units mm, $INSUNITS 4): each outline as a
+// closed POLYLINE, the blank's on layer BLANK, the pattern's on PATTERN.
+bool write_dxf(const std::filesystem::path& file, const BlankPly& ply) {
+  std::ofstream f(file);
+  if (!f) return false;
+  const auto axes = plane_axes(ply.normal);
+  auto num = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return std::string(buf);
+  };
+  f << "999\nthermostamp blank: ply '" << ply.name << "', mm\n"
+    << "0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nAC1009\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n"
+    << "0\nSECTION\n2\nTABLES\n0\nTABLE\n2\nLAYER\n70\n2\n"
+    << "0\nLAYER\n2\nBLANK\n70\n0\n62\n8\n6\nCONTINUOUS\n"
+    << "0\nLAYER\n2\nPATTERN\n70\n0\n62\n1\n6\nCONTINUOUS\n"
+    << "0\nENDTAB\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n";
+  auto outline = [&](const Outline& o, const char* layer) {
+    f << "0\nPOLYLINE\n8\n" << layer << "\n66\n1\n70\n1\n10\n0.0\n20\n0.0\n30\n0.0\n";
+    for (const OutlinePoint& q : o.points)
+      f << "0\nVERTEX\n8\n" << layer << "\n10\n" << num(1000 * dot(q.blank, axes[0])) << "\n20\n"
+        << num(1000 * dot(q.blank, axes[1])) << "\n30\n0.0\n";
+    f << "0\nSEQEND\n8\n" << layer << "\n";
+  };
+  for (const Outline& o : ply.blank.outlines) outline(o, "BLANK");
+  for (const Outline& o : ply.pattern.outlines) outline(o, "PATTERN");
+  f << "0\nENDSEC\n0\nEOF\n";
+  f.close();
+  return static_cast<bool>(f);
+}
+
+bool write_csv(const std::filesystem::path& file, const CutPattern& p) {
+  std::ofstream f(file);
+  if (!f) return false;
+  auto num = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return std::string(buf);
+  };
+  f << "outline,point,on_trim,blank_x_m,blank_y_m,blank_z_m,formed_x_m,formed_y_m,formed_z_m\n";
+  for (std::size_t o = 0; o < p.outlines.size(); ++o)
+    for (std::size_t k = 0; k < p.outlines[o].points.size(); ++k) {
+      const OutlinePoint& q = p.outlines[o].points[k];
+      f << o << ',' << k << ',' << (q.on_trim ? 1 : 0);
+      for (const double v : q.blank) f << ',' << num(v);
+      for (const double v : q.formed) f << ',' << num(v);
+      f << '\n';
+    }
+  f.close();
+  return static_cast<bool>(f);
+}
+
+}  // namespace
+
+BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> time,
+                        const std::filesystem::path& out, bool whole, const std::vector<TrimSurface>& trims) {
+  if (trims.empty()) throw ExportInputError("no --trim: give the surface the part is trimmed at");
+  FramePlies frame = read_frame_plies(dir, time, whole, false);
+  for (const FramePly& d : frame.plies)
+    for (std::size_t k = 0; k < d.x.size(); ++k)
+      if (!std::isfinite(d.x[k]))
+        throw ExportInputError("ply '" + d.name + "' has a position that is not finite at t = " + g(frame.time) +
+                               " s (node " + std::to_string(d.node_tag[k / 3]) +
+                               "): take an earlier frame with --time");
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) throw std::runtime_error("cannot create '" + out.string() + "': " + ec.message());
+  BlankResult res;
+  res.time = frame.time;
+  res.frame = frame.frame;
+  res.frames = frame.frames;
+  nlohmann::json doc;
+  doc["time_s"] = frame.time;
+  doc["frame"] = frame.group;
+  doc["results"] = frame.h5.string();
+  doc["trims"] = nlohmann::json::array();
+  for (const TrimSurface& t : trims) doc["trims"].push_back(t.text);
+  doc["plies"] = nlohmann::json::object();
+  for (const FramePly& d : frame.plies) {
+    BlankPly ply;
+    ply.name = d.name;
+    ply.mirrored = d.mirrored;
+    try {
+      ply.pattern = cut_pattern(d.x0, d.x, d.tri, trims);
+      ply.blank = cut_pattern(d.x0, d.x0, d.tri, {});
+    } catch (const std::exception& e) {
+      throw std::runtime_error("ply '" + d.name + "': " + e.what());
+    }
+    ply.flat = flat_blank(d.x0, d.tri, ply.normal);
+    ply.csv = out / (d.name + ".csv");
+    if (!write_csv(ply.csv, ply.pattern)) throw std::runtime_error("cannot write '" + ply.csv.string() + "'");
+    if (ply.flat) {
+      ply.dxf = out / (d.name + ".dxf");
+      if (!write_dxf(ply.dxf, ply)) throw std::runtime_error("cannot write '" + ply.dxf.string() + "'");
+    }
+    const CutPattern& p = ply.pattern;
+    nlohmann::json j;
+    j["blank_area_m2"] = p.blank_area;
+    j["kept_blank_area_m2"] = p.kept_blank_area;
+    j["kept_formed_area_m2"] = p.kept_formed_area;
+    j["kept_share"] = p.blank_area > 0 ? p.kept_blank_area / p.blank_area : 0.0;
+    j["outlines"] = nlohmann::json::array();
+    for (const Outline& o : p.outlines)
+      j["outlines"].push_back({{"points", o.points.size()},
+                               {"length_blank_m", o.length_blank},
+                               {"length_formed_m", o.length_formed},
+                               {"trim_length_blank_m", o.trim_length_blank}});
+    j["blank_outlines"] = ply.blank.outlines.size();
+    j["csv"] = ply.csv.filename().string();
+    j["dxf"] = ply.flat ? nlohmann::json(ply.dxf.filename().string()) : nlohmann::json(nullptr);
+    j["flat"] = ply.flat;
+    j["normal"] = ply.normal;
+    j["mirrored"] = ply.mirrored;
+    doc["plies"][d.name] = j;
+    res.plies.push_back(std::move(ply));
+  }
+  res.json = out / "blank.json";
+  std::ofstream f(res.json);
+  f << doc.dump(2) << "\n";
+  f.close();
+  if (!f) throw std::runtime_error("cannot write '" + res.json.string() + "'");
+  return res;
+}
+
+}  // namespace ts

@@ -1,0 +1,98 @@
+#pragma once
+// `thermostamp blank DIR --trim SURFACE`: the cut pattern of each ply. The
+// part is trimmed on the formed ply (a plane, a cylinder or a sphere, in
+// the run's coordinates); the pattern is the region of the blank, the ply
+// as the run started, that the forming carries into the part: its outlines
+// in the blank, the blank's area kept and the part's area, as CSV, DXF (for
+// a cutting table) and JSON.
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ts {
+
+// A trim surface: the part lies on one side of it.
+//   plane    "plane:X,Y,Z,NX,NY,NZ"        a point and the normal, which points into the part
+//   cylinder "cylinder:X,Y,Z,DX,DY,DZ,R"   a point on the axis, the axis's direction and the radius; the part inside
+//   sphere   "sphere:X,Y,Z,R"              the centre and the radius; the part inside
+// Lengths in m.
+struct TrimSurface {
+  enum class Kind { Plane, Cylinder, Sphere };
+  Kind kind = Kind::Plane;
+  std::array<double, 3> point{}, direction{};  // direction: unit
+  double radius = 0;
+  std::string text;  // as given
+};
+
+// Throws ExportInputError ("--trim 'TEXT': what is wrong") for text that is
+// no trim surface.
+TrimSurface parse_trim(const std::string& text);
+
+// The level of a point x (m): at most 0 in the part, above 0 outside; the
+// signed distance to the surface (for several surfaces, the part lying
+// inside all of them, the largest).
+double trim_level(const std::vector<TrimSurface>& trims, const double* x);
+
+struct OutlinePoint {
+  std::array<double, 3> blank{}, formed{};  // m
+  bool on_trim = false;                     // on the trim line (else a node of the blank's edge)
+};
+
+// A closed outline of the pattern (the last point joins the first), the
+// pattern on its left seen from the side the blank's triangles' normals
+// point to: an outer outline runs anticlockwise, a hole's clockwise.
+struct Outline {
+  std::vector<OutlinePoint> points;
+  double length_blank = 0, length_formed = 0;  // m, around
+  double trim_length_blank = 0;                 // m: the part of it along the trim line
+};
+
+struct CutPattern {
+  std::vector<Outline> outlines;
+  double blank_area = 0;        // m^2, the whole blank
+  double kept_blank_area = 0;   // m^2, the pattern in the blank
+  double kept_formed_area = 0;  // m^2, the pattern formed: the trimmed part's area
+};
+
+// The pattern of one ply: x0 its positions in the blank, x formed (3 per
+// node), tri its triangles (3 node indices each, alike oriented). The
+// level is taken at each node's formed position and is linear along each
+// edge: a crossing lies on the edge where the linear level is zero, at the
+// same place of both positions. A plane trim is thus exact on the formed
+// mesh; a curved one is within the chord's error of the surface. Without
+// trims the pattern is the whole blank (its outlines, its edges). Throws
+// std::runtime_error for triangles that are not alike oriented (a
+// boundary that does not close) or non-finite positions.
+CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
+                       const std::vector<TrimSurface>& trims);
+
+struct BlankPly {
+  std::string name;
+  std::filesystem::path csv, dxf;  // dxf empty where the blank is not flat
+  std::vector<std::string> mirrored;
+  CutPattern pattern;
+  CutPattern blank;  // the whole blank's outlines
+  bool flat = false;
+  std::array<double, 3> normal{};  // the blank's plane's unit normal (flat)
+};
+
+struct BlankResult {
+  double time = 0;  // s, of the frame
+  int frame = 0, frames = 0;
+  std::filesystem::path json;
+  std::vector<BlankPly> plies;
+};
+
+// Writes, for each ply of the frame at `time` (as export_plies picks it;
+// whole: mirrored at its symmetry planes), <out>/<ply>.csv (the outlines'
+// points in the blank and formed), <out>/<ply>.dxf where the blank is flat
+// (the pattern and the blank's outline in its plane, in mm) and
+// <out>/blank.json (areas, lengths, the trims). Throws ExportInputError for
+// input that cannot give a pattern, std::runtime_error where the results
+// cannot be read or the files written.
+BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> time,
+                        const std::filesystem::path& out, bool whole, const std::vector<TrimSurface>& trims);
+
+}  // namespace ts

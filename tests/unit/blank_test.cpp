@@ -1,0 +1,292 @@
+// The cut pattern of a formed ply (thermostamp blank): the region of the
+// blank that a map carries inside a trim surface.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "io/blank.hpp"
+#include "io/export.hpp"
+#include "mesh/shell_mesh.hpp"
+
+namespace ts {
+namespace {
+
+using V3 = std::array<double, 3>;
+
+// The signed area of an outline about +z (shoelace).
+double signed_area_z(const Outline& o) {
+  double a = 0;
+  for (std::size_t k = 0; k < o.points.size(); ++k) {
+    const V3& p = o.points[k].blank;
+    const V3& q = o.points[(k + 1) % o.points.size()].blank;
+    a += 0.5 * (p[0] * q[1] - q[0] * p[1]);
+  }
+  return a;
+}
+
+// The part of a convex polygon (x, y) where a x + b y + c >= 0
+// (Sutherland-Hodgman), independent of any mesh.
+std::vector<std::array<double, 2>> clip(const std::vector<std::array<double, 2>>& poly, double a, double b, double c) {
+  std::vector<std::array<double, 2>> out;
+  for (std::size_t k = 0; k < poly.size(); ++k) {
+    const auto& p = poly[k];
+    const auto& q = poly[(k + 1) % poly.size()];
+    const double fp = a * p[0] + b * p[1] + c, fq = a * q[0] + b * q[1] + c;
+    if (fp >= 0) out.push_back(p);
+    if ((fp >= 0) != (fq >= 0)) {
+      const double t = fp / (fp - fq);
+      out.push_back({p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])});
+    }
+  }
+  return out;
+}
+double area(const std::vector<std::array<double, 2>>& poly) {
+  double a = 0;
+  for (std::size_t k = 0; k < poly.size(); ++k) {
+    const auto& p = poly[k];
+    const auto& q = poly[(k + 1) % poly.size()];
+    a += 0.5 * (p[0] * q[1] - q[0] * p[1]);
+  }
+  return a;
+}
+
+TEST(Blank, TrimSurfacesAreReadOrRefusedWithWhatIsWrong) {
+  const TrimSurface p = parse_trim("plane:0,0,-0.005,0,0,-2");
+  EXPECT_EQ(p.kind, TrimSurface::Kind::Plane);
+  EXPECT_EQ(p.direction, (V3{0, 0, -1}));
+  const double below[3] = {0.3, -0.2, -0.007}, above[3] = {0, 0, -0.004};
+  EXPECT_DOUBLE_EQ(trim_level({p}, below), -0.002);
+  EXPECT_DOUBLE_EQ(trim_level({p}, above), 0.001);
+  const TrimSurface c = parse_trim("cylinder:0.01,0,0,0,0,3,0.08");
+  const double r[3] = {0.01 + 0.06, 0.08, 5.0};  // 0.1 from the axis
+  EXPECT_NEAR(trim_level({c}, r), 0.02, 1e-15);
+  const TrimSurface s = parse_trim("sphere:0,0,0.1,0.05");
+  const double o[3] = {0, 0.03, 0.14};
+  EXPECT_NEAR(trim_level({s}, o), 0.0, 1e-15);
+  // Inside both: the larger level (r: 0.02 off the cylinder, 5.005 above the plane).
+  EXPECT_NEAR(trim_level({c, p}, r), 5.005, 1e-15);
+  EXPECT_NEAR(trim_level({c, p}, above), 0.001, 1e-15);
+  auto refused = [](const std::string& text) {
+    try {
+      parse_trim(text);
+    } catch (const ExportInputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refused("cone:0,0,0,1"),
+            "--trim 'cone:0,0,0,1': expected plane:X,Y,Z,NX,NY,NZ, cylinder:X,Y,Z,DX,DY,DZ,R or sphere:X,Y,Z,R (m)");
+  EXPECT_EQ(refused("cylinder:0,0,0,0,0,1"),
+            "--trim 'cylinder:0,0,0,0,0,1': a cylinder takes 7 numbers (a point on its axis, the axis's direction and "
+            "the radius; m), found 6");
+  EXPECT_EQ(refused("plane"), "--trim 'plane': a plane takes 6 numbers (a point and the normal, which points into "
+                              "the part; m), found 0");
+  EXPECT_EQ(refused("plane:0,0,x,0,0,1"), "--trim 'plane:0,0,x,0,0,1': 'x' is not a number");
+  EXPECT_EQ(refused("plane:0,0,0,0,0,1,"), "--trim 'plane:0,0,0,0,0,1,': '' is not a number");
+  EXPECT_EQ(refused("plane:0,0,0,0,0,0"), "--trim 'plane:0,0,0,0,0,0': the normal is zero");
+  EXPECT_EQ(refused("cylinder:0,0,0,0,0,0,1"), "--trim 'cylinder:0,0,0,0,0,0,1': the axis's direction is zero");
+  EXPECT_EQ(refused("sphere:0,0,0,-1"), "--trim 'sphere:0,0,0,-1': the radius must be above 0, found -1");
+  EXPECT_EQ(refused("sphere:0,0,0,nan"), "--trim 'sphere:0,0,0,nan': 'nan' is not a number");
+}
+
+// An affine map x = A X + b of an irregular mesh of a rectangle carries
+// the blank's part on one side of the plane A^T n . X = n . (q - b) to the
+// side of the trim plane (q, n) that n points to: exactly, since the level
+// is linear along every edge. The pattern is the rectangle clipped by that
+// plane, its area, outline and trim line those of the clipped polygon.
+TEST(Blank, AffineMapsCarryThePreimageOfATrimPlane) {
+  const double x0 = 0.01, y0 = -0.02, sx = 0.12, sy = 0.08;
+  ShellMesh m = rectangle_mesh({x0, y0, 0.0}, {sx, sy}, {9, 6});
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jiggle(-0.004, 0.004);
+  const double eps = 1e-12;
+  for (std::size_t i = 0; i < m.x.size(); i += 3) {  // irregular triangles, the boundary kept straight
+    const bool on_x = std::abs(m.x[i] - x0) < eps || std::abs(m.x[i] - x0 - sx) < eps;
+    const bool on_y = std::abs(m.x[i + 1] - y0) < eps || std::abs(m.x[i + 1] - y0 - sy) < eps;
+    if (!on_x) m.x[i] += jiggle(rng);
+    if (!on_y) m.x[i + 1] += jiggle(rng);
+  }
+  const std::vector<std::array<double, 2>> rect = {{x0, y0}, {x0 + sx, y0}, {x0 + sx, y0 + sy}, {x0, y0 + sy}};
+  struct Case {
+    std::array<std::array<double, 3>, 3> A;
+    V3 b, q, n;
+  };
+  const std::vector<Case> cases = {
+      {{{{1.1, 0.0, 0.0}, {0.0, 0.95, 0.0}, {0.0, 0.0, 1.0}}}, {0.0, 0.0, 0.0}, {0.07, 0.0, 0.0}, {-1.0, 0.0, 0.0}},
+      {{{{0.8, 0.3, 0.0}, {-0.2, 1.05, 0.0}, {0.4, 0.1, 1.0}}}, {0.02, -0.01, 0.3}, {0.05, 0.01, 0.31}, {0.3, -1.0, 0.4}},
+      {{{{0.0, -1.0, 0.0}, {0.6, 0.0, 0.0}, {0.8, 0.0, 1.0}}}, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.039}, {0.2, 0.5, -1.0}},
+  };
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const Case& c = cases[k];
+    std::vector<double> x(m.x.size());
+    for (std::size_t i = 0; i < m.x.size(); i += 3)
+      for (int r = 0; r < 3; ++r)
+        x[i + r] = c.A[r][0] * m.x[i] + c.A[r][1] * m.x[i + 1] + c.A[r][2] * m.x[i + 2] + c.b[r];
+    const std::string text = "plane:" + std::to_string(c.q[0]) + "," + std::to_string(c.q[1]) + "," +
+                             std::to_string(c.q[2]) + "," + std::to_string(c.n[0]) + "," + std::to_string(c.n[1]) +
+                             "," + std::to_string(c.n[2]);
+    const TrimSurface t = parse_trim(text);
+    const CutPattern p = cut_pattern(m.x, x, m.triangles, {t});
+    // The preimage: a X + b Y + d >= 0 kept (Z = 0 in the blank).
+    const V3& n = t.direction;
+    const double a = c.A[0][0] * n[0] + c.A[1][0] * n[1] + c.A[2][0] * n[2];
+    const double bb = c.A[0][1] * n[0] + c.A[1][1] * n[1] + c.A[2][1] * n[2];
+    double d = 0;
+    for (int r = 0; r < 3; ++r) d += n[r] * (c.b[r] - t.point[r]);
+    const auto kept = clip(rect, a, bb, d);
+    ASSERT_EQ(p.outlines.size(), 1u) << "case " << k;
+    const Outline& o = p.outlines[0];
+    EXPECT_NEAR(p.blank_area, sx * sy, 1e-15) << "case " << k;
+    EXPECT_NEAR(p.kept_blank_area, area(kept), 1e-15) << "case " << k;
+    EXPECT_NEAR(signed_area_z(o), area(kept), 1e-15) << "case " << k << ": anticlockwise, round the whole pattern";
+    // The area ratio of the map of the plane Z = 0: |A e1 x A e2|.
+    const V3 a1{c.A[0][0], c.A[1][0], c.A[2][0]}, a2{c.A[0][1], c.A[1][1], c.A[2][1]};
+    const double ratio = std::sqrt(std::pow(a1[1] * a2[2] - a1[2] * a2[1], 2) +
+                                   std::pow(a1[2] * a2[0] - a1[0] * a2[2], 2) +
+                                   std::pow(a1[0] * a2[1] - a1[1] * a2[0], 2));
+    EXPECT_NEAR(p.kept_formed_area, ratio * area(kept), 1e-15) << "case " << k;
+    double chord = 0, perimeter = 0;
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      const auto& u = kept[i];
+      const auto& w = kept[(i + 1) % kept.size()];
+      const double l = std::hypot(w[0] - u[0], w[1] - u[1]);
+      perimeter += l;
+      if (std::abs(a * u[0] + bb * u[1] + d) < 1e-12 && std::abs(a * w[0] + bb * w[1] + d) < 1e-12) chord += l;
+    }
+    EXPECT_NEAR(o.length_blank, perimeter, 1e-14) << "case " << k;
+    EXPECT_NEAR(o.trim_length_blank, chord, 1e-14) << "case " << k;
+    EXPECT_GT(chord, 0.05) << "case " << k << ": the trim crosses the blank";
+    int on_trim = 0;
+    for (const OutlinePoint& q : o.points) {
+      EXPECT_EQ(q.blank[2], 0.0);
+      for (int r = 0; r < 3; ++r)
+        EXPECT_NEAR(q.formed[r], c.A[r][0] * q.blank[0] + c.A[r][1] * q.blank[1] + c.b[r], 1e-15) << "case " << k;
+      if (!q.on_trim) continue;
+      ++on_trim;
+      EXPECT_NEAR(a * q.blank[0] + bb * q.blank[1] + d, 0.0, 1e-16) << "case " << k;
+      EXPECT_NEAR(trim_level({t}, q.formed.data()), 0.0, 1e-16) << "case " << k;
+    }
+    EXPECT_GE(on_trim, 7) << "case " << k;
+  }
+  // Without a trim, or with one the whole formed ply lies inside: the
+  // blank's outline; with one it lies wholly outside of: nothing.
+  const CutPattern all = cut_pattern(m.x, m.x, m.triangles, {});
+  ASSERT_EQ(all.outlines.size(), 1u);
+  EXPECT_EQ(all.outlines[0].points.size(), 2u * (9 + 6));
+  EXPECT_NEAR(signed_area_z(all.outlines[0]), sx * sy, 1e-15);
+  EXPECT_NEAR(all.outlines[0].length_blank, 2 * (sx + sy), 1e-15);
+  EXPECT_EQ(all.outlines[0].trim_length_blank, 0.0);
+  const CutPattern inside = cut_pattern(m.x, m.x, m.triangles, {parse_trim("plane:0,0,-1,0,0,1")});
+  ASSERT_EQ(inside.outlines.size(), 1u);
+  EXPECT_EQ(inside.kept_blank_area, inside.blank_area);
+  const CutPattern none = cut_pattern(m.x, m.x, m.triangles, {parse_trim("plane:0,0,1,0,0,1")});
+  EXPECT_TRUE(none.outlines.empty());
+  EXPECT_EQ(none.kept_blank_area, 0.0);
+  // A band: two planes, two outlines' worth of trim line in one outline.
+  const CutPattern band =
+      cut_pattern(m.x, m.x, m.triangles, {parse_trim("plane:0.05,0,0,1,0,0"), parse_trim("plane:0.1,0,0,-1,0,0")});
+  ASSERT_EQ(band.outlines.size(), 1u);
+  EXPECT_NEAR(band.kept_blank_area, 0.05 * sy, 1e-15);
+  EXPECT_NEAR(band.outlines[0].trim_length_blank, 2 * sy, 1e-15);
+  // A disc inside the blank: one outline, all of it on the trim line.
+  const CutPattern disc = cut_pattern(m.x, m.x, m.triangles, {parse_trim("cylinder:0.07,0.02,0,0,0,1,0.025")});
+  ASSERT_EQ(disc.outlines.size(), 1u);
+  EXPECT_NEAR(signed_area_z(disc.outlines[0]), disc.kept_blank_area, 1e-13 * disc.kept_blank_area);
+  EXPECT_EQ(disc.outlines[0].trim_length_blank, disc.outlines[0].length_blank);
+  // (a polygon inside the circle: shorter, 1.4 % on these coarse cells)
+  EXPECT_LT(disc.outlines[0].length_blank, 2 * M_PI * 0.025);
+  EXPECT_GT(disc.outlines[0].length_blank, 0.97 * 2 * M_PI * 0.025);
+  // Triangles of both orientations: refused.
+  std::vector<int> mixed = m.triangles;
+  std::swap(mixed[1], mixed[2]);
+  EXPECT_THROW(cut_pattern(m.x, m.x, mixed, {}), std::runtime_error);
+  std::vector<double> bad = m.x;
+  bad[4] = std::nan("");
+  EXPECT_THROW(cut_pattern(m.x, bad, m.triangles, {}), std::runtime_error);
+}
+
+// A strip wrapped without stretch round a cylinder of radius R: x = (R
+// sin(X/R), Y, R (1 - cos(X/R))). Trimmed at the plane z = z0 (the part
+// below), the pattern is X <= X* = R acos(1 - z0/R), a straight line. The
+// level is linear along each edge while z is not: with X* in the middle of
+// a cell of length h, the trim line lies at X* - e, e = h^2 z''/(8 z') at
+// X* to leading order (the chord's offset), falling as h^2.
+TEST(Blank, StripWrappedRoundACylinderConvergesToItsArcLength) {
+  const double R = 0.05, W = 0.03, z0 = 0.02;
+  const double Xs = R * std::acos(1 - z0 / R);
+  const double lead = std::cos(Xs / R) / (8 * R * std::sin(Xs / R));  // e / h^2
+  double previous = 0, previous_h = 0;
+  for (const int k : {4, 9, 19, 39}) {
+    const double h = Xs / (k + 0.5);
+    const int cells = 2 * k + 2;
+    const ShellMesh m = rectangle_mesh({0, 0, 0}, {cells * h, W}, {cells, 6});
+    std::vector<double> x(m.x.size());
+    for (std::size_t i = 0; i < m.x.size(); i += 3) {
+      x[i] = R * std::sin(m.x[i] / R);
+      x[i + 1] = m.x[i + 1];
+      x[i + 2] = R * (1 - std::cos(m.x[i] / R));
+    }
+    const CutPattern p = cut_pattern(m.x, x, m.triangles, {parse_trim("plane:0,0," + std::to_string(z0) + ",0,0,-1")});
+    ASSERT_EQ(p.outlines.size(), 1u);
+    double error = -1;
+    for (const OutlinePoint& q : p.outlines[0].points) {
+      if (!q.on_trim) continue;
+      const double e = Xs - q.blank[0];
+      if (error >= 0) {
+        EXPECT_NEAR(e, error, 1e-15) << k << ": a straight trim line";
+      }
+      error = e;
+      EXPECT_NEAR(q.formed[2], z0, 1e-15);
+    }
+    EXPECT_NEAR(error / (lead * h * h), 1.0, 0.002) << k;
+    EXPECT_NEAR(p.kept_blank_area, W * (Xs - error), 1e-15) << k;
+    EXPECT_NEAR(p.outlines[0].trim_length_blank, W, 1e-15);
+    if (previous > 0) {
+      EXPECT_NEAR(previous / error, std::pow(previous_h / h, 2), 0.002 * std::pow(previous_h / h, 2)) << k;
+    }
+    previous = error;
+    previous_h = h;
+  }
+}
+
+// A flat plate, not moved, trimmed by a cylinder and by a sphere that cut
+// its plane in the same circle, r0 = 0.07 m. Each trim point lies inside
+// the circle, by at most the chord's offset: the level, |x - c| - rho with
+// rho the cylinder's radius or the distance to the sphere's centre, exceeds
+// its linear interpolant along an edge of length h by at most
+// h^2 / (8 (rho - h)), which is (rho / r0) times that in r. The pattern (a
+// quarter disc) lacks at most that offset along the arc and the segments
+// between the trim points inside it, s^3 / (12 r0) each for s <= h: pi h^2 / 24.
+TEST(Blank, CylinderAndSphereTrimAFlatPlateAtTheirCircle) {
+  const double r0 = 0.07, L = 0.1;
+  const ShellMesh m = rectangle_mesh({0, 0, 0}, {L, L}, {40, 40}, true);
+  const double h = max_edge_length(m);
+  for (const auto& [text, rho] : {std::pair<std::string, double>{"cylinder:0,0,0.3,0,0,-2,0.07", 0.07},
+                                  std::pair<std::string, double>{"sphere:0,0,0.024,0.074", 0.074}}) {
+    const TrimSurface t = parse_trim(text);
+    const CutPattern p = cut_pattern(m.x, m.x, m.triangles, {t});
+    ASSERT_EQ(p.outlines.size(), 1u) << text;
+    const double offset = rho / r0 * h * h / (8 * (rho - h));
+    int on = 0;
+    for (const OutlinePoint& q : p.outlines[0].points) {
+      if (!q.on_trim) continue;
+      ++on;
+      const double r = std::hypot(q.blank[0], q.blank[1]);
+      EXPECT_LE(r, r0 + 1e-15) << text;
+      EXPECT_GE(r, r0 - offset) << text;
+    }
+    EXPECT_GT(on, 40) << text;
+    const double quarter = M_PI * r0 * r0 / 4;
+    EXPECT_LE(p.kept_blank_area, quarter) << text;
+    EXPECT_GE(p.kept_blank_area, quarter - M_PI * r0 / 2 * offset - M_PI * h * h / 24) << text;
+    EXPECT_NEAR(p.kept_formed_area, p.kept_blank_area, 1e-18) << text;
+    EXPECT_NEAR(signed_area_z(p.outlines[0]), p.kept_blank_area, 1e-13 * quarter) << text;  // rounding
+  }
+}
+
+}  // namespace
+}  // namespace ts
