@@ -337,7 +337,7 @@ bool write_dxf(const std::filesystem::path& file, const BlankPly& ply) {
   return static_cast<bool>(f);
 }
 
-bool write_csv(const std::filesystem::path& file, const CutPattern& p) {
+bool write_csv(const std::filesystem::path& file, const CutPattern& pattern, const CutPattern& edge) {
   std::ofstream f(file);
   if (!f) return false;
   auto num = [](double v) {
@@ -345,15 +345,17 @@ bool write_csv(const std::filesystem::path& file, const CutPattern& p) {
     std::snprintf(buf, sizeof buf, "%.17g", v);
     return std::string(buf);
   };
-  f << "outline,point,on_trim,blank_x_m,blank_y_m,blank_z_m,formed_x_m,formed_y_m,formed_z_m\n";
-  for (std::size_t o = 0; o < p.outlines.size(); ++o)
-    for (std::size_t k = 0; k < p.outlines[o].points.size(); ++k) {
-      const OutlinePoint& q = p.outlines[o].points[k];
-      f << o << ',' << k << ',' << (q.on_trim ? 1 : 0);
-      for (const double v : q.blank) f << ',' << num(v);
-      for (const double v : q.formed) f << ',' << num(v);
-      f << '\n';
-    }
+  f << "kind,outline,point,on_trim,blank_x_m,blank_y_m,blank_z_m,formed_x_m,formed_y_m,formed_z_m\n";
+  for (const auto& [kind, p] : {std::pair<const char*, const CutPattern*>{"pattern", &pattern},
+                                std::pair<const char*, const CutPattern*>{"edge", &edge}})
+    for (std::size_t o = 0; o < p->outlines.size(); ++o)
+      for (std::size_t k = 0; k < p->outlines[o].points.size(); ++k) {
+        const OutlinePoint& q = p->outlines[o].points[k];
+        f << kind << ',' << o << ',' << k << ',' << (q.on_trim ? 1 : 0);
+        for (const double v : q.blank) f << ',' << num(v);
+        for (const double v : q.formed) f << ',' << num(v);
+        f << '\n';
+      }
   f.close();
   return static_cast<bool>(f);
 }
@@ -390,13 +392,13 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     ply.mirrored = d.mirrored;
     try {
       ply.pattern = cut_pattern(d.x0, d.x, d.tri, trims);
-      ply.blank = cut_pattern(d.x0, d.x0, d.tri, {});
+      ply.blank = cut_pattern(d.x0, d.x, d.tri, {});
     } catch (const std::exception& e) {
       throw std::runtime_error("ply '" + d.name + "': " + e.what());
     }
     ply.flat = flat_blank(d.x0, d.tri, ply.normal);
     ply.csv = out / (d.name + ".csv");
-    if (!write_csv(ply.csv, ply.pattern)) throw std::runtime_error("cannot write '" + ply.csv.string() + "'");
+    if (!write_csv(ply.csv, ply.pattern, ply.blank)) throw std::runtime_error("cannot write '" + ply.csv.string() + "'");
     if (ply.flat) {
       ply.dxf = out / (d.name + ".dxf");
       if (!write_dxf(ply.dxf, ply)) throw std::runtime_error("cannot write '" + ply.dxf.string() + "'");
@@ -414,6 +416,18 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
                                {"length_formed_m", o.length_formed},
                                {"trim_length_blank_m", o.trim_length_blank}});
     j["blank_outlines"] = ply.blank.outlines.size();
+    // The largest draw-in: the blank's edge's displacement in the blank's plane.
+    double draw_in = 0;
+    for (const Outline& o : ply.blank.outlines)
+      for (const OutlinePoint& q : o.points) {
+        Vec u = sub(q.formed, q.blank);
+        if (ply.flat) {
+          const double un = dot(u, ply.normal);
+          for (int c = 0; c < 3; ++c) u[c] -= un * ply.normal[c];
+        }
+        draw_in = std::max(draw_in, norm(u));
+      }
+    j["edge_displacement_max_m"] = draw_in;
     j["csv"] = ply.csv.filename().string();
     j["dxf"] = ply.flat ? nlohmann::json(ply.dxf.filename().string()) : nlohmann::json(nullptr);
     j["flat"] = ply.flat;

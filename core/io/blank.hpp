@@ -73,7 +73,7 @@ struct BlankPly {
   std::filesystem::path csv, dxf;  // dxf empty where the blank is not flat
   std::vector<std::string> mirrored;
   CutPattern pattern;
-  CutPattern blank;  // the whole blank's outlines
+  CutPattern blank;  // the whole blank's outlines (its edge), in the blank and formed
   bool flat = false;
   std::array<double, 3> normal{};  // the blank's plane's unit normal (flat)
 };
@@ -86,10 +86,12 @@ struct BlankResult {
 };
 
 // Writes, for each ply of the frame at `time` (as export_plies picks it;
-// whole: mirrored at its symmetry planes), <out>/<ply>.csv (the outlines'
-// points in the blank and formed), <out>/<ply>.dxf where the blank is flat
-// (the pattern and the blank's outline in its plane, in mm) and
-// <out>/blank.json (areas, lengths, the trims). Throws ExportInputError for
+// whole: mirrored at its symmetry planes), <out>/<ply>.csv (the points of
+// the pattern's outlines and of the blank's edge, each in the blank and
+// formed), <out>/<ply>.dxf where the blank is flat (the pattern and the
+// blank's outline in its plane, in mm) and <out>/blank.json (areas,
+// lengths, the edge's largest displacement in the blank's plane, the
+// trims). Throws ExportInputError for
 // input that cannot give a pattern, std::runtime_error where the results
 // cannot be read or the files written.
 BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> time,

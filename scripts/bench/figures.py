@@ -6,8 +6,10 @@ hemisphere_study.json (about 2.5 minutes on two cores), the demo job and
 the default hemisphere job with a conductance that follows the contact
 pressure (half a minute), and writes PNG files into docs/figures/.
 With --crystallisation, only the crystallisation studies' figures
-(about 6 minutes); with --conductivity, only the slab cooled with a
-conductivity that follows the temperature against its reference (seconds).
+(about 6 minutes); with --blank, only the cut patterns of the hemisphere
+cup cut at r = 80 mm, UD with either fibre layout and woven (two
+minutes); with --conductivity, only the slab cooled with a conductivity
+that follows the temperature against its reference (seconds).
 """
 import csv
 import json
@@ -165,9 +167,53 @@ def conductivity(tmp):
     print("rows against the reference at the shared nodes: largest difference %.3f K" % worst)
 
 
+def blank(tmp):
+    """The cut patterns of the hemisphere cup cut at the die's opening
+    (r = 80 mm), whole plies, for the UD fibres across the diagonal (the
+    default job) and along y, and for the woven plies."""
+    import math
+    fig, axes = plt.subplots(1, 3, figsize=(15, 5.4))
+    for ax, (job, title) in zip(axes, (("hemisphere_ud_2ply", "UD, fibres [1, -1, 0] (the default job)"),
+                                       ("hemisphere_ud_2ply_fibres_y", "UD, fibres along y"),
+                                       ("hemisphere_woven_2ply", "woven"))):
+        out = os.path.join(tmp, job)
+        subprocess.run([EXE, "run", os.path.join(ROOT, "share", "jobs", job + ".json"), "--out", out, "--quiet"],
+                       check=True)
+        subprocess.run([EXE, "blank", out, "--whole", "--trim", "cylinder:0,0,0,0,0,1,0.08"], check=True,
+                       stdout=subprocess.DEVNULL)
+        info = json.load(open(os.path.join(out, "blank", "blank.json")))
+        for ply, style in (("ply_top", "C3-"), ("ply_bottom", "C0--")):
+            rows = [r for r in csv.DictReader(open(os.path.join(out, "blank", ply + ".csv"))) if r["kind"] == "pattern"]
+            x = [1e3 * float(r["blank_x_m"]) for r in rows]
+            y = [1e3 * float(r["blank_y_m"]) for r in rows]
+            p = info["plies"][ply]
+            ax.plot(x + x[:1], y + y[:1], style, lw=1.2,
+                    label="%s: %.1f %% of the blank, r %.1f to %.1f mm"
+                    % (ply, 100 * p["kept_share"], min(math.hypot(a, b) for a, b in zip(x, y)),
+                       max(math.hypot(a, b) for a, b in zip(x, y))))
+        t = [2 * math.pi * k / 200 for k in range(201)]
+        ax.plot([80 * math.cos(a) for a in t], [80 * math.sin(a) for a in t], "k:", lw=0.8, label="r = 80 mm (the trim)")
+        ax.set_aspect("equal")
+        ax.set_xlim(-100, 100)
+        ax.set_ylim(-100, 112)
+        ax.grid(alpha=0.3)
+        ax.set_xlabel("x in the blank (mm)")
+        ax.set_ylabel("y in the blank (mm)")
+        ax.set_title(title, fontsize=9)
+        ax.legend(fontsize=7, loc="upper center")
+    fig.tight_layout()
+    fig.savefig(os.path.join(FIG, "hemi_blank_patterns.png"), dpi=110)
+    plt.close(fig)
+
+
 def main():
     os.makedirs(FIG, exist_ok=True)
     tmp = tempfile.mkdtemp()
+    if "--blank" in sys.argv:
+        blank(tmp)
+        shutil.rmtree(tmp)
+        print("figures written to", FIG)
+        return
     if "--conductivity" in sys.argv:
         conductivity(tmp)
         shutil.rmtree(tmp)

@@ -47,6 +47,11 @@ Writes into DIR/figures/:
                        of its area that did, and (from 0.40.0) the band of
                        its elements' thickness at constant volume
   energy.png           energy audit against time
+  blank_<part>.png     each ply's cut pattern (thermostamp blank, when
+                       DIR/blank/blank.json is there): the pattern in the
+                       blank, the blank's edge, and the edge formed (its
+                       draw-in), seen from the side the blank's normal
+                       points to
   materials.png        the specific heat and the conductivity against the
                        temperature of every material whose values
                        follow it (rows, held beyond the first and the
@@ -316,6 +321,61 @@ def stability_map(out, part, time, tri, xyz, q):
     finish_map(fig, ax, pc, "%s: long-term membrane stiffness q, t = %.3g s\n%d of %d elements below 0 (red), "
                "smallest %.3g N/m" % (part, time, unstable, q.size, finite.min() if finite.size else np.nan), "N/m")
     return save(fig, out, "stability_%s.png" % part, dpi=110, tight=False)
+
+
+def blank_axes(normal):
+    """In-plane axes of a flat blank, as thermostamp blank takes them for its
+    DXF files: x and y for a blank normal to z; otherwise the global axis
+    least aligned with the normal (turned to have its largest component
+    positive), projected into the plane, and the normal times it."""
+    n = np.asarray(normal, dtype=float)
+    if abs(n[2]) >= 1 - 1e-9:
+        return np.array([1.0, 0, 0]), np.array([0, 1.0, 0])
+    if n[np.argmax(np.abs(n))] < 0:
+        n = -n
+    a = np.zeros(3)
+    a[np.argmin(np.abs(n))] = 1
+    e1 = a - a.dot(n) * n
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(n, e1)
+
+
+def plot_blank(folder, out):
+    """Each ply's cut pattern from DIR/blank (thermostamp blank)."""
+    where = os.path.join(folder, "blank")
+    info = json.load(open(os.path.join(where, "blank.json")))
+    made = []
+    for part, p in sorted(info["plies"].items()):
+        rows = list(csv.DictReader(open(os.path.join(where, p["csv"]))))
+        e1, e2 = blank_axes(p["normal"]) if p.get("flat") else (np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
+        fig, ax = plt.subplots(figsize=(5.4, 5.0))
+        for kind, style in (("edge", "k-"), ("pattern", "r-")):
+            outlines = {}
+            for r in rows:
+                if r["kind"] == kind:
+                    outlines.setdefault(int(r["outline"]), []).append(r)
+            for k, o in sorted(outlines.items()):
+                for pos, st, label in (("blank", style, "the blank's edge" if kind == "edge" else "the pattern"),
+                                       ("formed", "k:", "the edge formed (top view)")):
+                    if kind == "pattern" and pos == "formed":
+                        continue
+                    xyz = np.array([[float(r["%s_%s_m" % (pos, c)]) for c in "xyz"] for r in o])
+                    xyz = np.vstack([xyz, xyz[:1]])
+                    u, v = 1e3 * xyz.dot(e1), 1e3 * xyz.dot(e2)
+                    if kind == "pattern":
+                        ax.fill(u, v, color="tab:red", alpha=0.15, lw=0)
+                    ax.plot(u, v, st, lw=1.2 if pos == "blank" else 0.8, label=label if k == 0 else None)
+        ax.set_aspect("equal")
+        ax.set_xlabel("mm")
+        ax.set_ylabel("mm")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+        ax.set_title("%s: cut pattern, t = %.3g s\n%.1f %% of the blank (%.4g m^2 formed), edge drawn in up to %.3g mm\n"
+                     "trim: %s" % (part, info["time_s"], 100 * p["kept_share"], p["kept_formed_area_m2"],
+                                   1e3 * p.get("edge_displacement_max_m", float("nan")), ", ".join(info["trims"])),
+                     fontsize=8)
+        made.append(save(fig, out, "blank_%s.png" % part, dpi=110))
+    return made
 
 
 def threshold_of(folder, part):
@@ -903,7 +963,7 @@ def main():
     # and the figures of the others are still made.
     for name, plot in (("study.csv", plot_study), ("probes.csv", plot_probes), ("results.h5", plot_maps),
                        ("tools.csv", plot_tools), ("plies.csv", plot_plies), ("energy.csv", plot_energy),
-                       ("summary.json", plot_materials)):
+                       ("summary.json", plot_materials), (os.path.join("blank", "blank.json"), plot_blank)):
         if not os.path.exists(os.path.join(folder, name)):
             continue
         try:

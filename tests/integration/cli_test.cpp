@@ -62,7 +62,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.40.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.41.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -2269,15 +2269,16 @@ TEST(Blank, CutPatternOfARunIsFoundOnItsMesh) {
         }
       const auto rows = csv_rows(dir / "pattern" / (ply + ".csv"));
       ASSERT_GT(rows.size(), 10u);
-      EXPECT_EQ(rows[0], (std::vector<std::string>{"outline", "point", "on_trim", "blank_x_m", "blank_y_m", "blank_z_m",
-                                                   "formed_x_m", "formed_y_m", "formed_z_m"}));
+      EXPECT_EQ(rows[0], (std::vector<std::string>{"kind", "outline", "point", "on_trim", "blank_x_m", "blank_y_m",
+                                                   "blank_z_m", "formed_x_m", "formed_y_m", "formed_z_m"}));
+      int edge_rows = 0;
       int on_trim = 0;
       double offset = 0;
       for (std::size_t i = 1; i < rows.size(); ++i) {
         std::array<double, 3> X{}, x{};
         for (int d = 0; d < 3; ++d) {
-          X[static_cast<std::size_t>(d)] = std::stod(rows[i][static_cast<std::size_t>(3 + d)]);
-          x[static_cast<std::size_t>(d)] = std::stod(rows[i][static_cast<std::size_t>(6 + d)]);
+          X[static_cast<std::size_t>(d)] = std::stod(rows[i][static_cast<std::size_t>(4 + d)]);
+          x[static_cast<std::size_t>(d)] = std::stod(rows[i][static_cast<std::size_t>(7 + d)]);
         }
         bool found = false;
         for (std::size_t k = 0; k < edge_ends[0].size() && !found; ++k) {
@@ -2297,11 +2298,18 @@ TEST(Blank, CutPatternOfARunIsFoundOnItsMesh) {
           for (int d = 0; d < 3; ++d) EXPECT_NEAR(x[d], a[d] + tt * (b[d] - a[d]), 1e-12) << ply << " row " << i;
         }
         EXPECT_TRUE(found) << ply << " row " << i << ": not on an edge of the blank";
-        if (rows[i][2] != "1") continue;
+        if (rows[i][0] == "edge") {  // the blank's edge: its nodes
+          ++edge_rows;
+          EXPECT_EQ(rows[i][3], "0");
+          continue;
+        }
+        EXPECT_EQ(rows[i][0], "pattern");
+        if (rows[i][3] != "1") continue;
         ++on_trim;
         offset = std::max(offset, std::abs(trim_level({t}, x.data())));
       }
       EXPECT_GT(on_trim, 5) << ply;
+      EXPECT_EQ(edge_rows, 4 * 6) << ply << ": the quarter's 6 x 6 cells";
       // The cylinder: the chord's offset, h^2 / (8 (r - h)), h = 0.025 / cos 45 deg.
       EXPECT_LE(offset, trim == plane ? 1e-15 : 0.035 * 0.035 / (8 * (0.1 - 0.035))) << ply;
       // The DXF, by ezdxf.
@@ -2314,8 +2322,12 @@ lines = [e for e in doc.modelspace() if e.dxftype() == "POLYLINE"]
 blank = [e for e in lines if e.dxf.layer == "BLANK"]
 pattern = [e for e in lines if e.dxf.layer == "PATTERN"]
 assert len(blank) == 1 and all(e.is_closed for e in lines), (len(blank), [e.is_closed for e in lines])
-rows = list(csv.DictReader(open(sys.argv[2])))
+rows = [r for r in csv.DictReader(open(sys.argv[2])) if r["kind"] == "pattern"]
+edge = [r for r in csv.DictReader(open(sys.argv[2])) if r["kind"] == "edge"]
 points = [p for e in pattern for p in e.points()]
+outline = list(blank[0].points())
+assert len(outline) == len(edge), (len(outline), len(edge))
+assert max(max(abs(p[0] - 1000 * float(r["blank_x_m"])), abs(p[1] - 1000 * float(r["blank_y_m"]))) for p, r in zip(outline, edge)) < 1e-6
 assert len(points) == len(rows), (len(points), len(rows))
 worst = max(max(abs(p[0] - 1000 * float(r["blank_x_m"])), abs(p[1] - 1000 * float(r["blank_y_m"]))) for p, r in zip(points, rows))
 assert worst < 1e-6, worst
