@@ -347,6 +347,9 @@ def plot_blank(folder, out):
     made = []
     for part, p in sorted(info["plies"].items()):
         rows = list(csv.DictReader(open(os.path.join(where, p["csv"]))))
+        for n, r in enumerate(rows):
+            if None in r.values() or None in r:
+                raise ValueError("%s: row %d is incomplete (cut short?)" % (p["csv"], n + 2))
         e1, e2 = blank_axes(p["normal"]) if p.get("flat") else (np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
         fig, ax = plt.subplots(figsize=(5.4, 5.0))
         for kind, style in (("edge", "k-"), ("pattern", "r-")):

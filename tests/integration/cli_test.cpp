@@ -3396,13 +3396,14 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   std::ofstream(dir / "job.json") << j.dump(2);
   const auto out = dir / "out";
   ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet").exit_code, 0);
+  ASSERT_EQ(thermostamp("blank " + q(out) + " --whole --trim sphere:0,0,0,0.1").exit_code, 0);  // blank_<ply>.png
   const auto r = thermostamp("report " + q(out));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> figures = {
       "profile_pole_top.png", "profile_pole_bottom.png", "profile_flank_top.png", "profile_flank_bottom.png",
       "probes_mean.png",      "map_ply_top.png",         "map_ply_bottom.png",    "shear_ply_top.png",
       "shear_ply_bottom.png", "fibre_strain_ply_top.png", "fibre_strain_ply_bottom.png", "tool_forces.png",
-      "plies.png",            "energy.png"};
+      "plies.png",            "energy.png",              "blank_ply_top.png",     "blank_ply_bottom.png"};
   for (const auto& f : figures) {
     std::ifstream png(out / "figures" / f, std::ios::binary);
     char magic[4] = {0, 0, 0, 0};
@@ -3413,10 +3414,14 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   // writing it: one line names it, the other figures are made again.
   std::filesystem::remove_all(out / "figures");
   std::filesystem::resize_file(out / "results.h5", 1000);
+  std::filesystem::resize_file(out / "blank" / "ply_top.csv", 150);
   const auto cut = thermostamp("report " + q(out));
   EXPECT_EQ(cut.exit_code, 3);
   EXPECT_EQ(cut.err.rfind("error: report: cannot plot " + (out / "results.h5").string() + ": ", 0), 0u) << cut.err;
-  EXPECT_EQ(std::count(cut.err.begin(), cut.err.end(), '\n'), 1) << cut.err;
+  EXPECT_NE(cut.err.find("error: report: cannot plot " + (out / "blank" / "blank.json").string() + ": "),
+            std::string::npos)
+      << cut.err;
+  EXPECT_EQ(std::count(cut.err.begin(), cut.err.end(), '\n'), 2) << cut.err;
   EXPECT_TRUE(std::filesystem::exists(out / "figures" / "energy.png"));
   EXPECT_FALSE(std::filesystem::exists(out / "figures" / "map_ply_top.png"));
   // A failed run (a balance error above a tight energy_tolerance): its
