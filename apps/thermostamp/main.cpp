@@ -88,7 +88,9 @@ nearest to T): the region of the blank (the ply as the run started) that
 the forming carries into the part, which lies inside every --trim surface,
 given on the formed part in m: plane:X,Y,Z,NX,NY,NZ (a point, and the
 normal, which points into the part), cylinder:X,Y,Z,DX,DY,DZ,R (inside; a
-point on the axis, its direction, the radius) or sphere:X,Y,Z,R (inside);
+point on the axis, its direction, the radius), sphere:X,Y,Z,R (inside) or
+polygon:FILE (inside a trim line drawn in plan view: a CSV file, a row x,y
+per vertex, the part seen along z);
 writes FOLDER/<ply>.csv (default DIR/blank: the pattern's outlines, each
 point in the blank and formed), FOLDER/<ply>.dxf where the blank is flat
 (the pattern and the blank's outline in its plane, mm) and

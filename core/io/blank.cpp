@@ -44,6 +44,92 @@ double polygon_area(const std::vector<Vec>& p) {
   return 0.5 * norm(s);
 }
 
+double cross2(const std::array<double, 2>& o, const std::array<double, 2>& a, const std::array<double, 2>& b) {
+  return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+// Whether the closed segments ab and cd share a point.
+bool segments_meet(const std::array<double, 2>& a, const std::array<double, 2>& b, const std::array<double, 2>& c,
+                   const std::array<double, 2>& d) {
+  const double d1 = cross2(c, d, a), d2 = cross2(c, d, b), d3 = cross2(a, b, c), d4 = cross2(a, b, d);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+  auto on = [](const std::array<double, 2>& p, const std::array<double, 2>& q, const std::array<double, 2>& r) {
+    return std::min(p[0], q[0]) <= r[0] && r[0] <= std::max(p[0], q[0]) && std::min(p[1], q[1]) <= r[1] &&
+           r[1] <= std::max(p[1], q[1]);
+  };
+  return (d1 == 0 && on(c, d, a)) || (d2 == 0 && on(c, d, b)) || (d3 == 0 && on(a, b, c)) || (d4 == 0 && on(a, b, d));
+}
+
+// A trim polygon from a CSV file: a row "x,y" per vertex (m); a first row
+// that is not two numbers is a header; empty rows and rows starting with
+// '#' are skipped; the first vertex repeated at the end is dropped.
+std::vector<std::array<double, 2>> read_polygon(const std::string& file, const std::string& what) {
+  std::ifstream in(file);
+  if (!in) throw ExportInputError(what + "cannot read '" + file + "'");
+  std::vector<std::array<double, 2>> p;
+  std::string line;
+  int row = 0;
+  while (std::getline(in, line)) {
+    ++row;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
+    const auto comma = line.find(',');
+    std::array<double, 2> v{};
+    bool ok = comma != std::string::npos && line.find(',', comma + 1) == std::string::npos;
+    for (int c = 0; c < 2 && ok; ++c) {
+      std::string item = c == 0 ? line.substr(0, comma) : line.substr(comma + 1);
+      const auto b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
+      item = b == std::string::npos ? std::string() : item.substr(b, e - b + 1);
+      char* end = nullptr;
+      v[static_cast<std::size_t>(c)] = std::strtod(item.c_str(), &end);
+      ok = !item.empty() && end == item.c_str() + item.size() && std::isfinite(v[static_cast<std::size_t>(c)]);
+    }
+    if (!ok) {
+      if (p.empty() && row == 1) continue;  // a header
+      throw ExportInputError(what + "'" + file + "' row " + std::to_string(row) + ": expected x,y (m), found '" +
+                             line + "'");
+    }
+    p.push_back(v);
+  }
+  if (p.size() > 1 && p.front() == p.back()) p.pop_back();
+  if (p.size() < 3)
+    throw ExportInputError(what + "'" + file + "' holds " + std::to_string(p.size()) +
+                           " vertices: a polygon needs at least 3");
+  const std::size_t n = p.size();
+  double area = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (p[k] == p[(k + 1) % n])
+      throw ExportInputError(what + "'" + file + "': vertex " + std::to_string(k + 1) + " is there twice in a row");
+    area += cross2({0, 0}, p[k], p[(k + 1) % n]) / 2;
+  }
+  if (!(std::abs(area) > 0)) throw ExportInputError(what + "'" + file + "': the polygon has no area");
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if (i == 0 && j == n - 1) continue;  // neighbours through the closing side
+      if (segments_meet(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]))
+        throw ExportInputError(what + "'" + file + "': the polygon crosses itself (sides " + std::to_string(i + 1) +
+                               " and " + std::to_string(j + 1) + ")");
+    }
+  return p;
+}
+
+// The signed distance of (x, y) to a polygon: negative inside.
+double polygon_level(const std::vector<std::array<double, 2>>& p, double x, double y) {
+  double d2 = std::numeric_limits<double>::infinity();
+  bool inside = false;
+  const std::size_t n = p.size();
+  for (std::size_t k = 0, j = n - 1; k < n; j = k++) {
+    const auto& a = p[j];
+    const auto& b = p[k];
+    if ((a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
+    const double ex = b[0] - a[0], ey = b[1] - a[1];
+    const double t = std::clamp(((x - a[0]) * ex + (y - a[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
+    const double dx = x - a[0] - t * ex, dy = y - a[1] - t * ey;
+    d2 = std::min(d2, dx * dx + dy * dy);
+  }
+  return inside ? -std::sqrt(d2) : std::sqrt(d2);
+}
+
 }  // namespace
 
 TrimSurface parse_trim(const std::string& text) {
@@ -66,8 +152,13 @@ TrimSurface parse_trim(const std::string& text) {
     t.kind = TrimSurface::Kind::Sphere;
     count = 4;
     takes = "a sphere takes 4 numbers (the centre and the radius; m)";
+  } else if (kind == "polygon" && colon != std::string::npos) {
+    t.kind = TrimSurface::Kind::Polygon;
+    t.polygon = read_polygon(text.substr(colon + 1), what);
+    return t;
   } else {
-    throw ExportInputError(what + "expected plane:X,Y,Z,NX,NY,NZ, cylinder:X,Y,Z,DX,DY,DZ,R or sphere:X,Y,Z,R (m)");
+    throw ExportInputError(what + "expected plane:X,Y,Z,NX,NY,NZ, cylinder:X,Y,Z,DX,DY,DZ,R, sphere:X,Y,Z,R (m) or "
+                                  "polygon:FILE");
   }
   std::vector<double> v;
   if (colon != std::string::npos) {
@@ -119,6 +210,9 @@ double trim_level(const std::vector<TrimSurface>& trims, const double* x) {
       case TrimSurface::Kind::Sphere:
         f = norm(r) - t.radius;
         break;
+      case TrimSurface::Kind::Polygon:
+        f = polygon_level(t.polygon, x[0], x[1]);
+        break;
     }
     level = std::max(level, f);
   }
@@ -133,8 +227,11 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
     if (!std::isfinite(x0[k]) || !std::isfinite(x[k]))
       throw std::runtime_error("node " + std::to_string(k / 3) + " has a position that is not finite");
   std::vector<double> level(n, -1.0);
-  if (!trims.empty())
-    for (std::size_t i = 0; i < n; ++i) level[i] = trim_level(trims, &x[3 * i]);
+  if (!trims.empty()) {
+    const long long nodes = static_cast<long long>(n);
+#pragma omp parallel for schedule(static) if (nodes > 4096)
+    for (long long i = 0; i < nodes; ++i) level[static_cast<std::size_t>(i)] = trim_level(trims, &x[3 * i]);
+  }
   // The edges, each once (smaller node first), and how many triangles have it.
   std::unordered_map<std::uint64_t, int> edge_id;
   std::vector<std::array<int, 2>> edges;

@@ -2382,6 +2382,9 @@ print("ok")
   EXPECT_EQ(refused(q(dir / "run") + " --trim cylinder:0,0,0,0,0,1"),
             "error: blank: --trim 'cylinder:0,0,0,0,0,1': a cylinder takes 7 numbers (a point on its axis, the axis's "
             "direction and the radius; m), found 6\n");
+  EXPECT_EQ(refused(q(dir / "run") + " --trim polygon:" + q(dir / "nowhere.csv")),
+            "error: blank: --trim 'polygon:" + (dir / "nowhere.csv").string() + "': cannot read '" +
+                (dir / "nowhere.csv").string() + "'\n");
   EXPECT_EQ(refused(q(dir / "job.json") + " --trim " + plane), "error: blank: '" + (dir / "job.json").string() +
                                                                    "' is not a folder\n");
   EXPECT_EQ(refused(q(dir / "mesh") + " --trim " + plane),

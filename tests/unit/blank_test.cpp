@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -78,8 +81,8 @@ TEST(Blank, TrimSurfacesAreReadOrRefusedWithWhatIsWrong) {
     }
     return std::string("accepted");
   };
-  EXPECT_EQ(refused("cone:0,0,0,1"),
-            "--trim 'cone:0,0,0,1': expected plane:X,Y,Z,NX,NY,NZ, cylinder:X,Y,Z,DX,DY,DZ,R or sphere:X,Y,Z,R (m)");
+  EXPECT_EQ(refused("cone:0,0,0,1"), "--trim 'cone:0,0,0,1': expected plane:X,Y,Z,NX,NY,NZ, cylinder:X,Y,Z,DX,DY,DZ,R, "
+                                    "sphere:X,Y,Z,R (m) or polygon:FILE");
   EXPECT_EQ(refused("cylinder:0,0,0,0,0,1"),
             "--trim 'cylinder:0,0,0,0,0,1': a cylinder takes 7 numbers (a point on its axis, the axis's direction and "
             "the radius; m), found 6");
@@ -286,6 +289,103 @@ TEST(Blank, CylinderAndSphereTrimAFlatPlateAtTheirCircle) {
     EXPECT_NEAR(p.kept_formed_area, p.kept_blank_area, 1e-18) << text;
     EXPECT_NEAR(signed_area_z(p.outlines[0]), p.kept_blank_area, 1e-13 * quarter) << text;  // rounding
   }
+}
+
+
+// A trim line drawn in plan view (polygon:FILE): an L-shaped outline, its
+// vertices off the mesh's lines, on a flat plate of 100 mm (40 x 40
+// crossed cells, edges up to h = 2.5 mm) turned by 30 degrees about z and
+// moved: the pattern is the outline taken back by that motion. Along its
+// sides the level is the distance to a line, linear: the trim points
+// farther than 2 h from a vertex lie on the outline to round-off; nearer
+// to a vertex, within h of it. The pattern's area is the outline's within
+// a triangle of h^2 at each of its 6 corners. Files that are not a
+// polygon are refused with what is wrong.
+TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
+  const auto dir = std::filesystem::temp_directory_path() / "thermostamp_blank_polygon";
+  std::filesystem::create_directories(dir);
+  const std::vector<std::array<double, 2>> L = {{0.0113, 0.0127}, {0.0871, 0.0127}, {0.0871, 0.0413},
+                                               {0.0437, 0.0413}, {0.0437, 0.0889}, {0.0113, 0.0889}};
+  const double exact = 0.0758 * 0.0286 + 0.0324 * 0.0476;
+  const ShellMesh m = rectangle_mesh({0, 0, 0}, {0.1, 0.1}, {40, 40}, true);
+  const double h = max_edge_length(m);
+  const double a = M_PI / 6, c = std::cos(a), s = std::sin(a), bx = 0.3, by = -0.2;
+  std::vector<double> x = m.x;
+  for (std::size_t i = 0; i < x.size(); i += 3) {
+    x[i] = c * m.x[i] - s * m.x[i + 1] + bx;
+    x[i + 1] = s * m.x[i] + c * m.x[i + 1] + by;
+    x[i + 2] = m.x[i + 2] + 0.05;
+  }
+  {
+    std::ofstream f(dir / "outline.csv");
+    f.precision(17);
+    f << "x_m,y_m\n";
+    for (const auto& v : L) f << c * v[0] - s * v[1] + bx << ", " << s * v[0] + c * v[1] + by << "\n";
+    f << c * L[0][0] - s * L[0][1] + bx << "," << s * L[0][0] + c * L[0][1] + by << "\n";  // closed: dropped
+  }
+  const TrimSurface t = parse_trim("polygon:" + (dir / "outline.csv").string());
+  ASSERT_EQ(t.polygon.size(), 6u);
+  const CutPattern p = cut_pattern(m.x, x, m.triangles, {t});
+  ASSERT_EQ(p.outlines.size(), 1u);
+  auto distance = [&](const V3& q) {  // to the outline's sides, and to its nearest vertex
+    double side = 1e300, vertex = 1e300;
+    for (std::size_t k = 0; k < L.size(); ++k) {
+      const auto& u = L[k];
+      const auto& w = L[(k + 1) % L.size()];
+      const double ex = w[0] - u[0], ey = w[1] - u[1];
+      const double tt = std::clamp(((q[0] - u[0]) * ex + (q[1] - u[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
+      side = std::min(side, std::hypot(q[0] - u[0] - tt * ex, q[1] - u[1] - tt * ey));
+      vertex = std::min(vertex, std::hypot(q[0] - u[0], q[1] - u[1]));
+    }
+    return std::pair<double, double>{side, vertex};
+  };
+  int far = 0;
+  for (const OutlinePoint& q : p.outlines[0].points) {
+    ASSERT_TRUE(q.on_trim);
+    const auto [side, vertex] = distance(q.blank);
+    if (vertex > 2 * h) {
+      ++far;
+      EXPECT_LT(side, 1e-15) << q.blank[0] << " " << q.blank[1];
+    } else {
+      EXPECT_LT(side, h) << q.blank[0] << " " << q.blank[1];
+    }
+  }
+  EXPECT_GT(far, 50);
+  EXPECT_NEAR(p.kept_blank_area, exact, 6 * h * h);
+  EXPECT_NEAR(p.kept_formed_area, p.kept_blank_area, 1e-15);
+  EXPECT_NEAR(signed_area_z(p.outlines[0]), p.kept_blank_area, 1e-13 * exact);
+  auto refused = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    try {
+      parse_trim("polygon:" + (dir / name).string());
+    } catch (const ExportInputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string at = "--trim 'polygon:" + dir.string() + "/";
+  EXPECT_EQ(refused("two.csv", "0,0\n1,0\n"), at + "two.csv': '" + dir.string() + "/two.csv' holds 2 vertices: a "
+                                                                                   "polygon needs at least 3");
+  EXPECT_EQ(refused("bad.csv", "x,y\n0,0\n1,0\n1;1\n"),
+            at + "bad.csv': '" + dir.string() + "/bad.csv' row 4: expected x,y (m), found '1;1'");
+  EXPECT_EQ(refused("three.csv", "0,0,0\n1,0,0\n1,1,0\n"),
+            at + "three.csv': '" + dir.string() + "/three.csv' row 2: expected x,y (m), found '1,0,0'");
+  EXPECT_EQ(refused("twice.csv", "0,0\n1,0\n1,0\n0,1\n"),
+            at + "twice.csv': '" + dir.string() + "/twice.csv': vertex 2 is there twice in a row");
+  EXPECT_EQ(refused("line.csv", "0,0\n1,1\n2,2\n"),
+            at + "line.csv': '" + dir.string() + "/line.csv': the polygon has no area");
+  EXPECT_EQ(refused("bowtie.csv", "0,0\n2,2\n2,0\n0,1\n"),
+            at + "bowtie.csv': '" + dir.string() + "/bowtie.csv': the polygon crosses itself (sides 1 and 3)");
+  EXPECT_EQ(refused("touch.csv", "# a side touching a vertex\n0,0\n2,0\n2,2\n1,0\n0,2\n"),
+            at + "touch.csv': '" + dir.string() + "/touch.csv': the polygon crosses itself (sides 1 and 3)");
+  std::filesystem::remove(dir / "none.csv");
+  try {
+    parse_trim("polygon:" + (dir / "none.csv").string());
+    ADD_FAILURE() << "a missing file accepted";
+  } catch (const ExportInputError& e) {
+    EXPECT_EQ(std::string(e.what()), at + "none.csv': cannot read '" + dir.string() + "/none.csv'");
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
