@@ -319,12 +319,12 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
             break;
           }
       if (follow < 0)
-        throw std::runtime_error("the outline does not close at " +
-                                 (next < nn ? "node " + std::to_string(next)
-                                            : "the edge of nodes " +
-                                                  std::to_string(edges[static_cast<std::size_t>(next - nn)][0]) +
-                                                  " and " + std::to_string(edges[static_cast<std::size_t>(next - nn)][1])) +
-                                 " (triangles not alike oriented?)");
+        throw std::runtime_error(
+            "the outline does not close at " +
+            (next < nn ? "node " + std::to_string(next)
+                       : "the edge of nodes " + std::to_string(edges[static_cast<std::size_t>(next - nn)][0]) +
+                             " and " + std::to_string(edges[static_cast<std::size_t>(next - nn)][1])) +
+            " (triangles not alike oriented?)");
       s = follow;
     }
     Outline o;
@@ -495,7 +495,8 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     }
     ply.flat = flat_blank(d.x0, d.tri, ply.normal);
     ply.csv = out / (d.name + ".csv");
-    if (!write_csv(ply.csv, ply.pattern, ply.blank)) throw std::runtime_error("cannot write '" + ply.csv.string() + "'");
+    if (!write_csv(ply.csv, ply.pattern, ply.blank))
+      throw std::runtime_error("cannot write '" + ply.csv.string() + "'");
     if (ply.flat) {
       ply.dxf = out / (d.name + ".dxf");
       if (!write_dxf(ply.dxf, ply)) throw std::runtime_error("cannot write '" + ply.dxf.string() + "'");

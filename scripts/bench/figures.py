@@ -192,7 +192,8 @@ def blank(tmp):
                     % (ply, 100 * p["kept_share"], min(math.hypot(a, b) for a, b in zip(x, y)),
                        max(math.hypot(a, b) for a, b in zip(x, y))))
         t = [2 * math.pi * k / 200 for k in range(201)]
-        ax.plot([80 * math.cos(a) for a in t], [80 * math.sin(a) for a in t], "k:", lw=0.8, label="r = 80 mm (the trim)")
+        ax.plot([80 * math.cos(a) for a in t], [80 * math.sin(a) for a in t], "k:", lw=0.8,
+                label="r = 80 mm (the trim)")
         ax.set_aspect("equal")
         ax.set_xlim(-100, 100)
         ax.set_ylim(-100, 112)

@@ -2327,9 +2327,11 @@ edge = [r for r in csv.DictReader(open(sys.argv[2])) if r["kind"] == "edge"]
 points = [p for e in pattern for p in e.points()]
 outline = list(blank[0].points())
 assert len(outline) == len(edge), (len(outline), len(edge))
-assert max(max(abs(p[0] - 1000 * float(r["blank_x_m"])), abs(p[1] - 1000 * float(r["blank_y_m"]))) for p, r in zip(outline, edge)) < 1e-6
+def apart(p, r):
+    return max(abs(p[0] - 1000 * float(r["blank_x_m"])), abs(p[1] - 1000 * float(r["blank_y_m"])))
+assert max(apart(p, r) for p, r in zip(outline, edge)) < 1e-6
 assert len(points) == len(rows), (len(points), len(rows))
-worst = max(max(abs(p[0] - 1000 * float(r["blank_x_m"])), abs(p[1] - 1000 * float(r["blank_y_m"]))) for p, r in zip(points, rows))
+worst = max(apart(p, r) for p, r in zip(points, rows))
 assert worst < 1e-6, worst
 xs = [p[0] for p in blank[0].points()]
 ys = [p[1] for p in blank[0].points()]
@@ -2344,7 +2346,8 @@ print("ok")
     }
   }
   // Whole: four times the quarter's pattern, one outline, all trim line.
-  ASSERT_EQ(thermostamp("blank " + q(dir / "run") + " --trim " + cylinder + " --out " + q(dir / "quarter")).exit_code, 0);
+  ASSERT_EQ(thermostamp("blank " + q(dir / "run") + " --trim " + cylinder + " --out " + q(dir / "quarter")).exit_code,
+            0);
   const auto w = thermostamp("blank " + q(dir / "run") + " --whole --trim " + cylinder + " --out " + q(dir / "whole"));
   ASSERT_EQ(w.exit_code, 0) << w.err;
   EXPECT_NE(w.out.find("ply 'ply_top' at t = 0.5 s (frames/000002 of results.h5, 3 frames), mirrored at x = 0, y = 0: "
