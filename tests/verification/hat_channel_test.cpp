@@ -85,6 +85,12 @@ std::map<std::pair<std::string, std::string>, double> probe_values(const std::fi
 // ply's unstable share at the end above 0.4 (measured 0.54: the channel and
 // the flange next to the die's radius), the upper ply's, whose fibres take
 // the excess length by drawing in, under 0.05 (measured 0.018).
+//
+// Cut pattern (thermostamp blank): the part trimmed at x = 45 mm on its
+// flange; the upper ply's trim line lies in the blank at 45 mm plus its
+// draw-in, within the same 0.08 mm below the excess length (measured
+// 12.168-12.172 mm along the whole line), the lower ply's at 45 mm plus
+// 4.7-4.8 mm.
 TEST(HatChannel, FibresAcrossTheChannelDrawInByTheSectionsExcessLength) {
   const auto example = source_dir() / "examples" / "hat_channel";
   {
@@ -151,6 +157,36 @@ TEST(HatChannel, FibresAcrossTheChannelDrawInByTheSectionsExcessLength) {
     EXPECT_LT(worst, 1e-4) << ply;
   }
   H5Fclose(file);
+
+  // The cut pattern of the part trimmed on its flange at x = 45 mm: the
+  // upper ply's fibres carry the section's path into the part, so its
+  // trim line lies in the blank at 45 mm plus the excess length, less the
+  // same chords, stretch and facets as its draw-in (within 0.08 mm); the
+  // lower ply's lies closer (it stretches across the channel instead).
+  const auto b = thermostamp("blank " + q(out) + " --trim plane:0.045,0,0,-1,0,0");
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  for (const std::string ply : {"ply_90", "ply_0"}) {
+    const auto rows = csv_rows(out / "blank" / (ply + ".csv"));
+    int on_trim = 0;
+    double lo = 1e9, hi = -1e9;
+    for (std::size_t k = 1; k < rows.size(); ++k) {
+      if (rows[k][0] != "pattern" || rows[k][3] != "1") continue;
+      ++on_trim;
+      EXPECT_NEAR(std::stod(rows[k][7]), 0.045, 1e-12) << ply << ": on the trim plane";
+      const double beyond = 1e3 * std::stod(rows[k][4]) - 45.0;
+      lo = std::min(lo, beyond);
+      hi = std::max(hi, beyond);
+    }
+    EXPECT_GT(on_trim, 20) << ply;
+    std::printf("%s: the trim line at x = 45 mm lies at 45 + %.4f to %.4f mm in the blank (excess length %.4f mm)\n",
+                ply.c_str(), lo, hi, excess_length());
+    if (ply == "ply_90") {
+      EXPECT_LT(hi, excess_length());
+      EXPECT_GT(lo, excess_length() - 0.08);
+    } else {
+      EXPECT_LT(hi, excess_length() - 5.0);
+    }
+  }
 }
 
 // The bending evaluated at most every 8th step (bending_subcycles 8, as
