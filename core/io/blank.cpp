@@ -469,9 +469,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
         throw ExportInputError("ply '" + d.name + "' has a position that is not finite at t = " + g(frame.time) +
                                " s (node " + std::to_string(d.node_tag[k / 3]) +
                                "): take an earlier frame with --time");
-  std::error_code ec;
-  std::filesystem::create_directories(out, ec);
-  if (ec) throw std::runtime_error("cannot create '" + out.string() + "': " + ec.message());
+  create_output_folder(out);
   BlankResult res;
   res.time = frame.time;
   res.frame = frame.frame;

@@ -402,12 +402,16 @@ FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<doub
   return res;
 }
 
-ExportResult export_plies(const std::filesystem::path& dir, std::optional<double> time,
-                          const std::filesystem::path& out, bool whole, ExportFormat format) {
-  FramePlies frame = read_frame_plies(dir, time, whole, true);
+void create_output_folder(const std::filesystem::path& out) {
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) throw std::runtime_error("cannot create '" + out.string() + "': " + ec.message());
+}
+
+ExportResult export_plies(const std::filesystem::path& dir, std::optional<double> time,
+                          const std::filesystem::path& out, bool whole, ExportFormat format) {
+  FramePlies frame = read_frame_plies(dir, time, whole, true);
+  create_output_folder(out);
   ExportResult res;
   res.time = frame.time;
   res.frame = frame.frame;

@@ -93,6 +93,10 @@ struct FramePlies {
 // frames'; std::runtime_error where the file cannot be read.
 FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<double> time, bool whole, bool fields);
 
+// Creates the folder a command writes into (and its parents); throws
+// std::runtime_error naming it and the system's reason where it cannot.
+void create_output_folder(const std::filesystem::path& out);
+
 struct ExportResult {
   double time = 0;  // s, of the frame exported
   int frame = 0;    // its index (0 the first)
