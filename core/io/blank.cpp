@@ -28,6 +28,26 @@ Vec cross(const Vec& a, const Vec& b) {
 double norm(const Vec& a) { return std::sqrt(dot(a, a)); }
 Vec at(const std::vector<double>& x, std::size_t i) { return {x[3 * i], x[3 * i + 1], x[3 * i + 2]}; }
 
+// Text as a message quotes it: control characters escaped (\r, \n, \t,
+// \xNN), so that a message stays on one line.
+std::string shown(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '\r') out += "\\r";
+    else if (c == '\n') out += "\\n";
+    else if (c == '\t') out += "\\t";
+    else if (u < 0x20 || u == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", u);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
 std::string g(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.6g", v);
@@ -65,7 +85,7 @@ bool segments_meet(const std::array<double, 2>& a, const std::array<double, 2>& 
 // '#' are skipped; the first vertex repeated at the end is dropped.
 std::vector<std::array<double, 2>> read_polygon(const std::string& file, const std::string& what) {
   std::ifstream in(file);
-  if (!in) throw ExportInputError(what + "cannot read '" + file + "'");
+  if (!in) throw ExportInputError(what + "cannot read '" + shown(file) + "'");
   std::vector<std::array<double, 2>> p;
   std::string line;
   int row = 0;
@@ -86,29 +106,30 @@ std::vector<std::array<double, 2>> read_polygon(const std::string& file, const s
     }
     if (!ok) {
       if (p.empty() && row == 1) continue;  // a header
-      throw ExportInputError(what + "'" + file + "' row " + std::to_string(row) + ": expected x,y (m), found '" +
-                             line + "'");
+      throw ExportInputError(what + "'" + shown(file) + "' row " + std::to_string(row) +
+                             ": expected x,y (m), found '" + shown(line) + "'");
     }
     p.push_back(v);
   }
   if (p.size() > 1 && p.front() == p.back()) p.pop_back();
   if (p.size() < 3)
-    throw ExportInputError(what + "'" + file + "' holds " + std::to_string(p.size()) +
+    throw ExportInputError(what + "'" + shown(file) + "' holds " + std::to_string(p.size()) +
                            " vertices: a polygon needs at least 3");
   const std::size_t n = p.size();
   double area = 0;
   for (std::size_t k = 0; k < n; ++k) {
     if (p[k] == p[(k + 1) % n])
-      throw ExportInputError(what + "'" + file + "': vertex " + std::to_string(k + 1) + " is there twice in a row");
+      throw ExportInputError(what + "'" + shown(file) + "': vertex " + std::to_string(k + 1) +
+                             " is there twice in a row");
     area += cross2({0, 0}, p[k], p[(k + 1) % n]) / 2;
   }
-  if (!(std::abs(area) > 0)) throw ExportInputError(what + "'" + file + "': the polygon has no area");
+  if (!(std::abs(area) > 0)) throw ExportInputError(what + "'" + shown(file) + "': the polygon has no area");
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = i + 2; j < n; ++j) {
       if (i == 0 && j == n - 1) continue;  // neighbours through the closing side
       if (segments_meet(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]))
-        throw ExportInputError(what + "'" + file + "': the polygon crosses itself (sides " + std::to_string(i + 1) +
-                               " and " + std::to_string(j + 1) + ")");
+        throw ExportInputError(what + "'" + shown(file) + "': the polygon crosses itself (sides " +
+                               std::to_string(i + 1) + " and " + std::to_string(j + 1) + ")");
     }
   return p;
 }
@@ -133,7 +154,7 @@ double polygon_level(const std::vector<std::array<double, 2>>& p, double x, doub
 }  // namespace
 
 TrimSurface parse_trim(const std::string& text) {
-  const std::string what = "--trim '" + text + "': ";
+  const std::string what = "--trim '" + shown(text) + "': ";
   const auto colon = text.find(':');
   const std::string kind = text.substr(0, colon);
   TrimSurface t;
@@ -169,7 +190,7 @@ TrimSurface parse_trim(const std::string& text) {
       char* end = nullptr;
       const double d = std::strtod(item.c_str(), &end);
       if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(d))
-        throw ExportInputError(what + "'" + item + "' is not a number");
+        throw ExportInputError(what + "'" + shown(item) + "' is not a number");
       v.push_back(d);
       if (comma == std::string::npos) break;
       from = comma + 1;

@@ -94,6 +94,8 @@ TEST(Blank, TrimSurfacesAreReadOrRefusedWithWhatIsWrong) {
   EXPECT_EQ(refused("cylinder:0,0,0,0,0,0,1"), "--trim 'cylinder:0,0,0,0,0,0,1': the axis's direction is zero");
   EXPECT_EQ(refused("sphere:0,0,0,-1"), "--trim 'sphere:0,0,0,-1': the radius must be above 0, found -1");
   EXPECT_EQ(refused("sphere:0,0,0,nan"), "--trim 'sphere:0,0,0,nan': 'nan' is not a number");
+  // Control characters escaped: the message stays on one line.
+  EXPECT_EQ(refused("plane:0,0,\r1,0,0,1\n"), "--trim 'plane:0,0,\\r1,0,0,1\\n': '1\\n' is not a number");
 }
 
 // An affine map x = A X + b of an irregular mesh of a rectangle carries
@@ -369,8 +371,8 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
   const std::string at = "--trim 'polygon:" + dir.string() + "/";
   EXPECT_EQ(refused("two.csv", "0,0\n1,0\n"), at + "two.csv': '" + dir.string() + "/two.csv' holds 2 vertices: a "
                                                                                    "polygon needs at least 3");
-  EXPECT_EQ(refused("bad.csv", "x,y\n0,0\n1,0\n1;1\n"),
-            at + "bad.csv': '" + dir.string() + "/bad.csv' row 4: expected x,y (m), found '1;1'");
+  EXPECT_EQ(refused("bad.csv", "x,y\n0,0\n1,0\n1;1\x01\n"),
+            at + "bad.csv': '" + dir.string() + "/bad.csv' row 4: expected x,y (m), found '1;1\\x01'");
   EXPECT_EQ(refused("three.csv", "0,0,0\n1,0,0\n1,1,0\n"),
             at + "three.csv': '" + dir.string() + "/three.csv' row 2: expected x,y (m), found '1,0,0'");
   EXPECT_EQ(refused("twice.csv", "0,0\n1,0\n1,0\n0,1\n"),
