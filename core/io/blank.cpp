@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cctype>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <stdexcept>
@@ -80,13 +82,15 @@ bool segments_meet(const std::array<double, 2>& a, const std::array<double, 2>& 
   return (d1 == 0 && on(c, d, a)) || (d2 == 0 && on(c, d, b)) || (d3 == 0 && on(a, b, c)) || (d4 == 0 && on(a, b, d));
 }
 
-// A trim polygon from a CSV file: a row "x,y" per vertex (m); a first row
-// that is not two numbers is a header; empty rows and rows starting with
-// '#' are skipped; the first vertex repeated at the end is dropped.
-std::vector<std::array<double, 2>> read_polygon(const std::string& file, const std::string& what) {
+using Ring = std::vector<std::array<double, 2>>;
+
+// A polygon's vertices from a CSV file: a row "x,y" per vertex; a first
+// row that is not two numbers is a header; empty rows and rows starting
+// with '#' are skipped.
+Ring read_csv_ring(const std::string& file, const std::string& what) {
   std::ifstream in(file);
   if (!in) throw ExportInputError(what + "cannot read '" + shown(file) + "'");
-  std::vector<std::array<double, 2>> p;
+  Ring p;
   std::string line;
   int row = 0;
   while (std::getline(in, line)) {
@@ -111,42 +115,216 @@ std::vector<std::array<double, 2>> read_polygon(const std::string& file, const s
     }
     p.push_back(v);
   }
-  if (p.size() > 1 && p.front() == p.back()) p.pop_back();
-  if (p.size() < 3)
-    throw ExportInputError(what + "'" + shown(file) + "' holds " + std::to_string(p.size()) +
-                           " vertices: a polygon needs at least 3");
-  const std::size_t n = p.size();
-  double area = 0;
-  for (std::size_t k = 0; k < n; ++k) {
-    if (p[k] == p[(k + 1) % n])
-      throw ExportInputError(what + "'" + shown(file) + "': vertex " + std::to_string(k + 1) +
-                             " is there twice in a row");
-    area += cross2({0, 0}, p[k], p[(k + 1) % n]) / 2;
-  }
-  if (!(std::abs(area) > 0)) throw ExportInputError(what + "'" + shown(file) + "': the polygon has no area");
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = i + 2; j < n; ++j) {
-      if (i == 0 && j == n - 1) continue;  // neighbours through the closing side
-      if (segments_meet(p[i], p[(i + 1) % n], p[j], p[(j + 1) % n]))
-        throw ExportInputError(what + "'" + shown(file) + "': the polygon crosses itself (sides " +
-                               std::to_string(i + 1) + " and " + std::to_string(j + 1) + ")");
-    }
   return p;
 }
 
-// The signed distance of (x, y) to a polygon: negative inside.
-double polygon_level(const std::vector<std::array<double, 2>>& p, double x, double y) {
+// The closed polylines of a DXF file's ENTITIES section (LWPOLYLINE, and
+// POLYLINE with its VERTEX entities), in x and y, their arcs (bulges)
+// drawn as sides of at most 2 degrees of arc, x mirrored for a polyline
+// whose extrusion points along -z; open polylines and other entities are
+// left out. `scale` (m per drawing unit): the given one, or
+// from the header's $INSUNITS.
+std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& what, double& scale, bool scale_given) {
+  std::ifstream in(file);
+  if (!in) throw ExportInputError(what + "cannot read '" + shown(file) + "'");
+  struct Vertex {
+    double x = 0, y = 0, bulge = 0;
+  };
+  std::vector<Ring> rings;
+  std::vector<Vertex> vs;
+  bool closed = false, in_polyline = false;
+  double extrusion_z = 1;  // a polyline drawn with its extrusion along -z has its x mirrored (the OCS)
+  int open = 0, units = -1;
+  std::string section, entity, code, value, variable;
+  auto finish = [&]() {  // the polyline read so far, as a ring
+    if (vs.empty()) return;
+    if (!closed) {
+      ++open;
+    } else {
+      Ring r;
+      for (std::size_t k = 0; k < vs.size(); ++k) {
+        const Vertex& a = vs[k];
+        const Vertex& b = vs[(k + 1) % vs.size()];
+        r.push_back({a.x, a.y});
+        if (a.bulge == 0 || !std::isfinite(a.bulge)) continue;
+        const double theta = 4 * std::atan(a.bulge), cx = b.x - a.x, cy = b.y - a.y, c = std::hypot(cx, cy);
+        if (!(c > 0)) continue;
+        const double h = c / 2 / std::tan(theta / 2);  // from the chord's middle to the centre, on its left
+        const double ox = (a.x + b.x) / 2 - cy / c * h, oy = (a.y + b.y) / 2 + cx / c * h;
+        const double radius = std::hypot(a.x - ox, a.y - oy), a0 = std::atan2(a.y - oy, a.x - ox);
+        const int n = std::max(1, static_cast<int>(std::ceil(std::abs(theta) / (2 * M_PI / 180))));
+        for (int i = 1; i < n; ++i)
+          r.push_back({ox + radius * std::cos(a0 + theta * i / n), oy + radius * std::sin(a0 + theta * i / n)});
+      }
+      if (extrusion_z < 0)
+        for (auto& v : r) v[0] = -v[0];
+      rings.push_back(std::move(r));
+    }
+    vs.clear();
+    closed = false;
+    extrusion_z = 1;
+  };
+  int line = 0;
+  auto trimmed = [](std::string t) {
+    if (!t.empty() && t.back() == '\r') t.pop_back();
+    const auto b = t.find_first_not_of(" \t"), e = t.find_last_not_of(" \t");
+    return b == std::string::npos ? std::string() : t.substr(b, e - b + 1);
+  };
+  auto number = [&](const std::string& t) {
+    char* end = nullptr;
+    const double v = std::strtod(t.c_str(), &end);
+    if (t.empty() || end != t.c_str() + t.size() || !std::isfinite(v))
+      throw ExportInputError(what + "'" + shown(file) + "' line " + std::to_string(line) +
+                             ": expected a number, found '" + shown(t) + "'");
+    return v;
+  };
+  while (std::getline(in, code) && std::getline(in, value)) {
+    line += 2;
+    code = trimmed(code);
+    value = trimmed(value);
+    if (code == "0") {
+      if (entity == "LWPOLYLINE" || (entity == "SEQEND" && in_polyline) || value == "ENDSEC") finish();
+      if (entity == "SEQEND") in_polyline = false;
+      if (value == "SECTION") section.clear();
+      entity = value;
+      if (entity == "POLYLINE" && section == "ENTITIES") {
+        finish();
+        in_polyline = true;
+      }
+      if (entity == "VERTEX" && in_polyline) vs.push_back({});
+      if (entity == "LWPOLYLINE" && section == "ENTITIES") {
+        vs.clear();
+        closed = false;
+      }
+      continue;
+    }
+    if (code == "2" && entity == "SECTION" && section.empty()) {  // the pair after "0 SECTION" names it
+      section = value;
+      continue;
+    }
+    if (section == "HEADER") {
+      if (code == "9") variable = value;
+      else if (code == "70" && variable == "$INSUNITS") units = static_cast<int>(number(value));
+      continue;
+    }
+    if (section != "ENTITIES") continue;
+    const bool lw = entity == "LWPOLYLINE", vertex = entity == "VERTEX" && in_polyline;
+    if ((lw || (entity == "POLYLINE" && in_polyline)) && code == "70")
+      closed = (static_cast<int>(number(value)) & 1) != 0;
+    if ((lw || (entity == "POLYLINE" && in_polyline)) && code == "230") extrusion_z = number(value);
+    if (lw && code == "10") vs.push_back({number(value), 0, 0});
+    if ((lw && !vs.empty()) || (vertex && !vs.empty())) {
+      if (vertex && code == "10") vs.back().x = number(value);
+      if (code == "20") vs.back().y = number(value);
+      if (code == "42") vs.back().bulge = number(value);
+    }
+  }
+  finish();
+  if (!scale_given) {
+    switch (units) {
+      case 1: scale = 0.0254; break;
+      case 2: scale = 0.3048; break;
+      case 4: scale = 0.001; break;
+      case 5: scale = 0.01; break;
+      case 6: scale = 1.0; break;
+      default:
+        throw ExportInputError(what + "'" + shown(file) + "' does not give its units (" +
+                               (units < 0 ? std::string("no $INSUNITS") : "$INSUNITS " + std::to_string(units)) +
+                               "): give them after a comma, polygon:" + shown(file) + ",0.001 for millimetres");
+    }
+  }
+  if (rings.empty())
+    throw ExportInputError(what + "'" + shown(file) + "' holds no closed polyline" +
+                           (open ? " (its " + std::to_string(open) + " open one" + (open > 1 ? "s are" : " is") +
+                                       " not a trim line: close it in CAD)"
+                                 : std::string(" (lines and arcs are not joined: join them into a polyline in CAD)")));
+  return rings;
+}
+
+// The rings of a polygon trim: "FILE" or "FILE,SCALE" (m per unit of the
+// file; a CSV file's default 1, a DXF file's from its $INSUNITS), each
+// ring's first vertex repeated at its end dropped, and checked: at least
+// 3 vertices, none twice in a row, an area, no side crossing or touching
+// another (of its ring or another ring).
+std::vector<Ring> read_polygon(const std::string& spec, const std::string& what) {
+  std::string file = spec;
+  double scale = 1.0;
+  bool scale_given = false;
+  if (const auto comma = spec.rfind(','); comma != std::string::npos) {
+    const std::string tail = spec.substr(comma + 1);
+    char* end = nullptr;
+    const double v = std::strtod(tail.c_str(), &end);
+    if (!tail.empty() && end == tail.c_str() + tail.size()) {
+      if (!(std::isfinite(v) && v > 0))
+        throw ExportInputError(what + "the scale must be a number above 0, found '" + shown(tail) + "'");
+      file = spec.substr(0, comma);
+      scale = v;
+      scale_given = true;
+    }
+  }
+  std::string ext = std::filesystem::path(file).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const bool dxf = ext == ".dxf";
+  std::vector<Ring> rings =
+      dxf ? read_dxf_rings(file, what, scale, scale_given) : std::vector<Ring>{read_csv_ring(file, what)};
+  const std::string at = what + "'" + shown(file) + "'";
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    Ring& p = rings[r];
+    for (auto& v : p) {
+      v[0] *= scale;
+      v[1] *= scale;
+    }
+    const std::string which = dxf ? ": polyline " + std::to_string(r + 1) : std::string();
+    if (p.size() > 1 && p.front() == p.back()) p.pop_back();
+    if (p.size() < 3)
+      throw ExportInputError(at + which + (dxf ? " has " : " holds ") + std::to_string(p.size()) +
+                             " vertices: a polygon needs at least 3");
+    const std::size_t n = p.size();
+    double area = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (p[k] == p[(k + 1) % n])
+        throw ExportInputError(at + (dxf ? which : std::string(":")) + " vertex " + std::to_string(k + 1) +
+                               " is there twice in a row");
+      area += cross2({0, 0}, p[k], p[(k + 1) % n]) / 2;
+    }
+    if (!(std::abs(area) > 0))
+      throw ExportInputError(at + (dxf ? which : std::string(":")) + " the polygon has no area");
+  }
+  for (std::size_t r = 0; r < rings.size(); ++r)
+    for (std::size_t q = r; q < rings.size(); ++q) {
+      const Ring& a = rings[r];
+      const Ring& b = rings[q];
+      for (std::size_t i = 0; i < a.size(); ++i)
+        for (std::size_t j = q == r ? i + 2 : 0; j < b.size(); ++j) {
+          if (q == r && i == 0 && j == a.size() - 1) continue;  // neighbours through the closing side
+          if (!segments_meet(a[i], a[(i + 1) % a.size()], b[j], b[(j + 1) % b.size()])) continue;
+          if (q == r)
+            throw ExportInputError(at + (dxf ? ": polyline " + std::to_string(r + 1) : std::string(":")) +
+                                   " the polygon crosses itself (sides " + std::to_string(i + 1) + " and " +
+                                   std::to_string(j + 1) + ")");
+          throw ExportInputError(at + ": polylines " + std::to_string(r + 1) + " and " + std::to_string(q + 1) +
+                                 " cross or touch");
+        }
+    }
+  return rings;
+}
+
+// The signed distance of (x, y) to a polygon of one or more rings:
+// negative inside (an odd number of sides crossed on the way out).
+double polygon_level(const std::vector<Ring>& rings, double x, double y) {
   double d2 = std::numeric_limits<double>::infinity();
   bool inside = false;
-  const std::size_t n = p.size();
-  for (std::size_t k = 0, j = n - 1; k < n; j = k++) {
-    const auto& a = p[j];
-    const auto& b = p[k];
-    if ((a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
-    const double ex = b[0] - a[0], ey = b[1] - a[1];
-    const double t = std::clamp(((x - a[0]) * ex + (y - a[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
-    const double dx = x - a[0] - t * ex, dy = y - a[1] - t * ey;
-    d2 = std::min(d2, dx * dx + dy * dy);
+  for (const Ring& p : rings) {
+    const std::size_t n = p.size();
+    for (std::size_t k = 0, j = n - 1; k < n; j = k++) {
+      const auto& a = p[j];
+      const auto& b = p[k];
+      if ((a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
+      const double ex = b[0] - a[0], ey = b[1] - a[1];
+      const double t = std::clamp(((x - a[0]) * ex + (y - a[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
+      const double dx = x - a[0] - t * ex, dy = y - a[1] - t * ey;
+      d2 = std::min(d2, dx * dx + dy * dy);
+    }
   }
   return inside ? -std::sqrt(d2) : std::sqrt(d2);
 }
@@ -175,7 +353,7 @@ TrimSurface parse_trim(const std::string& text) {
     takes = "a sphere takes 4 numbers (the centre and the radius; m)";
   } else if (kind == "polygon" && colon != std::string::npos) {
     t.kind = TrimSurface::Kind::Polygon;
-    t.polygon = read_polygon(text.substr(colon + 1), what);
+    t.rings = read_polygon(text.substr(colon + 1), what);
     return t;
   } else {
     throw ExportInputError(what + "expected plane:X,Y,Z,NX,NY,NZ, cylinder:X,Y,Z,DX,DY,DZ,R, sphere:X,Y,Z,R (m) or "
@@ -232,7 +410,7 @@ double trim_level(const std::vector<TrimSurface>& trims, const double* x) {
         f = norm(r) - t.radius;
         break;
       case TrimSurface::Kind::Polygon:
-        f = polygon_level(t.polygon, x[0], x[1]);
+        f = polygon_level(t.rings, x[0], x[1]);
         break;
     }
     level = std::max(level, f);

@@ -17,22 +17,27 @@ namespace ts {
 //   plane    "plane:X,Y,Z,NX,NY,NZ"        a point and the normal, which points into the part
 //   cylinder "cylinder:X,Y,Z,DX,DY,DZ,R"   a point on the axis, the axis's direction and the radius; the part inside
 //   sphere   "sphere:X,Y,Z,R"              the centre and the radius; the part inside
-//   polygon  "polygon:FILE"                a trim line drawn in plan view: a closed polygon
-//                                          in x and y, read from a CSV file (a row "x,y" per
-//                                          vertex, m); the part inside it, seen along z
+//   polygon  "polygon:FILE[,SCALE]"        a trim line drawn in plan view, seen along z: a
+//                                          closed polygon in x and y from a CSV file (a row
+//                                          "x,y" per vertex) or the closed polylines of a DXF
+//                                          file (holes too: inside an odd number of them);
+//                                          SCALE m per unit of the file (CSV: 1; DXF: from
+//                                          its $INSUNITS); the part inside
 // Lengths in m.
 struct TrimSurface {
   enum class Kind { Plane, Cylinder, Sphere, Polygon };
   Kind kind = Kind::Plane;
   std::array<double, 3> point{}, direction{};  // direction: unit
   double radius = 0;
-  std::vector<std::array<double, 2>> polygon;  // its vertices (x, y), not repeating the first
+  std::vector<std::vector<std::array<double, 2>>> rings;  // polygon: each ring's vertices (x, y, m)
   std::string text;  // as given
 };
 
 // Throws ExportInputError ("--trim 'TEXT': what is wrong") for text that is
-// no trim surface, or a polygon file that cannot be read, has fewer than 3
-// vertices, a vertex twice in a row, no area or crosses itself.
+// no trim surface, or a polygon file that cannot be read, holds no closed
+// polygon, has a ring of fewer than 3 vertices, a vertex twice in a row,
+// no area or sides that cross or touch, or a DXF file that does not give
+// its units and no scale.
 TrimSurface parse_trim(const std::string& text);
 
 // The level of a point x (m): at most 0 in the part, above 0 outside; the

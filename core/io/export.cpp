@@ -405,7 +405,9 @@ FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<doub
 void create_output_folder(const std::filesystem::path& out) {
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
-  if (ec) throw std::runtime_error("cannot create '" + out.string() + "': " + ec.message());
+  if (ec || !std::filesystem::is_directory(out))
+    throw ExportInputError("cannot create the output folder " + out.string() + " (--out): " +
+                           (ec ? ec.message() : std::string("a file of that name is there")));
 }
 
 ExportResult export_plies(const std::filesystem::path& dir, std::optional<double> time,

@@ -94,7 +94,8 @@ struct FramePlies {
 FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<double> time, bool whole, bool fields);
 
 // Creates the folder a command writes into (and its parents); throws
-// std::runtime_error naming it and the system's reason where it cannot.
+// ExportInputError naming it and the system's reason where it cannot (as
+// `run` refuses its --out).
 void create_output_folder(const std::filesystem::path& out);
 
 struct ExportResult {

@@ -2375,6 +2375,41 @@ print("ok")
         << ply;
     EXPECT_EQ(b["mirrored"], json::array({"x", "y"}));
   }
+  // A trim line drawn in CAD: an outline in plan view written by ezdxf
+  // (DXF R2010 in mm, with an extrusion along -z on a copy, whose x is
+  // mirrored), against the same outline in a CSV file in m.
+  std::ofstream(dir / "outline.py") << R"(import sys, ezdxf
+doc = ezdxf.new("R2010")
+doc.header["$INSUNITS"] = 4
+msp = doc.modelspace()
+outline = [(10, 5), (95, 12), (120, 70), (60, 110), (15, 80)]
+msp.add_lwpolyline(outline, close=True)
+msp.add_line((0, 0), (100, 100))
+doc.saveas(sys.argv[1])
+mirrored = ezdxf.new("R2010")
+mirrored.header["$INSUNITS"] = 4
+mirrored.modelspace().add_lwpolyline([(-x, y) for x, y in outline], close=True, dxfattribs={"extrusion": (0, 0, -1)})
+mirrored.saveas(sys.argv[2])
+with open(sys.argv[3], "w") as f:
+    f.write("x_m,y_m\n" + "".join("%r,%r\n" % (x / 1000, y / 1000) for x, y in outline))
+)";
+  ASSERT_EQ(std::system(("/usr/bin/python3 " + q(dir / "outline.py") + " " + q(dir / "outline.dxf") + " " +
+                         q(dir / "mirrored.dxf") + " " + q(dir / "outline.csv"))
+                            .c_str()),
+            0);
+  std::map<std::string, json> by;
+  for (const std::string f : {"outline.dxf", "mirrored.dxf", "outline.csv"}) {
+    const auto r =
+        thermostamp("blank " + q(dir / "run") + " --trim polygon:" + q(dir / f) + " --out " + q(dir / ("of_" + f)));
+    ASSERT_EQ(r.exit_code, 0) << f << ": " << r.err;
+    by[f] = read_job_document(dir / ("of_" + f) / "blank.json");
+  }
+  for (const std::string ply : {"ply_top", "ply_bottom"}) {
+    const double a = by["outline.csv"]["plies"][ply]["kept_blank_area_m2"].get<double>();
+    EXPECT_GT(a, 0.005) << ply;
+    for (const std::string f : {"outline.dxf", "mirrored.dxf"})
+      EXPECT_NEAR(by[f]["plies"][ply]["kept_blank_area_m2"].get<double>(), a, 1e-15) << ply << " " << f;
+  }
   // What cannot give a pattern.
   auto refused = [&](const std::string& args) {
     const auto r = thermostamp("blank " + args);
@@ -2392,6 +2427,12 @@ print("ok")
                                                                    "' is not a folder\n");
   EXPECT_EQ(refused(q(dir / "mesh") + " --trim " + plane),
             "error: blank: '" + (dir / "mesh").string() + "' holds no results.h5 (not the output folder of a run?)\n");
+  EXPECT_EQ(refused(q(dir / "run") + " --trim " + plane + " --out " + q(dir / "job.json" / "out")),
+            "error: blank: cannot create the output folder " + (dir / "job.json" / "out").string() +
+                " (--out): Not a directory\n");
+  EXPECT_EQ(thermostamp("export " + q(dir / "run") + " --out " + q(dir / "job.json" / "out")).err,
+            "error: export: cannot create the output folder " + (dir / "job.json" / "out").string() +
+                " (--out): Not a directory\n");
   EXPECT_EQ(refused(q(dir / "run") + " --trim " + plane + " --time 0.7"),
             "error: blank: no frame at t = 0.69999999999999996 s: the 3 frames are from t = 0 to 0.5 s\n");
   EXPECT_NE(refused(q(dir / "run") + " --trim " + plane + " --format gmsh")

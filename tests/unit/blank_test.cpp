@@ -329,7 +329,8 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
     f << c * L[0][0] - s * L[0][1] + bx << "," << s * L[0][0] + c * L[0][1] + by << "\n";  // closed: dropped
   }
   const TrimSurface t = parse_trim("polygon:" + (dir / "outline.csv").string());
-  ASSERT_EQ(t.polygon.size(), 6u);
+  ASSERT_EQ(t.rings.size(), 1u);
+  ASSERT_EQ(t.rings[0].size(), 6u);
   const CutPattern p = cut_pattern(m.x, x, m.triangles, {t});
   ASSERT_EQ(p.outlines.size(), 1u);
   auto distance = [&](const V3& q) {  // to the outline's sides, and to its nearest vertex
@@ -390,6 +391,100 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
   } catch (const ExportInputError& e) {
     EXPECT_EQ(std::string(e.what()), at + "none.csv': cannot read '" + dir.string() + "/none.csv'");
   }
+  std::filesystem::remove_all(dir);
+}
+
+
+// A trim line from CAD as a DXF file (mm, $INSUNITS 4): a slot, 50 x 30 mm
+// between two half circles of 15 mm (a closed LWPOLYLINE with bulges),
+// around a square hole of 20 x 10 mm (a closed POLYLINE of VERTEX
+// entities); a LINE and an open polyline beside them are left out. On a
+// flat plate of 100 mm (40 x 40 crossed cells, h = 2.5 mm): the arcs come
+// in sides of 2 degrees (90 per half circle); the pattern is the slot less
+// the hole, its area that of those polygons within the chord's offset of
+// the level along the arcs, pi r h^2 / (8 (r - h)) for the two half
+// circles, and h^2 at each of the hole's 4 corners; along the straight
+// sides, away from their ends, the trim line lies on them to round-off.
+// Units from $INSUNITS or from a scale after the file's name; a file that
+// gives none, or holds no closed polyline, is refused.
+TEST(Blank, PolygonFromADxfFileWithArcsAndAHole) {
+  const auto dir = std::filesystem::temp_directory_path() / "thermostamp_blank_dxf";
+  std::filesystem::create_directories(dir);
+  auto dxf = [&](const std::string& name, const std::string& header, const std::string& entities) {
+    std::ofstream(dir / name) << "0\nSECTION\n2\nHEADER\n" << header << "0\nENDSEC\n0\nSECTION\n2\nENTITIES\n"
+                              << entities << "0\nENDSEC\n0\nEOF\n";
+    return (dir / name).string();
+  };
+  const std::string slot =
+      "0\nLINE\n8\n0\n10\n0.0\n20\n0.0\n11\n100.0\n21\n100.0\n"
+      "0\nLWPOLYLINE\n8\nTRIM\n90\n4\n70\n1\n10\n25.0\n20\n25.0\n10\n75.0\n20\n25.0\n42\n1.0\n10\n75.0\n20\n55.0\n"
+      "10\n25.0\n20\n55.0\n42\n1.0\n"
+      "0\nPOLYLINE\n8\nTRIM\n66\n1\n70\n1\n10\n0.0\n20\n0.0\n30\n0.0\n"
+      "0\nVERTEX\n8\nTRIM\n10\n40.0\n20\n35.0\n30\n0.0\n0\nVERTEX\n8\nTRIM\n10\n60.0\n20\n35.0\n30\n0.0\n"
+      "0\nVERTEX\n8\nTRIM\n10\n60.0\n20\n45.0\n30\n0.0\n0\nVERTEX\n8\nTRIM\n10\n40.0\n20\n45.0\n30\n0.0\n"
+      "0\nSEQEND\n8\nTRIM\n"
+      "0\nLWPOLYLINE\n8\n0\n90\n3\n70\n0\n10\n0.0\n20\n90.0\n10\n50.0\n20\n95.0\n10\n99.0\n20\n90.0\n";
+  const std::string mm = dxf("slot.dxf", "9\n$ACADVER\n1\nAC1015\n9\n$INSUNITS\n70\n4\n", slot);
+  const TrimSurface t = parse_trim("polygon:" + mm);
+  ASSERT_EQ(t.rings.size(), 2u);
+  EXPECT_EQ(t.rings[0].size(), 2u + 2 * 90);  // the corners, and 89 points inside each arc
+  EXPECT_EQ(t.rings[1].size(), 4u);
+  EXPECT_NEAR(t.rings[0][1][0], 0.075, 1e-15);
+  const double r = 0.015, n = 90;
+  const double tessellated = 0.05 * 0.03 + 2 * (n / 2) * r * r * std::sin(M_PI / n) - 0.02 * 0.01;
+  const ShellMesh m = rectangle_mesh({0, 0, 0}, {0.1, 0.1}, {40, 40}, true);
+  const double h = max_edge_length(m);
+  const CutPattern p = cut_pattern(m.x, m.x, m.triangles, {t});
+  ASSERT_EQ(p.outlines.size(), 2u);  // the slot, and the hole
+  EXPECT_NEAR(signed_area_z(p.outlines[0]) + signed_area_z(p.outlines[1]), p.kept_blank_area, 1e-13 * tessellated);
+  EXPECT_LT(std::min(signed_area_z(p.outlines[0]), signed_area_z(p.outlines[1])), 0.0) << "the hole runs clockwise";
+  const double arcs = M_PI * r * h * h / (8 * (r - h)), corners = 4 * h * h;
+  EXPECT_LE(p.kept_blank_area, tessellated + corners);
+  EXPECT_GE(p.kept_blank_area, tessellated - arcs - corners);
+  int straight = 0;
+  for (const Outline& o : p.outlines)
+    for (const OutlinePoint& q : o.points) {
+      const double x = q.blank[0], y = q.blank[1];
+      // On the long sides of the slot (y = 25, 55 mm) or of the hole (y = 35, 45 mm), 2 h from their ends.
+      const double dy = std::min({std::abs(y - 0.025), std::abs(y - 0.055), std::abs(y - 0.035), std::abs(y - 0.045)});
+      const bool on_slot = x > 0.025 + 2 * h && x < 0.075 - 2 * h && std::abs(std::abs(y - 0.04) - 0.015) < h;
+      const bool on_hole = x > 0.04 + 2 * h && x < 0.06 - 2 * h && std::abs(std::abs(y - 0.04) - 0.005) < h;
+      if (!on_slot && !on_hole) continue;
+      ++straight;
+      const double off = dy;
+      EXPECT_LT(off, 1e-15) << x << " " << y;
+    }
+  EXPECT_GT(straight, 30);
+  // Units: a scale after the name, inches from $INSUNITS 1, none.
+  const std::string bare = dxf("bare.dxf", "", slot);
+  const TrimSurface scaled = parse_trim("polygon:" + bare + ",0.001");
+  EXPECT_EQ(scaled.rings, t.rings);
+  const std::string inch = dxf("inch.dxf", "9\n$INSUNITS\n70\n1\n", slot);
+  EXPECT_NEAR(parse_trim("polygon:" + inch).rings[0][1][0], 75 * 0.0254, 1e-15);
+  auto refused = [](const std::string& text) {
+    try {
+      parse_trim(text);
+    } catch (const ExportInputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refused("polygon:" + bare), "--trim 'polygon:" + bare + "': '" + bare +
+                                            "' does not give its units (no $INSUNITS): give them after a comma, "
+                                            "polygon:" + bare + ",0.001 for millimetres");
+  EXPECT_EQ(refused("polygon:" + bare + ",-1"), "--trim 'polygon:" + bare + ",-1': the scale must be a number above "
+                                                                              "0, found '-1'");
+  const std::string open = dxf("open.dxf", "9\n$INSUNITS\n70\n4\n",
+                               "0\nLWPOLYLINE\n8\n0\n90\n3\n70\n0\n10\n0.0\n20\n90.0\n10\n50.0\n20\n95.0\n"
+                               "10\n99.0\n20\n90.0\n");
+  EXPECT_EQ(refused("polygon:" + open), "--trim 'polygon:" + open + "': '" + open +
+                                            "' holds no closed polyline (its 1 open one is not a trim line: close it "
+                                            "in CAD)");
+  const std::string crossing = dxf("crossing.dxf", "9\n$INSUNITS\n70\n4\n",
+                                   slot + "0\nLWPOLYLINE\n8\n0\n90\n3\n70\n1\n10\n50.0\n20\n50.0\n10\n99.0\n20\n50.0\n"
+                                          "10\n99.0\n20\n99.0\n");
+  EXPECT_EQ(refused("polygon:" + crossing), "--trim 'polygon:" + crossing + "': '" + crossing +
+                                                "': polylines 1 and 3 cross or touch");
   std::filesystem::remove_all(dir);
 }
 
