@@ -89,8 +89,9 @@ the forming carries into the part, which lies inside every --trim surface,
 given on the formed part in m: plane:X,Y,Z,NX,NY,NZ (a point, and the
 normal, which points into the part), cylinder:X,Y,Z,DX,DY,DZ,R (inside; a
 point on the axis, its direction, the radius), sphere:X,Y,Z,R (inside) or
-polygon:FILE (inside a trim line drawn in plan view: a CSV file, a row x,y
-per vertex, the part seen along z);
+polygon:FILE[,SCALE] (inside a trim line drawn in plan view, seen along z:
+a CSV file, a row x,y per vertex, or the closed polylines of a DXF file;
+SCALE m per unit, for a DXF file from its $INSUNITS);
 writes FOLDER/<ply>.csv (default DIR/blank: the pattern's outlines, each
 point in the blank and formed), FOLDER/<ply>.dxf where the blank is flat
 (the pattern and the blank's outline in its plane, mm) and
