@@ -372,7 +372,7 @@ def plot_blank(folder, out):
         ax.set_xlabel("mm")
         ax.set_ylabel("mm")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper right")
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3)
         ax.set_title("%s: cut pattern, t = %.3g s\n%.1f %% of the blank (%.4g m^2 formed), "
                      "edge drawn in up to %.3g mm\ntrim: %s" % (part, info["time_s"], 100 * p["kept_share"], p["kept_formed_area_m2"],
                                    1e3 * p.get("edge_displacement_max_m", float("nan")), ", ".join(info["trims"])),
