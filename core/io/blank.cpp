@@ -84,6 +84,10 @@ bool segments_meet(const std::array<double, 2>& a, const std::array<double, 2>& 
 
 using Ring = std::vector<std::array<double, 2>>;
 
+// The largest coordinate a trim takes (m): beyond it the distances lose
+// their digits, and no press is that large.
+constexpr double kFar = 1e6;
+
 // A polygon's vertices from a CSV file: a row "x,y" per vertex; a first
 // row that is not two numbers is a header; empty rows and rows starting
 // with '#' are skipped.
@@ -270,9 +274,12 @@ std::vector<Ring> read_polygon(const std::string& spec, const std::string& what)
   const std::string at = what + "'" + shown(file) + "'";
   for (std::size_t r = 0; r < rings.size(); ++r) {
     Ring& p = rings[r];
-    for (auto& v : p) {
-      v[0] *= scale;
-      v[1] *= scale;
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      p[k][0] *= scale;
+      p[k][1] *= scale;
+      if (!(std::abs(p[k][0]) <= kFar && std::abs(p[k][1]) <= kFar))
+        throw ExportInputError(at + (dxf ? ": polyline " + std::to_string(r + 1) : std::string(":")) + " vertex " +
+                               std::to_string(k + 1) + " lies beyond 1e6 m: not a trim in a press (the scale?)");
     }
     const std::string which = dxf ? ": polyline " + std::to_string(r + 1) : std::string();
     if (p.size() > 1 && p.front() == p.back()) p.pop_back();
@@ -375,6 +382,8 @@ TrimSurface parse_trim(const std::string& text) {
     }
   }
   if (v.size() != count) throw ExportInputError(what + takes + ", found " + std::to_string(v.size()));
+  for (const double d : v)
+    if (std::abs(d) > kFar) throw ExportInputError(what + g(d) + " is beyond 1e6 (m): not a trim in a press");
   t.point = {v[0], v[1], v[2]};
   if (t.kind != TrimSurface::Kind::Sphere) {
     const Vec d{v[3], v[4], v[5]};
@@ -430,6 +439,9 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
     const long long nodes = static_cast<long long>(n);
 #pragma omp parallel for schedule(static) if (nodes > 4096)
     for (long long i = 0; i < nodes; ++i) level[static_cast<std::size_t>(i)] = trim_level(trims, &x[3 * i]);
+    for (std::size_t i = 0; i < n; ++i)
+      if (!std::isfinite(level[i]))
+        throw std::runtime_error("the distance of node " + std::to_string(i) + " to the trim is not finite");
   }
   // The edges, each once (smaller node first), and how many triangles have it.
   std::unordered_map<std::uint64_t, int> edge_id;

@@ -94,6 +94,8 @@ TEST(Blank, TrimSurfacesAreReadOrRefusedWithWhatIsWrong) {
   EXPECT_EQ(refused("cylinder:0,0,0,0,0,0,1"), "--trim 'cylinder:0,0,0,0,0,0,1': the axis's direction is zero");
   EXPECT_EQ(refused("sphere:0,0,0,-1"), "--trim 'sphere:0,0,0,-1': the radius must be above 0, found -1");
   EXPECT_EQ(refused("sphere:0,0,0,nan"), "--trim 'sphere:0,0,0,nan': 'nan' is not a number");
+  EXPECT_EQ(refused("plane:0,0,1e300,0,0,1"), "--trim 'plane:0,0,1e300,0,0,1': 1e+300 is beyond 1e6 (m): not a trim "
+                                              "in a press");
   // Control characters escaped: the message stays on one line.
   EXPECT_EQ(refused("plane:0,0,\r1,0,0,1\n"), "--trim 'plane:0,0,\\r1,0,0,1\\n': '1\\n' is not a number");
 }
@@ -472,6 +474,9 @@ TEST(Blank, PolygonFromADxfFileWithArcsAndAHole) {
   EXPECT_EQ(refused("polygon:" + bare), "--trim 'polygon:" + bare + "': '" + bare +
                                             "' does not give its units (no $INSUNITS): give them after a comma, "
                                             "polygon:" + bare + ",0.001 for millimetres");
+  EXPECT_EQ(refused("polygon:" + bare + ",1e6"), "--trim 'polygon:" + bare + ",1e6': '" + bare +
+                                                   "': polyline 1 vertex 1 lies beyond 1e6 m: not a trim in a press "
+                                                   "(the scale?)");
   EXPECT_EQ(refused("polygon:" + bare + ",-1"), "--trim 'polygon:" + bare + ",-1': the scale must be a number above "
                                                                               "0, found '-1'");
   const std::string open = dxf("open.dxf", "9\n$INSUNITS\n70\n4\n",
