@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -297,22 +298,48 @@ std::vector<Ring> read_polygon(const std::string& spec, const std::string& what)
     if (!(std::abs(area) > 0))
       throw ExportInputError(at + (dxf ? which : std::string(":")) + " the polygon has no area");
   }
+  // Sides that cross or touch: each side against those whose extent in x
+  // overlaps its own (sorted by their smallest x).
+  struct Side {
+    std::size_t ring, index;
+    double x0, x1, y0, y1;
+  };
+  std::vector<Side> sides;
   for (std::size_t r = 0; r < rings.size(); ++r)
-    for (std::size_t q = r; q < rings.size(); ++q) {
-      const Ring& a = rings[r];
-      const Ring& b = rings[q];
-      for (std::size_t i = 0; i < a.size(); ++i)
-        for (std::size_t j = q == r ? i + 2 : 0; j < b.size(); ++j) {
-          if (q == r && i == 0 && j == a.size() - 1) continue;  // neighbours through the closing side
-          if (!segments_meet(a[i], a[(i + 1) % a.size()], b[j], b[(j + 1) % b.size()])) continue;
-          if (q == r)
-            throw ExportInputError(at + (dxf ? ": polyline " + std::to_string(r + 1) : std::string(":")) +
-                                   " the polygon crosses itself (sides " + std::to_string(i + 1) + " and " +
-                                   std::to_string(j + 1) + ")");
-          throw ExportInputError(at + ": polylines " + std::to_string(r + 1) + " and " + std::to_string(q + 1) +
-                                 " cross or touch");
-        }
+    for (std::size_t i = 0; i < rings[r].size(); ++i) {
+      const auto& a = rings[r][i];
+      const auto& b = rings[r][(i + 1) % rings[r].size()];
+      sides.push_back({r, i, std::min(a[0], b[0]), std::max(a[0], b[0]), std::min(a[1], b[1]), std::max(a[1], b[1])});
     }
+  std::sort(sides.begin(), sides.end(), [](const Side& a, const Side& b) {
+    return a.x0 != b.x0 ? a.x0 < b.x0 : (a.ring != b.ring ? a.ring < b.ring : a.index < b.index);
+  });
+  std::optional<std::array<std::size_t, 4>> first;
+  for (std::size_t u = 0; u < sides.size(); ++u)
+    for (std::size_t w = u + 1; w < sides.size() && sides[w].x0 <= sides[u].x1; ++w) {
+      const Side& a = sides[u].ring < sides[w].ring || (sides[u].ring == sides[w].ring && sides[u].index < sides[w].index)
+                          ? sides[u]
+                          : sides[w];
+      const Side& b = &a == &sides[u] ? sides[w] : sides[u];
+      if (a.y1 < b.y0 || b.y1 < a.y0) continue;
+      const Ring& ra = rings[a.ring];
+      const Ring& rb = rings[b.ring];
+      if (a.ring == b.ring && (b.index == a.index + 1 || (a.index == 0 && b.index == ra.size() - 1)))
+        continue;  // neighbours
+      if (!segments_meet(ra[a.index], ra[(a.index + 1) % ra.size()], rb[b.index], rb[(b.index + 1) % rb.size()]))
+        continue;
+      const std::array<std::size_t, 4> pair{a.ring, a.index, b.ring, b.index};
+      if (!first || pair < *first) first = pair;  // the first pair in the file's order is named
+    }
+  if (first) {
+    const auto [ra, ia, rb, ib] = *first;
+    if (ra == rb)
+      throw ExportInputError(at + (dxf ? ": polyline " + std::to_string(ra + 1) : std::string(":")) +
+                             " the polygon crosses itself (sides " + std::to_string(ia + 1) + " and " +
+                             std::to_string(ib + 1) + ")");
+    throw ExportInputError(at + ": polylines " + std::to_string(ra + 1) + " and " + std::to_string(rb + 1) +
+                           " cross or touch");
+  }
   return rings;
 }
 
