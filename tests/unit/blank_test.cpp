@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -386,6 +387,43 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
             at + "bowtie.csv': '" + dir.string() + "/bowtie.csv': the polygon crosses itself (sides 1 and 3)");
   EXPECT_EQ(refused("touch.csv", "# a side touching a vertex\n0,0\n2,0\n2,2\n1,0\n0,2\n"),
             at + "touch.csv': '" + dir.string() + "/touch.csv': the polygon crosses itself (sides 1 and 3)");
+  // Random polygons, some crossing themselves: accepted exactly when no
+  // two sides that are not neighbours share a point (every pair checked
+  // here, by the signs of the triangles' areas).
+  {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    auto orient = [](const std::array<double, 2>& o, const std::array<double, 2>& a, const std::array<double, 2>& b) {
+      const double c = (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+      return (c > 0) - (c < 0);
+    };
+    int accepted = 0, crossing = 0;
+    for (int k = 0; k < 300; ++k) {
+      const int n = 4 + k % 9;
+      std::vector<std::array<double, 2>> v;
+      const bool star = k % 2 == 0;  // half of them round a centre: no crossing
+      for (int i = 0; i < n; ++i) {
+        const double a = star ? 2 * M_PI * (i + 0.8 * u(rng)) / n : 0, r = 0.2 + 0.3 * u(rng);
+        v.push_back(star ? std::array<double, 2>{0.5 + r * std::cos(a), 0.5 + r * std::sin(a)}
+                         : std::array<double, 2>{u(rng), u(rng)});
+      }
+      bool meets = false;
+      for (int i = 0; i < n && !meets; ++i)
+        for (int j = i + 2; j < n && !meets; ++j) {
+          if (i == 0 && j == n - 1) continue;
+          const auto &a = v[i], &b = v[(i + 1) % n], &c = v[j], &d = v[(j + 1) % n];
+          meets = orient(a, b, c) != orient(a, b, d) && orient(c, d, a) != orient(c, d, b);
+        }
+      std::ostringstream text;
+      text.precision(17);
+      for (const auto& p : v) text << p[0] << "," << p[1] << "\n";
+      const std::string why = refused("random.csv", text.str());
+      EXPECT_EQ(why == "accepted", !meets) << k << ": " << why;
+      (meets ? crossing : accepted) += 1;
+    }
+    EXPECT_GT(accepted, 100);
+    EXPECT_GT(crossing, 100);
+  }
   std::filesystem::remove(dir / "none.csv");
   try {
     parse_trim("polygon:" + (dir / "none.csv").string());
