@@ -21,6 +21,16 @@ namespace {
 
 using V3 = std::array<double, 3>;
 
+// The message parse_trim refuses text with ("accepted" where it takes it).
+std::string refused(const std::string& text) {
+  try {
+    parse_trim(text);
+  } catch (const ExportInputError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
 // The signed area of an outline about +z (shoelace).
 double signed_area_z(const Outline& o) {
   double a = 0;
@@ -74,14 +84,6 @@ TEST(Blank, TrimSurfacesAreReadOrRefusedWithWhatIsWrong) {
   // Inside both: the larger level (r: 0.02 off the cylinder, 5.005 above the plane).
   EXPECT_NEAR(trim_level({c, p}, r), 5.005, 1e-15);
   EXPECT_NEAR(trim_level({c, p}, above), 0.001, 1e-15);
-  auto refused = [](const std::string& text) {
-    try {
-      parse_trim(text);
-    } catch (const ExportInputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
   EXPECT_EQ(refused("cone:0,0,0,1"), "--trim 'cone:0,0,0,1': expected plane:X,Y,Z,NX,NY,NZ, cylinder:X,Y,Z,DX,DY,DZ,R, "
                                     "sphere:X,Y,Z,R (m) or polygon:FILE");
   EXPECT_EQ(refused("cylinder:0,0,0,0,0,1"),
@@ -363,29 +365,24 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
   EXPECT_NEAR(p.kept_blank_area, exact, 6 * h * h);
   EXPECT_NEAR(p.kept_formed_area, p.kept_blank_area, 1e-15);
   EXPECT_NEAR(signed_area_z(p.outlines[0]), p.kept_blank_area, 1e-13 * exact);
-  auto refused = [&](const std::string& name, const std::string& text) {
+  auto refused_file = [&](const std::string& name, const std::string& text) {
     std::ofstream(dir / name) << text;
-    try {
-      parse_trim("polygon:" + (dir / name).string());
-    } catch (const ExportInputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
+    return refused("polygon:" + (dir / name).string());
   };
   const std::string at = "--trim 'polygon:" + dir.string() + "/";
-  EXPECT_EQ(refused("two.csv", "0,0\n1,0\n"), at + "two.csv': '" + dir.string() + "/two.csv' holds 2 vertices: a "
+  EXPECT_EQ(refused_file("two.csv", "0,0\n1,0\n"), at + "two.csv': '" + dir.string() + "/two.csv' holds 2 vertices: a "
                                                                                    "polygon needs at least 3");
-  EXPECT_EQ(refused("bad.csv", "x,y\n0,0\n1,0\n1;1\x01\n"),
+  EXPECT_EQ(refused_file("bad.csv", "x,y\n0,0\n1,0\n1;1\x01\n"),
             at + "bad.csv': '" + dir.string() + "/bad.csv' row 4: expected x,y (m), found '1;1\\x01'");
-  EXPECT_EQ(refused("three.csv", "0,0,0\n1,0,0\n1,1,0\n"),
+  EXPECT_EQ(refused_file("three.csv", "0,0,0\n1,0,0\n1,1,0\n"),
             at + "three.csv': '" + dir.string() + "/three.csv' row 2: expected x,y (m), found '1,0,0'");
-  EXPECT_EQ(refused("twice.csv", "0,0\n1,0\n1,0\n0,1\n"),
+  EXPECT_EQ(refused_file("twice.csv", "0,0\n1,0\n1,0\n0,1\n"),
             at + "twice.csv': '" + dir.string() + "/twice.csv': vertex 2 is there twice in a row");
-  EXPECT_EQ(refused("line.csv", "0,0\n1,1\n2,2\n"),
+  EXPECT_EQ(refused_file("line.csv", "0,0\n1,1\n2,2\n"),
             at + "line.csv': '" + dir.string() + "/line.csv': the polygon has no area");
-  EXPECT_EQ(refused("bowtie.csv", "0,0\n2,2\n2,0\n0,1\n"),
+  EXPECT_EQ(refused_file("bowtie.csv", "0,0\n2,2\n2,0\n0,1\n"),
             at + "bowtie.csv': '" + dir.string() + "/bowtie.csv': the polygon crosses itself (sides 1 and 3)");
-  EXPECT_EQ(refused("touch.csv", "# a side touching a vertex\n0,0\n2,0\n2,2\n1,0\n0,2\n"),
+  EXPECT_EQ(refused_file("touch.csv", "# a side touching a vertex\n0,0\n2,0\n2,2\n1,0\n0,2\n"),
             at + "touch.csv': '" + dir.string() + "/touch.csv': the polygon crosses itself (sides 1 and 3)");
   // Random polygons, some crossing themselves: accepted exactly when no
   // two sides that are not neighbours share a point (every pair checked
@@ -417,7 +414,7 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
       std::ostringstream text;
       text.precision(17);
       for (const auto& p : v) text << p[0] << "," << p[1] << "\n";
-      const std::string why = refused("random.csv", text.str());
+      const std::string why = refused_file("random.csv", text.str());
       EXPECT_EQ(why == "accepted", !meets) << k << ": " << why;
       (meets ? crossing : accepted) += 1;
     }
@@ -501,14 +498,6 @@ TEST(Blank, PolygonFromADxfFileWithArcsAndAHole) {
   EXPECT_EQ(scaled.rings, t.rings);
   const std::string inch = dxf("inch.dxf", "9\n$INSUNITS\n70\n1\n", slot);
   EXPECT_NEAR(parse_trim("polygon:" + inch).rings[0][1][0], 75 * 0.0254, 1e-15);
-  auto refused = [](const std::string& text) {
-    try {
-      parse_trim(text);
-    } catch (const ExportInputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
   EXPECT_EQ(refused("polygon:" + bare), "--trim 'polygon:" + bare + "': '" + bare +
                                             "' does not give its units (no $INSUNITS): give them after a comma, "
                                             "polygon:" + bare + ",0.001 for millimetres");
