@@ -183,6 +183,13 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
                              ": expected a number, found '" + shown(t) + "'");
     return v;
   };
+  auto integer = [&](const std::string& t) {  // a flag or a code's number
+    const double v = number(t);
+    if (!(std::abs(v) <= 1e9) || v != std::floor(v))
+      throw ExportInputError(what + "'" + shown(file) + "' line " + std::to_string(line) +
+                             ": expected an integer, found '" + shown(t) + "'");
+    return static_cast<int>(v);
+  };
   while (std::getline(in, code) && std::getline(in, value)) {
     line += 2;
     code = trimmed(code);
@@ -209,13 +216,13 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
     }
     if (section == "HEADER") {
       if (code == "9") variable = value;
-      else if (code == "70" && variable == "$INSUNITS") units = static_cast<int>(number(value));
+      else if (code == "70" && variable == "$INSUNITS") units = integer(value);
       continue;
     }
     if (section != "ENTITIES") continue;
     const bool lw = entity == "LWPOLYLINE", vertex = entity == "VERTEX" && in_polyline;
     if ((lw || (entity == "POLYLINE" && in_polyline)) && code == "70")
-      closed = (static_cast<int>(number(value)) & 1) != 0;
+      closed = (integer(value) & 1) != 0;
     if ((lw || (entity == "POLYLINE" && in_polyline)) && code == "230") extrusion_z = number(value);
     if (lw && code == "10") vs.push_back({number(value), 0, 0});
     if ((lw && !vs.empty()) || (vertex && !vs.empty())) {

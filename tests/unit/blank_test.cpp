@@ -517,6 +517,9 @@ TEST(Blank, PolygonFromADxfFileWithArcsAndAHole) {
                                           "10\n99.0\n20\n99.0\n");
   EXPECT_EQ(refused("polygon:" + crossing), "--trim 'polygon:" + crossing + "': '" + crossing +
                                                 "': polylines 1 and 3 cross or touch");
+  const std::string flag = dxf("flag.dxf", "9\n$INSUNITS\n70\n1e300\n", slot);
+  EXPECT_EQ(refused("polygon:" + flag), "--trim 'polygon:" + flag + "': '" + flag +
+                                            "' line 8: expected an integer, found '1e300'");
   std::filesystem::remove_all(dir);
 }
 
