@@ -429,7 +429,14 @@ int cmd_blank(const Args& a) {
     std::cout << p.csv.string() << ": " << line;
     if (c.outlines.empty()) std::cout << "; nothing of the ply lies inside the trim";
     else if (trimmed == 0) std::cout << "; the trim does not cross the ply: the whole blank";
-    std::cout << (p.flat ? "; " + p.dxf.string() : std::string("; no DXF: the blank is not flat")) << "\n";
+    std::cout << (p.flat ? "; " + p.dxf.string() : std::string("; no DXF: the blank is not flat"));
+    if (!p.marks.empty())
+      std::snprintf(line, sizeof line, " with %zu fibre marks every %g mm", p.marks.size(), 1000 * p.mark_spacing);
+    else if (p.flat && !c.outlines.empty())
+      std::snprintf(line, sizeof line, " without fibre marks (the frames hold no fibre_direction)");
+    else
+      line[0] = '\0';
+    std::cout << line << "\n";
   }
   std::cout << r.json.string() << "\n";
   return 0;

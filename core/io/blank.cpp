@@ -10,6 +10,7 @@
 #include <fstream>
 #include <limits>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -599,6 +600,65 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
   return p;
 }
 
+std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vector<double>& x,
+                                   const std::vector<int>& tri, const std::vector<TrimSurface>& trims,
+                                   const std::vector<double>& fibre, const std::array<double, 3>& e1,
+                                   const std::array<double, 3>& e2, double spacing) {
+  const std::size_t n = x0.size() / 3, m = tri.size() / 3;
+  std::vector<double> level(n, -1.0);
+  if (!trims.empty())
+    for (std::size_t i = 0; i < n; ++i) level[i] = trim_level(trims, &x[3 * i]);
+  std::vector<FibreMark> marks;
+  std::set<std::pair<long long, long long>> taken;  // grid points already marked
+  for (std::size_t e = 0; e < m; ++e) {
+    double u[3], v[3], l[3];
+    for (int k = 0; k < 3; ++k) {
+      const Vec p = at(x0, static_cast<std::size_t>(tri[3 * e + k]));
+      u[k] = dot(p, e1);
+      v[k] = dot(p, e2);
+      l[k] = level[static_cast<std::size_t>(tri[3 * e + k])];
+    }
+    const double det = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
+    if (!(std::abs(det) > 0)) continue;
+    const Vec a = at(fibre, e);
+    Vec d{dot(a, e1), dot(a, e2), 0};  // in the plane
+    const double ld = std::hypot(d[0], d[1]);
+    if (!(ld > 0)) continue;
+    d = {d[0] / ld, d[1] / ld, 0};
+    const long long i0 = static_cast<long long>(std::ceil(std::min({u[0], u[1], u[2]}) / spacing - 1e-9));
+    const long long i1 = static_cast<long long>(std::floor(std::max({u[0], u[1], u[2]}) / spacing + 1e-9));
+    const long long j0 = static_cast<long long>(std::ceil(std::min({v[0], v[1], v[2]}) / spacing - 1e-9));
+    const long long j1 = static_cast<long long>(std::floor(std::max({v[0], v[1], v[2]}) / spacing + 1e-9));
+    for (long long i = i0; i <= i1; ++i)
+      for (long long j = j0; j <= j1; ++j) {
+        const double pu = static_cast<double>(i) * spacing, pv = static_cast<double>(j) * spacing;
+        const double b1 = ((pu - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (pv - v[0])) / det;
+        const double b2 = ((u[1] - u[0]) * (pv - v[0]) - (pu - u[0]) * (v[1] - v[0])) / det;
+        const double b0 = 1 - b1 - b2;
+        const double tol = -1e-12;
+        if (b0 < tol || b1 < tol || b2 < tol) continue;
+        if (b0 * l[0] + b1 * l[1] + b2 * l[2] > 0) continue;  // outside the pattern
+        if (!taken.emplace(i, j).second) continue;
+        Vec c{0, 0, 0};  // the point on the triangle
+
+        for (int k = 0; k < 3; ++k) {
+          const Vec p = at(x0, static_cast<std::size_t>(tri[3 * e + k]));
+          const double w = k == 0 ? b0 : k == 1 ? b1 : b2;
+          for (int q = 0; q < 3; ++q) c[q] += w * p[q];
+        }
+        const double half = 0.3 * spacing;
+        FibreMark mk;
+        for (int q = 0; q < 3; ++q) {
+          const double dir = d[0] * e1[q] + d[1] * e2[q];
+          mk.from[q] = c[q] - half * dir;
+          mk.to[q] = c[q] + half * dir;
+        }
+        marks.push_back(mk);
+      }
+  }
+  return marks;
+}
+
 namespace {
 
 // The blank's plane: flat when every node lies within 1e-6 of its
@@ -648,8 +708,20 @@ std::array<Vec, 2> plane_axes(const Vec& n) {
   return {e1, cross(nn, e1)};
 }
 
+// The fibre marks' spacing for a pattern `extent` across (m): of 1, 2 or
+// 5 times a power of 10, the nearest to extent / 15 (at least 1 mm).
+double mark_spacing(double extent) {
+  const double want = std::max(extent / 15, 1e-3);
+  double best = 1e-3;
+  for (double p = 1e-3; p < 1e3; p *= 10)
+    for (const double f : {1.0, 2.0, 5.0})
+      if (std::abs(std::log(f * p / want)) < std::abs(std::log(best / want))) best = f * p;
+  return best;
+}
+
 // A DXF file (AutoCAD R12, ASCII; units mm, $INSUNITS 4): each outline as a
-// closed POLYLINE, the blank's on layer BLANK, the pattern's on PATTERN.
+// closed POLYLINE, the blank's on layer BLANK, the pattern's on PATTERN,
+// and the fibre marks as LINEs on layer FIBRE.
 bool write_dxf(const std::filesystem::path& file, const BlankPly& ply) {
   std::ofstream f(file);
   if (!f) return false;
@@ -661,9 +733,10 @@ bool write_dxf(const std::filesystem::path& file, const BlankPly& ply) {
   };
   f << "999\nthermostamp blank: ply '" << ply.name << "', mm\n"
     << "0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nAC1009\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n"
-    << "0\nSECTION\n2\nTABLES\n0\nTABLE\n2\nLAYER\n70\n2\n"
+    << "0\nSECTION\n2\nTABLES\n0\nTABLE\n2\nLAYER\n70\n3\n"
     << "0\nLAYER\n2\nBLANK\n70\n0\n62\n8\n6\nCONTINUOUS\n"
     << "0\nLAYER\n2\nPATTERN\n70\n0\n62\n1\n6\nCONTINUOUS\n"
+    << "0\nLAYER\n2\nFIBRE\n70\n0\n62\n5\n6\nCONTINUOUS\n"
     << "0\nENDTAB\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n";
   auto outline = [&](const Outline& o, const char* layer) {
     f << "0\nPOLYLINE\n8\n" << layer << "\n66\n1\n70\n1\n10\n0.0\n20\n0.0\n30\n0.0\n";
@@ -674,6 +747,10 @@ bool write_dxf(const std::filesystem::path& file, const BlankPly& ply) {
   };
   for (const Outline& o : ply.blank.outlines) outline(o, "BLANK");
   for (const Outline& o : ply.pattern.outlines) outline(o, "PATTERN");
+  for (const FibreMark& k : ply.marks)
+    f << "0\nLINE\n8\nFIBRE\n10\n" << num(1000 * dot(k.from, axes[0])) << "\n20\n" << num(1000 * dot(k.from, axes[1]))
+      << "\n30\n0.0\n11\n" << num(1000 * dot(k.to, axes[0])) << "\n21\n" << num(1000 * dot(k.to, axes[1]))
+      << "\n31\n0.0\n";
   f << "0\nENDSEC\n0\nEOF\n";
   f.close();
   return static_cast<bool>(f);
@@ -726,6 +803,8 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
   doc["trims"] = nlohmann::json::array();
   for (const TrimSurface& t : trims) doc["trims"].push_back(t.text);
   doc["plies"] = nlohmann::json::object();
+  // The fibre directions of the blank: the first frame's field.
+  const FramePlies first = read_frame_plies(dir, std::nullopt, whole, true, true);
   for (const FramePly& d : frame.plies) {
     BlankPly ply;
     ply.name = d.name;
@@ -737,6 +816,23 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
       throw std::runtime_error("ply '" + d.name + "': " + e.what());
     }
     ply.flat = flat_blank(d.x0, d.tri, ply.normal);
+    const std::vector<double>* fibre = nullptr;
+    for (const FramePly& f0 : first.plies)
+      if (f0.name == d.name && f0.tri == d.tri)
+        for (const PlyField& f : f0.fields)
+          if (f.name == "fibre_direction" && f.cells && f.components == 3) fibre = &f.v;
+    if (ply.flat && fibre && !ply.pattern.outlines.empty()) {
+      const auto axes = plane_axes(ply.normal);
+      double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+      for (const Outline& o : ply.pattern.outlines)
+        for (const OutlinePoint& q : o.points)
+          for (int c = 0; c < 2; ++c) {
+            lo[c] = std::min(lo[c], dot(q.blank, axes[static_cast<std::size_t>(c)]));
+            hi[c] = std::max(hi[c], dot(q.blank, axes[static_cast<std::size_t>(c)]));
+          }
+      ply.mark_spacing = mark_spacing(std::max(hi[0] - lo[0], hi[1] - lo[1]));
+      ply.marks = fibre_marks(d.x0, d.x, d.tri, trims, *fibre, axes[0], axes[1], ply.mark_spacing);
+    }
     ply.csv = out / (d.name + ".csv");
     if (!write_csv(ply.csv, ply.pattern, ply.blank))
       throw std::runtime_error("cannot write '" + ply.csv.string() + "'");
@@ -774,6 +870,9 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     j["flat"] = ply.flat;
     j["normal"] = ply.normal;
     j["mirrored"] = ply.mirrored;
+    j["fibre_marks"] = ply.marks.size();
+    j["fibre_mark_spacing_m"] = ply.mark_spacing > 0 ? nlohmann::json(ply.mark_spacing) : nlohmann::json(nullptr);
+    if (ply.flat && !fibre) j["fibre_marks_left_out"] = "the first frame holds no fibre_direction (output.fields)";
     doc["plies"][d.name] = j;
     res.plies.push_back(std::move(ply));
   }

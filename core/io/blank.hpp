@@ -79,6 +79,24 @@ struct CutPattern {
 CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
                        const std::vector<TrimSurface>& trims);
 
+// A fibre mark of a pattern: a short line along the fibres at a point of
+// the pattern, in the blank (m).
+struct FibreMark {
+  std::array<double, 3> from{}, to{};
+};
+
+// Fibre marks at the points of a square grid of spacing `spacing` in the
+// blank's plane (axes e1, e2, through the origin) that lie in the pattern
+// (the trims' level at the formed positions x, linear in each triangle, at
+// most 0), each along the fibre direction `fibre` (3 per triangle, as the
+// frames' field fibre_direction) of the triangle it lies in, projected into
+// the plane, 0.6 spacing long, centred on the point; a point on an edge
+// goes to the first triangle that has it.
+std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vector<double>& x,
+                                   const std::vector<int>& tri, const std::vector<TrimSurface>& trims,
+                                   const std::vector<double>& fibre, const std::array<double, 3>& e1,
+                                   const std::array<double, 3>& e2, double spacing);
+
 struct BlankPly {
   std::string name;
   std::filesystem::path csv, dxf;  // dxf empty where the blank is not flat
@@ -87,6 +105,8 @@ struct BlankPly {
   CutPattern blank;  // the whole blank's outlines (its edge), in the blank and formed
   bool flat = false;
   std::array<double, 3> normal{};  // the blank's plane's unit normal (flat)
+  std::vector<FibreMark> marks;    // flat, with fibre_direction in the first frame
+  double mark_spacing = 0;         // m
 };
 
 struct BlankResult {
@@ -100,7 +120,8 @@ struct BlankResult {
 // whole: mirrored at its symmetry planes), <out>/<ply>.csv (the points of
 // the pattern's outlines and of the blank's edge, each in the blank and
 // formed), <out>/<ply>.dxf where the blank is flat (the pattern and the
-// blank's outline in its plane, in mm) and <out>/blank.json (areas,
+// blank's outline in its plane, in mm, and fibre marks where the first
+// frame holds fibre_direction) and <out>/blank.json (areas,
 // lengths, the edge's largest displacement in the blank's plane, the
 // trims). Throws ExportInputError for
 // input that cannot give a pattern, std::runtime_error where the results

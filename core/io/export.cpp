@@ -314,7 +314,8 @@ ExportResult export_gmsh(const std::filesystem::path& dir, std::optional<double>
   return export_plies(dir, time, out, whole, ExportFormat::Gmsh);
 }
 
-FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<double> time, bool whole, bool fields) {
+FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<double> time, bool whole, bool fields,
+                            bool first) {
   const auto h5 = dir / "results.h5";
   if (!std::filesystem::is_directory(dir))
     throw ExportInputError("'" + dir.string() + "' is not a folder");
@@ -332,8 +333,8 @@ FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<doub
   FramePlies res;
   res.h5 = h5;
   res.frames = static_cast<int>(frames.times.size());
-  int k = res.frames - 1;
-  if (time) {
+  int k = first ? 0 : res.frames - 1;
+  if (time && !first) {
     const double first = frames.times.front(), last = frames.times.back();
     const double eps = 1e-9 * std::max({1.0, std::abs(first), std::abs(last)});
     if (!(*time >= first - eps && *time <= last + eps))

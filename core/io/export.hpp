@@ -91,7 +91,9 @@ struct FramePlies {
 // symmetry planes when `whole` (see export_gmsh). Throws ExportInputError
 // for a folder without results.h5 or frames, or a time outside the
 // frames'; std::runtime_error where the file cannot be read.
-FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<double> time, bool whole, bool fields);
+// first: the first frame instead (time is then not looked at).
+FramePlies read_frame_plies(const std::filesystem::path& dir, std::optional<double> time, bool whole, bool fields,
+                            bool first = false);
 
 // Creates the folder a command writes into (and its parents); throws
 // ExportInputError naming it and the system's reason where it cannot (as

@@ -2236,7 +2236,7 @@ TEST(Export, WholePlyOfASymmetryModelIsTheMirroredRuns) {
 TEST(Blank, CutPatternOfARunIsFoundOnItsMesh) {
   const auto dir = temp_dir("blank");
   json j = short_hemisphere(0.5, 0.25, 6);
-  j["output"]["fields"] = {"displacement"};
+  j["output"]["fields"] = {"displacement", "fibre_direction"};
   std::ofstream(dir / "job.json") << j.dump(2);
   ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "run")).exit_code, 0);
   ASSERT_EQ(thermostamp("export " + q(dir / "run") + " --out " + q(dir / "mesh")).exit_code, 0);
@@ -2248,7 +2248,7 @@ TEST(Blank, CutPatternOfARunIsFoundOnItsMesh) {
                          ": ply 'ply_top' at t = 0.5 s (frames/000002 of results.h5, 3 frames): 1 outline, "),
               std::string::npos)
         << r.out;
-    EXPECT_NE(r.out.find("; " + (dir / "pattern" / "ply_bottom.dxf").string() + "\n"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("; " + (dir / "pattern" / "ply_bottom.dxf").string() + " with "), std::string::npos) << r.out;
     const json doc = read_job_document(dir / "pattern" / "blank.json");
     EXPECT_EQ(doc["trims"], json::array({trim}));
     EXPECT_EQ(doc["frame"], "frames/000002");
@@ -2336,10 +2336,25 @@ assert worst < 1e-6, worst
 xs = [p[0] for p in blank[0].points()]
 ys = [p[1] for p in blank[0].points()]
 assert abs(min(xs)) < 1e-9 and abs(max(xs) - 150) < 1e-9 and abs(max(ys) - 150) < 1e-9, (min(xs), max(xs), max(ys))
+# The fibre marks: along the fibres, [1, -1, 0] (the quarter, not mirrored), inside the pattern.
+from matplotlib.path import Path
+marks = [e for e in doc.modelspace() if e.dxftype() == "LINE" and e.dxf.layer == "FIBRE"]
+assert len(marks) == int(sys.argv[3]), (len(marks), sys.argv[3])
+inside = Path([(p[0], p[1]) for p in pattern[0].points()])
+for e in marks:
+    s, t = e.dxf.start, e.dxf.end
+    assert abs((t[0] - s[0]) + (t[1] - s[1])) < 1e-7, (s, t)  # 10 digits in the file
+    mid = ((s[0] + t[0]) / 2, (s[1] + t[1]) / 2)
+    assert inside.contains_point(mid, radius=1e-6) or inside.contains_point(mid, radius=-1e-6), mid
 print("ok")
 )";
+      const json info = read_job_document(dir / "pattern" / "blank.json")["plies"][ply];
+      EXPECT_GT(info["fibre_marks"].get<int>(), trim == plane ? 30 : 50) << ply << " " << trim;
+      // Of 1, 2, 5 x 10^n, the nearest to the pattern's extent / 15: 0.1 m (cylinder), 0.15 m (plane).
+      EXPECT_EQ(info["fibre_mark_spacing_m"], trim == plane ? 0.01 : 0.005) << ply << " " << trim;
       EXPECT_EQ(std::system(("/usr/bin/python3 " + q(dir / "dxf.py") + " " + q(dir / "pattern" / (ply + ".dxf")) +
-                             " " + q(dir / "pattern" / (ply + ".csv")) + " >/dev/null")
+                             " " + q(dir / "pattern" / (ply + ".csv")) + " " + info["fibre_marks"].dump() +
+                             " >/dev/null")
                                 .c_str()),
                 0)
           << ply << " " << trim;
@@ -2375,6 +2390,36 @@ print("ok")
         << ply;
     EXPECT_EQ(b["mirrored"], json::array({"x", "y"}));
   }
+  // Whole, the marks follow the mirror images of the fibres: [1, -1, 0]
+  // where x and y have the same sign, [1, 1, 0] where they have not.
+  std::ofstream(dir / "quadrants.py") << R"(import sys, ezdxf
+marks = [e for e in ezdxf.readfile(sys.argv[1]).modelspace() if e.dxftype() == "LINE" and e.dxf.layer == "FIBRE"]
+off = 0
+for e in marks:
+    s, t = e.dxf.start, e.dxf.end
+    mx, my = (s[0] + t[0]) / 2, (s[1] + t[1]) / 2
+    if abs(mx) < 1e-9 or abs(my) < 1e-9:
+        continue  # on a plane: either
+    along = (t[0] - s[0]) * (t[1] - s[1])  # < 0 along [1, -1], > 0 along [1, 1]
+    off += (along > 0) == (mx * my > 0)
+assert off == 0 and len(marks) > 200, (off, len(marks))
+print("ok")
+)";
+  EXPECT_EQ(std::system(("/usr/bin/python3 " + q(dir / "quadrants.py") + " " + q(dir / "whole" / "ply_top.dxf") +
+                         " >/dev/null")
+                            .c_str()),
+            0);
+  // Frames without fibre_direction: no marks, and the line says so.
+  json plain = short_hemisphere(0.01, 0.01, 4);
+  plain["output"]["fields"] = {"displacement"};
+  std::ofstream(dir / "plain.json") << plain.dump(2);
+  ASSERT_EQ(thermostamp("run " + q(dir / "plain.json") + " --quiet --out " + q(dir / "plain")).exit_code, 0);
+  const auto p = thermostamp("blank " + q(dir / "plain") + " --trim " + cylinder);
+  ASSERT_EQ(p.exit_code, 0) << p.err;
+  EXPECT_NE(p.out.find("ply_top.dxf without fibre marks (the frames hold no fibre_direction)\n"), std::string::npos)
+      << p.out;
+  EXPECT_EQ(read_job_document(dir / "plain" / "blank" / "blank.json")["plies"]["ply_top"]["fibre_marks_left_out"],
+            "the first frame holds no fibre_direction (output.fields)");
   // A trim line drawn in CAD: an outline in plan view written by ezdxf
   // (DXF R2010 in mm, with an extrusion along -z on a copy, whose x is
   // mirrored), against the same outline in a CSV file in m.

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -521,6 +522,71 @@ TEST(Blank, PolygonFromADxfFileWithArcsAndAHole) {
   EXPECT_EQ(refused("polygon:" + flag), "--trim 'polygon:" + flag + "': '" + flag +
                                             "' line 8: expected an integer, found '1e300'");
   std::filesystem::remove_all(dir);
+}
+
+
+// Fibre marks: on a flat plate 120 x 80 mm (irregular triangles, fibres at
+// 30 degrees in its first half and 120 degrees in the other, as a field
+// per triangle), trimmed to 13.3 < x < 101.7 mm, with a grid of 10 mm: a
+// mark at every grid point inside the trim, the blank's edges included
+// (9 x 9 of them), 6 mm long, centred on it, along the fibres of its
+// triangle. (Within about an element of a corner of two trims, where the
+// level is the larger of two, a point inside may be left out, as the
+// pattern's outline cuts that corner.)
+TEST(Blank, FibreMarksFollowTheFibresOfTheirTriangles) {
+  ShellMesh m = rectangle_mesh({0, 0, 0}, {0.12, 0.08}, {12, 8});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> jiggle(-0.0025, 0.0025);
+  for (std::size_t i = 0; i < m.x.size(); i += 3) {
+    const bool edge_x = m.x[i] < 1e-12 || m.x[i] > 0.12 - 1e-12, edge_y = m.x[i + 1] < 1e-12 || m.x[i + 1] > 0.08 - 1e-12;
+    if (!edge_x) m.x[i] += jiggle(rng);
+    if (!edge_y) m.x[i + 1] += jiggle(rng);
+  }
+  const std::size_t tris = m.triangles.size() / 3;
+  std::vector<double> fibre(3 * tris);
+  auto centre_x = [&](std::size_t e) {
+    double c = 0;
+    for (int k = 0; k < 3; ++k) c += m.x[3 * static_cast<std::size_t>(m.triangles[3 * e + k])] / 3;
+    return c;
+  };
+  for (std::size_t e = 0; e < tris; ++e) {
+    const double a = (centre_x(e) < 0.06 ? 30.0 : 120.0) * M_PI / 180;
+    fibre[3 * e] = std::cos(a);
+    fibre[3 * e + 1] = std::sin(a);
+  }
+  const std::vector<TrimSurface> trims = {parse_trim("plane:0.0133,0,0,1,0,0"), parse_trim("plane:0.1017,0,0,-1,0,0")};
+  const auto marks = fibre_marks(m.x, m.x, m.triangles, trims, fibre, {1, 0, 0}, {0, 1, 0}, 0.01);
+  ASSERT_EQ(marks.size(), 9u * 9u);  // x = 20 ... 100 mm, y = 0 ... 80 mm
+  std::set<std::pair<long, long>> at;
+  for (const FibreMark& k : marks) {
+    const double cx = (k.from[0] + k.to[0]) / 2, cy = (k.from[1] + k.to[1]) / 2;
+    const long i = std::lround(cx / 0.01), j = std::lround(cy / 0.01);
+    EXPECT_NEAR(cx, 0.01 * static_cast<double>(i), 1e-15);
+    EXPECT_NEAR(cy, 0.01 * static_cast<double>(j), 1e-15);
+    at.emplace(i, j);
+    EXPECT_NEAR(std::hypot(k.to[0] - k.from[0], k.to[1] - k.from[1]), 0.006, 1e-15);
+    EXPECT_EQ(k.from[2], 0.0);
+    // The triangle the point lies in: its fibres.
+    int found = -1;
+    for (std::size_t e = 0; e < tris && found < 0; ++e) {
+      double u[3], v[3];
+      for (int q = 0; q < 3; ++q) {
+        u[q] = m.x[3 * static_cast<std::size_t>(m.triangles[3 * e + q])];
+        v[q] = m.x[3 * static_cast<std::size_t>(m.triangles[3 * e + q]) + 1];
+      }
+      const double det = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
+      const double b1 = ((cx - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (cy - v[0])) / det;
+      const double b2 = ((u[1] - u[0]) * (cy - v[0]) - (cx - u[0]) * (v[1] - v[0])) / det;
+      if (b1 >= -1e-12 && b2 >= -1e-12 && 1 - b1 - b2 >= -1e-12) found = static_cast<int>(e);
+    }
+    ASSERT_GE(found, 0);
+    const double cross = (k.to[0] - k.from[0]) * fibre[3 * static_cast<std::size_t>(found) + 1] -
+                         (k.to[1] - k.from[1]) * fibre[3 * static_cast<std::size_t>(found)];
+    EXPECT_NEAR(cross, 0.0, 1e-15) << "along the fibres of triangle " << found;
+  }
+  EXPECT_EQ(at.size(), marks.size()) << "one mark a point";
+  EXPECT_EQ(at.begin()->first, 2);
+  EXPECT_EQ(at.rbegin()->first, 10);
 }
 
 }  // namespace
