@@ -653,6 +653,19 @@ std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vec
           mk.from[q] = c[q] - half * dir;
           mk.to[q] = c[q] + half * dir;
         }
+        // The ends formed: their barycentric coordinates in the blank's triangle, on its corners formed.
+        for (const int end : {0, 1}) {
+          const double qu = pu + (end ? half : -half) * d[0], qv = pv + (end ? half : -half) * d[1];
+          const double c1 = ((qu - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (qv - v[0])) / det;
+          const double c2 = ((u[1] - u[0]) * (qv - v[0]) - (qu - u[0]) * (v[1] - v[0])) / det;
+          const double w[3] = {1 - c1 - c2, c1, c2};
+          Vec f{0, 0, 0};
+          for (int k = 0; k < 3; ++k) {
+            const Vec p = at(x, static_cast<std::size_t>(tri[3 * e + k]));
+            for (int q = 0; q < 3; ++q) f[q] += w[k] * p[q];
+          }
+          (end ? mk.formed_to : mk.formed_from) = f;
+        }
         marks.push_back(mk);
       }
   }
@@ -756,7 +769,8 @@ bool write_dxf(const std::filesystem::path& file, const BlankPly& ply) {
   return static_cast<bool>(f);
 }
 
-bool write_csv(const std::filesystem::path& file, const CutPattern& pattern, const CutPattern& edge) {
+bool write_csv(const std::filesystem::path& file, const CutPattern& pattern, const CutPattern& edge,
+               const std::vector<FibreMark>& marks) {
   std::ofstream f(file);
   if (!f) return false;
   auto num = [](double v) {
@@ -775,6 +789,13 @@ bool write_csv(const std::filesystem::path& file, const CutPattern& pattern, con
         for (const double v : q.formed) f << ',' << num(v);
         f << '\n';
       }
+  for (std::size_t k = 0; k < marks.size(); ++k)
+    for (const int end : {0, 1}) {
+      f << "fibre," << k << ',' << end << ",0";
+      for (const double v : end ? marks[k].to : marks[k].from) f << ',' << num(v);
+      for (const double v : end ? marks[k].formed_to : marks[k].formed_from) f << ',' << num(v);
+      f << '\n';
+    }
   f.close();
   return static_cast<bool>(f);
 }
@@ -834,7 +855,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
       ply.marks = fibre_marks(d.x0, d.x, d.tri, trims, *fibre, axes[0], axes[1], ply.mark_spacing);
     }
     ply.csv = out / (d.name + ".csv");
-    if (!write_csv(ply.csv, ply.pattern, ply.blank))
+    if (!write_csv(ply.csv, ply.pattern, ply.blank, ply.marks))
       throw std::runtime_error("cannot write '" + ply.csv.string() + "'");
     if (ply.flat) {
       ply.dxf = out / (d.name + ".dxf");

@@ -80,9 +80,11 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
                        const std::vector<TrimSurface>& trims);
 
 // A fibre mark of a pattern: a short line along the fibres at a point of
-// the pattern, in the blank (m).
+// the pattern, in the blank (m), and its ends formed, by the map of the
+// triangle its middle lies in (linear in the triangle).
 struct FibreMark {
   std::array<double, 3> from{}, to{};
+  std::array<double, 3> formed_from{}, formed_to{};
 };
 
 // Fibre marks at the points of a square grid of spacing `spacing` in the

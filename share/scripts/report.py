@@ -49,9 +49,9 @@ Writes into DIR/figures/:
   energy.png           energy audit against time
   blank_<part>.png     each ply's cut pattern (thermostamp blank, when
                        DIR/blank/blank.json is there): the pattern in the
-                       blank, the blank's edge, and the edge formed (its
-                       draw-in), seen from the side the blank's normal
-                       points to
+                       blank with its fibre marks, the blank's edge, and
+                       the edge formed (its draw-in), seen from the side
+                       the blank's normal points to
   materials.png        the specific heat and the conductivity against the
                        temperature of every material whose values
                        follow it (rows, held beyond the first and the
@@ -368,11 +368,16 @@ def plot_blank(folder, out):
                     if kind == "pattern":
                         ax.fill(u, v, color="tab:red", alpha=0.15, lw=0)
                     ax.plot(u, v, st, lw=1.2 if pos == "blank" else 0.8, label=label if k == 0 else None)
+        ends = [r for r in rows if r["kind"] == "fibre"]
+        for k, (a, b) in enumerate(zip(ends[0::2], ends[1::2])):
+            xyz = np.array([[float(r["blank_%s_m" % c]) for c in "xyz"] for r in (a, b)])
+            ax.plot(1e3 * xyz.dot(e1), 1e3 * xyz.dot(e2), "-", color="tab:blue", lw=0.6,
+                    label="the fibres (marks)" if k == 0 else None)
         ax.set_aspect("equal")
         ax.set_xlabel("mm")
         ax.set_ylabel("mm")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
         ax.set_title("%s: cut pattern, t = %.3g s\n%.1f %% of the blank (%.4g m^2 formed), "
                      "edge drawn in up to %.3g mm\ntrim: %s" % (part, info["time_s"], 100 * p["kept_share"], p["kept_formed_area_m2"],
                                    1e3 * p.get("edge_displacement_max_m", float("nan")), ", ".join(info["trims"])),

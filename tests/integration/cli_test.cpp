@@ -2271,10 +2271,14 @@ TEST(Blank, CutPatternOfARunIsFoundOnItsMesh) {
       ASSERT_GT(rows.size(), 10u);
       EXPECT_EQ(rows[0], (std::vector<std::string>{"kind", "outline", "point", "on_trim", "blank_x_m", "blank_y_m",
                                                    "blank_z_m", "formed_x_m", "formed_y_m", "formed_z_m"}));
-      int edge_rows = 0;
+      int edge_rows = 0, fibre_rows = 0;
       int on_trim = 0;
       double offset = 0;
       for (std::size_t i = 1; i < rows.size(); ++i) {
+        if (rows[i][0] == "fibre") {  // a fibre mark's end: against the DXF below
+          ++fibre_rows;
+          continue;
+        }
         std::array<double, 3> X{}, x{};
         for (int d = 0; d < 3; ++d) {
           X[static_cast<std::size_t>(d)] = std::stod(rows[i][static_cast<std::size_t>(4 + d)]);
@@ -2310,6 +2314,8 @@ TEST(Blank, CutPatternOfARunIsFoundOnItsMesh) {
       }
       EXPECT_GT(on_trim, 5) << ply;
       EXPECT_EQ(edge_rows, 4 * 6) << ply << ": the quarter's 6 x 6 cells";
+      const json marks_info = read_job_document(dir / "pattern" / "blank.json")["plies"][ply];
+      EXPECT_EQ(fibre_rows, 2 * marks_info["fibre_marks"].get<int>()) << ply;
       // The cylinder: the chord's offset, h^2 / (8 (r - h)), h = 0.025 / cos 45 deg.
       EXPECT_LE(offset, trim == plane ? 1e-15 : 0.035 * 0.035 / (8 * (0.1 - 0.035))) << ply;
       // The DXF, by ezdxf.
@@ -2340,6 +2346,10 @@ assert abs(min(xs)) < 1e-9 and abs(max(xs) - 150) < 1e-9 and abs(max(ys) - 150) 
 from matplotlib.path import Path
 marks = [e for e in doc.modelspace() if e.dxftype() == "LINE" and e.dxf.layer == "FIBRE"]
 assert len(marks) == int(sys.argv[3]), (len(marks), sys.argv[3])
+ends = [r for r in csv.DictReader(open(sys.argv[2])) if r["kind"] == "fibre"]
+assert len(ends) == 2 * len(marks)
+for e, a, b in zip(marks, ends[0::2], ends[1::2]):
+    assert apart(e.dxf.start, a) < 1e-6 and apart(e.dxf.end, b) < 1e-6, (e.dxf.start, a, b)
 inside = Path([(p[0], p[1]) for p in pattern[0].points()])
 for e in marks:
     s, t = e.dxf.start, e.dxf.end

@@ -530,7 +530,8 @@ TEST(Blank, PolygonFromADxfFileWithArcsAndAHole) {
 // per triangle), trimmed to 13.3 < x < 101.7 mm, with a grid of 10 mm: a
 // mark at every grid point inside the trim, the blank's edges included
 // (9 x 9 of them), 6 mm long, centred on it, along the fibres of its
-// triangle. (Within about an element of a corner of two trims, where the
+// triangle; their ends formed by an affine map are the map's images of
+// them. (Within about an element of a corner of two trims, where the
 // level is the larger of two, a point inside may be left out, as the
 // pattern's outline cuts that corner.)
 TEST(Blank, FibreMarksFollowTheFibresOfTheirTriangles) {
@@ -555,7 +556,13 @@ TEST(Blank, FibreMarksFollowTheFibresOfTheirTriangles) {
     fibre[3 * e + 1] = std::sin(a);
   }
   const std::vector<TrimSurface> trims = {parse_trim("plane:0.0133,0,0,1,0,0"), parse_trim("plane:0.1017,0,0,-1,0,0")};
-  const auto marks = fibre_marks(m.x, m.x, m.triangles, trims, fibre, {1, 0, 0}, {0, 1, 0}, 0.01);
+  // Formed: a stretch, a shear and a turn out of the plane, x = A X + b
+  // (the trims' planes x = const are kept by it: A's first row is (1, 0, 0)).
+  std::vector<double> x(m.x.size());
+  const double A[3][3] = {{1.0, 0.0, 0.0}, {0.2, 1.1, 0.0}, {0.0, 0.3, 1.0}}, b[3] = {0.0, 0.01, 0.02};
+  for (std::size_t i = 0; i < x.size(); i += 3)
+    for (int r = 0; r < 3; ++r) x[i + r] = A[r][0] * m.x[i] + A[r][1] * m.x[i + 1] + A[r][2] * m.x[i + 2] + b[r];
+  const auto marks = fibre_marks(m.x, x, m.triangles, trims, fibre, {1, 0, 0}, {0, 1, 0}, 0.01);
   ASSERT_EQ(marks.size(), 9u * 9u);  // x = 20 ... 100 mm, y = 0 ... 80 mm
   std::set<std::pair<long, long>> at;
   for (const FibreMark& k : marks) {
@@ -566,6 +573,10 @@ TEST(Blank, FibreMarksFollowTheFibresOfTheirTriangles) {
     at.emplace(i, j);
     EXPECT_NEAR(std::hypot(k.to[0] - k.from[0], k.to[1] - k.from[1]), 0.006, 1e-15);
     EXPECT_EQ(k.from[2], 0.0);
+    for (int r = 0; r < 3; ++r) {  // the ends formed: by the affine map
+      EXPECT_NEAR(k.formed_from[r], A[r][0] * k.from[0] + A[r][1] * k.from[1] + b[r], 1e-15);
+      EXPECT_NEAR(k.formed_to[r], A[r][0] * k.to[0] + A[r][1] * k.to[1] + b[r], 1e-15);
+    }
     // The triangle the point lies in: its fibres.
     int found = -1;
     for (std::size_t e = 0; e < tris && found < 0; ++e) {
