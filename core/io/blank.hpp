@@ -1,10 +1,11 @@
 #pragma once
 // `thermostamp blank DIR --trim SURFACE`: the cut pattern of each ply. The
-// part is trimmed on the formed ply (a plane, a cylinder or a sphere, in
-// the run's coordinates); the pattern is the region of the blank, the ply
-// as the run started, that the forming carries into the part: its outlines
-// in the blank, the blank's area kept and the part's area, as CSV, DXF (for
-// a cutting table) and JSON.
+// part is trimmed on the formed ply (a plane, a cylinder, a sphere or an
+// outline in plan view, in the run's coordinates); the pattern is the
+// region of the blank, the ply as the run started, that the forming
+// carries into the part: its outlines in the blank, the blank's area kept
+// and the part's area, with marks along the fibres, as CSV, DXF (for a
+// cutting table) and JSON.
 #include <array>
 #include <filesystem>
 #include <optional>
@@ -34,10 +35,10 @@ struct TrimSurface {
 };
 
 // Throws ExportInputError ("--trim 'TEXT': what is wrong") for text that is
-// no trim surface, or a polygon file that cannot be read, holds no closed
-// polygon, has a ring of fewer than 3 vertices, a vertex twice in a row,
-// no area or sides that cross or touch, or a DXF file that does not give
-// its units and no scale.
+// no trim surface, numbers beyond 1e6 m, or a polygon file that cannot be
+// read, holds no closed polygon, has a ring of fewer than 3 vertices, a
+// vertex twice in a row, no area or sides that cross or touch, or a DXF
+// file that does not give its units and no scale.
 TrimSurface parse_trim(const std::string& text);
 
 // The level of a point x (m): at most 0 in the part, above 0 outside; the
