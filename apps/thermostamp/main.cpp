@@ -37,7 +37,8 @@ constexpr const char* kUsage = R"(usage:
   thermostamp report DIR [--against OTHER]   # PNG figures into DIR/figures (with OTHER: both runs on the same axes)
   thermostamp compare DIR_A DIR_B [--json] [--rtol R] [--from T]   # how far two runs' results are apart
   thermostamp export DIR [--time T] [--out FOLDER] [--whole] [--format gmsh|abaqus|calculix]   # each ply as a mesh
-  thermostamp blank DIR --trim SURFACE [--trim SURFACE ...] [--time T] [--out FOLDER] [--whole]   # cut patterns
+  thermostamp blank DIR --trim SURFACE [--trim SURFACE ...] [--margin M] [--time T] [--out FOLDER] [--whole]
+                  # cut patterns
   thermostamp --version
 
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
@@ -95,7 +96,9 @@ SCALE m per unit, for a DXF file from its $INSUNITS);
 writes FOLDER/<ply>.csv (default DIR/blank: the pattern's outlines, each
 point in the blank and formed), FOLDER/<ply>.dxf where the blank is flat
 (the pattern and the blank's outline in its plane, mm) and
-FOLDER/blank.json (areas, lengths); --whole: mirrored as with export
+FOLDER/blank.json (areas, lengths); --margin M: the trim line moved out by
+M m on the formed part (an allowance; below 0, in); --whole: mirrored as
+with export
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -122,6 +125,7 @@ struct Args {
   bool whole = false;          // export: mirrored at the symmetry planes
   ts::ExportFormat format = ts::ExportFormat::Gmsh;  // export: --format
   std::vector<std::string> trims;    // blank: the --trim surfaces, as written
+  double margin = 0;                 // blank: --margin (m)
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -138,7 +142,7 @@ const std::map<std::string, std::vector<std::string>>& command_options() {
       {"report", {"--against"}},
       {"compare", {"--json", "--rtol", "--from"}},
       {"export", {"--time", "--out", "--whole", "--format"}},
-      {"blank", {"--trim", "--time", "--out", "--whole"}}};
+      {"blank", {"--trim", "--margin", "--time", "--out", "--whole"}}};
   return m;
 }
 
@@ -200,6 +204,15 @@ Args parse(int argc, char** argv) {
       a.restart = true;
     } else if (s == "--trim") {
       a.trims.push_back(value(s));
+    } else if (s == "--margin") {
+      const std::string t = value(s);
+      try {
+        std::size_t used = 0;
+        a.margin = std::stod(t, &used);
+        if (used != t.size() || !std::isfinite(a.margin)) throw std::invalid_argument(t);
+      } catch (const std::exception&) {
+        throw UsageError("--margin expects a length in m, found '" + t + "'");
+      }
     } else if (s == "--whole") {
       a.whole = true;
     } else if (s == "--format") {
@@ -404,12 +417,16 @@ int cmd_blank(const Args& a) {
   try {
     std::vector<ts::TrimSurface> trims;
     for (const auto& t : a.trims) trims.push_back(ts::parse_trim(t));
-    r = ts::blank_plies(dir, a.time, a.out.empty() ? dir / "blank" : std::filesystem::path(a.out), a.whole, trims);
+    r = ts::blank_plies(dir, a.time, a.out.empty() ? dir / "blank" : std::filesystem::path(a.out), a.whole, trims,
+                        a.margin);
   } catch (const std::exception& e) {  // 2: no pattern as asked; 3: a file that cannot be read or written
     std::cerr << "error: blank: " << e.what() << "\n";
     return dynamic_cast<const ts::ExportInputError*>(&e) ? 2 : 3;
   }
-  char line[400];
+  char line[600];
+  char moved[64];
+  std::snprintf(moved, sizeof moved, "%s by %g mm", a.margin > 0 ? "out" : "in", std::abs(1000 * a.margin));
+  const std::string margin_text = moved;
   for (const auto& p : r.plies) {
     const auto& c = p.pattern;
     std::size_t trimmed = 0;
@@ -422,7 +439,9 @@ int cmd_blank(const Args& a) {
                   "ply '%s' at t = %.6g s (frames/%06d of results.h5, %d frames)%s: %zu outline%s, %.4g %% of the "
                   "blank's %.6g m^2 (%.6g m^2 formed), trim line %.6g m in the blank",
                   p.name.c_str(), r.time, r.frame, r.frames,
-                  p.mirrored.empty() ? "" : (", mirrored at " + ts::join(p.mirrored, " = 0, ") + " = 0").c_str(),
+                  (p.mirrored.empty() ? std::string() : ", mirrored at " + ts::join(p.mirrored, " = 0, ") + " = 0")
+                      .append(a.margin == 0 ? std::string() : ", the trim line moved " + margin_text)
+                      .c_str(),
                   c.outlines.size(), c.outlines.size() == 1 ? "" : "s",
                   c.blank_area > 0 ? 100 * c.kept_blank_area / c.blank_area : 0.0, c.blank_area, c.kept_formed_area,
                   cut);

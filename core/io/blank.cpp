@@ -463,7 +463,7 @@ double trim_level(const std::vector<TrimSurface>& trims, const double* x) {
 }
 
 CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
-                       const std::vector<TrimSurface>& trims) {
+                       const std::vector<TrimSurface>& trims, double margin) {
   const std::size_t n = x0.size() / 3, m = tri.size() / 3;
   if (x.size() != x0.size()) throw std::runtime_error("the blank and the formed ply have other numbers of nodes");
   for (std::size_t k = 0; k < x0.size(); ++k)
@@ -473,7 +473,7 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
   if (!trims.empty()) {
     const long long nodes = static_cast<long long>(n);
 #pragma omp parallel for schedule(static) if (nodes > 4096)
-    for (long long i = 0; i < nodes; ++i) level[static_cast<std::size_t>(i)] = trim_level(trims, &x[3 * i]);
+    for (long long i = 0; i < nodes; ++i) level[static_cast<std::size_t>(i)] = trim_level(trims, &x[3 * i]) - margin;
     for (std::size_t i = 0; i < n; ++i)
       if (!std::isfinite(level[i]))
         throw std::runtime_error("the distance of node " + std::to_string(i) + " to the trim is not finite");
@@ -603,11 +603,11 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
 std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vector<double>& x,
                                    const std::vector<int>& tri, const std::vector<TrimSurface>& trims,
                                    const std::vector<double>& fibre, const std::array<double, 3>& e1,
-                                   const std::array<double, 3>& e2, double spacing) {
+                                   const std::array<double, 3>& e2, double spacing, double margin) {
   const std::size_t n = x0.size() / 3, m = tri.size() / 3;
   std::vector<double> level(n, -1.0);
   if (!trims.empty())
-    for (std::size_t i = 0; i < n; ++i) level[i] = trim_level(trims, &x[3 * i]);
+    for (std::size_t i = 0; i < n; ++i) level[i] = trim_level(trims, &x[3 * i]) - margin;
   std::vector<FibreMark> marks;
   std::set<std::pair<long long, long long>> taken;  // grid points already marked
   for (std::size_t e = 0; e < m; ++e) {
@@ -803,8 +803,10 @@ bool write_csv(const std::filesystem::path& file, const CutPattern& pattern, con
 }  // namespace
 
 BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> time,
-                        const std::filesystem::path& out, bool whole, const std::vector<TrimSurface>& trims) {
+                        const std::filesystem::path& out, bool whole, const std::vector<TrimSurface>& trims,
+                        double margin) {
   if (trims.empty()) throw ExportInputError("no --trim: give the surface the part is trimmed at");
+  if (!(std::abs(margin) <= kFar)) throw ExportInputError("--margin " + g(margin) + ": beyond 1e6 (m)");
   FramePlies frame = read_frame_plies(dir, time, whole, false);
   for (const FramePly& d : frame.plies)
     for (std::size_t k = 0; k < d.x.size(); ++k)
@@ -823,6 +825,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
   doc["results"] = frame.h5.string();
   doc["trims"] = nlohmann::json::array();
   for (const TrimSurface& t : trims) doc["trims"].push_back(t.text);
+  doc["margin_m"] = margin;
   doc["plies"] = nlohmann::json::object();
   // The fibre directions of the blank: the first frame's field.
   const FramePlies first = read_frame_plies(dir, std::nullopt, whole, true, true);
@@ -831,7 +834,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     ply.name = d.name;
     ply.mirrored = d.mirrored;
     try {
-      ply.pattern = cut_pattern(d.x0, d.x, d.tri, trims);
+      ply.pattern = cut_pattern(d.x0, d.x, d.tri, trims, margin);
       ply.blank = cut_pattern(d.x0, d.x, d.tri, {});
     } catch (const std::exception& e) {
       throw std::runtime_error("ply '" + d.name + "': " + e.what());
@@ -852,7 +855,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
             hi[c] = std::max(hi[c], dot(q.blank, axes[static_cast<std::size_t>(c)]));
           }
       ply.mark_spacing = mark_spacing(std::max(hi[0] - lo[0], hi[1] - lo[1]));
-      ply.marks = fibre_marks(d.x0, d.x, d.tri, trims, *fibre, axes[0], axes[1], ply.mark_spacing);
+      ply.marks = fibre_marks(d.x0, d.x, d.tri, trims, *fibre, axes[0], axes[1], ply.mark_spacing, margin);
     }
     ply.csv = out / (d.name + ".csv");
     if (!write_csv(ply.csv, ply.pattern, ply.blank, ply.marks))

@@ -77,8 +77,12 @@ struct CutPattern {
 // trims the pattern is the whole blank (its outlines, its edges). Throws
 // std::runtime_error for triangles that are not alike oriented (a
 // boundary that does not close) or non-finite positions.
+//
+// margin (m): the trim line moved out by it on the formed part (the level
+// less the margin), an allowance the pattern takes beyond the part's edge;
+// below 0, in.
 CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
-                       const std::vector<TrimSurface>& trims);
+                       const std::vector<TrimSurface>& trims, double margin = 0);
 
 // A fibre mark of a pattern: a short line along the fibres at a point of
 // the pattern, in the blank (m), and its ends formed, by the map of the
@@ -90,15 +94,15 @@ struct FibreMark {
 
 // Fibre marks at the points of a square grid of spacing `spacing` in the
 // blank's plane (axes e1, e2, through the origin) that lie in the pattern
-// (the trims' level at the formed positions x, linear in each triangle, at
-// most 0), each along the fibre direction `fibre` (3 per triangle, as the
+// (the trims' level at the formed positions x less the margin, linear in
+// each triangle, at most 0), each along the fibre direction `fibre` (3 per triangle, as the
 // frames' field fibre_direction) of the triangle it lies in, projected into
 // the plane, 0.6 spacing long, centred on the point; a point on an edge
 // goes to the first triangle that has it.
 std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vector<double>& x,
                                    const std::vector<int>& tri, const std::vector<TrimSurface>& trims,
                                    const std::vector<double>& fibre, const std::array<double, 3>& e1,
-                                   const std::array<double, 3>& e2, double spacing);
+                                   const std::array<double, 3>& e2, double spacing, double margin = 0);
 
 struct BlankPly {
   std::string name;
@@ -130,6 +134,7 @@ struct BlankResult {
 // input that cannot give a pattern, std::runtime_error where the results
 // cannot be read or the files written.
 BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> time,
-                        const std::filesystem::path& out, bool whole, const std::vector<TrimSurface>& trims);
+                        const std::filesystem::path& out, bool whole, const std::vector<TrimSurface>& trims,
+                        double margin = 0);
 
 }  // namespace ts

@@ -2490,8 +2490,17 @@ with open(sys.argv[3], "w") as f:
                 " (--out): Not a directory\n");
   EXPECT_EQ(refused(q(dir / "run") + " --trim " + plane + " --time 0.7"),
             "error: blank: no frame at t = 0.69999999999999996 s: the 3 frames are from t = 0 to 0.5 s\n");
+  EXPECT_NE(refused(q(dir / "run") + " --trim " + plane + " --margin 5mm")
+                .find("error: --margin expects a length in m, found '5mm'"),
+            std::string::npos);
+  const auto margin = thermostamp("blank " + q(dir / "run") + " --trim " + plane + " --margin 0.004 --out " +
+                                  q(dir / "margin"));
+  ASSERT_EQ(margin.exit_code, 0) << margin.err;
+  EXPECT_NE(margin.out.find(" frames), the trim line moved out by 4 mm: 1 outline, "), std::string::npos)
+      << margin.out;
+  EXPECT_EQ(read_job_document(dir / "margin" / "blank.json")["margin_m"], 0.004);
   EXPECT_NE(refused(q(dir / "run") + " --trim " + plane + " --format gmsh")
-                .find("error: --format does not apply to 'blank'; its options: --trim, --time, --out, --whole"),
+                .find("error: --format does not apply to 'blank'; its options: --trim, --margin, --time, --out, --whole"),
             std::string::npos);
 }
 

@@ -185,6 +185,19 @@ TEST(Blank, AffineMapsCarryThePreimageOfATrimPlane) {
       EXPECT_NEAR(trim_level({t}, q.formed.data()), 0.0, 1e-16) << "case " << k;
     }
     EXPECT_GE(on_trim, 7) << "case " << k;
+    // With a margin: the trim line moved out (or in) by it on the formed
+    // part, the pattern clipped by the plane moved as much in the preimage.
+    for (const double margin : {0.004, -0.003}) {
+      const CutPattern q = cut_pattern(m.x, x, m.triangles, {t}, margin);
+      ASSERT_EQ(q.outlines.size(), 1u) << "case " << k;
+      // n . (A X + b - q) >= -margin: a X + b Y + d + margin >= 0.
+      EXPECT_NEAR(q.kept_blank_area, area(clip(rect, a, bb, d + margin)), 1e-15) << "case " << k << " " << margin;
+      for (const OutlinePoint& o : q.outlines[0].points) {
+        if (o.on_trim) {
+          EXPECT_NEAR(trim_level({t}, o.formed.data()), margin, 1e-16) << "case " << k;
+        }
+      }
+    }
   }
   // Without a trim, or with one the whole formed ply lies inside: the
   // blank's outline; with one it lies wholly outside of: nothing.
