@@ -284,6 +284,19 @@ def pressure_map(out, part, time, tri, xyz, vals):
     return save(fig, out, "pressure_%s.png" % part, dpi=110, tight=False)
 
 
+def element_map(xyz, tri, values, cmap_name, **scale):
+    """A map of one value per element on a ply's shape (top view, mm),
+    mirrored as the ply is, grey where a value is NaN; scale: vmin and vmax,
+    or norm. Returns the figure, its axes and the last drawn collection."""
+    cmap = plt.get_cmap(cmap_name).copy()
+    cmap.set_bad("lightgrey")
+    fig, ax = plt.subplots(figsize=(5.2, 4.4))
+    for mxy, mtri, v in mirrored(xyz[:, :2], tri, values, True):
+        pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.ma.masked_invalid(v), cmap=cmap,
+                          **scale)
+    return fig, ax, pc
+
+
 def thickness_map(out, part, time, tri, xyz, h, h0):
     """The thickness at constant volume of one ply (per element): its change
     in % from the first frame's (the job's thickness), thicker in red (a
@@ -292,12 +305,7 @@ def thickness_map(out, part, time, tri, xyz, h, h0):
     change = 100.0 * (h / h0 - 1.0)
     finite = change[np.isfinite(change)]
     lim = max(np.abs(finite).max() if finite.size else 0.0, 1e-9)
-    cmap = plt.get_cmap("coolwarm").copy()
-    cmap.set_bad("lightgrey")
-    fig, ax = plt.subplots(figsize=(5.2, 4.4))
-    for mxy, mtri, v in mirrored(xyz[:, :2], tri, change, True):
-        pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.ma.masked_invalid(v), vmin=-lim,
-                          vmax=lim, cmap=cmap)
+    fig, ax, pc = element_map(xyz, tri, change, "coolwarm", vmin=-lim, vmax=lim)
     finish_map(fig, ax, pc, "%s: thickness at constant volume, t = %.3g s\n%.4g to %.4g mm (%+.1f to %+.1f %%)"
                % (part, time, 1e3 * np.nanmin(h), 1e3 * np.nanmax(h), finite.min() if finite.size else np.nan,
                   finite.max() if finite.size else np.nan), "% of the initial thickness")
@@ -311,12 +319,8 @@ def stability_map(out, part, time, tri, xyz, q):
     element had none (collapsed)."""
     finite = q[np.isfinite(q)]
     span = max(np.abs(finite).max() if finite.size else 1.0, 1e-12)
-    cmap = plt.get_cmap("RdBu").copy()
-    cmap.set_bad("lightgrey")
-    fig, ax = plt.subplots(figsize=(5.2, 4.4))
-    for mxy, mtri, v in mirrored(xyz[:, :2], tri, q, True):
-        pc = ax.tripcolor(mxy[:, 0] * 1e3, mxy[:, 1] * 1e3, mtri, facecolors=np.ma.masked_invalid(v),
-                          norm=matplotlib.colors.TwoSlopeNorm(vcenter=0.0, vmin=-span, vmax=span), cmap=cmap)
+    fig, ax, pc = element_map(xyz, tri, q, "RdBu",
+                              norm=matplotlib.colors.TwoSlopeNorm(vcenter=0.0, vmin=-span, vmax=span))
     unstable = np.count_nonzero(finite < 0)
     finish_map(fig, ax, pc, "%s: long-term membrane stiffness q, t = %.3g s\n%d of %d elements below 0 (red), "
                "smallest %.3g N/m" % (part, time, unstable, q.size, finite.min() if finite.size else np.nan), "N/m")
