@@ -371,6 +371,26 @@ double polygon_level(const std::vector<Ring>& rings, double x, double y) {
   return inside ? -std::sqrt(d2) : std::sqrt(d2);
 }
 
+// The level of a point x (m) for one surface: the signed distance, at
+// most 0 in the part.
+double surface_level(const TrimSurface& t, const double* x) {
+  const Vec r{x[0] - t.point[0], x[1] - t.point[1], x[2] - t.point[2]};
+  switch (t.kind) {
+    case TrimSurface::Kind::Plane:
+      return -dot(r, t.direction);
+    case TrimSurface::Kind::Cylinder: {
+      const double a = dot(r, t.direction);
+      const Vec off{r[0] - a * t.direction[0], r[1] - a * t.direction[1], r[2] - a * t.direction[2]};
+      return norm(off) - t.radius;
+    }
+    case TrimSurface::Kind::Sphere:
+      return norm(r) - t.radius;
+    case TrimSurface::Kind::Polygon:
+      return polygon_level(t.rings, x[0], x[1]);
+  }
+  return 0;
+}
+
 }  // namespace
 
 TrimSurface parse_trim(const std::string& text) {
@@ -437,30 +457,427 @@ TrimSurface parse_trim(const std::string& text) {
 
 double trim_level(const std::vector<TrimSurface>& trims, const double* x) {
   double level = -std::numeric_limits<double>::infinity();
-  for (const TrimSurface& t : trims) {
-    const Vec r{x[0] - t.point[0], x[1] - t.point[1], x[2] - t.point[2]};
-    double f = 0;
-    switch (t.kind) {
-      case TrimSurface::Kind::Plane:
-        f = -dot(r, t.direction);
-        break;
-      case TrimSurface::Kind::Cylinder: {
-        const double a = dot(r, t.direction);
-        const Vec off{r[0] - a * t.direction[0], r[1] - a * t.direction[1], r[2] - a * t.direction[2]};
-        f = norm(off) - t.radius;
-        break;
-      }
-      case TrimSurface::Kind::Sphere:
-        f = norm(r) - t.radius;
-        break;
-      case TrimSurface::Kind::Polygon:
-        f = polygon_level(t.rings, x[0], x[1]);
-        break;
-    }
-    level = std::max(level, f);
-  }
+  for (const TrimSurface& t : trims) level = std::max(level, surface_level(t, x));
   return level;
 }
+
+namespace {
+
+// Whether (x, y) lies inside one ring (crossings of a ray along +x).
+bool ring_contains(const Ring& p, double x, double y) {
+  bool inside = false;
+  const std::size_t n = p.size();
+  for (std::size_t k = 0, j = n - 1; k < n; j = k++) {
+    const auto& a = p[j];
+    const auto& b = p[k];
+    if ((a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
+  }
+  return inside;
+}
+
+// A polygon trim in plan view: its sides, each turned so that the part
+// lies on its left (a ring inside an even number of others runs
+// anticlockwise, one inside an odd number, a hole, clockwise), in a grid
+// of cells over their extent that lists the sides reaching into each.
+class PlanPolygon {
+ public:
+  struct Side {
+    std::array<double, 2> a{}, b{};
+    double length = 0;
+  };
+
+  explicit PlanPolygon(const std::vector<Ring>& rings) {
+    lo_[0] = lo_[1] = std::numeric_limits<double>::infinity();
+    hi_[0] = hi_[1] = -std::numeric_limits<double>::infinity();
+    for (std::size_t r = 0; r < rings.size(); ++r) {
+      const Ring& p = rings[r];
+      int depth = 0;
+      for (std::size_t q = 0; q < rings.size(); ++q)
+        if (q != r && ring_contains(rings[q], p[0][0], p[0][1])) ++depth;
+      double area = 0;
+      for (std::size_t k = 0; k < p.size(); ++k) area += cross2({0, 0}, p[k], p[(k + 1) % p.size()]);
+      const bool reverse = (area > 0) != (depth % 2 == 0);
+      for (std::size_t k = 0; k < p.size(); ++k) {
+        Side s{p[k], p[(k + 1) % p.size()], 0};
+        if (reverse) std::swap(s.a, s.b);
+        s.length = std::hypot(s.b[0] - s.a[0], s.b[1] - s.a[1]);
+        for (int d = 0; d < 2; ++d) {
+          lo_[d] = std::min({lo_[d], s.a[static_cast<std::size_t>(d)], s.b[static_cast<std::size_t>(d)]});
+          hi_[d] = std::max({hi_[d], s.a[static_cast<std::size_t>(d)], s.b[static_cast<std::size_t>(d)]});
+        }
+        sides.push_back(s);
+      }
+    }
+    const int n = std::clamp(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(sides.size())))), 1, 1024);
+    n_ = n;
+    for (int d = 0; d < 2; ++d) cell_[d] = (hi_[d] - lo_[d]) / n;
+    cells_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
+    for (std::size_t s = 0; s < sides.size(); ++s) {
+      const Side& e = sides[s];
+      const int c0 = index(0, std::min(e.a[0], e.b[0])), c1 = index(0, std::max(e.a[0], e.b[0]));
+      const int r0 = index(1, std::min(e.a[1], e.b[1])), r1 = index(1, std::max(e.a[1], e.b[1]));
+      for (int r = r0; r <= r1; ++r)
+        for (int c = c0; c <= c1; ++c) cells_[static_cast<std::size_t>(r * n_ + c)].push_back(static_cast<int>(s));
+    }
+  }
+
+  // Inside an odd number of rings: the crossings of a ray along +x,
+  // through the cells of the point's row, each counted in the cell it
+  // lies in.
+  bool inside(double x, double y) const {
+    if (!(x >= lo_[0] && x <= hi_[0] && y >= lo_[1] && y <= hi_[1])) return false;
+    bool in = false;
+    const int r = index(1, y);
+    for (int c = index(0, x); c < n_; ++c)
+      for (const int s : cells_[static_cast<std::size_t>(r * n_ + c)]) {
+        const Side& e = sides[static_cast<std::size_t>(s)];
+        if ((e.a[1] > y) == (e.b[1] > y)) continue;
+        const double xc = std::clamp(e.a[0] + (y - e.a[1]) * (e.b[0] - e.a[0]) / (e.b[1] - e.a[1]),
+                                     std::min(e.a[0], e.b[0]), std::max(e.a[0], e.b[0]));
+        if (x < xc && index(0, xc) == c) in = !in;
+      }
+    return in;
+  }
+
+  // The sides reaching into the cells that the box meets, each once.
+  void near(double x0, double x1, double y0, double y1, std::vector<int>& out) const {
+    out.clear();
+    if (x1 < lo_[0] || x0 > hi_[0] || y1 < lo_[1] || y0 > hi_[1]) return;
+    for (int r = index(1, y0); r <= index(1, y1); ++r)
+      for (int c = index(0, x0); c <= index(0, x1); ++c) {
+        const auto& cell = cells_[static_cast<std::size_t>(r * n_ + c)];
+        out.insert(out.end(), cell.begin(), cell.end());
+      }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+
+  // The signed distance of (x, y) to side s's line, negative on the
+  // part's side, and where it lies along the side (0 at a, 1 at b).
+  double level(int s, double x, double y) const {
+    const Side& e = sides[static_cast<std::size_t>(s)];
+    return -((e.b[0] - e.a[0]) * (y - e.a[1]) - (e.b[1] - e.a[1]) * (x - e.a[0])) / e.length;
+  }
+  double along(int s, double x, double y) const {
+    const Side& e = sides[static_cast<std::size_t>(s)];
+    return ((x - e.a[0]) * (e.b[0] - e.a[0]) + (y - e.a[1]) * (e.b[1] - e.a[1])) / (e.length * e.length);
+  }
+
+  std::vector<Side> sides;
+
+ private:
+  int index(int d, double v) const {
+    const double c = std::floor((v - lo_[d]) / cell_[d]);
+    return static_cast<int>(std::clamp(c, 0.0, static_cast<double>(n_ - 1)));
+  }
+  double lo_[2]{}, hi_[2]{}, cell_[2]{};
+  int n_ = 1;
+  std::vector<std::vector<int>> cells_;
+};
+
+// The trims as a ply's pattern takes them: each plane, cylinder and
+// sphere (and each polygon given with a margin) as its level less the
+// margin at every formed node, linear in each triangle; each polygon
+// without a margin as its sides in plan view, exact in each triangle,
+// and whether each node lies inside it.
+struct Trimming {
+  std::vector<std::vector<double>> linear;  // [trim][node], m
+  std::vector<PlanPolygon> polygons;
+  std::vector<std::vector<char>> node_inside;  // [polygon][node]
+};
+
+Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurface>& trims, double margin) {
+  Trimming t;
+  const long long n = static_cast<long long>(x.size() / 3);
+  for (const TrimSurface& s : trims) {
+    if (s.kind == TrimSurface::Kind::Polygon && margin == 0) {
+      const PlanPolygon& p = t.polygons.emplace_back(s.rings);
+      auto& in = t.node_inside.emplace_back(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static) if (n > 4096)
+      for (long long i = 0; i < n; ++i) in[static_cast<std::size_t>(i)] = p.inside(x[3 * i], x[3 * i + 1]);
+      continue;
+    }
+    auto& l = t.linear.emplace_back(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static) if (n > 4096)
+    for (long long i = 0; i < n; ++i) l[static_cast<std::size_t>(i)] = surface_level(s, &x[3 * i]) - margin;
+    for (long long i = 0; i < n; ++i)
+      if (!std::isfinite(l[static_cast<std::size_t>(i)]))
+        throw std::runtime_error("the distance of node " + std::to_string(i) + " to the trim is not finite");
+  }
+  return t;
+}
+
+// A point of a triangle by its barycentric weights on the corners.
+struct Weights {
+  double w[3] = {0, 0, 0};
+};
+
+// A piece of the boundary of a triangle's part of the pattern, the
+// pattern on its left: on the trim (a trim surface or a polygon's side)
+// or along one of the triangle's edges; emitted when it belongs to the
+// pattern's outline (not along an edge that another triangle shares).
+struct Piece {
+  Weights a, b;
+  bool trim_a = false, trim_b = false, trim = false, emit = false;
+};
+
+// The part of one triangle inside every trim, as the pieces of its
+// boundary: those of the triangle's edges inside the trims, and those of
+// each trim's zero line (or polygon side) inside the triangle and the
+// other trims. A plane's line and a polygon's sides are exact in the
+// triangle, so that where two of them meet, the corner is too.
+class TriangleCut {
+ public:
+  TriangleCut(const Trimming& t, const std::vector<double>& x) : t_(t), x_(x) {}
+
+  // The triangle's state: -1 outside the pattern, 1 inside it whole, 0 cut.
+  int prepare(const int c[3]) {
+    for (int k = 0; k < 3; ++k) c_[k] = c[k];
+    lin_.clear();
+    poly_.clear();
+    sides_.clear();
+    for (std::size_t j = 0; j < t_.linear.size(); ++j) {
+      const auto& l = t_.linear[j];
+      const double f0 = l[idx(0)], f1 = l[idx(1)], f2 = l[idx(2)];
+      if (f0 > 0 && f1 > 0 && f2 > 0) return -1;
+      if (f0 < 0 && f1 < 0 && f2 < 0) continue;
+      lin_.push_back(static_cast<int>(j));
+    }
+    double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 2; ++d) {
+        lo[d] = std::min(lo[d], x_[3 * idx(k) + static_cast<std::size_t>(d)]);
+        hi[d] = std::max(hi[d], x_[3 * idx(k) + static_cast<std::size_t>(d)]);
+      }
+    for (std::size_t p = 0; p < t_.polygons.size(); ++p) {
+      const PlanPolygon& poly = t_.polygons[p];
+      poly.near(lo[0], hi[0], lo[1], hi[1], near_);
+      bool reached = false;
+      for (const int s : near_) {
+        SideAt sa{static_cast<int>(p), s, {}, {}};
+        for (int k = 0; k < 3; ++k) {
+          sa.f[k] = poly.level(s, x_[3 * idx(k)], x_[3 * idx(k) + 1]);
+          sa.s[k] = poly.along(s, x_[3 * idx(k)], x_[3 * idx(k) + 1]);
+        }
+        if ((sa.f[0] > 0 && sa.f[1] > 0 && sa.f[2] > 0) || (sa.f[0] < 0 && sa.f[1] < 0 && sa.f[2] < 0)) continue;
+        if ((sa.s[0] < 0 && sa.s[1] < 0 && sa.s[2] < 0) || (sa.s[0] > 1 && sa.s[1] > 1 && sa.s[2] > 1)) continue;
+        sides_.push_back(sa);
+        reached = true;
+      }
+      if (!reached) {  // no side reaches the triangle: inside or outside whole
+        const auto& in = t_.node_inside[p];
+        bool inside = in[idx(0)] != 0;
+        if (in[idx(1)] != in[idx(0)] || in[idx(2)] != in[idx(0)]) {
+          double cx = 0, cy = 0;
+          for (int k = 0; k < 3; ++k) {
+            cx += x_[3 * idx(k)] / 3;
+            cy += x_[3 * idx(k) + 1] / 3;
+          }
+          inside = poly.inside(cx, cy);
+        }
+        if (!inside) return -1;
+        continue;
+      }
+      poly_.push_back(static_cast<int>(p));
+    }
+    return lin_.empty() && poly_.empty() ? 1 : 0;
+  }
+
+  // Whether a point of the prepared triangle lies in the pattern, leaving
+  // out one linear trim or one polygon (-1: none); a point on a polygon's
+  // side is inside it.
+  bool kept(const Weights& w, int skip_linear = -1, int skip_polygon = -1) const {
+    for (const int j : lin_) {
+      if (j == skip_linear) continue;
+      const auto& l = t_.linear[static_cast<std::size_t>(j)];
+      if (w.w[0] * l[idx(0)] + w.w[1] * l[idx(1)] + w.w[2] * l[idx(2)] > 0) return false;
+    }
+    for (const int p : poly_) {
+      if (p == skip_polygon) continue;
+      bool on = false;
+      for (const SideAt& sa : sides_) {
+        if (sa.poly != p || dot3(w, sa.f) != 0) continue;
+        const double s = dot3(w, sa.s);
+        if (s >= 0 && s <= 1) {
+          on = true;
+          break;
+        }
+      }
+      if (on) continue;
+      double px = 0, py = 0;
+      for (int k = 0; k < 3; ++k) {
+        px += w.w[k] * x_[3 * idx(k)];
+        py += w.w[k] * x_[3 * idx(k) + 1];
+      }
+      if (!t_.polygons[static_cast<std::size_t>(p)].inside(px, py)) return false;
+    }
+    return true;
+  }
+
+  // The boundary pieces of the prepared triangle (state 0), and the share
+  // of its area inside the pattern (by the pieces' closed path in the
+  // barycentric plane). boundary[k]: whether the edge from corner k to
+  // k + 1 is on the blank's edge.
+  double pieces(const bool boundary[3], std::vector<Piece>& out) {
+    out_ = &out;
+    out.clear();
+    // The triangle's edges, each taken from its smaller node, as the other
+    // triangle that has it takes it too, then turned round as need be.
+    for (int k = 0; k < 3; ++k) {
+      const int i = k, j = (k + 1) % 3;
+      const bool forward = c_[i] < c_[j];
+      Weights a, b;
+      a.w[forward ? i : j] = 1;
+      b.w[forward ? j : i] = 1;
+      const std::size_t first = out.size();
+      along(a, b, -1, -1, -1, false, boundary[k]);
+      if (forward) continue;
+      std::reverse(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
+      for (std::size_t q = first; q < out.size(); ++q) {
+        std::swap(out[q].a, out[q].b);
+        std::swap(out[q].trim_a, out[q].trim_b);
+      }
+    }
+    // Each linear trim's zero line.
+    for (const int j : lin_) {
+      const auto& l = t_.linear[static_cast<std::size_t>(j)];
+      const double g[3] = {l[idx(0)], l[idx(1)], l[idx(2)]};
+      Weights a, b;
+      if (zero_line(g, a, b)) along(a, b, j, -1, -1, true, true);
+    }
+    // Each polygon side's piece in the triangle: its line between the
+    // side's ends.
+    for (std::size_t s = 0; s < sides_.size(); ++s) {
+      const SideAt& sa = sides_[s];
+      Weights a, b;
+      if (!zero_line(sa.f, a, b)) continue;
+      const double ta = dot3(a, sa.s), tb = dot3(b, sa.s);
+      double u0 = 0, u1 = 1;
+      if (ta == tb) {
+        if (ta < 0 || ta > 1) continue;
+      } else {
+        const double v0 = -ta / (tb - ta), v1 = (1 - ta) / (tb - ta);
+        u0 = std::max(0.0, std::min(v0, v1));
+        u1 = std::min(1.0, std::max(v0, v1));
+        if (!(u1 > u0)) continue;
+      }
+      along(lerp(a, b, u0), lerp(a, b, u1), -1, static_cast<int>(s), sa.poly, true, true);
+    }
+    double twice_area = 0;  // in the plane (w1, w2), where the triangle has 1/2
+    for (const Piece& q : out) twice_area += q.a.w[1] * q.b.w[2] - q.a.w[2] * q.b.w[1];
+    return std::clamp(twice_area, 0.0, 1.0);
+  }
+
+ private:
+  struct SideAt {
+    int poly = 0, side = 0;
+    double f[3] = {0, 0, 0}, s[3] = {0, 0, 0};  // the side's level and position along it at the corners
+  };
+
+  std::size_t idx(int k) const { return static_cast<std::size_t>(c_[k]); }
+  static double dot3(const Weights& w, const double* v) { return w.w[0] * v[0] + w.w[1] * v[1] + w.w[2] * v[2]; }
+  static Weights lerp(const Weights& a, const Weights& b, double u) {
+    Weights w;
+    for (int k = 0; k < 3; ++k) w.w[k] = a.w[k] + u * (b.w[k] - a.w[k]);
+    return w;
+  }
+
+  // The zero line of the linear function with corner values g in the
+  // triangle, directed with the negative side on its left: false where
+  // it misses the triangle, touches it at a corner, covers it, or runs
+  // along an edge with the triangle on its left (that edge is the
+  // triangle's own: its pieces come from the edge). Crossings of edges
+  // are placed from the edge's smaller node.
+  bool zero_line(const double g[3], Weights& a, Weights& b) const {
+    Weights p[3];
+    bool node[3] = {false, false, false};
+    int n = 0, corner[3] = {-1, -1, -1};
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3;
+      if (g[i] == 0) {
+        p[n].w[i] = 1;
+        node[n] = true;
+        corner[n] = i;
+        ++n;
+      } else if ((g[i] < 0 && g[j] > 0) || (g[i] > 0 && g[j] < 0)) {
+        if (c_[i] < c_[j]) {
+          const double t = g[i] / (g[i] - g[j]);
+          p[n].w[i] = 1 - t;
+          p[n].w[j] = t;
+        } else {
+          const double t = g[j] / (g[j] - g[i]);
+          p[n].w[j] = 1 - t;
+          p[n].w[i] = t;
+        }
+        ++n;
+      }
+    }
+    if (n != 2) return false;
+    a = p[0];
+    b = p[1];
+    const double d1 = -(g[2] - g[0]), d2 = g[1] - g[0];
+    if ((b.w[1] - a.w[1]) * d1 + (b.w[2] - a.w[2]) * d2 < 0) std::swap(a, b);
+    if (node[0] && node[1]) {
+      const int third = 3 - corner[0] - corner[1];
+      if (g[third] < 0) return false;  // along an edge, the triangle (in the part) on its left
+    }
+    return true;
+  }
+
+  // The pieces of the segment a -> b inside every trim but its own
+  // (own_linear, or own_side of own_polygon), split where it crosses
+  // another trim's line or side.
+  void along(const Weights& a, const Weights& b, int own_linear, int own_side, int own_polygon, bool trim,
+             bool emit) {
+    us_.assign({0.0, 1.0});
+    for (const int j : lin_) {
+      if (j == own_linear) continue;
+      const auto& l = t_.linear[static_cast<std::size_t>(j)];
+      const double g[3] = {l[idx(0)], l[idx(1)], l[idx(2)]};
+      const double fa = dot3(a, g), fb = dot3(b, g);
+      if ((fa < 0 && fb > 0) || (fa > 0 && fb < 0)) us_.push_back(fa / (fa - fb));
+    }
+    for (std::size_t s = 0; s < sides_.size(); ++s) {
+      if (static_cast<int>(s) == own_side) continue;
+      const SideAt& sa = sides_[s];
+      const double fa = dot3(a, sa.f), fb = dot3(b, sa.f);
+      if (!((fa < 0 && fb > 0) || (fa > 0 && fb < 0))) continue;
+      const double u = fa / (fa - fb);
+      const double ta = dot3(a, sa.s), tb = dot3(b, sa.s), t = ta + u * (tb - ta);
+      if (t >= 0 && t <= 1) us_.push_back(u);
+    }
+    std::sort(us_.begin(), us_.end());
+    us_.erase(std::unique(us_.begin(), us_.end()), us_.end());
+    double from = -1;  // the start of the kept run
+    for (std::size_t k = 0; k + 1 < us_.size(); ++k) {
+      const double ua = us_[k], ub = us_[k + 1];
+      const bool in = kept(lerp(a, b, 0.5 * (ua + ub)), own_linear, own_polygon);
+      if (in && from < 0) from = ua;
+      if ((!in || k + 2 == us_.size()) && from >= 0) {
+        const double to = in ? ub : ua;
+        Piece q;
+        q.a = lerp(a, b, from);
+        q.b = lerp(a, b, to);
+        q.trim_a = trim || from > 0;
+        q.trim_b = trim || to < 1;
+        q.trim = trim;
+        q.emit = emit;
+        out_->push_back(q);
+        from = -1;
+      }
+    }
+  }
+
+  const Trimming& t_;
+  const std::vector<double>& x_;
+  int c_[3] = {0, 0, 0};
+  std::vector<int> lin_, poly_, near_;
+  std::vector<SideAt> sides_;
+  std::vector<double> us_;
+  std::vector<Piece>* out_ = nullptr;
+};
+
+}  // namespace
 
 CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
                        const std::vector<TrimSurface>& trims, double margin) {
@@ -469,93 +886,155 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
   for (std::size_t k = 0; k < x0.size(); ++k)
     if (!std::isfinite(x0[k]) || !std::isfinite(x[k]))
       throw std::runtime_error("node " + std::to_string(k / 3) + " has a position that is not finite");
-  std::vector<double> level(n, -1.0);
-  if (!trims.empty()) {
-    const long long nodes = static_cast<long long>(n);
-#pragma omp parallel for schedule(static) if (nodes > 4096)
-    for (long long i = 0; i < nodes; ++i) level[static_cast<std::size_t>(i)] = trim_level(trims, &x[3 * i]) - margin;
-    for (std::size_t i = 0; i < n; ++i)
-      if (!std::isfinite(level[i]))
-        throw std::runtime_error("the distance of node " + std::to_string(i) + " to the trim is not finite");
-  }
-  // The edges, each once (smaller node first), and how many triangles have it.
-  std::unordered_map<std::uint64_t, int> edge_id;
-  std::vector<std::array<int, 2>> edges;
-  std::vector<int> uses;
-  auto edge = [&](int a, int b) {
+  const Trimming trimming = make_trimming(x, trims, margin);
+  // How many triangles have each edge (smaller node first).
+  std::unordered_map<std::uint64_t, int> uses;
+  auto edge_key = [](int a, int b) {
     const int lo = std::min(a, b), hi = std::max(a, b);
-    const std::uint64_t key = (static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint32_t>(hi);
-    const auto [it, added] = edge_id.emplace(key, static_cast<int>(edges.size()));
-    if (added) {
-      edges.push_back({lo, hi});
-      uses.push_back(0);
-    }
-    return it->second;
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(lo)) << 32) | static_cast<std::uint32_t>(hi);
   };
   for (std::size_t e = 0; e < m; ++e)
-    for (int k = 0; k < 3; ++k) ++uses[static_cast<std::size_t>(edge(tri[3 * e + k], tri[3 * e + (k + 1) % 3]))];
-  // Points: a node (key < n) or the crossing of an edge (key n + edge),
-  // placed from the edge's smaller node, so that both of its triangles
-  // place it alike.
-  const int nn = static_cast<int>(n);
-  auto point = [&](int key, const std::vector<double>& pos) -> Vec {
-    if (key < nn) return at(pos, static_cast<std::size_t>(key));
-    const auto& ed = edges[static_cast<std::size_t>(key - nn)];
-    const double la = level[static_cast<std::size_t>(ed[0])], lb = level[static_cast<std::size_t>(ed[1])];
-    const double t = la / (la - lb);
-    const Vec a = at(pos, static_cast<std::size_t>(ed[0])), b = at(pos, static_cast<std::size_t>(ed[1]));
-    return {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
+    for (int k = 0; k < 3; ++k) ++uses[edge_key(tri[3 * e + k], tri[3 * e + (k + 1) % 3])];
+  struct Segment {
+    Vec b0, f0, b1, f1;  // the ends in the blank and formed
+    bool on0 = false, on1 = false, trim = false;
   };
+  std::vector<Segment> segments;  // the pattern on their left
   CutPattern p;
-  std::vector<std::array<int, 2>> segments;  // directed, the pattern on their left
-  std::vector<Vec> poly0, poly;
+  TriangleCut cut(trimming, x);
+  std::vector<Piece> pieces;
   for (std::size_t e = 0; e < m; ++e) {
     const int c[3] = {tri[3 * e], tri[3 * e + 1], tri[3 * e + 2]};
-    bool in[3];
-    for (int k = 0; k < 3; ++k) in[k] = level[static_cast<std::size_t>(c[k])] <= 0;
-    p.blank_area += polygon_area({at(x0, static_cast<std::size_t>(c[0])), at(x0, static_cast<std::size_t>(c[1])),
-                                  at(x0, static_cast<std::size_t>(c[2]))});
-    poly0.clear();
-    poly.clear();
-    int leave = -1, enter = -1;  // the crossings where the walk round the triangle leaves and enters the part
-    for (int k = 0; k < 3; ++k) {
-      const int a = c[k], b = c[(k + 1) % 3];
-      const int cross_key = nn + edge(a, b);
-      if (in[k]) {
-        poly0.push_back(point(a, x0));
-        poly.push_back(point(a, x));
+    auto place = [&](const Weights& w, const std::vector<double>& pos) {
+      Vec q{0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        const Vec corner = at(pos, static_cast<std::size_t>(c[k]));
+        for (int d = 0; d < 3; ++d) q[static_cast<std::size_t>(d)] += w.w[k] * corner[static_cast<std::size_t>(d)];
       }
-      if (in[k] != in[(k + 1) % 3]) {
-        poly0.push_back(point(cross_key, x0));
-        poly.push_back(point(cross_key, x));
-        (in[k] ? leave : enter) = cross_key;
+      return q;
+    };
+    const double a0 = polygon_area({at(x0, static_cast<std::size_t>(c[0])), at(x0, static_cast<std::size_t>(c[1])),
+                                    at(x0, static_cast<std::size_t>(c[2]))});
+    const double a = polygon_area({at(x, static_cast<std::size_t>(c[0])), at(x, static_cast<std::size_t>(c[1])),
+                                   at(x, static_cast<std::size_t>(c[2]))});
+    p.blank_area += a0;
+    const int state = cut.prepare(c);
+    if (state < 0) continue;
+    bool boundary[3];
+    for (int k = 0; k < 3; ++k) boundary[k] = uses[edge_key(c[k], c[(k + 1) % 3])] == 1;
+    if (state > 0) {
+      p.kept_blank_area += a0;
+      p.kept_formed_area += a;
+      for (int k = 0; k < 3; ++k)
+        if (boundary[k]) {
+          Weights u, v;
+          u.w[k] = 1;
+          v.w[(k + 1) % 3] = 1;
+          segments.push_back({place(u, x0), place(u, x), place(v, x0), place(v, x), false, false, false});
+        }
+      continue;
+    }
+    const double share = cut.pieces(boundary, pieces);
+    p.kept_blank_area += share * a0;
+    p.kept_formed_area += share * a;
+    for (const Piece& q : pieces)
+      if (q.emit)
+        segments.push_back({place(q.a, x0), place(q.a, x), place(q.b, x0), place(q.b, x), q.trim_a, q.trim_b, q.trim});
+  }
+  // The segments' ends as points of the blank: ends within 1e-9 of the
+  // blank's size of each other are one point (a corner where two trims
+  // meet, or a polygon's vertex, is found in the triangle of each of its
+  // lines, to round-off).
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], x0[3 * i + static_cast<std::size_t>(d)]);
+      hi[d] = std::max(hi[d], x0[3 * i + static_cast<std::size_t>(d)]);
+    }
+  const double size = n ? std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) : 0.0;
+  const double tol = size > 0 ? 1e-9 * size : 1e-300;
+  struct Point {
+    Vec blank, formed;
+    bool on_trim;
+  };
+  std::vector<Point> points;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells;
+  auto cell = [](long long i, long long j, long long k) {
+    std::uint64_t h = static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ULL;
+    h ^= static_cast<std::uint64_t>(j) + 0x7F4A7C159E3779B9ULL + (h << 6) + (h >> 2);
+    h ^= static_cast<std::uint64_t>(k) + 0x94D049BB133111EBULL + (h << 6) + (h >> 2);
+    return h;
+  };
+  auto point_of = [&](const Vec& b, const Vec& f, bool on) {
+    long long g[3];
+    for (int d = 0; d < 3; ++d)
+      g[d] = static_cast<long long>(std::floor((b[static_cast<std::size_t>(d)] - lo[d]) / tol));
+    for (long long i = g[0] - 1; i <= g[0] + 1; ++i)
+      for (long long j = g[1] - 1; j <= g[1] + 1; ++j)
+        for (long long k = g[2] - 1; k <= g[2] + 1; ++k) {
+          const auto it = cells.find(cell(i, j, k));
+          if (it == cells.end()) continue;
+          for (const int id : it->second) {
+            Point& q = points[static_cast<std::size_t>(id)];
+            if (std::abs(q.blank[0] - b[0]) <= tol && std::abs(q.blank[1] - b[1]) <= tol &&
+                std::abs(q.blank[2] - b[2]) <= tol) {
+              q.on_trim = q.on_trim || on;
+              return id;
+            }
+          }
+        }
+    points.push_back({b, f, on});
+    cells[cell(g[0], g[1], g[2])].push_back(static_cast<int>(points.size() - 1));
+    return static_cast<int>(points.size() - 1);
+  };
+  // Directed segments between points; one and its reverse cancel (a
+  // trim line along an edge seen from both of its triangles), a second
+  // alike is left out.
+  std::vector<std::array<int, 2>> ends;
+  std::vector<char> trim_segment;
+  {
+    std::unordered_map<std::uint64_t, std::size_t> open;
+    std::vector<char> alive;
+    auto key = [](int a, int b) {
+      return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+    };
+    std::vector<std::array<int, 2>> all;
+    std::vector<char> all_trim;
+    for (const Segment& s : segments) {
+      const int a = point_of(s.b0, s.f0, s.on0), b = point_of(s.b1, s.f1, s.on1);
+      if (a == b) continue;
+      if (const auto it = open.find(key(b, a)); it != open.end()) {
+        alive[it->second] = 0;
+        open.erase(it);
+        continue;
       }
-      if (uses[static_cast<std::size_t>(cross_key - nn)] != 1) continue;  // not on the blank's edge
-      if (in[k] && in[(k + 1) % 3]) segments.push_back({a, b});
-      else if (in[k]) segments.push_back({a, cross_key});
-      else if (in[(k + 1) % 3]) segments.push_back({cross_key, b});
+      if (open.count(key(a, b))) continue;
+      open[key(a, b)] = all.size();
+      all.push_back({a, b});
+      all_trim.push_back(s.trim ? 1 : 0);
+      alive.push_back(1);
     }
-    if (leave >= 0) segments.push_back({leave, enter});
-    if (poly0.size() >= 3) {
-      p.kept_blank_area += polygon_area(poly0);
-      p.kept_formed_area += polygon_area(poly);
-    }
+    for (std::size_t s = 0; s < all.size(); ++s)
+      if (alive[s]) {
+        ends.push_back(all[s]);
+        trim_segment.push_back(all_trim[s]);
+      }
   }
   // The segments joined into closed outlines, in the order of their
   // triangles (where two outlines touch at a point, the first segment
   // not yet taken out of it).
   std::unordered_map<int, std::vector<int>> out_of;
-  for (std::size_t s = 0; s < segments.size(); ++s) out_of[segments[s][0]].push_back(static_cast<int>(s));
-  std::vector<char> taken(segments.size(), 0);
-  for (std::size_t s0 = 0; s0 < segments.size(); ++s0) {
+  for (std::size_t s = 0; s < ends.size(); ++s) out_of[ends[s][0]].push_back(static_cast<int>(s));
+  std::vector<char> taken(ends.size(), 0);
+  for (std::size_t s0 = 0; s0 < ends.size(); ++s0) {
     if (taken[s0]) continue;
-    std::vector<int> keys;
+    std::vector<int> chain;
     int s = static_cast<int>(s0);
-    const int start = segments[s0][0];
+    const int start = ends[s0][0];
     while (true) {
       taken[static_cast<std::size_t>(s)] = 1;
-      keys.push_back(segments[static_cast<std::size_t>(s)][0]);
-      const int next = segments[static_cast<std::size_t>(s)][1];
+      chain.push_back(s);
+      const int next = ends[static_cast<std::size_t>(s)][1];
       if (next == start) break;
       int follow = -1;
       if (const auto it = out_of.find(next); it != out_of.end())
@@ -564,36 +1043,23 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
             follow = t;
             break;
           }
-      if (follow < 0)
-        throw std::runtime_error(
-            "the outline does not close at " +
-            (next < nn ? "node " + std::to_string(next)
-                       : "the edge of nodes " + std::to_string(edges[static_cast<std::size_t>(next - nn)][0]) +
-                             " and " + std::to_string(edges[static_cast<std::size_t>(next - nn)][1])) +
-            " (triangles not alike oriented?)");
+      if (follow < 0) {
+        const Vec& b = points[static_cast<std::size_t>(next)].blank;
+        throw std::runtime_error("the outline does not close at (" + g(b[0]) + ", " + g(b[1]) + ", " + g(b[2]) +
+                                 ") m of the blank (triangles not alike oriented?)");
+      }
       s = follow;
     }
+    if (chain.size() < 3) continue;  // a touch of the trim surface at a point or along an edge
     Outline o;
-    for (const int k : keys) {
-      OutlinePoint q{point(k, x0), point(k, x), k >= nn};
-      if (!o.points.empty() && o.points.back().blank == q.blank) {  // a node on the trim surface
-        o.points.back().on_trim = o.points.back().on_trim || q.on_trim;
-        continue;
-      }
-      o.points.push_back(q);
-    }
-    while (o.points.size() > 1 && o.points.back().blank == o.points.front().blank) {
-      o.points.front().on_trim = o.points.front().on_trim || o.points.back().on_trim;
-      o.points.pop_back();
-    }
-    if (o.points.size() < 3) continue;  // a touch of the trim surface at a point or along an edge
-    for (std::size_t k = 0; k < o.points.size(); ++k) {
-      const OutlinePoint& a = o.points[k];
-      const OutlinePoint& b = o.points[(k + 1) % o.points.size()];
+    for (const int k : chain) {
+      const Point& a = points[static_cast<std::size_t>(ends[static_cast<std::size_t>(k)][0])];
+      const Point& b = points[static_cast<std::size_t>(ends[static_cast<std::size_t>(k)][1])];
+      o.points.push_back({a.blank, a.formed, a.on_trim});
       const double l0 = norm(sub(b.blank, a.blank));
       o.length_blank += l0;
       o.length_formed += norm(sub(b.formed, a.formed));
-      if (a.on_trim && b.on_trim) o.trim_length_blank += l0;
+      if (trim_segment[static_cast<std::size_t>(k)]) o.trim_length_blank += l0;
     }
     p.outlines.push_back(std::move(o));
   }
@@ -604,19 +1070,20 @@ std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vec
                                    const std::vector<int>& tri, const std::vector<TrimSurface>& trims,
                                    const std::vector<double>& fibre, const std::array<double, 3>& e1,
                                    const std::array<double, 3>& e2, double spacing, double margin) {
-  const std::size_t n = x0.size() / 3, m = tri.size() / 3;
-  std::vector<double> level(n, -1.0);
-  if (!trims.empty())
-    for (std::size_t i = 0; i < n; ++i) level[i] = trim_level(trims, &x[3 * i]) - margin;
+  const std::size_t m = tri.size() / 3;
+  const Trimming trimming = make_trimming(x, trims, margin);
+  TriangleCut cut(trimming, x);
   std::vector<FibreMark> marks;
   std::set<std::pair<long long, long long>> taken;  // grid points already marked
   for (std::size_t e = 0; e < m; ++e) {
-    double u[3], v[3], l[3];
+    const int corners[3] = {tri[3 * e], tri[3 * e + 1], tri[3 * e + 2]};
+    const int state = cut.prepare(corners);
+    if (state < 0) continue;
+    double u[3], v[3];
     for (int k = 0; k < 3; ++k) {
       const Vec p = at(x0, static_cast<std::size_t>(tri[3 * e + k]));
       u[k] = dot(p, e1);
       v[k] = dot(p, e2);
-      l[k] = level[static_cast<std::size_t>(tri[3 * e + k])];
     }
     const double det = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
     if (!(std::abs(det) > 0)) continue;
@@ -637,7 +1104,7 @@ std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vec
         const double b0 = 1 - b1 - b2;
         const double tol = -1e-12;
         if (b0 < tol || b1 < tol || b2 < tol) continue;
-        if (b0 * l[0] + b1 * l[1] + b2 * l[2] > 0) continue;  // outside the pattern
+        if (state == 0 && !cut.kept(Weights{{b0, b1, b2}})) continue;  // outside the pattern
         if (!taken.emplace(i, j).second) continue;
         Vec c{0, 0, 0};  // the point on the triangle
 

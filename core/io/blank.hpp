@@ -69,18 +69,25 @@ struct CutPattern {
 };
 
 // The pattern of one ply: x0 its positions in the blank, x formed (3 per
-// node), tri its triangles (3 node indices each, alike oriented). The
-// level is taken at each node's formed position and is linear along each
-// edge: a crossing lies on the edge where the linear level is zero, at the
-// same place of both positions. A plane trim is thus exact on the formed
-// mesh; a curved one is within the chord's error of the surface. Without
-// trims the pattern is the whole blank (its outlines, its edges). Throws
-// std::runtime_error for triangles that are not alike oriented (a
-// boundary that does not close) or non-finite positions.
+// node), tri its triangles (3 node indices each, alike oriented). In each
+// triangle the part is cut by each trim in turn: a plane, cylinder or
+// sphere by its level at the corners' formed positions, linear in the
+// triangle (a crossing of an edge lies where the linear level is zero,
+// at the same place of both positions); a polygon by each of its sides,
+// the signed distance to the side's line in plan view, linear in the
+// triangle, between the side's ends. A plane trim and a polygon are thus
+// exact on the formed mesh, corners where two trims meet and a polygon's
+// vertices included; a cylinder or a sphere is within the chord's error
+// of the surface. Without trims the pattern is the whole blank (its
+// outlines, its edges). Throws std::runtime_error for triangles that are
+// not alike oriented (a boundary that does not close) or non-finite
+// positions.
 //
 // margin (m): the trim line moved out by it on the formed part (the level
 // less the margin), an allowance the pattern takes beyond the part's edge;
-// below 0, in.
+// below 0, in. With a margin a polygon is taken by its distance, linear in
+// each triangle as a cylinder's (the line at that distance from a polygon
+// is rounded at its corners).
 CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
                        const std::vector<TrimSurface>& trims, double margin = 0);
 
@@ -94,8 +101,7 @@ struct FibreMark {
 
 // Fibre marks at the points of a square grid of spacing `spacing` in the
 // blank's plane (axes e1, e2, through the origin) that lie in the pattern
-// (the trims' level at the formed positions x less the margin, linear in
-// each triangle, at most 0), each along the fibre direction `fibre` (3 per triangle, as the
+// (inside every trim as cut_pattern takes them), each along the fibre direction `fibre` (3 per triangle, as the
 // frames' field fibre_direction) of the triangle it lies in, projected into
 // the plane, 0.6 spacing long, centred on the point; a point on an edge
 // goes to the first triangle that has it.
