@@ -482,6 +482,86 @@ TEST(Blank, CornersWhereTrimsMeetAreExact) {
   std::filesystem::remove_all(dir);
 }
 
+// A polygon across a vertical wall: a plate of 100 mm (20 x 20 cells, the
+// nodes moved at random but for the wall's edges) formed into a step, its
+// strip 40 < X < 60 mm stood up as a wall in the plane x = 40 mm (each of
+// its triangles seen edge-on in plan view) and the rest beyond it moved
+// back by 20 mm and up by as much. Trimmed by 100 star-shaped polygons in
+// plan view, the pattern is exact: the polygon's area over the plan's 80
+// x 100 mm, plus the wall's 20 mm times the length of the line x = 40 mm
+// inside the polygon (computed here from the sides' crossings).
+TEST(Blank, PolygonAcrossAVerticalWall) {
+  using P2 = std::array<double, 2>;
+  ShellMesh m = rectangle_mesh({0, 0, 0}, {0.1, 0.1}, {20, 20});
+  const std::size_t nodes = m.x.size() / 3;
+  std::vector<int> column(nodes);
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> jiggle(-0.001, 0.001);
+  for (std::size_t i = 0; i < nodes; ++i) {
+    column[i] = static_cast<int>(std::lround(m.x[3 * i] / 0.005));
+    const int row = static_cast<int>(std::lround(m.x[3 * i + 1] / 0.005));
+    if (column[i] != 0 && column[i] != 8 && column[i] != 12 && column[i] != 20) m.x[3 * i] += jiggle(rng);
+    if (row != 0 && row != 20) m.x[3 * i + 1] += jiggle(rng);
+  }
+  double wall0 = 0, wall1 = 0;  // the wall's edges in the blank
+  for (std::size_t i = 0; i < nodes; ++i) {
+    if (column[i] == 8) wall0 = m.x[3 * i];
+    if (column[i] == 12) wall1 = m.x[3 * i];
+  }
+  std::vector<double> x = m.x;
+  for (std::size_t i = 0; i < nodes; ++i) {
+    const double X = m.x[3 * i];
+    if (column[i] > 8 && column[i] < 12) {
+      x[3 * i] = wall0;
+      x[3 * i + 2] = X - wall0;
+    } else if (column[i] >= 12) {
+      x[3 * i] = X - (wall1 - wall0);
+      x[3 * i + 2] = wall1 - wall0;
+    }
+  }
+  const auto dir = std::filesystem::temp_directory_path() / "thermostamp_blank_wall";
+  std::filesystem::create_directories(dir);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int crossing = 0;
+  for (int k = 0; k < 100; ++k) {
+    const int n = 3 + k % 10;
+    const P2 centre = {0.02 + 0.04 * u(rng), 0.02 + 0.06 * u(rng)};
+    std::vector<P2> star;
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * M_PI * (i + 0.8 * u(rng)) / n, r = 0.01 + 0.04 * u(rng);
+      star.push_back({centre[0] + r * std::cos(a), centre[1] + r * std::sin(a)});
+    }
+    {
+      std::ofstream f(dir / "star.csv");
+      f.precision(17);
+      for (const P2& v : star) f << v[0] << "," << v[1] << "\n";
+    }
+    const CutPattern p = cut_pattern(m.x, x, m.triangles, {parse_trim("polygon:" + (dir / "star.csv").string())});
+    std::vector<P2> region = star;
+    if (area(region) < 0) std::reverse(region.begin(), region.end());
+    for (const auto& h : std::vector<std::array<double, 3>>{{1, 0, 0}, {-1, 0, 0.08}, {0, 1, 0}, {0, -1, 0.1}})
+      region = clip(region, h[0], h[1], h[2]);
+    std::vector<double> ys;  // where the sides cross x = wall0
+    for (std::size_t i = 0; i < star.size(); ++i) {
+      const P2& a = star[i];
+      const P2& b = star[(i + 1) % star.size()];
+      if ((a[0] > wall0) != (b[0] > wall0)) ys.push_back(a[1] + (wall0 - a[0]) * (b[1] - a[1]) / (b[0] - a[0]));
+    }
+    std::sort(ys.begin(), ys.end());
+    double chord = 0;
+    for (std::size_t i = 0; i + 1 < ys.size(); i += 2)
+      chord += std::max(0.0, std::min(ys[i + 1], 0.1) - std::max(ys[i], 0.0));
+    if (chord > 0) ++crossing;
+    const double expected = (region.size() >= 3 ? area(region) : 0.0) + (wall1 - wall0) * chord;
+    EXPECT_NEAR(p.kept_blank_area, expected, 2e-15) << k;
+    double outlined = 0;
+    for (const Outline& o : p.outlines) outlined += signed_area_z(o);
+    EXPECT_NEAR(outlined, p.kept_blank_area, 2e-15) << k;
+  }
+  EXPECT_GT(crossing, 90);
+  std::filesystem::remove_all(dir);
+}
+
 // A strip wrapped without stretch round a cylinder of radius R: x = (R
 // sin(X/R), Y, R (1 - cos(X/R))). Trimmed at the plane z = z0 (the part
 // below), the pattern is X <= X* = R acos(1 - z0/R), a straight line. The
