@@ -125,12 +125,15 @@ Ring read_csv_ring(const std::string& file, const std::string& what) {
 }
 
 // The closed polylines of a DXF file's ENTITIES section (LWPOLYLINE, and
-// POLYLINE with its VERTEX entities), in x and y, their arcs (bulges)
-// drawn as sides of at most 2 degrees of arc, x mirrored for a polyline
-// whose extrusion points along -z; open polylines and other entities are
-// left out. `scale` (m per drawing unit): the given one, or
+// POLYLINE with its VERTEX entities), their arcs (bulges) drawn as sides
+// of at most 2 degrees of arc, in the coordinates of the plane they are
+// drawn in (the object coordinate system of their extrusion direction,
+// `normal`, which every one of them must share; a 3D POLYLINE's vertices
+// in x and y, seen along z); open polylines, polygon meshes and other
+// entities are left out. `scale` (m per drawing unit): the given one, or
 // from the header's $INSUNITS.
-std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& what, double& scale, bool scale_given) {
+std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& what, double& scale, bool scale_given,
+                                 Vec& normal) {
   std::ifstream in(file);
   if (!in) throw ExportInputError(what + "cannot read '" + shown(file) + "'");
   struct Vertex {
@@ -138,15 +141,28 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
   };
   std::vector<Ring> rings;
   std::vector<Vertex> vs;
-  bool closed = false, in_polyline = false;
-  double extrusion_z = 1;  // a polyline drawn with its extrusion along -z has its x mirrored (the OCS)
-  int open = 0, units = -1;
+  bool closed = false, in_polyline = false, three_d = false, mesh = false;
+  Vec extrusion{0, 0, 1};  // the normal of the plane the polyline is drawn in
+  std::optional<Vec> first_normal;
+  int open = 0, units = -1, count = 0;
   std::string section, entity, code, value, variable;
   auto finish = [&]() {  // the polyline read so far, as a ring
-    if (vs.empty()) return;
-    if (!closed) {
+    if (vs.empty() || mesh) {
+    } else if (!closed) {
       ++open;
     } else {
+      ++count;
+      const double l = norm(extrusion);
+      if (!(l > 0) || !std::isfinite(l))
+        throw ExportInputError(what + "'" + shown(file) + "': polyline " + std::to_string(count) +
+                               " has no extrusion direction (the normal of its plane, codes 210-230)");
+      const Vec n = three_d ? Vec{0, 0, 1} : Vec{extrusion[0] / l, extrusion[1] / l, extrusion[2] / l};
+      if (!first_normal) first_normal = n;
+      if (norm(sub(n, *first_normal)) > 1e-9)
+        throw ExportInputError(what + "'" + shown(file) + "': polyline " + std::to_string(count) +
+                               " is drawn in another plane than polyline 1 (normal " + g(n[0]) + ", " + g(n[1]) +
+                               ", " + g(n[2]) + " against " + g((*first_normal)[0]) + ", " + g((*first_normal)[1]) +
+                               ", " + g((*first_normal)[2]) + "): draw a trim outline's polylines in one plane");
       Ring r;
       for (std::size_t k = 0; k < vs.size(); ++k) {
         const Vertex& a = vs[k];
@@ -162,13 +178,13 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
         for (int i = 1; i < n; ++i)
           r.push_back({ox + radius * std::cos(a0 + theta * i / n), oy + radius * std::sin(a0 + theta * i / n)});
       }
-      if (extrusion_z < 0)
-        for (auto& v : r) v[0] = -v[0];
       rings.push_back(std::move(r));
     }
     vs.clear();
     closed = false;
-    extrusion_z = 1;
+    three_d = false;
+    mesh = false;
+    extrusion = {0, 0, 1};
   };
   int line = 0;
   auto trimmed = [](std::string t) {
@@ -222,9 +238,17 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
     }
     if (section != "ENTITIES") continue;
     const bool lw = entity == "LWPOLYLINE", vertex = entity == "VERTEX" && in_polyline;
-    if ((lw || (entity == "POLYLINE" && in_polyline)) && code == "70")
-      closed = (integer(value) & 1) != 0;
-    if ((lw || (entity == "POLYLINE" && in_polyline)) && code == "230") extrusion_z = number(value);
+    const bool header = lw || (entity == "POLYLINE" && in_polyline);
+    if (header && code == "70") {
+      const int flags = integer(value);
+      closed = (flags & 1) != 0;
+      if (!lw) {
+        three_d = (flags & 8) != 0;
+        mesh = (flags & (16 | 64)) != 0;
+      }
+    }
+    if (header && (code == "210" || code == "220" || code == "230"))
+      extrusion[static_cast<std::size_t>(code[1] - '1')] = number(value);
     if (lw && code == "10") vs.push_back({number(value), 0, 0});
     if ((lw && !vs.empty()) || (vertex && !vs.empty())) {
       if (vertex && code == "10") vs.back().x = number(value);
@@ -233,6 +257,7 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
     }
   }
   finish();
+  normal = first_normal.value_or(Vec{0, 0, 1});
   if (!scale_given) {
     switch (units) {
       case 1: scale = 0.0254; break;
@@ -259,7 +284,7 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
 // ring's first vertex repeated at its end dropped, and checked: at least
 // 3 vertices, none twice in a row, an area, no side crossing or touching
 // another (of its ring or another ring).
-std::vector<Ring> read_polygon(const std::string& spec, const std::string& what) {
+std::vector<Ring> read_polygon(const std::string& spec, const std::string& what, Vec& normal) {
   std::string file = spec;
   double scale = 1.0;
   bool scale_given = false;
@@ -279,7 +304,8 @@ std::vector<Ring> read_polygon(const std::string& spec, const std::string& what)
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   const bool dxf = ext == ".dxf";
   std::vector<Ring> rings =
-      dxf ? read_dxf_rings(file, what, scale, scale_given) : std::vector<Ring>{read_csv_ring(file, what)};
+      dxf ? read_dxf_rings(file, what, scale, scale_given, normal) : std::vector<Ring>{read_csv_ring(file, what)};
+  if (!dxf) normal = {0, 0, 1};
   const std::string at = what + "'" + shown(file) + "'";
   for (std::size_t r = 0; r < rings.size(); ++r) {
     Ring& p = rings[r];
@@ -386,7 +412,8 @@ double surface_level(const TrimSurface& t, const double* x) {
     case TrimSurface::Kind::Sphere:
       return norm(r) - t.radius;
     case TrimSurface::Kind::Polygon:
-      return polygon_level(t.rings, x[0], x[1]);
+      return polygon_level(t.rings, x[0] * t.plan_u[0] + x[1] * t.plan_u[1] + x[2] * t.plan_u[2],
+                           x[0] * t.plan_v[0] + x[1] * t.plan_v[1] + x[2] * t.plan_v[2]);
   }
   return 0;
 }
@@ -415,7 +442,15 @@ TrimSurface parse_trim(const std::string& text) {
     takes = "a sphere takes 4 numbers (the centre and the radius; m)";
   } else if (kind == "polygon" && colon != std::string::npos) {
     t.kind = TrimSurface::Kind::Polygon;
-    t.rings = read_polygon(text.substr(colon + 1), what);
+    Vec n{0, 0, 1};
+    t.rings = read_polygon(text.substr(colon + 1), what, n);
+    // The plane's axes by DXF's arbitrary axis algorithm: x along (0, 1, 0)
+    // x n, or (0, 0, 1) x n where n is not near z; y = n x x.
+    Vec ax = std::abs(n[0]) < 1.0 / 64 && std::abs(n[1]) < 1.0 / 64 ? cross({0, 1, 0}, n) : cross({0, 0, 1}, n);
+    const double l = norm(ax);
+    ax = {ax[0] / l, ax[1] / l, ax[2] / l};
+    t.plan_u = ax;
+    t.plan_v = cross(n, ax);
     return t;
   } else {
     throw ExportInputError(what + "expected plane:X,Y,Z,NX,NY,NZ, cylinder:X,Y,Z,DX,DY,DZ,R, sphere:X,Y,Z,R (m) or "
@@ -583,6 +618,7 @@ class PlanPolygon {
 struct Trimming {
   std::vector<std::vector<double>> linear;  // [trim][node], m
   std::vector<PlanPolygon> polygons;
+  std::vector<std::vector<double>> plan;       // [polygon][2 node + 0, 1]: each node in the polygon's plane, m
   std::vector<std::vector<char>> node_inside;  // [polygon][node]
 };
 
@@ -592,9 +628,17 @@ Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurfa
   for (const TrimSurface& s : trims) {
     if (s.kind == TrimSurface::Kind::Polygon && margin == 0) {
       const PlanPolygon& p = t.polygons.emplace_back(s.rings);
+      auto& uv = t.plan.emplace_back(2 * static_cast<std::size_t>(n));
       auto& in = t.node_inside.emplace_back(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static) if (n > 4096)
-      for (long long i = 0; i < n; ++i) in[static_cast<std::size_t>(i)] = p.inside(x[3 * i], x[3 * i + 1]);
+      for (long long i = 0; i < n; ++i) {
+        const double* q = &x[3 * i];
+        const double u = q[0] * s.plan_u[0] + q[1] * s.plan_u[1] + q[2] * s.plan_u[2];
+        const double v = q[0] * s.plan_v[0] + q[1] * s.plan_v[1] + q[2] * s.plan_v[2];
+        uv[2 * static_cast<std::size_t>(i)] = u;
+        uv[2 * static_cast<std::size_t>(i) + 1] = v;
+        in[static_cast<std::size_t>(i)] = p.inside(u, v);
+      }
       continue;
     }
     auto& l = t.linear.emplace_back(static_cast<std::size_t>(n));
@@ -628,7 +672,7 @@ struct Piece {
 // triangle, so that where two of them meet, the corner is too.
 class TriangleCut {
  public:
-  TriangleCut(const Trimming& t, const std::vector<double>& x) : t_(t), x_(x) {}
+  explicit TriangleCut(const Trimming& t) : t_(t) {}
 
   // The triangle's state: -1 outside the pattern, 1 inside it whole, 0 cut.
   int prepare(const int c[3]) {
@@ -643,21 +687,22 @@ class TriangleCut {
       if (f0 < 0 && f1 < 0 && f2 < 0) continue;
       lin_.push_back(static_cast<int>(j));
     }
-    double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
-    for (int k = 0; k < 3; ++k)
-      for (int d = 0; d < 2; ++d) {
-        lo[d] = std::min(lo[d], x_[3 * idx(k) + static_cast<std::size_t>(d)]);
-        hi[d] = std::max(hi[d], x_[3 * idx(k) + static_cast<std::size_t>(d)]);
-      }
     for (std::size_t p = 0; p < t_.polygons.size(); ++p) {
       const PlanPolygon& poly = t_.polygons[p];
+      const auto& uv = t_.plan[p];
+      double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+      for (int k = 0; k < 3; ++k)
+        for (std::size_t d = 0; d < 2; ++d) {
+          lo[d] = std::min(lo[d], uv[2 * idx(k) + d]);
+          hi[d] = std::max(hi[d], uv[2 * idx(k) + d]);
+        }
       poly.near(lo[0], hi[0], lo[1], hi[1], near_);
       bool reached = false;
       for (const int s : near_) {
         SideAt sa{static_cast<int>(p), s, {}, {}};
         for (int k = 0; k < 3; ++k) {
-          sa.f[k] = poly.level(s, x_[3 * idx(k)], x_[3 * idx(k) + 1]);
-          sa.s[k] = poly.along(s, x_[3 * idx(k)], x_[3 * idx(k) + 1]);
+          sa.f[k] = poly.level(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
+          sa.s[k] = poly.along(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
         }
         if ((sa.f[0] > 0 && sa.f[1] > 0 && sa.f[2] > 0) || (sa.f[0] < 0 && sa.f[1] < 0 && sa.f[2] < 0)) continue;
         if ((sa.s[0] < 0 && sa.s[1] < 0 && sa.s[2] < 0) || (sa.s[0] > 1 && sa.s[1] > 1 && sa.s[2] > 1)) continue;
@@ -670,8 +715,8 @@ class TriangleCut {
         if (in[idx(1)] != in[idx(0)] || in[idx(2)] != in[idx(0)]) {
           double cx = 0, cy = 0;
           for (int k = 0; k < 3; ++k) {
-            cx += x_[3 * idx(k)] / 3;
-            cy += x_[3 * idx(k) + 1] / 3;
+            cx += uv[2 * idx(k)] / 3;
+            cy += uv[2 * idx(k) + 1] / 3;
           }
           inside = poly.inside(cx, cy);
         }
@@ -706,8 +751,8 @@ class TriangleCut {
       if (on) continue;
       double px = 0, py = 0;
       for (int k = 0; k < 3; ++k) {
-        px += w.w[k] * x_[3 * idx(k)];
-        py += w.w[k] * x_[3 * idx(k) + 1];
+        px += w.w[k] * t_.plan[static_cast<std::size_t>(p)][2 * idx(k)];
+        py += w.w[k] * t_.plan[static_cast<std::size_t>(p)][2 * idx(k) + 1];
       }
       if (!t_.polygons[static_cast<std::size_t>(p)].inside(px, py)) return false;
     }
@@ -869,7 +914,6 @@ class TriangleCut {
   }
 
   const Trimming& t_;
-  const std::vector<double>& x_;
   int c_[3] = {0, 0, 0};
   std::vector<int> lin_, poly_, near_;
   std::vector<SideAt> sides_;
@@ -901,7 +945,7 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
   };
   std::vector<Segment> segments;  // the pattern on their left
   CutPattern p;
-  TriangleCut cut(trimming, x);
+  TriangleCut cut(trimming);
   std::vector<Piece> pieces;
   for (std::size_t e = 0; e < m; ++e) {
     const int c[3] = {tri[3 * e], tri[3 * e + 1], tri[3 * e + 2]};
@@ -1072,7 +1116,7 @@ std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vec
                                    const std::array<double, 3>& e2, double spacing, double margin) {
   const std::size_t m = tri.size() / 3;
   const Trimming trimming = make_trimming(x, trims, margin);
-  TriangleCut cut(trimming, x);
+  TriangleCut cut(trimming);
   std::vector<FibreMark> marks;
   std::set<std::pair<long long, long long>> taken;  // grid points already marked
   for (std::size_t e = 0; e < m; ++e) {

@@ -18,19 +18,26 @@ namespace ts {
 //   plane    "plane:X,Y,Z,NX,NY,NZ"        a point and the normal, which points into the part
 //   cylinder "cylinder:X,Y,Z,DX,DY,DZ,R"   a point on the axis, the axis's direction and the radius; the part inside
 //   sphere   "sphere:X,Y,Z,R"              the centre and the radius; the part inside
-//   polygon  "polygon:FILE[,SCALE]"        a trim line drawn in plan view, seen along z: a
-//                                          closed polygon in x and y from a CSV file (a row
-//                                          "x,y" per vertex) or the closed polylines of a DXF
-//                                          file (holes too: inside an odd number of them);
-//                                          SCALE m per unit of the file (CSV: 1; DXF: from
-//                                          its $INSUNITS); the part inside
+//   polygon  "polygon:FILE[,SCALE]"        a trim line drawn in a plane and cut along its
+//                                          normal: a closed polygon in x and y from a CSV
+//                                          file (a row "x,y" per vertex; plan view, seen
+//                                          along z) or the closed polylines of a DXF file
+//                                          (holes too: inside an odd number of them), in the
+//                                          plane their extrusion direction gives (z for a
+//                                          drawing in plan view); SCALE m per unit of the
+//                                          file (CSV: 1; DXF: from its $INSUNITS); the part
+//                                          inside
 // Lengths in m.
 struct TrimSurface {
   enum class Kind { Plane, Cylinder, Sphere, Polygon };
   Kind kind = Kind::Plane;
   std::array<double, 3> point{}, direction{};  // direction: unit
   double radius = 0;
-  std::vector<std::vector<std::array<double, 2>>> rings;  // polygon: each ring's vertices (x, y, m)
+  std::vector<std::vector<std::array<double, 2>>> rings;  // polygon: each ring's vertices (m)
+  // polygon: the axes of its plane, unit and normal to each other; a
+  // vertex (a, b) lies at a plan_u + b plan_v, and the polygon cuts along
+  // plan_u x plan_v (x and y for a drawing in plan view, seen along z).
+  std::array<double, 3> plan_u{1, 0, 0}, plan_v{0, 1, 0};
   std::string text;  // as given
 };
 
@@ -42,8 +49,8 @@ struct TrimSurface {
 TrimSurface parse_trim(const std::string& text);
 
 // The level of a point x (m): at most 0 in the part, above 0 outside; the
-// signed distance to the surface (a polygon's: in the plane z = 0 of the
-// point's projection; for several surfaces, the part lying inside all of
+// signed distance to the surface (a polygon's: in its plane, of the
+// point's projection along its normal; for several surfaces, the part lying inside all of
 // them, the largest).
 double trim_level(const std::vector<TrimSurface>& trims, const double* x);
 
@@ -74,8 +81,9 @@ struct CutPattern {
 // sphere by its level at the corners' formed positions, linear in the
 // triangle (a crossing of an edge lies where the linear level is zero,
 // at the same place of both positions); a polygon by each of its sides,
-// the signed distance to the side's line in plan view, linear in the
-// triangle, between the side's ends. A plane trim and a polygon are thus
+// the signed distance to the side's line in the polygon's plane (of the
+// points projected along its normal), linear in the triangle, between the
+// side's ends. A plane trim and a polygon are thus
 // exact on the formed mesh, corners where two trims meet and a polygon's
 // vertices included; a cylinder or a sphere is within the chord's error
 // of the surface. Without trims the pattern is the whole blank (its

@@ -2432,7 +2432,10 @@ print("ok")
             "the first frame holds no fibre_direction (output.fields)");
   // A trim line drawn in CAD: an outline in plan view written by ezdxf
   // (DXF R2010 in mm, with an extrusion along -z on a copy, whose x is
-  // mirrored), against the same outline in a CSV file in m.
+  // mirrored), against the same outline in a CSV file in m; and the
+  // outline drawn in a tilted plane (extrusion (0.3, -0.2, 0.93)), whose
+  // pattern's trim points, formed, ezdxf's own object coordinate system
+  // takes onto the outline.
   std::ofstream(dir / "outline.py") << R"(import sys, ezdxf
 doc = ezdxf.new("R2010")
 doc.header["$INSUNITS"] = 4
@@ -2447,9 +2450,14 @@ mirrored.modelspace().add_lwpolyline([(-x, y) for x, y in outline], close=True, 
 mirrored.saveas(sys.argv[2])
 with open(sys.argv[3], "w") as f:
     f.write("x_m,y_m\n" + "".join("%r,%r\n" % (x / 1000, y / 1000) for x, y in outline))
+tilted = ezdxf.new("R2010")
+tilted.header["$INSUNITS"] = 4
+tilted.modelspace().add_lwpolyline([(x - 60, y - 55) for x, y in outline], close=True,
+                                   dxfattribs={"extrusion": (0.3, -0.2, 0.93)})
+tilted.saveas(sys.argv[4])
 )";
   ASSERT_EQ(std::system(("/usr/bin/python3 " + q(dir / "outline.py") + " " + q(dir / "outline.dxf") + " " +
-                         q(dir / "mirrored.dxf") + " " + q(dir / "outline.csv"))
+                         q(dir / "mirrored.dxf") + " " + q(dir / "outline.csv") + " " + q(dir / "tilted.dxf"))
                             .c_str()),
             0);
   std::map<std::string, json> by;
@@ -2464,6 +2472,39 @@ with open(sys.argv[3], "w") as f:
     EXPECT_GT(a, 0.005) << ply;
     for (const std::string f : {"outline.dxf", "mirrored.dxf"})
       EXPECT_NEAR(by[f]["plies"][ply]["kept_blank_area_m2"].get<double>(), a, 1e-15) << ply << " " << f;
+  }
+  {
+    const auto r = thermostamp("blank " + q(dir / "run") + " --trim polygon:" + q(dir / "tilted.dxf") + " --out " +
+                               q(dir / "of_tilted"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::ofstream(dir / "on_outline.py") << R"(import csv, math, sys
+from ezdxf.math import OCS, Vec3
+outline = [(x - 60, y - 55) for x, y in [(10, 5), (95, 12), (120, 70), (60, 110), (15, 80)]]
+ocs = OCS((0.3, -0.2, 0.93))
+worst, count = 0.0, 0
+for name in sys.argv[1:]:
+    for row in csv.DictReader(open(name)):
+        if row["kind"] != "pattern" or row["on_trim"] != "1":
+            continue
+        p = ocs.from_wcs(Vec3(*(1000 * float(row["formed_%s_m" % c]) for c in "xyz")))
+        d = min(math.hypot(*((p.x - ax - t * (bx - ax)), (p.y - ay - t * (by - ay))))
+                for (ax, ay), (bx, by) in zip(outline, outline[1:] + outline[:1])
+                for t in [max(0.0, min(1.0, ((p.x - ax) * (bx - ax) + (p.y - ay) * (by - ay)) /
+                                       ((bx - ax) ** 2 + (by - ay) ** 2)))])
+        worst, count = max(worst, d), count + 1
+print("%d %.3e" % (count, worst))
+)";
+    ASSERT_EQ(std::system(("/usr/bin/python3 " + q(dir / "on_outline.py") + " " +
+                           q(dir / "of_tilted" / "ply_top.csv") + " " + q(dir / "of_tilted" / "ply_bottom.csv") +
+                           " > " + q(dir / "on_outline.txt"))
+                              .c_str()),
+              0);
+    std::ifstream in(dir / "on_outline.txt");
+    int count = 0;
+    double worst = 1;
+    in >> count >> worst;
+    EXPECT_GT(count, 20);
+    EXPECT_LT(worst, 1e-9) << "mm, the trim points off the outline in its plane";
   }
   // What cannot give a pattern.
   auto refused = [&](const std::string& args) {

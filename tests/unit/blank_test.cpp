@@ -865,6 +865,105 @@ TEST(Blank, PolygonFromADxfFileWithArcsAndAHole) {
 }
 
 
+// A trim outline drawn in CAD in a plane other than plan view: a DXF
+// polyline's extrusion direction n is the normal of the plane it is
+// drawn in, its vertices in that plane's axes (DXF's arbitrary axis
+// algorithm, here by hand: n = -y gives x and z; n = +x gives y and z;
+// n = (0, -0.6, 0.8) gives (1, 0, 0) and (0, 0.8, 0.6)). The trim cuts
+// along n. A plate of 100 mm (irregular triangles) formed into a plane
+// tilted against the drawing's, x = X ax + Y ay + (0.3 X + 0.2 Y + 0.05)
+// n: seen along n, each point lies at (X, Y), so the pattern is the L
+// drawn, exactly. Polylines in two planes, or without a normal, are
+// refused; a 3D POLYLINE is seen along z.
+TEST(Blank, PolygonDrawnInAnotherPlaneCutsAlongItsNormal) {
+  const auto dir = std::filesystem::temp_directory_path() / "thermostamp_blank_plane";
+  std::filesystem::create_directories(dir);
+  const std::vector<std::array<double, 2>> L = {{11.3, 12.7}, {87.1, 12.7}, {87.1, 41.3},
+                                               {43.7, 41.3}, {43.7, 88.9}, {11.3, 88.9}};  // mm
+  const double exact = 0.0758 * 0.0286 + 0.0324 * 0.0476;
+  auto lwpolyline = [&](const std::vector<std::array<double, 2>>& pts, const V3& n) {
+    std::ostringstream e;
+    e.precision(17);
+    e << "0\nLWPOLYLINE\n8\nTRIM\n90\n" << pts.size() << "\n70\n1\n";
+    for (const auto& v : pts) e << "10\n" << v[0] << "\n20\n" << v[1] << "\n";
+    e << "210\n" << n[0] << "\n220\n" << n[1] << "\n230\n" << n[2] << "\n";
+    return e.str();
+  };
+  auto dxf = [&](const std::string& name, const std::string& entities) {
+    std::ofstream(dir / name) << "0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n"
+                              << entities << "0\nENDSEC\n0\nEOF\n";
+    return (dir / name).string();
+  };
+  const ShellMesh m = irregular_rectangle(0, 0, 0.1, 0.1, 20, 20, 0.0015, 31);
+  struct View {
+    V3 n, ax, ay;
+  };
+  const std::vector<View> views = {{{0, -1, 0}, {1, 0, 0}, {0, 0, 1}},
+                                   {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
+                                   {{0, -0.6, 0.8}, {1, 0, 0}, {0, 0.8, 0.6}}};
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    const View& w = views[k];
+    const TrimSurface t = parse_trim("polygon:" + dxf("view.dxf", lwpolyline(L, w.n)));
+    for (int d = 0; d < 3; ++d) {
+      EXPECT_NEAR(t.plan_u[d], w.ax[d], 1e-15) << k;
+      EXPECT_NEAR(t.plan_v[d], w.ay[d], 1e-15) << k;
+    }
+    std::vector<double> x(m.x.size());
+    for (std::size_t i = 0; i < x.size(); i += 3) {
+      const double X = m.x[i], Y = m.x[i + 1], h = 0.3 * X + 0.2 * Y + 0.05;
+      for (int d = 0; d < 3; ++d) x[i + d] = X * w.ax[d] + Y * w.ay[d] + h * w.n[d];
+    }
+    const CutPattern p = cut_pattern(m.x, x, m.triangles, {t});
+    ASSERT_EQ(p.outlines.size(), 1u) << k;
+    EXPECT_NEAR(p.kept_blank_area, exact, 1e-13 * exact) << k;
+    EXPECT_NEAR(signed_area_z(p.outlines[0]), exact, 1e-13 * exact) << k;
+    int corners = 0;
+    for (const OutlinePoint& q : p.outlines[0].points) {
+      double side = 1e300, vertex = 1e300;
+      for (std::size_t i = 0; i < L.size(); ++i) {
+        const std::array<double, 2> a{L[i][0] / 1000, L[i][1] / 1000};
+        const std::array<double, 2> b{L[(i + 1) % L.size()][0] / 1000, L[(i + 1) % L.size()][1] / 1000};
+        const double ex = b[0] - a[0], ey = b[1] - a[1];
+        const double tt =
+            std::clamp(((q.blank[0] - a[0]) * ex + (q.blank[1] - a[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
+        side = std::min(side, std::hypot(q.blank[0] - a[0] - tt * ex, q.blank[1] - a[1] - tt * ey));
+        vertex = std::min(vertex, std::hypot(q.blank[0] - a[0], q.blank[1] - a[1]));
+      }
+      EXPECT_LT(side, 1e-16) << k;
+      if (vertex < 1e-16) ++corners;
+    }
+    EXPECT_EQ(corners, 6) << k;
+  }
+  // Plan view by default and along -z (x mirrored, as CAD draws it seen from below).
+  EXPECT_EQ(parse_trim("polygon:" + dxf("z.dxf", lwpolyline(L, {0, 0, 1}))).plan_u, (V3{1, 0, 0}));
+  const TrimSurface below = parse_trim("polygon:" + dxf("below.dxf", lwpolyline(L, {0, 0, -1})));
+  EXPECT_EQ(below.plan_u, (V3{-1, 0, 0}));
+  EXPECT_EQ(below.plan_v, (V3{0, 1, 0}));
+  // A 3D POLYLINE (flag 8): its vertices' x and y, seen along z.
+  {
+    std::ostringstream e;
+    e << "0\nPOLYLINE\n8\nTRIM\n66\n1\n70\n9\n10\n0.0\n20\n0.0\n30\n0.0\n";
+    for (const auto& v : L)
+      e << "0\nVERTEX\n8\nTRIM\n10\n" << v[0] << "\n20\n" << v[1] << "\n30\n" << v[0] / 3 << "\n70\n32\n";
+    e << "0\nSEQEND\n8\nTRIM\n";
+    const TrimSurface t = parse_trim("polygon:" + dxf("3d.dxf", e.str()));
+    EXPECT_EQ(t.plan_u, (V3{1, 0, 0}));
+    EXPECT_EQ(t.plan_v, (V3{0, 1, 0}));
+    ASSERT_EQ(t.rings.size(), 1u);
+    EXPECT_NEAR(t.rings[0][1][0], 0.0871, 1e-15);
+  }
+  const std::vector<std::array<double, 2>> hole = {{30, 20}, {35, 20}, {35, 25}};
+  const std::string two = dxf("two.dxf", lwpolyline(L, {0, -1, 0}) + lwpolyline(hole, {0, 1, 0}));
+  EXPECT_EQ(refused("polygon:" + two), "--trim 'polygon:" + two + "': '" + two +
+                                           "': polyline 2 is drawn in another plane than polyline 1 (normal 0, 1, 0 "
+                                           "against 0, -1, 0): draw a trim outline's polylines in one plane");
+  const std::string none = dxf("none.dxf", lwpolyline(L, {0, 0, 0}));
+  EXPECT_EQ(refused("polygon:" + none), "--trim 'polygon:" + none + "': '" + none +
+                                            "': polyline 1 has no extrusion direction (the normal of its plane, codes "
+                                            "210-230)");
+  std::filesystem::remove_all(dir);
+}
+
 // Fibre marks: on a flat plate 120 x 80 mm (irregular triangles, fibres at
 // 30 degrees in its first half and 120 degrees in the other, as a field
 // per triangle), trimmed to 13.3 < x < 101.7 mm, with a grid of 10 mm: a
