@@ -616,6 +616,12 @@ class PlanPolygon {
 // without a margin as its sides in plan view, exact in each triangle,
 // and whether each node lies inside it.
 struct Trimming {
+  // Levels within it of 0 are on the trim (m: 1e-10 of the formed ply's
+  // size, far above the round-off of a level and far below any length
+  // that matters): a point on two trims that coincide there (the same
+  // plane twice, a plane along a polygon's side) is on both, not inside
+  // one and outside the other by a rounding.
+  double eps = 0;
   std::vector<std::vector<double>> linear;  // [trim][node], m
   std::vector<PlanPolygon> polygons;
   std::vector<std::vector<double>> plan;       // [polygon][2 node + 0, 1]: each node in the polygon's plane, m
@@ -625,6 +631,12 @@ struct Trimming {
 Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurface>& trims, double margin) {
   Trimming t;
   const long long n = static_cast<long long>(x.size() / 3);
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    lo[k % 3] = std::min(lo[k % 3], x[k]);
+    hi[k % 3] = std::max(hi[k % 3], x[k]);
+  }
+  t.eps = n > 0 ? 1e-10 * std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) : 0.0;
   for (const TrimSurface& s : trims) {
     if (s.kind == TrimSurface::Kind::Polygon && margin == 0) {
       const PlanPolygon& p = t.polygons.emplace_back(s.rings);
@@ -699,7 +711,7 @@ class TriangleCut {
       poly.near(lo[0], hi[0], lo[1], hi[1], near_);
       bool reached = false;
       for (const int s : near_) {
-        SideAt sa{static_cast<int>(p), s, {}, {}};
+        SideAt sa{static_cast<int>(p), s, {}, {}, poly.sides[static_cast<std::size_t>(s)].length};
         for (int k = 0; k < 3; ++k) {
           sa.f[k] = poly.level(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
           sa.s[k] = poly.along(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
@@ -735,15 +747,15 @@ class TriangleCut {
     for (const int j : lin_) {
       if (j == skip_linear) continue;
       const auto& l = t_.linear[static_cast<std::size_t>(j)];
-      if (w.w[0] * l[idx(0)] + w.w[1] * l[idx(1)] + w.w[2] * l[idx(2)] > 0) return false;
+      if (w.w[0] * l[idx(0)] + w.w[1] * l[idx(1)] + w.w[2] * l[idx(2)] > t_.eps) return false;
     }
     for (const int p : poly_) {
       if (p == skip_polygon) continue;
       bool on = false;
       for (const SideAt& sa : sides_) {
-        if (sa.poly != p || dot3(w, sa.f) != 0) continue;
-        const double s = dot3(w, sa.s);
-        if (s >= 0 && s <= 1) {
+        if (sa.poly != p || std::abs(dot3(w, sa.f)) > t_.eps) continue;
+        const double s = dot3(w, sa.s), d = t_.eps / sa.length;
+        if (s >= -d && s <= 1 + d) {
           on = true;
           break;
         }
@@ -808,6 +820,25 @@ class TriangleCut {
       }
       along(lerp(a, b, u0), lerp(a, b, u1), -1, static_cast<int>(s), sa.poly, true, true);
     }
+    // Two trims that coincide here give the same piece twice: once is
+    // kept; a piece and its reverse (their parts meet along it only) go.
+    auto same = [](const Weights& u, const Weights& v) {
+      return std::abs(u.w[0] - v.w[0]) <= 1e-9 && std::abs(u.w[1] - v.w[1]) <= 1e-9 &&
+             std::abs(u.w[2] - v.w[2]) <= 1e-9;
+    };
+    for (std::size_t i = 0; i < out.size(); ++i)
+      for (std::size_t j = i + 1; j < out.size() && out[i].trim; ++j) {
+        if (!out[j].trim) continue;
+        if (same(out[i].a, out[j].a) && same(out[i].b, out[j].b)) {
+          out.erase(out.begin() + static_cast<std::ptrdiff_t>(j));
+          --j;
+        } else if (same(out[i].a, out[j].b) && same(out[i].b, out[j].a)) {
+          out.erase(out.begin() + static_cast<std::ptrdiff_t>(j));
+          out.erase(out.begin() + static_cast<std::ptrdiff_t>(i));
+          --i;
+          break;
+        }
+      }
     double twice_area = 0;  // in the plane (w1, w2), where the triangle has 1/2
     for (const Piece& q : out) twice_area += q.a.w[1] * q.b.w[2] - q.a.w[2] * q.b.w[1];
     return std::clamp(twice_area, 0.0, 1.0);
@@ -817,10 +848,15 @@ class TriangleCut {
   struct SideAt {
     int poly = 0, side = 0;
     double f[3] = {0, 0, 0}, s[3] = {0, 0, 0};  // the side's level and position along it at the corners
+    double length = 0;                           // m
   };
 
   std::size_t idx(int k) const { return static_cast<std::size_t>(c_[k]); }
   static double dot3(const Weights& w, const double* v) { return w.w[0] * v[0] + w.w[1] * v[1] + w.w[2] * v[2]; }
+  // A level that goes from one side of 0 to the other by more than eps.
+  bool crosses(double fa, double fb) const {
+    return (fa < -t_.eps && fb > t_.eps) || (fa > t_.eps && fb < -t_.eps);
+  }
   static Weights lerp(const Weights& a, const Weights& b, double u) {
     Weights w;
     for (int k = 0; k < 3; ++k) w.w[k] = a.w[k] + u * (b.w[k] - a.w[k]);
@@ -880,16 +916,17 @@ class TriangleCut {
       const auto& l = t_.linear[static_cast<std::size_t>(j)];
       const double g[3] = {l[idx(0)], l[idx(1)], l[idx(2)]};
       const double fa = dot3(a, g), fb = dot3(b, g);
-      if ((fa < 0 && fb > 0) || (fa > 0 && fb < 0)) us_.push_back(fa / (fa - fb));
+      if (crosses(fa, fb)) us_.push_back(fa / (fa - fb));
     }
     for (std::size_t s = 0; s < sides_.size(); ++s) {
       if (static_cast<int>(s) == own_side) continue;
       const SideAt& sa = sides_[s];
       const double fa = dot3(a, sa.f), fb = dot3(b, sa.f);
-      if (!((fa < 0 && fb > 0) || (fa > 0 && fb < 0))) continue;
+      if (!crosses(fa, fb)) continue;
       const double u = fa / (fa - fb);
       const double ta = dot3(a, sa.s), tb = dot3(b, sa.s), t = ta + u * (tb - ta);
-      if (t >= 0 && t <= 1) us_.push_back(u);
+      const double d = t_.eps / sa.length;
+      if (t >= -d && t <= 1 + d) us_.push_back(u);
     }
     std::sort(us_.begin(), us_.end());
     us_.erase(std::unique(us_.begin(), us_.end()), us_.end());

@@ -482,6 +482,65 @@ TEST(Blank, CornersWhereTrimsMeetAreExact) {
   std::filesystem::remove_all(dir);
 }
 
+// Trims that coincide along a line: the same plane, cylinder or polygon
+// twice, a plane along a polygon's side, two polygons sharing part of a
+// side, on an irregular plate of 100 mm (17 x 13 crossed cells) turned by
+// 0.3 rad in plan and tilted. Each gives the pattern of the trims without
+// the repeats, or the exact region where they overlap; where two parts
+// meet along a line only, nothing.
+TEST(Blank, CoincidentTrimsGiveTheirPatternOnce) {
+  const auto dir = std::filesystem::temp_directory_path() / "thermostamp_blank_coincident";
+  std::filesystem::create_directories(dir);
+  const ShellMesh m = irregular_rectangle(0, 0, 0.1, 0.1, 17, 13, 0.0008, 41);
+  std::vector<double> x = m.x;
+  const double c = std::cos(0.3), s = std::sin(0.3);
+  for (std::size_t i = 0; i < x.size(); i += 3) {
+    x[i] = c * m.x[i] - s * m.x[i + 1] + 0.01;
+    x[i + 1] = s * m.x[i] + c * m.x[i + 1] - 0.02;
+    x[i + 2] = 0.01 * m.x[i];
+  }
+  auto file = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return "polygon:" + (dir / name).string();
+  };
+  const std::string sq = file("sq.csv", "0.02,0.01\n0.06,0.01\n0.06,0.07\n0.02,0.07\n");
+  const std::string beside = file("beside.csv", "0.06,0.03\n0.09,0.03\n0.09,0.05\n0.06,0.05\n");  // across x = 0.06
+  const std::string part = file("part.csv", "0.01,0.02\n0.06,0.02\n0.06,0.05\n0.01,0.05\n");     // along x = 0.06
+  auto pattern = [&](const std::vector<std::string>& texts) {
+    std::vector<TrimSurface> trims;
+    for (const std::string& t : texts) trims.push_back(parse_trim(t));
+    return cut_pattern(m.x, x, m.triangles, trims);
+  };
+  auto expect_same = [&](const CutPattern& a, const CutPattern& b, const std::string& what) {
+    EXPECT_NEAR(a.kept_blank_area, b.kept_blank_area, 1e-15) << what;
+    EXPECT_NEAR(a.kept_formed_area, b.kept_formed_area, 1e-15) << what;
+    ASSERT_EQ(a.outlines.size(), b.outlines.size()) << what;
+    for (std::size_t o = 0; o < a.outlines.size(); ++o) {
+      EXPECT_NEAR(a.outlines[o].length_blank, b.outlines[o].length_blank, 1e-14) << what;
+      EXPECT_NEAR(a.outlines[o].trim_length_blank, b.outlines[o].trim_length_blank, 1e-14) << what;
+    }
+  };
+  const std::string plane = "plane:0.03,0,0,1,0,0", cylinder = "cylinder:0.05,0.03,0,0,0,1,0.03";
+  expect_same(pattern({plane, plane}), pattern({plane}), "a plane twice");
+  expect_same(pattern({cylinder, cylinder}), pattern({cylinder}), "a cylinder twice");
+  expect_same(pattern({sq, sq}), pattern({sq}), "a polygon twice");
+  expect_same(pattern({sq, "plane:0.06,0,0,-1,0,0"}), pattern({sq}), "a plane along a side, the polygon inside it");
+  expect_same(pattern({"plane:0.02,0,0,1,0,0", sq}), pattern({sq}), "a plane along the other side");
+  const CutPattern one = pattern({sq});
+  EXPECT_NEAR(one.kept_blank_area, 0.04 * 0.06, 1e-15);  // the plan's map is a turn: areas kept
+  const CutPattern overlap = pattern({sq, part});
+  ASSERT_EQ(overlap.outlines.size(), 1u);
+  EXPECT_NEAR(overlap.kept_blank_area, 0.04 * 0.03, 1e-15);
+  EXPECT_NEAR(overlap.outlines[0].length_blank, 2 * (0.04 + 0.03), 1e-14);
+  expect_same(pattern({sq, part, "plane:0.06,0,0,-1,0,0"}), overlap, "two polygons and a plane along one line");
+  for (const auto& texts : std::vector<std::vector<std::string>>{{sq, beside}, {sq, "plane:0.06,0,0,1,0,0"}}) {
+    const CutPattern p = pattern(texts);
+    EXPECT_TRUE(p.outlines.empty()) << texts[1];
+    EXPECT_LT(p.kept_blank_area, 1e-18) << texts[1];
+  }
+  std::filesystem::remove_all(dir);
+}
+
 // A polygon across a vertical wall: a plate of 100 mm (20 x 20 cells, the
 // nodes moved at random but for the wall's edges) formed into a step, its
 // strip 40 < X < 60 mm stood up as a wall in the plane x = 40 mm (each of
