@@ -90,9 +90,10 @@ the forming carries into the part, which lies inside every --trim surface,
 given on the formed part in m: plane:X,Y,Z,NX,NY,NZ (a point, and the
 normal, which points into the part), cylinder:X,Y,Z,DX,DY,DZ,R (inside; a
 point on the axis, its direction, the radius), sphere:X,Y,Z,R (inside) or
-polygon:FILE[,SCALE] (inside a trim line drawn in plan view, seen along z:
-a CSV file, a row x,y per vertex, or the closed polylines of a DXF file;
-SCALE m per unit, for a DXF file from its $INSUNITS);
+polygon:FILE[,SCALE] (inside a trim line, cut along the normal of the
+plane it is drawn in: a CSV file, a row x,y per vertex, in plan view, or
+the closed polylines of a DXF file, in the plane of their extrusion
+direction; SCALE m per unit, for a DXF file from its $INSUNITS);
 writes FOLDER/<ply>.csv (default DIR/blank: the pattern's outlines, each
 point in the blank and formed), FOLDER/<ply>.dxf where the blank is flat
 (the pattern and the blank's outline in its plane, mm) and
@@ -414,8 +415,8 @@ int cmd_blank(const Args& a) {
   if (a.trims.empty()) throw UsageError("blank needs a --trim surface");
   const std::filesystem::path dir = a.positional[0];
   ts::BlankResult r;
+  std::vector<ts::TrimSurface> trims;
   try {
-    std::vector<ts::TrimSurface> trims;
     for (const auto& t : a.trims) trims.push_back(ts::parse_trim(t));
     r = ts::blank_plies(dir, a.time, a.out.empty() ? dir / "blank" : std::filesystem::path(a.out), a.whole, trims,
                         a.margin);
@@ -424,6 +425,13 @@ int cmd_blank(const Args& a) {
     return dynamic_cast<const ts::ExportInputError*>(&e) ? 2 : 3;
   }
   char line[600];
+  for (const auto& t : trims) {  // an outline drawn in another plane than plan view: which way it cuts
+    const std::array<double, 3> n = ts::polygon_cut_direction(t);
+    if (t.kind != ts::TrimSurface::Kind::Polygon || (n[0] == 0 && n[1] == 0)) continue;
+    std::snprintf(line, sizeof line, "(%.6g, %.6g, %.6g)", n[0], n[1], n[2]);
+    std::cout << "trim '" << t.text << "': cut along " << line
+              << ", the normal of the plane its outline is drawn in\n";
+  }
   char moved[64];
   std::snprintf(moved, sizeof moved, "%s by %g mm", a.margin > 0 ? "out" : "in", std::abs(1000 * a.margin));
   const std::string margin_text = moved;

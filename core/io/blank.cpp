@@ -490,6 +490,8 @@ TrimSurface parse_trim(const std::string& text) {
   return t;
 }
 
+std::array<double, 3> polygon_cut_direction(const TrimSurface& t) { return cross(t.plan_u, t.plan_v); }
+
 double trim_level(const std::vector<TrimSurface>& trims, const double* x) {
   double level = -std::numeric_limits<double>::infinity();
   for (const TrimSurface& t : trims) level = std::max(level, surface_level(t, x));
@@ -1373,6 +1375,9 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
   doc["results"] = frame.h5.string();
   doc["trims"] = nlohmann::json::array();
   for (const TrimSurface& t : trims) doc["trims"].push_back(t.text);
+  doc["polygon_cut_directions"] = nlohmann::json::object();  // each polygon trim's, by its text
+  for (const TrimSurface& t : trims)
+    if (t.kind == TrimSurface::Kind::Polygon) doc["polygon_cut_directions"][t.text] = polygon_cut_direction(t);
   doc["margin_m"] = margin;
   doc["plies"] = nlohmann::json::object();
   // The fibre directions of the blank: the first frame's field.

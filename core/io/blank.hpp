@@ -48,6 +48,10 @@ struct TrimSurface {
 // file that does not give its units and no scale.
 TrimSurface parse_trim(const std::string& text);
 
+// The direction a polygon trim cuts along: plan_u x plan_v, (0, 0, 1)
+// for a drawing in plan view.
+std::array<double, 3> polygon_cut_direction(const TrimSurface& t);
+
 // The level of a point x (m): at most 0 in the part, above 0 outside; the
 // signed distance to the surface (a polygon's: in its plane, of the
 // point's projection along its normal; for several surfaces, the part lying inside all of

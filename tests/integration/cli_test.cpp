@@ -2465,6 +2465,7 @@ tilted.saveas(sys.argv[4])
     const auto r =
         thermostamp("blank " + q(dir / "run") + " --trim polygon:" + q(dir / f) + " --out " + q(dir / ("of_" + f)));
     ASSERT_EQ(r.exit_code, 0) << f << ": " << r.err;
+    EXPECT_EQ(r.out.find("cut along"), std::string::npos) << f << ": plan view, seen along z (or -z)";
     by[f] = read_job_document(dir / ("of_" + f) / "blank.json");
   }
   for (const std::string ply : {"ply_top", "ply_bottom"}) {
@@ -2477,6 +2478,14 @@ tilted.saveas(sys.argv[4])
     const auto r = thermostamp("blank " + q(dir / "run") + " --trim polygon:" + q(dir / "tilted.dxf") + " --out " +
                                q(dir / "of_tilted"));
     ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.out.substr(0, r.out.find('\n') + 1),
+              "trim 'polygon:" + (dir / "tilted.dxf").string() +
+                  "': cut along (0.300768, -0.200512, 0.932381), the normal of the plane its outline is drawn in\n");
+    const json directions = read_job_document(dir / "of_tilted" / "blank.json")["polygon_cut_directions"];
+    ASSERT_EQ(directions.size(), 1u);
+    const double length = std::sqrt(0.3 * 0.3 + 0.2 * 0.2 + 0.93 * 0.93);
+    EXPECT_NEAR(directions.begin()->at(0).get<double>(), 0.3 / length, 1e-15);
+    EXPECT_NEAR(directions.begin()->at(2).get<double>(), 0.93 / length, 1e-15);
     std::ofstream(dir / "on_outline.py") << R"(import csv, math, sys
 from ezdxf.math import OCS, Vec3
 outline = [(x - 60, y - 55) for x, y in [(10, 5), (95, 12), (120, 70), (60, 110), (15, 80)]]
