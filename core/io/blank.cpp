@@ -657,7 +657,10 @@ Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurfa
     }
     auto& l = t.linear.emplace_back(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static) if (n > 4096)
-    for (long long i = 0; i < n; ++i) l[static_cast<std::size_t>(i)] = surface_level(s, &x[3 * i]) - margin;
+    for (long long i = 0; i < n; ++i) {
+      const double f = surface_level(s, &x[3 * i]) - margin;
+      l[static_cast<std::size_t>(i)] = std::abs(f) <= t.eps ? 0.0 : f;  // a node on the trim to round-off: on it
+    }
     for (long long i = 0; i < n; ++i)
       if (!std::isfinite(l[static_cast<std::size_t>(i)]))
         throw std::runtime_error("the distance of node " + std::to_string(i) + " to the trim is not finite");
@@ -710,13 +713,17 @@ class TriangleCut {
           lo[d] = std::min(lo[d], uv[2 * idx(k) + d]);
           hi[d] = std::max(hi[d], uv[2 * idx(k) + d]);
         }
-      poly.near(lo[0], hi[0], lo[1], hi[1], near_);
+      const double grow = 10 * t_.eps;  // the sides within round-off of it too
+      poly.near(lo[0] - grow, hi[0] + grow, lo[1] - grow, hi[1] + grow, near_);
       bool reached = false;
       for (const int s : near_) {
         SideAt sa{static_cast<int>(p), s, {}, {}, poly.sides[static_cast<std::size_t>(s)].length};
-        for (int k = 0; k < 3; ++k) {
-          sa.f[k] = poly.level(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
-          sa.s[k] = poly.along(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
+        const double d = t_.eps / sa.length;
+        for (int k = 0; k < 3; ++k) {  // a node on the side's line, or at its end, to round-off: on it
+          const double f = poly.level(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
+          const double a = poly.along(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
+          sa.f[k] = std::abs(f) <= t_.eps ? 0.0 : f;
+          sa.s[k] = std::abs(a) <= d ? 0.0 : std::abs(a - 1) <= d ? 1.0 : a;
         }
         if ((sa.f[0] > 0 && sa.f[1] > 0 && sa.f[2] > 0) || (sa.f[0] < 0 && sa.f[1] < 0 && sa.f[2] < 0)) continue;
         if ((sa.s[0] < 0 && sa.s[1] < 0 && sa.s[2] < 0) || (sa.s[0] > 1 && sa.s[1] > 1 && sa.s[2] > 1)) continue;
@@ -743,26 +750,36 @@ class TriangleCut {
   }
 
   // Whether a point of the prepared triangle lies in the pattern, leaving
-  // out one linear trim or one polygon (-1: none); a point on a polygon's
-  // side is inside it.
-  bool kept(const Weights& w, int skip_linear = -1, int skip_polygon = -1) const {
+  // out one linear trim or one polygon (-1: none). A level at most `tol`
+  // is inside: 0 for the triangle's edges (as the zero lines are found),
+  // eps for a point on a trim (on another trim that coincides with it
+  // there, it is inside that one too). Near a polygon's side (within
+  // 10 eps, between its ends) the side's level decides, as it places the
+  // side's line in the triangle; elsewhere the even-odd test in plan.
+  bool kept(const Weights& w, int skip_linear, int skip_polygon, double tol) const {
     for (const int j : lin_) {
       if (j == skip_linear) continue;
       const auto& l = t_.linear[static_cast<std::size_t>(j)];
-      if (w.w[0] * l[idx(0)] + w.w[1] * l[idx(1)] + w.w[2] * l[idx(2)] > t_.eps) return false;
+      if (w.w[0] * l[idx(0)] + w.w[1] * l[idx(1)] + w.w[2] * l[idx(2)] > tol) return false;
     }
     for (const int p : poly_) {
       if (p == skip_polygon) continue;
-      bool on = false;
+      double nearest = 10 * t_.eps, level = 0;
+      bool near = false;
       for (const SideAt& sa : sides_) {
-        if (sa.poly != p || std::abs(dot3(w, sa.f)) > t_.eps) continue;
-        const double s = dot3(w, sa.s), d = t_.eps / sa.length;
-        if (s >= -d && s <= 1 + d) {
-          on = true;
-          break;
-        }
+        if (sa.poly != p) continue;
+        const double f = dot3(w, sa.f);
+        if (std::abs(f) > nearest) continue;
+        const double s = dot3(w, sa.s), d = 10 * t_.eps / sa.length;
+        if (s < -d || s > 1 + d) continue;
+        nearest = std::abs(f);
+        level = f;
+        near = true;
       }
-      if (on) continue;
+      if (near) {
+        if (level > tol) return false;
+        continue;
+      }
       double px = 0, py = 0;
       for (int k = 0; k < 3; ++k) {
         px += w.w[k] * t_.plan[static_cast<std::size_t>(p)][2 * idx(k)];
@@ -822,25 +839,33 @@ class TriangleCut {
       }
       along(lerp(a, b, u0), lerp(a, b, u1), -1, static_cast<int>(s), sa.poly, true, true);
     }
-    // Two trims that coincide here give the same piece twice: once is
-    // kept; a piece and its reverse (their parts meet along it only) go.
+    // Trims that coincide here give the same piece more than once: one is
+    // kept; where it comes both ways (the trims' parts meet along it only)
+    // none.
     auto same = [](const Weights& u, const Weights& v) {
       return std::abs(u.w[0] - v.w[0]) <= 1e-9 && std::abs(u.w[1] - v.w[1]) <= 1e-9 &&
              std::abs(u.w[2] - v.w[2]) <= 1e-9;
     };
-    for (std::size_t i = 0; i < out.size(); ++i)
-      for (std::size_t j = i + 1; j < out.size() && out[i].trim; ++j) {
-        if (!out[j].trim) continue;
+    std::vector<char>& drop = drop_;
+    drop.assign(out.size(), 0);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      if (!out[i].trim || drop[i]) continue;
+      bool reversed = false;
+      for (std::size_t j = i + 1; j < out.size(); ++j) {
+        if (!out[j].trim || drop[j]) continue;
         if (same(out[i].a, out[j].a) && same(out[i].b, out[j].b)) {
-          out.erase(out.begin() + static_cast<std::ptrdiff_t>(j));
-          --j;
+          drop[j] = 1;
         } else if (same(out[i].a, out[j].b) && same(out[i].b, out[j].a)) {
-          out.erase(out.begin() + static_cast<std::ptrdiff_t>(j));
-          out.erase(out.begin() + static_cast<std::ptrdiff_t>(i));
-          --i;
-          break;
+          drop[j] = 1;
+          reversed = true;
         }
       }
+      if (reversed) drop[i] = 1;
+    }
+    std::size_t kept_pieces = 0;
+    for (std::size_t i = 0; i < out.size(); ++i)
+      if (!drop[i]) out[kept_pieces++] = out[i];
+    out.resize(kept_pieces);
     double twice_area = 0;  // in the plane (w1, w2), where the triangle has 1/2
     for (const Piece& q : out) twice_area += q.a.w[1] * q.b.w[2] - q.a.w[2] * q.b.w[1];
     return std::clamp(twice_area, 0.0, 1.0);
@@ -855,10 +880,8 @@ class TriangleCut {
 
   std::size_t idx(int k) const { return static_cast<std::size_t>(c_[k]); }
   static double dot3(const Weights& w, const double* v) { return w.w[0] * v[0] + w.w[1] * v[1] + w.w[2] * v[2]; }
-  // A level that goes from one side of 0 to the other by more than eps.
-  bool crosses(double fa, double fb) const {
-    return (fa < -t_.eps && fb > t_.eps) || (fa > t_.eps && fb < -t_.eps);
-  }
+  // A level that goes from one side of 0 to the other.
+  static bool crosses(double fa, double fb) { return (fa < 0 && fb > 0) || (fa > 0 && fb < 0); }
   static Weights lerp(const Weights& a, const Weights& b, double u) {
     Weights w;
     for (int k = 0; k < 3; ++k) w.w[k] = a.w[k] + u * (b.w[k] - a.w[k]);
@@ -935,7 +958,7 @@ class TriangleCut {
     double from = -1;  // the start of the kept run
     for (std::size_t k = 0; k + 1 < us_.size(); ++k) {
       const double ua = us_[k], ub = us_[k + 1];
-      const bool in = kept(lerp(a, b, 0.5 * (ua + ub)), own_linear, own_polygon);
+      const bool in = kept(lerp(a, b, 0.5 * (ua + ub)), own_linear, own_polygon, trim ? t_.eps : 0.0);
       if (in && from < 0) from = ua;
       if ((!in || k + 2 == us_.size()) && from >= 0) {
         const double to = in ? ub : ua;
@@ -958,6 +981,7 @@ class TriangleCut {
   std::vector<SideAt> sides_;
   std::vector<double> us_;
   std::vector<Piece>* out_ = nullptr;
+  std::vector<char> drop_;
 };
 
 }  // namespace
@@ -1187,7 +1211,7 @@ std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vec
         const double b0 = 1 - b1 - b2;
         const double tol = -1e-12;
         if (b0 < tol || b1 < tol || b2 < tol) continue;
-        if (state == 0 && !cut.kept(Weights{{b0, b1, b2}})) continue;  // outside the pattern
+        if (state == 0 && !cut.kept(Weights{{b0, b1, b2}}, -1, -1, 0.0)) continue;  // outside the pattern
         if (!taken.emplace(i, j).second) continue;
         Vec c{0, 0, 0};  // the point on the triangle
 
