@@ -527,7 +527,20 @@ class PlanPolygon {
     lo_[0] = lo_[1] = std::numeric_limits<double>::infinity();
     hi_[0] = hi_[1] = -std::numeric_limits<double>::infinity();
     for (std::size_t r = 0; r < rings.size(); ++r) {
-      const Ring& p = rings[r];
+      // Vertices between two sides along one line are left out: such a
+      // side is one, as another trim along that line sees it.
+      Ring p;
+      const Ring& given = rings[r];
+      for (std::size_t k = 0; k < given.size(); ++k) {
+        const auto& a = given[(k + given.size() - 1) % given.size()];
+        const auto& b = given[k];
+        const auto& c = given[(k + 1) % given.size()];
+        const double ab = std::hypot(b[0] - a[0], b[1] - a[1]), bc = std::hypot(c[0] - b[0], c[1] - b[1]);
+        const bool straight = std::abs(cross2(a, b, c)) <= 1e-12 * ab * bc &&
+                              (b[0] - a[0]) * (c[0] - b[0]) + (b[1] - a[1]) * (c[1] - b[1]) > 0;
+        if (!straight) p.push_back(b);
+      }
+      if (p.size() < 3) p = given;
       int depth = 0;
       for (std::size_t q = 0; q < rings.size(); ++q)
         if (q != r && ring_contains(rings[q], p[0][0], p[0][1])) ++depth;
@@ -880,8 +893,11 @@ class TriangleCut {
 
   std::size_t idx(int k) const { return static_cast<std::size_t>(c_[k]); }
   static double dot3(const Weights& w, const double* v) { return w.w[0] * v[0] + w.w[1] * v[1] + w.w[2] * v[2]; }
-  // A level that goes from one side of 0 to the other.
-  static bool crosses(double fa, double fb) { return (fa < 0 && fb > 0) || (fa > 0 && fb < 0); }
+  // A level that goes from one side of 0 to the other (by more than tol
+  // either way).
+  static bool crosses(double fa, double fb, double tol) {
+    return (fa < -tol && fb > tol) || (fa > tol && fb < -tol);
+  }
   static Weights lerp(const Weights& a, const Weights& b, double u) {
     Weights w;
     for (int k = 0; k < 3; ++k) w.w[k] = a.w[k] + u * (b.w[k] - a.w[k]);
@@ -932,22 +948,25 @@ class TriangleCut {
 
   // The pieces of the segment a -> b inside every trim but its own
   // (own_linear, or own_side of own_polygon), split where it crosses
-  // another trim's line or side.
+  // another trim's line or side. A triangle's edge is taken strictly, as
+  // the zero lines cross it; a trim's piece with the tolerance eps (a
+  // level within eps of 0 at both of its ends is on that trim along it).
   void along(const Weights& a, const Weights& b, int own_linear, int own_side, int own_polygon, bool trim,
              bool emit) {
+    const double tol = trim ? t_.eps : 0.0;
     us_.assign({0.0, 1.0});
     for (const int j : lin_) {
       if (j == own_linear) continue;
       const auto& l = t_.linear[static_cast<std::size_t>(j)];
       const double g[3] = {l[idx(0)], l[idx(1)], l[idx(2)]};
       const double fa = dot3(a, g), fb = dot3(b, g);
-      if (crosses(fa, fb)) us_.push_back(fa / (fa - fb));
+      if (crosses(fa, fb, tol)) us_.push_back(fa / (fa - fb));
     }
     for (std::size_t s = 0; s < sides_.size(); ++s) {
       if (static_cast<int>(s) == own_side) continue;
       const SideAt& sa = sides_[s];
       const double fa = dot3(a, sa.f), fb = dot3(b, sa.f);
-      if (!crosses(fa, fb)) continue;
+      if (!crosses(fa, fb, tol)) continue;
       const double u = fa / (fa - fb);
       const double ta = dot3(a, sa.s), tb = dot3(b, sa.s), t = ta + u * (tb - ta);
       const double d = t_.eps / sa.length;
@@ -955,12 +974,15 @@ class TriangleCut {
     }
     std::sort(us_.begin(), us_.end());
     us_.erase(std::unique(us_.begin(), us_.end()), us_.end());
+    // A run of kept parts is one piece along an edge; along a trim each
+    // part is one, so that where another trim coincides with it over part
+    // of it, the two give the same pieces there.
     double from = -1;  // the start of the kept run
     for (std::size_t k = 0; k + 1 < us_.size(); ++k) {
       const double ua = us_[k], ub = us_[k + 1];
-      const bool in = kept(lerp(a, b, 0.5 * (ua + ub)), own_linear, own_polygon, trim ? t_.eps : 0.0);
+      const bool in = kept(lerp(a, b, 0.5 * (ua + ub)), own_linear, own_polygon, tol);
       if (in && from < 0) from = ua;
-      if ((!in || k + 2 == us_.size()) && from >= 0) {
+      if ((!in || trim || k + 2 == us_.size()) && from >= 0) {
         const double to = in ? ub : ua;
         Piece q;
         q.a = lerp(a, b, from);

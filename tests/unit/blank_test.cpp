@@ -484,10 +484,11 @@ TEST(Blank, CornersWhereTrimsMeetAreExact) {
 
 // Trims that coincide along a line: the same plane, cylinder or polygon
 // twice, a plane along a polygon's side, two polygons sharing part of a
-// side, on an irregular plate of 100 mm (17 x 13 crossed cells) turned by
-// 0.3 rad in plan and tilted. Each gives the pattern of the trims without
-// the repeats, or the exact region where they overlap; where two parts
-// meet along a line only, nothing.
+// side (one of them with a vertex along it), on an irregular plate of
+// 100 mm (17 x 13 crossed cells) turned by 0.3 rad in plan and tilted.
+// Each gives the pattern of the trims without the repeats, or the exact
+// region where they overlap; where two parts meet along a line only,
+// nothing.
 TEST(Blank, CoincidentTrimsGiveTheirPatternOnce) {
   const auto dir = std::filesystem::temp_directory_path() / "thermostamp_blank_coincident";
   std::filesystem::create_directories(dir);
@@ -533,6 +534,9 @@ TEST(Blank, CoincidentTrimsGiveTheirPatternOnce) {
   EXPECT_NEAR(overlap.kept_blank_area, 0.04 * 0.03, 1e-15);
   EXPECT_NEAR(overlap.outlines[0].length_blank, 2 * (0.04 + 0.03), 1e-14);
   expect_same(pattern({sq, part, "plane:0.06,0,0,-1,0,0"}), overlap, "two polygons and a plane along one line");
+  // A vertex between two sides along one line: the same outline.
+  const std::string kinked = file("kinked.csv", "0.01,0.02\n0.06,0.02\n0.06,0.035\n0.06,0.05\n0.01,0.05\n");
+  expect_same(pattern({sq, kinked}), overlap, "a polygon with a vertex along the common line");
   for (const auto& texts : std::vector<std::vector<std::string>>{{sq, beside}, {sq, "plane:0.06,0,0,1,0,0"}}) {
     const CutPattern p = pattern(texts);
     EXPECT_TRUE(p.outlines.empty()) << texts[1];
