@@ -69,6 +69,25 @@ double area(const std::vector<std::array<double, 2>>& poly) {
   return a;
 }
 
+// The distance of (x, y) to a closed polygon's sides (m).
+double to_sides(const std::vector<std::array<double, 2>>& poly, double x, double y) {
+  double d = 1e300;
+  for (std::size_t k = 0; k < poly.size(); ++k) {
+    const auto& u = poly[k];
+    const auto& w = poly[(k + 1) % poly.size()];
+    const double ex = w[0] - u[0], ey = w[1] - u[1];
+    const double t = std::clamp(((x - u[0]) * ex + (y - u[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
+    d = std::min(d, std::hypot(x - u[0] - t * ex, y - u[1] - t * ey));
+  }
+  return d;
+}
+// The distance of (x, y) to a polygon's nearest vertex (m).
+double to_vertices(const std::vector<std::array<double, 2>>& poly, double x, double y) {
+  double d = 1e300;
+  for (const auto& v : poly) d = std::min(d, std::hypot(x - v[0], y - v[1]));
+  return d;
+}
+
 // A rectangle's mesh with its inner nodes moved at random by up to
 // `amplitude` in x and y (those on its sides along them only), for
 // irregular triangles with straight sides.
@@ -263,17 +282,7 @@ TEST(Blank, AffineMapsCarryThePreimageOfATrimPlane) {
 //    with its area and corners exact.
 TEST(Blank, CornersWhereTrimsMeetAreExact) {
   using P2 = std::array<double, 2>;
-  auto distance_to = [](const std::vector<P2>& poly, const V3& q) {  // to the polygon's sides
-    double d = 1e300;
-    for (std::size_t k = 0; k < poly.size(); ++k) {
-      const P2& u = poly[k];
-      const P2& w = poly[(k + 1) % poly.size()];
-      const double ex = w[0] - u[0], ey = w[1] - u[1];
-      const double tt = std::clamp(((q[0] - u[0]) * ex + (q[1] - u[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
-      d = std::min(d, std::hypot(q[0] - u[0] - tt * ex, q[1] - u[1] - tt * ey));
-    }
-    return d;
-  };
+  auto distance_to = [](const std::vector<P2>& poly, const V3& q) { return to_sides(poly, q[0], q[1]); };
   auto nearest_point = [](const CutPattern& p, const P2& v) {
     double d = 1e300;
     for (const Outline& o : p.outlines)
@@ -840,16 +849,7 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
   const CutPattern p = cut_pattern(m.x, x, m.triangles, {t});
   ASSERT_EQ(p.outlines.size(), 1u);
   auto distance = [&](const V3& q) {  // to the outline's sides, and to its nearest vertex
-    double side = 1e300, vertex = 1e300;
-    for (std::size_t k = 0; k < L.size(); ++k) {
-      const auto& u = L[k];
-      const auto& w = L[(k + 1) % L.size()];
-      const double ex = w[0] - u[0], ey = w[1] - u[1];
-      const double tt = std::clamp(((q[0] - u[0]) * ex + (q[1] - u[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
-      side = std::min(side, std::hypot(q[0] - u[0] - tt * ex, q[1] - u[1] - tt * ey));
-      vertex = std::min(vertex, std::hypot(q[0] - u[0], q[1] - u[1]));
-    }
-    return std::pair<double, double>{side, vertex};
+    return std::pair<double, double>{to_sides(L, q[0], q[1]), to_vertices(L, q[0], q[1])};
   };
   int corners = 0;
   for (const OutlinePoint& q : p.outlines[0].points) {
@@ -973,28 +973,15 @@ TEST(Blank, PolygonFromADxfFileWithArcsAndAHole) {
   EXPECT_NEAR(signed_area_z(p.outlines[0]) + signed_area_z(p.outlines[1]), p.kept_blank_area, 1e-13 * tessellated);
   EXPECT_LT(std::min(signed_area_z(p.outlines[0]), signed_area_z(p.outlines[1])), 0.0) << "the hole runs clockwise";
   EXPECT_NEAR(p.kept_blank_area, tessellated, 1e-13 * tessellated);
-  std::vector<std::array<double, 2>> ends;  // of the polygons' sides, in turn
-  for (const auto& ring : t.rings)
-    for (std::size_t k = 0; k < ring.size(); ++k) {
-      ends.push_back(ring[k]);
-      ends.push_back(ring[(k + 1) % ring.size()]);
-    }
   std::size_t points = 0;
   for (const Outline& o : p.outlines)
     for (const OutlinePoint& q : o.points) {
       double off = 1e300;
-      for (std::size_t k = 0; k < ends.size(); k += 2) {
-        const auto& u = ends[k];
-        const auto& w = ends[k + 1];
-        const double ex = w[0] - u[0], ey = w[1] - u[1];
-        const double tt =
-            std::clamp(((q.blank[0] - u[0]) * ex + (q.blank[1] - u[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
-        off = std::min(off, std::hypot(q.blank[0] - u[0] - tt * ex, q.blank[1] - u[1] - tt * ey));
-      }
+      for (const auto& ring : t.rings) off = std::min(off, to_sides(ring, q.blank[0], q.blank[1]));
       EXPECT_LT(off, 1e-16) << q.blank[0] << " " << q.blank[1];
       ++points;
     }
-  EXPECT_GT(points, ends.size() / 2) << "every vertex, and where sides cross the mesh's edges";
+  EXPECT_GT(points, t.rings[0].size() + t.rings[1].size()) << "every vertex, and where sides cross the mesh's edges";
   // Units: a scale after the name, inches from $INSUNITS 1, none.
   const std::string bare = dxf("bare.dxf", "", slot);
   const TrimSurface scaled = parse_trim("polygon:" + bare + ",0.001");
@@ -1043,6 +1030,8 @@ TEST(Blank, PolygonDrawnInAnotherPlaneCutsAlongItsNormal) {
   const std::vector<std::array<double, 2>> L = {{11.3, 12.7}, {87.1, 12.7}, {87.1, 41.3},
                                                {43.7, 41.3}, {43.7, 88.9}, {11.3, 88.9}};  // mm
   const double exact = 0.0758 * 0.0286 + 0.0324 * 0.0476;
+  std::vector<std::array<double, 2>> L_m;  // m
+  for (const auto& v : L) L_m.push_back({v[0] / 1000, v[1] / 1000});
   auto lwpolyline = [&](const std::vector<std::array<double, 2>>& pts, const V3& n) {
     std::ostringstream e;
     e.precision(17);
@@ -1081,18 +1070,8 @@ TEST(Blank, PolygonDrawnInAnotherPlaneCutsAlongItsNormal) {
     EXPECT_NEAR(signed_area_z(p.outlines[0]), exact, 1e-13 * exact) << k;
     int corners = 0;
     for (const OutlinePoint& q : p.outlines[0].points) {
-      double side = 1e300, vertex = 1e300;
-      for (std::size_t i = 0; i < L.size(); ++i) {
-        const std::array<double, 2> a{L[i][0] / 1000, L[i][1] / 1000};
-        const std::array<double, 2> b{L[(i + 1) % L.size()][0] / 1000, L[(i + 1) % L.size()][1] / 1000};
-        const double ex = b[0] - a[0], ey = b[1] - a[1];
-        const double tt =
-            std::clamp(((q.blank[0] - a[0]) * ex + (q.blank[1] - a[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
-        side = std::min(side, std::hypot(q.blank[0] - a[0] - tt * ex, q.blank[1] - a[1] - tt * ey));
-        vertex = std::min(vertex, std::hypot(q.blank[0] - a[0], q.blank[1] - a[1]));
-      }
-      EXPECT_LT(side, 1e-16) << k;
-      if (vertex < 1e-16) ++corners;
+      EXPECT_LT(to_sides(L_m, q.blank[0], q.blank[1]), 1e-16) << k;
+      if (to_vertices(L_m, q.blank[0], q.blank[1]) < 1e-16) ++corners;
     }
     EXPECT_EQ(corners, 6) << k;
   }
