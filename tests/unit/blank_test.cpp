@@ -69,6 +69,26 @@ double area(const std::vector<std::array<double, 2>>& poly) {
   return a;
 }
 
+// A closed polygon's perimeter, and the length of its sides that lie on
+// one of the lines a x + b y + d = 0 (within 1e-12).
+std::pair<double, double> perimeter_and_on(const std::vector<std::array<double, 2>>& poly,
+                                           const std::vector<std::array<double, 3>>& lines) {
+  double perimeter = 0, on = 0;
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const auto& u = poly[i];
+    const auto& w = poly[(i + 1) % poly.size()];
+    const double l = std::hypot(w[0] - u[0], w[1] - u[1]);
+    perimeter += l;
+    for (const auto& ln : lines)
+      if (std::abs(ln[0] * u[0] + ln[1] * u[1] + ln[2]) < 1e-12 &&
+          std::abs(ln[0] * w[0] + ln[1] * w[1] + ln[2]) < 1e-12) {
+        on += l;
+        break;
+      }
+  }
+  return {perimeter, on};
+}
+
 // The distance of (x, y) to a closed polygon's sides (m).
 double to_sides(const std::vector<std::array<double, 2>>& poly, double x, double y) {
   double d = 1e300;
@@ -191,14 +211,7 @@ TEST(Blank, AffineMapsCarryThePreimageOfATrimPlane) {
                                    std::pow(a1[2] * a2[0] - a1[0] * a2[2], 2) +
                                    std::pow(a1[0] * a2[1] - a1[1] * a2[0], 2));
     EXPECT_NEAR(p.kept_formed_area, ratio * area(kept), 1e-15) << "case " << k;
-    double chord = 0, perimeter = 0;
-    for (std::size_t i = 0; i < kept.size(); ++i) {
-      const auto& u = kept[i];
-      const auto& w = kept[(i + 1) % kept.size()];
-      const double l = std::hypot(w[0] - u[0], w[1] - u[1]);
-      perimeter += l;
-      if (std::abs(a * u[0] + bb * u[1] + d) < 1e-12 && std::abs(a * w[0] + bb * w[1] + d) < 1e-12) chord += l;
-    }
+    const auto [perimeter, chord] = perimeter_and_on(kept, {{a, bb, d}});
     EXPECT_NEAR(o.length_blank, perimeter, 1e-14) << "case " << k;
     EXPECT_NEAR(o.trim_length_blank, chord, 1e-14) << "case " << k;
     EXPECT_GT(chord, 0.05) << "case " << k << ": the trim crosses the blank";
@@ -320,17 +333,7 @@ TEST(Blank, CornersWhereTrimsMeetAreExact) {
       EXPECT_NEAR(p.kept_blank_area, area(kept), 1e-15);
       EXPECT_NEAR(signed_area_z(p.outlines[0]), area(kept), 1e-15);
       EXPECT_LT(nearest_point(p, corner), 1e-15);
-      double perimeter = 0, chords = 0;
-      for (std::size_t i = 0; i < kept.size(); ++i) {
-        const P2& u = kept[i];
-        const P2& w = kept[(i + 1) % kept.size()];
-        const double l = std::hypot(w[0] - u[0], w[1] - u[1]);
-        perimeter += l;
-        for (const auto& ln : lines)
-          if (std::abs(ln[0] * u[0] + ln[1] * u[1] + ln[2]) < 1e-12 &&
-              std::abs(ln[0] * w[0] + ln[1] * w[1] + ln[2]) < 1e-12)
-            chords += l;
-      }
+      const auto [perimeter, chords] = perimeter_and_on(kept, lines);
       EXPECT_NEAR(p.outlines[0].length_blank, perimeter, 1e-14);
       EXPECT_NEAR(p.outlines[0].trim_length_blank, chords, 1e-14);
       for (const OutlinePoint& q : p.outlines[0].points) {
