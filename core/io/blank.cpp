@@ -125,8 +125,8 @@ Ring read_csv_ring(const std::string& file, const std::string& what) {
 }
 
 // The closed polylines of a DXF file's ENTITIES section (LWPOLYLINE, and
-// POLYLINE with its VERTEX entities), their arcs (bulges) drawn as sides
-// of at most 2 degrees of arc, in the coordinates of the plane they are
+// POLYLINE with its VERTEX entities) and its circles (CIRCLE), their arcs
+// (bulges) drawn as sides of at most 2 degrees of arc, in the coordinates of the plane they are
 // drawn in (the object coordinate system of their extrusion direction,
 // `normal`, which every one of them must share; a 3D POLYLINE's vertices
 // in x and y, seen along z); open polylines, polygon meshes and other
@@ -143,6 +143,8 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
   std::vector<Vertex> vs;
   bool closed = false, in_polyline = false, three_d = false, mesh = false;
   Vec extrusion{0, 0, 1};  // the normal of the plane the polyline is drawn in
+  std::array<double, 3> circle{};  // a CIRCLE's centre and radius
+  int circle_line = 0;
   std::optional<Vec> first_normal;
   int open = 0, units = -1, count = 0;
   std::string section, entity, code, value, variable;
@@ -212,6 +214,14 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
     code = trimmed(code);
     value = trimmed(value);
     if (code == "0") {
+      if (entity == "CIRCLE" && section == "ENTITIES") {  // a closed polyline of two half circles
+        if (!(circle[2] > 0) || !std::isfinite(circle[2]))
+          throw ExportInputError(what + "'" + shown(file) + "' line " + std::to_string(circle_line) +
+                                 ": a CIRCLE without a radius above 0");
+        vs = {{circle[0] + circle[2], circle[1], 1.0}, {circle[0] - circle[2], circle[1], 1.0}};
+        closed = true;
+        finish();
+      }
       if (entity == "LWPOLYLINE" || (entity == "SEQEND" && in_polyline) || value == "ENDSEC") finish();
       if (entity == "SEQEND") in_polyline = false;
       if (value == "SECTION") section.clear();
@@ -224,6 +234,10 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
       if (entity == "LWPOLYLINE" && section == "ENTITIES") {
         vs.clear();
         closed = false;
+      }
+      if (entity == "CIRCLE") {
+        circle = {0, 0, 0};
+        circle_line = line;
       }
       continue;
     }
@@ -238,6 +252,13 @@ std::vector<Ring> read_dxf_rings(const std::string& file, const std::string& wha
     }
     if (section != "ENTITIES") continue;
     const bool lw = entity == "LWPOLYLINE", vertex = entity == "VERTEX" && in_polyline;
+    if (entity == "CIRCLE") {  // its centre in the plane of its extrusion direction, and its radius
+      if (code == "10" || code == "20") circle[code == "10" ? 0 : 1] = number(value);
+      if (code == "40") circle[2] = number(value);
+      if (code == "210" || code == "220" || code == "230")
+        extrusion[static_cast<std::size_t>(code[1] - '1')] = number(value);
+      continue;
+    }
     const bool header = lw || (entity == "POLYLINE" && in_polyline);
     if (header && code == "70") {
       const int flags = integer(value);

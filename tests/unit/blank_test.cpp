@@ -940,7 +940,7 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
 // around a square hole of 20 x 10 mm (a closed POLYLINE of VERTEX
 // entities); a LINE and an open polyline beside them are left out. On a
 // flat plate of 100 mm (40 x 40 crossed cells): the arcs come in sides of
-// 2 degrees (90 per half circle); the pattern is the slot less the hole,
+// 2 degrees (90 per half circle), a CIRCLE's in 180; the pattern is the slot less the hole,
 // its area that of those polygons to round-off, the hole's outline
 // clockwise; every point of the pattern lies on the polygons' sides.
 // Units from $INSUNITS or from a scale after the file's name; a file that
@@ -985,6 +985,26 @@ TEST(Blank, PolygonFromADxfFileWithArcsAndAHole) {
       ++points;
     }
   EXPECT_GT(points, t.rings[0].size() + t.rings[1].size()) << "every vertex, and where sides cross the mesh's edges";
+  // A CIRCLE (50, 40) mm, r 20 mm: a polygon of 180 sides of 2 degrees.
+  {
+    const TrimSurface c = parse_trim(
+        "polygon:" + dxf("circle.dxf", "9\n$INSUNITS\n70\n4\n",
+                         "0\nCIRCLE\n8\nTRIM\n10\n50.0\n20\n40.0\n30\n0.0\n40\n20.0\n0\nLINE\n8\n0\n10\n0.0\n20\n0.0\n"
+                         "11\n1.0\n21\n1.0\n"));
+    ASSERT_EQ(c.rings.size(), 1u);
+    ASSERT_EQ(c.rings[0].size(), 180u);
+    EXPECT_NEAR(c.rings[0][0][0], 0.07, 1e-15);
+    EXPECT_NEAR(c.rings[0][90][0], 0.03, 1e-15);
+    const CutPattern q = cut_pattern(m.x, m.x, m.triangles, {c});
+    ASSERT_EQ(q.outlines.size(), 1u);
+    const double gon = 90 * 0.02 * 0.02 * std::sin(2 * M_PI / 180);
+    EXPECT_NEAR(q.kept_blank_area, gon, 1e-13 * gon);
+    for (const OutlinePoint& o : q.outlines[0].points) EXPECT_LT(to_sides(c.rings[0], o.blank[0], o.blank[1]), 1e-16);
+    EXPECT_EQ(refused("polygon:" + dxf("flat.dxf", "9\n$INSUNITS\n70\n4\n",
+                                       "0\nCIRCLE\n8\nTRIM\n10\n50.0\n20\n40.0\n30\n0.0\n40\n0.0\n")),
+              "--trim 'polygon:" + (dir / "flat.dxf").string() + "': '" + (dir / "flat.dxf").string() +
+                  "' line 16: a CIRCLE without a radius above 0");
+  }
   // Units: a scale after the name, inches from $INSUNITS 1, none.
   const std::string bare = dxf("bare.dxf", "", slot);
   const TrimSurface scaled = parse_trim("polygon:" + bare + ",0.001");
