@@ -328,6 +328,7 @@ std::vector<Ring> read_polygon(const std::string& spec, const std::string& what,
       dxf ? read_dxf_rings(file, what, scale, scale_given, normal) : std::vector<Ring>{read_csv_ring(file, what)};
   if (!dxf) normal = {0, 0, 1};
   const std::string at = what + "'" + shown(file) + "'";
+  double lo[2] = {kFar, kFar}, hi[2] = {-kFar, -kFar};
   for (std::size_t r = 0; r < rings.size(); ++r) {
     Ring& p = rings[r];
     for (std::size_t k = 0; k < p.size(); ++k) {
@@ -336,16 +337,29 @@ std::vector<Ring> read_polygon(const std::string& spec, const std::string& what,
       if (!(std::abs(p[k][0]) <= kFar && std::abs(p[k][1]) <= kFar))
         throw ExportInputError(at + (dxf ? ": polyline " + std::to_string(r + 1) : std::string(":")) + " vertex " +
                                std::to_string(k + 1) + " lies beyond 1e6 m: not a trim in a press (the scale?)");
+      for (std::size_t d = 0; d < 2; ++d) {
+        lo[d] = std::min(lo[d], p[k][d]);
+        hi[d] = std::max(hi[d], p[k][d]);
+      }
     }
+  }
+  // Two vertices within 1e-9 of the polygon's size of each other are one:
+  // a side that short has no direction to cut along.
+  const double close = 1e-9 * std::hypot(hi[0] - lo[0], hi[1] - lo[1]);
+  auto same = [&](const std::array<double, 2>& a, const std::array<double, 2>& b) {
+    return std::hypot(a[0] - b[0], a[1] - b[1]) <= close;
+  };
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    Ring& p = rings[r];
     const std::string which = dxf ? ": polyline " + std::to_string(r + 1) : std::string();
-    if (p.size() > 1 && p.front() == p.back()) p.pop_back();
+    if (p.size() > 1 && same(p.front(), p.back())) p.pop_back();
     if (p.size() < 3)
       throw ExportInputError(at + which + (dxf ? " has " : " holds ") + std::to_string(p.size()) +
                              " vertices: a polygon needs at least 3");
     const std::size_t n = p.size();
     double area = 0;
     for (std::size_t k = 0; k < n; ++k) {
-      if (p[k] == p[(k + 1) % n])
+      if (same(p[k], p[(k + 1) % n]))
         throw ExportInputError(at + (dxf ? which : std::string(":")) + " vertex " + std::to_string(k + 1) +
                                " is there twice in a row");
       area += cross2({0, 0}, p[k], p[(k + 1) % n]) / 2;
@@ -625,9 +639,11 @@ class PlanPolygon {
 
   // The signed distance of (x, y) to side s's line, negative on the
   // part's side, and where it lies along the side (0 at a, 1 at b).
-  double level(int s, double x, double y) const {
+  double level(int s, double x, double y) const {  // from the side's nearer end, for fewer lost digits
     const Side& e = sides[static_cast<std::size_t>(s)];
-    return -((e.b[0] - e.a[0]) * (y - e.a[1]) - (e.b[1] - e.a[1]) * (x - e.a[0])) / e.length;
+    const bool from_a = std::hypot(x - e.a[0], y - e.a[1]) <= std::hypot(x - e.b[0], y - e.b[1]);
+    const auto& o = from_a ? e.a : e.b;
+    return -((e.b[0] - e.a[0]) * (y - o[1]) - (e.b[1] - e.a[1]) * (x - o[0])) / e.length;
   }
   double along(int s, double x, double y) const {
     const Side& e = sides[static_cast<std::size_t>(s)];
@@ -1196,7 +1212,7 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
       if (follow < 0) {
         const Vec& b = points[static_cast<std::size_t>(next)].blank;
         throw std::runtime_error("the outline does not close at (" + g(b[0]) + ", " + g(b[1]) + ", " + g(b[2]) +
-                                 ") m of the blank (triangles not alike oriented?)");
+                                 ") m of the blank (triangles not alike oriented, or a trim too thin there for the doubles?)");
       }
       s = follow;
     }

@@ -881,6 +881,8 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
             at + "three.csv': '" + dir.string() + "/three.csv' row 2: expected x,y (m), found '1,0,0'");
   EXPECT_EQ(refused_file("twice.csv", "0,0\n1,0\n1,0\n0,1\n"),
             at + "twice.csv': '" + dir.string() + "/twice.csv': vertex 2 is there twice in a row");
+  EXPECT_EQ(refused_file("nearly.csv", "0,0\n1,0\n1,1e-12\n0,1\n"),  // within 1e-9 of the polygon's size
+            at + "nearly.csv': '" + dir.string() + "/nearly.csv': vertex 2 is there twice in a row");
   EXPECT_EQ(refused_file("line.csv", "0,0\n1,1\n2,2\n"),
             at + "line.csv': '" + dir.string() + "/line.csv': the polygon has no area");
   EXPECT_EQ(refused_file("bowtie.csv", "0,0\n2,2\n2,0\n0,1\n"),
