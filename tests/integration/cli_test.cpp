@@ -2455,9 +2455,20 @@ tilted.header["$INSUNITS"] = 4
 tilted.modelspace().add_lwpolyline([(x - 60, y - 55) for x, y in outline], close=True,
                                    dxfattribs={"extrusion": (0.3, -0.2, 0.93)})
 tilted.saveas(sys.argv[4])
+# The plane trim above, x <= 0.06 + 0.2 y, as an outline seen along it: drawn in the plane
+# whose normal (0.2, 1, 0) lies in it, a side on the plane (where ezdxf's own object
+# coordinate system puts the point (60, 0, 0) mm of it).
+ocs = ezdxf.math.OCS((0.2, 1, 0))
+x0 = ocs.from_wcs((60, 0, 0)).x
+along = ezdxf.new("R2010")
+along.header["$INSUNITS"] = 4
+along.modelspace().add_lwpolyline([(x0, -500), (x0 + 1000, -500), (x0 + 1000, 500), (x0, 500)], close=True,
+                                  dxfattribs={"extrusion": (0.2, 1, 0)})
+along.saveas(sys.argv[5])
 )";
   ASSERT_EQ(std::system(("/usr/bin/python3 " + q(dir / "outline.py") + " " + q(dir / "outline.dxf") + " " +
-                         q(dir / "mirrored.dxf") + " " + q(dir / "outline.csv") + " " + q(dir / "tilted.dxf"))
+                         q(dir / "mirrored.dxf") + " " + q(dir / "outline.csv") + " " + q(dir / "tilted.dxf") +
+                         " " + q(dir / "along.dxf"))
                             .c_str()),
             0);
   std::map<std::string, json> by;
@@ -2514,6 +2525,28 @@ print("%d %.3e" % (count, worst))
     in >> count >> worst;
     EXPECT_GT(count, 20);
     EXPECT_LT(worst, 1e-9) << "mm, the trim points off the outline in its plane";
+  }
+  {
+    // Seen along the plane, the outline cuts the plies as the plane does.
+    ASSERT_EQ(thermostamp("blank " + q(dir / "run") + " --trim polygon:" + q(dir / "along.dxf") + " --out " +
+                          q(dir / "of_along"))
+                  .exit_code,
+              0);
+    ASSERT_EQ(thermostamp("blank " + q(dir / "run") + " --trim " + plane + " --out " + q(dir / "of_plane")).exit_code,
+              0);
+    const json a = read_job_document(dir / "of_along" / "blank.json");
+    const json b = read_job_document(dir / "of_plane" / "blank.json");
+    for (const std::string ply : {"ply_top", "ply_bottom"}) {
+      const double area = b["plies"][ply]["kept_blank_area_m2"].get<double>();
+      EXPECT_GT(area, 0.001) << ply;
+      EXPECT_NEAR(a["plies"][ply]["kept_blank_area_m2"].get<double>(), area, 1e-12 * area) << ply;
+      EXPECT_NEAR(a["plies"][ply]["kept_formed_area_m2"].get<double>(),
+                  b["plies"][ply]["kept_formed_area_m2"].get<double>(), 1e-12 * area)
+          << ply;
+      EXPECT_NEAR(a["plies"][ply]["outlines"][0]["trim_length_blank_m"].get<double>(),
+                  b["plies"][ply]["outlines"][0]["trim_length_blank_m"].get<double>(), 1e-9)
+          << ply;
+    }
   }
   // What cannot give a pattern.
   auto refused = [&](const std::string& args) {
