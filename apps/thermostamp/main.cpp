@@ -464,6 +464,10 @@ int cmd_blank(const Args& a) {
     else
       line[0] = '\0';
     std::cout << line << "\n";
+    if (!c.fallback.empty())
+      std::cerr << "warning: ply '" << p.name << "': the exact cut's outline did not close (" << c.fallback
+                << "): its pattern comes from the trims' largest distance, linear in each triangle (corners within "
+                   "about an element)\n";
   }
   std::cout << r.json.string() << "\n";
   return 0;

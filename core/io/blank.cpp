@@ -638,16 +638,23 @@ class PlanPolygon {
   }
 
   // The signed distance of (x, y) to side s's line, negative on the
-  // part's side, and where it lies along the side (0 at a, 1 at b).
-  double level(int s, double x, double y) const {  // from the side's nearer end, for fewer lost digits
+  // part's side (m), and how far along the side it lies from a, and back
+  // from b (m; both at least 0 between the ends). Each from the side's
+  // nearer end, or from the end it is measured from, so that a point
+  // near an end keeps its digits however long the side.
+  double level(int s, double x, double y) const {
     const Side& e = sides[static_cast<std::size_t>(s)];
     const bool from_a = std::hypot(x - e.a[0], y - e.a[1]) <= std::hypot(x - e.b[0], y - e.b[1]);
     const auto& o = from_a ? e.a : e.b;
     return -((e.b[0] - e.a[0]) * (y - o[1]) - (e.b[1] - e.a[1]) * (x - o[0])) / e.length;
   }
-  double along(int s, double x, double y) const {
+  double from_a(int s, double x, double y) const {
     const Side& e = sides[static_cast<std::size_t>(s)];
-    return ((x - e.a[0]) * (e.b[0] - e.a[0]) + (y - e.a[1]) * (e.b[1] - e.a[1])) / (e.length * e.length);
+    return ((x - e.a[0]) * (e.b[0] - e.a[0]) + (y - e.a[1]) * (e.b[1] - e.a[1])) / e.length;
+  }
+  double from_b(int s, double x, double y) const {
+    const Side& e = sides[static_cast<std::size_t>(s)];
+    return ((e.b[0] - x) * (e.b[0] - e.a[0]) + (e.b[1] - y) * (e.b[1] - e.a[1])) / e.length;
   }
 
   std::vector<Side> sides;
@@ -680,7 +687,12 @@ struct Trimming {
   std::vector<std::vector<char>> node_inside;  // [polygon][node]
 };
 
-Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurface>& trims, double margin) {
+// combined: the trims as one level, the largest of their distances less
+// the margin, linear in each triangle (a polygon's in its plane): corners
+// where trims meet, and a polygon's, within about an element, but one
+// level that changes sign where it does, whatever the trims' shapes.
+Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurface>& trims, double margin,
+                       bool combined = false) {
   Trimming t;
   const long long n = static_cast<long long>(x.size() / 3);
   double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
@@ -689,6 +701,18 @@ Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurfa
     hi[k % 3] = std::max(hi[k % 3], x[k]);
   }
   t.eps = n > 0 ? 1e-10 * std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) : 0.0;
+  if (combined && !trims.empty()) {
+    auto& l = t.linear.emplace_back(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static) if (n > 4096)
+    for (long long i = 0; i < n; ++i) {
+      const double f = trim_level(trims, &x[3 * i]) - margin;
+      l[static_cast<std::size_t>(i)] = std::abs(f) <= t.eps ? 0.0 : f;
+    }
+    for (long long i = 0; i < n; ++i)
+      if (!std::isfinite(l[static_cast<std::size_t>(i)]))
+        throw std::runtime_error("the distance of node " + std::to_string(i) + " to the trim is not finite");
+    return t;
+  }
   for (const TrimSurface& s : trims) {
     if (s.kind == TrimSurface::Kind::Polygon && margin == 0) {
       const PlanPolygon& p = t.polygons.emplace_back(s.rings);
@@ -767,16 +791,16 @@ class TriangleCut {
       poly.near(lo[0] - grow, hi[0] + grow, lo[1] - grow, hi[1] + grow, near_);
       bool reached = false;
       for (const int s : near_) {
-        SideAt sa{static_cast<int>(p), s, {}, {}, poly.sides[static_cast<std::size_t>(s)].length};
-        const double d = t_.eps / sa.length;
+        SideAt sa{static_cast<int>(p), s, {}, {}, {}};
+        auto snap = [&](double v) { return std::abs(v) <= t_.eps ? 0.0 : v; };
         for (int k = 0; k < 3; ++k) {  // a node on the side's line, or at its end, to round-off: on it
-          const double f = poly.level(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
-          const double a = poly.along(s, uv[2 * idx(k)], uv[2 * idx(k) + 1]);
-          sa.f[k] = std::abs(f) <= t_.eps ? 0.0 : f;
-          sa.s[k] = std::abs(a) <= d ? 0.0 : std::abs(a - 1) <= d ? 1.0 : a;
+          const double u = uv[2 * idx(k)], v = uv[2 * idx(k) + 1];
+          sa.f[k] = snap(poly.level(s, u, v));
+          sa.sa[k] = snap(poly.from_a(s, u, v));
+          sa.sb[k] = snap(poly.from_b(s, u, v));
         }
         if ((sa.f[0] > 0 && sa.f[1] > 0 && sa.f[2] > 0) || (sa.f[0] < 0 && sa.f[1] < 0 && sa.f[2] < 0)) continue;
-        if ((sa.s[0] < 0 && sa.s[1] < 0 && sa.s[2] < 0) || (sa.s[0] > 1 && sa.s[1] > 1 && sa.s[2] > 1)) continue;
+        if ((sa.sa[0] < 0 && sa.sa[1] < 0 && sa.sa[2] < 0) || (sa.sb[0] < 0 && sa.sb[1] < 0 && sa.sb[2] < 0)) continue;
         sides_.push_back(sa);
         reached = true;
       }
@@ -820,8 +844,7 @@ class TriangleCut {
         if (sa.poly != p) continue;
         const double f = dot3(w, sa.f);
         if (std::abs(f) > nearest) continue;
-        const double s = dot3(w, sa.s), d = 10 * t_.eps / sa.length;
-        if (s < -d || s > 1 + d) continue;
+        if (dot3(w, sa.sa) < -10 * t_.eps || dot3(w, sa.sb) < -10 * t_.eps) continue;
         nearest = std::abs(f);
         level = f;
         near = true;
@@ -877,16 +900,17 @@ class TriangleCut {
       const SideAt& sa = sides_[s];
       Weights a, b;
       if (!zero_line(sa.f, a, b)) continue;
-      const double ta = dot3(a, sa.s), tb = dot3(b, sa.s);
+      // The part where it is at least 0 from a and from b, each from its
+      // own end.
       double u0 = 0, u1 = 1;
-      if (ta == tb) {
-        if (ta < 0 || ta > 1) continue;
-      } else {
-        const double v0 = -ta / (tb - ta), v1 = (1 - ta) / (tb - ta);
-        u0 = std::max(0.0, std::min(v0, v1));
-        u1 = std::min(1.0, std::max(v0, v1));
-        if (!(u1 > u0)) continue;
+      bool empty = false;
+      for (const double* from : {sa.sa, sa.sb}) {
+        const double ta = dot3(a, from), tb = dot3(b, from);
+        if (ta < 0 && tb < 0) empty = true;
+        else if (ta < 0) u0 = std::max(u0, ta / (ta - tb));
+        else if (tb < 0) u1 = std::min(u1, ta / (ta - tb));
       }
+      if (empty || !(u1 > u0)) continue;
       along(lerp(a, b, u0), lerp(a, b, u1), -1, static_cast<int>(s), sa.poly, true, true);
     }
     // Trims that coincide here give the same piece more than once: one is
@@ -924,8 +948,9 @@ class TriangleCut {
  private:
   struct SideAt {
     int poly = 0, side = 0;
-    double f[3] = {0, 0, 0}, s[3] = {0, 0, 0};  // the side's level and position along it at the corners
-    double length = 0;                           // m
+    // The side's level, and how far along it from a and back from b, at
+    // the corners (m).
+    double f[3] = {0, 0, 0}, sa[3] = {0, 0, 0}, sb[3] = {0, 0, 0};
   };
 
   std::size_t idx(int k) const { return static_cast<std::size_t>(c_[k]); }
@@ -1005,9 +1030,9 @@ class TriangleCut {
       const double fa = dot3(a, sa.f), fb = dot3(b, sa.f);
       if (!crosses(fa, fb, tol)) continue;
       const double u = fa / (fa - fb);
-      const double ta = dot3(a, sa.s), tb = dot3(b, sa.s), t = ta + u * (tb - ta);
-      const double d = t_.eps / sa.length;
-      if (t >= -d && t <= 1 + d) us_.push_back(u);
+      const double from_a = dot3(a, sa.sa) + u * (dot3(b, sa.sa) - dot3(a, sa.sa));
+      const double from_b = dot3(a, sa.sb) + u * (dot3(b, sa.sb) - dot3(a, sa.sb));
+      if (from_a >= -t_.eps && from_b >= -t_.eps) us_.push_back(u);
     }
     std::sort(us_.begin(), us_.end());
     us_.erase(std::unique(us_.begin(), us_.end()), us_.end());
@@ -1045,14 +1070,16 @@ class TriangleCut {
 
 }  // namespace
 
-CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
-                       const std::vector<TrimSurface>& trims, double margin) {
+namespace {
+
+// An outline that does not close.
+struct OpenOutline : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+CutPattern cut_with(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
+                    const Trimming& trimming) {
   const std::size_t n = x0.size() / 3, m = tri.size() / 3;
-  if (x.size() != x0.size()) throw std::runtime_error("the blank and the formed ply have other numbers of nodes");
-  for (std::size_t k = 0; k < x0.size(); ++k)
-    if (!std::isfinite(x0[k]) || !std::isfinite(x[k]))
-      throw std::runtime_error("node " + std::to_string(k / 3) + " has a position that is not finite");
-  const Trimming trimming = make_trimming(x, trims, margin);
   // How many triangles have each edge (smaller node first).
   std::unordered_map<std::uint64_t, int> uses;
   auto edge_key = [](int a, int b) {
@@ -1211,8 +1238,8 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
           }
       if (follow < 0) {
         const Vec& b = points[static_cast<std::size_t>(next)].blank;
-        throw std::runtime_error("the outline does not close at (" + g(b[0]) + ", " + g(b[1]) + ", " + g(b[2]) +
-                                 ") m of the blank (triangles not alike oriented, or a trim too thin there for the doubles?)");
+        throw OpenOutline("the outline does not close at (" + g(b[0]) + ", " + g(b[1]) + ", " + g(b[2]) +
+                          ") m of the blank");
       }
       s = follow;
     }
@@ -1232,12 +1259,36 @@ CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>&
   return p;
 }
 
+}  // namespace
+
+CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
+                       const std::vector<TrimSurface>& trims, double margin) {
+  if (x.size() != x0.size()) throw std::runtime_error("the blank and the formed ply have other numbers of nodes");
+  for (std::size_t k = 0; k < x0.size(); ++k)
+    if (!std::isfinite(x0[k]) || !std::isfinite(x[k]))
+      throw std::runtime_error("node " + std::to_string(k / 3) + " has a position that is not finite");
+  std::string open;
+  try {
+    return cut_with(x0, x, tri, make_trimming(x, trims, margin));
+  } catch (const OpenOutline& e) {
+    open = e.what();
+  }
+  try {  // where the exact cut does not close (a trim too thin or too tangent there for the doubles)
+    CutPattern p = cut_with(x0, x, tri, make_trimming(x, trims, margin, true));
+    p.fallback = open;
+    return p;
+  } catch (const OpenOutline& e) {
+    throw std::runtime_error(std::string(e.what()) + " (triangles not alike oriented?)");
+  }
+}
+
 std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vector<double>& x,
                                    const std::vector<int>& tri, const std::vector<TrimSurface>& trims,
                                    const std::vector<double>& fibre, const std::array<double, 3>& e1,
-                                   const std::array<double, 3>& e2, double spacing, double margin) {
+                                   const std::array<double, 3>& e2, double spacing, double margin,
+                                   bool combined) {
   const std::size_t m = tri.size() / 3;
-  const Trimming trimming = make_trimming(x, trims, margin);
+  const Trimming trimming = make_trimming(x, trims, margin, combined);
   TriangleCut cut(trimming);
   std::vector<FibreMark> marks;
   std::set<std::pair<long long, long long>> taken;  // grid points already marked
@@ -1491,7 +1542,8 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
             hi[c] = std::max(hi[c], dot(q.blank, axes[static_cast<std::size_t>(c)]));
           }
       ply.mark_spacing = mark_spacing(std::max(hi[0] - lo[0], hi[1] - lo[1]));
-      ply.marks = fibre_marks(d.x0, d.x, d.tri, trims, *fibre, axes[0], axes[1], ply.mark_spacing, margin);
+      ply.marks = fibre_marks(d.x0, d.x, d.tri, trims, *fibre, axes[0], axes[1], ply.mark_spacing, margin,
+                              !ply.pattern.fallback.empty());
     }
     ply.csv = out / (d.name + ".csv");
     if (!write_csv(ply.csv, ply.pattern, ply.blank, ply.marks))
@@ -1506,6 +1558,8 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     j["kept_blank_area_m2"] = p.kept_blank_area;
     j["kept_formed_area_m2"] = p.kept_formed_area;
     j["kept_share"] = p.blank_area > 0 ? p.kept_blank_area / p.blank_area : 0.0;
+    j["method"] = p.fallback.empty() ? "exact" : "distance";
+    j["fallback"] = p.fallback.empty() ? nlohmann::json(nullptr) : nlohmann::json(p.fallback);
     j["outlines"] = nlohmann::json::array();
     for (const Outline& o : p.outlines)
       j["outlines"].push_back({{"points", o.points.size()},

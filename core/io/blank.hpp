@@ -77,6 +77,11 @@ struct CutPattern {
   double blank_area = 0;        // m^2, the whole blank
   double kept_blank_area = 0;   // m^2, the pattern in the blank
   double kept_formed_area = 0;  // m^2, the pattern formed: the trimmed part's area
+  // Empty where each triangle was cut exactly; otherwise why not (where
+  // the exact cut's outline did not close), and the pattern comes from
+  // the trims' largest distance, linear in each triangle, as a curved
+  // trim's does: corners within about an element.
+  std::string fallback;
 };
 
 // The pattern of one ply: x0 its positions in the blank, x formed (3 per
@@ -116,11 +121,13 @@ struct FibreMark {
 // (inside every trim as cut_pattern takes them), each along the fibre direction `fibre` (3 per triangle, as the
 // frames' field fibre_direction) of the triangle it lies in, projected into
 // the plane, 0.6 spacing long, centred on the point; a point on an edge
-// goes to the first triangle that has it.
+// goes to the first triangle that has it. combined: the trims as the
+// pattern takes them where it falls back (CutPattern::fallback).
 std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vector<double>& x,
                                    const std::vector<int>& tri, const std::vector<TrimSurface>& trims,
                                    const std::vector<double>& fibre, const std::array<double, 3>& e1,
-                                   const std::array<double, 3>& e2, double spacing, double margin = 0);
+                                   const std::array<double, 3>& e2, double spacing, double margin = 0,
+                                   bool combined = false);
 
 struct BlankPly {
   std::string name;

@@ -1130,6 +1130,34 @@ TEST(Blank, PolygonDrawnInAnotherPlaneCutsAlongItsNormal) {
   std::filesystem::remove_all(dir);
 }
 
+// Where the exact cut's outline does not close, the pattern comes from
+// the trims' largest distance, linear in each triangle, and says so: a
+// circle drawn on the front plane (normal -y, r = 21.3 mm) touching the
+// flat plate, seen edge-on, in one vertex at z = 1e-18 m (the 180-gon's
+// lowest, off the plate by round-off): the exact cut finds the line of
+// contact on some of the plate's edges and not on others. The pattern is
+// that line, no area.
+TEST(Blank, APatternTheExactCutCannotCloseComesFromTheDistance) {
+  const auto dir = std::filesystem::temp_directory_path() / "thermostamp_blank_fallback";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream f(dir / "tangent.dxf");
+    f << "0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n6\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n0\nCIRCLE\n8\nT\n10\n0.0437\n"
+         "20\n0.0213\n30\n0\n40\n0.0213\n210\n0\n220\n-1\n230\n0\n0\nENDSEC\n0\nEOF\n";
+  }
+  const TrimSurface t = parse_trim("polygon:" + (dir / "tangent.dxf").string());
+  for (const int n : {7, 13, 20}) {
+    const ShellMesh m = rectangle_mesh({0, 0, 0}, {0.1, 0.1}, {n, n});
+    const CutPattern p = cut_pattern(m.x, m.x, m.triangles, {t});
+    EXPECT_NE(p.fallback.find("the outline does not close at (0.0437, "), std::string::npos) << n << ": " << p.fallback;
+    EXPECT_TRUE(p.outlines.empty()) << n;
+    EXPECT_LT(p.kept_blank_area, 1e-18) << n;
+    const std::vector<double> fibre(m.triangles.size(), 1.0);
+    EXPECT_TRUE(fibre_marks(m.x, m.x, m.triangles, {t}, fibre, {1, 0, 0}, {0, 1, 0}, 0.01, 0, true).empty()) << n;
+  }
+  std::filesystem::remove_all(dir);
+}
+
 // Fibre marks: on a flat plate 120 x 80 mm (irregular triangles, fibres at
 // 30 degrees in its first half and 120 degrees in the other, as a field
 // per triangle), trimmed to 13.3 < x < 101.7 mm, with a grid of 10 mm: a
