@@ -58,14 +58,10 @@ std::string g(double v) {
   return buf;
 }
 
-// The area of a plane polygon (its points in order).
-double polygon_area(const std::vector<Vec>& p) {
-  Vec s{0, 0, 0};
-  for (std::size_t k = 1; k + 1 < p.size(); ++k) {
-    const Vec c = cross(sub(p[k], p[0]), sub(p[k + 1], p[0]));
-    for (int d = 0; d < 3; ++d) s[d] += c[d];
-  }
-  return 0.5 * norm(s);
+// The area of the triangle of nodes c of positions x.
+double triangle_area(const std::vector<double>& x, const int c[3]) {
+  const Vec a = at(x, static_cast<std::size_t>(c[0])), b = at(x, static_cast<std::size_t>(c[1]));
+  return 0.5 * norm(cross(sub(b, a), sub(at(x, static_cast<std::size_t>(c[2])), a)));
 }
 
 double cross2(const std::array<double, 2>& o, const std::array<double, 2>& a, const std::array<double, 2>& b) {
@@ -412,17 +408,29 @@ std::vector<Ring> read_polygon(const std::string& spec, const std::string& what,
   return rings;
 }
 
+// Whether (x, y) lies inside one ring (crossings of a ray along +x).
+bool ring_contains(const Ring& p, double x, double y) {
+  bool inside = false;
+  const std::size_t n = p.size();
+  for (std::size_t k = 0, j = n - 1; k < n; j = k++) {
+    const auto& a = p[j];
+    const auto& b = p[k];
+    if ((a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
+  }
+  return inside;
+}
+
 // The signed distance of (x, y) to a polygon of one or more rings:
 // negative inside (an odd number of sides crossed on the way out).
 double polygon_level(const std::vector<Ring>& rings, double x, double y) {
   double d2 = std::numeric_limits<double>::infinity();
   bool inside = false;
   for (const Ring& p : rings) {
+    inside = inside != ring_contains(p, x, y);
     const std::size_t n = p.size();
     for (std::size_t k = 0, j = n - 1; k < n; j = k++) {
       const auto& a = p[j];
       const auto& b = p[k];
-      if ((a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
       const double ex = b[0] - a[0], ey = b[1] - a[1];
       const double t = std::clamp(((x - a[0]) * ex + (y - a[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
       const double dx = x - a[0] - t * ex, dy = y - a[1] - t * ey;
@@ -534,18 +542,6 @@ double trim_level(const std::vector<TrimSurface>& trims, const double* x) {
 }
 
 namespace {
-
-// Whether (x, y) lies inside one ring (crossings of a ray along +x).
-bool ring_contains(const Ring& p, double x, double y) {
-  bool inside = false;
-  const std::size_t n = p.size();
-  for (std::size_t k = 0, j = n - 1; k < n; j = k++) {
-    const auto& a = p[j];
-    const auto& b = p[k];
-    if ((a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
-  }
-  return inside;
-}
 
 // A polygon trim in plan view: its sides, each turned so that the part
 // lies on its left (a ring inside an even number of others runs
@@ -1106,10 +1102,7 @@ CutPattern cut_with(const std::vector<double>& x0, const std::vector<double>& x,
       }
       return q;
     };
-    const double a0 = polygon_area({at(x0, static_cast<std::size_t>(c[0])), at(x0, static_cast<std::size_t>(c[1])),
-                                    at(x0, static_cast<std::size_t>(c[2]))});
-    const double a = polygon_area({at(x, static_cast<std::size_t>(c[0])), at(x, static_cast<std::size_t>(c[1])),
-                                   at(x, static_cast<std::size_t>(c[2]))});
+    const double a0 = triangle_area(x0, c), a = triangle_area(x, c);
     p.blank_area += a0;
     const int state = cut.prepare(c);
     if (state < 0) continue;
