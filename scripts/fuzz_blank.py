@@ -2,14 +2,14 @@
 """Fuzzing of `thermostamp blank`'s cut (scripts/fuzz/blank_*.cpp, linked to
 the core library of a build): random meshes and trims (every outline must
 close, its area the pattern's, a trim given twice the pattern once),
-trims through the mesh's nodes and along its lines (areas against clipping
-in the blank), and mutated DXF outlines (read and cut, or refused in one
-line). Exit status 1 where any case fails; the failing case's number
+mutated DXF outlines (read and cut, or refused in one line), and the unit
+test of trims through the mesh's nodes and along its lines (areas against
+clipping in the blank) with more cases. Exit status 1 where any case fails; the failing case's number
 reruns it alone (the programs' last argument).
 
 Usage: scripts/fuzz_blank.py [--cases N] [--seeds S ...] [--sanitize]
-(after a Release build, or with --sanitize after scripts/sanitize, which
-links against build-sanitize/ with ASan and UBSan). Default: 20 000 cases
+(after a Release build with its tests, or with --sanitize after
+scripts/sanitize, which links against build-sanitize/ with ASan and UBSan). Default: 20 000 cases
 of each kind for seed 1, about 10 s (a few minutes sanitized).
 """
 import argparse
@@ -44,7 +44,17 @@ def main():
     args = ap.parse_args()
     env = dict(os.environ, ASAN_OPTIONS="detect_leaks=0:abort_on_error=1", UBSAN_OPTIONS="print_stacktrace=1")
     failed = False
-    for name in ("blank_random", "blank_aligned", "blank_dxf"):
+    # Trims along the mesh: the unit test's cases, more of them.
+    tests = os.path.join(ROOT, "build-sanitize" if args.sanitize else "build", "bin", "unit_tests")
+    for seed in args.seeds:
+        r = subprocess.run([tests, "--gtest_filter=Blank.TrimsThroughNodesAndAlongTheMeshLines", "--gtest_brief=1"],
+                           env=dict(env, THERMOSTAMP_BLANK_CASES=str(args.cases), THERMOSTAMP_BLANK_SEED=str(seed)),
+                           capture_output=True, text=True)
+        print(f"aligned seed {seed}: {args.cases} cases, " + ("passed" if r.returncode == 0 else "FAILED"))
+        if r.returncode != 0:
+            failed = True
+            print(r.stdout[-4000:] + r.stderr[-2000:], end="")
+    for name in ("blank_random", "blank_dxf"):
         exe = build(name, args.sanitize)
         for seed in (args.seeds if name != "blank_dxf" else [None]):
             cmd = [exe, str(args.cases)] + ([] if seed is None else [str(seed)])

@@ -5,7 +5,8 @@
 // cylinders, spheres, star polygons, half of them with vertices on a
 // 6.25 mm grid), a margin in a third of the cases, a trim given twice in
 // half of them. Every pattern must close, its outlines' area equal its
-// area, and a trim twice give the pattern once (1e-12 of the blank's area).
+// area (1e-8 of the blank's: the points' joining), and a trim twice give
+// the pattern once (1e-12 of the blank's area).
 // Usage: blank_random CASES SEED [CASE]   (CASE: only that one, to look at it)
 #include <cmath>
 #include <cstdio>
@@ -29,7 +30,7 @@ static double sarea(const Outline& o) {
   }
   return a;
 }
-static int fallbacks = 0;
+static int fallbacks = 0, joined = 0;
 int main(int argc, char** argv) {
   int N = argc > 1 ? atoi(argv[1]) : 1000;
   unsigned seed0 = argc > 2 ? atoi(argv[2]) : 1;
@@ -143,8 +144,14 @@ int main(int argc, char** argv) {
       if (!p.fallback.empty()) ++fallbacks;
       double sa = 0;
       for (auto& o : p.outlines) sa += sarea(o);
+      // The outlines' points are joined within 1e-9 of the blank's size
+      // (0.14 m here): their area may differ from the pattern's by that
+      // times the outlines' length, some 1e-10 m^2 at most; a piece left
+      // out or an outline that does not close differs by an element's
+      // worth (1e-6 m^2 and more).
       bool ok = p.kept_blank_area <= p.blank_area * (1 + 1e-12) && p.kept_blank_area >= 0 &&
-                std::abs(sa - p.kept_blank_area) <= 1e-12 * p.blank_area;
+                std::abs(sa - p.kept_blank_area) <= 1e-8 * p.blank_area;
+      if (std::abs(sa - p.kept_blank_area) > 1e-12 * p.blank_area) ++joined;
       if (!ok) {
         ++bad;
         if (bad < 15)
@@ -158,6 +165,7 @@ int main(int argc, char** argv) {
         std::printf("THROW it %d kind %d: %s trims %s margin %g\n", it, kind, e.what(), desc.str().c_str(), margin);
     }
   }
-  std::printf("%d cases, %d bad, %d thrown, %d by the distance\n", N, bad, thrown, fallbacks);
+  std::printf("%d cases, %d bad, %d thrown, %d by the distance, %d outline areas off by 1e-12 to 1e-8 of the blank's\n",
+              N, bad, thrown, fallbacks, joined);
   return bad + thrown > 0 ? 1 : 0;
 }

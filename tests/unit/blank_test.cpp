@@ -5,6 +5,7 @@
 #include <array>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -565,14 +566,19 @@ TEST(Blank, CoincidentTrimsGiveTheirPatternOnce) {
 // triangles with their corners on nodes, given formed (so that the turn's
 // rounding puts them off the nodes by 1e-17 m). The pattern's area
 // against the plate clipped by the trims in the blank, here.
+// THERMOSTAMP_BLANK_CASES and THERMOSTAMP_BLANK_SEED run other cases
+// (scripts/fuzz_blank.py: many more).
 TEST(Blank, TrimsThroughNodesAndAlongTheMeshLines) {
   using P2 = std::array<double, 2>;
   const auto dir = std::filesystem::temp_directory_path() / "thermostamp_blank_aligned";
   std::filesystem::create_directories(dir);
-  std::mt19937 rng(97);
+  const char* count_env = std::getenv("THERMOSTAMP_BLANK_CASES");
+  const char* seed_env = std::getenv("THERMOSTAMP_BLANK_SEED");
+  const int total = count_env ? std::atoi(count_env) : 3000;
+  std::mt19937 rng(seed_env ? static_cast<unsigned>(std::atoi(seed_env)) : 97u);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int cases = 0, cut = 0, empty = 0;
-  for (int it = 0; it < 3000; ++it) {
+  for (int it = 0; it < total; ++it) {
     const int n = 2 + static_cast<int>(rng() % 12);
     const bool crossed = rng() % 2 == 0;
     const double L = 0.1, h = L / n;
@@ -650,9 +656,9 @@ TEST(Blank, TrimsThroughNodesAndAlongTheMeshLines) {
     ++cases;
     (expected > 1e-12 ? cut : empty) += 1;
   }
-  EXPECT_EQ(cases, 3000);
-  EXPECT_GT(cut, 1000);
-  EXPECT_GT(empty, 300);
+  EXPECT_EQ(cases, total);
+  EXPECT_GT(cut, total / 3);
+  EXPECT_GT(empty, total / 10);
   std::filesystem::remove_all(dir);
 }
 
