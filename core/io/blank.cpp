@@ -697,16 +697,21 @@ Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurfa
     hi[k % 3] = std::max(hi[k % 3], x[k]);
   }
   t.eps = n > 0 ? 1e-10 * std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) : 0.0;
-  if (combined && !trims.empty()) {
+  // A level at every node, less the margin; within eps of 0: 0 (a node on
+  // the trim to round-off is on it).
+  auto add_level = [&](auto&& level) {
     auto& l = t.linear.emplace_back(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static) if (n > 4096)
     for (long long i = 0; i < n; ++i) {
-      const double f = trim_level(trims, &x[3 * i]) - margin;
+      const double f = level(&x[3 * i]) - margin;
       l[static_cast<std::size_t>(i)] = std::abs(f) <= t.eps ? 0.0 : f;
     }
     for (long long i = 0; i < n; ++i)
       if (!std::isfinite(l[static_cast<std::size_t>(i)]))
         throw std::runtime_error("the distance of node " + std::to_string(i) + " to the trim is not finite");
+  };
+  if (combined && !trims.empty()) {
+    add_level([&](const double* q) { return trim_level(trims, q); });
     return t;
   }
   for (const TrimSurface& s : trims) {
@@ -725,15 +730,7 @@ Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurfa
       }
       continue;
     }
-    auto& l = t.linear.emplace_back(static_cast<std::size_t>(n));
-#pragma omp parallel for schedule(static) if (n > 4096)
-    for (long long i = 0; i < n; ++i) {
-      const double f = surface_level(s, &x[3 * i]) - margin;
-      l[static_cast<std::size_t>(i)] = std::abs(f) <= t.eps ? 0.0 : f;  // a node on the trim to round-off: on it
-    }
-    for (long long i = 0; i < n; ++i)
-      if (!std::isfinite(l[static_cast<std::size_t>(i)]))
-        throw std::runtime_error("the distance of node " + std::to_string(i) + " to the trim is not finite");
+    add_level([&](const double* q) { return surface_level(s, q); });
   }
   return t;
 }
