@@ -432,6 +432,18 @@ int cmd_blank(const Args& a) {
     std::cout << "trim '" << t.text << "': cut along " << line
               << ", the normal of the plane its outline is drawn in\n";
   }
+  if (!r.plies.empty()) {  // a polygon whose outline moved by the margin could not be found
+    const auto& why = r.plies.front().pattern.polygon_margin;
+    std::size_t k = 0;
+    for (const auto& t : trims) {
+      if (t.kind != ts::TrimSurface::Kind::Polygon || a.margin == 0) continue;
+      if (k < why.size() && !why[k].empty())
+        std::cerr << "warning: trim '" << t.text << "': " << why[k]
+                  << "; the polygon is taken by its distance less the margin, linear in each triangle (corners "
+                     "within about an element)\n";
+      ++k;
+    }
+  }
   char moved[64];
   std::snprintf(moved, sizeof moved, "%s by %g mm", a.margin > 0 ? "out" : "in", std::abs(1000 * a.margin));
   const std::string margin_text = moved;

@@ -82,6 +82,44 @@ bool segments_meet(const std::array<double, 2>& a, const std::array<double, 2>& 
 
 using Ring = std::vector<std::array<double, 2>>;
 
+// The first two sides, in the rings' order (ring and index of each), that
+// cross or touch, other than neighbours: each side against those whose
+// extent in x overlaps its own (sorted by their smallest x).
+std::optional<std::array<std::size_t, 4>> first_meeting_sides(const std::vector<Ring>& rings) {
+  struct Side {
+    std::size_t ring, index;
+    double x0, x1, y0, y1;
+  };
+  std::vector<Side> sides;
+  for (std::size_t r = 0; r < rings.size(); ++r)
+    for (std::size_t i = 0; i < rings[r].size(); ++i) {
+      const auto& a = rings[r][i];
+      const auto& b = rings[r][(i + 1) % rings[r].size()];
+      sides.push_back({r, i, std::min(a[0], b[0]), std::max(a[0], b[0]), std::min(a[1], b[1]), std::max(a[1], b[1])});
+    }
+  std::sort(sides.begin(), sides.end(), [](const Side& a, const Side& b) {
+    return a.x0 != b.x0 ? a.x0 < b.x0 : (a.ring != b.ring ? a.ring < b.ring : a.index < b.index);
+  });
+  std::optional<std::array<std::size_t, 4>> first;
+  for (std::size_t u = 0; u < sides.size(); ++u)
+    for (std::size_t w = u + 1; w < sides.size() && sides[w].x0 <= sides[u].x1; ++w) {
+      const bool u_first =
+          sides[u].ring < sides[w].ring || (sides[u].ring == sides[w].ring && sides[u].index < sides[w].index);
+      const Side& a = u_first ? sides[u] : sides[w];
+      const Side& b = &a == &sides[u] ? sides[w] : sides[u];
+      if (a.y1 < b.y0 || b.y1 < a.y0) continue;
+      const Ring& ra = rings[a.ring];
+      const Ring& rb = rings[b.ring];
+      if (a.ring == b.ring && (b.index == a.index + 1 || (a.index == 0 && b.index == ra.size() - 1)))
+        continue;  // neighbours
+      if (!segments_meet(ra[a.index], ra[(a.index + 1) % ra.size()], rb[b.index], rb[(b.index + 1) % rb.size()]))
+        continue;
+      const std::array<std::size_t, 4> pair{a.ring, a.index, b.ring, b.index};
+      if (!first || pair < *first) first = pair;  // the first pair in the file's order is named
+    }
+  return first;
+}
+
 // The largest coordinate a trim takes (m): beyond it the distances lose
 // their digits, and no press is that large.
 constexpr double kFar = 1e6;
@@ -363,39 +401,7 @@ std::vector<Ring> read_polygon(const std::string& spec, const std::string& what,
     if (!(std::abs(area) > 0))
       throw ExportInputError(at + (dxf ? which : std::string(":")) + " the polygon has no area");
   }
-  // Sides that cross or touch: each side against those whose extent in x
-  // overlaps its own (sorted by their smallest x).
-  struct Side {
-    std::size_t ring, index;
-    double x0, x1, y0, y1;
-  };
-  std::vector<Side> sides;
-  for (std::size_t r = 0; r < rings.size(); ++r)
-    for (std::size_t i = 0; i < rings[r].size(); ++i) {
-      const auto& a = rings[r][i];
-      const auto& b = rings[r][(i + 1) % rings[r].size()];
-      sides.push_back({r, i, std::min(a[0], b[0]), std::max(a[0], b[0]), std::min(a[1], b[1]), std::max(a[1], b[1])});
-    }
-  std::sort(sides.begin(), sides.end(), [](const Side& a, const Side& b) {
-    return a.x0 != b.x0 ? a.x0 < b.x0 : (a.ring != b.ring ? a.ring < b.ring : a.index < b.index);
-  });
-  std::optional<std::array<std::size_t, 4>> first;
-  for (std::size_t u = 0; u < sides.size(); ++u)
-    for (std::size_t w = u + 1; w < sides.size() && sides[w].x0 <= sides[u].x1; ++w) {
-      const Side& a = sides[u].ring < sides[w].ring || (sides[u].ring == sides[w].ring && sides[u].index < sides[w].index)
-                          ? sides[u]
-                          : sides[w];
-      const Side& b = &a == &sides[u] ? sides[w] : sides[u];
-      if (a.y1 < b.y0 || b.y1 < a.y0) continue;
-      const Ring& ra = rings[a.ring];
-      const Ring& rb = rings[b.ring];
-      if (a.ring == b.ring && (b.index == a.index + 1 || (a.index == 0 && b.index == ra.size() - 1)))
-        continue;  // neighbours
-      if (!segments_meet(ra[a.index], ra[(a.index + 1) % ra.size()], rb[b.index], rb[(b.index + 1) % rb.size()]))
-        continue;
-      const std::array<std::size_t, 4> pair{a.ring, a.index, b.ring, b.index};
-      if (!first || pair < *first) first = pair;  // the first pair in the file's order is named
-    }
+  const std::optional<std::array<std::size_t, 4>> first = first_meeting_sides(rings);
   if (first) {
     const auto [ra, ia, rb, ib] = *first;
     if (ra == rb)
@@ -423,6 +429,7 @@ bool ring_contains(const Ring& p, double x, double y) {
 // The signed distance of (x, y) to a polygon of one or more rings:
 // negative inside (an odd number of sides crossed on the way out).
 double polygon_level(const std::vector<Ring>& rings, double x, double y) {
+  if (rings.empty()) return 1e300;  // a polygon moved in until nothing is left: everything outside
   double d2 = std::numeric_limits<double>::infinity();
   bool inside = false;
   for (const Ring& p : rings) {
@@ -543,6 +550,41 @@ double trim_level(const std::vector<TrimSurface>& trims, const double* x) {
 
 namespace {
 
+// A polygon's ring as the trim takes it: its vertices, those between two
+// sides along one line left out (such a side is one, as another trim
+// along that line sees it), and whether it runs the other way round the
+// part (the part lies on the left of a ring inside an even number of
+// others run anticlockwise, one inside an odd number, a hole, clockwise).
+struct TurnedRing {
+  Ring vertices;
+  bool reverse = false;
+};
+
+std::vector<TurnedRing> turned_rings(const std::vector<Ring>& rings) {
+  std::vector<TurnedRing> out;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    Ring p;
+    const Ring& given = rings[r];
+    for (std::size_t k = 0; k < given.size(); ++k) {
+      const auto& a = given[(k + given.size() - 1) % given.size()];
+      const auto& b = given[k];
+      const auto& c = given[(k + 1) % given.size()];
+      const double ab = std::hypot(b[0] - a[0], b[1] - a[1]), bc = std::hypot(c[0] - b[0], c[1] - b[1]);
+      const bool straight = std::abs(cross2(a, b, c)) <= 1e-12 * ab * bc &&
+                            (b[0] - a[0]) * (c[0] - b[0]) + (b[1] - a[1]) * (c[1] - b[1]) > 0;
+      if (!straight && ab > 0) p.push_back(b);
+    }
+    if (p.size() < 3) p = given;
+    int depth = 0;
+    for (std::size_t q = 0; q < rings.size(); ++q)
+      if (q != r && ring_contains(rings[q], p[0][0], p[0][1])) ++depth;
+    double area = 0;
+    for (std::size_t k = 0; k < p.size(); ++k) area += cross2({0, 0}, p[k], p[(k + 1) % p.size()]);
+    out.push_back({p, (area > 0) != (depth % 2 == 0)});
+  }
+  return out;
+}
+
 // A polygon trim in plan view: its sides, each turned so that the part
 // lies on its left (a ring inside an even number of others runs
 // anticlockwise, one inside an odd number, a hole, clockwise), in a grid
@@ -557,27 +599,9 @@ class PlanPolygon {
   explicit PlanPolygon(const std::vector<Ring>& rings) {
     lo_[0] = lo_[1] = std::numeric_limits<double>::infinity();
     hi_[0] = hi_[1] = -std::numeric_limits<double>::infinity();
-    for (std::size_t r = 0; r < rings.size(); ++r) {
-      // Vertices between two sides along one line are left out: such a
-      // side is one, as another trim along that line sees it.
-      Ring p;
-      const Ring& given = rings[r];
-      for (std::size_t k = 0; k < given.size(); ++k) {
-        const auto& a = given[(k + given.size() - 1) % given.size()];
-        const auto& b = given[k];
-        const auto& c = given[(k + 1) % given.size()];
-        const double ab = std::hypot(b[0] - a[0], b[1] - a[1]), bc = std::hypot(c[0] - b[0], c[1] - b[1]);
-        const bool straight = std::abs(cross2(a, b, c)) <= 1e-12 * ab * bc &&
-                              (b[0] - a[0]) * (c[0] - b[0]) + (b[1] - a[1]) * (c[1] - b[1]) > 0;
-        if (!straight) p.push_back(b);
-      }
-      if (p.size() < 3) p = given;
-      int depth = 0;
-      for (std::size_t q = 0; q < rings.size(); ++q)
-        if (q != r && ring_contains(rings[q], p[0][0], p[0][1])) ++depth;
-      double area = 0;
-      for (std::size_t k = 0; k < p.size(); ++k) area += cross2({0, 0}, p[k], p[(k + 1) % p.size()]);
-      const bool reverse = (area > 0) != (depth % 2 == 0);
+    for (const TurnedRing& t : turned_rings(rings)) {
+      const Ring& p = t.vertices;
+      const bool reverse = t.reverse;
       for (std::size_t k = 0; k < p.size(); ++k) {
         Side s{p[k], p[(k + 1) % p.size()], 0};
         if (reverse) std::swap(s.a, s.b);
@@ -665,11 +689,383 @@ class PlanPolygon {
   std::vector<std::vector<int>> cells_;
 };
 
+// A polygon's outline moved out by a margin m in its plane (in, m < 0).
+// The region within |m| of the polygon (m > 0) is the polygon, a strip
+// along each side (a rectangle of the side's length and |m| wide,
+// outside it) and a sector about each vertex where the outline turns
+// towards the polygon (an outer corner): a point within |m| of the
+// polygon is nearest to a side between its ends or to such a vertex. Its
+// outline is thus made of the strips' outer sides and the sectors' arcs;
+// each arc is drawn as tangents to it, each over at most 2 degrees of it
+// (a sector so drawn holds the whole sector, and no point of its outline
+// is nearer to the vertex than |m|). At an inner corner the two moved
+// sides end where they meet. Each of these lines is cut where it crosses
+// another, and a piece is kept where it lies in none of the strips and
+// sectors (and not in the polygon) and has none on its right: where the
+// moved outline meets itself (a slot narrower than 2 |m|, a hole that
+// closes), only its part at |m| from the polygon is left. Below 0 the
+// region is the polygon less the strips and sectors inside it, the
+// sectors about the inner corners. The pieces are joined into rings, the
+// part on their left.
+class MarginOutline {
+ public:
+  using P2 = std::array<double, 2>;
+
+  MarginOutline(const std::vector<Ring>& rings, double m) : poly_(rings), m_(m), a_(std::abs(m)) {
+    if (!(a_ <= kFar)) throw std::runtime_error("the margin " + g(m) + " m is beyond 1e6 m");
+    double lo[2] = {kFar, kFar}, hi[2] = {-kFar, -kFar};
+    for (const Ring& r : rings)
+      for (const P2& p : r)
+        for (std::size_t d = 0; d < 2; ++d) {
+          if (!(std::abs(p[d]) <= kFar)) throw std::runtime_error("a vertex lies beyond 1e6 m");
+          lo[d] = std::min(lo[d], p[d]);
+          hi[d] = std::max(hi[d], p[d]);
+        }
+    size_ = std::hypot(hi[0] - lo[0], hi[1] - lo[1]) + 2 * a_;
+    eps_ = 1e-10 * size_;
+    for (const TurnedRing& t : turned_rings(rings)) {
+      Ring chain = t.vertices;  // the part on its left
+      if (t.reverse) std::reverse(chain.begin(), chain.end());
+      add_ring(chain);
+    }
+  }
+
+  // The rings of the moved outline; throws std::runtime_error where its
+  // pieces do not join into rings that neither cross nor touch.
+  std::vector<Ring> rings() {
+    split();
+    return join();
+  }
+
+ private:
+  struct Edge {
+    P2 a, b;
+    int part;  // the strip or sector it bounds
+  };
+  struct Part {
+    // A strip: origin o, along d for len, across n (towards the margin)
+    // for |m|. A sector: a convex polygon, anticlockwise.
+    bool strip = true;
+    P2 o{}, d{}, n{};
+    double len = 0;
+    std::vector<P2> fan;
+    double lo[2]{}, hi[2]{};
+  };
+
+  void add_ring(const Ring& p) {
+    const std::size_t n = p.size();
+    std::vector<P2> d(n), out(n);  // each side's direction and outer normal
+    std::vector<double> len(n), turn(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const P2& a = p[k];
+      const P2& b = p[(k + 1) % n];
+      len[k] = std::hypot(b[0] - a[0], b[1] - a[1]);
+      d[k] = {(b[0] - a[0]) / len[k], (b[1] - a[1]) / len[k]};
+      out[k] = {d[k][1], -d[k][0]};
+    }
+    // turn[k]: at the end of side k, towards side k + 1 (anticlockwise > 0).
+    for (std::size_t k = 0; k < n; ++k) {
+      const P2& u = d[k];
+      const P2& w = d[(k + 1) % n];
+      turn[k] = std::atan2(u[0] * w[1] - u[1] * w[0], u[0] * w[0] + u[1] * w[1]);
+    }
+    // At an inner corner (for this margin) the two moved sides meet at the
+    // miter point, |m| tan(turn / 2) back along each from the corner: they
+    // end there where both sides are more than twice that long (else they
+    // run on to their ends and the pieces beyond the crossing fall inside
+    // the other's strip). A miter short against the sides thus leaves no
+    // sliver of a piece to judge.
+    std::vector<char> miter(n, 0);
+    std::vector<P2> at(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t k1 = (k + 1) % n;
+      if (m_ * turn[k] > 0 || turn[k] == 0) continue;
+      const double back = a_ * std::tan(0.5 * std::abs(turn[k]));
+      if (!(2 * back < len[k] && 2 * back < len[k1])) continue;
+      const double c = 1 + out[k][0] * out[k1][0] + out[k][1] * out[k1][1];
+      const P2& v = p[k1];
+      miter[k] = 1;
+      at[k] = {v[0] + m_ * (out[k][0] + out[k1][0]) / c, v[1] + m_ * (out[k][1] + out[k1][1]) / c};
+    }
+    const double sign = m_ > 0 ? 1.0 : -1.0;
+    const double step = 2.0 * std::acos(-1.0) / 180.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t k1 = (k + 1) % n, k0 = (k + n - 1) % n;
+      const P2& ea = p[k];
+      const P2& eb = p[k1];
+      Part st;
+      st.o = ea;
+      st.d = d[k];
+      st.n = {sign * out[k][0], sign * out[k][1]};
+      st.len = len[k];
+      const P2 ea_out{ea[0] + m_ * out[k][0], ea[1] + m_ * out[k][1]};
+      const P2 eb_out{eb[0] + m_ * out[k][0], eb[1] + m_ * out[k][1]};
+      box(st, {ea, eb, ea_out, eb_out});
+      const P2 a = miter[k0] ? at[k0] : ea_out, b = miter[k] ? at[k] : eb_out;
+      parts_.push_back(st);
+      edges_.push_back({a, b, static_cast<int>(parts_.size() - 1)});
+      // The corner at the side's end, towards the next side: an arc about it
+      // where the outline turns towards the polygon (for this margin).
+      if (!(m_ * turn[k] > 0)) continue;
+      const int chords = std::max(1, static_cast<int>(std::ceil(std::abs(turn[k]) / step - 1e-9)));
+      Part fan;
+      fan.strip = false;
+      std::vector<P2> q{b};
+      const double reach = m_ / std::cos(0.5 * std::abs(turn[k]) / chords);  // the tangents' corners
+      for (int j = 0; j < chords; ++j) {
+        const double t = turn[k] * (j + 0.5) / chords, c = std::cos(t), sn = std::sin(t);
+        const P2 r{c * out[k][0] - sn * out[k][1], sn * out[k][0] + c * out[k][1]};
+        q.push_back({eb[0] + reach * r[0], eb[1] + reach * r[1]});
+      }
+      q.push_back({eb[0] + m_ * out[k1][0], eb[1] + m_ * out[k1][1]});
+      fan.fan.push_back(eb);
+      if (turn[k] > 0) {
+        fan.fan.insert(fan.fan.end(), q.begin(), q.end());
+      } else {
+        fan.fan.insert(fan.fan.end(), q.rbegin(), q.rend());
+      }
+      box(fan, fan.fan);
+      parts_.push_back(fan);
+      for (std::size_t j = 0; j + 1 < q.size(); ++j)
+        edges_.push_back({q[j], q[j + 1], static_cast<int>(parts_.size() - 1)});
+    }
+  }
+
+  static void box(Part& p, const std::vector<P2>& pts) {
+    p.lo[0] = p.lo[1] = std::numeric_limits<double>::infinity();
+    p.hi[0] = p.hi[1] = -std::numeric_limits<double>::infinity();
+    for (const P2& q : pts)
+      for (std::size_t d = 0; d < 2; ++d) {
+        p.lo[d] = std::min(p.lo[d], q[d]);
+        p.hi[d] = std::max(p.hi[d], q[d]);
+      }
+  }
+
+  // Whether q lies inside part p by more than eps.
+  bool deep_inside(const Part& p, const P2& q) const {
+    if (q[0] < p.lo[0] || q[0] > p.hi[0] || q[1] < p.lo[1] || q[1] > p.hi[1]) return false;
+    if (p.strip) {
+      const double u = (q[0] - p.o[0]) * p.d[0] + (q[1] - p.o[1]) * p.d[1];
+      const double v = (q[0] - p.o[0]) * p.n[0] + (q[1] - p.o[1]) * p.n[1];
+      return u > eps_ && u < p.len - eps_ && v > eps_ && v < a_ - eps_;
+    }
+    const std::size_t n = p.fan.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const P2& u = p.fan[k];
+      const P2& w = p.fan[(k + 1) % n];
+      const double l = std::hypot(w[0] - u[0], w[1] - u[1]);
+      if (!(cross2(u, w, q) > eps_ * l)) return false;
+    }
+    return true;
+  }
+
+  // The cells of a grid over every edge and part, each listing the edges
+  // and parts whose extent reaches into it.
+  void grid() {
+    lo_[0] = lo_[1] = std::numeric_limits<double>::infinity();
+    hi_[0] = hi_[1] = -std::numeric_limits<double>::infinity();
+    for (const Part& p : parts_)
+      for (std::size_t d = 0; d < 2; ++d) {
+        lo_[d] = std::min(lo_[d], p.lo[d]);
+        hi_[d] = std::max(hi_[d], p.hi[d]);
+      }
+    n_ = std::clamp(static_cast<int>(std::ceil(std::sqrt(static_cast<double>(edges_.size())))), 1, 1024);
+    for (std::size_t d = 0; d < 2; ++d) cell_[d] = std::max((hi_[d] - lo_[d]) / n_, 1e-300);
+    edge_cells_.assign(static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_), {});
+    part_cells_.assign(edge_cells_.size(), {});
+    for (std::size_t k = 0; k < edges_.size(); ++k) {
+      const Edge& e = edges_[k];
+      for_cells(std::min(e.a[0], e.b[0]) - eps_, std::max(e.a[0], e.b[0]) + eps_, std::min(e.a[1], e.b[1]) - eps_,
+                std::max(e.a[1], e.b[1]) + eps_, [&](std::size_t c) { edge_cells_[c].push_back(static_cast<int>(k)); });
+    }
+    for (std::size_t k = 0; k < parts_.size(); ++k)
+      for_cells(parts_[k].lo[0], parts_[k].hi[0], parts_[k].lo[1], parts_[k].hi[1],
+                [&](std::size_t c) { part_cells_[c].push_back(static_cast<int>(k)); });
+  }
+  int index(std::size_t d, double v) const {
+    const double c = std::floor((v - lo_[d]) / cell_[d]);
+    return static_cast<int>(std::clamp(c, 0.0, static_cast<double>(n_ - 1)));
+  }
+  template <class F>
+  void for_cells(double x0, double x1, double y0, double y1, F&& f) const {
+    for (int r = index(1, y0); r <= index(1, y1); ++r)
+      for (int c = index(0, x0); c <= index(0, x1); ++c) f(static_cast<std::size_t>(r * n_ + c));
+  }
+
+  // Each edge cut where another crosses it (or, along the same line,
+  // where the other's ends lie on it), and its pieces kept where they lie
+  // outside every part (and outside the polygon for m > 0, inside it for
+  // m < 0).
+  void split() {
+    grid();
+    std::vector<std::vector<double>> cuts(edges_.size());
+    for (const auto& cell : edge_cells_)
+      for (std::size_t i = 0; i < cell.size(); ++i)
+        for (std::size_t j = i + 1; j < cell.size(); ++j) {
+          const std::size_t p = static_cast<std::size_t>(std::min(cell[i], cell[j]));
+          const std::size_t q = static_cast<std::size_t>(std::max(cell[i], cell[j]));
+          crossing(p, q, cuts[p], cuts[q]);
+        }
+    for (std::size_t k = 0; k < edges_.size(); ++k) {
+      const Edge& e = edges_[k];
+      const double len = std::hypot(e.b[0] - e.a[0], e.b[1] - e.a[1]);
+      auto& t = cuts[k];
+      t.push_back(1.0);
+      std::sort(t.begin(), t.end());
+      double from = 0;
+      P2 a = e.a;
+      for (const double to : t) {
+        if ((to - from) * len <= eps_ && to < 1.0) continue;  // one point with the cut before
+        const P2 b = to >= 1.0 ? e.b : P2{e.a[0] + to * (e.b[0] - e.a[0]), e.a[1] + to * (e.b[1] - e.a[1])};
+        // Judged at three points (one that lies on a line between two
+        // parts, the polygon's side where the piece passes from a strip
+        // into the polygon, says nothing), and beside each on the right,
+        // which must lie outside the region: a piece along a line between
+        // two parts (a strip's end) has the region on both sides. (Not
+        // beside a piece so short that the points beside it lie near its
+        // ends: a corner's tangents about a vertex with a margin near the
+        // round-off.)
+        const double l = std::hypot(b[0] - a[0], b[1] - a[1]);
+        const P2 right{4 * eps_ * (b[1] - a[1]) / l, -4 * eps_ * (b[0] - a[0]) / l};
+        bool keep = true;
+        for (const double f : {0.5, 0.25, 0.75}) {
+          const P2 q{a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])};
+          keep = keep && kept(q, e.part) && (l <= 64 * eps_ || !in_region({q[0] + right[0], q[1] + right[1]}));
+        }
+        if (keep) pieces_.push_back({a, b, e.part});
+        from = to;
+        a = b;
+      }
+    }
+  }
+
+  void crossing(std::size_t p, std::size_t q, std::vector<double>& tp, std::vector<double>& tq) const {
+    const Edge& e = edges_[p];
+    const Edge& f = edges_[q];
+    const P2 r{e.b[0] - e.a[0], e.b[1] - e.a[1]}, s{f.b[0] - f.a[0], f.b[1] - f.a[1]};
+    const double lr = std::hypot(r[0], r[1]), ls = std::hypot(s[0], s[1]);
+    if (std::max(e.a[0], e.b[0]) + eps_ < std::min(f.a[0], f.b[0]) ||
+        std::max(f.a[0], f.b[0]) + eps_ < std::min(e.a[0], e.b[0]) ||
+        std::max(e.a[1], e.b[1]) + eps_ < std::min(f.a[1], f.b[1]) ||
+        std::max(f.a[1], f.b[1]) + eps_ < std::min(e.a[1], e.b[1]))
+      return;
+    auto add = [&](std::vector<double>& t, double v, double l) {
+      if (v * l > eps_ && (1 - v) * l > eps_) t.push_back(v);
+    };
+    const double den = r[0] * s[1] - r[1] * s[0];
+    const P2 w{f.a[0] - e.a[0], f.a[1] - e.a[1]};
+    if (std::abs(den) > 1e-12 * lr * ls) {
+      const double t = (w[0] * s[1] - w[1] * s[0]) / den, u = (w[0] * r[1] - w[1] * r[0]) / den;
+      if (t * lr < -eps_ || (t - 1) * lr > eps_ || u * ls < -eps_ || (u - 1) * ls > eps_) return;
+      add(tp, t, lr);
+      add(tq, u, ls);
+      return;
+    }
+    // Parallel: along one line, each cut where the other's ends lie on it.
+    if (std::abs(w[0] * r[1] - w[1] * r[0]) > eps_ * lr) return;
+    for (const P2& c : {f.a, f.b}) add(tp, ((c[0] - e.a[0]) * r[0] + (c[1] - e.a[1]) * r[1]) / (lr * lr), lr);
+    for (const P2& c : {e.a, e.b}) add(tq, ((c[0] - f.a[0]) * s[0] + (c[1] - f.a[1]) * s[1]) / (ls * ls), ls);
+  }
+
+  // Whether q lies in the region (inside the polygon or deep inside a
+  // part for m > 0; inside the polygon and no part for m < 0).
+  bool in_region(const P2& q) const {
+    bool deep = false;
+    const auto& cell = part_cells_[static_cast<std::size_t>(index(1, q[1]) * n_ + index(0, q[0]))];
+    for (const int k : cell) deep = deep || deep_inside(parts_[static_cast<std::size_t>(k)], q);
+    return m_ > 0 ? deep || poly_.inside(q[0], q[1]) : !deep && poly_.inside(q[0], q[1]);
+  }
+
+  bool kept(const P2& q, int own) const {
+    if (poly_.inside(q[0], q[1]) != (m_ < 0)) return false;
+    const auto& cell = part_cells_[static_cast<std::size_t>(index(1, q[1]) * n_ + index(0, q[0]))];
+    for (const int k : cell)
+      if (k != own && deep_inside(parts_[static_cast<std::size_t>(k)], q)) return false;
+    return true;
+  }
+
+  // The pieces joined end to start into rings: ends within 4 eps are one
+  // point; a piece there twice is kept once, pieces both ways are dropped.
+  std::vector<Ring> join() {
+    std::vector<P2> points;
+    std::unordered_map<long long, std::vector<int>> at;  // grid cells of 16 eps
+    const double h = 16 * eps_;
+    auto key = [&](long long i, long long j) { return i * 73856093LL ^ j * 19349663LL; };
+    auto id = [&](const P2& p) {
+      const long long i = static_cast<long long>(std::floor(p[0] / h));
+      const long long j = static_cast<long long>(std::floor(p[1] / h));
+      for (long long di = -1; di <= 1; ++di)
+        for (long long dj = -1; dj <= 1; ++dj) {
+          const auto f = at.find(key(i + di, j + dj));
+          if (f == at.end()) continue;
+          for (const int k : f->second) {
+            const P2& q = points[static_cast<std::size_t>(k)];
+            if (std::hypot(q[0] - p[0], q[1] - p[1]) <= 4 * eps_) return k;
+          }
+        }
+      points.push_back(p);
+      at[key(i, j)].push_back(static_cast<int>(points.size() - 1));
+      return static_cast<int>(points.size() - 1);
+    };
+    std::set<std::pair<int, int>> links;
+    for (const Edge& e : pieces_) {
+      const int a = id(e.a), b = id(e.b);
+      if (a == b) continue;
+      if (links.erase({b, a})) continue;  // both ways: no outline there
+      links.insert({a, b});
+    }
+    auto where = [&](int k) {
+      const P2& q = points[static_cast<std::size_t>(k)];
+      return "(" + g(q[0]) + ", " + g(q[1]) + ") m";
+    };
+    std::unordered_map<int, int> next;
+    for (const auto& [a, b] : links)
+      if (!next.emplace(a, b).second)
+        throw std::runtime_error("the outline moved by the margin branches at " + where(a));
+    std::vector<Ring> out;
+    std::set<int> done;
+    for (const auto& [a, b] : links) {
+      if (done.count(a)) continue;
+      Ring r;
+      int k = a;
+      while (!done.count(k)) {
+        done.insert(k);
+        r.push_back(points[static_cast<std::size_t>(k)]);
+        const auto f = next.find(k);
+        if (f == next.end()) throw std::runtime_error("the outline moved by the margin does not close at " + where(k));
+        k = f->second;
+      }
+      if (k != a) throw std::runtime_error("the outline moved by the margin meets itself at " + where(k));
+      // Vertices within 1e-9 of the size of each other are one.
+      Ring q;
+      for (const P2& p : r)
+        if (q.empty() || std::hypot(p[0] - q.back()[0], p[1] - q.back()[1]) > 1e-9 * size_) q.push_back(p);
+      while (q.size() > 1 && std::hypot(q[0][0] - q.back()[0], q[0][1] - q.back()[1]) <= 1e-9 * size_) q.pop_back();
+      if (q.size() >= 3) out.push_back(std::move(q));
+    }
+    if (const auto meet = first_meeting_sides(out)) {
+      const P2& p = out[(*meet)[0]][(*meet)[1]];
+      throw std::runtime_error("the outline moved by the margin touches itself near (" + g(p[0]) + ", " + g(p[1]) +
+                               ") m");
+    }
+    return out;
+  }
+
+  PlanPolygon poly_;
+  double m_, a_;
+  double size_ = 0, eps_ = 0;
+  std::vector<Part> parts_;
+  std::vector<Edge> edges_, pieces_;
+  double lo_[2]{}, hi_[2]{}, cell_[2]{};
+  int n_ = 1;
+  std::vector<std::vector<int>> edge_cells_, part_cells_;
+};
+
 // The trims as a ply's pattern takes them: each plane, cylinder and
-// sphere (and each polygon given with a margin) as its level less the
-// margin at every formed node, linear in each triangle; each polygon
-// without a margin as its sides in plan view, exact in each triangle,
-// and whether each node lies inside it.
+// sphere (and each polygon taken by its distance with a margin) as its
+// level less the margin at every formed node, linear in each triangle;
+// each polygon (its rings moved by the margin) as its sides in plan view,
+// exact in each triangle, and whether each node lies inside it.
 struct Trimming {
   // Levels within it of 0 are on the trim (m: 1e-10 of the formed ply's
   // size, far above the round-off of a level and far below any length
@@ -697,13 +1093,13 @@ Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurfa
     hi[k % 3] = std::max(hi[k % 3], x[k]);
   }
   t.eps = n > 0 ? 1e-10 * std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) : 0.0;
-  // A level at every node, less the margin; within eps of 0: 0 (a node on
-  // the trim to round-off is on it).
+  // A level at every node; within eps of 0: 0 (a node on the trim to
+  // round-off is on it).
   auto add_level = [&](auto&& level) {
     auto& l = t.linear.emplace_back(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(static) if (n > 4096)
     for (long long i = 0; i < n; ++i) {
-      const double f = level(&x[3 * i]) - margin;
+      const double f = level(&x[3 * i]);
       l[static_cast<std::size_t>(i)] = std::abs(f) <= t.eps ? 0.0 : f;
     }
     for (long long i = 0; i < n; ++i)
@@ -711,11 +1107,15 @@ Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurfa
         throw std::runtime_error("the distance of node " + std::to_string(i) + " to the trim is not finite");
   };
   if (combined && !trims.empty()) {
-    add_level([&](const double* q) { return trim_level(trims, q); });
+    add_level([&](const double* q) {
+      double l = -std::numeric_limits<double>::infinity();
+      for (const TrimSurface& s : trims) l = std::max(l, surface_level(s, q) - (s.margin_in_rings ? 0.0 : margin));
+      return l;
+    });
     return t;
   }
   for (const TrimSurface& s : trims) {
-    if (s.kind == TrimSurface::Kind::Polygon && margin == 0) {
+    if (s.kind == TrimSurface::Kind::Polygon && (margin == 0 || s.margin_in_rings)) {
       const PlanPolygon& p = t.polygons.emplace_back(s.rings);
       auto& uv = t.plan.emplace_back(2 * static_cast<std::size_t>(n));
       auto& in = t.node_inside.emplace_back(static_cast<std::size_t>(n));
@@ -730,7 +1130,7 @@ Trimming make_trimming(const std::vector<double>& x, const std::vector<TrimSurfa
       }
       continue;
     }
-    add_level([&](const double* q) { return surface_level(s, q); });
+    add_level([&](const double* q) { return surface_level(s, q) - margin; });
   }
   return t;
 }
@@ -1251,21 +1651,59 @@ CutPattern cut_with(const std::vector<double>& x0, const std::vector<double>& x,
 
 }  // namespace
 
+std::vector<std::vector<std::array<double, 2>>> polygon_margin_rings(const TrimSurface& t, double margin) {
+  if (t.kind != TrimSurface::Kind::Polygon) throw std::runtime_error("not a polygon trim");
+  if (margin == 0) return t.rings;
+  return MarginOutline(t.rings, margin).rings();
+}
+
+namespace {
+
+// The trims as cut with a margin: each polygon's rings moved by it
+// (margin_in_rings) where they can be, otherwise the polygon is taken by
+// its distance; why, for each polygon trim (empty where moved).
+std::vector<TrimSurface> with_margin(const std::vector<TrimSurface>& trims, double margin,
+                                     std::vector<std::string>* why) {
+  std::vector<TrimSurface> out = trims;
+  for (TrimSurface& t : out) {
+    if (t.kind != TrimSurface::Kind::Polygon || margin == 0) continue;
+    if (t.margin_in_rings) {  // moved already
+      if (why) why->emplace_back();
+      continue;
+    }
+    try {
+      t.rings = polygon_margin_rings(t, margin);
+      t.margin_in_rings = true;
+      if (why) why->emplace_back();
+    } catch (const std::runtime_error& e) {
+      if (why) why->push_back(e.what());
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
-                       const std::vector<TrimSurface>& trims, double margin) {
+                       const std::vector<TrimSurface>& given, double margin) {
+  std::vector<std::string> moved;
+  const std::vector<TrimSurface> trims = with_margin(given, margin, &moved);
   if (x.size() != x0.size()) throw std::runtime_error("the blank and the formed ply have other numbers of nodes");
   for (std::size_t k = 0; k < x0.size(); ++k)
     if (!std::isfinite(x0[k]) || !std::isfinite(x[k]))
       throw std::runtime_error("node " + std::to_string(k / 3) + " has a position that is not finite");
   std::string open;
   try {
-    return cut_with(x0, x, tri, make_trimming(x, trims, margin));
+    CutPattern p = cut_with(x0, x, tri, make_trimming(x, trims, margin));
+    p.polygon_margin = moved;
+    return p;
   } catch (const OpenOutline& e) {
     open = e.what();
   }
   try {  // where the exact cut does not close (a trim too thin or too tangent there for the doubles)
     CutPattern p = cut_with(x0, x, tri, make_trimming(x, trims, margin, true));
     p.fallback = open;
+    p.polygon_margin = moved;
     return p;
   } catch (const OpenOutline& e) {
     throw std::runtime_error(std::string(e.what()) + " (triangles not alike oriented?)");
@@ -1278,7 +1716,7 @@ std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vec
                                    const std::array<double, 3>& e2, double spacing, double margin,
                                    bool combined) {
   const std::size_t m = tri.size() / 3;
-  const Trimming trimming = make_trimming(x, trims, margin, combined);
+  const Trimming trimming = make_trimming(x, with_margin(trims, margin, nullptr), margin, combined);
   TriangleCut cut(trimming);
   std::vector<FibreMark> marks;
   std::set<std::pair<long long, long long>> taken;  // grid points already marked
@@ -1481,6 +1919,34 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
                         double margin) {
   if (trims.empty()) throw ExportInputError("no --trim: give the surface the part is trimmed at");
   if (!(std::abs(margin) <= kFar)) throw ExportInputError("--margin " + g(margin) + ": beyond 1e6 (m)");
+  // Each polygon's outline moved by the margin: its rings and vertices,
+  // or why it is taken by its distance instead.
+  nlohmann::json margins = nlohmann::json::object();
+  std::vector<TrimSurface> cut = trims;  // the polygons' outlines moved by the margin, found once
+  for (TrimSurface& t : cut) {
+    if (t.kind != TrimSurface::Kind::Polygon || margin == 0) continue;
+    nlohmann::json j;
+    try {
+      auto rings = polygon_margin_rings(t, margin);
+      if (rings.empty())
+        throw ExportInputError("--margin " + g(margin) + " moves the outline of '" + t.text +
+                               "' in by half its width or more: nothing of it is left");
+      std::size_t vertices = 0;
+      for (const auto& r : rings) vertices += r.size();
+      j["method"] = "moved";
+      j["rings"] = rings.size();
+      j["vertices"] = vertices;
+      j["fallback"] = nullptr;
+      t.rings = std::move(rings);
+      t.margin_in_rings = true;
+    } catch (const ExportInputError&) {
+      throw;
+    } catch (const std::runtime_error& e) {
+      j["method"] = "distance";
+      j["fallback"] = e.what();
+    }
+    margins[t.text] = j;
+  }
   FramePlies frame = read_frame_plies(dir, time, whole, false);
   for (const FramePly& d : frame.plies)
     for (std::size_t k = 0; k < d.x.size(); ++k)
@@ -1503,6 +1969,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
   for (const TrimSurface& t : trims)
     if (t.kind == TrimSurface::Kind::Polygon) doc["polygon_cut_directions"][t.text] = polygon_cut_direction(t);
   doc["margin_m"] = margin;
+  doc["polygon_margins"] = margins;
   doc["plies"] = nlohmann::json::object();
   // The fibre directions of the blank: the first frame's field.
   const FramePlies first = read_frame_plies(dir, std::nullopt, whole, true, true);
@@ -1511,7 +1978,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     ply.name = d.name;
     ply.mirrored = d.mirrored;
     try {
-      ply.pattern = cut_pattern(d.x0, d.x, d.tri, trims, margin);
+      ply.pattern = cut_pattern(d.x0, d.x, d.tri, cut, margin);
       ply.blank = cut_pattern(d.x0, d.x, d.tri, {});
     } catch (const std::exception& e) {
       throw std::runtime_error("ply '" + d.name + "': " + e.what());
@@ -1532,7 +1999,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
             hi[c] = std::max(hi[c], dot(q.blank, axes[static_cast<std::size_t>(c)]));
           }
       ply.mark_spacing = mark_spacing(std::max(hi[0] - lo[0], hi[1] - lo[1]));
-      ply.marks = fibre_marks(d.x0, d.x, d.tri, trims, *fibre, axes[0], axes[1], ply.mark_spacing, margin,
+      ply.marks = fibre_marks(d.x0, d.x, d.tri, cut, *fibre, axes[0], axes[1], ply.mark_spacing, margin,
                               !ply.pattern.fallback.empty());
     }
     ply.csv = out / (d.name + ".csv");

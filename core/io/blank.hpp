@@ -38,6 +38,9 @@ struct TrimSurface {
   // vertex (a, b) lies at a plan_u + b plan_v, and the polygon cuts along
   // plan_u x plan_v (x and y for a drawing in plan view, seen along z).
   std::array<double, 3> plan_u{1, 0, 0}, plan_v{0, 1, 0};
+  // polygon: the rings are already moved by the margin the pattern is cut
+  // with (polygon_margin_rings); the cut takes them as they are.
+  bool margin_in_rings = false;
   std::string text;  // as given
 };
 
@@ -57,6 +60,22 @@ std::array<double, 3> polygon_cut_direction(const TrimSurface& t);
 // point's projection along its normal; for several surfaces, the part lying inside all of
 // them, the largest).
 double trim_level(const std::vector<TrimSurface>& trims, const double* x);
+
+// A polygon trim's outline moved out by `margin` (m; in, below 0) in its
+// plane: each side parallel to it at that distance, the outer corners
+// rounded by arcs about the vertices (drawn as their tangents, each over
+// at most 2 degrees of the arc: the line is nowhere nearer to the polygon
+// than the margin, and at most 1.5e-4 of the margin further), the inner corners where the moved
+// sides meet, and where the moved outline meets itself (a slot narrower
+// than twice the margin, a hole that closes, a part narrower than twice
+// a margin below 0) only its part at that distance from the polygon. The
+// rings are those of the region within the margin of the polygon (its
+// points outside within the margin of it taken too; below 0, its points
+// within the margin of its outline left out), empty where a margin below
+// 0 leaves nothing. Throws std::runtime_error where the moved outline's
+// pieces do not join into rings that neither cross nor touch (saying
+// where), and for a trim that is no polygon.
+std::vector<std::vector<std::array<double, 2>>> polygon_margin_rings(const TrimSurface& t, double margin);
 
 struct OutlinePoint {
   std::array<double, 3> blank{}, formed{};  // m
@@ -82,6 +101,11 @@ struct CutPattern {
   // the trims' largest distance, linear in each triangle, as a curved
   // trim's does: corners within about an element.
   std::string fallback;
+  // With a margin: for each polygon trim in order, empty where its
+  // outline was moved by the margin (polygon_margin_rings) and cut
+  // exactly; otherwise why not, and it was taken by its distance less the
+  // margin, linear in each triangle.
+  std::vector<std::string> polygon_margin;
 };
 
 // The pattern of one ply: x0 its positions in the blank, x formed (3 per
@@ -102,9 +126,10 @@ struct CutPattern {
 //
 // margin (m): the trim line moved out by it on the formed part (the level
 // less the margin), an allowance the pattern takes beyond the part's edge;
-// below 0, in. With a margin a polygon is taken by its distance, linear in
-// each triangle as a cylinder's (the line at that distance from a polygon
-// is rounded at its corners).
+// below 0, in. A polygon's outline is moved by it in its plane
+// (polygon_margin_rings) and cut exactly; where that cannot be done, the
+// polygon is taken by its distance, linear in each triangle as a
+// cylinder's (CutPattern::polygon_margin says which).
 CutPattern cut_pattern(const std::vector<double>& x0, const std::vector<double>& x, const std::vector<int>& tri,
                        const std::vector<TrimSurface>& trims, double margin = 0);
 

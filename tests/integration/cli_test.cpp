@@ -62,7 +62,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.42.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.43.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -2582,6 +2582,23 @@ print("%d %.3e" % (count, worst))
   EXPECT_NE(margin.out.find(" frames), the trim line moved out by 4 mm: 1 outline, "), std::string::npos)
       << margin.out;
   EXPECT_EQ(read_job_document(dir / "margin" / "blank.json")["margin_m"], 0.004);
+  {  // a polygon's outline moved by the margin, or moved in until nothing is left
+    const std::string outline = "polygon:" + (dir / "outline.csv").string();
+    const auto r = thermostamp("blank " + q(dir / "run") + " --trim " + q(outline) + " --margin 0.004 --out " +
+                               q(dir / "polygon_margin"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    const json b = read_job_document(dir / "polygon_margin" / "blank.json");
+    EXPECT_EQ(b["polygon_margins"][outline]["method"], "moved") << b.dump(2);
+    EXPECT_EQ(b["polygon_margins"][outline]["rings"], 1) << b.dump(2);
+    for (const std::string ply : {"ply_top", "ply_bottom"})
+      EXPECT_GT(b["plies"][ply]["kept_blank_area_m2"].get<double>(),
+                by["outline.csv"]["plies"][ply]["kept_blank_area_m2"].get<double>())
+          << ply;
+    EXPECT_EQ(refused(q(dir / "run") + " --trim " + q(outline) + " --margin -1"),
+              "error: blank: --margin -1 moves the outline of '" + outline +
+                  "' in by half its width or more: nothing of it is left\n");
+  }
   EXPECT_NE(refused(q(dir / "run") + " --trim " + plane + " --format gmsh")
                 .find("error: --format does not apply to 'blank'; its options: --trim, --margin, --time, --out, --whole"),
             std::string::npos);

@@ -1136,6 +1136,257 @@ TEST(Blank, PolygonDrawnInAnotherPlaneCutsAlongItsNormal) {
   std::filesystem::remove_all(dir);
 }
 
+// Inside an odd number of rings (crossings of a ray along +x).
+bool inside_rings(const std::vector<std::vector<std::array<double, 2>>>& rings, double x, double y) {
+  bool in = false;
+  for (const auto& p : rings)
+    for (std::size_t k = 0, j = p.size() - 1; k < p.size(); j = k++)
+      if ((p[j][1] > y) != (p[k][1] > y) &&
+          x < p[j][0] + (y - p[j][1]) * (p[k][0] - p[j][0]) / (p[k][1] - p[j][1]))
+        in = !in;
+  return in;
+}
+double to_rings(const std::vector<std::vector<std::array<double, 2>>>& rings, double x, double y) {
+  double d = 1e300;
+  for (const auto& p : rings) d = std::min(d, to_sides(p, x, y));
+  return d;
+}
+double area_of(const std::vector<std::vector<std::array<double, 2>>>& rings) {
+  double a = 0;
+  for (const auto& p : rings) a += std::abs(area(p));
+  return a;
+}
+// The area of the sector of angle t (rad) about a vertex as drawn: its
+// arc of radius r by tangents, each over at most 2 degrees of it (k kites
+// of two right triangles with legs r and r tan(t / 2k)).
+double drawn_sector(double t, double r) {
+  const int k = static_cast<int>(std::ceil(t / (2 * M_PI / 180) - 1e-9));
+  return k * r * r * std::tan(t / (2 * k));
+}
+// How much further from the vertex the tangents' corners lie than the arc.
+const double kTangentReach = 1 / std::cos(M_PI / 180);
+
+// --margin with a polygon: its outline moved by the margin in its plane,
+// exact in its sides and inner corners, its outer corners drawn as
+// tangents to the arc over at most 2 degrees each; the pattern is then
+// cut exactly along it. References: the areas of the strips, corners and
+// sectors for an L, in and out (Steiner's formula with the corners'
+// overlaps); a slot narrower than twice the margin, closed; random
+// polygons against the distance to the polygon, point by point (every
+// grid point further than the tangents' offset from the moved line on the
+// side the distance puts it).
+TEST(Blank, PolygonMovedByAMarginIsItsOffsetOutline) {
+  using Rings = std::vector<std::vector<std::array<double, 2>>>;
+  auto polygon = [](const Rings& rings) {
+    TrimSurface t;
+    t.kind = TrimSurface::Kind::Polygon;
+    t.rings = rings;
+    t.text = "polygon";
+    return t;
+  };
+  const std::vector<std::array<double, 2>> L = {{0.0113, 0.0127}, {0.0871, 0.0127}, {0.0871, 0.0413},
+                                               {0.0437, 0.0413}, {0.0437, 0.0889}, {0.0113, 0.0889}};
+  const double a_L = 0.0758 * 0.0286 + 0.0324 * 0.0476, p_L = 2 * (0.0758 + 0.0762);
+  for (const double m : {0.004, -0.003}) {
+    const Rings r = polygon_margin_rings(polygon({L}), m);
+    ASSERT_EQ(r.size(), 1u) << m;
+    const double a = std::abs(m);
+    // Out: 5 outer corners rounded (90 degrees each), the inner one
+    // where the sides meet (a square a x a counted twice); in: the 5
+    // corners where the sides meet (a square each counted twice), the
+    // inner corner rounded.
+    const double exact = m > 0 ? a_L + p_L * a + 5 * drawn_sector(M_PI / 2, a) - a * a
+                               : a_L - p_L * a + 5 * a * a - drawn_sector(M_PI / 2, a);
+    EXPECT_NEAR(area_of(r), exact, 1e-16) << m;
+    int at_margin = 0;  // every vertex and side at the margin or within the tangents' offset beyond it
+    for (std::size_t k = 0; k < r[0].size(); ++k) {
+      const auto& u = r[0][k];
+      const auto& w = r[0][(k + 1) % r[0].size()];
+      const double d = to_sides(L, u[0], u[1]), mid = to_sides(L, 0.5 * (u[0] + w[0]), 0.5 * (u[1] + w[1]));
+      EXPECT_GE(d, a - 1e-16) << m << " vertex " << k;
+      EXPECT_LE(d, a * kTangentReach + 1e-16) << m << " vertex " << k;
+      EXPECT_GE(mid, a - 1e-16) << m << " side " << k;
+      EXPECT_LE(mid, a * kTangentReach + 1e-16) << m << " side " << k;
+      EXPECT_EQ(inside_rings({L}, u[0], u[1]), m < 0) << m << " vertex " << k;
+      at_margin += std::abs(d - a) <= 1e-16;
+    }
+    // Each rounded corner: where the moved sides end (on the arc) and 45
+    // tangents' corners; each sharp corner: one vertex.
+    EXPECT_EQ(r[0].size(), m > 0 ? 5u * 47u + 1u : 5u + 47u) << m;
+    EXPECT_EQ(at_margin, m > 0 ? 5 * 2 + 1 : 5 + 2) << m;
+  }
+  // A rectangle with a slot narrower than twice the margin: the slot is
+  // filled, and above it the arcs about its two corners meet.
+  {
+    const double w = 0.008, m = 0.006;
+    const std::vector<std::array<double, 2>> slotted = {{0, 0},     {0.1, 0},    {0.1, 0.05}, {0.054, 0.05},
+                                                        {0.054, 0.02}, {0.046, 0.02}, {0.046, 0.05}, {0, 0.05}};
+    const Rings r = polygon_margin_rings(polygon({slotted}), m);
+    ASSERT_EQ(r.size(), 1u);
+    const double c = w / 2;
+    const double cusp = m * w - (c * std::sqrt(m * m - c * c) + m * m * std::asin(c / m));
+    const double smooth = (0.1 + 2 * m) * (0.05 + 2 * m) - (4 - M_PI) * m * m - cusp;
+    // The tangents add at most this much to the 6 arcs of 90 degrees.
+    const double tangents = 6 * (drawn_sector(M_PI / 2, m) - M_PI / 4 * m * m);
+    EXPECT_GE(area_of(r), smooth);
+    EXPECT_LE(area_of(r), smooth + tangents);
+    double lowest = 1;  // over the slot
+    for (const auto& u : r[0]) {
+      const double d = to_sides(slotted, u[0], u[1]);
+      EXPECT_GE(d, m - 1e-16);
+      EXPECT_LE(d, m * kTangentReach + 1e-16);
+      if (std::abs(u[0] - 0.05) < c) lowest = std::min(lowest, u[1]);
+    }
+    EXPECT_GE(lowest, 0.05 + std::sqrt(m * m - c * c));
+    EXPECT_LE(lowest, 0.05 + std::sqrt(m * m * kTangentReach * kTangentReach - c * c));
+    // Moved in by more than half the slot's walls' width: two pieces.
+    EXPECT_EQ(polygon_margin_rings(polygon({slotted}), -0.0201).size(), 2u);
+    EXPECT_TRUE(polygon_margin_rings(polygon({slotted}), -0.03).empty());
+  }
+  // A step whose lower side, moved up, runs to the corner above along the
+  // line between the upper side's strip and that corner's sector (inside
+  // the region: left out, not taken as outline).
+  {
+    const std::vector<std::array<double, 2>> step = {{0, 0},       {0.03, 0},    {0.03, 0.01},
+                                                     {0.01, 0.01}, {0.01, 0.02}, {0, 0.02}};
+    const double m = 0.01;
+    const Rings r = polygon_margin_rings(polygon({step}), m);
+    ASSERT_EQ(r.size(), 1u);
+    EXPECT_NEAR(area_of(r), 0.0004 + 0.1 * m + 5 * drawn_sector(M_PI / 2, m) - m * m, 1e-17);
+  }
+  // Margins near the round-off about inner corners of small turns (a
+  // square with a dent): the moved sides end where they meet, not in
+  // slivers beyond each other too short to judge. The area within what
+  // joining the points within 1e-9 of the size allows (that times the
+  // perimeter): the corners' tangents are shorter than that here.
+  for (int k = 0; k < 200; ++k) {
+    const double t = 0.001 + 0.05 * k / 200;  // the dent's depth (m)
+    const std::vector<std::array<double, 2>> dart = {{0, 0}, {0.05, t}, {0.1, 0}, {0.1, 0.1}, {0, 0.1}};
+    const double a = 0.01 - 0.05 * t, p = 0.3 + 2 * std::hypot(0.05, t);
+    for (const double m : {1e-8, -1e-8, 3e-9, 1e-7}) {
+      Rings r;
+      ASSERT_NO_THROW(r = polygon_margin_rings(polygon({dart}), m)) << k << " " << m;
+      EXPECT_NEAR(area_of(r), a + p * m + M_PI * m * m, 1e-9 * std::hypot(0.1, 0.1) * p) << k << " " << m;
+    }
+  }
+  // Stars with their vertices on a 6.25 mm grid, moved by margins off
+  // the grid: sides along the same lines and the moved sides of some
+  // crossing others' where those pass from a strip into the polygon
+  // (exactly half-way along a piece for some). Every outline is found.
+  {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    auto orient = [](const std::array<double, 2>& o, const std::array<double, 2>& a, const std::array<double, 2>& b) {
+      const double c = (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+      return (c > 0) - (c < 0);
+    };
+    int moved = 0;
+    for (int k = 0; k < 4000; ++k) {
+      const int n = 3 + static_cast<int>(rng() % 58);
+      const double g = 0.00625, rad = 0.02 + 0.05 * u(rng);
+      std::vector<std::array<double, 2>> v;
+      for (int i = 0; i < n; ++i) {
+        const double t = 2 * M_PI * (i + 0.8 * u(rng)) / n, r = rad * (0.3 + 0.7 * u(rng));
+        const std::array<double, 2> q{std::round(r * std::cos(t) / g) * g, std::round(r * std::sin(t) / g) * g};
+        if (v.empty() || q != v.back()) v.push_back(q);
+      }
+      while (v.size() > 1 && v.front() == v.back()) v.pop_back();
+      bool simple = v.size() >= 3 && std::abs(area(v)) > 0;
+      for (std::size_t i = 0; i < v.size() && simple; ++i)
+        for (std::size_t j = i + 1; j < v.size() && simple; ++j) {
+          if (j == i + 1 || (i == 0 && j == v.size() - 1)) continue;
+          const auto &a = v[i], &b = v[(i + 1) % v.size()], &c = v[j], &d = v[(j + 1) % v.size()];
+          simple = !(orient(a, b, c) * orient(a, b, d) <= 0 && orient(c, d, a) * orient(c, d, b) <= 0);
+        }
+      for (std::size_t i = 0; i < v.size() && simple; ++i)  // no side folded back onto the one before
+        simple = orient(v[i], v[(i + 1) % v.size()], v[(i + 2) % v.size()]) != 0 ||
+                 (v[(i + 1) % v.size()][0] - v[i][0]) * (v[(i + 2) % v.size()][0] - v[(i + 1) % v.size()][0]) +
+                         (v[(i + 1) % v.size()][1] - v[i][1]) * (v[(i + 2) % v.size()][1] - v[(i + 1) % v.size()][1]) >
+                     0;
+      if (!simple) continue;
+      const double m = (k % 2 ? 1 : -1) * (1e-4 + 0.02 * u(rng));
+      try {
+        const Rings r = polygon_margin_rings(polygon({v}), m);
+        ++moved;
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << "star " << k << ", margin " << m << ": " << e.what();
+      }
+    }
+    EXPECT_GT(moved, 1000);
+  }
+  // Random polygons (stars with deep notches), with a hole in half of
+  // them, moved out and in: every point of a grid over them lies inside
+  // the moved outline exactly where its distance to the polygon says
+  // (points within the tangents' offset beyond the margin left out).
+  {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    int checked = 0;
+    for (int k = 0; k < 60; ++k) {
+      const int n = 5 + k % 23;
+      Rings rings(1);
+      for (int i = 0; i < n; ++i) {
+        const double t = 2 * M_PI * (i + 0.7 * u(rng)) / n, rad = 0.01 + 0.04 * u(rng);
+        rings[0].push_back({rad * std::cos(t), rad * std::sin(t)});
+      }
+      if (k % 2) {  // a small hole round the centre, clockwise
+        const double h = 0.003 + 0.004 * u(rng);
+        rings.push_back({{-h, -h}, {-h, h}, {h, h}, {h, -h}});
+        if (!inside_rings({rings[0]}, -h, -h) || !inside_rings({rings[0]}, h, h) ||
+            !inside_rings({rings[0]}, -h, h) || !inside_rings({rings[0]}, h, -h) || to_sides(rings[0], 0, 0) < 2 * h)
+          rings.pop_back();
+      }
+      const double m = (k % 3 == 0 ? -1 : 1) * (0.0005 + 0.01 * u(rng));
+      Rings moved;
+      try {
+        moved = polygon_margin_rings(polygon(rings), m);
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << "case " << k << ": " << e.what();
+        continue;
+      }
+      const double band = std::abs(m) * (kTangentReach - 1) + 1e-12;
+      const int g = 120;
+      for (int i = 0; i <= g; ++i)
+        for (int j = 0; j <= g; ++j) {
+          const double x = -0.065 + 0.13 * i / g, y = -0.065 + 0.13 * j / g;
+          const bool in = inside_rings(rings, x, y);
+          const double d = in ? -to_rings(rings, x, y) : to_rings(rings, x, y);
+          if (std::abs(d - m) <= band) continue;
+          EXPECT_EQ(inside_rings(moved, x, y), d < m) << "case " << k << " at " << x << ", " << y << ": d " << d;
+          ++checked;
+        }
+    }
+    EXPECT_GT(checked, 500000);
+  }
+  // The pattern of a formed plate, turned and moved, cut with the margin:
+  // exactly the moved outline carried back (the plate's map is rigid).
+  {
+    const ShellMesh m = rectangle_mesh({0, 0, 0}, {0.1, 0.1}, {40, 40}, true);
+    const double t = M_PI / 6, c = std::cos(t), s = std::sin(t), bx = 0.3, by = -0.2;
+    std::vector<double> x = m.x;
+    for (std::size_t i = 0; i < x.size(); i += 3) {
+      x[i] = c * m.x[i] - s * m.x[i + 1] + bx;
+      x[i + 1] = s * m.x[i] + c * m.x[i + 1] + by;
+      x[i + 2] = m.x[i + 2] + 0.05;
+    }
+    std::vector<std::array<double, 2>> formed;
+    for (const auto& v : L) formed.push_back({c * v[0] - s * v[1] + bx, s * v[0] + c * v[1] + by});
+    for (const double margin : {0.004, -0.003}) {
+      const Rings moved = polygon_margin_rings(polygon({formed}), margin);
+      const CutPattern p = cut_pattern(m.x, x, m.triangles, {polygon({formed})}, margin);
+      ASSERT_EQ(p.polygon_margin, std::vector<std::string>{""});
+      ASSERT_EQ(p.outlines.size(), 1u);
+      EXPECT_NEAR(p.kept_formed_area, area_of(moved), 1e-13 * area_of(moved)) << margin;
+      EXPECT_NEAR(p.kept_blank_area, area_of(moved), 1e-13 * area_of(moved)) << margin;
+      for (const OutlinePoint& q : p.outlines[0].points) EXPECT_LT(to_rings(moved, q.formed[0], q.formed[1]), 1e-16);
+    }
+    // Moved in until nothing is left: no pattern.
+    const CutPattern none = cut_pattern(m.x, x, m.triangles, {polygon({formed})}, -0.02);
+    EXPECT_TRUE(none.outlines.empty());
+    EXPECT_EQ(none.kept_blank_area, 0.0);
+  }
+}
+
 // Where the exact cut's outline does not close, the pattern comes from
 // the trims' largest distance, linear in each triangle, and says so: a
 // circle drawn on the front plane (normal -y, r = 21.3 mm) touching the
