@@ -2,7 +2,8 @@
 """Fuzzing of `thermostamp blank`'s cut (scripts/fuzz/blank_*.cpp, linked to
 the core library of a build): random meshes and trims (every outline must
 close, its area the pattern's, a trim given twice the pattern once),
-mutated DXF outlines (read and cut, or refused in one line), and the unit
+mutated DXF outlines (read and cut, or refused in one line), polygons
+moved by a margin (against the distance to the polygon), and the unit
 test of trims through the mesh's nodes and along its lines (areas against
 clipping in the blank) with more cases. Exit status 1 where any case fails; the failing case's number
 reruns it alone (the programs' last argument).
@@ -10,7 +11,8 @@ reruns it alone (the programs' last argument).
 Usage: scripts/fuzz_blank.py [--cases N] [--seeds S ...] [--sanitize]
 (after a Release build with its tests, or with --sanitize after
 scripts/sanitize, which links against build-sanitize/ with ASan and UBSan). Default: 20 000 cases
-of each kind for seed 1, about 10 s (a few minutes sanitized).
+of each kind for seed 1, about 3 minutes (the margins' grid checks 2 of
+them; sanitized much longer).
 """
 import argparse
 import os
@@ -54,7 +56,7 @@ def main():
         if r.returncode != 0:
             failed = True
             print(r.stdout[-4000:] + r.stderr[-2000:], end="")
-    for name in ("blank_random", "blank_dxf"):
+    for name in ("blank_random", "blank_dxf", "blank_margin"):
         exe = build(name, args.sanitize)
         for seed in (args.seeds if name != "blank_dxf" else [None]):
             cmd = [exe, str(args.cases)] + ([] if seed is None else [str(seed)])
