@@ -382,9 +382,13 @@ def plot_blank(folder, out):
         ax.set_ylabel("mm")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
+        margin = info.get("margin_m", 0) or 0
+        moved = "" if margin == 0 else ", moved %s by %g mm" % ("out" if margin > 0 else "in", abs(1e3 * margin))
         ax.set_title("%s: cut pattern, t = %.3g s\n%.1f %% of the blank (%.4g m^2 formed), "
-                     "edge drawn in up to %.3g mm\ntrim: %s" % (part, info["time_s"], 100 * p["kept_share"], p["kept_formed_area_m2"],
-                                   1e3 * p.get("edge_displacement_max_m", float("nan")), ", ".join(info["trims"])),
+                     "edge drawn in up to %.3g mm\ntrim: %s%s" % (part, info["time_s"], 100 * p["kept_share"],
+                                                          p["kept_formed_area_m2"],
+                                                          1e3 * p.get("edge_displacement_max_m", float("nan")),
+                                                          ", ".join(info["trims"]), moved),
                      fontsize=8)
         made.append(save(fig, out, "blank_%s.png" % part, dpi=110))
     return made
