@@ -127,6 +127,23 @@ ShellMesh irregular_rectangle(double x0, double y0, double sx, double sy, int nx
   return m;
 }
 
+// A rigid motion of the plan tests: turned by 30 degrees about z, moved
+// by (0.3, -0.2, 0.05) m; of a point in plan and of a mesh's nodes.
+std::array<double, 2> turned_and_moved(const std::array<double, 2>& v) {
+  const double c = std::cos(M_PI / 6), s = std::sin(M_PI / 6);
+  return {c * v[0] - s * v[1] + 0.3, s * v[0] + c * v[1] - 0.2};
+}
+std::vector<double> turned_and_moved(const std::vector<double>& x0) {
+  std::vector<double> x = x0;
+  for (std::size_t i = 0; i < x.size(); i += 3) {
+    const auto p = turned_and_moved(std::array<double, 2>{x0[i], x0[i + 1]});
+    x[i] = p[0];
+    x[i + 1] = p[1];
+    x[i + 2] = x0[i + 2] + 0.05;
+  }
+  return x;
+}
+
 TEST(Blank, TrimSurfacesAreReadOrRefusedWithWhatIsWrong) {
   const TrimSurface p = parse_trim("plane:0,0,-0.005,0,0,-2");
   EXPECT_EQ(p.kind, TrimSurface::Kind::Plane);
@@ -838,19 +855,13 @@ TEST(Blank, PolygonDrawnInPlanViewTrimsAlongItsSides) {
                                                {0.0437, 0.0413}, {0.0437, 0.0889}, {0.0113, 0.0889}};
   const double exact = 0.0758 * 0.0286 + 0.0324 * 0.0476;
   const ShellMesh m = rectangle_mesh({0, 0, 0}, {0.1, 0.1}, {40, 40}, true);
-  const double a = M_PI / 6, c = std::cos(a), s = std::sin(a), bx = 0.3, by = -0.2;
-  std::vector<double> x = m.x;
-  for (std::size_t i = 0; i < x.size(); i += 3) {
-    x[i] = c * m.x[i] - s * m.x[i + 1] + bx;
-    x[i + 1] = s * m.x[i] + c * m.x[i + 1] + by;
-    x[i + 2] = m.x[i + 2] + 0.05;
-  }
+  const std::vector<double> x = turned_and_moved(m.x);
   {
     std::ofstream f(dir / "outline.csv");
     f.precision(17);
     f << "x_m,y_m\n";
-    for (const auto& v : L) f << c * v[0] - s * v[1] + bx << ", " << s * v[0] + c * v[1] + by << "\n";
-    f << c * L[0][0] - s * L[0][1] + bx << "," << s * L[0][0] + c * L[0][1] + by << "\n";  // closed: dropped
+    for (const auto& v : L) f << turned_and_moved(v)[0] << ", " << turned_and_moved(v)[1] << "\n";
+    f << turned_and_moved(L[0])[0] << "," << turned_and_moved(L[0])[1] << "\n";  // closed: dropped
   }
   const TrimSurface t = parse_trim("polygon:" + (dir / "outline.csv").string());
   ASSERT_EQ(t.rings.size(), 1u);
@@ -1362,15 +1373,9 @@ TEST(Blank, PolygonMovedByAMarginIsItsOffsetOutline) {
   // exactly the moved outline carried back (the plate's map is rigid).
   {
     const ShellMesh m = rectangle_mesh({0, 0, 0}, {0.1, 0.1}, {40, 40}, true);
-    const double t = M_PI / 6, c = std::cos(t), s = std::sin(t), bx = 0.3, by = -0.2;
-    std::vector<double> x = m.x;
-    for (std::size_t i = 0; i < x.size(); i += 3) {
-      x[i] = c * m.x[i] - s * m.x[i + 1] + bx;
-      x[i + 1] = s * m.x[i] + c * m.x[i + 1] + by;
-      x[i + 2] = m.x[i + 2] + 0.05;
-    }
+    const std::vector<double> x = turned_and_moved(m.x);
     std::vector<std::array<double, 2>> formed;
-    for (const auto& v : L) formed.push_back({c * v[0] - s * v[1] + bx, s * v[0] + c * v[1] + by});
+    for (const auto& v : L) formed.push_back(turned_and_moved(v));
     for (const double margin : {0.004, -0.003}) {
       const Rings moved = polygon_margin_rings(polygon({formed}), margin);
       const CutPattern p = cut_pattern(m.x, x, m.triangles, {polygon({formed})}, margin);
