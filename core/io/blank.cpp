@@ -1654,7 +1654,28 @@ CutPattern cut_with(const std::vector<double>& x0, const std::vector<double>& x,
 std::vector<std::vector<std::array<double, 2>>> polygon_margin_rings(const TrimSurface& t, double margin) {
   if (t.kind != TrimSurface::Kind::Polygon) throw std::runtime_error("not a polygon trim");
   if (margin == 0) return t.rings;
-  return MarginOutline(t.rings, margin).rings();
+  try {
+    return MarginOutline(t.rings, margin).rings();
+  } catch (const std::runtime_error& e) {
+    // Moved sides that coincide exactly (a polygon on a grid moved by a
+    // whole or half spacing): the margin 1e-8 of the polygon's size
+    // larger, then smaller, parts them.
+    double lo[2] = {kFar, kFar}, hi[2] = {-kFar, -kFar};
+    for (const auto& r : t.rings)
+      for (const auto& p : r)
+        for (std::size_t d = 0; d < 2; ++d) {
+          lo[d] = std::min(lo[d], p[d]);
+          hi[d] = std::max(hi[d], p[d]);
+        }
+    const double nudge = 1e-8 * std::hypot(hi[0] - lo[0], hi[1] - lo[1]);
+    for (const double s : {1.0, -1.0}) {
+      try {
+        return MarginOutline(t.rings, margin + s * nudge * (margin > 0 ? 1 : -1)).rings();
+      } catch (const std::runtime_error&) {
+      }
+    }
+    throw;
+  }
 }
 
 namespace {

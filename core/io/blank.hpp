@@ -72,9 +72,12 @@ double trim_level(const std::vector<TrimSurface>& trims, const double* x);
 // rings are those of the region within the margin of the polygon (its
 // points outside within the margin of it taken too; below 0, its points
 // within the margin of its outline left out), empty where a margin below
-// 0 leaves nothing. Throws std::runtime_error where the moved outline's
-// pieces do not join into rings that neither cross nor touch (saying
-// where), and for a trim that is no polygon.
+// 0 leaves nothing. Where moved sides coincide exactly (a polygon on a
+// grid moved by a whole or half spacing, a bar moved in by half its
+// width) the margin is taken 1e-8 of the polygon's size larger, or else
+// smaller, which parts them. Throws std::runtime_error where the moved
+// outline's pieces still do not join into rings that neither cross nor
+// touch (saying where), and for a trim that is no polygon.
 std::vector<std::vector<std::array<double, 2>>> polygon_margin_rings(const TrimSurface& t, double margin);
 
 struct OutlinePoint {

@@ -1391,25 +1391,33 @@ TEST(Blank, PolygonMovedByAMarginIsItsOffsetOutline) {
     EXPECT_EQ(none.kept_blank_area, 0.0);
   }
   // A C whose bars are moved in by exactly half their width: lines of no
-  // width where the moved sides meet the polygon's own. The moved outline
-  // is not found and says why; the pattern comes from the distance less
-  // the margin (the square of 10 mm left of the slot, within about an
-  // element: 0.5 mm cells).
+  // width where the moved sides meet the polygon's own. The margin 1e-8
+  // of the polygon's size larger parts them: the square of 10 mm left of
+  // the slot, less that all round. Half the bars' width less a little:
+  // the square and the bars' thin strips.
   {
     const std::vector<std::array<double, 2>> c = {{0, 0},       {0.1, 0},     {0.1, 0.02},  {0.05, 0.02},
                                                   {0.05, 0.03}, {0.1, 0.03},  {0.1, 0.05},  {0, 0.05}};
-    EXPECT_THROW(polygon_margin_rings(polygon({c}), -0.02), std::runtime_error);
-    const ShellMesh plate = rectangle_mesh({-0.01, -0.01, 0}, {0.12, 0.07}, {240, 140}, true);
-    const CutPattern p = cut_pattern(plate.x, plate.x, plate.triangles, {polygon({c})}, -0.02);
+    const double nudge = 1e-8 * std::hypot(0.1, 0.05);
+    const Rings square = polygon_margin_rings(polygon({c}), -0.02);
+    ASSERT_EQ(square.size(), 1u);
+    EXPECT_NEAR(area_of(square), (0.01 - 2 * nudge) * (0.01 - 2 * nudge), 1e-18);
+    const ShellMesh plate = rectangle_mesh({-0.01, -0.01, 0}, {0.12, 0.07}, {24, 14}, true);
+    for (const double m : {-0.02, -0.0199}) {
+      const CutPattern p = cut_pattern(plate.x, plate.x, plate.triangles, {polygon({c})}, m);
+      EXPECT_EQ(p.polygon_margin, std::vector<std::string>{""}) << m;
+      EXPECT_NEAR(p.kept_blank_area, area_of(polygon_margin_rings(polygon({c}), m)), 1e-15) << m;
+    }
+  }
+  // Where the moved outline cannot be found, the pattern comes from the
+  // distance less the margin, and says why: a margin beyond 1e6 m keeps
+  // the whole plate.
+  {
+    const ShellMesh plate = rectangle_mesh({0, 0, 0}, {0.1, 0.1}, {8, 8}, true);
+    const CutPattern p = cut_pattern(plate.x, plate.x, plate.triangles, {polygon({L})}, 2e6);
     ASSERT_EQ(p.polygon_margin.size(), 1u);
-    EXPECT_NE(p.polygon_margin[0].find("the outline moved by the margin"), std::string::npos) << p.polygon_margin[0];
-    EXPECT_TRUE(p.fallback.empty());
-    EXPECT_NEAR(p.kept_blank_area, 1e-4, 0.0005 * 0.04);
-    // Half the bars' width less a little: the outline is moved, the square
-    // and the two bars' thin strips.
-    const CutPattern q = cut_pattern(plate.x, plate.x, plate.triangles, {polygon({c})}, -0.0199);
-    EXPECT_EQ(q.polygon_margin, std::vector<std::string>{""});
-    EXPECT_NEAR(q.kept_blank_area, area_of(polygon_margin_rings(polygon({c}), -0.0199)), 1e-15);
+    EXPECT_EQ(p.polygon_margin[0], "the margin 2e+06 m is beyond 1e6 m");
+    EXPECT_NEAR(p.kept_blank_area, 0.01, 1e-15);
   }
 }
 
