@@ -737,6 +737,9 @@ class MarginOutline {
     return join();
   }
 
+  // The diagonal of the polygon's extent (m).
+  double polygon_size() const { return size_ - 2 * a_; }
+
  private:
   struct Edge {
     P2 a, b;
@@ -1654,23 +1657,17 @@ CutPattern cut_with(const std::vector<double>& x0, const std::vector<double>& x,
 std::vector<std::vector<std::array<double, 2>>> polygon_margin_rings(const TrimSurface& t, double margin) {
   if (t.kind != TrimSurface::Kind::Polygon) throw std::runtime_error("not a polygon trim");
   if (margin == 0) return t.rings;
+  MarginOutline outline(t.rings, margin);
   try {
-    return MarginOutline(t.rings, margin).rings();
-  } catch (const std::runtime_error& e) {
+    return outline.rings();
+  } catch (const std::runtime_error&) {
     // Moved sides that coincide exactly (a polygon on a grid moved by a
     // whole or half spacing): the margin 1e-8 of the polygon's size
     // larger, then smaller, parts them.
-    double lo[2] = {kFar, kFar}, hi[2] = {-kFar, -kFar};
-    for (const auto& r : t.rings)
-      for (const auto& p : r)
-        for (std::size_t d = 0; d < 2; ++d) {
-          lo[d] = std::min(lo[d], p[d]);
-          hi[d] = std::max(hi[d], p[d]);
-        }
-    const double nudge = 1e-8 * std::hypot(hi[0] - lo[0], hi[1] - lo[1]);
-    for (const double s : {1.0, -1.0}) {
+    const double nudge = 1e-8 * outline.polygon_size() * (margin > 0 ? 1 : -1);
+    for (const double moved : {margin + nudge, margin - nudge}) {
       try {
-        return MarginOutline(t.rings, margin + s * nudge * (margin > 0 ? 1 : -1)).rings();
+        return MarginOutline(t.rings, moved).rings();
       } catch (const std::runtime_error&) {
       }
     }
