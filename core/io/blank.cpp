@@ -1937,33 +1937,27 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
                         double margin) {
   if (trims.empty()) throw ExportInputError("no --trim: give the surface the part is trimmed at");
   if (!(std::abs(margin) <= kFar)) throw ExportInputError("--margin " + g(margin) + ": beyond 1e6 (m)");
-  // Each polygon's outline moved by the margin: its rings and vertices,
-  // or why it is taken by its distance instead.
+  // Each polygon's outline moved by the margin (found once for every
+  // ply): its rings and vertices, or why it is taken by its distance.
+  std::vector<std::string> why;
+  const std::vector<TrimSurface> cut = with_margin(trims, margin, &why);
   nlohmann::json margins = nlohmann::json::object();
-  std::vector<TrimSurface> cut = trims;  // the polygons' outlines moved by the margin, found once
-  for (TrimSurface& t : cut) {
+  std::size_t k = 0;
+  for (const TrimSurface& t : cut) {
     if (t.kind != TrimSurface::Kind::Polygon || margin == 0) continue;
     nlohmann::json j;
-    try {
-      auto rings = polygon_margin_rings(t, margin);
-      if (rings.empty())
+    if (t.margin_in_rings) {
+      if (t.rings.empty())
         throw ExportInputError("--margin " + g(margin) + " moves the outline of '" + t.text +
                                "' in by half its width or more: nothing of it is left");
       std::size_t vertices = 0;
-      for (const auto& r : rings) vertices += r.size();
-      j["method"] = "moved";
-      j["rings"] = rings.size();
-      j["vertices"] = vertices;
-      j["fallback"] = nullptr;
-      t.rings = std::move(rings);
-      t.margin_in_rings = true;
-    } catch (const ExportInputError&) {
-      throw;
-    } catch (const std::runtime_error& e) {
-      j["method"] = "distance";
-      j["fallback"] = e.what();
+      for (const auto& r : t.rings) vertices += r.size();
+      j = {{"method", "moved"}, {"rings", t.rings.size()}, {"vertices", vertices}, {"fallback", nullptr}};
+    } else {
+      j = {{"method", "distance"}, {"fallback", why[k]}};
     }
     margins[t.text] = j;
+    ++k;
   }
   FramePlies frame = read_frame_plies(dir, time, whole, false);
   for (const FramePly& d : frame.plies)
