@@ -10,12 +10,16 @@ running, with one line naming a JSON path) or 3 (stopped with a message),
 within the timeout. Anything else (a crash, a signal, a hang, an input
 error without a JSON path) is listed and makes the script exit 1.
 
+The job itself must run (exit 0) for --end S first; otherwise the script
+says why and exits 2, since every variant would be refused for the same
+reason.
+
 Usage: scripts/robustness.py [JOB] [--end S] [--timeout S] [--values a,b,...] [--structure] [--threads N]
 (after a build; JOB defaults to the hemisphere scene: about 15 minutes for
 the numbers, a few for the structure, whose variants are mostly refused
-at once; the variants are written
-to a temporary folder, so a job that names files by relative paths needs
-them made absolute first).
+at once). The variants are written to a temporary folder: every string of
+the job that names a file or folder relative to the job's own folder (a
+mesh, a material card, a plugin path) is made absolute first.
 """
 import argparse
 import copy
@@ -40,6 +44,30 @@ def paths(node, path=()):
     for k, v in items:
         yield path + (k,), v
         yield from paths(v, path + (k,))
+
+
+def absolute_paths(node, folder):
+    """Every string below node that names an existing file or folder
+    relative to folder, made absolute (in place)."""
+    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+    for k, v in items:
+        if isinstance(v, str) and v and not os.path.isabs(v) and os.path.exists(os.path.join(folder, v)):
+            node[k] = os.path.abspath(os.path.join(folder, v))
+        else:
+            absolute_paths(v, folder)
+
+
+def run(job, d, threads, timeout):
+    """Runs job from folder d: (exit status or "timeout", the last error line)."""
+    job_path = os.path.join(d, "job.json")
+    json.dump(job, open(job_path, "w"))
+    cmd = [EXE, "run", job_path, "--out", os.path.join(d, "out"), "--quiet", "--threads", str(threads)]
+    try:
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return "timeout", ""
+    errors = [l for l in r.stderr.splitlines() if l.startswith("error:")]
+    return r.returncode, (errors or r.stderr.strip().splitlines() or [""])[-1]
 
 
 def is_number(v):
@@ -79,6 +107,7 @@ def main():
     ap.add_argument("--threads", type=int, default=1, help="threads of every run")
     args = ap.parse_args()
     base = json.load(open(args.job))
+    absolute_paths(base, os.path.dirname(os.path.abspath(args.job)))
     base["time"]["end"] = args.end
     output = base.setdefault("output", {})
     output["interval"] = args.end / 2
@@ -87,16 +116,12 @@ def main():
     values = [float(v) for v in args.values.split(",")] if args.values else []
     counts, bad = {}, []
     with tempfile.TemporaryDirectory() as d:
-        job_path = os.path.join(d, "job.json")
+        code, last = run(base, d, args.threads, args.timeout)
+        if code != 0:
+            print("the job itself does not run to %g s (exit status %s): %s" % (args.end, code, last[:300]))
+            sys.exit(2)
         for what, job in variants(base, values, args.structure):
-            json.dump(job, open(job_path, "w"))
-            cmd = [EXE, "run", job_path, "--out", os.path.join(d, "out"), "--quiet", "--threads", str(args.threads)]
-            try:
-                r = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout)
-                errors = [l for l in r.stderr.splitlines() if l.startswith("error:")]
-                code, last = r.returncode, (errors or r.stderr.strip().splitlines() or [""])[-1]
-            except subprocess.TimeoutExpired:
-                code, last = "timeout", ""
+            code, last = run(job, d, args.threads, args.timeout)
             counts[code] = counts.get(code, 0) + 1
             if code == 3:
                 print("stopped %s: %s" % (what, last[:200]), flush=True)
