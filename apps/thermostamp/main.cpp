@@ -40,7 +40,10 @@ constexpr const char* kUsage = R"(usage:
   thermostamp blank DIR --trim SURFACE [--trim SURFACE ...] [--margin M] [--time T] [--out FOLDER] [--whole]
                   # cut patterns
   thermostamp --version
+)";
 
+// What --help adds to the usage: the options and the exit statuses.
+constexpr const char* kDetails = R"(
 --keep-subnormals: keep numbers below 2.2e-308 as the processor's slow
 subnormals instead of flushing them to zero during the run (the default)
 --restart: continue the run from the checkpoint in its output folder
@@ -229,7 +232,12 @@ Args parse(int argc, char** argv) {
     } else if (s == "--markdown") {
       a.markdown = true;
     } else if (s.rfind("--", 0) == 0) {
-      throw UsageError("unknown option '" + s + "'");
+      // The nearest option of the command (of any command where it is unknown).
+      std::vector<std::string> known;
+      for (const auto& [c, opts] : command_options())
+        if (c == a.command || !command_options().count(a.command)) known.insert(known.end(), opts.begin(), opts.end());
+      const std::string dym = ts::did_you_mean(s, known);
+      throw UsageError("unknown option '" + s + "'" + (dym.empty() ? "" : "; " + dym));
     } else {
       a.positional.push_back(s);
       continue;
@@ -496,7 +504,7 @@ int main(int argc, char** argv) {
     }
     if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h" ||
                       std::string(argv[1]) == "help")) {
-      std::cout << kUsage;
+      std::cout << kUsage << kDetails;
       return 0;
     }
     const Args a = parse(argc, argv);
@@ -577,9 +585,13 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (a.command == "blank") return cmd_blank(a);
-    throw UsageError("unknown command '" + a.command + "'");
+    std::vector<std::string> commands;
+    for (const auto& c : command_options()) commands.push_back(c.first);
+    const std::string dym = ts::did_you_mean(a.command, commands);
+    throw UsageError("unknown command '" + a.command + "'" + (dym.empty() ? "" : "; " + dym));
   } catch (const UsageError& e) {
-    std::cerr << "error: " << e.what() << "\n" << kUsage;
+    std::cerr << "error: " << e.what() << "\n"
+              << kUsage << "(thermostamp --help: what each option does, and the exit statuses)\n";
     return 2;
   } catch (const ts::JobError& e) {
     std::cerr << "error: " << e.what() << "\n";

@@ -66,13 +66,18 @@ TEST(Cli, Version) {
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
-// is wrong, then the usage; an option of another command is one of them.
+// is wrong (with the nearest command or option where one is near), then the
+// usage, whose options --help explains; an option of another command is one
+// of them.
 TEST(Cli, UsageErrorsNameWhatIsWrong) {
   const std::string job = q(demo_job());
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"", "error: no command given"},
-      {"rnu " + job, "error: unknown command 'rnu'"},
+      {"rnu " + job, "error: unknown command 'rnu'; did you mean 'run'?"},
+      {"frobnicate " + job, "error: unknown command 'frobnicate'"},
       {"run " + job + " --frobnicate", "error: unknown option '--frobnicate'"},
+      {"run " + job + " --thread 2", "error: unknown option '--thread'; did you mean '--threads'?"},
+      {"export a --timme 2", "error: unknown option '--timme'; did you mean '--time'?"},
       {"run " + job + " --threads 0", "error: --threads expects a positive integer, found '0'"},
       {"run " + job + " --out", "error: --out needs a value"},
       {"validate " + job + " --against x", "error: --against does not apply to 'validate'; its options: --set"},
@@ -87,7 +92,14 @@ TEST(Cli, UsageErrorsNameWhatIsWrong) {
     EXPECT_EQ(r.exit_code, 2) << args;
     EXPECT_EQ(r.err.substr(0, r.err.find('\n')), message) << args;
     EXPECT_NE(r.err.find("usage:"), std::string::npos) << args;
+    EXPECT_NE(r.err.find("thermostamp --help"), std::string::npos) << args;
+    EXPECT_EQ(r.err.find("--keep-subnormals: keep numbers"), std::string::npos) << args;
   }
+  const auto help = thermostamp("--help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("usage:"), std::string::npos);
+  EXPECT_NE(help.out.find("--keep-subnormals: keep numbers"), std::string::npos);
+  EXPECT_NE(help.out.find("exit status: 0 success"), std::string::npos);
 }
 
 TEST(Cli, PluginsListsEveryInTreePlugin) {
