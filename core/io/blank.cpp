@@ -622,7 +622,7 @@ class PlanPolygon {
       const int c0 = index(0, std::min(e.a[0], e.b[0])), c1 = index(0, std::max(e.a[0], e.b[0]));
       const int r0 = index(1, std::min(e.a[1], e.b[1])), r1 = index(1, std::max(e.a[1], e.b[1]));
       for (int r = r0; r <= r1; ++r)
-        for (int c = c0; c <= c1; ++c) cells_[static_cast<std::size_t>(r * n_ + c)].push_back(static_cast<int>(s));
+        for (int c = c0; c <= c1; ++c) cells_[static_cast<std::size_t>(r) * n_ + c].push_back(static_cast<int>(s));
     }
   }
 
@@ -634,7 +634,7 @@ class PlanPolygon {
     bool in = false;
     const int r = index(1, y);
     for (int c = index(0, x); c < n_; ++c)
-      for (const int s : cells_[static_cast<std::size_t>(r * n_ + c)]) {
+      for (const int s : cells_[static_cast<std::size_t>(r) * n_ + c]) {
         const Side& e = sides[static_cast<std::size_t>(s)];
         if ((e.a[1] > y) == (e.b[1] > y)) continue;
         const double xc = std::clamp(e.a[0] + (y - e.a[1]) * (e.b[0] - e.a[0]) / (e.b[1] - e.a[1]),
@@ -650,7 +650,7 @@ class PlanPolygon {
     if (x1 < lo_[0] || x0 > hi_[0] || y1 < lo_[1] || y0 > hi_[1]) return;
     for (int r = index(1, y0); r <= index(1, y1); ++r)
       for (int c = index(0, x0); c <= index(0, x1); ++c) {
-        const auto& cell = cells_[static_cast<std::size_t>(r * n_ + c)];
+        const auto& cell = cells_[static_cast<std::size_t>(r) * n_ + c];
         out.insert(out.end(), cell.begin(), cell.end());
       }
     std::sort(out.begin(), out.end());
@@ -892,7 +892,7 @@ class MarginOutline {
   template <class F>
   void for_cells(double x0, double x1, double y0, double y1, F&& f) const {
     for (int r = index(1, y0); r <= index(1, y1); ++r)
-      for (int c = index(0, x0); c <= index(0, x1); ++c) f(static_cast<std::size_t>(r * n_ + c));
+      for (int c = index(0, x0); c <= index(0, x1); ++c) f(static_cast<std::size_t>(r) * n_ + c);
   }
 
   // Each edge cut where another crosses it (or, along the same line,
@@ -974,14 +974,14 @@ class MarginOutline {
   // part for m > 0; inside the polygon and no part for m < 0).
   bool in_region(const P2& q) const {
     bool deep = false;
-    const auto& cell = part_cells_[static_cast<std::size_t>(index(1, q[1]) * n_ + index(0, q[0]))];
+    const auto& cell = part_cells_[static_cast<std::size_t>(index(1, q[1])) * n_ + index(0, q[0])];
     for (const int k : cell) deep = deep || deep_inside(parts_[static_cast<std::size_t>(k)], q);
     return m_ > 0 ? deep || poly_.inside(q[0], q[1]) : !deep && poly_.inside(q[0], q[1]);
   }
 
   bool kept(const P2& q, int own) const {
     if (poly_.inside(q[0], q[1]) != (m_ < 0)) return false;
-    const auto& cell = part_cells_[static_cast<std::size_t>(index(1, q[1]) * n_ + index(0, q[0]))];
+    const auto& cell = part_cells_[static_cast<std::size_t>(index(1, q[1])) * n_ + index(0, q[0])];
     for (const int k : cell)
       if (k != own && deep_inside(parts_[static_cast<std::size_t>(k)], q)) return false;
     return true;
@@ -1856,9 +1856,11 @@ std::array<Vec, 2> plane_axes(const Vec& n) {
 double mark_spacing(double extent) {
   const double want = std::max(extent / 15, 1e-3);
   double best = 1e-3;
-  for (double p = 1e-3; p < 1e3; p *= 10)
+  for (int k = -3; k < 3; ++k) {
+    const double p = std::pow(10.0, k);
     for (const double f : {1.0, 2.0, 5.0})
       if (std::abs(std::log(f * p / want)) < std::abs(std::log(best / want))) best = f * p;
+  }
   return best;
 }
 
