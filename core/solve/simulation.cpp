@@ -311,6 +311,10 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) try : job_(job)
   }
   build_parts();
   build_tools();
+  // Before the thermal and mechanical set-up, whose checks such values
+  // often fail first (a step too small to reach the end).
+  warn_large_meshes();
+  warn_unlikely_units();
   build_thermal();
   if (!job_.thermal) {  // isothermal: one constant value per node
     for (auto& st : parts_) {
@@ -332,7 +336,6 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) try : job_(job)
   }
   build_probes();
   warn_plies_behind_tools();
-  warn_large_meshes();
 } catch (const JobError& e) {
   // A value a material took from its card: the error names the card.
   throw with_material_card(job, e);
@@ -470,6 +473,47 @@ void Simulation::warn_large_meshes() const {
       logger("job")->warn("{}/surface: the tool's mesh is {:.4g} m across: is '{}' in millimetres? (\"scale\": "
                           "0.001 reads it in metres)",
                           job_.tools[t].pointer, s, job_.tools[t].surface.file.filename().string());
+}
+
+// Values that are most often given in another unit than the job's (m, kg,
+// J, degC): a ply as thick as a good part of its width (mm for m), a
+// density of a few units (g/cm^3 for kg/m^3), a specific heat of a few
+// units (J/(g K) or kJ/(kg K) for J/(kg K)), a temperature above 450 degC
+// (kelvin for degC). Warnings, since none of them is impossible.
+void Simulation::warn_unlikely_units() const {
+  for (const auto& st : parts_)
+    if (const double span = box_span(st->x0); span > 0 && st->def->thickness > 0.1 * span)
+      logger("job")->warn("{}/thickness: {:.4g} m for a ply {:.4g} m across: the shell model takes plies thin against "
+                          "their extent; is it in millimetres? (lengths are in m)",
+                          st->def->pointer, st->def->thickness, span);
+  for (const MaterialDef& m : job_.materials) {
+    if (m.density > 0 && m.density < 100)
+      logger("job")->warn("{}/density: {:.4g} kg/m^3: is it in g/cm^3? ({:.4g} g/cm^3 is {:.4g} kg/m^3)", m.pointer,
+                          m.density, m.density, 1000 * m.density);
+    if (m.specific_heat > 0 && m.specific_heat < 50)
+      logger("job")->warn("{}/specific_heat: {:.4g} J/(kg K): is it in J/(g K) or kJ/(kg K)? ({:.4g} kJ/(kg K) is "
+                          "{:.4g} J/(kg K))",
+                          m.pointer, m.specific_heat, m.specific_heat, 1000 * m.specific_heat);
+  }
+  constexpr double kHot = 450.0;  // degC
+  auto hot = [&](const std::string& where, double t) {
+    if (t > kHot)
+      logger("job")->warn("{}: {:.6g} degC: is it in kelvin? (temperatures are in degC; {:.6g} K is {:.6g} degC)", where,
+                          t, t, t - 273.15);
+    return t > kHot;
+  };
+  for (const auto& st : parts_)
+    if (st->def->initial_results.empty()) hot(st->def->pointer + "/initial_temperature", st->def->initial_temperature);
+  for (const ToolDef& t : job_.tools) {
+    if (t.temperature_table.empty()) hot(t.pointer + "/temperature", t.temperature);
+    for (std::size_t r = 0; r < t.temperature_table.size(); ++r)
+      if (hot(t.pointer + "/temperature/" + std::to_string(r) + "/1", t.temperature_table[r][1])) break;
+  }
+  for (const HeatExchangeDef& h : job_.heat_exchanges) {
+    if (h.ambient_table.empty()) hot(h.pointer + "/ambient", h.ambient);
+    for (std::size_t r = 0; r < h.ambient_table.size(); ++r)
+      if (hot(h.pointer + "/ambient/" + std::to_string(r) + "/1", h.ambient_table[r][1])) break;
+  }
 }
 
 std::string Simulation::fastest_node() const {

@@ -762,6 +762,38 @@ TEST(Cli, MeshFilesInMillimetresTakeAScale) {
   }
 }
 
+// Values given in another unit than the job's (mm for m, g/cm^3 for kg/m^3,
+// kJ/(kg K) for J/(kg K), kelvin for degC) are warned of, each at its JSON
+// path with the value it would be in the job's unit, before the checks that
+// such values often fail (here the density and specific heat make the
+// explicit thermal step too small); the shipped job gives none of these
+// warnings.
+TEST(Cli, UnlikelyUnitsAreWarned) {
+  const auto job = source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json";
+  const auto r = thermostamp("validate " + q(job) +
+                             " --set parts.1.thickness=0.5 --set materials.pa66_cf_ud.density=1.294"
+                             " --set materials.pa66_cf_ud.specific_heat=1.775 --set parts.0.initial_temperature=573.15"
+                             " --set 'tools.2.temperature=[[0, 533.15], [1, 300]]'");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const std::size_t error = r.err.find("error: /solvers/thermal: the thermal step");
+  EXPECT_NE(error, std::string::npos) << r.err;
+  for (const std::string w :
+       {"/parts/1/thickness: 0.5 m for a ply 0.15 m across: the shell model takes plies thin against their extent; "
+        "is it in millimetres? (lengths are in m)",
+        "/materials/pa66_cf_ud/density: 1.294 kg/m^3: is it in g/cm^3? (1.294 g/cm^3 is 1294 kg/m^3)",
+        "/materials/pa66_cf_ud/specific_heat: 1.775 J/(kg K): is it in J/(g K) or kJ/(kg K)? (1.775 kJ/(kg K) is "
+        "1775 J/(kg K))",
+        "/parts/0/initial_temperature: 573.15 degC: is it in kelvin? (temperatures are in degC; 573.15 K is 300 "
+        "degC)",
+        "/tools/2/temperature/0/1: 533.15 degC: is it in kelvin? (temperatures are in degC; 533.15 K is 260 degC)"})
+    EXPECT_LT(r.err.find("[warning] " + w), error) << w << "\n" << r.err;
+  for (const std::string none : {"/parts/0/thickness", "/parts/1/initial_temperature", "/tools/0/temperature"})
+    EXPECT_EQ(r.err.find(none), std::string::npos) << none << "\n" << r.err;
+  const auto plain = thermostamp("validate " + q(job));
+  EXPECT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_EQ(plain.err.find("is it in"), std::string::npos) << plain.err;
+}
+
 // The results draw the tools: each tool's surface once under /tools (the
 // die's plane over the plies; the punch and holder of the hemisphere
 // revolved), each frame the nodes of the tools that move, where tools.csv
