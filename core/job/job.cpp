@@ -332,6 +332,18 @@ double rows_mean(const std::vector<std::array<double, 2>>& tab, double t0, doubl
   return sum / (t1 - t0);
 }
 
+std::array<double, 3> MotionDef::force_at(double t) const {
+  if (force_table.empty()) return force;
+  const auto& tab = force_table;
+  if (t <= tab.front()[0]) return {tab.front()[1], tab.front()[2], tab.front()[3]};
+  if (t >= tab.back()[0]) return {tab.back()[1], tab.back()[2], tab.back()[3]};
+  const auto it = std::upper_bound(tab.begin(), tab.end(), t, [](double v, const auto& row) { return v < row[0]; });
+  const auto& b = *it;
+  const auto& a = *(it - 1);
+  const double s = (t - a[0]) / (b[0] - a[0]);
+  return {a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2]), a[3] + s * (b[3] - a[3])};
+}
+
 double ToolDef::temperature_over(double t0, double t1) const {
   return temperature_table.empty() ? temperature : rows_mean(temperature_table, t0, t1);
 }
@@ -827,10 +839,42 @@ void parse_job_into(Job& job) {
           }
         } else {
           t.motion.kind = MotionDef::Kind::Force;
-          const auto f = mo.reals("force", 3);
-          t.motion.force = {f[0], f[1], f[2]};
-          if (f[0] * f[0] + f[1] * f[1] + f[2] * f[2] == 0.0)
-            throw JobError(mo.at("force"), "must not be the zero vector (the tool moves along the force)");
+          const json& fj = mo.raw("force");
+          const std::string fp = mo.at("force");
+          if (fj.is_array() && !fj.empty() && fj.front().is_array()) {  // rows [t, fx, fy, fz]
+            auto& tab = t.motion.force_table;
+            for (std::size_t k = 0; k < fj.size(); ++k) {
+              const auto row = as_reals(fj[k], pointer_append(fp, k), 4);
+              if (k > 0 && !(row[0] > tab.back()[0]))
+                throw JobError(pointer_append(fp, k), "times must increase from row to row");
+              tab.push_back({row[0], row[1], row[2], row[3]});
+            }
+            // The tool moves along one line: every row along the first that
+            // is not zero (either way, or zero).
+            const std::array<double, 4>* first = nullptr;
+            for (std::size_t k = 0; k < tab.size(); ++k) {
+              const auto& r = tab[k];
+              const double n2 = r[1] * r[1] + r[2] * r[2] + r[3] * r[3];
+              if (n2 == 0.0) continue;
+              if (!first) {
+                first = &r;
+                t.motion.force = {r[1], r[2], r[3]};
+                continue;
+              }
+              const auto& a = *first;
+              const double a2 = a[1] * a[1] + a[2] * a[2] + a[3] * a[3];
+              const double cx = a[2] * r[3] - a[3] * r[2], cy = a[3] * r[1] - a[1] * r[3], cz = a[1] * r[2] - a[2] * r[1];
+              if (cx * cx + cy * cy + cz * cz > 1e-18 * a2 * n2)
+                throw JobError(pointer_append(fp, k), "every row's force must lie along the first row that is not "
+                                                      "zero (the tool moves along one line)");
+            }
+            if (!first) throw JobError(fp, "must not be zero in every row (the tool moves along the force)");
+          } else {
+            const auto f = mo.reals("force", 3);
+            t.motion.force = {f[0], f[1], f[2]};
+            if (f[0] * f[0] + f[1] * f[1] + f[2] * f[2] == 0.0)
+              throw JobError(fp, "must not be the zero vector (the tool moves along the force)");
+          }
           t.motion.mass = mo.real("mass", std::nullopt, 0.0, true);
           t.motion.damping = mo.real("damping", 0.0, 0.0);
         }

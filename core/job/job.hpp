@@ -125,8 +125,16 @@ struct MotionDef {
   enum class Kind { Fixed, Velocity, Displacement, Force } kind = Kind::Fixed;
   std::array<double, 3> velocity{0, 0, 0};
   std::vector<std::array<double, 4>> table;  // t, dx, dy, dz
+  // A force-controlled tool: the force (N), constant, or with force_table
+  // the first row's that is not zero (its direction, along which the tool
+  // moves; every row lies along it).
   std::array<double, 3> force{0, 0, 0};
+  // Force over time: rows [t (s), fx, fy, fz (N)], times increasing; linear
+  // between rows, held before the first and after the last. Empty: constant.
+  std::vector<std::array<double, 4>> force_table;
   double mass = 0, damping = 0;
+  // The force at time t (N): force, or force_table's there.
+  std::array<double, 3> force_at(double t) const;
 };
 
 struct ToolDef {

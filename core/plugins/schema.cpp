@@ -321,7 +321,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
       {"oneOf",
        {{{"type", "object"}, {"required", {"velocity"}}, {"properties", {{"velocity", vec(3)}}}, {"additionalProperties", false}},
         {{"type", "object"}, {"required", {"displacement"}}, {"properties", {{"displacement", {{"type", "array"}, {"items", {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 4}, {"maxItems", 4}}}, {"description", "rows [t, dx, dy, dz]"}}}}}, {"additionalProperties", false}},
-        {{"type", "object"}, {"required", {"force", "mass"}}, {"properties", {{"force", vec(3)}, {"mass", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[kg]"}}}, {"damping", {{"type", "number"}, {"minimum", 0}, {"description", "[N s/m]"}}}}}, {"additionalProperties", false}}}}};
+        {{"type", "object"}, {"required", {"force", "mass"}}, {"properties", {{"force", {{"oneOf", {vec(3), {{"type", "array"}, {"items", {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 4}, {"maxItems", 4}}}, {"description", "rows [t, fx, fy, fz]: the force over time, along one line"}}}}}}, {"mass", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[kg]"}}}, {"damping", {{"type", "number"}, {"minimum", 0}, {"description", "[N s/m]"}}}}}, {"additionalProperties", false}}}}};
   const json tool = {{"type", "object"},
                      {"required", {"name", "surface"}},
                      {"properties", {{"name", {{"type", "string"}}}, {"surface", surface}, {"motion", motion}, {"temperature", temperature_or_rows}}},

@@ -378,8 +378,17 @@ std::vector<std::string> Simulation::tool_motion_lines() const {
                 std::to_string(m.table.size()) + " rows)";
       lines.push_back(line);
     } else if (m.kind == MotionDef::Kind::Force) {
-      lines.push_back(head + "pressed by " + fmt_vec3(m.force[0], m.force[1], m.force[2]) + " N, mass " + fmt_g(m.mass, 4) +
-                      " kg, damper " + fmt_g(m.damping, 4) + " N s/m, from its surface's position");
+      std::string by = fmt_vec3(m.force[0], m.force[1], m.force[2]) + " N";
+      if (!m.force_table.empty()) {
+        const auto& a = m.force_table.front();
+        const auto& z = m.force_table.back();
+        by = fmt_vec3(a[1], a[2], a[3]) + " N at t = 0 (the first row)";
+        if (m.force_table.size() > 1)
+          by += ", " + fmt_vec3(z[1], z[2], z[3]) + " N from t = " + fmt_g(z[0], 4) + " s (the last of " +
+                std::to_string(m.force_table.size()) + " rows)";
+      }
+      lines.push_back(head + "pressed by " + by + ", mass " + fmt_g(m.mass, 4) + " kg, damper " + fmt_g(m.damping, 4) +
+                      " N s/m, from its surface's position");
     }
   }
   return lines;

@@ -1045,9 +1045,12 @@ void RigidTool::advance(double t, double dt, double dt_avg, const std::array<dou
   const MotionDef& m = def_->motion;
   if (m.kind == MotionDef::Kind::Fixed) return;
   if (m.kind == MotionDef::Kind::Force) {
-    // Translation along the force: M a = |F| + dir . R - c v.
+    // Translation along the force: M a = F + dir . R - c v, F the force at
+    // t along dir (the direction of the force, or of its rows' first that
+    // is not zero).
     const Vec3 dir = sdk::normalized({m.force[0], m.force[1], m.force[2]});
-    const double F = sdk::norm({m.force[0], m.force[1], m.force[2]});
+    const auto f = m.force_at(t);
+    const double F = sdk::dot(dir, {f[0], f[1], f[2]});
     double v = sdk::dot(v_, dir);
     v += dt_avg * (F + sdk::dot(dir, {reaction[0], reaction[1], reaction[2]}) - m.damping * v) / m.mass;
     for (int d = 0; d < 3; ++d) {

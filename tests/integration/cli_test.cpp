@@ -62,7 +62,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.43.1 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.44.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -599,6 +599,26 @@ TEST(Cli, ValidateTellsHowToolsMove) {
         "tool 'holder': pressed by (0, 0, -60) N, mass 2 kg, damper 4000 N s/m, from its surface's position\n"})
     EXPECT_NE(hat.out.find(line), std::string::npos) << hat.out;
   EXPECT_EQ(hat.out.find("tool 'die': displaced"), std::string::npos) << hat.out;
+  // A holder force that follows rows: its first and last; rows that do not
+  // lie along one line, or all zero, are refused at the row.
+  const std::string hat_job = q(source_dir() / "examples" / "hat_channel" / "hat_channel.json");
+  const auto rows = thermostamp("validate " + hat_job + " --set 'tools.2.motion.force=[[0, 0, 0, -20], [0.1, 0, 0, -60]]'");
+  ASSERT_EQ(rows.exit_code, 0) << rows.err;
+  EXPECT_NE(rows.out.find("tool 'holder': pressed by (0, 0, -20) N at t = 0 (the first row), (0, 0, -60) N from t = "
+                          "0.1 s (the last of 2 rows), mass 2 kg, damper 4000 N s/m, from its surface's position\n"),
+            std::string::npos)
+      << rows.out;
+  for (const auto& [force, message] : std::vector<std::pair<std::string, std::string>>{
+           {"[[0, 0, 0, -20], [0.1, 0, 5, -60]]",
+            "error: /tools/2/motion/force/1: every row's force must lie along the first row that is not zero (the "
+            "tool moves along one line)"},
+           {"[[0, 0, 0, 0], [0.1, 0, 0, 0]]",
+            "error: /tools/2/motion/force: must not be zero in every row (the tool moves along the force)"},
+           {"[[0.1, 0, 0, -20], [0.1, 0, 0, -60]]", "error: /tools/2/motion/force/1: times must increase from row to row"}}) {
+    const auto bad = thermostamp("validate " + hat_job + " --set 'tools.2.motion.force=" + force + "'");
+    EXPECT_EQ(bad.exit_code, 2) << force;
+    EXPECT_EQ(bad.err.substr(0, bad.err.find('\n')), message) << bad.err;
+  }
   const auto hemi = thermostamp("validate " + q(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json"));
   ASSERT_EQ(hemi.exit_code, 0) << hemi.err;
   EXPECT_NE(hemi.out.find("tool 'punch': moves at (0, 0, -0.01) m/s from its surface's position\n"), std::string::npos)
@@ -3879,8 +3899,8 @@ namespace {
 
 // `thermostamp schema` describes every shipped job, a specific heat given
 // as rows and crystallisation kinetics with melting rows, and rejects a
-// typo, a row of three numbers, an incomplete rate, a melting share above 1
-// and an unknown probe quantity (validated with Debian's python3-jsonschema).
+// typo, a row of three numbers, an incomplete rate, a melting share above 1,
+// a holder force row of three numbers and an unknown probe quantity (validated with Debian's python3-jsonschema).
 TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   const auto dir = temp_dir("schema");
   const auto r = thermostamp("schema");
@@ -3952,6 +3972,12 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   json reorder_generator = with_checkpoints;  // reorder is for mesh files
   reorder_generator["parts"][0]["mesh"]["reorder"] = true;
   std::ofstream(dir / "reorder_generator.json") << reorder_generator.dump();
+  // A holder force that follows rows, and one with a row of three numbers.
+  json holder_rows = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json");
+  holder_rows["tools"][2]["motion"]["force"] = {{0.0, 0.0, 0.0, -100.0}, {1.0, 0.0, 0.0, -500.0}};
+  std::ofstream(dir / "holder_rows.json") << holder_rows.dump();
+  holder_rows["tools"][2]["motion"]["force"] = {{0.0, 0.0, -100.0}, {1.0, 0.0, -500.0}};
+  std::ofstream(dir / "bad_holder_rows.json") << holder_rows.dump();
   // A probe with a quantity the kernel does not know.
   json probe = with_checkpoints;
   probe["output"]["probes"][0]["quantities"] = {"temperature_mean", "fibre_strian"};
@@ -3963,7 +3989,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
   good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " " + q(dir / "kinetics.json") + " " +
-          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " " + q(dir / "mesh_file.json") + " " + q(dir / "matrix_latent.json") + " ";
+          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " " + q(dir / "mesh_file.json") + " " + q(dir / "matrix_latent.json") + " " + q(dir / "holder_rows.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_k_table.json") + " >/dev/null").c_str()), 0);
@@ -3976,6 +4002,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   EXPECT_NE(std::system((py + q(dir / "probe.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "reorder_generator.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "both_latent.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "bad_holder_rows.json") + " >/dev/null").c_str()), 0);
 }
 
 }  // namespace

@@ -153,6 +153,87 @@ TEST(Contact, PlyPressedBetweenTwoPlanes) {
               r.result.mechanical_steps);
 }
 
+// A holder whose force follows rows [t, fx, fy, fz] (linear between them,
+// held after the last). (a) Alone, 5 mm above the ply, under the ramp
+// F(t) = -a t along z with mass m and damper c: m v' = -a t - c v, so
+// u(t) = -(a / c) (t^2 / 2 - (m / c) t + (m / c)^2 (1 - exp(-c t / m))).
+// Required within 1e-3 of u at the end: the scheme takes the damper at the
+// half-step velocity before it, a first-order error of about c dt / m
+// (2e-4 here). The same holder under the constant force a t_end, the
+// closed form of a constant force, within the same 1e-3. (b) The ply
+// pressed between the die and the holder as in PlyPressedBetweenTwoPlanes,
+// the force F1 up to 6 ms, then rising to F2 = 2 F1 at 8 ms and held: the
+// die and the holder carry F1 at 5 ms and F2 at the end within 1 %, as the
+// constant force does.
+TEST(Contact, HolderForceFollowsItsRows) {
+  const double m = 0.1, c = 20.0, a = 925.0, t_end = 0.01, tau = m / c;
+  auto holder_alone = [&](const json& force) {
+    json j = base_job(t_end);
+    j["parts"] = json::array({ply("ply", 0.0)});
+    j["tools"] = {plane("die", -0.5 * kH, 1), plane("holder", 0.5 * kH + 0.005, -1)};
+    j["tools"][1]["motion"] = {{"force", force}, {"mass", m}, {"damping", c}};
+    j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}},
+                         {{"type", "contact"}, {"between", {"holder", "ply"}}}};
+    j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+    const JobRun r = run_json(j, 1);
+    EXPECT_TRUE(r.result.ok) << r.result.error;
+    return -tool_value(r.result, 1, 2, false);
+  };
+  const double ramp = holder_alone(json::array({json::array({0, 0, 0, 0}), json::array({t_end, 0, 0, -a * t_end})}));
+  const double ramp_exact = (a / c) * (t_end * t_end / 2 - tau * t_end + tau * tau * (1 - std::exp(-t_end / tau)));
+  const double F0 = a * t_end;
+  const double constant = holder_alone(json::array({0, 0, -F0}));
+  const double constant_exact = (F0 / c) * (t_end - tau * (1 - std::exp(-t_end / tau)));
+  std::printf("holder alone: ramp %.8g m (closed form %.8g, %.2e), constant force %.8g m (closed form %.8g, %.2e)\n",
+              ramp, ramp_exact, ramp / ramp_exact - 1, constant, constant_exact, constant / constant_exact - 1);
+  EXPECT_NEAR(ramp / ramp_exact, 1.0, 1e-3);
+  EXPECT_NEAR(constant / constant_exact, 1.0, 1e-3);
+  EXPECT_LT(ramp, 0.005);  // it never reached the ply
+
+  const double pressure = 0.2e6, F1 = pressure * kSide * kSide, F2 = 2 * F1;
+  json j = base_job(0.015);
+  j["parts"] = json::array({ply("ply", 0.0)});
+  j["tools"] = {plane("die", -0.5 * kH, 1), plane("holder", 0.5 * kH, -1)};
+  j["tools"][1]["motion"] = {
+      {"force", json::array({json::array({0, 0, 0, -F1}), json::array({0.006, 0, 0, -F1}), json::array({0.008, 0, 0, -F2})})},
+      {"mass", 0.1},
+      {"damping", 2000.0}};
+  j["interactions"] = {{{"type", "contact"}, {"between", {"die", "ply"}}},
+                       {{"type", "contact"}, {"between", {"holder", "ply"}}}};
+  j["constraints"] = {{{"type", "fix"}, {"part", "ply"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"x", "y"}}}};
+  j["solvers"]["mechanics"]["damping"] = 2000.0;
+  j["output"]["series_interval"] = 1e-4;
+  const auto dir = temp_dir("holder_force_rows");
+  const JobRun r = run_json(j, 0, dir);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  // The tools' forces at the row of tools.csv nearest to 5 ms.
+  double at5[2] = {0, 0}, best[2] = {1, 1};
+  {
+    std::ifstream csv(dir / "tools.csv");
+    std::string line;
+    std::getline(csv, line);
+    while (std::getline(csv, line)) {
+      std::vector<std::string> v;
+      std::stringstream ss(line);
+      for (std::string item; std::getline(ss, item, ',');) v.push_back(item);
+      const int k = v.at(1) == "die" ? 0 : 1;
+      const double t = std::stod(v.at(0));
+      if (std::abs(t - 0.005) < best[k]) {
+        best[k] = std::abs(t - 0.005);
+        at5[k] = std::stod(v.at(7));
+      }
+    }
+  }
+  const double die_end = -tool_value(r.result, 0, 2, true), holder_end = tool_value(r.result, 1, 2, true);
+  std::printf("holder force rows: at 5 ms die %.5g N, holder %.5g N (F1 %.4g N); at the end die %.5g N, holder "
+              "%.5g N (F2 %.4g N)\n",
+              -at5[0], at5[1], F1, die_end, holder_end, F2);
+  EXPECT_NEAR(-at5[0] / F1, 1.0, 0.01);
+  EXPECT_NEAR(at5[1] / F1, 1.0, 0.01);
+  EXPECT_NEAR(die_end / F2, 1.0, 0.01);
+  EXPECT_NEAR(holder_end / F2, 1.0, 0.01);
+}
+
 // A plane punch driven down at constant speed v from 3 mm above a ply that
 // lies on a die. Nodes farther from a tool than the contact cutoff are not
 // queried again until the tool's travel and their own motion could have
