@@ -332,9 +332,7 @@ double rows_mean(const std::vector<std::array<double, 2>>& tab, double t0, doubl
   return sum / (t1 - t0);
 }
 
-std::array<double, 3> MotionDef::force_at(double t) const {
-  if (force_table.empty()) return force;
-  const auto& tab = force_table;
+std::array<double, 3> rows_at(const std::vector<std::array<double, 4>>& tab, double t) {
   if (t <= tab.front()[0]) return {tab.front()[1], tab.front()[2], tab.front()[3]};
   if (t >= tab.back()[0]) return {tab.back()[1], tab.back()[2], tab.back()[3]};
   const auto it = std::upper_bound(tab.begin(), tab.end(), t, [](double v, const auto& row) { return v < row[0]; });
@@ -342,6 +340,10 @@ std::array<double, 3> MotionDef::force_at(double t) const {
   const auto& a = *(it - 1);
   const double s = (t - a[0]) / (b[0] - a[0]);
   return {a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2]), a[3] + s * (b[3] - a[3])};
+}
+
+std::array<double, 3> MotionDef::force_at(double t) const {
+  return force_table.empty() ? force : rows_at(force_table, t);
 }
 
 double ToolDef::temperature_over(double t0, double t1) const {
@@ -618,6 +620,17 @@ JobError with_material_card(const Job& job, const JobError& e) {
 }
 
 namespace {
+// Rows [t, x, y, z] of a non-empty array (at p), times increasing.
+std::vector<std::array<double, 4>> rows_of_four(const json& rows, const std::string& p) {
+  std::vector<std::array<double, 4>> out;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const auto row = as_reals(rows[k], pointer_append(p, k), 4);
+    if (k > 0 && !(row[0] > out.back()[0])) throw JobError(pointer_append(p, k), "times must increase from row to row");
+    out.push_back({row[0], row[1], row[2], row[3]});
+  }
+  return out;
+}
+
 void parse_job_into(Job& job) {
   const json& doc = job.document;
   ObjectReader top(doc, "");
@@ -831,24 +844,14 @@ void parse_job_into(Job& job) {
           const json& tab = mo.raw("displacement");
           const std::string tp = mo.at("displacement");
           if (!tab.is_array() || tab.empty()) throw JobError(tp, "expected rows [t, dx, dy, dz]");
-          for (std::size_t k = 0; k < tab.size(); ++k) {
-            const auto row = as_reals(tab[k], pointer_append(tp, k), 4);
-            if (k > 0 && !(row[0] > t.motion.table.back()[0]))
-              throw JobError(pointer_append(tp, k), "times must increase from row to row");
-            t.motion.table.push_back({row[0], row[1], row[2], row[3]});
-          }
+          t.motion.table = rows_of_four(tab, tp);
         } else {
           t.motion.kind = MotionDef::Kind::Force;
           const json& fj = mo.raw("force");
           const std::string fp = mo.at("force");
           if (fj.is_array() && !fj.empty() && fj.front().is_array()) {  // rows [t, fx, fy, fz]
             auto& tab = t.motion.force_table;
-            for (std::size_t k = 0; k < fj.size(); ++k) {
-              const auto row = as_reals(fj[k], pointer_append(fp, k), 4);
-              if (k > 0 && !(row[0] > tab.back()[0]))
-                throw JobError(pointer_append(fp, k), "times must increase from row to row");
-              tab.push_back({row[0], row[1], row[2], row[3]});
-            }
+            tab = rows_of_four(fj, fp);
             // The tool moves along one line: every row along the first that
             // is not zero (either way, or zero).
             const std::array<double, 4>* first = nullptr;

@@ -121,6 +121,10 @@ struct SurfaceDef {
   double scale = 1.0;                                                    // mesh: factor on the file's coordinates
 };
 
+// The value of rows [t, x, y, z] (times increasing, at least one row) at
+// time t: linear between the rows, held before the first and after the last.
+std::array<double, 3> rows_at(const std::vector<std::array<double, 4>>& rows, double t);
+
 struct MotionDef {
   enum class Kind { Fixed, Velocity, Displacement, Force } kind = Kind::Fixed;
   std::array<double, 3> velocity{0, 0, 0};

@@ -1028,16 +1028,7 @@ void RigidTool::query_kept(std::size_t n, const double* points, double cutoff, d
 std::array<double, 3> RigidTool::prescribed(double t) const {
   const MotionDef& m = def_->motion;
   if (m.kind == MotionDef::Kind::Velocity) return {m.velocity[0] * t, m.velocity[1] * t, m.velocity[2] * t};
-  if (m.kind == MotionDef::Kind::Displacement) {
-    const auto& tab = m.table;
-    if (t <= tab.front()[0]) return {tab.front()[1], tab.front()[2], tab.front()[3]};
-    if (t >= tab.back()[0]) return {tab.back()[1], tab.back()[2], tab.back()[3]};
-    const auto it = std::upper_bound(tab.begin(), tab.end(), t, [](double v, const auto& row) { return v < row[0]; });
-    const auto& b = *it;
-    const auto& a = *(it - 1);
-    const double s = (t - a[0]) / (b[0] - a[0]);
-    return {a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2]), a[3] + s * (b[3] - a[3])};
-  }
+  if (m.kind == MotionDef::Kind::Displacement) return rows_at(m.table, t);
   return u_;
 }
 
@@ -1050,7 +1041,7 @@ void RigidTool::advance(double t, double dt, double dt_avg, const std::array<dou
     // is not zero).
     const Vec3 dir = sdk::normalized({m.force[0], m.force[1], m.force[2]});
     const auto f = m.force_at(t);
-    const double F = sdk::dot(dir, {f[0], f[1], f[2]});
+    const double F = m.force_table.empty() ? sdk::norm({f[0], f[1], f[2]}) : sdk::dot(dir, {f[0], f[1], f[2]});
     double v = sdk::dot(v_, dir);
     v += dt_avg * (F + sdk::dot(dir, {reaction[0], reaction[1], reaction[2]}) - m.damping * v) / m.mass;
     for (int d = 0; d < 3; ++d) {
