@@ -475,10 +475,10 @@ def plot_tools(folder, out):
     def temps(name):
         return [float(r["temperature"]) for r in rows if r["tool"] == name and r.get("temperature") not in (None, "")]
     varying = [n for n in tools if len(set(temps(n))) > 1]
-    fig, axes = plt.subplots(1, 3 if varying else 2, figsize=(15 if varying else 10, 4))
-    a1, a2 = axes[0], axes[1]
+    fig, axes = plt.subplots(1, 4 if varying else 3, figsize=(20 if varying else 15, 4))
+    a1, a4, a2 = axes[0], axes[1], axes[2]
     if varying:
-        a3 = axes[2]
+        a3 = axes[3]
         for name in varying:
             a3.plot([float(r["time"]) for r in rows if r["tool"] == name], temps(name), label=name)
         a3.set_xlabel("time (s)")
@@ -498,9 +498,14 @@ def plot_tools(folder, out):
         if reach.max() > 1e-3:  # tools that travel (a force-controlled holder barely moves)
             d = moved[int(np.argmax(reach))] / reach.max()
             a1.plot(moved @ d * 1e3, -(f @ d), label=name)  # force resisting the motion
+        # The force over time (the press force; a holder's force rows).
+        a4.plot(t, np.linalg.norm(f, axis=1), label=name)
         a2.plot(t, [float(r["heat_J"]) for r in rs], label=name)
-    mark_stop([a2], stop_of(folder))
-    mark_restart([a2], restart_of(folder))
+    mark_stop([a4, a2], stop_of(folder))
+    mark_restart([a4, a2], restart_of(folder))
+    a4.set_xlabel("time (s)")
+    a4.set_ylabel("force of the plies on the tool (N)")
+    a4.set_title("tool forces over time")
     a1.set_xlabel("tool travel (mm)")
     a1.set_ylabel("force resisting the tool's motion (N)")
     a1.set_title("tool force against travel")
@@ -509,7 +514,7 @@ def plot_tools(folder, out):
     a2.set_title("heat exchanged with each tool")
     if not a1.lines:  # e.g. a run interrupted early
         a1.text(0.5, 0.5, "no tool has travelled 1 mm yet", ha="center", va="center", transform=a1.transAxes)
-    for a in (a1, a2):
+    for a in (a1, a4, a2):
         a.grid(alpha=0.3)
         if a.lines:
             a.legend(fontsize=8)
