@@ -8,6 +8,8 @@
 #include <limits>
 #include <sstream>
 
+#include <thermostamp/sdk/math.hpp>
+
 namespace ts {
 namespace {
 // Thermal runs whose steps would land on more frames or probe samples than
@@ -854,24 +856,21 @@ void parse_job_into(Job& job) {
             tab = rows_of_four(fj, fp);
             // The tool moves along one line: every row along the first that
             // is not zero (either way, or zero).
-            const std::array<double, 4>* first = nullptr;
+            bool found = false;
             for (std::size_t k = 0; k < tab.size(); ++k) {
-              const auto& r = tab[k];
-              const double n2 = r[1] * r[1] + r[2] * r[2] + r[3] * r[3];
-              if (n2 == 0.0) continue;
-              if (!first) {
-                first = &r;
-                t.motion.force = {r[1], r[2], r[3]};
-                continue;
-              }
-              const auto& a = *first;
-              const double a2 = a[1] * a[1] + a[2] * a[2] + a[3] * a[3];
-              const double cx = a[2] * r[3] - a[3] * r[2], cy = a[3] * r[1] - a[1] * r[3], cz = a[1] * r[2] - a[2] * r[1];
-              if (cx * cx + cy * cy + cz * cz > 1e-18 * a2 * n2)
+              const sdk::Vec3 f{tab[k][1], tab[k][2], tab[k][3]};
+              const double f2 = sdk::dot(f, f);
+              if (f2 == 0.0) continue;
+              if (!found) {
+                found = true;
+                t.motion.force = f;
+              } else if (const sdk::Vec3 c = sdk::cross(t.motion.force, f);
+                         sdk::dot(c, c) > 1e-18 * sdk::dot(t.motion.force, t.motion.force) * f2) {
                 throw JobError(pointer_append(fp, k), "every row's force must lie along the first row that is not "
                                                       "zero (the tool moves along one line)");
+              }
             }
-            if (!first) throw JobError(fp, "must not be zero in every row (the tool moves along the force)");
+            if (!found) throw JobError(fp, "must not be zero in every row (the tool moves along the force)");
           } else {
             const auto f = mo.reals("force", 3);
             t.motion.force = {f[0], f[1], f[2]};
