@@ -314,6 +314,7 @@ Simulation::Simulation(const Job& job, PluginRegistry& registry) try : job_(job)
   // Before the thermal and mechanical set-up, whose checks such values
   // often fail first (a step too small to reach the end).
   warn_large_meshes();
+  refuse_impossible_plies();
   warn_unlikely_units();
   build_thermal();
   if (!job_.thermal) {  // isothermal: one constant value per node
@@ -482,6 +483,24 @@ void Simulation::warn_large_meshes() const {
       logger("job")->warn("{}/surface: the tool's mesh is {:.4g} m across: is '{}' in millimetres? (\"scale\": "
                           "0.001 reads it in metres)",
                           job_.tools[t].pointer, s, job_.tools[t].surface.file.filename().string());
+}
+
+// A ply below a micrometre across, or as thick as it is wide, is no shell
+// the model can take: refused at its path, before the step checks that
+// such values would fail less clearly (or the run would stop on).
+void Simulation::refuse_impossible_plies() const {
+  constexpr double kSmall = 1e-6;  // m
+  for (const auto& st : parts_) {
+    const double span = box_span(st->x0);
+    if (span < kSmall)
+      throw JobError(st->def->pointer + "/mesh", "the ply is " + fmt_g(span, 4) +
+                                                     " m across: lengths are in m, and a ply below a micrometre "
+                                                     "across is no part to form");
+    if (st->def->thickness >= span)
+      throw JobError(st->def->pointer + "/thickness",
+                     fmt_g(st->def->thickness, 4) + " m for a ply " + fmt_g(span, 4) +
+                         " m across: a shell is thinner than its extent (lengths are in m)");
+  }
 }
 
 // Values that are most often given in another unit than the job's (m, kg,

@@ -232,6 +232,7 @@ class Simulation {
   std::string fastest_node() const;
   void warn_plies_behind_tools() const;
   void warn_large_meshes() const;
+  void refuse_impossible_plies() const;
   void warn_unlikely_units() const;
   void build_thermal();
   // A specific heat table (solve/heat_capacity.hpp) or crystallisation

@@ -791,14 +791,14 @@ TEST(Cli, MeshFilesInMillimetresTakeAScale) {
 TEST(Cli, UnlikelyUnitsAreWarned) {
   const auto job = source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json";
   const auto r = thermostamp("validate " + q(job) +
-                             " --set parts.1.thickness=0.5 --set materials.pa66_cf_ud.density=1.294"
+                             " --set parts.1.thickness=0.05 --set materials.pa66_cf_ud.density=1.294"
                              " --set materials.pa66_cf_ud.specific_heat=1.775 --set parts.0.initial_temperature=573.15"
                              " --set 'tools.2.temperature=[[0, 533.15], [1, 300]]'");
   EXPECT_EQ(r.exit_code, 2) << r.err;
   const std::size_t error = r.err.find("error: /solvers/thermal: the thermal step");
   EXPECT_NE(error, std::string::npos) << r.err;
   for (const std::string w :
-       {"/parts/1/thickness: 0.5 m for a ply 0.15 m across: the shell model takes plies thin against their extent; "
+       {"/parts/1/thickness: 0.05 m for a ply 0.15 m across: the shell model takes plies thin against their extent; "
         "is it in millimetres? (lengths are in m)",
         "/materials/pa66_cf_ud/density: 1.294 kg/m^3: is it in g/cm^3? (1.294 g/cm^3 is 1294 kg/m^3)",
         "/materials/pa66_cf_ud/specific_heat: 1.775 J/(kg K): is it in J/(g K) or kJ/(kg K)? (1.775 kJ/(kg K) is "
@@ -812,6 +812,32 @@ TEST(Cli, UnlikelyUnitsAreWarned) {
   const auto plain = thermostamp("validate " + q(job));
   EXPECT_EQ(plain.exit_code, 0) << plain.err;
   EXPECT_EQ(plain.err.find("is it in"), std::string::npos) << plain.err;
+}
+
+// A ply as thick as it is wide, or below a micrometre across, is refused at
+// its path before the step checks (which it would fail less clearly, or
+// pass and stop the run on its first step).
+TEST(Cli, ImpossiblePliesAreRefused) {
+  const auto job = source_dir() / "share" / "jobs" / "hemisphere_ud_2ply.json";
+  const auto thick = thermostamp("validate " + q(job) + " --set parts.1.thickness=1e30");
+  EXPECT_EQ(thick.exit_code, 2) << thick.err;
+  EXPECT_NE(thick.err.find("error: /parts/1/thickness: 1e+30 m for a ply 0.15 m across: a shell is thinner than its "
+                           "extent (lengths are in m)"),
+            std::string::npos)
+      << thick.err;
+  EXPECT_EQ(thick.err.find("is it in millimetres"), std::string::npos) << "an error, not a warning too\n" << thick.err;
+  const auto as_wide = thermostamp("validate " + q(job) + " --set parts.0.thickness=0.15");
+  EXPECT_EQ(as_wide.exit_code, 2) << as_wide.err;
+  EXPECT_NE(as_wide.err.find("error: /parts/0/thickness: 0.15 m for a ply 0.15 m across"), std::string::npos)
+      << as_wide.err;
+  const auto tiny = thermostamp("validate " + q(job) + " --set 'parts.0.mesh.size=[1e-30, 1e-30]'");
+  EXPECT_EQ(tiny.exit_code, 2) << tiny.err;
+  EXPECT_NE(tiny.err.find("error: /parts/0/mesh: the ply is 1e-30 m across: lengths are in m"), std::string::npos)
+      << tiny.err;
+  // Thin and small but possible: a ply 2 mm across, 0.5 mm thick, only warned.
+  const auto small = thermostamp("validate " + q(job) + " --set 'parts.0.mesh.size=[0.002, 0.002]'");
+  EXPECT_EQ(small.err.find("error: /parts/0/"), std::string::npos) << small.err;
+  EXPECT_NE(small.err.find("[warning] /parts/0/thickness"), std::string::npos) << small.err;
 }
 
 // The results draw the tools: each tool's surface once under /tools (the
