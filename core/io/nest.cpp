@@ -1,0 +1,266 @@
+#include "io/nest.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+namespace ts {
+namespace {
+
+using Interval = std::pair<double, double>;
+using Set = std::vector<Interval>;  // sorted by their start
+
+// Joins intervals that overlap (closed sets: those that touch too).
+void merge_closed(Set& s) {
+  std::sort(s.begin(), s.end());
+  Set out;
+  for (const Interval& i : s)
+    if (!out.empty() && i.first <= out.back().second)
+      out.back().second = std::max(out.back().second, i.second);
+    else
+      out.push_back(i);
+  s = std::move(out);
+}
+
+// Joins open intervals that overlap; two that only touch stay apart (the
+// point between them is not in the set).
+void merge_open(Set& s) {
+  std::sort(s.begin(), s.end());
+  Set out;
+  for (const Interval& i : s)
+    if (!out.empty() && i.first < out.back().second)
+      out.back().second = std::max(out.back().second, i.second);
+    else
+      out.push_back(i);
+  s = std::move(out);
+}
+
+// The extent in x of the region (inside an odd number of rings) within the
+// strip a <= y <= b: the x-ranges of its edges' pieces in the strip and its
+// spans on the strip's two lines. Each piece of the region in the strip is
+// connected, so its extent is that of its boundary, made of those.
+Set strip_extent(const std::vector<Ring2>& rings, double a, double b) {
+  Set out;
+  std::vector<double> on_a, on_b;
+  for (const Ring2& r : rings)
+    for (std::size_t k = 0; k < r.size(); ++k) {
+      const auto& p = r[k];
+      const auto& q = r[(k + 1) % r.size()];
+      const double lo = std::min(p[1], q[1]), hi = std::max(p[1], q[1]);
+      if (hi >= a && lo <= b) {
+        if (p[1] == q[1]) {
+          out.emplace_back(std::min(p[0], q[0]), std::max(p[0], q[0]));
+        } else {
+          const double ta = (a - p[1]) / (q[1] - p[1]), tb = (b - p[1]) / (q[1] - p[1]);
+          const double t0 = std::clamp(std::min(ta, tb), 0.0, 1.0), t1 = std::clamp(std::max(ta, tb), 0.0, 1.0);
+          const double x0 = p[0] + t0 * (q[0] - p[0]), x1 = p[0] + t1 * (q[0] - p[0]);
+          out.emplace_back(std::min(x0, x1), std::max(x0, x1));
+        }
+      }
+      for (auto [y, xs] : {std::pair<double, std::vector<double>*>{a, &on_a}, {b, &on_b}})
+        if ((p[1] <= y) != (q[1] <= y)) xs->push_back(p[0] + (y - p[1]) / (q[1] - p[1]) * (q[0] - p[0]));
+    }
+  for (std::vector<double>* xs : {&on_a, &on_b}) {
+    std::sort(xs->begin(), xs->end());
+    for (std::size_t k = 0; k + 1 < xs->size(); k += 2) out.emplace_back((*xs)[k], (*xs)[k + 1]);
+  }
+  merge_closed(out);
+  return out;
+}
+
+double signed_area(const Ring2& r) {
+  double s = 0;
+  for (std::size_t k = 0; k < r.size(); ++k) {
+    const auto& p = r[k];
+    const auto& q = r[(k + 1) % r.size()];
+    s += p[0] * q[1] - q[0] * p[1];
+  }
+  return s / 2;
+}
+
+bool inside(const Ring2& r, double x, double y) {
+  bool in = false;
+  for (std::size_t k = 0, j = r.size() - 1; k < r.size(); j = k++)
+    if ((r[k][1] > y) != (r[j][1] > y) &&
+        x < (r[j][0] - r[k][0]) * (y - r[k][1]) / (r[j][1] - r[k][1]) + r[k][0])
+      in = !in;
+  return in;
+}
+
+// The area inside an odd number of rings: each ring's area, counted
+// against the region where it lies inside an odd number of the others (a
+// hole's), whichever way round it runs. Rings neither cross nor touch.
+double region_area(const std::vector<Ring2>& rings) {
+  double area = 0;
+  for (std::size_t k = 0; k < rings.size(); ++k) {
+    if (rings[k].size() < 3) continue;
+    int depth = 0;
+    for (std::size_t j = 0; j < rings.size(); ++j)
+      if (j != k && rings[j].size() >= 3 && inside(rings[j], rings[k][0][0], rings[k][0][1])) ++depth;
+    area += (depth % 2 ? -1 : 1) * std::abs(signed_area(rings[k]));
+  }
+  return area;
+}
+
+// The open set `f` taken modulo p, within [0, p).
+Set fold(const Set& f, double p) {
+  Set out;
+  for (const auto& [lo, hi] : f) {
+    if (hi - lo >= p) return {{-1.0, p + 1}};  // every place
+    const double k = std::floor(lo / p);
+    const double a = lo - k * p, b = hi - k * p;
+    if (b <= p) {
+      out.emplace_back(a, b);
+    } else {
+      // Across the place p, which is also the place 0: both ends taken.
+      out.emplace_back(a, p + 1);
+      out.emplace_back(-1.0, b - p);
+    }
+  }
+  merge_open(out);
+  return out;
+}
+
+// The closed complement of the open set `f` within [0, p].
+Set complement(const Set& f, double p) {
+  Set out;
+  double from = 0;
+  for (const auto& [lo, hi] : f) {
+    if (lo > from) out.emplace_back(from, std::min(lo, p));
+    from = std::max(from, hi);
+    if (from >= p) break;
+  }
+  if (from <= p) out.emplace_back(from, p);
+  return out;
+}
+
+Set intersect(const Set& a, const Set& b) {
+  Set out;
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    const double lo = std::max(a[i].first, b[j].first), hi = std::min(a[i].second, b[j].second);
+    if (lo <= hi) out.emplace_back(lo, hi);
+    if (a[i].second < b[j].second)
+      ++i;
+    else
+      ++j;
+  }
+  return out;
+}
+
+}  // namespace
+
+RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, int bands) {
+  if (!(std::isfinite(roll_width) && roll_width >= 0)) throw std::invalid_argument("a roll width not finite or below 0");
+  if (!(std::isfinite(gap) && gap >= 0)) throw std::invalid_argument("a gap not finite or below 0");
+  if (bands < 1) throw std::invalid_argument("fewer than one band");
+  RollNest n;
+  double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+  for (const Ring2& r : rings)
+    for (const auto& v : r)
+      for (int c = 0; c < 2; ++c) {
+        if (!std::isfinite(v[static_cast<std::size_t>(c)])) throw std::invalid_argument("a vertex not finite");
+        lo[c] = std::min(lo[c], v[static_cast<std::size_t>(c)]);
+        hi[c] = std::max(hi[c], v[static_cast<std::size_t>(c)]);
+      }
+  n.area = region_area(rings);
+  if (!(n.area > 0)) throw std::invalid_argument("a pattern without area");
+  n.length = hi[0] - lo[0];
+  n.width = hi[1] - lo[1];
+  const int K = bands;
+  const double step = (n.width + gap) / K;  // the bands' height
+  n.resolution = step;
+  const double eps = 1e-9 * (n.length + n.width + gap);  // round-off allowance
+  // Each band of the pattern grown by gap / 2 all round (a square of side
+  // gap about each of its points): its extent along the roll.
+  const double y0 = lo[1] - gap / 2;
+  std::vector<Set> band(static_cast<std::size_t>(K));
+  for (int k = 0; k < K; ++k) {
+    // The strip drawn in by the round-off allowance: a band whose edge
+    // lies along an edge of the pattern takes none of the region beyond.
+    Set s = strip_extent(rings, y0 + k * step - gap / 2 + eps, y0 + (k + 1) * step + gap / 2 - eps);
+    for (auto& [a, b] : s) {
+      a -= gap / 2;
+      b += gap / 2;
+    }
+    merge_closed(s);
+    band[static_cast<std::size_t>(k)] = std::move(s);
+  }
+  // The shifts along the roll at which a copy m bands higher overlaps the
+  // pattern (open intervals: copies may touch), each grown by the round-off
+  // allowance, so that copies never overlap by round-off.
+  std::vector<Set> over(static_cast<std::size_t>(K));
+  std::vector<bool> done(static_cast<std::size_t>(K), false);
+  auto overlap = [&](int m) -> const Set& {
+    const auto mm = static_cast<std::size_t>(m);
+    if (!done[mm]) {
+      Set s;
+      for (int k = 0; k + m < K; ++k)
+        for (const Interval& i : band[static_cast<std::size_t>(k)])
+          for (const Interval& j : band[static_cast<std::size_t>(k + m)]) {
+            s.emplace_back(j.first - i.second - eps, j.second - i.first + eps);
+          }
+      merge_open(s);
+      over[mm] = std::move(s);
+      done[mm] = true;
+    }
+    return over[mm];
+  };
+  // The pitch: the smallest p for which no copy k p along the lane
+  // overlaps the pattern.
+  const Set& along = overlap(0);
+  double p = 0;
+  for (const Interval& i : along)
+    if (i.first < 0 && 0 < i.second) p = i.second;
+  if (!(p > 0)) p = n.length + gap;  // a pattern with no band (cannot be: it has area)
+  const double far = along.empty() ? 0.0 : along.back().second;
+  for (bool moved = true; moved;) {
+    moved = false;
+    for (int k = 1; k * p < far && !moved; ++k)
+      for (const Interval& i : along)
+        if (i.first < k * p && k * p < i.second) {
+          p = i.second / k;
+          moved = true;
+          break;
+        }
+  }
+  n.pitch = p;
+  // The lanes: the smallest step of m bands with a shift s along the roll
+  // for which no copy of lane j (j s + k p along, j m bands across)
+  // overlaps the pattern.
+  int m_best = K;
+  double s_best = 0;
+  for (int m = 1; m < K; ++m) {
+    Set allowed{{0.0, p}};
+    for (int j = 1; j * m < K && !allowed.empty(); ++j) {
+      const Set free = complement(fold(overlap(j * m), p), p);
+      Set sj;  // the shifts s with j s (mod p) free
+      for (int r = 0; r < j; ++r)
+        for (const auto& [a, b] : free) sj.emplace_back((a + r * p) / j, (b + r * p) / j);
+      merge_closed(sj);
+      allowed = intersect(allowed, sj);
+    }
+    if (!allowed.empty()) {
+      const Interval* widest = &allowed.front();
+      for (const Interval& i : allowed)
+        if (i.second - i.first > widest->second - widest->first) widest = &i;
+      m_best = m;
+      s_best = (widest->first + widest->second) / 2;
+      if (s_best >= p) s_best -= p;
+      break;
+    }
+  }
+  n.lane_step = m_best * step;
+  n.lane_shift = s_best;
+  const double across = n.width + gap;  // a lane's height on the roll
+  n.lanes = roll_width + eps >= across ? 1 + static_cast<int>(std::floor((roll_width - across + eps) / n.lane_step)) : 0;
+  if (n.lanes > 0) {
+    n.roll_per_pattern = n.pitch / n.lanes;
+    n.utilisation = roll_width > 0 ? n.lanes * n.area / (roll_width * n.pitch) : 0.0;
+  }
+  n.origin = {gap / 2 - lo[0], gap / 2 - lo[1]};
+  return n;
+}
+
+}  // namespace ts

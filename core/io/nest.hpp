@@ -1,0 +1,48 @@
+#pragma once
+// Copies of one cut pattern laid on a roll of prepreg (`thermostamp blank
+// --roll W`): in lanes along the roll, each copy turned as the first (the
+// fibres of every copy along the roll), the copies of a lane at the
+// smallest pitch that keeps them apart, each lane against the one before
+// at the smallest step across the roll that keeps them apart, with the
+// shift along the roll that allows it. The figures a cutting plan asks
+// for: how many lanes fit across the roll, the roll's length per pattern
+// and the share of the roll the patterns take.
+#include <array>
+#include <vector>
+
+namespace ts {
+
+using Ring2 = std::vector<std::array<double, 2>>;
+
+struct RollNest {
+  double length = 0, width = 0;  // m: the pattern's extent along and across the roll
+  double area = 0;               // m^2: the pattern's
+  double pitch = 0;              // m: from copy to copy along a lane
+  double lane_step = 0;          // m: across the roll, from lane to lane
+  double lane_shift = 0;         // m: along the roll, each lane against the one before (0 <= it < pitch)
+  int lanes = 0;                 // across the roll's width; 0 where the pattern is wider than the roll
+  double roll_per_pattern = 0;   // m of roll per pattern: pitch / lanes (0 where no lane fits)
+  double utilisation = 0;        // the patterns' share of the roll: lanes area / (roll width pitch)
+  double resolution = 0;         // m: the lane step is a multiple of it
+  // The copy in lane j (from 0, at the roll's edge y = 0), place i along
+  // the lane, lies at its pattern coordinates plus
+  // origin + (i pitch + (j lane_shift mod pitch), j lane_step).
+  std::array<double, 2> origin{};
+};
+
+// Nests the pattern `rings` (closed polygons, the region inside an odd
+// number of them; in the roll's axes: x along the roll, y across it; m) on
+// a roll `roll_width` m wide, with at least `gap` m between copies
+// (Euclidean distance; a copy is kept gap / 2 from the roll's edges). The
+// pattern is taken in `bands` bands across the roll, each band by the
+// extent along the roll of the pattern within it and gap / 2 about it, so
+// that no two copies come nearer than the gap (the bands are drawn over
+// the pattern; copies may stand a little further apart than needed where
+// an edge slants across a band); the lane step is the smallest multiple of
+// the band's height (width + gap) / bands with which some shift along
+// the roll keeps the lanes apart, and the pitch exact for that banding.
+// Throws std::invalid_argument for a pattern without area, a width or gap
+// not finite or below 0, or bands below 1.
+RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, int bands = 1000);
+
+}  // namespace ts

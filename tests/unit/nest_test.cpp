@@ -1,0 +1,219 @@
+// Copies of a cut pattern on a roll (`blank --roll`): lanes against the
+// closed forms of shapes whose best lanes are known (a rectangle, a
+// staircase that tiles the roll, a disc's and an ellipse's hexagonal
+// lanes), and on a star with a notch, copies checked by their exact
+// geometry: never nearer than the gap, and no lane step three bands
+// smaller that any shift allows.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "io/nest.hpp"
+
+namespace {
+
+using ts::Ring2;
+using Pt = std::array<double, 2>;
+
+Ring2 ellipse(double a, double b, int n) {
+  Ring2 r;
+  for (int k = 0; k < n; ++k) {
+    const double t = 2 * std::numbers::pi * k / n;
+    r.push_back({a * std::cos(t), b * std::sin(t)});
+  }
+  return r;
+}
+
+double cross(const Pt& o, const Pt& a, const Pt& b) {
+  return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+bool segments_cross(const Pt& a, const Pt& b, const Pt& c, const Pt& d) {
+  const double d1 = cross(a, b, c), d2 = cross(a, b, d), d3 = cross(c, d, a), d4 = cross(c, d, b);
+  return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
+}
+
+double point_segment(const Pt& p, const Pt& a, const Pt& b) {
+  const double ux = b[0] - a[0], uy = b[1] - a[1];
+  const double t = std::clamp(((p[0] - a[0]) * ux + (p[1] - a[1]) * uy) / (ux * ux + uy * uy), 0.0, 1.0);
+  return std::hypot(p[0] - a[0] - t * ux, p[1] - a[1] - t * uy);
+}
+
+bool inside(const Ring2& r, const Pt& p) {
+  bool in = false;
+  for (std::size_t k = 0, j = r.size() - 1; k < r.size(); j = k++)
+    if ((r[k][1] > p[1]) != (r[j][1] > p[1]) &&
+        p[0] < (r[j][0] - r[k][0]) * (p[1] - r[k][1]) / (r[j][1] - r[k][1]) + r[k][0])
+      in = !in;
+  return in;
+}
+
+Ring2 moved(const Ring2& r, double dx, double dy) {
+  Ring2 out = r;
+  for (auto& v : out) v = {v[0] + dx, v[1] + dy};
+  return out;
+}
+
+// The distance between two simple polygons' regions; -1 where they
+// overlap (sides that cross, or a vertex of one inside the other and off
+// its sides), 0 where they only touch.
+double distance(const Ring2& p, const Ring2& q) {
+  double d = 1e300;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (std::size_t j = 0; j < q.size(); ++j) {
+      const Pt &a = p[i], &b = p[(i + 1) % p.size()], &c = q[j], &e = q[(j + 1) % q.size()];
+      if (segments_cross(a, b, c, e)) return -1;
+      d = std::min({d, point_segment(a, c, e), point_segment(c, a, b)});
+    }
+  auto off_sides = [](const Ring2& r, const Pt& v) {
+    double m = 1e300;
+    for (std::size_t k = 0; k < r.size(); ++k) m = std::min(m, point_segment(v, r[k], r[(k + 1) % r.size()]));
+    return m > 1e-12;
+  };
+  for (const Pt& v : p)
+    if (inside(q, v) && off_sides(q, v)) return -1;
+  for (const Pt& v : q)
+    if (inside(p, v) && off_sides(p, v)) return -1;
+  return d;
+}
+
+// The nearest copy of a lane layout to the one at the origin: over the
+// lanes -3..3 and places -4..4 along them.
+double nearest_copy(const Ring2& r, double pitch, double shift, double step) {
+  double d = 1e300;
+  for (int j = -3; j <= 3; ++j)
+    for (int i = -4; i <= 4; ++i)
+      if (i != 0 || j != 0) d = std::min(d, distance(r, moved(r, i * pitch + j * shift, j * step)));
+  return d;
+}
+
+TEST(Nest, RectangleLanes) {
+  const Ring2 rect{{0, 0}, {0.3, 0}, {0.3, 0.2}, {0, 0.2}};
+  const ts::RollNest n = ts::nest_on_roll({rect}, 1.0, 0.005);
+  EXPECT_NEAR(n.pitch, 0.305, 1e-9);  // copies 1e-9 of the size apart against round-off
+  EXPECT_NEAR(n.lane_step, 0.205, 1e-12);
+  EXPECT_EQ(n.lanes, 4);  // 0.205 + 3 x 0.205 = 0.82 m of the 1 m
+  EXPECT_NEAR(n.area, 0.06, 1e-15);
+  EXPECT_NEAR(n.utilisation, 4 * 0.06 / 0.305, 1e-8);
+  EXPECT_NEAR(n.roll_per_pattern, 0.305 / 4, 1e-9);
+  EXPECT_NEAR(n.origin[0], 0.0025, 1e-15);
+  EXPECT_NEAR(n.origin[1], 0.0025, 1e-15);
+  // A roll narrower than the pattern and its gap takes none; one just wide
+  // enough takes one lane.
+  EXPECT_EQ(ts::nest_on_roll({rect}, 0.2, 0.005).lanes, 0);
+  EXPECT_EQ(ts::nest_on_roll({rect}, 0.205, 0.005).lanes, 1);
+  EXPECT_EQ(ts::nest_on_roll({rect}, 0.205 * 5, 0.005).lanes, 5);
+}
+
+// A tab thinner than a band, wholly within one, still sets the pitch: a
+// band takes the extent of the pattern's edges within it, not only that
+// along its two lines.
+TEST(Nest, TabThinnerThanABandSetsThePitch) {
+  const Ring2 tabbed{{0, 0}, {1, 0}, {1, 0.5003}, {1.5, 0.5003}, {1.5, 0.5006}, {1, 0.5006}, {1, 1}, {0, 1}};
+  const ts::RollNest n = ts::nest_on_roll({tabbed}, 3.0, 0.0);
+  EXPECT_NEAR(n.resolution, 1e-3, 1e-15);  // the tab lies within the band from 0.5 to 0.501
+  EXPECT_NEAR(n.pitch, 1.5, 1e-8);
+  EXPECT_GE(nearest_copy(tabbed, n.pitch, n.lane_shift, n.lane_step), 0.0);
+  EXPECT_LT(distance(tabbed, moved(tabbed, n.pitch - 1e-3, 0)), 0.0) << "a pitch a little smaller overlaps";
+}
+
+// A staircase of two unit steps (its rows [1, 3] and [0, 2]) is 3 long, but
+// its copies fit 2 apart along the lane, and lanes 2 apart tile the roll.
+TEST(Nest, StaircaseTilesTheRoll) {
+  const Ring2 z{{1, 0}, {3, 0}, {3, 1}, {2, 1}, {2, 2}, {0, 2}, {0, 1}, {1, 1}};
+  const ts::RollNest n = ts::nest_on_roll({z}, 8.0, 0.0);
+  EXPECT_NEAR(n.length, 3.0, 1e-15);
+  EXPECT_NEAR(n.pitch, 2.0, 1e-8);
+  EXPECT_NEAR(n.lane_step, 2.0, 1e-12);
+  EXPECT_EQ(n.lanes, 4);
+  EXPECT_NEAR(n.utilisation, 1.0, 1e-8);
+  EXPECT_GE(nearest_copy(z, n.pitch, n.lane_shift, n.lane_step), 0.0);
+}
+
+// Two unit squares 1.5 apart in a row: a pitch of 1 or 1.25 keeps the next
+// copy clear but not the one after (at 2 or 2.5, on the second square);
+// 3.5 is the smallest that keeps every copy clear.
+TEST(Nest, EveryCopyOfALaneKeepsClearNotOnlyTheNext) {
+  const Ring2 left{{0, 0}, {1, 0}, {1, 1}, {0, 1}}, right{{2.5, 0}, {3.5, 0}, {3.5, 1}, {2.5, 1}};
+  const ts::RollNest n = ts::nest_on_roll({left, right}, 1.0, 0.0);
+  EXPECT_NEAR(n.pitch, 3.5, 1e-8);
+  EXPECT_EQ(n.lanes, 1);
+  EXPECT_NEAR(n.utilisation, 2.0 / 3.5, 1e-8);
+}
+
+// A pattern of two unit squares, one 3 above the other: lanes 1 apart
+// would keep clear of the next lane and the one after, but the third
+// lane's lower square would meet the first lane's upper one; 2 apart every
+// lane keeps clear of every other.
+TEST(Nest, EveryLaneKeepsClearNotOnlyTheNext) {
+  const Ring2 low{{0, 0}, {1, 0}, {1, 1}, {0, 1}}, high{{0, 3}, {1, 3}, {1, 4}, {0, 4}};
+  const ts::RollNest n = ts::nest_on_roll({low, high}, 10.0, 0.0);
+  EXPECT_NEAR(n.area, 2.0, 1e-15);
+  EXPECT_NEAR(n.pitch, 1.0, 1e-8);
+  EXPECT_GE(n.lane_step, 2.0 - 1e-9);
+  EXPECT_LE(n.lane_step, 2.0 + n.resolution);
+  EXPECT_EQ(n.lanes, 4);  // lanes from 0, 2, 4 and 6 to 10 m
+  EXPECT_NEAR(n.utilisation, 4 * 2.0 / 10.0, 1e-8);
+}
+
+// Discs and ellipses: their lanes are the hexagonal packing (a disc
+// touches two in its lane and two in each next lane), pitch 2a, step
+// sqrt(3) b, shift a. The polygon of 720 sides lies within 1e-5 of its
+// circle. The banding keeps the step within three bands above the exact
+// one: each banded copy reaches at most a band beyond the ellipse, and
+// the step is a whole number of bands (1.97 bands above it here).
+TEST(Nest, DiscsAndEllipsesPackHexagonally) {
+  for (const auto& [a, b] : {std::pair{0.1, 0.1}, std::pair{0.15, 0.05}}) {
+    const Ring2 e = ellipse(a, b, 720);
+    const ts::RollNest n = ts::nest_on_roll({e}, 1.0, 0.0);
+    const double band = 2 * b / 1000;
+    EXPECT_NEAR(n.resolution, band, 1e-15);
+    EXPECT_NEAR(n.pitch, 2 * a, 1e-5 * a) << a << " x " << b;
+    EXPECT_GE(n.lane_step, std::sqrt(3.0) * b * (1 - 1e-4)) << a << " x " << b;
+    EXPECT_LE(n.lane_step, std::sqrt(3.0) * b + 3 * band) << a << " x " << b;
+    EXPECT_NEAR(n.lane_shift, a, 0.02 * a) << a << " x " << b;
+    EXPECT_NEAR(n.area, std::numbers::pi * a * b, 1e-4 * a * b);
+    EXPECT_GE(nearest_copy(e, n.pitch, n.lane_shift, n.lane_step), 0.0);
+  }
+}
+
+// A star with a notch to its centre: copies never nearer than the gap (exact distance
+// between the polygons), the copies along a lane touching within the
+// gap's allowance, and a lane step three bands smaller taking no shift.
+TEST(Nest, CopiesOfAStarKeepTheGapAndNoSmallerStepFits) {
+  Ring2 star;
+  for (int k = 0; k < 14; ++k) {
+    const double t = 2 * std::numbers::pi * k / 14 + 0.1, r = k % 2 ? 0.04 : 0.1 + 0.01 * (k % 3);
+    star.push_back({r * std::cos(t), 0.8 * r * std::sin(t)});
+  }
+  star.insert(star.begin() + 3, {0.0, 0.0});  // a notch to the centre
+  for (const double gap : {0.0, 0.004}) {
+    const ts::RollNest n = ts::nest_on_roll({star}, 1.0, gap);
+    const double near = nearest_copy(star, n.pitch, n.lane_shift, n.lane_step);
+    EXPECT_GE(near, gap * (1 - 1e-9)) << "gap " << gap;
+    // Along the lane: the next copy within the gap's square allowance
+    // (Euclidean distance at most sqrt(2) times the gap) and a band.
+    const double along = distance(star, moved(star, n.pitch, 0));
+    EXPECT_LE(along, std::sqrt(2.0) * gap + n.resolution) << "gap " << gap;
+    if (gap > 0) continue;
+    // No shift (in steps of pitch / 4000) lets lanes three bands closer.
+    const double closer = n.lane_step - 3 * n.resolution;
+    int fits = 0;
+    for (int k = 0; k < 4000; ++k)
+      if (nearest_copy(star, n.pitch, n.pitch * k / 4000, closer) >= 0) ++fits;
+    EXPECT_EQ(fits, 0);
+  }
+}
+
+TEST(Nest, RefusesWhatIsNoPattern) {
+  const Ring2 line{{0, 0}, {1, 0}, {2, 0}};
+  EXPECT_THROW(ts::nest_on_roll({line}, 1.0, 0.0), std::invalid_argument);
+  const Ring2 sq{{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  EXPECT_THROW(ts::nest_on_roll({sq}, -1.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(ts::nest_on_roll({sq}, 1.0, std::nan("")), std::invalid_argument);
+  EXPECT_THROW(ts::nest_on_roll({sq}, 1.0, 0.0, 0), std::invalid_argument);
+}
+
+}  // namespace
