@@ -38,6 +38,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp compare DIR_A DIR_B [--json] [--rtol R] [--from T]   # how far two runs' results are apart
   thermostamp export DIR [--time T] [--out FOLDER] [--whole] [--format gmsh|abaqus|calculix]   # each ply as a mesh
   thermostamp blank DIR --trim SURFACE [--trim SURFACE ...] [--margin M] [--time T] [--out FOLDER] [--whole]
+                  [--roll W [--gap G]]
                   # cut patterns
   thermostamp --version
 )";
@@ -102,7 +103,10 @@ point in the blank and formed), FOLDER/<ply>.dxf where the blank is flat
 (the pattern and the blank's outline in its plane, mm) and
 FOLDER/blank.json (areas, lengths); --margin M: the trim line moved out by
 M m on the formed part (an allowance; below 0, in); --whole: mirrored as
-with export
+with export; --roll W: also lays each flat pattern on a roll W m wide with
+its fibres along the roll, copies in lanes at least G m apart (--gap,
+default 0): the lanes, the roll's length per pattern and the share of the
+roll used, in blank.json and FOLDER/<ply>_nest.dxf (the layout, mm)
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -130,6 +134,8 @@ struct Args {
   ts::ExportFormat format = ts::ExportFormat::Gmsh;  // export: --format
   std::vector<std::string> trims;    // blank: the --trim surfaces, as written
   double margin = 0;                 // blank: --margin (m)
+  std::optional<double> roll;        // blank: --roll, the roll's width (m)
+  std::optional<double> gap;         // blank: --gap between copies on the roll (m)
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -146,7 +152,7 @@ const std::map<std::string, std::vector<std::string>>& command_options() {
       {"report", {"--against"}},
       {"compare", {"--json", "--rtol", "--from"}},
       {"export", {"--time", "--out", "--whole", "--format"}},
-      {"blank", {"--trim", "--margin", "--time", "--out", "--whole"}}};
+      {"blank", {"--trim", "--margin", "--time", "--out", "--whole", "--roll", "--gap"}}};
   return m;
 }
 
@@ -217,6 +223,10 @@ Args parse(int argc, char** argv) {
       } catch (const std::exception&) {
         throw UsageError("--margin expects a length in m, found '" + t + "'");
       }
+    } else if (s == "--roll") {
+      a.roll = finite_number(s, value(s), false, "a roll width in m, above 0");
+    } else if (s == "--gap") {
+      a.gap = finite_number(s, value(s), true, "a gap in m, at least 0");
     } else if (s == "--whole") {
       a.whole = true;
     } else if (s == "--format") {
@@ -421,13 +431,16 @@ int cmd_plugins(const Args& a) {
 int cmd_blank(const Args& a) {
   if (a.positional.size() != 1) throw UsageError("expected one output folder");
   if (a.trims.empty()) throw UsageError("blank needs a --trim surface");
+  if (a.gap && !a.roll) throw UsageError("--gap is the gap between patterns on a roll: give the roll's width with --roll");
+  std::optional<ts::RollOptions> roll;
+  if (a.roll) roll = ts::RollOptions{*a.roll, a.gap.value_or(0.0)};
   const std::filesystem::path dir = a.positional[0];
   ts::BlankResult r;
   std::vector<ts::TrimSurface> trims;
   try {
     for (const auto& t : a.trims) trims.push_back(ts::parse_trim(t));
     r = ts::blank_plies(dir, a.time, a.out.empty() ? dir / "blank" : std::filesystem::path(a.out), a.whole, trims,
-                        a.margin);
+                        a.margin, roll);
   } catch (const std::exception& e) {  // 2: no pattern as asked; 3: a file that cannot be read or written
     std::cerr << "error: blank: " << e.what() << "\n";
     return dynamic_cast<const ts::ExportInputError*>(&e) ? 2 : 3;
@@ -484,6 +497,31 @@ int cmd_blank(const Args& a) {
     else
       line[0] = '\0';
     std::cout << line << "\n";
+    if (p.nest) {
+      const ts::RollNest& n = p.nest->nest;
+      char turned[64];
+      std::snprintf(turned, sizeof turned, "%.4g", -p.nest->fibre_angle_deg);
+      const std::string fibres =
+          !p.nest->fibres_known ? std::string("the blank's x along it (the frames hold no fibre_direction)")
+          : std::abs(p.nest->fibre_angle_deg) < 1e-9
+              ? std::string("fibres along it")
+              : "fibres along it (the pattern turned by " + std::string(turned) + " deg)";
+      if (n.lanes > 0)
+        std::snprintf(line, sizeof line,
+                      "  on a roll %g mm wide, %s, %g mm apart: %d lane%s, a pattern every %.4g mm along each, %.4g "
+                      "mm of roll per pattern, %.1f %% of the roll used",
+                      1000 * *a.roll, fibres.c_str(), 1000 * a.gap.value_or(0.0), n.lanes, n.lanes == 1 ? "" : "s",
+                      1000 * n.pitch, 1000 * n.roll_per_pattern, 100 * n.utilisation);
+      else
+        std::snprintf(line, sizeof line,
+                      "  on a roll %g mm wide, %s, %g mm apart: the pattern, %.4g mm across the roll with the gap, "
+                      "does not fit",
+                      1000 * *a.roll, fibres.c_str(), 1000 * a.gap.value_or(0.0), 1000 * (n.width + a.gap.value_or(0.0)));
+      std::cout << line << "; " << p.nest->dxf.string() << "\n";
+    } else if (roll) {
+      std::cout << "  not nested: " << (c.outlines.empty() ? "nothing of the ply lies inside the trim" : "the blank is not flat")
+                << "\n";
+    }
     if (!c.fallback.empty())
       std::cerr << "warning: ply '" << p.name << "': the exact cut's outline did not close (" << c.fallback
                 << "): its pattern comes from the trims' largest distance, linear in each triangle (corners within "

@@ -12,7 +12,9 @@
 #include <optional>
 #include <set>
 #include <stdexcept>
+#include <tuple>
 #include <unordered_map>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -1932,13 +1934,89 @@ bool write_csv(const std::filesystem::path& file, const CutPattern& pattern, con
   return static_cast<bool>(f);
 }
 
+// The fibres of the modelled ply (the triangles before its mirror images:
+// a mirrored ply's first half or quarter) in the blank's plane: their
+// area-weighted mean direction, degrees from axes[0] in (-90, 90], and the
+// largest difference of a triangle's direction from it (degrees).
+std::pair<double, double> fibre_angle(const FramePly& d, const std::vector<double>& fibre,
+                                      const std::array<Vec, 2>& axes) {
+  const std::size_t m = (d.tri.size() / 3) >> d.mirrored.size();
+  double c2 = 0, s2 = 0;
+  std::vector<double> phis;
+  for (std::size_t e = 0; e < m && 3 * e + 2 < fibre.size(); ++e) {
+    const Vec f = at(fibre, e);
+    const double u = dot(f, axes[0]), v = dot(f, axes[1]);
+    if (u == 0 && v == 0) continue;
+    const double phi = std::atan2(v, u), w = triangle_area(d.x0, &d.tri[3 * e]);
+    c2 += w * std::cos(2 * phi);
+    s2 += w * std::sin(2 * phi);
+    phis.push_back(phi);
+  }
+  const double pi = std::acos(-1.0);
+  auto wrap = [pi](double a) {  // into (-pi/2, pi/2]: a direction, not a sense
+    a = std::remainder(a, pi);
+    return a <= -pi / 2 ? a + pi : a;
+  };
+  const double mean = wrap(0.5 * std::atan2(s2, c2));
+  double spread = 0;
+  for (const double phi : phis) spread = std::max(spread, std::abs(wrap(phi - mean)));
+  return {mean * 180 / pi, spread * 180 / pi};
+}
+
+// The layout of a nest (roll axes, mm): the roll's two edges on layer
+// ROLL, each copy whose extent lies within the first `length` m of the
+// roll on layer PATTERN. Returns the copies drawn, -1 where the file cannot
+// be written.
+int write_nest_dxf(const std::filesystem::path& file, const std::string& ply, const std::vector<Ring2>& rings,
+                   const RollNest& n, const RollOptions& roll, double length) {
+  std::ofstream f(file);
+  if (!f) return -1;
+  auto num = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", 1000 * v);
+    return std::string(buf);
+  };
+  f << "999\nthermostamp blank: ply '" << ply << "' nested on a roll " << num(roll.width)
+    << " mm wide, fibres along x, mm\n"
+    << "0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nAC1009\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n"
+    << "0\nSECTION\n2\nTABLES\n0\nTABLE\n2\nLAYER\n70\n2\n"
+    << "0\nLAYER\n2\nROLL\n70\n0\n62\n8\n6\nCONTINUOUS\n"
+    << "0\nLAYER\n2\nPATTERN\n70\n0\n62\n1\n6\nCONTINUOUS\n"
+    << "0\nENDTAB\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n";
+  for (const double y : {0.0, roll.width})
+    f << "0\nLINE\n8\nROLL\n10\n0.0\n20\n" << num(y) << "\n30\n0.0\n11\n" << num(length) << "\n21\n"
+      << num(y) << "\n31\n0.0\n";
+  int copies = 0;
+  for (int j = 0; j < n.lanes; ++j) {
+    const double shift = std::fmod(j * n.lane_shift, n.pitch);
+    for (int i = 0;; ++i) {
+      const double dx = n.origin[0] + i * n.pitch + shift, dy = n.origin[1] + j * n.lane_step;
+      if (roll.gap / 2 + i * n.pitch + shift + n.length > length) break;
+      for (const Ring2& r : rings) {
+        f << "0\nPOLYLINE\n8\nPATTERN\n66\n1\n70\n1\n10\n0.0\n20\n0.0\n30\n0.0\n";
+        for (const auto& v : r)
+          f << "0\nVERTEX\n8\nPATTERN\n10\n" << num(v[0] + dx) << "\n20\n" << num(v[1] + dy) << "\n30\n0.0\n";
+        f << "0\nSEQEND\n8\nPATTERN\n";
+      }
+      ++copies;
+    }
+  }
+  f << "0\nENDSEC\n0\nEOF\n";
+  f.close();
+  return f ? copies : -1;
+}
+
 }  // namespace
 
 BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> time,
                         const std::filesystem::path& out, bool whole, const std::vector<TrimSurface>& trims,
-                        double margin) {
+                        double margin, std::optional<RollOptions> roll) {
   if (trims.empty()) throw ExportInputError("no --trim: give the surface the part is trimmed at");
   if (!(std::abs(margin) <= kFar)) throw ExportInputError("--margin " + g(margin) + ": beyond 1e6 (m)");
+  if (roll && !(roll->width > 0 && roll->width <= kFar))
+    throw ExportInputError("--roll " + g(roll->width) + ": a roll width above 0 and at most 1e6 (m)");
+  if (roll && !(roll->gap >= 0 && roll->gap <= kFar))
+    throw ExportInputError("--gap " + g(roll->gap) + ": a gap of at least 0 and at most 1e6 (m)");
   // Each polygon's outline moved by the margin (found once for every
   // ply): its rings and vertices, or why it is taken by its distance.
   std::vector<std::string> why;
@@ -1983,6 +2061,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
   for (const TrimSurface& t : trims)
     if (t.kind == TrimSurface::Kind::Polygon) doc["polygon_cut_directions"][t.text] = polygon_cut_direction(t);
   doc["margin_m"] = margin;
+  if (roll) doc["roll"] = {{"width_m", roll->width}, {"gap_m", roll->gap}};
   doc["polygon_margins"] = margins;
   doc["plies"] = nlohmann::json::object();
   // The fibre directions of the blank: the first frame's field.
@@ -2015,6 +2094,30 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
       ply.mark_spacing = mark_spacing(std::max(hi[0] - lo[0], hi[1] - lo[1]));
       ply.marks = fibre_marks(d.x0, d.x, d.tri, cut, *fibre, axes[0], axes[1], ply.mark_spacing, margin,
                               !ply.pattern.fallback.empty());
+    }
+    if (roll && ply.flat && !ply.pattern.outlines.empty()) {
+      const auto axes = plane_axes(ply.normal);
+      PlyNest pn;
+      if (fibre) {
+        std::tie(pn.fibre_angle_deg, pn.fibre_spread_deg) = fibre_angle(d, *fibre, axes);
+        pn.fibres_known = true;
+      }
+      const double a = pn.fibre_angle_deg * std::acos(-1.0) / 180, c = std::cos(a), sn = std::sin(a);
+      std::vector<Ring2> rings;
+      for (const Outline& o : ply.pattern.outlines) {
+        Ring2 r;
+        for (const OutlinePoint& q : o.points) {
+          const double u = dot(q.blank, axes[0]), v = dot(q.blank, axes[1]);
+          r.push_back({c * u + sn * v, -sn * u + c * v});
+        }
+        rings.push_back(std::move(r));
+      }
+      pn.nest = nest_on_roll(rings, roll->width, roll->gap);
+      pn.drawn_length = std::max(1.0, 3 * pn.nest.pitch + pn.nest.length + roll->gap);
+      pn.dxf = out / (d.name + "_nest.dxf");
+      pn.drawn_copies = write_nest_dxf(pn.dxf, d.name, rings, pn.nest, *roll, pn.drawn_length);
+      if (pn.drawn_copies < 0) throw std::runtime_error("cannot write '" + pn.dxf.string() + "'");
+      ply.nest = pn;
     }
     ply.csv = out / (d.name + ".csv");
     if (!write_csv(ply.csv, ply.pattern, ply.blank, ply.marks))
@@ -2058,6 +2161,33 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     j["fibre_marks"] = ply.marks.size();
     j["fibre_mark_spacing_m"] = ply.mark_spacing > 0 ? nlohmann::json(ply.mark_spacing) : nlohmann::json(nullptr);
     if (ply.flat && !fibre) j["fibre_marks_left_out"] = "the first frame holds no fibre_direction (output.fields)";
+    if (roll) {
+      if (ply.nest) {
+        const PlyNest& pn = *ply.nest;
+        const RollNest& n = pn.nest;
+        j["nest"] = {{"roll_width_m", roll->width},
+                     {"gap_m", roll->gap},
+                     {"fibre_angle_deg", pn.fibres_known ? nlohmann::json(pn.fibre_angle_deg) : nlohmann::json(nullptr)},
+                     {"fibre_spread_deg", pn.fibres_known ? nlohmann::json(pn.fibre_spread_deg) : nlohmann::json(nullptr)},
+                     {"pattern_length_m", n.length},
+                     {"pattern_width_m", n.width},
+                     {"pattern_area_m2", n.area},
+                     {"pitch_m", n.pitch},
+                     {"lane_step_m", n.lane_step},
+                     {"lane_shift_m", n.lane_shift},
+                     {"lanes", n.lanes},
+                     {"roll_length_per_pattern_m", n.lanes > 0 ? nlohmann::json(n.roll_per_pattern) : nlohmann::json(nullptr)},
+                     {"utilisation", n.utilisation},
+                     {"resolution_m", n.resolution},
+                     {"dxf", pn.dxf.filename().string()},
+                     {"drawn_length_m", pn.drawn_length},
+                     {"drawn_copies", pn.drawn_copies}};
+      } else {
+        j["nest"] = nullptr;
+        j["nest_left_out"] = ply.pattern.outlines.empty() ? "nothing of the ply lies inside the trim"
+                                                           : "the blank is not flat";
+      }
+    }
     doc["plies"][d.name] = j;
     res.plies.push_back(std::move(ply));
   }

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "io/nest.hpp"
+
 namespace ts {
 
 // A trim surface: the part lies on one side of it.
@@ -157,6 +159,29 @@ std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vec
                                    const std::array<double, 3>& e2, double spacing, double margin = 0,
                                    bool combined = false);
 
+// `blank --roll W [--gap G]`: each pattern laid on a roll W m wide, at
+// least G m between copies.
+struct RollOptions {
+  double width = 0;  // m
+  double gap = 0;    // m
+};
+
+// A ply's pattern on the roll (nest_on_roll), turned in the blank's plane so
+// that its fibres run along the roll.
+struct PlyNest {
+  RollNest nest;
+  // The fibres' direction in the blank's plane (its DXF axes), degrees from
+  // its first axis, in (-90, 90]: the pattern is turned by minus it. The
+  // area-weighted mean over the modelled ply's triangles (a mirrored ply's
+  // first quarter or half); 0 without fibre_direction in the first frame.
+  double fibre_angle_deg = 0;
+  double fibre_spread_deg = 0;  // the largest difference of a triangle's fibres from it
+  bool fibres_known = false;
+  std::filesystem::path dxf;    // the layout: copies over a length of the roll
+  double drawn_length = 0;      // m of roll in it
+  int drawn_copies = 0;
+};
+
 struct BlankPly {
   std::string name;
   std::filesystem::path csv, dxf;  // dxf empty where the blank is not flat
@@ -167,6 +192,7 @@ struct BlankPly {
   std::array<double, 3> normal{};  // the blank's plane's unit normal (flat)
   std::vector<FibreMark> marks;    // flat, with fibre_direction in the first frame
   double mark_spacing = 0;         // m
+  std::optional<PlyNest> nest;     // with RollOptions, where the blank is flat and the pattern not empty
 };
 
 struct BlankResult {
@@ -183,11 +209,12 @@ struct BlankResult {
 // blank's outline in its plane, in mm, and fibre marks where the first
 // frame holds fibre_direction) and <out>/blank.json (areas,
 // lengths, the edge's largest displacement in the blank's plane, the
-// trims). Throws ExportInputError for
+// trims); with `roll`, also each flat ply's pattern nested on the roll
+// (PlyNest; in blank.json and as <out>/<ply>_nest.dxf). Throws ExportInputError for
 // input that cannot give a pattern, std::runtime_error where the results
 // cannot be read or the files written.
 BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> time,
                         const std::filesystem::path& out, bool whole, const std::vector<TrimSurface>& trims,
-                        double margin = 0);
+                        double margin = 0, std::optional<RollOptions> roll = std::nullopt);
 
 }  // namespace ts

@@ -7,8 +7,8 @@ the default hemisphere job with a conductance that follows the contact
 pressure (half a minute), and writes PNG files into docs/figures/.
 With --crystallisation, only the crystallisation studies' figures
 (about 6 minutes); with --blank, only the cut patterns of the hemisphere
-cup cut at r = 80 mm, UD with either fibre layout and woven (two
-minutes); with --conductivity, only the slab cooled with a conductivity
+cup cut at r = 80 mm, UD with either fibre layout and woven, and the top
+plies' patterns on a roll 600 mm wide (two minutes); with --conductivity, only the slab cooled with a conductivity
 that follows the temperature against its reference (seconds).
 """
 import csv
@@ -173,14 +173,16 @@ def blank(tmp):
     default job) and along y, and for the woven plies."""
     import math
     fig, axes = plt.subplots(1, 3, figsize=(15, 5.4))
+    nests = []
     for ax, (job, title) in zip(axes, (("hemisphere_ud_2ply", "UD, fibres [1, -1, 0] (the default job)"),
                                        ("hemisphere_ud_2ply_fibres_y", "UD, fibres along y"),
                                        ("hemisphere_woven_2ply", "woven"))):
         out = os.path.join(tmp, job)
         subprocess.run([EXE, "run", os.path.join(ROOT, "share", "jobs", job + ".json"), "--out", out, "--quiet"],
                        check=True)
-        subprocess.run([EXE, "blank", out, "--whole", "--trim", "cylinder:0,0,0,0,0,1,0.08"], check=True,
-                       stdout=subprocess.DEVNULL)
+        subprocess.run([EXE, "blank", out, "--whole", "--trim", "cylinder:0,0,0,0,0,1,0.08", "--roll", "0.6", "--gap",
+                        "0.005"], check=True, stdout=subprocess.DEVNULL)
+        nests.append((out, title))
         info = json.load(open(os.path.join(out, "blank", "blank.json")))
         for ply, style in (("ply_top", "C3-"), ("ply_bottom", "C0--")):
             rows = [r for r in csv.DictReader(open(os.path.join(out, "blank", ply + ".csv"))) if r["kind"] == "pattern"]
@@ -204,6 +206,33 @@ def blank(tmp):
         ax.legend(fontsize=7, loc="upper center")
     fig.tight_layout()
     fig.savefig(os.path.join(FIG, "hemi_blank_patterns.png"), dpi=110)
+    plt.close(fig)
+    # The top ply's pattern on a roll 600 mm wide, 5 mm apart, fibres along
+    # the roll: the layouts blank writes (<ply>_nest.dxf).
+    import ezdxf
+    fig, axes = plt.subplots(3, 1, figsize=(10, 12))
+    for ax, (out, title) in zip(axes, nests):
+        n = json.load(open(os.path.join(out, "blank", "blank.json")))["plies"]["ply_top"]["nest"]
+        msp = ezdxf.readfile(os.path.join(out, "blank", n["dxf"])).modelspace()
+        for e in msp:
+            if e.dxftype() == "LINE":
+                ax.plot([e.dxf.start[0], e.dxf.end[0]], [e.dxf.start[1], e.dxf.end[1]], "k-", lw=1.5)
+            elif e.dxftype() == "POLYLINE":
+                pts = [(p[0], p[1]) for p in e.points()]
+                pts.append(pts[0])
+                ax.fill([p[0] for p in pts], [p[1] for p in pts], color="C0", alpha=0.25)
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], "C0-", lw=0.8)
+        ax.set_aspect("equal")
+        ax.set_xlim(-10, 1000 * n["drawn_length_m"] + 10)
+        ax.set_ylim(-20, 620)
+        ax.set_xlabel("along the roll, the fibres' direction (mm)")
+        ax.set_ylabel("across (mm)")
+        ax.set_title("%s, ply_top: %d lanes, pitch %.1f mm, %.1f mm of roll per pattern, %.1f %% of the roll used"
+                     % (title, n["lanes"], 1e3 * n["pitch_m"], 1e3 * n["roll_length_per_pattern_m"],
+                        100 * n["utilisation"]), fontsize=9)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(FIG, "hemi_nest.png"), dpi=90)
     plt.close(fig)
 
 

@@ -2311,6 +2311,104 @@ TEST(Export, WholePlyOfASymmetryModelIsTheMirroredRuns) {
   EXPECT_NE(flat.out.find(" frames), 85 nodes, 144 triangles;"), std::string::npos) << flat.out;
 }
 
+// `thermostamp blank --roll`: the whole plies' patterns of a hemisphere run
+// (cylinder r = 0.1 m) laid on a roll 500 mm wide, 4 mm apart. The fibres
+// ([1, -1, 0], -45 deg) run along the roll: every copy of the layout (read
+// by ezdxf) is the CSV's pattern turned by 45 deg, within the roll's edges
+// less half the gap, and no two copies are nearer than the gap (the
+// exact distance between their polylines, numpy). The figures of
+// blank.json agree with each other; --gap without --roll and a roll of no
+// width are refused with exit 2.
+TEST(Blank, PatternsNestedOnARoll) {
+  const auto dir = temp_dir("blank_roll");
+  json j = short_hemisphere(0.5, 0.25, 6);
+  j["output"]["fields"] = {"displacement", "fibre_direction"};
+  std::ofstream(dir / "job.json") << j.dump(2);
+  ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "run")).exit_code, 0);
+  const auto r = thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.5 --gap "
+                             "0.004 --out " + q(dir / "roll"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("  on a roll 500 mm wide, fibres along it (the pattern turned by 45 deg), 4 mm apart: "),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("; " + (dir / "roll" / "ply_top_nest.dxf").string() + "\n"), std::string::npos) << r.out;
+  const json doc = read_job_document(dir / "roll" / "blank.json");
+  EXPECT_EQ(doc["roll"], json({{"width_m", 0.5}, {"gap_m", 0.004}}));
+  for (const std::string ply : {"ply_top", "ply_bottom"}) {
+    const json& n = doc["plies"][ply]["nest"];
+    ASSERT_TRUE(n.is_object()) << doc.dump(2);
+    EXPECT_NEAR(n["fibre_angle_deg"].get<double>(), -45, 1e-9) << ply;
+    EXPECT_LT(n["fibre_spread_deg"].get<double>(), 1e-9) << ply << ": the modelled quarter's fibres";
+    const double area = doc["plies"][ply]["kept_blank_area_m2"].get<double>();
+    EXPECT_NEAR(n["pattern_area_m2"].get<double>(), area, 1e-12 * area) << ply;
+    const int lanes = n["lanes"].get<int>();
+    const double pitch = n["pitch_m"].get<double>(), step = n["lane_step_m"].get<double>();
+    const double across = n["pattern_width_m"].get<double>() + 0.004;
+    EXPECT_GE(lanes, 2) << ply;
+    EXPECT_LE(across + (lanes - 1) * step, 0.5) << ply << ": the lanes fit";
+    EXPECT_GT(across + lanes * step, 0.5) << ply << ": one more would not";
+    EXPECT_GE(pitch, n["pattern_length_m"].get<double>() + 0.004 - 1e-12) << ply;
+    EXPECT_NEAR(n["utilisation"].get<double>(), lanes * area / (0.5 * pitch), 1e-12) << ply;
+    EXPECT_NEAR(n["roll_length_per_pattern_m"].get<double>(), pitch / lanes, 1e-15) << ply;
+    EXPECT_GT(n["drawn_copies"].get<int>(), 3 * lanes - 1) << ply;
+    std::ofstream(dir / "nest.py") << R"(import csv, math, sys, ezdxf, numpy as np
+doc = ezdxf.readfile(sys.argv[1])
+assert not doc.audit().has_errors
+width, gap, copies = float(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5])
+msp = doc.modelspace()
+edges = sorted(e.dxf.start[1] for e in msp if e.dxftype() == "LINE" and e.dxf.layer == "ROLL")
+assert edges == [0.0, width], edges
+polys = [np.array([(p[0], p[1]) for p in e.points()]) for e in msp if e.dxftype() == "POLYLINE"]
+assert len(polys) == copies, (len(polys), copies)
+rows = [r for r in csv.DictReader(open(sys.argv[2])) if r["kind"] == "pattern"]
+pattern = 1000 * np.array([(float(r["blank_x_m"]), float(r["blank_y_m"])) for r in rows])
+c, s = math.cos(math.radians(45)), math.sin(math.radians(45))
+turned = pattern @ np.array([[c, s], [-s, c]])  # turned by +45 deg: the fibres (1, -1) along x
+for p in polys:
+    assert len(p) == len(turned)
+    d = p - turned
+    assert np.abs(d - d[0]).max() < 1e-6, np.abs(d - d[0]).max()
+    assert p[:, 1].min() >= gap / 2 - 1e-6 and p[:, 1].max() <= width - gap / 2 + 1e-6
+def seg_dist(a, b):  # the least distance between the sides of two closed polylines
+    p0, p1 = a, np.roll(a, -1, axis=0)
+    q0, q1 = b, np.roll(b, -1, axis=0)
+    best = np.inf
+    for (u0, u1, v0, v1) in ((p0, p1, q0, q1), (q0, q1, p0, p1)):
+        d = u1 - u0
+        t = np.clip(((v0[:, None, :] - u0[None]) * d[None]).sum(-1) / (d * d).sum(-1)[None], 0, 1)
+        near = u0[None] + t[..., None] * d[None]
+        best = min(best, np.sqrt(((v0[:, None, :] - near) ** 2).sum(-1)).min())
+    return best
+from matplotlib.path import Path
+least = np.inf
+for i in range(len(polys)):
+    for k in range(i + 1, len(polys)):
+        a, b = polys[i], polys[k]
+        if (a[:, 0].min() > b[:, 0].max() + gap or b[:, 0].min() > a[:, 0].max() + gap or
+                a[:, 1].min() > b[:, 1].max() + gap or b[:, 1].min() > a[:, 1].max() + gap):
+            continue
+        assert not Path(a).contains_point(b[0]) and not Path(b).contains_point(a[0])
+        least = min(least, seg_dist(a, b))
+assert least >= gap - 1e-6, least
+assert least < 2 * gap, least
+print("ok", least)
+)";
+    EXPECT_EQ(std::system(("/usr/bin/python3 " + q(dir / "nest.py") + " " + q(dir / "roll" / (ply + "_nest.dxf")) + " " +
+                           q(dir / "roll" / (ply + ".csv")) + " 500 4 " + n["drawn_copies"].dump() + " >/dev/null")
+                              .c_str()),
+              0)
+        << ply;
+  }
+  const auto no_roll = thermostamp("blank " + q(dir / "run") + " --trim cylinder:0,0,0,0,0,1,0.1 --gap 0.004");
+  EXPECT_EQ(no_roll.exit_code, 2);
+  EXPECT_NE(no_roll.err.find("error: --gap is the gap between patterns on a roll: give the roll's width with --roll"),
+            std::string::npos)
+      << no_roll.err;
+  const auto no_width = thermostamp("blank " + q(dir / "run") + " --trim cylinder:0,0,0,0,0,1,0.1 --roll 0");
+  EXPECT_EQ(no_width.exit_code, 2);
+  EXPECT_NE(no_width.err.find("--roll expects a roll width in m, above 0"), std::string::npos) << no_width.err;
+}
+
 // `thermostamp blank`: the cut pattern of each ply of a run of the
 // hemisphere (6 x 6 cells, 0.5 s: the punch 5 mm down, the plies drawn in),
 // trimmed by a cylinder r = 0.1 m about the punch's axis and a plane. Each
