@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
-"""Fuzzing of `thermostamp blank`'s cut (scripts/fuzz/blank_*.cpp, linked to
+"""Fuzzing of `thermostamp blank`'s cut (scripts/fuzz/*.cpp, linked to
 the core library of a build): random meshes and trims (every outline must
 close, its area the pattern's, a trim given twice the pattern once),
 mutated DXF outlines (read and cut, or refused in one line), polygons
-moved by a margin (against the distance to the polygon), and the unit
+moved by a margin (against the distance to the polygon), random patterns
+nested on a roll (copies apart by the gap, by their exact distances), and the unit
 test of trims through the mesh's nodes and along its lines (areas against
 clipping in the blank) with more cases. Exit status 1 where any case fails; the failing case's number
 reruns it alone (the programs' last argument).
@@ -56,7 +57,7 @@ def main():
         if r.returncode != 0:
             failed = True
             print(r.stdout[-4000:] + r.stderr[-2000:], end="")
-    for name in ("blank_random", "blank_dxf", "blank_margin"):
+    for name in ("blank_random", "blank_dxf", "blank_margin", "nest_random"):
         exe = build(name, args.sanitize)
         for seed in (args.seeds if name != "blank_dxf" else [None]):
             cmd = [exe, str(args.cases)] + ([] if seed is None else [str(seed)])

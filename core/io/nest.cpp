@@ -220,7 +220,11 @@ RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double
     for (int k = 1; k * p < far && !moved; ++k)
       for (const Interval& i : along)
         if (i.first < k * p && k * p < i.second) {
-          p = i.second / k;
+          // The least p with k p at the interval's end (k p rounds below
+          // it for p = end / k at times).
+          double q = i.second / k;
+          while (k * q < i.second) q = std::nextafter(q, 2 * q);
+          p = q;
           moved = true;
           break;
         }
