@@ -52,6 +52,8 @@ Writes into DIR/figures/:
                        blank with its fibre marks, the blank's edge, and
                        the edge formed (its draw-in), seen from the side
                        the blank's normal points to
+  nest_<part>.png      with blank --roll: each ply's patterns on the roll
+                       (the layout of DIR/blank/<ply>_nest.dxf)
   materials.png        the specific heat and the conductivity against the
                        temperature of every material whose values
                        follow it (rows, held beyond the first and the
@@ -391,7 +393,60 @@ def plot_blank(folder, out):
                                                           ", ".join(info["trims"]), moved),
                      fontsize=8)
         made.append(save(fig, out, "blank_%s.png" % part, dpi=110))
+        if p.get("nest"):
+            made.append(plot_nest(where, part, p["nest"], out))
     return made
+
+
+def read_nest_dxf(path):
+    """The roll's edges (LINEs) and the copies (closed POLYLINEs) of a layout
+    that thermostamp blank --roll writes (DXF R12, mm)."""
+    lines = open(path).read().split("\n")
+    pairs = zip(lines[0::2], lines[1::2])
+    lines_out, polys, entity, values, poly = [], [], None, {}, None
+    for code, value in pairs:
+        code = code.strip()
+        if code == "0":
+            if entity == "VERTEX" and poly is not None:
+                poly.append((values["10"], values["20"]))
+            elif entity == "LINE":
+                lines_out.append(((values["10"], values["20"]), (values["11"], values["21"])))
+            entity, values = value.strip(), {}
+            if entity == "POLYLINE":
+                poly = []
+            elif entity == "SEQEND" and poly is not None:
+                polys.append(poly)
+                poly = None
+        elif code in ("10", "20", "11", "21"):
+            values[code] = float(value)
+    return lines_out, polys
+
+
+def plot_nest(where, part, n, out):
+    """A ply's patterns on the roll (thermostamp blank --roll): the layout
+    of <ply>_nest.dxf."""
+    edges, polys = read_nest_dxf(os.path.join(where, n["dxf"]))
+    length = 1e3 * n["drawn_length_m"]
+    width = 1e3 * n["roll_width_m"]
+    fig, ax = plt.subplots(figsize=(min(14, 2 + 8 * length / max(length, width)), 1.5 + 6 * width / max(length, width)))
+    for (a, b), (c, d) in edges:
+        ax.plot([a, c], [b, d], "k-", lw=1.5)
+    for k, poly in enumerate(polys):
+        poly = poly + poly[:1]
+        ax.fill([q[0] for q in poly], [q[1] for q in poly], color="tab:red", alpha=0.15, lw=0)
+        ax.plot([q[0] for q in poly], [q[1] for q in poly], "r-", lw=0.8, label="the pattern" if k == 0 else None)
+    ax.set_aspect("equal")
+    ax.set_xlabel("along the roll (mm)" + (", the fibres' direction" if n.get("fibre_angle_deg") is not None else ""))
+    ax.set_ylabel("across (mm)")
+    ax.grid(alpha=0.3)
+    if n["lanes"] > 0:
+        what = ("%d lane%s, a pattern every %.4g mm, %.4g mm of roll per pattern, %.1f %% of the roll used"
+                % (n["lanes"], "" if n["lanes"] == 1 else "s", 1e3 * n["pitch_m"], 1e3 * n["roll_length_per_pattern_m"],
+                   100 * n["utilisation"]))
+    else:
+        what = "the pattern does not fit across the roll"
+    ax.set_title("%s on a roll %g mm wide, %g mm apart\n%s" % (part, width, 1e3 * n["gap_m"], what), fontsize=8)
+    return save(fig, out, "nest_%s.png" % part, dpi=100)
 
 
 def threshold_of(folder, part):

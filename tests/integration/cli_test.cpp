@@ -2317,8 +2317,8 @@ TEST(Export, WholePlyOfASymmetryModelIsTheMirroredRuns) {
 // by ezdxf) is the CSV's pattern turned by 45 deg, within the roll's edges
 // less half the gap, and no two copies are nearer than the gap (the
 // exact distance between their polylines, numpy). The figures of
-// blank.json agree with each other; --gap without --roll and a roll of no
-// width are refused with exit 2.
+// blank.json agree with each other, and `report` draws the layouts;
+// --gap without --roll and a roll of no width are refused with exit 2.
 TEST(Blank, PatternsNestedOnARoll) {
   const auto dir = temp_dir("blank_roll");
   json j = short_hemisphere(0.5, 0.25, 6);
@@ -2399,6 +2399,12 @@ print("ok", least)
               0)
         << ply;
   }
+  // report draws each ply's layout from DIR/blank.
+  ASSERT_EQ(thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.5").exit_code, 0);
+  const auto rep = thermostamp("report " + q(dir / "run"));
+  ASSERT_EQ(rep.exit_code, 0) << rep.err;
+  for (const char* f : {"nest_ply_top.png", "nest_ply_bottom.png", "blank_ply_top.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "run" / "figures" / f)) << f;
   const auto no_roll = thermostamp("blank " + q(dir / "run") + " --trim cylinder:0,0,0,0,0,1,0.1 --gap 0.004");
   EXPECT_EQ(no_roll.exit_code, 2);
   EXPECT_NE(no_roll.err.find("error: --gap is the gap between patterns on a roll: give the roll's width with --roll"),
