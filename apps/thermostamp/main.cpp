@@ -498,7 +498,8 @@ int cmd_blank(const Args& a) {
       line[0] = '\0';
     std::cout << line << "\n";
     if (p.nest) {
-      const ts::RollNest& n = p.nest->nest;
+      const ts::RollNest& n = p.nest->layout.nest;
+      const bool pairs = p.nest->layout.pairs;
       char turned[64];
       std::snprintf(turned, sizeof turned, "%.4g", -p.nest->fibre_angle_deg);
       const std::string fibres =
@@ -508,16 +509,23 @@ int cmd_blank(const Args& a) {
               : "fibres along it (the pattern turned by " + std::string(turned) + " deg)";
       if (n.lanes > 0)
         std::snprintf(line, sizeof line,
-                      "  on a roll %g mm wide, %s, %g mm apart: %d lane%s, a pattern every %.4g mm along each, %.4g "
+                      "  on a roll %g mm wide, %s, %g mm apart: %d lane%s%s, a %s every %.4g mm along each, %.4g "
                       "mm of roll per pattern, %.1f %% of the roll used",
                       1000 * *a.roll, fibres.c_str(), 1000 * a.gap.value_or(0.0), n.lanes, n.lanes == 1 ? "" : "s",
-                      1000 * n.pitch, 1000 * n.roll_per_pattern, 100 * n.utilisation);
+                      pairs ? " of pairs (a copy and one turned by 180 deg)" : "", pairs ? "pair" : "pattern",
+                      1000 * n.pitch, 1000 * p.nest->layout.roll_per_pattern, 100 * n.utilisation);
       else
         std::snprintf(line, sizeof line,
                       "  on a roll %g mm wide, %s, %g mm apart: the pattern, %.4g mm across the roll with the gap, "
                       "does not fit",
-                      1000 * *a.roll, fibres.c_str(), 1000 * a.gap.value_or(0.0), 1000 * (n.width + a.gap.value_or(0.0)));
-      std::cout << line << "; " << p.nest->dxf.string() << "\n";
+                      1000 * *a.roll, fibres.c_str(), 1000 * a.gap.value_or(0.0),
+                      1000 * (p.nest->layout.width + a.gap.value_or(0.0)));
+      std::cout << line;
+      if (pairs) {
+        std::snprintf(line, sizeof line, " (all alike: %.4g mm)", 1000 * p.nest->layout.single_roll_per_pattern);
+        std::cout << (p.nest->layout.single_roll_per_pattern > 0 ? line : " (all alike: none fits)");
+      }
+      std::cout << "; " << p.nest->dxf.string() << "\n";
     } else if (roll) {
       std::cout << "  not nested: " << (c.outlines.empty() ? "nothing of the ply lies inside the trim" : "the blank is not flat")
                 << "\n";

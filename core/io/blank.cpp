@@ -2112,11 +2112,13 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
         }
         rings.push_back(std::move(r));
       }
-      pn.nest = nest_on_roll(rings, roll->width, roll->gap);
-      pn.drawn_length = std::max(1.0, 3 * pn.nest.pitch + pn.nest.length + roll->gap);
+      pn.layout = lay_on_roll(rings, roll->width, roll->gap);
+      const RollNest& n = pn.layout.nest;
+      pn.drawn_length = std::max(1.0, 3 * n.pitch + n.length + roll->gap);
       pn.dxf = out / (d.name + "_nest.dxf");
-      pn.drawn_copies = write_nest_dxf(pn.dxf, d.name, rings, pn.nest, *roll, pn.drawn_length);
-      if (pn.drawn_copies < 0) throw std::runtime_error("cannot write '" + pn.dxf.string() + "'");
+      const int units = write_nest_dxf(pn.dxf, d.name, pn.layout.unit, n, *roll, pn.drawn_length);
+      if (units < 0) throw std::runtime_error("cannot write '" + pn.dxf.string() + "'");
+      pn.drawn_copies = units * (pn.layout.pairs ? 2 : 1);
       ply.nest = pn;
     }
     ply.csv = out / (d.name + ".csv");
@@ -2164,19 +2166,27 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     if (roll) {
       if (ply.nest) {
         const PlyNest& pn = *ply.nest;
-        const RollNest& n = pn.nest;
+        const RollNest& n = pn.layout.nest;
         j["nest"] = {{"roll_width_m", roll->width},
                      {"gap_m", roll->gap},
                      {"fibre_angle_deg", pn.fibres_known ? nlohmann::json(pn.fibre_angle_deg) : nlohmann::json(nullptr)},
                      {"fibre_spread_deg", pn.fibres_known ? nlohmann::json(pn.fibre_spread_deg) : nlohmann::json(nullptr)},
-                     {"pattern_length_m", n.length},
-                     {"pattern_width_m", n.width},
-                     {"pattern_area_m2", n.area},
+                     {"pattern_length_m", pn.layout.length},
+                     {"pattern_width_m", pn.layout.width},
+                     {"pattern_area_m2", pn.layout.area},
+                     {"pairs_turned_180", pn.layout.pairs},
+                     {"turned_offset_m", pn.layout.pairs ? nlohmann::json(pn.layout.turned) : nlohmann::json(nullptr)},
+                     {"unit_length_m", n.length},
+                     {"unit_width_m", n.width},
                      {"pitch_m", n.pitch},
                      {"lane_step_m", n.lane_step},
                      {"lane_shift_m", n.lane_shift},
                      {"lanes", n.lanes},
-                     {"roll_length_per_pattern_m", n.lanes > 0 ? nlohmann::json(n.roll_per_pattern) : nlohmann::json(nullptr)},
+                     {"roll_length_per_pattern_m",
+                      n.lanes > 0 ? nlohmann::json(pn.layout.roll_per_pattern) : nlohmann::json(nullptr)},
+                     {"alike_roll_length_per_pattern_m", pn.layout.single_roll_per_pattern > 0
+                                                             ? nlohmann::json(pn.layout.single_roll_per_pattern)
+                                                             : nlohmann::json(nullptr)},
                      {"utilisation", n.utilisation},
                      {"resolution_m", n.resolution},
                      {"dxf", pn.dxf.filename().string()},

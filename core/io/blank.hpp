@@ -166,10 +166,10 @@ struct RollOptions {
   double gap = 0;    // m
 };
 
-// A ply's pattern on the roll (nest_on_roll), turned in the blank's plane so
+// A ply's pattern on the roll (lay_on_roll), turned in the blank's plane so
 // that its fibres run along the roll.
 struct PlyNest {
-  RollNest nest;
+  RollLayout layout;
   // The fibres' direction in the blank's plane (its DXF axes), degrees from
   // its first axis, in (-90, 90]: the pattern is turned by minus it. The
   // area-weighted mean over the modelled ply's triangles (a mirrored ply's
@@ -179,7 +179,7 @@ struct PlyNest {
   bool fibres_known = false;
   std::filesystem::path dxf;    // the layout: copies over a length of the roll
   double drawn_length = 0;      // m of roll in it
-  int drawn_copies = 0;
+  int drawn_copies = 0;         // patterns drawn
 };
 
 struct BlankPly {

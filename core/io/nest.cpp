@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <optional>
 #include <utility>
 
 namespace ts {
@@ -265,6 +266,78 @@ RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double
   }
   n.origin = {gap / 2 - lo[0], gap / 2 - lo[1]};
   return n;
+}
+
+RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, bool try_pairs, int bands) {
+  RollLayout best;
+  best.nest = nest_on_roll(rings, roll_width, gap, bands);
+  best.unit = rings;
+  best.area = best.nest.area;
+  best.length = best.nest.length;
+  best.width = best.nest.width;
+  auto per_metre = [](const RollNest& n, int copies) { return n.lanes > 0 ? copies * n.lanes / n.pitch : 0.0; };
+  best.roll_per_pattern = best.nest.lanes > 0 ? best.nest.pitch / best.nest.lanes : 0.0;
+  best.single_roll_per_pattern = best.roll_per_pattern;
+  if (!try_pairs) return best;
+  double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+  for (const Ring2& r : rings)
+    for (const auto& v : r)
+      for (std::size_t c = 0; c < 2; ++c) {
+        lo[c] = std::min(lo[c], v[c]);
+        hi[c] = std::max(hi[c], v[c]);
+      }
+  const double H = hi[1] - lo[1], eps = 1e-9 * (hi[0] - lo[0] + H + gap);
+  constexpr int kFine = 250;  // bands to choose with
+  const double pick = (hi[1] - lo[1] + gap) / kFine;
+  // The turned copy q(v) = t - v beside the pattern: for an offset t_y
+  // across, the shifts t_x at which the two (each grown by gap / 2 all
+  // round) overlap, band by band over their common height; the turned copy
+  // then lies just beyond them, to the right or to the left.
+  double best_rate = per_metre(best.nest, 1);
+  std::optional<std::pair<RollNest, std::array<double, 2>>> found;
+  for (int o = 0; o <= 40; ++o) {
+    const double ty = (lo[1] + hi[1]) + H * (o - 20) / 20.0;
+    std::vector<Ring2> turned = rings;
+    for (Ring2& r : turned)
+      for (auto& v : r) v = {-v[0], ty - v[1]};
+    const double y_lo = std::max(lo[1], ty - hi[1]) - gap, y_hi = std::min(hi[1], ty - lo[1]) + gap;
+    Set forbid;
+    for (double y = y_lo; y < y_hi; y += pick) {
+      Set a = strip_extent(rings, y - gap / 2 + eps, y + pick + gap / 2 - eps);
+      Set b = strip_extent(turned, y - gap / 2 + eps, y + pick + gap / 2 - eps);
+      for (const Interval& i : a)
+        for (const Interval& j : b) forbid.emplace_back(i.first - j.second - gap - eps, i.second - j.first + gap + eps);
+    }
+    merge_open(forbid);
+    if (forbid.empty()) continue;  // one above the other: no nearer than the single layout's lanes
+    for (const double tx : {forbid.back().second, forbid.front().first}) {
+      std::vector<Ring2> pair = rings;
+      for (Ring2 r : turned) {
+        for (auto& v : r) v[0] += tx;
+        pair.push_back(std::move(r));
+      }
+      const RollNest n = nest_on_roll(pair, roll_width, gap, kFine);
+      if (const double rate = per_metre(n, 2); rate > best_rate * 1.005) {
+        best_rate = rate;
+        found = std::pair{n, std::array<double, 2>{tx, ty}};
+      }
+    }
+  }
+  if (!found) return best;
+  // The chosen pair with the bands asked for; kept where it still saves.
+  std::vector<Ring2> pair = rings;
+  for (Ring2 r : rings) {
+    for (auto& v : r) v = {found->second[0] - v[0], found->second[1] - v[1]};
+    pair.push_back(std::move(r));
+  }
+  const RollNest n = nest_on_roll(pair, roll_width, gap, bands);
+  if (!(per_metre(n, 2) > per_metre(best.nest, 1) * 1.005)) return best;
+  best.nest = n;
+  best.unit = std::move(pair);
+  best.pairs = true;
+  best.turned = found->second;
+  best.roll_per_pattern = n.pitch / (2.0 * n.lanes);
+  return best;
 }
 
 }  // namespace ts

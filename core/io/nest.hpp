@@ -45,4 +45,25 @@ struct RollNest {
 // not finite or below 0, or bands below 1.
 RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, int bands = 1000);
 
+// The layout a cutting plan takes: every copy alike (nest_on_roll of the
+// pattern), or, where that saves at least half a per cent of the roll,
+// pairs of a copy and one turned by 180 degrees in the roll's plane (the
+// fibres still along the roll), the pair nested as one unit. A pair
+// places the turned copy beside the first along the roll, as near as the
+// gap allows, at each of 41 offsets across the roll from one above the
+// other to one below it, and on either side; each pair is nested with 250
+// bands to choose, the best again with `bands`.
+struct RollLayout {
+  RollNest nest;                 // of the unit: the pattern, or the pair
+  std::vector<Ring2> unit;       // its rings: the pattern's, and with pairs the turned copy's
+  bool pairs = false;            // the unit is a pair
+  std::array<double, 2> turned{};  // pairs: the turned copy's vertex of the pattern's v lies at turned - v
+  double area = 0;               // m^2: the pattern's
+  double length = 0, width = 0;  // m: the pattern's extent along and across the roll
+  double roll_per_pattern = 0;   // m of roll per pattern (0 where no lane fits)
+  double single_roll_per_pattern = 0;  // m: every copy alike, for comparison (0 where no lane fits)
+};
+RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, bool try_pairs = true,
+                       int bands = 1000);
+
 }  // namespace ts

@@ -1,7 +1,8 @@
 // Random patterns on a roll (scripts/fuzz_blank.py): star polygons of 3 to
 // 24 points, one or two pieces, a hole in some, turned at random, gaps from
 // 0 to a tenth of their size, rolls from narrower than the pattern to ten
-// times it. Every layout must keep its copies apart by the gap (the exact
+// times it; a tenth of them laid out with pairs turned by 180 degrees tried
+// (lay_on_roll), whose copies and turned copies are checked alike. Every layout must keep its copies apart by the gap (the exact
 // distance between the polygons, over 7 lanes x 9 copies; 1e-9 of the
 // size allowed for round-off), its lanes within the roll, and its figures
 // consistent (utilisation, roll per pattern, area by the shoelace sum).
@@ -77,7 +78,7 @@ int main(int argc, char** argv) {
   const int N = argc > 1 ? std::atoi(argv[1]) : 1000;
   const unsigned seed0 = argc > 2 ? static_cast<unsigned>(std::atoi(argv[2])) : 1;
   const int only = argc > 3 ? std::atoi(argv[3]) : -1;
-  int bad = 0, none = 0;
+  int bad = 0, none = 0, pairs_taken = 0;
   double worst_excess = 0;  // the nearest copies' distance over the gap, in bands
   for (int it = 0; it < N; ++it) {
     if (only >= 0 && it != only) continue;
@@ -123,21 +124,45 @@ int main(int argc, char** argv) {
     const double width = (hi - lo) * (0.8 + 9 * u(rng));
     RollNest n;
     const int bands = 200 + static_cast<int>(u(rng) * 800);
-    if (only >= 0) std::printf("width %.17g, gap %.17g, bands %d\n", width, gap, bands);
+    const bool try_pairs = u(rng) < 0.1;
+    if (only >= 0) std::printf("width %.17g, gap %.17g, bands %d%s\n", width, gap, bands, try_pairs ? ", pairs" : "");
+    std::vector<Ring2> unit = rings;
+    bool paired = false;
     try {
-      n = nest_on_roll(rings, width, gap, bands);
+      if (try_pairs) {
+        const RollLayout l = lay_on_roll(rings, width, gap, true, bands);
+        n = l.nest;
+        unit = l.unit;
+        paired = l.pairs;
+        pairs_taken += paired;
+        if (!(l.roll_per_pattern <= l.single_roll_per_pattern || l.single_roll_per_pattern == 0)) {
+          std::printf("case %d: pairs take more roll than copies alike\n", it);
+          ++bad;
+        }
+      } else {
+        n = nest_on_roll(rings, width, gap, bands);
+      }
     } catch (const std::exception& e) {
       std::printf("case %d: threw %s\n", it, e.what());
       ++bad;
       continue;
     }
-    bool ok = std::abs(n.area - area) <= 1e-12 * area;
+    bool ok = std::abs(n.area - (paired ? 2 : 1) * area) <= 1e-12 * area;
+    if (paired) {  // the unit's extent across
+      lo = 1e300;
+      hi = -1e300;
+      for (const Ring2& r : unit)
+        for (const Pt& v : r) {
+          lo = std::min(lo, v[1]);
+          hi = std::max(hi, v[1]);
+        }
+    }
     const double across = hi - lo + gap;
     const int fit = width + 1e-9 * size >= across ? 1 + static_cast<int>(std::floor((width - across) / n.lane_step + 1e-9)) : 0;
     ok = ok && n.lanes == fit;
     if (n.lanes > 0)
       ok = ok && std::abs(n.utilisation - n.lanes * n.area / (width * n.pitch)) <= 1e-12 &&
-           std::abs(n.roll_per_pattern - n.pitch / n.lanes) <= 1e-15;
+           std::abs(n.roll_per_pattern - n.pitch / n.lanes) <= 1e-15;  // of the unit
     else
       ++none;
     // The first lane from gap / 2 to the last within width - gap / 2.
@@ -149,8 +174,11 @@ int main(int argc, char** argv) {
     for (int j = -3; j <= 3 && nearest >= 0; ++j)
       for (int i = -4; i <= 4 && nearest >= 0; ++i)
         if (i != 0 || j != 0)
-          nearest = std::min(nearest, distance(rings, moved(rings, i * n.pitch + j * n.lane_shift, j * n.lane_step),
+          nearest = std::min(nearest, distance(unit, moved(unit, i * n.pitch + j * n.lane_shift, j * n.lane_step),
                                                1e-9 * size));
+    if (paired)  // the pattern and its turned copy in the unit
+      nearest = std::min(nearest, distance({unit.begin(), unit.begin() + static_cast<long>(rings.size())},
+                                           {unit.begin() + static_cast<long>(rings.size()), unit.end()}, 1e-9 * size));
     ok = ok && nearest >= gap - 1e-9 * size;
     if (nearest >= 0) worst_excess = std::max(worst_excess, (nearest - gap) / n.resolution);
     if (only >= 0)
@@ -166,7 +194,8 @@ int main(int argc, char** argv) {
                   area, nearest, ok ? "" : "  FAILED");
     if (!ok) ++bad;
   }
-  std::printf("%d cases, %d failed, %d with a roll too narrow; the nearest copies at most %.3g bands beyond the gap\n",
-              only >= 0 ? 1 : N, bad, none, worst_excess);
+  std::printf("%d cases, %d failed, %d with a roll too narrow, %d in pairs turned by 180 deg; the nearest copies at "
+              "most %.3g bands beyond the gap\n",
+              only >= 0 ? 1 : N, bad, none, pairs_taken, worst_excess);
   return bad ? 1 : 0;
 }

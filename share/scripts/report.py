@@ -440,8 +440,10 @@ def plot_nest(where, part, n, out):
     ax.set_ylabel("across (mm)")
     ax.grid(alpha=0.3)
     if n["lanes"] > 0:
-        what = ("%d lane%s, a pattern every %.4g mm, %.4g mm of roll per pattern, %.1f %% of the roll used"
-                % (n["lanes"], "" if n["lanes"] == 1 else "s", 1e3 * n["pitch_m"], 1e3 * n["roll_length_per_pattern_m"],
+        pairs = n.get("pairs_turned_180")
+        what = ("%d lane%s%s, a %s every %.4g mm, %.4g mm of roll per pattern, %.1f %% of the roll used"
+                % (n["lanes"], "" if n["lanes"] == 1 else "s", " of pairs (one turned by 180 deg)" if pairs else "",
+                   "pair" if pairs else "pattern", 1e3 * n["pitch_m"], 1e3 * n["roll_length_per_pattern_m"],
                    100 * n["utilisation"]))
     else:
         what = "the pattern does not fit across the roll"

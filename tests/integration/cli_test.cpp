@@ -2314,7 +2314,8 @@ TEST(Export, WholePlyOfASymmetryModelIsTheMirroredRuns) {
 // `thermostamp blank --roll`: the whole plies' patterns of a hemisphere run
 // (cylinder r = 0.1 m) laid on a roll 500 mm wide, 4 mm apart. The fibres
 // ([1, -1, 0], -45 deg) run along the roll: every copy of the layout (read
-// by ezdxf) is the CSV's pattern turned by 45 deg, within the roll's edges
+// by ezdxf) is the CSV's pattern turned by 45 deg (or 225 deg, the turned
+// copy of a pair), within the roll's edges
 // less half the gap, and no two copies are nearer than the gap (the
 // exact distance between their polylines, numpy). The figures of
 // blank.json agree with each other, and `report` draws the layouts;
@@ -2343,13 +2344,15 @@ TEST(Blank, PatternsNestedOnARoll) {
     EXPECT_NEAR(n["pattern_area_m2"].get<double>(), area, 1e-12 * area) << ply;
     const int lanes = n["lanes"].get<int>();
     const double pitch = n["pitch_m"].get<double>(), step = n["lane_step_m"].get<double>();
-    const double across = n["pattern_width_m"].get<double>() + 0.004;
+    const double across = n["unit_width_m"].get<double>() + 0.004;
     EXPECT_GE(lanes, 2) << ply;
     EXPECT_LE(across + (lanes - 1) * step, 0.5) << ply << ": the lanes fit";
     EXPECT_GT(across + lanes * step, 0.5) << ply << ": one more would not";
-    EXPECT_GE(pitch, n["pattern_length_m"].get<double>() + 0.004 - 1e-12) << ply;
-    EXPECT_NEAR(n["utilisation"].get<double>(), lanes * area / (0.5 * pitch), 1e-12) << ply;
-    EXPECT_NEAR(n["roll_length_per_pattern_m"].get<double>(), pitch / lanes, 1e-15) << ply;
+    const int per_unit = n["pairs_turned_180"].get<bool>() ? 2 : 1;
+    EXPECT_NEAR(n["utilisation"].get<double>(), per_unit * lanes * area / (0.5 * pitch), 1e-12) << ply;
+    EXPECT_NEAR(n["roll_length_per_pattern_m"].get<double>(), pitch / (per_unit * lanes), 1e-15) << ply;
+    EXPECT_LE(n["roll_length_per_pattern_m"].get<double>(), n["alike_roll_length_per_pattern_m"].get<double>())
+        << ply;
     EXPECT_GT(n["drawn_copies"].get<int>(), 3 * lanes - 1) << ply;
     std::ofstream(dir / "nest.py") << R"(import csv, math, sys, ezdxf, numpy as np
 doc = ezdxf.readfile(sys.argv[1])
@@ -2364,10 +2367,10 @@ rows = [r for r in csv.DictReader(open(sys.argv[2])) if r["kind"] == "pattern"]
 pattern = 1000 * np.array([(float(r["blank_x_m"]), float(r["blank_y_m"])) for r in rows])
 c, s = math.cos(math.radians(45)), math.sin(math.radians(45))
 turned = pattern @ np.array([[c, s], [-s, c]])  # turned by +45 deg: the fibres (1, -1) along x
-for p in polys:
+for p in polys:  # each the pattern so turned, or turned by 180 deg more (pairs), and moved
     assert len(p) == len(turned)
-    d = p - turned
-    assert np.abs(d - d[0]).max() < 1e-6, np.abs(d - d[0]).max()
+    d, e = p - turned, p + turned
+    assert min(np.abs(d - d[0]).max(), np.abs(e - e[0]).max()) < 1e-6, np.abs(d - d[0]).max()
     assert p[:, 1].min() >= gap / 2 - 1e-6 and p[:, 1].max() <= width - gap / 2 + 1e-6
 def seg_dist(a, b):  # the least distance between the sides of two closed polylines
     p0, p1 = a, np.roll(a, -1, axis=0)

@@ -227,6 +227,58 @@ TEST(Nest, PitchSearchEndsWhereTheProductRoundsDown) {
   EXPECT_GE(nearest, 0.0);
 }
 
+// The copies of the units of a layout (the pattern, or the pair) around the
+// first: the nearest distance between any two of their pieces, over 7
+// lanes x 9 units; -1 where two overlap.
+double nearest_unit(const std::vector<Ring2>& unit, const ts::RollNest& n) {
+  double d = 1e300;
+  for (int j = -3; j <= 3; ++j)
+    for (int i = -4; i <= 4; ++i)
+      for (std::size_t a = 0; a < unit.size(); ++a)
+        for (std::size_t b = 0; b < unit.size(); ++b) {
+          if (i == 0 && j == 0 && a >= b) continue;  // a piece against itself, each pair once
+          d = std::min(d, distance(unit[a], moved(unit[b], i * n.pitch + j * n.lane_shift, j * n.lane_step)));
+        }
+  return d;
+}
+
+// Right triangles pair with their copies turned by 180 degrees into
+// squares that fill the roll, where copies all alike fill at most 2/3 of
+// it (the densest lattice of a triangle's translates); discs on a wide roll
+// gain nothing from pairs and stay alike.
+TEST(Nest, TrianglesPairIntoSquaresDiscsStayAlike) {
+  const Ring2 tri{{0, 0}, {0.2, 0}, {0, 0.2}};
+  for (const double gap : {0.0, 0.01}) {
+    const ts::RollLayout l = ts::lay_on_roll({tri}, 1.0, gap);
+    ASSERT_TRUE(l.pairs) << "gap " << gap;
+    ASSERT_EQ(l.unit.size(), 2u);
+    EXPECT_NEAR(l.area, 0.02, 1e-15);
+    // The pair: the square 0.2 + gap (the diagonal cut a band wider), lanes of them.
+    const double side = 0.2 + gap;
+    const int lanes = 1 + static_cast<int>((1.0 - side) / side);
+    EXPECT_EQ(l.nest.lanes, lanes) << "gap " << gap;
+    EXPECT_NEAR(l.roll_per_pattern, side / (2 * lanes), 0.01 * side / (2 * lanes)) << "gap " << gap;
+    EXPECT_GT(l.single_roll_per_pattern, 1.45 * l.roll_per_pattern) << "gap " << gap;
+    if (gap == 0) {
+      EXPECT_GT(l.nest.utilisation, 0.99);
+    }
+    EXPECT_GE(nearest_unit(l.unit, l.nest), gap * (1 - 1e-9)) << "gap " << gap;
+    // The turned copy is the pattern turned: its vertex of v at turned - v.
+    for (std::size_t k = 0; k < tri.size(); ++k)
+      for (std::size_t c = 0; c < 2; ++c) EXPECT_NEAR(l.unit[1][k][c], l.turned[c] - tri[k][c], 1e-15);
+    EXPECT_FALSE(ts::lay_on_roll({tri}, 1.0, gap, false).pairs);
+  }
+  // Discs on a roll 20 m wide: the hexagonal lanes are the densest packing,
+  // which no pair beats. On a roll 1 m wide a pair may fit the width
+  // better; whichever is taken keeps the copies apart.
+  const ts::RollLayout disc = ts::lay_on_roll({ellipse(0.1, 0.1, 360)}, 20.0, 0.0);
+  EXPECT_FALSE(disc.pairs);
+  EXPECT_EQ(disc.roll_per_pattern, disc.single_roll_per_pattern);
+  const ts::RollLayout narrow = ts::lay_on_roll({ellipse(0.1, 0.1, 360)}, 1.0, 0.0);
+  EXPECT_LE(narrow.roll_per_pattern, narrow.single_roll_per_pattern);
+  EXPECT_GE(nearest_unit(narrow.unit, narrow.nest), 0.0);
+}
+
 TEST(Nest, RefusesWhatIsNoPattern) {
   const Ring2 line{{0, 0}, {1, 0}, {2, 0}};
   EXPECT_THROW(ts::nest_on_roll({line}, 1.0, 0.0), std::invalid_argument);
