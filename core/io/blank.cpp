@@ -1964,11 +1964,12 @@ std::pair<double, double> fibre_angle(const FramePly& d, const std::vector<doubl
 }
 
 // The layout of a nest (roll axes, mm): the roll's two edges on layer
-// ROLL, each copy whose extent lies within the first `length` m of the
-// roll on layer PATTERN. Returns the copies drawn, -1 where the file cannot
-// be written.
-int write_nest_dxf(const std::filesystem::path& file, const std::string& ply, const std::vector<Ring2>& rings,
-                   const RollNest& n, const RollOptions& roll, double length) {
+// ROLL, on layer PATTERN each pattern of the units (the unit's rings in
+// `pieces` patterns of as many rings each) that lies wholly within the
+// first `length` m of the roll. Returns the patterns drawn, -1 where the
+// file cannot be written.
+int write_nest_dxf(const std::filesystem::path& file, const std::string& ply, const std::vector<Ring2>& unit,
+                   int pieces, const RollNest& n, const RollOptions& roll, double length) {
   std::ofstream f(file);
   if (!f) return -1;
   auto num = [](double v) {
@@ -1986,24 +1987,37 @@ int write_nest_dxf(const std::filesystem::path& file, const std::string& ply, co
   for (const double y : {0.0, roll.width})
     f << "0\nLINE\n8\nROLL\n10\n0.0\n20\n" << num(y) << "\n30\n0.0\n11\n" << num(length) << "\n21\n"
       << num(y) << "\n31\n0.0\n";
-  int copies = 0;
+  const std::size_t per = unit.size() / static_cast<std::size_t>(pieces);
+  std::vector<std::array<double, 2>> extent;  // each piece's extent along the roll
+  for (int k = 0; k < pieces; ++k) {
+    std::array<double, 2> e{1e300, -1e300};
+    for (std::size_t r = k * per; r < (k + 1) * per; ++r)
+      for (const auto& v : unit[r]) e = {std::min(e[0], v[0]), std::max(e[1], v[0])};
+    extent.push_back(e);
+  }
+  const double tol = 1e-9 * (n.length + n.width);
+  int drawn = 0;
   for (int j = 0; j < n.lanes; ++j) {
-    const double shift = std::fmod(j * n.lane_shift, n.pitch);
-    for (int i = 0;; ++i) {
-      const double dx = n.origin[0] + i * n.pitch + shift, dy = n.origin[1] + j * n.lane_step;
-      if (roll.gap / 2 + i * n.pitch + shift + n.length > length) break;
-      for (const Ring2& r : rings) {
-        f << "0\nPOLYLINE\n8\nPATTERN\n66\n1\n70\n1\n10\n0.0\n20\n0.0\n30\n0.0\n";
-        for (const auto& v : r)
-          f << "0\nVERTEX\n8\nPATTERN\n10\n" << num(v[0] + dx) << "\n20\n" << num(v[1] + dy) << "\n30\n0.0\n";
-        f << "0\nSEQEND\n8\nPATTERN\n";
+    const double shift = std::fmod(j * n.lane_shift, n.pitch), dy = n.origin[1] + j * n.lane_step;
+    for (int i = -2;; ++i) {
+      const double dx = n.origin[0] + i * n.pitch + shift;
+      if (roll.gap / 2 + i * n.pitch + shift > length) break;  // the unit starts beyond the length drawn
+      for (int k = 0; k < pieces; ++k) {
+        if (dx + extent[static_cast<std::size_t>(k)][0] < -tol || dx + extent[static_cast<std::size_t>(k)][1] > length + tol)
+          continue;
+        for (std::size_t r = k * per; r < (k + 1) * per; ++r) {
+          f << "0\nPOLYLINE\n8\nPATTERN\n66\n1\n70\n1\n10\n0.0\n20\n0.0\n30\n0.0\n";
+          for (const auto& v : unit[r])
+            f << "0\nVERTEX\n8\nPATTERN\n10\n" << num(v[0] + dx) << "\n20\n" << num(v[1] + dy) << "\n30\n0.0\n";
+          f << "0\nSEQEND\n8\nPATTERN\n";
+        }
+        ++drawn;
       }
-      ++copies;
     }
   }
   f << "0\nENDSEC\n0\nEOF\n";
   f.close();
-  return f ? copies : -1;
+  return f ? drawn : -1;
 }
 
 }  // namespace
@@ -2116,9 +2130,9 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
       const RollNest& n = pn.layout.nest;
       pn.drawn_length = std::max(1.0, 3 * n.pitch + n.length + roll->gap);
       pn.dxf = out / (d.name + "_nest.dxf");
-      const int units = write_nest_dxf(pn.dxf, d.name, pn.layout.unit, n, *roll, pn.drawn_length);
-      if (units < 0) throw std::runtime_error("cannot write '" + pn.dxf.string() + "'");
-      pn.drawn_copies = units * (pn.layout.pairs ? 2 : 1);
+      pn.drawn_copies = write_nest_dxf(pn.dxf, d.name, pn.layout.unit, pn.layout.pairs ? 2 : 1, n, *roll,
+                                       pn.drawn_length);
+      if (pn.drawn_copies < 0) throw std::runtime_error("cannot write '" + pn.dxf.string() + "'");
       ply.nest = pn;
     }
     ply.csv = out / (d.name + ".csv");

@@ -227,9 +227,12 @@ def blank(tmp):
         ax.set_ylim(-20, 620)
         ax.set_xlabel("along the roll, the fibres' direction (mm)")
         ax.set_ylabel("across (mm)")
-        ax.set_title("%s, ply_top: %d lanes, pitch %.1f mm, %.1f mm of roll per pattern, %.1f %% of the roll used"
-                     % (title, n["lanes"], 1e3 * n["pitch_m"], 1e3 * n["roll_length_per_pattern_m"],
+        ax.set_title("%s, ply_top: %d lanes%s, pitch %.1f mm, %.1f mm of roll per pattern (all alike %.1f mm), "
+                     "%.1f %% of the roll used"
+                     % (title, n["lanes"], " of pairs" if n["pairs_turned_180"] else "", 1e3 * n["pitch_m"],
+                        1e3 * n["roll_length_per_pattern_m"], 1e3 * n["alike_roll_length_per_pattern_m"],
                         100 * n["utilisation"]), fontsize=9)
+        print("%s: %s" % (title, json.dumps(n)))
         ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(os.path.join(FIG, "hemi_nest.png"), dpi=90)
