@@ -2311,6 +2311,15 @@ TEST(Export, WholePlyOfASymmetryModelIsTheMirroredRuns) {
   EXPECT_NE(flat.out.find(" frames), 85 nodes, 144 triangles;"), std::string::npos) << flat.out;
 }
 
+// A run of the hemisphere scene for `blank` (6 x 6 cells, 0.5 s: the punch
+// 5 mm down, the plies drawn in) whose frames hold the fibres, in DIR/run.
+bool run_for_blank(const std::filesystem::path& dir) {
+  json j = short_hemisphere(0.5, 0.25, 6);
+  j["output"]["fields"] = {"displacement", "fibre_direction"};
+  std::ofstream(dir / "job.json") << j.dump(2);
+  return thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "run")).exit_code == 0;
+}
+
 // `thermostamp blank --roll`: the whole plies' patterns of a hemisphere run
 // (cylinder r = 0.1 m) laid on a roll 500 mm wide, 4 mm apart. The fibres
 // ([1, -1, 0], -45 deg) run along the roll: every copy of the layout (read
@@ -2322,10 +2331,7 @@ TEST(Export, WholePlyOfASymmetryModelIsTheMirroredRuns) {
 // --gap without --roll and a roll of no width are refused with exit 2.
 TEST(Blank, PatternsNestedOnARoll) {
   const auto dir = temp_dir("blank_roll");
-  json j = short_hemisphere(0.5, 0.25, 6);
-  j["output"]["fields"] = {"displacement", "fibre_direction"};
-  std::ofstream(dir / "job.json") << j.dump(2);
-  ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "run")).exit_code, 0);
+  ASSERT_TRUE(run_for_blank(dir));
   const auto r = thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.5 --gap "
                              "0.004 --out " + q(dir / "roll"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -2432,10 +2438,7 @@ print("ok", least)
 // without results and a time without a frame are refused with exit 2.
 TEST(Blank, CutPatternOfARunIsFoundOnItsMesh) {
   const auto dir = temp_dir("blank");
-  json j = short_hemisphere(0.5, 0.25, 6);
-  j["output"]["fields"] = {"displacement", "fibre_direction"};
-  std::ofstream(dir / "job.json") << j.dump(2);
-  ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --quiet --out " + q(dir / "run")).exit_code, 0);
+  ASSERT_TRUE(run_for_blank(dir));
   ASSERT_EQ(thermostamp("export " + q(dir / "run") + " --out " + q(dir / "mesh")).exit_code, 0);
   const std::string cylinder = "cylinder:0,0,0,0,0,1,0.1", plane = "plane:0.06,0,0,-1,0.2,0";
   for (const std::string& trim : {cylinder, plane}) {
