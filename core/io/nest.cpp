@@ -293,7 +293,8 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
   // across, the shifts t_x at which the two (each grown by gap / 2 all
   // round) overlap, band by band over their common height; the turned copy
   // then lies just beyond them, to the right or to the left.
-  double best_rate = per_metre(best.nest, 1);
+  const double need = 1.005 * per_metre(best.nest, 1);  // patterns per metre of roll a pair must beat
+  double best_rate = 0;
   std::optional<std::pair<RollNest, std::array<double, 2>>> found;
   for (int o = 0; o <= 40; ++o) {
     const double ty = (lo[1] + hi[1]) + H * (o - 20) / 20.0;
@@ -317,7 +318,7 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
         pair.push_back(std::move(r));
       }
       const RollNest n = nest_on_roll(pair, roll_width, gap, kFine);
-      if (const double rate = per_metre(n, 2); rate > best_rate * 1.005) {
+      if (const double rate = per_metre(n, 2); rate > need && rate > best_rate) {
         best_rate = rate;
         found = std::pair{n, std::array<double, 2>{tx, ty}};
       }
@@ -331,7 +332,7 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
     pair.push_back(std::move(r));
   }
   const RollNest n = nest_on_roll(pair, roll_width, gap, bands);
-  if (!(per_metre(n, 2) > per_metre(best.nest, 1) * 1.005)) return best;
+  if (!(per_metre(n, 2) > need)) return best;
   best.nest = n;
   best.unit = std::move(pair);
   best.pairs = true;
