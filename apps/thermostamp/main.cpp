@@ -105,8 +105,9 @@ FOLDER/blank.json (areas, lengths); --margin M: the trim line moved out by
 M m on the formed part (an allowance; below 0, in); --whole: mirrored as
 with export; --roll W: also lays each flat pattern on a roll W m wide with
 its fibres along the roll, copies in lanes at least G m apart (--gap,
-default 0): the lanes, the roll's length per pattern and the share of the
-roll used, in blank.json and FOLDER/<ply>_nest.dxf (the layout, mm)
+default 0), all alike or in pairs with one turned by 180 degrees where
+that saves roll: the lanes, the roll's length per pattern and the share
+of the roll used, in blank.json and FOLDER/<ply>_nest.dxf (the layout, mm)
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
