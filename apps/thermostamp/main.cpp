@@ -432,7 +432,8 @@ int cmd_plugins(const Args& a) {
 int cmd_blank(const Args& a) {
   if (a.positional.size() != 1) throw UsageError("expected one output folder");
   if (a.trims.empty()) throw UsageError("blank needs a --trim surface");
-  if (a.gap && !a.roll) throw UsageError("--gap is the gap between patterns on a roll: give the roll's width with --roll");
+  if (a.gap && !a.roll)
+    throw UsageError("--gap is the gap between patterns on a roll: give the roll's width with --roll");
   std::optional<ts::RollOptions> roll;
   if (a.roll) roll = ts::RollOptions{*a.roll, a.gap.value_or(0.0)};
   const std::filesystem::path dir = a.positional[0];
@@ -528,7 +529,8 @@ int cmd_blank(const Args& a) {
       }
       std::cout << "; " << p.nest->dxf.string() << "\n";
     } else if (roll) {
-      std::cout << "  not nested: " << (c.outlines.empty() ? "nothing of the ply lies inside the trim" : "the blank is not flat")
+      std::cout << "  not nested: "
+                << (c.outlines.empty() ? "nothing of the ply lies inside the trim" : "the blank is not flat")
                 << "\n";
     }
     if (!c.fallback.empty())

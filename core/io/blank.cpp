@@ -416,18 +416,6 @@ std::vector<Ring> read_polygon(const std::string& spec, const std::string& what,
   return rings;
 }
 
-// Whether (x, y) lies inside one ring (crossings of a ray along +x).
-bool ring_contains(const Ring& p, double x, double y) {
-  bool inside = false;
-  const std::size_t n = p.size();
-  for (std::size_t k = 0, j = n - 1; k < n; j = k++) {
-    const auto& a = p[j];
-    const auto& b = p[k];
-    if ((a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
-  }
-  return inside;
-}
-
 // The signed distance of (x, y) to a polygon of one or more rings:
 // negative inside (an odd number of sides crossed on the way out).
 double polygon_level(const std::vector<Ring>& rings, double x, double y) {
@@ -1866,38 +1854,56 @@ double mark_spacing(double extent) {
   return best;
 }
 
-// A DXF file (AutoCAD R12, ASCII; units mm, $INSUNITS 4): each outline as a
-// closed POLYLINE, the blank's on layer BLANK, the pattern's on PATTERN,
-// and the fibre marks as LINEs on layer FIBRE.
+// DXF (AutoCAD R12, ASCII) in mm ($INSUNITS 4): a number, the header
+// with a comment and the layers (name and colour), a closed POLYLINE of
+// points (mm) and a LINE.
+std::string dxf_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return std::string(buf);
+}
+
+void dxf_begin(std::ostream& f, const std::string& comment,
+               const std::vector<std::pair<std::string, int>>& layers) {
+  f << "999\n" << comment << "\n"
+    << "0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nAC1009\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n"
+    << "0\nSECTION\n2\nTABLES\n0\nTABLE\n2\nLAYER\n70\n" << layers.size() << "\n";
+  for (const auto& [name, colour] : layers)
+    f << "0\nLAYER\n2\n" << name << "\n70\n0\n62\n" << colour << "\n6\nCONTINUOUS\n";
+  f << "0\nENDTAB\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n";
+}
+
+template <class Points>
+void dxf_polyline(std::ostream& f, const char* layer, const Points& points) {
+  f << "0\nPOLYLINE\n8\n" << layer << "\n66\n1\n70\n1\n10\n0.0\n20\n0.0\n30\n0.0\n";
+  for (const auto& [x, y] : points)
+    f << "0\nVERTEX\n8\n" << layer << "\n10\n" << dxf_number(x) << "\n20\n" << dxf_number(y) << "\n30\n0.0\n";
+  f << "0\nSEQEND\n8\n" << layer << "\n";
+}
+
+void dxf_line(std::ostream& f, const char* layer, double x0, double y0, double x1, double y1) {
+  f << "0\nLINE\n8\n" << layer << "\n10\n" << dxf_number(x0) << "\n20\n" << dxf_number(y0) << "\n30\n0.0\n11\n"
+    << dxf_number(x1) << "\n21\n" << dxf_number(y1) << "\n31\n0.0\n";
+}
+
+// A ply's DXF file: each outline as a closed POLYLINE, the blank's on
+// layer BLANK, the pattern's on PATTERN, and the fibre marks as LINEs on
+// layer FIBRE.
 bool write_dxf(const std::filesystem::path& file, const BlankPly& ply) {
   std::ofstream f(file);
   if (!f) return false;
   const auto axes = plane_axes(ply.normal);
-  auto num = [](double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.10g", v);
-    return std::string(buf);
-  };
-  f << "999\nthermostamp blank: ply '" << ply.name << "', mm\n"
-    << "0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nAC1009\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n"
-    << "0\nSECTION\n2\nTABLES\n0\nTABLE\n2\nLAYER\n70\n3\n"
-    << "0\nLAYER\n2\nBLANK\n70\n0\n62\n8\n6\nCONTINUOUS\n"
-    << "0\nLAYER\n2\nPATTERN\n70\n0\n62\n1\n6\nCONTINUOUS\n"
-    << "0\nLAYER\n2\nFIBRE\n70\n0\n62\n5\n6\nCONTINUOUS\n"
-    << "0\nENDTAB\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n";
+  dxf_begin(f, "thermostamp blank: ply '" + ply.name + "', mm", {{"BLANK", 8}, {"PATTERN", 1}, {"FIBRE", 5}});
   auto outline = [&](const Outline& o, const char* layer) {
-    f << "0\nPOLYLINE\n8\n" << layer << "\n66\n1\n70\n1\n10\n0.0\n20\n0.0\n30\n0.0\n";
-    for (const OutlinePoint& q : o.points)
-      f << "0\nVERTEX\n8\n" << layer << "\n10\n" << num(1000 * dot(q.blank, axes[0])) << "\n20\n"
-        << num(1000 * dot(q.blank, axes[1])) << "\n30\n0.0\n";
-    f << "0\nSEQEND\n8\n" << layer << "\n";
+    std::vector<std::pair<double, double>> mm;
+    for (const OutlinePoint& q : o.points) mm.emplace_back(1000 * dot(q.blank, axes[0]), 1000 * dot(q.blank, axes[1]));
+    dxf_polyline(f, layer, mm);
   };
   for (const Outline& o : ply.blank.outlines) outline(o, "BLANK");
   for (const Outline& o : ply.pattern.outlines) outline(o, "PATTERN");
   for (const FibreMark& k : ply.marks)
-    f << "0\nLINE\n8\nFIBRE\n10\n" << num(1000 * dot(k.from, axes[0])) << "\n20\n" << num(1000 * dot(k.from, axes[1]))
-      << "\n30\n0.0\n11\n" << num(1000 * dot(k.to, axes[0])) << "\n21\n" << num(1000 * dot(k.to, axes[1]))
-      << "\n31\n0.0\n";
+    dxf_line(f, "FIBRE", 1000 * dot(k.from, axes[0]), 1000 * dot(k.from, axes[1]), 1000 * dot(k.to, axes[0]),
+             1000 * dot(k.to, axes[1]));
   f << "0\nENDSEC\n0\nEOF\n";
   f.close();
   return static_cast<bool>(f);
@@ -1972,21 +1978,10 @@ int write_nest_dxf(const std::filesystem::path& file, const std::string& ply, co
                    int pieces, const RollNest& n, const RollOptions& roll, double length) {
   std::ofstream f(file);
   if (!f) return -1;
-  auto num = [](double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.10g", 1000 * v);
-    return std::string(buf);
-  };
-  f << "999\nthermostamp blank: ply '" << ply << "' nested on a roll " << num(roll.width)
-    << " mm wide, fibres along x, mm\n"
-    << "0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nAC1009\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n"
-    << "0\nSECTION\n2\nTABLES\n0\nTABLE\n2\nLAYER\n70\n2\n"
-    << "0\nLAYER\n2\nROLL\n70\n0\n62\n8\n6\nCONTINUOUS\n"
-    << "0\nLAYER\n2\nPATTERN\n70\n0\n62\n1\n6\nCONTINUOUS\n"
-    << "0\nENDTAB\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n";
-  for (const double y : {0.0, roll.width})
-    f << "0\nLINE\n8\nROLL\n10\n0.0\n20\n" << num(y) << "\n30\n0.0\n11\n" << num(length) << "\n21\n"
-      << num(y) << "\n31\n0.0\n";
+  dxf_begin(f, "thermostamp blank: ply '" + ply + "' nested on a roll " + dxf_number(1000 * roll.width) +
+                   " mm wide, fibres along x, mm",
+            {{"ROLL", 8}, {"PATTERN", 1}});
+  for (const double y : {0.0, roll.width}) dxf_line(f, "ROLL", 0, 1000 * y, 1000 * length, 1000 * y);
   const std::size_t per = unit.size() / static_cast<std::size_t>(pieces);
   std::vector<std::array<double, 2>> extent;  // each piece's extent along the roll
   for (int k = 0; k < pieces; ++k) {
@@ -2003,13 +1998,12 @@ int write_nest_dxf(const std::filesystem::path& file, const std::string& ply, co
       const double dx = n.origin[0] + i * n.pitch + shift;
       if (roll.gap / 2 + i * n.pitch + shift > length) break;  // the unit starts beyond the length drawn
       for (int k = 0; k < pieces; ++k) {
-        if (dx + extent[static_cast<std::size_t>(k)][0] < -tol || dx + extent[static_cast<std::size_t>(k)][1] > length + tol)
-          continue;
+        const auto& e = extent[static_cast<std::size_t>(k)];
+        if (dx + e[0] < -tol || dx + e[1] > length + tol) continue;
         for (std::size_t r = k * per; r < (k + 1) * per; ++r) {
-          f << "0\nPOLYLINE\n8\nPATTERN\n66\n1\n70\n1\n10\n0.0\n20\n0.0\n30\n0.0\n";
-          for (const auto& v : unit[r])
-            f << "0\nVERTEX\n8\nPATTERN\n10\n" << num(v[0] + dx) << "\n20\n" << num(v[1] + dy) << "\n30\n0.0\n";
-          f << "0\nSEQEND\n8\nPATTERN\n";
+          std::vector<std::pair<double, double>> mm;
+          for (const auto& v : unit[r]) mm.emplace_back(1000 * (v[0] + dx), 1000 * (v[1] + dy));
+          dxf_polyline(f, "PATTERN", mm);
         }
         ++drawn;
       }
@@ -2181,10 +2175,11 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
       if (ply.nest) {
         const PlyNest& pn = *ply.nest;
         const RollNest& n = pn.layout.nest;
+        auto known = [&](double v) { return pn.fibres_known ? nlohmann::json(v) : nlohmann::json(nullptr); };
         j["nest"] = {{"roll_width_m", roll->width},
                      {"gap_m", roll->gap},
-                     {"fibre_angle_deg", pn.fibres_known ? nlohmann::json(pn.fibre_angle_deg) : nlohmann::json(nullptr)},
-                     {"fibre_spread_deg", pn.fibres_known ? nlohmann::json(pn.fibre_spread_deg) : nlohmann::json(nullptr)},
+                     {"fibre_angle_deg", known(pn.fibre_angle_deg)},
+                     {"fibre_spread_deg", known(pn.fibre_spread_deg)},
                      {"pattern_length_m", pn.layout.length},
                      {"pattern_width_m", pn.layout.width},
                      {"pattern_area_m2", pn.layout.area},

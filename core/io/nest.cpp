@@ -80,15 +80,6 @@ double signed_area(const Ring2& r) {
   return s / 2;
 }
 
-bool inside(const Ring2& r, double x, double y) {
-  bool in = false;
-  for (std::size_t k = 0, j = r.size() - 1; k < r.size(); j = k++)
-    if ((r[k][1] > y) != (r[j][1] > y) &&
-        x < (r[j][0] - r[k][0]) * (y - r[k][1]) / (r[j][1] - r[k][1]) + r[k][0])
-      in = !in;
-  return in;
-}
-
 // The area inside an odd number of rings: each ring's area, counted
 // against the region where it lies inside an odd number of the others (a
 // hole's), whichever way round it runs. Rings neither cross nor touch.
@@ -98,7 +89,7 @@ double region_area(const std::vector<Ring2>& rings) {
     if (rings[k].size() < 3) continue;
     int depth = 0;
     for (std::size_t j = 0; j < rings.size(); ++j)
-      if (j != k && rings[j].size() >= 3 && inside(rings[j], rings[k][0][0], rings[k][0][1])) ++depth;
+      if (j != k && rings[j].size() >= 3 && ring_contains(rings[j], rings[k][0][0], rings[k][0][1])) ++depth;
     area += (depth % 2 ? -1 : 1) * std::abs(signed_area(rings[k]));
   }
   return area;
@@ -152,8 +143,20 @@ Set intersect(const Set& a, const Set& b) {
 
 }  // namespace
 
+bool ring_contains(const Ring2& p, double x, double y) {
+  bool inside = false;
+  const std::size_t n = p.size();
+  for (std::size_t k = 0, j = n - 1; k < n; j = k++) {
+    const auto& a = p[j];
+    const auto& b = p[k];
+    if ((a[1] > y) != (b[1] > y) && x < a[0] + (y - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
+  }
+  return inside;
+}
+
 RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, int bands) {
-  if (!(std::isfinite(roll_width) && roll_width >= 0)) throw std::invalid_argument("a roll width not finite or below 0");
+  if (!(std::isfinite(roll_width) && roll_width >= 0))
+    throw std::invalid_argument("a roll width not finite or below 0");
   if (!(std::isfinite(gap) && gap >= 0)) throw std::invalid_argument("a gap not finite or below 0");
   if (bands < 1) throw std::invalid_argument("fewer than one band");
   RollNest n;
@@ -259,7 +262,8 @@ RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double
   n.lane_step = m_best * step;
   n.lane_shift = s_best;
   const double across = n.width + gap;  // a lane's height on the roll
-  n.lanes = roll_width + eps >= across ? 1 + static_cast<int>(std::floor((roll_width - across + eps) / n.lane_step)) : 0;
+  n.lanes =
+      roll_width + eps >= across ? 1 + static_cast<int>(std::floor((roll_width - across + eps) / n.lane_step)) : 0;
   if (n.lanes > 0) {
     n.roll_per_pattern = n.pitch / n.lanes;
     n.utilisation = roll_width > 0 ? n.lanes * n.area / (roll_width * n.pitch) : 0.0;

@@ -14,6 +14,9 @@ namespace ts {
 
 using Ring2 = std::vector<std::array<double, 2>>;
 
+// Whether (x, y) lies inside a ring (crossings of a ray along +x).
+bool ring_contains(const Ring2& ring, double x, double y);
+
 struct RollNest {
   double length = 0, width = 0;  // m: the pattern's extent along and across the roll
   double area = 0;               // m^2: the pattern's
