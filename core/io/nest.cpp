@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <optional>
 #include <utility>
 
 namespace ts {
@@ -67,6 +66,38 @@ Set strip_extent(const std::vector<Ring2>& rings, double a, double b) {
     for (std::size_t k = 0; k + 1 < xs->size(); k += 2) out.emplace_back((*xs)[k], (*xs)[k + 1]);
   }
   merge_closed(out);
+  return out;
+}
+
+// The pattern in `count` bands of height `step` from `y0` up, each band
+// by the extent along the roll of the points within `r` of the pattern and
+// level with it (a disc of radius r about each point of the pattern). A
+// band's own part of the pattern is taken by its extent (strip_extent, the
+// strip drawn in by `eps` so that a band whose edge lies along an edge of
+// the pattern takes none of the region beyond), and a part j bands away
+// grown by sqrt(r^2 - d^2), d = (j - 1) step its least distance across the
+// roll from the band: the set holds every point within r of the pattern
+// and none beyond r + 2 step (a point of a band's part of the pattern lies
+// at most a step across the roll from the band).
+std::vector<Set> grown_bands(const std::vector<Ring2>& rings, double y0, double step, int count, double r,
+                             double eps) {
+  std::vector<Set> own(static_cast<std::size_t>(count));
+  for (int k = 0; k < count; ++k)
+    own[static_cast<std::size_t>(k)] = strip_extent(rings, y0 + k * step + eps, y0 + (k + 1) * step - eps);
+  if (!(r > 0)) return own;
+  std::vector<Set> out(static_cast<std::size_t>(count));
+  const int reach = 1 + static_cast<int>(std::ceil(r / step));
+  for (int k = 0; k < count; ++k) {
+    Set s;
+    for (int j = std::max(0, k - reach); j <= std::min(count - 1, k + reach); ++j) {
+      const double d = std::max(0, std::abs(j - k) - 1) * step;
+      if (d >= r) continue;
+      const double a = std::sqrt(r * r - d * d);
+      for (const auto& [lo, hi] : own[static_cast<std::size_t>(j)]) s.emplace_back(lo - a, hi + a);
+    }
+    merge_closed(s);
+    out[static_cast<std::size_t>(k)] = std::move(s);
+  }
   return out;
 }
 
@@ -154,7 +185,12 @@ bool ring_contains(const Ring2& p, double x, double y) {
   return inside;
 }
 
-RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, int bands) {
+namespace {
+
+// nest_on_roll of a pattern whose area is known (a pair, whose two copies
+// may touch: where a vertex of one lies on the other, which of the two it
+// lies within is a matter of round-off).
+RollNest nest_with_area(const std::vector<Ring2>& rings, double area, double roll_width, double gap, int bands) {
   if (!(std::isfinite(roll_width) && roll_width >= 0))
     throw std::invalid_argument("a roll width not finite or below 0");
   if (!(std::isfinite(gap) && gap >= 0)) throw std::invalid_argument("a gap not finite or below 0");
@@ -168,7 +204,7 @@ RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double
         lo[c] = std::min(lo[c], v[static_cast<std::size_t>(c)]);
         hi[c] = std::max(hi[c], v[static_cast<std::size_t>(c)]);
       }
-  n.area = region_area(rings);
+  n.area = area;
   if (!(n.area > 0)) throw std::invalid_argument("a pattern without area");
   n.length = hi[0] - lo[0];
   n.width = hi[1] - lo[1];
@@ -176,21 +212,9 @@ RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double
   const double step = (n.width + gap) / K;  // the bands' height
   n.resolution = step;
   const double eps = 1e-9 * (n.length + n.width + gap);  // round-off allowance
-  // Each band of the pattern grown by gap / 2 all round (a square of side
-  // gap about each of its points): its extent along the roll.
-  const double y0 = lo[1] - gap / 2;
-  std::vector<Set> band(static_cast<std::size_t>(K));
-  for (int k = 0; k < K; ++k) {
-    // The strip drawn in by the round-off allowance: a band whose edge
-    // lies along an edge of the pattern takes none of the region beyond.
-    Set s = strip_extent(rings, y0 + k * step - gap / 2 + eps, y0 + (k + 1) * step + gap / 2 - eps);
-    for (auto& [a, b] : s) {
-      a -= gap / 2;
-      b += gap / 2;
-    }
-    merge_closed(s);
-    band[static_cast<std::size_t>(k)] = std::move(s);
-  }
+  // Each band of the pattern grown by gap / 2 all round: two copies whose
+  // grown bands keep apart are at least the gap apart.
+  const std::vector<Set> band = grown_bands(rings, lo[1] - gap / 2, step, K, gap / 2, eps);
   // The shifts along the roll at which a copy m bands higher overlaps the
   // pattern (open intervals: copies may touch), each grown by the round-off
   // allowance, so that copies never overlap by round-off.
@@ -272,6 +296,12 @@ RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double
   return n;
 }
 
+}  // namespace
+
+RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, int bands) {
+  return nest_with_area(rings, region_area(rings), roll_width, gap, bands);
+}
+
 RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, bool try_pairs, int bands) {
   RollLayout best;
   best.nest = nest_on_roll(rings, roll_width, gap, bands);
@@ -298,8 +328,7 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
   // round) overlap, band by band over their common height; the turned copy
   // then lies just beyond them, to the right or to the left.
   const double need = 1.005 * per_metre(best.nest, 1);  // patterns per metre of roll a pair must beat
-  double best_rate = 0;
-  std::optional<std::pair<RollNest, std::array<double, 2>>> found;
+  std::vector<std::pair<double, std::array<double, 2>>> found;  // patterns per metre, and the offset t
   for (int o = 0; o <= 40; ++o) {
     const double ty = (lo[1] + hi[1]) + H * (o - 20) / 20.0;
     std::vector<Ring2> turned = rings;
@@ -307,11 +336,16 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
       for (auto& v : r) v = {-v[0], ty - v[1]};
     const double y_lo = std::max(lo[1], ty - hi[1]) - gap, y_hi = std::min(hi[1], ty - lo[1]) + gap;
     Set forbid;
-    for (double y = y_lo; y < y_hi; y += pick) {
-      Set a = strip_extent(rings, y - gap / 2 + eps, y + pick + gap / 2 - eps);
-      Set b = strip_extent(turned, y - gap / 2 + eps, y + pick + gap / 2 - eps);
-      for (const Interval& i : a)
-        for (const Interval& j : b) forbid.emplace_back(i.first - j.second - gap - eps, i.second - j.first + gap + eps);
+    if (y_hi > y_lo) {
+      const int count = static_cast<int>(std::ceil((y_hi - y_lo) / pick));
+      // Closed strips (not drawn in): every point of either copy counts,
+      // also on a band's edge, and the turned copy keeps clear of the
+      // first by the round-off allowance.
+      const std::vector<Set> a = grown_bands(rings, y_lo, pick, count, gap / 2, 0.0);
+      const std::vector<Set> b = grown_bands(turned, y_lo, pick, count, gap / 2, 0.0);
+      for (std::size_t k = 0; k < a.size(); ++k)
+        for (const Interval& i : a[k])
+          for (const Interval& j : b[k]) forbid.emplace_back(i.first - j.second - eps, i.second - j.first + eps);
     }
     merge_open(forbid);
     if (forbid.empty()) continue;  // one above the other: no nearer than the single layout's lanes
@@ -321,27 +355,33 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
         for (auto& v : r) v[0] += tx;
         pair.push_back(std::move(r));
       }
-      const RollNest n = nest_on_roll(pair, roll_width, gap, kFine);
-      if (const double rate = per_metre(n, 2); rate > need && rate > best_rate) {
-        best_rate = rate;
-        found = std::pair{n, std::array<double, 2>{tx, ty}};
-      }
+      const RollNest n = nest_with_area(pair, 2 * best.area, roll_width, gap, kFine);
+      if (const double rate = per_metre(n, 2); rate > need) found.emplace_back(rate, std::array<double, 2>{tx, ty});
     }
   }
-  if (!found) return best;
-  // The chosen pair with the bands asked for; kept where it still saves.
-  std::vector<Ring2> pair = rings;
-  for (Ring2 r : rings) {
-    for (auto& v : r) v = {found->second[0] - v[0], found->second[1] - v[1]};
-    pair.push_back(std::move(r));
+  // The best few pairs again with the bands asked for (the choice with
+  // fewer bands may differ by a lane or a band's step); the best of them
+  // kept where it still saves.
+  constexpr std::size_t kKept = 3;
+  std::stable_sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  double best_rate = need;
+  for (std::size_t k = 0; k < std::min(kKept, found.size()); ++k) {
+    const std::array<double, 2> t = found[k].second;
+    std::vector<Ring2> pair = rings;
+    for (Ring2 r : rings) {
+      for (auto& v : r) v = {t[0] - v[0], t[1] - v[1]};
+      pair.push_back(std::move(r));
+    }
+    const RollNest n = nest_with_area(pair, 2 * best.area, roll_width, gap, bands);
+    if (const double rate = per_metre(n, 2); rate > best_rate) {
+      best_rate = rate;
+      best.nest = n;
+      best.unit = std::move(pair);
+      best.pairs = true;
+      best.turned = t;
+      best.roll_per_pattern = n.pitch / (2.0 * n.lanes);
+    }
   }
-  const RollNest n = nest_on_roll(pair, roll_width, gap, bands);
-  if (!(per_metre(n, 2) > need)) return best;
-  best.nest = n;
-  best.unit = std::move(pair);
-  best.pairs = true;
-  best.turned = found->second;
-  best.roll_per_pattern = n.pitch / (2.0 * n.lanes);
   return best;
 }
 

@@ -38,12 +38,13 @@ struct RollNest {
 // a roll `roll_width` m wide, with at least `gap` m between copies
 // (Euclidean distance; a copy is kept gap / 2 from the roll's edges). The
 // pattern is taken in `bands` bands across the roll, each band by the
-// extent along the roll of the pattern within it and gap / 2 about it, so
-// that no two copies come nearer than the gap (the bands are drawn over
-// the pattern; copies may stand a little further apart than needed where
-// an edge slants across a band); the lane step is the smallest multiple of
-// the band's height (width + gap) / bands with which some shift along
-// the roll keeps the lanes apart, and the pitch exact for that banding.
+// extent along the roll of the points level with it within gap / 2 of the
+// pattern, so that no two copies come nearer than the gap (the bands are
+// drawn over the pattern: the copy along a lane that sets the pitch, for
+// most patterns the next, stands at most four bands further than the gap);
+// the lane step is the smallest multiple of the band's height
+// (width + gap) / bands with which some shift along the roll keeps the
+// lanes apart, and the pitch exact for that banding.
 // Throws std::invalid_argument for a pattern without area, a width or gap
 // not finite or below 0, or bands below 1.
 RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, int bands = 1000);
@@ -55,7 +56,7 @@ RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double
 // places the turned copy beside the first along the roll, as near as the
 // gap allows, at each of 41 offsets across the roll from one above the
 // other to one below it, and on either side; each pair is nested with 250
-// bands to choose, the best again with `bands`.
+// bands to choose, the best three again with `bands`.
 struct RollLayout {
   RollNest nest;                 // of the unit: the pattern, or the pair
   std::vector<Ring2> unit;       // its rings: the pattern's, and with pairs the turned copy's
