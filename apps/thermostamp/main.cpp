@@ -107,7 +107,8 @@ with export; --roll W: also lays each flat pattern on a roll W m wide with
 its fibres along the roll, copies in lanes at least G m apart (--gap,
 default 0), all alike or in pairs with one turned by 180 degrees where
 that saves roll: the lanes, the roll's length per pattern and the share
-of the roll used, in blank.json and FOLDER/<ply>_nest.dxf (the layout, mm)
+of the roll used, in blank.json and FOLDER/<ply>_nest.dxf (the layout, mm),
+and the roll per part (every ply once, each in lanes of its own)
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -537,6 +538,15 @@ int cmd_blank(const Args& a) {
       std::cerr << "warning: ply '" << p.name << "': the exact cut's outline did not close (" << c.fallback
                 << "): its pattern comes from the trims' largest distance, linear in each triangle (corners within "
                    "about an element)\n";
+  }
+  if (a.roll) {
+    if (r.roll_per_part)
+      std::snprintf(line, sizeof line,
+                    "per part: %.4g mm of the roll, every ply's pattern once, each ply in lanes of its own",
+                    1000 * *r.roll_per_part);
+    else
+      std::snprintf(line, sizeof line, "per part: no figure, %s", r.roll_per_part_left_out.c_str());
+    std::cout << line << "\n";
   }
   std::cout << r.json.string() << "\n";
   return 0;

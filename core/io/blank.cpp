@@ -2210,6 +2210,25 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     doc["plies"][d.name] = j;
     res.plies.push_back(std::move(ply));
   }
+  if (roll) {
+    double sum = 0;
+    std::vector<std::string> why;
+    for (const BlankPly& ply : res.plies) {
+      if (ply.pattern.outlines.empty()) continue;  // nothing of it in the part
+      if (!ply.nest)
+        why.push_back("ply '" + ply.name + "' is not nested: its blank is not flat");
+      else if (ply.nest->layout.nest.lanes == 0)
+        why.push_back("ply '" + ply.name + "' does not fit on the roll");
+      else
+        sum += ply.nest->layout.roll_per_pattern;
+    }
+    if (why.empty())
+      res.roll_per_part = sum;
+    for (const std::string& w : why)
+      res.roll_per_part_left_out += (res.roll_per_part_left_out.empty() ? "" : "; ") + w;
+    doc["roll"]["roll_length_per_part_m"] = res.roll_per_part ? nlohmann::json(sum) : nlohmann::json(nullptr);
+    if (!res.roll_per_part) doc["roll"]["roll_length_per_part_left_out"] = res.roll_per_part_left_out;
+  }
   res.json = out / "blank.json";
   std::ofstream f(res.json);
   f << doc.dump(2) << "\n";

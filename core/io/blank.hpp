@@ -200,6 +200,12 @@ struct BlankResult {
   int frame = 0, frames = 0;
   std::filesystem::path json;
   std::vector<BlankPly> plies;
+  // With a roll: m of roll per part, every ply's pattern once, each ply
+  // cut in lanes of its own (the sum of the plies' roll per pattern; a ply
+  // with nothing inside the trim takes none); none where a ply is not
+  // nested or does not fit, and why.
+  std::optional<double> roll_per_part;
+  std::string roll_per_part_left_out;
 };
 
 // Writes, for each ply of the frame at `time` (as export_plies picks it;

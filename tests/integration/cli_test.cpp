@@ -62,7 +62,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.45.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.46.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -2340,7 +2340,16 @@ TEST(Blank, PatternsNestedOnARoll) {
       << r.out;
   EXPECT_NE(r.out.find("; " + (dir / "roll" / "ply_top_nest.dxf").string() + "\n"), std::string::npos) << r.out;
   const json doc = read_job_document(dir / "roll" / "blank.json");
-  EXPECT_EQ(doc["roll"], json({{"width_m", 0.5}, {"gap_m", 0.004}}));
+  EXPECT_EQ(doc["roll"]["width_m"], 0.5);
+  EXPECT_EQ(doc["roll"]["gap_m"], 0.004);
+  // Per part: each ply's roll per pattern, summed.
+  double per_part = 0;
+  for (const std::string ply : {"ply_top", "ply_bottom"})
+    per_part += doc["plies"][ply]["nest"]["roll_length_per_pattern_m"].get<double>();
+  EXPECT_NEAR(doc["roll"]["roll_length_per_part_m"].get<double>(), per_part, 1e-15);
+  char part_line[128];
+  std::snprintf(part_line, sizeof part_line, "\nper part: %.4g mm of the roll, every ply's pattern once", 1000 * per_part);
+  EXPECT_NE(r.out.find(part_line), std::string::npos) << r.out;
   for (const std::string ply : {"ply_top", "ply_bottom"}) {
     const json& n = doc["plies"][ply]["nest"];
     ASSERT_TRUE(n.is_object()) << doc.dump(2);
@@ -2363,7 +2372,7 @@ TEST(Blank, PatternsNestedOnARoll) {
     std::ofstream(dir / "nest.py") << R"(import csv, math, sys, ezdxf, numpy as np
 doc = ezdxf.readfile(sys.argv[1])
 assert not doc.audit().has_errors
-width, gap, copies = float(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5])
+width, gap, copies, band = float(sys.argv[3]), float(sys.argv[4]), int(sys.argv[5]), float(sys.argv[6])
 msp = doc.modelspace()
 edges = sorted(e.dxf.start[1] for e in msp if e.dxftype() == "LINE" and e.dxf.layer == "ROLL")
 assert edges == [0.0, width], edges
@@ -2399,11 +2408,12 @@ for i in range(len(polys)):
         assert not Path(a).contains_point(b[0]) and not Path(b).contains_point(a[0])
         least = min(least, seg_dist(a, b))
 assert least >= gap - 1e-6, least
-assert least < 2 * gap, least
+assert least <= gap + 4 * band + 1e-6, least  # the next copy along a lane
 print("ok", least)
 )";
     EXPECT_EQ(std::system(("/usr/bin/python3 " + q(dir / "nest.py") + " " + q(dir / "roll" / (ply + "_nest.dxf")) + " " +
-                           q(dir / "roll" / (ply + ".csv")) + " 500 4 " + n["drawn_copies"].dump() + " >/dev/null")
+                           q(dir / "roll" / (ply + ".csv")) + " 500 4 " + n["drawn_copies"].dump() + " " +
+                           std::to_string(1e3 * n["resolution_m"].get<double>()) + " >/dev/null")
                               .c_str()),
               0)
         << ply;
@@ -2414,6 +2424,15 @@ print("ok", least)
   ASSERT_EQ(rep.exit_code, 0) << rep.err;
   for (const char* f : {"nest_ply_top.png", "nest_ply_bottom.png", "blank_ply_top.png"})
     EXPECT_TRUE(std::filesystem::exists(dir / "run" / "figures" / f)) << f;
+  // A roll narrower than the patterns: no figure per part, and why.
+  const auto narrow = thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.1 " +
+                                  "--out " + q(dir / "narrow"));
+  ASSERT_EQ(narrow.exit_code, 0) << narrow.err;
+  const std::string neither = "ply 'ply_bottom' does not fit on the roll; ply 'ply_top' does not fit on the roll";
+  EXPECT_NE(narrow.out.find("\nper part: no figure, " + neither + "\n"), std::string::npos) << narrow.out;
+  const json narrow_doc = read_job_document(dir / "narrow" / "blank.json");
+  EXPECT_TRUE(narrow_doc["roll"]["roll_length_per_part_m"].is_null());
+  EXPECT_EQ(narrow_doc["roll"]["roll_length_per_part_left_out"], neither);
   const auto no_roll = thermostamp("blank " + q(dir / "run") + " --trim cylinder:0,0,0,0,0,1,0.1 --gap 0.004");
   EXPECT_EQ(no_roll.exit_code, 2);
   EXPECT_NE(no_roll.err.find("error: --gap is the gap between patterns on a roll: give the roll's width with --roll"),
