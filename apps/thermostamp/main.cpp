@@ -38,7 +38,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp compare DIR_A DIR_B [--json] [--rtol R] [--from T]   # how far two runs' results are apart
   thermostamp export DIR [--time T] [--out FOLDER] [--whole] [--format gmsh|abaqus|calculix]   # each ply as a mesh
   thermostamp blank DIR --trim SURFACE [--trim SURFACE ...] [--margin M] [--time T] [--out FOLDER] [--whole]
-                  [--roll W [--gap G]]
+                  [--roll W [--gap G] [--turn-90]]
                   # cut patterns
   thermostamp --version
 )";
@@ -108,7 +108,9 @@ its fibres along the roll, copies in lanes at least G m apart (--gap,
 default 0), all alike or in pairs with one turned by 180 degrees where
 that saves roll: the lanes, the roll's length per pattern and the share
 of the roll used, in blank.json and FOLDER/<ply>_nest.dxf (the layout, mm),
-and the roll per part (every ply once, each in lanes of its own)
+and the roll per part (every ply once, each in lanes of its own);
+--turn-90: copies may also be turned by 90 degrees, the weft along the roll
+(for a balanced woven roll; a UD tape's fibres would run across it)
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -138,6 +140,7 @@ struct Args {
   double margin = 0;                 // blank: --margin (m)
   std::optional<double> roll;        // blank: --roll, the roll's width (m)
   std::optional<double> gap;         // blank: --gap between copies on the roll (m)
+  bool turn_90 = false;              // blank: --turn-90, copies on the roll may be turned by 90 degrees
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -154,7 +157,7 @@ const std::map<std::string, std::vector<std::string>>& command_options() {
       {"report", {"--against"}},
       {"compare", {"--json", "--rtol", "--from"}},
       {"export", {"--time", "--out", "--whole", "--format"}},
-      {"blank", {"--trim", "--margin", "--time", "--out", "--whole", "--roll", "--gap"}}};
+      {"blank", {"--trim", "--margin", "--time", "--out", "--whole", "--roll", "--gap", "--turn-90"}}};
   return m;
 }
 
@@ -229,6 +232,8 @@ Args parse(int argc, char** argv) {
       a.roll = finite_number(s, value(s), false, "a roll width in m, above 0");
     } else if (s == "--gap") {
       a.gap = finite_number(s, value(s), true, "a gap in m, at least 0");
+    } else if (s == "--turn-90") {
+      a.turn_90 = true;
     } else if (s == "--whole") {
       a.whole = true;
     } else if (s == "--format") {
@@ -435,8 +440,10 @@ int cmd_blank(const Args& a) {
   if (a.trims.empty()) throw UsageError("blank needs a --trim surface");
   if (a.gap && !a.roll)
     throw UsageError("--gap is the gap between patterns on a roll: give the roll's width with --roll");
+  if (a.turn_90 && !a.roll)
+    throw UsageError("--turn-90 lets patterns on a roll be turned by 90 degrees: give the roll's width with --roll");
   std::optional<ts::RollOptions> roll;
-  if (a.roll) roll = ts::RollOptions{*a.roll, a.gap.value_or(0.0)};
+  if (a.roll) roll = ts::RollOptions{*a.roll, a.gap.value_or(0.0), a.turn_90};
   const std::filesystem::path dir = a.positional[0];
   ts::BlankResult r;
   std::vector<ts::TrimSurface> trims;
@@ -503,13 +510,18 @@ int cmd_blank(const Args& a) {
     if (p.nest) {
       const ts::RollNest& n = p.nest->layout.nest;
       const bool pairs = p.nest->layout.pairs;
+      // The pattern is turned by minus the fibres' angle (0 where unknown)
+      // and, with turned_90, by 90 degrees more.
+      const bool quarter = p.nest->layout.turned_90;
+      const double turn = (quarter ? 90.0 : 0.0) - p.nest->fibre_angle_deg;
+      std::string fibres = !p.nest->fibres_known ? (quarter ? "the blank's y" : "the blank's x")
+                           : quarter              ? "the weft"
+                                                  : "fibres";
+      fibres += " along it";
       char turned[64];
-      std::snprintf(turned, sizeof turned, "%.4g", -p.nest->fibre_angle_deg);
-      const std::string fibres =
-          !p.nest->fibres_known ? std::string("the blank's x along it (the frames hold no fibre_direction)")
-          : std::abs(p.nest->fibre_angle_deg) < 1e-9
-              ? std::string("fibres along it")
-              : "fibres along it (the pattern turned by " + std::string(turned) + " deg)";
+      std::snprintf(turned, sizeof turned, " (the pattern turned by %.4g deg)", turn);
+      if (std::abs(turn) > 1e-9) fibres += turned;
+      if (!p.nest->fibres_known) fibres += " (the frames hold no fibre_direction)";
       if (n.lanes > 0)
         std::snprintf(line, sizeof line,
                       "  on a roll %g mm wide, %s, %g mm apart: %d lane%s%s, a %s every %.4g mm along each, %.4g "
@@ -524,9 +536,11 @@ int cmd_blank(const Args& a) {
                       1000 * *a.roll, fibres.c_str(), 1000 * a.gap.value_or(0.0),
                       1000 * (p.nest->layout.width + a.gap.value_or(0.0)));
       std::cout << line;
-      if (pairs) {
-        std::snprintf(line, sizeof line, " (all alike: %.4g mm)", 1000 * p.nest->layout.single_roll_per_pattern);
-        std::cout << (p.nest->layout.single_roll_per_pattern > 0 ? line : " (all alike: none fits)");
+      if (pairs || quarter) {
+        const char* as = quarter ? "not turned by 90 deg, all alike" : "all alike";
+        std::snprintf(line, sizeof line, " (%s: %.4g mm)", as, 1000 * p.nest->layout.single_roll_per_pattern);
+        std::cout << (p.nest->layout.single_roll_per_pattern > 0 ? std::string(line)
+                                                                  : " (" + std::string(as) + ": none fits)");
       }
       std::cout << "; " << p.nest->dxf.string() << "\n";
     } else if (roll) {

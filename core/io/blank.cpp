@@ -2069,7 +2069,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
   for (const TrimSurface& t : trims)
     if (t.kind == TrimSurface::Kind::Polygon) doc["polygon_cut_directions"][t.text] = polygon_cut_direction(t);
   doc["margin_m"] = margin;
-  if (roll) doc["roll"] = {{"width_m", roll->width}, {"gap_m", roll->gap}};
+  if (roll) doc["roll"] = {{"width_m", roll->width}, {"gap_m", roll->gap}, {"turn_90", roll->turn_90}};
   doc["polygon_margins"] = margins;
   doc["plies"] = nlohmann::json::object();
   // The fibre directions of the blank: the first frame's field.
@@ -2120,7 +2120,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
         }
         rings.push_back(std::move(r));
       }
-      pn.layout = lay_on_roll(rings, roll->width, roll->gap);
+      pn.layout = lay_on_roll(rings, roll->width, roll->gap, true, 1000, roll->turn_90);
       const RollNest& n = pn.layout.nest;
       pn.drawn_length = std::max(1.0, 3 * n.pitch + n.length + roll->gap);
       pn.dxf = out / (d.name + "_nest.dxf");
@@ -2183,6 +2183,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
                      {"pattern_length_m", pn.layout.length},
                      {"pattern_width_m", pn.layout.width},
                      {"pattern_area_m2", pn.layout.area},
+                     {"turned_90", pn.layout.turned_90},
                      {"pairs_turned_180", pn.layout.pairs},
                      {"turned_offset_m", pn.layout.pairs ? nlohmann::json(pn.layout.turned) : nlohmann::json(nullptr)},
                      {"unit_length_m", n.length},

@@ -162,8 +162,9 @@ std::vector<FibreMark> fibre_marks(const std::vector<double>& x0, const std::vec
 // `blank --roll W [--gap G]`: each pattern laid on a roll W m wide, at
 // least G m between copies.
 struct RollOptions {
-  double width = 0;  // m
-  double gap = 0;    // m
+  double width = 0;      // m
+  double gap = 0;        // m
+  bool turn_90 = false;  // copies may also be turned by 90 degrees (a balanced woven roll's weft along it)
 };
 
 // A ply's pattern on the roll (lay_on_roll), turned in the blank's plane so

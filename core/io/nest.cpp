@@ -302,7 +302,10 @@ RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double
   return nest_with_area(rings, region_area(rings), roll_width, gap, bands);
 }
 
-RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, bool try_pairs, int bands) {
+namespace {
+
+// lay_on_roll of the pattern as given.
+RollLayout lay_as_given(const std::vector<Ring2>& rings, double roll_width, double gap, bool try_pairs, int bands) {
   RollLayout best;
   best.nest = nest_on_roll(rings, roll_width, gap, bands);
   best.unit = rings;
@@ -381,6 +384,27 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
       best.turned = t;
       best.roll_per_pattern = n.pitch / (2.0 * n.lanes);
     }
+  }
+  return best;
+}
+
+}  // namespace
+
+RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, bool try_pairs, int bands,
+                       bool try_quarter_turn) {
+  RollLayout best = lay_as_given(rings, roll_width, gap, try_pairs, bands);
+  if (!try_quarter_turn) return best;
+  std::vector<Ring2> quarter = rings;
+  for (Ring2& r : quarter)
+    for (auto& v : r) v = {-v[1], v[0]};
+  RollLayout turned = lay_as_given(quarter, roll_width, gap, try_pairs, bands);
+  // Taken where it saves at least half a per cent of the roll (or fits
+  // where the pattern as given does not).
+  const bool fits = turned.roll_per_pattern > 0;
+  if (fits && (best.roll_per_pattern == 0 || turned.roll_per_pattern * 1.005 < best.roll_per_pattern)) {
+    turned.turned_90 = true;
+    turned.single_roll_per_pattern = best.single_roll_per_pattern;  // the pattern as given, all alike
+    return turned;
   }
   return best;
 }

@@ -56,18 +56,24 @@ RollNest nest_on_roll(const std::vector<Ring2>& rings, double roll_width, double
 // places the turned copy beside the first along the roll, as near as the
 // gap allows, at each of 41 offsets across the roll from one above the
 // other to one below it, and on either side; each pair is nested with 250
-// bands to choose, the best three again with `bands`.
+// bands to choose, the best three again with `bands`. With
+// `try_quarter_turn` (a balanced woven roll, whose weft may run along the
+// roll as well as its warp), the pattern turned by 90 degrees is laid out
+// the same way, and taken where it saves at least half a per cent of the
+// roll, or fits where the pattern as given does not.
 struct RollLayout {
   RollNest nest;                 // of the unit: the pattern, or the pair
-  std::vector<Ring2> unit;       // its rings: the pattern's, and with pairs the turned copy's
+  std::vector<Ring2> unit;       // its rings: the pattern's (turned by 90 degrees with turned_90), and with pairs
+                                 // the turned copy's
   bool pairs = false;            // the unit is a pair
-  std::array<double, 2> turned{};  // pairs: the turned copy's vertex of the pattern's v lies at turned - v
+  bool turned_90 = false;        // every copy turned by +90 degrees first: v -> (-v_y, v_x)
+  std::array<double, 2> turned{};  // pairs: the turned copy's vertex of the (first) copy's v lies at turned - v
   double area = 0;               // m^2: the pattern's
-  double length = 0, width = 0;  // m: the pattern's extent along and across the roll
+  double length = 0, width = 0;  // m: the (first) copy's extent along and across the roll
   double roll_per_pattern = 0;   // m of roll per pattern (0 where no lane fits)
-  double single_roll_per_pattern = 0;  // m: every copy alike, for comparison (0 where no lane fits)
+  double single_roll_per_pattern = 0;  // m: every copy alike as given, for comparison (0 where no lane fits)
 };
 RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, bool try_pairs = true,
-                       int bands = 1000);
+                       int bands = 1000, bool try_quarter_turn = false);
 
 }  // namespace ts

@@ -2,7 +2,8 @@
 // 24 points, one or two pieces, a hole in some, turned at random, gaps from
 // 0 to a tenth of their size, rolls from narrower than the pattern to ten
 // times it; a tenth of them laid out with pairs turned by 180 degrees tried
-// (lay_on_roll), whose copies and turned copies are checked alike. Every
+// (lay_on_roll), half of those with a quarter turn too, whose copies and
+// turned copies are checked alike. Every
 // layout must keep its copies apart by the gap (the exact distance between
 // the polygons, over 7 lanes x 9 copies; 1e-9 of the size allowed for
 // round-off), the copy along a lane that sets the pitch no further than
@@ -80,7 +81,7 @@ int main(int argc, char** argv) {
   const int N = argc > 1 ? std::atoi(argv[1]) : 1000;
   const unsigned seed0 = argc > 2 ? static_cast<unsigned>(std::atoi(argv[2])) : 1;
   const int only = argc > 3 ? std::atoi(argv[3]) : -1;
-  int bad = 0, none = 0, pairs_taken = 0;
+  int bad = 0, none = 0, pairs_taken = 0, quarters_taken = 0;
   double worst_excess = 0;  // the distance over the gap of the copy that sets the pitch, in bands
   for (int it = 0; it < N; ++it) {
     if (only >= 0 && it != only) continue;
@@ -127,20 +128,33 @@ int main(int argc, char** argv) {
     RollNest n;
     const int bands = 200 + static_cast<int>(u(rng) * 800);
     const bool try_pairs = u(rng) < 0.1;
-    if (only >= 0) std::printf("width %.17g, gap %.17g, bands %d%s\n", width, gap, bands, try_pairs ? ", pairs" : "");
+    const bool try_quarter = try_pairs && u(rng) < 0.5;  // half of those also turned by 90 degrees
+    if (only >= 0)
+      std::printf("width %.17g, gap %.17g, bands %d%s%s\n", width, gap, bands, try_pairs ? ", pairs" : "",
+                  try_quarter ? ", a quarter turn" : "");
     std::vector<Ring2> unit = rings;
-    bool paired = false;
+    bool paired = false, quartered = false;
     try {
       if (try_pairs) {
-        const RollLayout l = lay_on_roll(rings, width, gap, true, bands);
+        const RollLayout l = lay_on_roll(rings, width, gap, true, bands, try_quarter);
         n = l.nest;
         unit = l.unit;
         paired = l.pairs;
+        quartered = l.turned_90;
         pairs_taken += paired;
+        quarters_taken += quartered;
         if (!(l.roll_per_pattern <= l.single_roll_per_pattern || l.single_roll_per_pattern == 0)) {
           std::printf("case %d: pairs take more roll than copies alike\n", it);
           ++bad;
         }
+        for (std::size_t k = 0; quartered && k < rings.size(); ++k)  // the pattern turned by +90 degrees
+          for (std::size_t i = 0; i < rings[k].size(); ++i)
+            if (unit[k][i] != Pt{-rings[k][i][1], rings[k][i][0]}) {
+              std::printf("case %d: the first copy is not the pattern turned by 90 degrees\n", it);
+              ++bad;
+              k = rings.size();
+              break;
+            }
       } else {
         n = nest_on_roll(rings, width, gap, bands);
       }
@@ -150,7 +164,7 @@ int main(int argc, char** argv) {
       continue;
     }
     bool ok = std::abs(n.area - (paired ? 2 : 1) * area) <= 1e-12 * area;
-    if (paired) {  // the unit's extent across
+    if (paired || quartered) {  // the unit's extent across
       lo = 1e300;
       hi = -1e300;
       for (const Ring2& r : unit)
@@ -203,8 +217,8 @@ int main(int argc, char** argv) {
                   area, nearest, ok ? "" : "  FAILED");
     if (!ok) ++bad;
   }
-  std::printf("%d cases, %d failed, %d with a roll too narrow, %d in pairs turned by 180 deg; the copy that sets the "
-              "pitch at most %.3g bands beyond the gap\n",
-              only >= 0 ? 1 : N, bad, none, pairs_taken, worst_excess);
+  std::printf("%d cases, %d failed, %d with a roll too narrow, %d in pairs turned by 180 deg, %d turned by 90 deg; the "
+              "copy that sets the pitch at most %.3g bands beyond the gap\n",
+              only >= 0 ? 1 : N, bad, none, pairs_taken, quarters_taken, worst_excess);
   return bad ? 1 : 0;
 }

@@ -436,7 +436,9 @@ def plot_nest(where, part, n, out):
         ax.fill([q[0] for q in poly], [q[1] for q in poly], color="tab:red", alpha=0.15, lw=0)
         ax.plot([q[0] for q in poly], [q[1] for q in poly], "r-", lw=0.8, label="the pattern" if k == 0 else None)
     ax.set_aspect("equal")
-    ax.set_xlabel("along the roll (mm)" + (", the fibres' direction" if n.get("fibre_angle_deg") is not None else ""))
+    known = n.get("fibre_angle_deg") is not None
+    ax.set_xlabel("along the roll (mm)" + ((", the weft's direction" if n.get("turned_90") else ", the fibres' direction")
+                                           if known else ""))
     ax.set_ylabel("across (mm)")
     ax.grid(alpha=0.3)
     if n["lanes"] > 0:
@@ -445,6 +447,8 @@ def plot_nest(where, part, n, out):
                 % (n["lanes"], "" if n["lanes"] == 1 else "s", " of pairs (one turned by 180 deg)" if pairs else "",
                    "pair" if pairs else "pattern", 1e3 * n["pitch_m"], 1e3 * n["roll_length_per_pattern_m"],
                    100 * n["utilisation"]))
+        if n.get("turned_90"):
+            what = "turned by 90 deg, " + what
     else:
         what = "the pattern does not fit across the roll"
     ax.set_title("%s on a roll %g mm wide, %g mm apart\n%s" % (part, width, 1e3 * n["gap_m"], what), fontsize=8)

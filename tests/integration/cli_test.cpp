@@ -2380,8 +2380,9 @@ polys = [np.array([(p[0], p[1]) for p in e.points()]) for e in msp if e.dxftype(
 assert len(polys) == copies, (len(polys), copies)
 rows = [r for r in csv.DictReader(open(sys.argv[2])) if r["kind"] == "pattern"]
 pattern = 1000 * np.array([(float(r["blank_x_m"]), float(r["blank_y_m"])) for r in rows])
-c, s = math.cos(math.radians(45)), math.sin(math.radians(45))
-turned = pattern @ np.array([[c, s], [-s, c]])  # turned by +45 deg: the fibres (1, -1) along x
+angle = float(sys.argv[7]) if len(sys.argv) > 7 else 45.0
+c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
+turned = pattern @ np.array([[c, s], [-s, c]])  # turned by +45 deg: the fibres (1, -1) along x (135: the weft)
 for p in polys:  # each the pattern so turned, or turned by 180 deg more (pairs), and moved
     assert len(p) == len(turned)
     d, e = p - turned, p + turned
@@ -2424,6 +2425,44 @@ print("ok", least)
   ASSERT_EQ(rep.exit_code, 0) << rep.err;
   for (const char* f : {"nest_ply_top.png", "nest_ply_bottom.png", "blank_ply_top.png"})
     EXPECT_TRUE(std::filesystem::exists(dir / "run" / "figures" / f)) << f;
+  // A strip 60 mm wide across the fibres (the cylinder and two planes
+  // 30 mm either side of the line x = y) lies some 200 mm across a roll
+  // 150 mm wide and does not fit; with --turn-90 it is turned by 90 degrees
+  // more (the weft along the roll), and fits.
+  const std::string strip = " --whole --trim cylinder:0,0,0,0,0,1,0.1 --trim plane:0.0212132034,-0.0212132034,0,-1,1,0 "
+                            "--trim plane:-0.0212132034,0.0212132034,0,1,-1,0 --roll 0.15 --gap 0.004";
+  const auto across = thermostamp("blank " + q(dir / "run") + strip + " --out " + q(dir / "strip"));
+  ASSERT_EQ(across.exit_code, 0) << across.err;
+  EXPECT_NE(across.out.find("fibres along it (the pattern turned by 45 deg), 4 mm apart: the pattern, "),
+            std::string::npos)
+      << across.out;
+  const auto quarter = thermostamp("blank " + q(dir / "run") + strip + " --turn-90 --out " + q(dir / "strip90"));
+  ASSERT_EQ(quarter.exit_code, 0) << quarter.err;
+  const json quarter_doc = read_job_document(dir / "strip90" / "blank.json");
+  EXPECT_EQ(quarter_doc["roll"]["turn_90"], true);
+  EXPECT_EQ(doc["roll"]["turn_90"], false);
+  for (const std::string ply : {"ply_top", "ply_bottom"}) {
+    const json& n = quarter_doc["plies"][ply]["nest"];
+    EXPECT_FALSE(doc["plies"][ply]["nest"]["turned_90"].get<bool>());
+    EXPECT_TRUE(n["turned_90"].get<bool>()) << ply;
+    EXPECT_GE(n["lanes"].get<int>(), 1) << ply;
+    EXPECT_TRUE(n["alike_roll_length_per_pattern_m"].is_null()) << ply << ": as given none fits";
+    EXPECT_EQ(std::system(("/usr/bin/python3 " + q(dir / "nest.py") + " " + q(dir / "strip90" / (ply + "_nest.dxf")) +
+                           " " + q(dir / "strip90" / (ply + ".csv")) + " 150 4 " + n["drawn_copies"].dump() + " " +
+                           std::to_string(1e3 * n["resolution_m"].get<double>()) + " 135 >/dev/null")
+                              .c_str()),
+              0)
+        << ply;
+  }
+  EXPECT_NE(quarter.out.find("on a roll 150 mm wide, the weft along it (the pattern turned by 135 deg), 4 mm apart: "),
+            std::string::npos)
+      << quarter.out;
+  const auto no_roll_90 = thermostamp("blank " + q(dir / "run") + " --trim cylinder:0,0,0,0,0,1,0.1 --turn-90");
+  EXPECT_EQ(no_roll_90.exit_code, 2);
+  EXPECT_NE(no_roll_90.err.find("error: --turn-90 lets patterns on a roll be turned by 90 degrees: give the roll's "
+                                "width with --roll"),
+            std::string::npos)
+      << no_roll_90.err;
   // A roll narrower than the patterns: no figure per part, and why.
   const auto narrow = thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.1 " +
                                   "--out " + q(dir / "narrow"));

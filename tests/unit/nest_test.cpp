@@ -280,6 +280,42 @@ double nearest_unit(const std::vector<Ring2>& unit, const ts::RollNest& n) {
   return d;
 }
 
+// A balanced woven roll's weft may run along the roll (try_quarter_turn):
+// a rectangle 300 x 200 mm on a roll 310 mm wide takes one lane either
+// way, a copy every 300 mm as given and every 200 mm turned by 90 degrees;
+// one 100 x 400 mm fits only turned (three lanes, a copy every 400 mm); a
+// square gains nothing from the turn and stays as given.
+TEST(Nest, AQuarterTurnLaysTheWeftAlongTheRoll) {
+  const Ring2 rect{{0, 0}, {0.3, 0}, {0.3, 0.2}, {0, 0.2}};
+  const ts::RollLayout given = ts::lay_on_roll({rect}, 0.31, 0.0, true, 1000, false);
+  EXPECT_FALSE(given.turned_90);
+  EXPECT_NEAR(given.roll_per_pattern, 0.3, 1e-8);
+  const ts::RollLayout l = ts::lay_on_roll({rect}, 0.31, 0.0, true, 1000, true);
+  ASSERT_TRUE(l.turned_90);
+  EXPECT_FALSE(l.pairs);
+  EXPECT_EQ(l.nest.lanes, 1);
+  EXPECT_NEAR(l.roll_per_pattern, 0.2, 1e-8);
+  EXPECT_NEAR(l.single_roll_per_pattern, 0.3, 1e-8);  // as given, for comparison
+  EXPECT_NEAR(l.length, 0.2, 1e-15);
+  EXPECT_NEAR(l.width, 0.3, 1e-15);
+  ASSERT_EQ(l.unit.size(), 1u);
+  for (std::size_t k = 0; k < rect.size(); ++k) {  // turned by +90 degrees: (x, y) -> (-y, x)
+    EXPECT_EQ(l.unit[0][k][0], -rect[k][1]);
+    EXPECT_EQ(l.unit[0][k][1], rect[k][0]);
+  }
+  const Ring2 tall{{0, 0}, {0.1, 0}, {0.1, 0.4}, {0, 0.4}};
+  EXPECT_EQ(ts::lay_on_roll({tall}, 0.3, 0.0, true, 1000, false).nest.lanes, 0);
+  const ts::RollLayout t = ts::lay_on_roll({tall}, 0.3, 0.0, true, 1000, true);
+  ASSERT_TRUE(t.turned_90);
+  EXPECT_EQ(t.nest.lanes, 3);
+  EXPECT_NEAR(t.roll_per_pattern, 0.4 / 3, 1e-8);
+  EXPECT_EQ(t.single_roll_per_pattern, 0.0);  // as given none fits
+  const Ring2 square{{0, 0}, {0.2, 0}, {0.2, 0.2}, {0, 0.2}};
+  const ts::RollLayout sq = ts::lay_on_roll({square}, 0.5, 0.01, true, 1000, true);
+  EXPECT_FALSE(sq.turned_90);
+  EXPECT_EQ(sq.unit[0], square);
+}
+
 // Two patterns (found by scripts/fuzz/nest_random.cpp, seed 2, cases 903
 // and 1980) whose turned copy, without a gap, comes to touch the first at
 // a vertex. The pair's area was once summed by which copy that vertex lay
