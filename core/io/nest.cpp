@@ -331,6 +331,15 @@ RollLayout lay_as_given(const std::vector<Ring2>& rings, double roll_width, doub
   // round) overlap, band by band over their common height; the turned copy
   // then lies just beyond them, to the right or to the left.
   const double need = 1.005 * per_metre(best.nest, 1);  // patterns per metre of roll a pair must beat
+  // The pattern and its copy turned by 180 degrees whose vertex of v lies at t - v.
+  auto pair_at = [&rings](const std::array<double, 2>& t) {
+    std::vector<Ring2> pair = rings;
+    for (Ring2 r : rings) {
+      for (auto& v : r) v = {t[0] - v[0], t[1] - v[1]};
+      pair.push_back(std::move(r));
+    }
+    return pair;
+  };
   std::vector<std::pair<double, std::array<double, 2>>> found;  // patterns per metre, and the offset t
   for (int o = 0; o <= 40; ++o) {
     const double ty = (lo[1] + hi[1]) + H * (o - 20) / 20.0;
@@ -353,12 +362,7 @@ RollLayout lay_as_given(const std::vector<Ring2>& rings, double roll_width, doub
     merge_open(forbid);
     if (forbid.empty()) continue;  // one above the other: no nearer than the single layout's lanes
     for (const double tx : {forbid.back().second, forbid.front().first}) {
-      std::vector<Ring2> pair = rings;
-      for (Ring2 r : turned) {
-        for (auto& v : r) v[0] += tx;
-        pair.push_back(std::move(r));
-      }
-      const RollNest n = nest_with_area(pair, 2 * best.area, roll_width, gap, kFine);
+      const RollNest n = nest_with_area(pair_at({tx, ty}), 2 * best.area, roll_width, gap, kFine);
       if (const double rate = per_metre(n, 2); rate > need) found.emplace_back(rate, std::array<double, 2>{tx, ty});
     }
   }
@@ -370,11 +374,7 @@ RollLayout lay_as_given(const std::vector<Ring2>& rings, double roll_width, doub
   double best_rate = need;
   for (std::size_t k = 0; k < std::min(kKept, found.size()); ++k) {
     const std::array<double, 2> t = found[k].second;
-    std::vector<Ring2> pair = rings;
-    for (Ring2 r : rings) {
-      for (auto& v : r) v = {t[0] - v[0], t[1] - v[1]};
-      pair.push_back(std::move(r));
-    }
+    std::vector<Ring2> pair = pair_at(t);
     const RollNest n = nest_with_area(pair, 2 * best.area, roll_width, gap, bands);
     if (const double rate = per_metre(n, 2); rate > best_rate) {
       best_rate = rate;
