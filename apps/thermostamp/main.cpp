@@ -38,7 +38,7 @@ constexpr const char* kUsage = R"(usage:
   thermostamp compare DIR_A DIR_B [--json] [--rtol R] [--from T]   # how far two runs' results are apart
   thermostamp export DIR [--time T] [--out FOLDER] [--whole] [--format gmsh|abaqus|calculix]   # each ply as a mesh
   thermostamp blank DIR --trim SURFACE [--trim SURFACE ...] [--margin M] [--time T] [--out FOLDER] [--whole]
-                  [--roll W [--gap G] [--turn-90]]
+                  [--roll W [--gap G] [--turn-90] [--parts N]]
                   # cut patterns
   thermostamp --version
 )";
@@ -110,7 +110,10 @@ that saves roll: the lanes, the roll's length per pattern and the share
 of the roll used, in blank.json and FOLDER/<ply>_nest.dxf (the layout, mm),
 and the roll per part (every ply once, each in lanes of its own);
 --turn-90: copies may also be turned by 90 degrees, the weft along the roll
-(for a balanced woven roll; a UD tape's fibres would run across it)
+(for a balanced woven roll; a UD tape's fibres would run across it);
+--parts N: also the roll a batch of N parts takes (each ply's N patterns on
+the shortest stretch of its lanes, one ply after the other), in blank.json
+and FOLDER/<ply>_parts.dxf (the batch's patterns, mm)
 
 exit status: 0 success, 2 invalid input (nothing was run), 3 the run failed,
 130 / 143 interrupted by SIGINT / SIGTERM (stopped at the end of a step, with a
@@ -141,6 +144,7 @@ struct Args {
   std::optional<double> roll;        // blank: --roll, the roll's width (m)
   std::optional<double> gap;         // blank: --gap between copies on the roll (m)
   bool turn_90 = false;              // blank: --turn-90, copies on the roll may be turned by 90 degrees
+  int parts = 0;                     // blank: --parts, a batch of that many parts (0: none)
   std::vector<std::string> options;  // the options given, as written (--set once)
 };
 
@@ -157,7 +161,7 @@ const std::map<std::string, std::vector<std::string>>& command_options() {
       {"report", {"--against"}},
       {"compare", {"--json", "--rtol", "--from"}},
       {"export", {"--time", "--out", "--whole", "--format"}},
-      {"blank", {"--trim", "--margin", "--time", "--out", "--whole", "--roll", "--gap", "--turn-90"}}};
+      {"blank", {"--trim", "--margin", "--time", "--out", "--whole", "--roll", "--gap", "--turn-90", "--parts"}}};
   return m;
 }
 
@@ -234,6 +238,15 @@ Args parse(int argc, char** argv) {
       a.gap = finite_number(s, value(s), true, "a gap in m, at least 0");
     } else if (s == "--turn-90") {
       a.turn_90 = true;
+    } else if (s == "--parts") {
+      const std::string t = value(s);
+      try {
+        std::size_t used = 0;
+        a.parts = std::stoi(t, &used);
+        if (used != t.size() || a.parts < 1 || a.parts > 10000) throw std::invalid_argument(t);
+      } catch (const std::exception&) {
+        throw UsageError("--parts expects a number of parts from 1 to 10000, found '" + t + "'");
+      }
     } else if (s == "--whole") {
       a.whole = true;
     } else if (s == "--format") {
@@ -442,8 +455,10 @@ int cmd_blank(const Args& a) {
     throw UsageError("--gap is the gap between patterns on a roll: give the roll's width with --roll");
   if (a.turn_90 && !a.roll)
     throw UsageError("--turn-90 lets patterns on a roll be turned by 90 degrees: give the roll's width with --roll");
+  if (a.parts > 0 && !a.roll)
+    throw UsageError("--parts gives the roll a batch of parts takes: give the roll's width with --roll");
   std::optional<ts::RollOptions> roll;
-  if (a.roll) roll = ts::RollOptions{*a.roll, a.gap.value_or(0.0), a.turn_90};
+  if (a.roll) roll = ts::RollOptions{*a.roll, a.gap.value_or(0.0), a.turn_90, a.parts};
   const std::filesystem::path dir = a.positional[0];
   ts::BlankResult r;
   std::vector<ts::TrimSurface> trims;
@@ -543,6 +558,14 @@ int cmd_blank(const Args& a) {
                                                                   : " (" + std::string(as) + ": none fits)");
       }
       std::cout << "; " << p.nest->dxf.string() << "\n";
+      if (const auto& b = p.nest->batch) {
+        std::snprintf(line, sizeof line,
+                      "  %d pattern%s: %.4g m of the roll (%d x %.4g mm = %.4g m at the lanes' rate); ", a.parts,
+                      a.parts == 1 ? "" : "s",
+                      b->length, a.parts, 1000 * p.nest->layout.roll_per_pattern,
+                      a.parts * p.nest->layout.roll_per_pattern);
+        std::cout << line << p.nest->batch_dxf.string() << "\n";
+      }
     } else if (roll) {
       std::cout << "  not nested: "
                 << (c.outlines.empty() ? "nothing of the ply lies inside the trim" : "the blank is not flat")
@@ -561,6 +584,17 @@ int cmd_blank(const Args& a) {
     else
       std::snprintf(line, sizeof line, "per part: no figure, %s", r.roll_per_part_left_out.c_str());
     std::cout << line << "\n";
+    if (a.parts > 0) {
+      if (r.roll_for_parts)
+        std::snprintf(line, sizeof line,
+                      "for %d part%s: %.4g m of the roll, each ply's patterns on a stretch of its own lanes, one ply "
+                      "after the other",
+                      a.parts, a.parts == 1 ? "" : "s", *r.roll_for_parts);
+      else
+        std::snprintf(line, sizeof line, "for %d part%s: no figure, %s", a.parts, a.parts == 1 ? "" : "s",
+                      r.roll_per_part_left_out.c_str());
+      std::cout << line << "\n";
+    }
   }
   std::cout << r.json.string() << "\n";
   return 0;

@@ -1969,19 +1969,33 @@ std::pair<double, double> fibre_angle(const FramePly& d, const std::vector<doubl
   return {mean * 180 / pi, spread * 180 / pi};
 }
 
-// The layout of a nest (roll axes, mm): the roll's two edges on layer
-// ROLL, on layer PATTERN each pattern of the units (the unit's rings in
-// `pieces` patterns of as many rings each) that lies wholly within the
-// first `length` m of the roll. Returns the patterns drawn, -1 where the
-// file cannot be written.
-int write_nest_dxf(const std::filesystem::path& file, const std::string& ply, const std::vector<Ring2>& unit,
-                   int pieces, const RollNest& n, const RollOptions& roll, double length) {
+// A layout on the roll (roll axes, mm): the roll's two edges over its
+// first `length` m on layer ROLL, and on layer PATTERN each copy (the
+// unit's rings in `pieces` patterns of as many rings each; a copy is one
+// of them moved). Returns the patterns drawn, -1 where the file cannot be
+// written.
+int write_roll_dxf(const std::filesystem::path& file, const std::string& title, const std::vector<Ring2>& unit,
+                   int pieces, const std::vector<RollCopy>& copies, double width, double length) {
   std::ofstream f(file);
   if (!f) return -1;
-  dxf_begin(f, "thermostamp blank: ply '" + ply + "' nested on a roll " + dxf_number(1000 * roll.width) +
-                   " mm wide, fibres along x, mm",
-            {{"ROLL", 8}, {"PATTERN", 1}});
-  for (const double y : {0.0, roll.width}) dxf_line(f, "ROLL", 0, 1000 * y, 1000 * length, 1000 * y);
+  dxf_begin(f, title, {{"ROLL", 8}, {"PATTERN", 1}});
+  for (const double y : {0.0, width}) dxf_line(f, "ROLL", 0, 1000 * y, 1000 * length, 1000 * y);
+  const std::size_t per = unit.size() / static_cast<std::size_t>(pieces);
+  for (const RollCopy& c : copies)
+    for (std::size_t r = c.piece * per; r < (c.piece + 1) * per; ++r) {
+      std::vector<std::pair<double, double>> mm;
+      for (const auto& v : unit[r]) mm.emplace_back(1000 * (v[0] + c.offset[0]), 1000 * (v[1] + c.offset[1]));
+      dxf_polyline(f, "PATTERN", mm);
+    }
+  f << "0\nENDSEC\n0\nEOF\n";
+  f.close();
+  return f ? static_cast<int>(copies.size()) : -1;
+}
+
+// The copies of a nest's lanes (pieces patterns per unit) that lie wholly
+// within the first `length` m of the roll.
+std::vector<RollCopy> copies_within(const std::vector<Ring2>& unit, int pieces, const RollNest& n, double gap,
+                                    double length) {
   const std::size_t per = unit.size() / static_cast<std::size_t>(pieces);
   std::vector<std::array<double, 2>> extent;  // each piece's extent along the roll
   for (int k = 0; k < pieces; ++k) {
@@ -1991,27 +2005,20 @@ int write_nest_dxf(const std::filesystem::path& file, const std::string& ply, co
     extent.push_back(e);
   }
   const double tol = 1e-9 * (n.length + n.width);
-  int drawn = 0;
+  std::vector<RollCopy> copies;
   for (int j = 0; j < n.lanes; ++j) {
     const double shift = std::fmod(j * n.lane_shift, n.pitch), dy = n.origin[1] + j * n.lane_step;
     for (int i = -2;; ++i) {
       const double dx = n.origin[0] + i * n.pitch + shift;
-      if (roll.gap / 2 + i * n.pitch + shift > length) break;  // the unit starts beyond the length drawn
+      if (gap / 2 + i * n.pitch + shift > length) break;  // the unit starts beyond the length drawn
       for (int k = 0; k < pieces; ++k) {
         const auto& e = extent[static_cast<std::size_t>(k)];
         if (dx + e[0] < -tol || dx + e[1] > length + tol) continue;
-        for (std::size_t r = k * per; r < (k + 1) * per; ++r) {
-          std::vector<std::pair<double, double>> mm;
-          for (const auto& v : unit[r]) mm.emplace_back(1000 * (v[0] + dx), 1000 * (v[1] + dy));
-          dxf_polyline(f, "PATTERN", mm);
-        }
-        ++drawn;
+        copies.push_back({k, {dx, dy}});
       }
     }
   }
-  f << "0\nENDSEC\n0\nEOF\n";
-  f.close();
-  return f ? drawn : -1;
+  return copies;
 }
 
 }  // namespace
@@ -2025,6 +2032,8 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     throw ExportInputError("--roll " + g(roll->width) + ": a roll width above 0 and at most 1e6 (m)");
   if (roll && !(roll->gap >= 0 && roll->gap <= kFar))
     throw ExportInputError("--gap " + g(roll->gap) + ": a gap of at least 0 and at most 1e6 (m)");
+  if (roll && !(roll->parts >= 0 && roll->parts <= 10000))
+    throw ExportInputError("--parts " + std::to_string(roll->parts) + ": a number of parts from 1 to 10000");
   // Each polygon's outline moved by the margin (found once for every
   // ply): its rings and vertices, or why it is taken by its distance.
   std::vector<std::string> why;
@@ -2124,9 +2133,24 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
       const RollNest& n = pn.layout.nest;
       pn.drawn_length = std::max(1.0, 3 * n.pitch + n.length + roll->gap);
       pn.dxf = out / (d.name + "_nest.dxf");
-      pn.drawn_copies = write_nest_dxf(pn.dxf, d.name, pn.layout.unit, pn.layout.pairs ? 2 : 1, n, *roll,
-                                       pn.drawn_length);
+      const int pieces = pn.layout.pairs ? 2 : 1;
+      const std::string title = "thermostamp blank: ply '" + d.name + "' nested on a roll " +
+                                dxf_number(1000 * roll->width) + " mm wide, fibres along x, mm";
+      pn.drawn_copies =
+          write_roll_dxf(pn.dxf, title, pn.layout.unit, pieces,
+                         copies_within(pn.layout.unit, pieces, n, roll->gap, pn.drawn_length), roll->width,
+                         pn.drawn_length);
       if (pn.drawn_copies < 0) throw std::runtime_error("cannot write '" + pn.dxf.string() + "'");
+      if (roll->parts > 0 && n.lanes > 0) {
+        pn.batch = lay_batch(pn.layout, roll->gap, roll->parts);
+        pn.batch_dxf = out / (d.name + "_parts.dxf");
+        const std::string batch_title = "thermostamp blank: ply '" + d.name + "', " + std::to_string(roll->parts) +
+                                        " patterns on a roll " + dxf_number(1000 * roll->width) +
+                                        " mm wide, fibres along x, mm";
+        if (write_roll_dxf(pn.batch_dxf, batch_title, pn.layout.unit, pieces, pn.batch->copies, roll->width,
+                           pn.batch->length) < 0)
+          throw std::runtime_error("cannot write '" + pn.batch_dxf.string() + "'");
+      }
       ply.nest = pn;
     }
     ply.csv = out / (d.name + ".csv");
@@ -2202,6 +2226,11 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
                      {"dxf", pn.dxf.filename().string()},
                      {"drawn_length_m", pn.drawn_length},
                      {"drawn_copies", pn.drawn_copies}};
+        if (roll->parts > 0 && !pn.batch) j["nest"]["parts"] = nullptr;  // no lane fits
+        if (pn.batch)
+          j["nest"]["parts"] = {{"count", roll->parts},
+                                {"roll_length_m", pn.batch->length},
+                                {"dxf", pn.batch_dxf.filename().string()}};
       } else {
         j["nest"] = nullptr;
         j["nest_left_out"] = ply.pattern.outlines.empty() ? "nothing of the ply lies inside the trim"
@@ -2212,7 +2241,7 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
     res.plies.push_back(std::move(ply));
   }
   if (roll) {
-    double sum = 0;
+    double sum = 0, batch = 0;
     std::vector<std::string> why;
     for (const BlankPly& ply : res.plies) {
       if (ply.pattern.outlines.empty()) continue;  // nothing of it in the part
@@ -2220,15 +2249,24 @@ BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> 
         why.push_back("ply '" + ply.name + "' is not nested: its blank is not flat");
       else if (ply.nest->layout.nest.lanes == 0)
         why.push_back("ply '" + ply.name + "' does not fit on the roll");
-      else
+      else {
         sum += ply.nest->layout.roll_per_pattern;
+        if (ply.nest->batch) batch += ply.nest->batch->length;
+      }
     }
-    if (why.empty())
+    if (why.empty()) {
       res.roll_per_part = sum;
+      if (roll->parts > 0) res.roll_for_parts = batch;
+    }
     for (const std::string& w : why)
       res.roll_per_part_left_out += (res.roll_per_part_left_out.empty() ? "" : "; ") + w;
     doc["roll"]["roll_length_per_part_m"] = res.roll_per_part ? nlohmann::json(sum) : nlohmann::json(nullptr);
     if (!res.roll_per_part) doc["roll"]["roll_length_per_part_left_out"] = res.roll_per_part_left_out;
+    if (roll->parts > 0) {
+      doc["roll"]["parts"] = roll->parts;
+      doc["roll"]["roll_length_for_parts_m"] =
+          res.roll_for_parts ? nlohmann::json(*res.roll_for_parts) : nlohmann::json(nullptr);
+    }
   }
   res.json = out / "blank.json";
   std::ofstream f(res.json);

@@ -165,6 +165,7 @@ struct RollOptions {
   double width = 0;      // m
   double gap = 0;        // m
   bool turn_90 = false;  // copies may also be turned by 90 degrees (a balanced woven roll's weft along it)
+  int parts = 0;         // a batch of that many parts (lay_batch); 0: none
 };
 
 // A ply's pattern on the roll (lay_on_roll), turned in the blank's plane so
@@ -181,6 +182,8 @@ struct PlyNest {
   std::filesystem::path dxf;    // the layout: copies over a length of the roll
   double drawn_length = 0;      // m of roll in it
   int drawn_copies = 0;         // patterns drawn
+  std::optional<RollBatch> batch;  // with RollOptions::parts, where a lane fits: the batch's patterns
+  std::filesystem::path batch_dxf;  // and their layout
 };
 
 struct BlankPly {
@@ -207,6 +210,10 @@ struct BlankResult {
   // nested or does not fit, and why.
   std::optional<double> roll_per_part;
   std::string roll_per_part_left_out;
+  // With RollOptions::parts: m of roll for the batch, each ply's patterns
+  // (a stretch of its own lanes, lay_batch) one after the other; none
+  // where roll_per_part has none.
+  std::optional<double> roll_for_parts;
 };
 
 // Writes, for each ply of the frame at `time` (as export_plies picks it;
@@ -217,7 +224,8 @@ struct BlankResult {
 // frame holds fibre_direction) and <out>/blank.json (areas,
 // lengths, the edge's largest displacement in the blank's plane, the
 // trims); with `roll`, also each flat ply's pattern nested on the roll
-// (PlyNest; in blank.json and as <out>/<ply>_nest.dxf). Throws ExportInputError for
+// (PlyNest; in blank.json and as <out>/<ply>_nest.dxf), and with
+// RollOptions::parts the batch's (<out>/<ply>_parts.dxf). Throws ExportInputError for
 // input that cannot give a pattern, std::runtime_error where the results
 // cannot be read or the files written.
 BlankResult blank_plies(const std::filesystem::path& dir, std::optional<double> time,

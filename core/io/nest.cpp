@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <queue>
+#include <tuple>
 #include <stdexcept>
 #include <utility>
 
@@ -407,6 +409,79 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
     return turned;
   }
   return best;
+}
+
+RollBatch lay_batch(const RollLayout& layout, double gap, int count) {
+  const RollNest& n = layout.nest;
+  if (count < 1 || count > 10000) throw std::invalid_argument("a batch of fewer than 1 or more than 10000 patterns");
+  if (n.lanes < 1 || !(n.pitch > 0)) throw std::invalid_argument("a layout without a lane");
+  const int pieces = layout.pairs ? 2 : 1;
+  const std::size_t per = layout.unit.size() / static_cast<std::size_t>(pieces);
+  std::vector<std::array<double, 2>> extent;  // each piece's extent along the roll, in the unit's coordinates
+  for (int k = 0; k < pieces; ++k) {
+    std::array<double, 2> e{1e300, -1e300};
+    for (std::size_t r = k * per; r < (k + 1) * per; ++r)
+      for (const auto& v : layout.unit[r]) e = {std::min(e[0], v[0]), std::max(e[1], v[0])};
+    extent.push_back(e);
+  }
+  // Every lane's places i = 0 .. last: the window of the shortest stretch
+  // is at most (units + 1) pitches and a unit long (units of every lane
+  // from any start), so places from m on, m pitches beyond the unit's
+  // length, hold every window that starts in their first pitch.
+  const long units = (count + static_cast<long>(n.lanes) * pieces - 1) / (static_cast<long>(n.lanes) * pieces);
+  const long m = static_cast<long>(std::ceil(n.length / n.pitch)) + 1;
+  const long last = units + 3 * m + 4;
+  struct Slot {
+    double lo, hi;  // the piece's extent along the roll
+    int lane, piece;
+    long place;
+  };
+  std::vector<Slot> slots;
+  slots.reserve(static_cast<std::size_t>(n.lanes) * pieces * (last + 1));
+  for (int j = 0; j < n.lanes; ++j) {
+    const double shift = std::fmod(j * n.lane_shift, n.pitch);
+    for (long i = 0; i <= last; ++i) {
+      const double x = n.origin[0] + static_cast<double>(i) * n.pitch + shift;
+      for (int k = 0; k < pieces; ++k) slots.push_back({x + extent[k][0], x + extent[k][1], j, k, i});
+    }
+  }
+  // The starts from the last to the first: the count nearest ends of the
+  // slots that start at or after each, kept in a heap of the largest.
+  std::sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) { return a.lo > b.lo; });
+  std::priority_queue<double> ends;
+  double best = 1e300, start = 0, end = 0;
+  for (std::size_t s = 0; s < slots.size();) {
+    const double x0 = slots[s].lo;
+    for (; s < slots.size() && slots[s].lo == x0; ++s) {
+      if (ends.size() < static_cast<std::size_t>(count)) {
+        ends.push(slots[s].hi);
+      } else if (slots[s].hi < ends.top()) {
+        ends.pop();
+        ends.push(slots[s].hi);
+      }
+    }
+    if (ends.size() == static_cast<std::size_t>(count) && ends.top() - x0 < best) {
+      best = ends.top() - x0;
+      start = x0;
+      end = ends.top();
+    }
+  }
+  std::vector<const Slot*> in;
+  for (const Slot& s : slots)
+    if (s.lo >= start && s.hi <= end) in.push_back(&s);
+  std::sort(in.begin(), in.end(), [](const Slot* a, const Slot* b) {
+    return std::tie(a->hi, a->lane, a->place, a->piece) < std::tie(b->hi, b->lane, b->place, b->piece);
+  });
+  RollBatch batch;
+  batch.length = best + gap;
+  for (std::size_t c = 0; c < static_cast<std::size_t>(count); ++c) {
+    const Slot& s = *in[c];
+    const double shift = std::fmod(s.lane * n.lane_shift, n.pitch);
+    batch.copies.push_back({s.piece,
+                            {n.origin[0] + static_cast<double>(s.place) * n.pitch + shift - start + gap / 2,
+                             n.origin[1] + s.lane * n.lane_step}});
+  }
+  return batch;
 }
 
 }  // namespace ts

@@ -76,4 +76,26 @@ struct RollLayout {
 RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, bool try_pairs = true,
                        int bands = 1000, bool try_quarter_turn = false);
 
+// A batch of `count` patterns cut from the layout's lanes: the stretch of
+// roll that holds `count` whole patterns of the lanes (the copies of every
+// lane at the pitch, the lanes at their step and shift across the roll,
+// as nested) and is the shortest along the roll over every start, with
+// the gap before its first pattern and after its last. Its copies are
+// moved along the roll so that the stretch starts at x = 0: each copy is
+// the unit's rings of `piece` (0 the pattern, 1 a pair's turned copy)
+// moved by `offset`. The lanes are not changed for the batch: a shorter
+// stretch may exist with other shifts between the lanes (few patterns on
+// a wide roll) or more copies of the pattern turned.
+// Throws std::invalid_argument for a count below 1 or above 10 000, or a
+// layout without a lane.
+struct RollCopy {
+  int piece = 0;                   // 0 the pattern, 1 the turned copy of a pair
+  std::array<double, 2> offset{};  // m, added to the unit's rings of the piece
+};
+struct RollBatch {
+  double length = 0;             // m of roll: from gap / 2 before the first pattern to gap / 2 beyond the last
+  std::vector<RollCopy> copies;  // count of them, by their end along the roll
+};
+RollBatch lay_batch(const RollLayout& layout, double gap, int count);
+
 }  // namespace ts

@@ -62,7 +62,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.46.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.47.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -2327,13 +2327,17 @@ bool run_for_blank(const std::filesystem::path& dir) {
 // copy of a pair), within the roll's edges
 // less half the gap, and no two copies are nearer than the gap (the
 // exact distance between their polylines, numpy). The figures of
-// blank.json agree with each other, and `report` draws the layouts;
-// --gap without --roll and a roll of no width are refused with exit 2.
+// blank.json agree with each other, and `report` draws the layouts. A
+// batch of 7 parts (--parts): 7 such copies of each ply on a stretch of
+// roll with the gap at its ends, no longer than the lanes' units from any
+// start and no shorter than the patterns' area; --gap, --turn-90 and
+// --parts without --roll, a roll of no width and a count that is no whole
+// number from 1 to 10000 are refused with exit 2.
 TEST(Blank, PatternsNestedOnARoll) {
   const auto dir = temp_dir("blank_roll");
   ASSERT_TRUE(run_for_blank(dir));
   const auto r = thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.5 --gap "
-                             "0.004 --out " + q(dir / "roll"));
+                             "0.004 --parts 7 --out " + q(dir / "roll"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("  on a roll 500 mm wide, fibres along it (the pattern turned by 45 deg), 4 mm apart: "),
             std::string::npos)
@@ -2349,6 +2353,25 @@ TEST(Blank, PatternsNestedOnARoll) {
   EXPECT_NEAR(doc["roll"]["roll_length_per_part_m"].get<double>(), per_part, 1e-15);
   char part_line[128];
   std::snprintf(part_line, sizeof part_line, "\nper part: %.4g mm of the roll, every ply's pattern once", 1000 * per_part);
+  EXPECT_NE(r.out.find(part_line), std::string::npos) << r.out;
+  // A batch of 7 parts: each ply's stretch, summed.
+  double batch = 0;
+  for (const std::string ply : {"ply_top", "ply_bottom"}) {
+    const json& b = doc["plies"][ply]["nest"]["parts"];
+    ASSERT_TRUE(b.is_object()) << doc.dump(2);
+    EXPECT_EQ(b["count"], 7);
+    EXPECT_EQ(b["dxf"], ply + "_parts.dxf");
+    batch += b["roll_length_m"].get<double>();
+    char ply_line[160];
+    std::snprintf(ply_line, sizeof ply_line, "\n  7 patterns: %.4g m of the roll (7 x %.4g mm = ",
+                  b["roll_length_m"].get<double>(),
+                  1000 * doc["plies"][ply]["nest"]["roll_length_per_pattern_m"].get<double>());
+    EXPECT_NE(r.out.find(ply_line), std::string::npos) << ply_line << r.out;
+  }
+  EXPECT_EQ(doc["roll"]["parts"], 7);
+  EXPECT_NEAR(doc["roll"]["roll_length_for_parts_m"].get<double>(), batch, 1e-15);
+  std::snprintf(part_line, sizeof part_line, "\nfor 7 parts: %.4g m of the roll, each ply's patterns on a stretch",
+                batch);
   EXPECT_NE(r.out.find(part_line), std::string::npos) << r.out;
   for (const std::string ply : {"ply_top", "ply_bottom"}) {
     const json& n = doc["plies"][ply]["nest"];
@@ -2410,6 +2433,12 @@ for i in range(len(polys)):
         least = min(least, seg_dist(a, b))
 assert least >= gap - 1e-6, least
 assert least <= gap + 4 * band + 1e-6, least  # the next copy along a lane
+if len(sys.argv) > 8:  # a batch: its stretch of roll, the gap before and after its patterns
+    length = float(sys.argv[8])
+    ends = sorted(x for e in msp if e.dxftype() == "LINE" for x in (e.dxf.start[0], e.dxf.end[0]))
+    assert abs(ends[0]) < 1e-9 and abs(ends[-1] - length) < 1e-6, (ends, length)
+    xs = np.concatenate([p[:, 0] for p in polys])
+    assert abs(xs.min() - gap / 2) < 1e-6 and abs(xs.max() - (length - gap / 2)) < 1e-6, (xs.min(), xs.max())
 print("ok", least)
 )";
     EXPECT_EQ(std::system(("/usr/bin/python3 " + q(dir / "nest.py") + " " + q(dir / "roll" / (ply + "_nest.dxf")) + " " +
@@ -2418,6 +2447,19 @@ print("ok", least)
                               .c_str()),
               0)
         << ply;
+    // The batch: 7 copies on the roll, the gap apart, its stretch within
+    // what the lanes' units from any start and the patterns' area allow.
+    const double length = n["parts"]["roll_length_m"].get<double>();
+    EXPECT_EQ(std::system(("/usr/bin/python3 " + q(dir / "nest.py") + " " + q(dir / "roll" / (ply + "_parts.dxf")) +
+                           " " + q(dir / "roll" / (ply + ".csv")) + " 500 4 7 " +
+                           std::to_string(1e3 * n["resolution_m"].get<double>()) + " 45 " +
+                           std::to_string(1e3 * length) + " >/dev/null")
+                              .c_str()),
+              0)
+        << ply;
+    const int units = (7 + per_unit * lanes - 1) / (per_unit * lanes);
+    EXPECT_LE(length, (units + 1) * pitch + n["unit_length_m"].get<double>() + 0.004) << ply;
+    EXPECT_GE(length * 0.5, 7 * area) << ply;
   }
   // report draws each ply's layout from DIR/blank.
   ASSERT_EQ(thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.5").exit_code, 0);
@@ -2465,13 +2507,30 @@ print("ok", least)
       << no_roll_90.err;
   // A roll narrower than the patterns: no figure per part, and why.
   const auto narrow = thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.1 " +
-                                  "--out " + q(dir / "narrow"));
+                                  "--parts 3 --out " + q(dir / "narrow"));
   ASSERT_EQ(narrow.exit_code, 0) << narrow.err;
   const std::string neither = "ply 'ply_bottom' does not fit on the roll; ply 'ply_top' does not fit on the roll";
   EXPECT_NE(narrow.out.find("\nper part: no figure, " + neither + "\n"), std::string::npos) << narrow.out;
   const json narrow_doc = read_job_document(dir / "narrow" / "blank.json");
   EXPECT_TRUE(narrow_doc["roll"]["roll_length_per_part_m"].is_null());
   EXPECT_EQ(narrow_doc["roll"]["roll_length_per_part_left_out"], neither);
+  EXPECT_TRUE(narrow_doc["roll"]["roll_length_for_parts_m"].is_null());
+  EXPECT_NE(narrow.out.find("\nfor 3 parts: no figure, " + neither + "\n"), std::string::npos) << narrow.out;
+  EXPECT_TRUE(narrow_doc["plies"]["ply_top"]["nest"]["parts"].is_null());
+  EXPECT_FALSE(std::filesystem::exists(dir / "narrow" / "ply_top_parts.dxf"));
+  for (const char* bad : {"--parts 0", "--parts 2.5", "--parts 10001", "--parts x"}) {
+    const auto refused =
+        thermostamp("blank " + q(dir / "run") + " --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.5 " + std::string(bad));
+    EXPECT_EQ(refused.exit_code, 2) << bad;
+    EXPECT_NE(refused.err.find("error: --parts expects a number of parts from 1 to 10000, found '"), std::string::npos)
+        << refused.err;
+  }
+  const auto no_roll_parts = thermostamp("blank " + q(dir / "run") + " --trim cylinder:0,0,0,0,0,1,0.1 --parts 3");
+  EXPECT_EQ(no_roll_parts.exit_code, 2);
+  EXPECT_NE(no_roll_parts.err.find("error: --parts gives the roll a batch of parts takes: give the roll's width with "
+                                   "--roll"),
+            std::string::npos)
+      << no_roll_parts.err;
   const auto no_roll = thermostamp("blank " + q(dir / "run") + " --trim cylinder:0,0,0,0,0,1,0.1 --gap 0.004");
   EXPECT_EQ(no_roll.exit_code, 2);
   EXPECT_NE(no_roll.err.find("error: --gap is the gap between patterns on a roll: give the roll's width with --roll"),

@@ -380,6 +380,92 @@ TEST(Nest, TrianglesPairIntoSquaresDiscsStayAlike) {
   EXPECT_GE(nearest_unit(narrow.unit, narrow.nest), 0.0);
 }
 
+// A batch of patterns: the shortest stretch of the lanes that holds them.
+// Against closed forms where the lanes are known (one lane of rectangles:
+// count pitches; three hexagonal lanes of discs: 1.5 and 2.5 diameters
+// for 3 and 6 discs, the lanes' shifts moving it by at most twice their
+// difference from a radius), and on a star in pairs with a gap, the
+// copies checked by their exact geometry (on the roll, never nearer than
+// the gap) and against every start of the lanes' places taken one by one
+// (no stretch a little shorter holds as many).
+TEST(Nest, ABatchTakesTheShortestStretchOfTheLanes) {
+  const Ring2 rect{{0, 0}, {0.3, 0}, {0.3, 0.2}, {0, 0.2}};
+  const ts::RollLayout one = ts::lay_on_roll({rect}, 0.205, 0.005);
+  ASSERT_EQ(one.nest.lanes, 1);
+  const ts::RollBatch seven = ts::lay_batch(one, 0.005, 7);
+  EXPECT_NEAR(seven.length, 7 * 0.305, 1e-8);  // the pitch is 1e-9 of the size above 0.305
+  ASSERT_EQ(seven.copies.size(), 7u);
+  for (std::size_t c = 0; c < 7; ++c) {
+    EXPECT_NEAR(seven.copies[c].offset[0], 0.0025 + 0.305 * c, 1e-8) << c;
+    EXPECT_NEAR(seven.copies[c].offset[1], 0.0025, 1e-15) << c;
+  }
+
+  const double a = 0.1;
+  const ts::RollLayout discs = ts::lay_on_roll({ellipse(a, a, 720)}, 0.55, 0.0, false);
+  ASSERT_EQ(discs.nest.lanes, 3);
+  const double off = 2 * std::abs(discs.nest.lane_shift - a) + 1e-4 * a;  // the shifts' difference, the pitch's
+  EXPECT_NEAR(ts::lay_batch(discs, 0.0, 1).length, 2 * a, 1e-12);
+  EXPECT_NEAR(ts::lay_batch(discs, 0.0, 3).length, 3 * a, off);
+  EXPECT_NEAR(ts::lay_batch(discs, 0.0, 6).length, 5 * a, off);
+
+  Ring2 star;
+  for (int k = 0; k < 14; ++k) {
+    const double t = 2 * std::numbers::pi * k / 14 + 0.1, r = k % 2 ? 0.04 : 0.1 + 0.01 * (k % 3);
+    star.push_back({r * std::cos(t), 0.8 * r * std::sin(t)});
+  }
+  star.insert(star.begin() + 3, {0.0, 0.0});
+  const double gap = 0.004, width = 0.7;
+  const ts::RollLayout l = ts::lay_on_roll({star}, width, gap);
+  ASSERT_TRUE(l.pairs);
+  const ts::RollNest& n = l.nest;
+  const int count = 25;
+  const ts::RollBatch b = ts::lay_batch(l, gap, count);
+  ASSERT_EQ(b.copies.size(), static_cast<std::size_t>(count));
+  std::vector<Ring2> placed;
+  for (const ts::RollCopy& c : b.copies) {
+    placed.push_back(moved(l.unit[static_cast<std::size_t>(c.piece)], c.offset[0], c.offset[1]));
+    for (const Pt& v : placed.back()) {
+      EXPECT_GE(v[0], gap / 2 - 1e-12);
+      EXPECT_LE(v[0], b.length - gap / 2 + 1e-12);
+      EXPECT_GE(v[1], gap / 2 - 1e-12);
+      EXPECT_LE(v[1], width - gap / 2 + 1e-12);
+    }
+  }
+  for (std::size_t i = 0; i < placed.size(); ++i)
+    for (std::size_t j = i + 1; j < placed.size(); ++j)
+      EXPECT_GE(distance(placed[i], placed[j]), gap * (1 - 1e-9)) << i << " " << j;
+  EXPECT_GE(b.length * width, count * l.area);
+  const int units = (count + 2 * n.lanes - 1) / (2 * n.lanes);
+  EXPECT_LE(b.length, (units + 1) * n.pitch + n.length + gap);
+  // Every place of the lanes, each piece by its extent along the roll; no
+  // stretch from any piece's start 1e-9 m shorter than the batch's (less
+  // the gap) holds count of them.
+  std::vector<std::array<double, 2>> slots;
+  for (int j = 0; j < n.lanes; ++j)
+    for (int i = 0; i < 4 * units + 20; ++i)
+      for (std::size_t k = 0; k < 2; ++k) {
+        const double x = n.origin[0] + i * n.pitch + std::fmod(j * n.lane_shift, n.pitch);
+        double lo = 1e300, hi = -1e300;
+        for (const Pt& v : l.unit[k]) {
+          lo = std::min(lo, v[0] + x);
+          hi = std::max(hi, v[0] + x);
+        }
+        slots.push_back({lo, hi});
+      }
+  int most = 0;
+  for (const auto& s : slots) {
+    int within = 0;
+    for (const auto& t : slots)
+      if (t[0] >= s[0] && t[1] <= s[0] + b.length - gap - 1e-9) ++within;
+    most = std::max(most, within);
+  }
+  EXPECT_LT(most, count);
+
+  EXPECT_THROW(ts::lay_batch(l, gap, 0), std::invalid_argument);
+  EXPECT_THROW(ts::lay_batch(l, gap, 10001), std::invalid_argument);
+  EXPECT_THROW(ts::lay_batch(ts::lay_on_roll({rect}, 0.1, 0.0), 0.0, 1), std::invalid_argument);  // no lane
+}
+
 TEST(Nest, RefusesWhatIsNoPattern) {
   const Ring2 line{{0, 0}, {1, 0}, {2, 0}};
   EXPECT_THROW(ts::nest_on_roll({line}, 1.0, 0.0), std::invalid_argument);
