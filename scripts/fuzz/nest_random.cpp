@@ -9,6 +9,10 @@
 // round-off), the copy along a lane that sets the pitch no further than
 // four bands beyond it, its lanes within the roll, and its figures
 // consistent (utilisation, roll per pattern, area by the shoelace sum).
+// Each layout with a lane also gives a batch of 1 to 40 patterns
+// (lay_batch): its copies must lie on the roll within its stretch, the gap
+// apart, and no stretch of the lanes a little shorter (from any piece's
+// start, the places counted one by one) may hold as many.
 // Usage: nest_random CASES SEED [CASE]   (CASE: only that one, to look at it)
 #include <algorithm>
 #include <array>
@@ -204,6 +208,55 @@ int main(int argc, char** argv) {
       along = std::min(along, distance(unit, moved(unit, i * n.pitch, 0), 1e-9 * size));
     ok = ok && (n.lanes == 0 || along <= gap + 4 * n.resolution + 1e-9 * size);
     if (n.lanes > 0 && along >= 0) worst_excess = std::max(worst_excess, (along - gap) / n.resolution);
+    if (n.lanes > 0) {  // a batch
+      RollLayout l;
+      l.nest = n;
+      l.unit = unit;
+      l.pairs = paired;
+      const int count = 1 + static_cast<int>(u(rng) * 40);
+      const RollBatch b = lay_batch(l, gap, count);
+      const std::size_t per = paired ? rings.size() : unit.size();
+      auto piece = [&](int k) { return std::vector<Ring2>(unit.begin() + k * per, unit.begin() + (k + 1) * per); };
+      std::vector<std::vector<Ring2>> placed;
+      bool inside = b.copies.size() == static_cast<std::size_t>(count);
+      for (const RollCopy& c : b.copies) {
+        placed.push_back(moved(piece(c.piece), c.offset[0], c.offset[1]));
+        for (const Ring2& r : placed.back())
+          for (const Pt& v : r)
+            inside = inside && v[0] >= gap / 2 - 1e-9 * size && v[0] <= b.length - gap / 2 + 1e-9 * size &&
+                     v[1] >= gap / 2 - 1e-9 * size && v[1] <= width - gap / 2 + 1e-9 * size;
+      }
+      double apart = 1e300;
+      for (std::size_t i = 0; i < placed.size(); ++i)
+        for (std::size_t j = i + 1; j < placed.size(); ++j)
+          apart = std::min(apart, distance(placed[i], placed[j], 1e-9 * size));
+      std::vector<std::array<double, 2>> slots;  // every place of the lanes by its extent along the roll
+      const int pieces = paired ? 2 : 1, units = (count + pieces * n.lanes - 1) / (pieces * n.lanes);
+      const int places = 4 * units + 8 + 3 * static_cast<int>(std::ceil(n.length / n.pitch));
+      for (int j = 0; j < n.lanes; ++j)
+        for (int i = 0; i < places; ++i)
+          for (int k = 0; k < pieces; ++k) {
+            const double x = n.origin[0] + i * n.pitch + std::fmod(j * n.lane_shift, n.pitch);
+            double a = 1e300, z = -1e300;
+            for (const Ring2& r : piece(k))
+              for (const Pt& v : r) {
+                a = std::min(a, v[0] + x);
+                z = std::max(z, v[0] + x);
+              }
+            slots.push_back({a, z});
+          }
+      int most = 0;
+      for (const auto& st : slots) {
+        int within = 0;
+        for (const auto& t : slots) within += t[0] >= st[0] && t[1] <= st[0] + b.length - gap - 1e-9 * size;
+        most = std::max(most, within);
+      }
+      if (!inside || apart < gap - 1e-9 * size || most >= count) {
+        std::printf("case %d: a batch of %d: %s, copies %.9g apart, %d within a shorter stretch  FAILED\n", it, count,
+                    inside ? "on the roll" : "off the roll or its stretch", apart, most);
+        ok = false;
+      }
+    }
     if (only >= 0)
       for (const Ring2& r : rings) {
         std::printf("ring:");
