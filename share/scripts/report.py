@@ -54,6 +54,8 @@ Writes into DIR/figures/:
                        the blank's normal points to
   nest_<part>.png      with blank --roll: each ply's patterns on the roll
                        (the layout of DIR/blank/<ply>_nest.dxf)
+  parts_<part>.png     with blank --parts N (N up to 500): the batch's
+                       patterns (DIR/blank/<ply>_parts.dxf)
   materials.png        the specific heat and the conductivity against the
                        temperature of every material whose values
                        follow it (rows, held beyond the first and the
@@ -395,6 +397,9 @@ def plot_blank(folder, out):
         made.append(save(fig, out, "blank_%s.png" % part, dpi=110))
         if p.get("nest"):
             made.append(plot_nest(where, part, p["nest"], out))
+            batch = p["nest"].get("parts")
+            if batch and batch["count"] <= 500:  # longer batches are the layout's lanes over and over
+                made.append(plot_nest(where, part, p["nest"], out, batch))
     return made
 
 
@@ -422,11 +427,12 @@ def read_nest_dxf(path):
     return lines_out, polys
 
 
-def plot_nest(where, part, n, out):
+def plot_nest(where, part, n, out, batch=None):
     """A ply's patterns on the roll (thermostamp blank --roll): the layout
-    of <ply>_nest.dxf."""
-    edges, polys = read_nest_dxf(os.path.join(where, n["dxf"]))
-    length = 1e3 * n["drawn_length_m"]
+    of <ply>_nest.dxf, or with `batch` (blank --parts) the batch's patterns
+    of <ply>_parts.dxf."""
+    edges, polys = read_nest_dxf(os.path.join(where, batch["dxf"] if batch else n["dxf"]))
+    length = 1e3 * (batch["roll_length_m"] if batch else n["drawn_length_m"])
     width = 1e3 * n["roll_width_m"]
     fig, ax = plt.subplots(figsize=(min(14, 2 + 8 * length / max(length, width)), 1.5 + 6 * width / max(length, width)))
     for (a, b), (c, d) in edges:
@@ -441,7 +447,11 @@ def plot_nest(where, part, n, out):
                                            if known else ""))
     ax.set_ylabel("across (mm)")
     ax.grid(alpha=0.3)
-    if n["lanes"] > 0:
+    if batch:
+        what = ("a batch of %d: %.4g m of the roll (%.4g m at %.4g mm of roll per pattern)"
+                % (batch["count"], batch["roll_length_m"], batch["count"] * n["roll_length_per_pattern_m"],
+                   1e3 * n["roll_length_per_pattern_m"]))
+    elif n["lanes"] > 0:
         pairs = n.get("pairs_turned_180")
         what = ("%d lane%s%s, a %s every %.4g mm, %.4g mm of roll per pattern, %.1f %% of the roll used"
                 % (n["lanes"], "" if n["lanes"] == 1 else "s", " of pairs (one turned by 180 deg)" if pairs else "",
@@ -452,7 +462,7 @@ def plot_nest(where, part, n, out):
     else:
         what = "the pattern does not fit across the roll"
     ax.set_title("%s on a roll %g mm wide, %g mm apart\n%s" % (part, width, 1e3 * n["gap_m"], what), fontsize=8)
-    return save(fig, out, "nest_%s.png" % part, dpi=100)
+    return save(fig, out, ("parts_%s.png" if batch else "nest_%s.png") % part, dpi=100)
 
 
 def threshold_of(folder, part):

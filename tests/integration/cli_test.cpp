@@ -2327,7 +2327,8 @@ bool run_for_blank(const std::filesystem::path& dir) {
 // copy of a pair), within the roll's edges
 // less half the gap, and no two copies are nearer than the gap (the
 // exact distance between their polylines, numpy). The figures of
-// blank.json agree with each other, and `report` draws the layouts. A
+// blank.json agree with each other, and `report` draws the layouts (and
+// a batch's). A
 // batch of 7 parts (--parts): 7 such copies of each ply on a stretch of
 // roll with the gap at its ends, no longer than the lanes' units from any
 // start and no shorter than the patterns' area; --gap, --turn-90 and
@@ -2462,10 +2463,12 @@ print("ok", least)
     EXPECT_GE(length * 0.5, 7 * area) << ply;
   }
   // report draws each ply's layout from DIR/blank.
-  ASSERT_EQ(thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.5").exit_code, 0);
+  ASSERT_EQ(
+      thermostamp("blank " + q(dir / "run") + " --whole --trim cylinder:0,0,0,0,0,1,0.1 --roll 0.5 --parts 3").exit_code,
+      0);
   const auto rep = thermostamp("report " + q(dir / "run"));
   ASSERT_EQ(rep.exit_code, 0) << rep.err;
-  for (const char* f : {"nest_ply_top.png", "nest_ply_bottom.png", "blank_ply_top.png"})
+  for (const char* f : {"nest_ply_top.png", "nest_ply_bottom.png", "blank_ply_top.png", "parts_ply_top.png"})
     EXPECT_TRUE(std::filesystem::exists(dir / "run" / "figures" / f)) << f;
   // A strip 60 mm wide across the fibres (the cylinder and two planes
   // 30 mm either side of the line x = y) lies some 200 mm across a roll
