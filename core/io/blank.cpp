@@ -1996,14 +1996,7 @@ int write_roll_dxf(const std::filesystem::path& file, const std::string& title, 
 // within the first `length` m of the roll.
 std::vector<RollCopy> copies_within(const std::vector<Ring2>& unit, int pieces, const RollNest& n, double gap,
                                     double length) {
-  const std::size_t per = unit.size() / static_cast<std::size_t>(pieces);
-  std::vector<std::array<double, 2>> extent;  // each piece's extent along the roll
-  for (int k = 0; k < pieces; ++k) {
-    std::array<double, 2> e{1e300, -1e300};
-    for (std::size_t r = k * per; r < (k + 1) * per; ++r)
-      for (const auto& v : unit[r]) e = {std::min(e[0], v[0]), std::max(e[1], v[0])};
-    extent.push_back(e);
-  }
+  const std::vector<std::array<double, 2>> extent = piece_extents(unit, pieces);
   const double tol = 1e-9 * (n.length + n.width);
   std::vector<RollCopy> copies;
   for (int j = 0; j < n.lanes; ++j) {

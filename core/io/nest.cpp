@@ -411,19 +411,24 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
   return best;
 }
 
+std::vector<std::array<double, 2>> piece_extents(const std::vector<Ring2>& unit, int pieces) {
+  const std::size_t per = unit.size() / static_cast<std::size_t>(pieces);
+  std::vector<std::array<double, 2>> extent;
+  for (std::size_t k = 0; k < static_cast<std::size_t>(pieces); ++k) {
+    std::array<double, 2> e{1e300, -1e300};
+    for (std::size_t r = k * per; r < (k + 1) * per; ++r)
+      for (const auto& v : unit[r]) e = {std::min(e[0], v[0]), std::max(e[1], v[0])};
+    extent.push_back(e);
+  }
+  return extent;
+}
+
 RollBatch lay_batch(const RollLayout& layout, double gap, int count) {
   const RollNest& n = layout.nest;
   if (count < 1 || count > 10000) throw std::invalid_argument("a batch of fewer than 1 or more than 10000 patterns");
   if (n.lanes < 1 || !(n.pitch > 0)) throw std::invalid_argument("a layout without a lane");
   const int pieces = layout.pairs ? 2 : 1;
-  const std::size_t per = layout.unit.size() / static_cast<std::size_t>(pieces);
-  std::vector<std::array<double, 2>> extent;  // each piece's extent along the roll, in the unit's coordinates
-  for (int k = 0; k < pieces; ++k) {
-    std::array<double, 2> e{1e300, -1e300};
-    for (std::size_t r = k * per; r < (k + 1) * per; ++r)
-      for (const auto& v : layout.unit[r]) e = {std::min(e[0], v[0]), std::max(e[1], v[0])};
-    extent.push_back(e);
-  }
+  const std::vector<std::array<double, 2>> extent = piece_extents(layout.unit, pieces);  // in the unit's coordinates
   // Every lane's places i = 0 .. last: the window of the shortest stretch
   // is at most (units + 1) pitches and a unit long (units of every lane
   // from any start), so places from m on, m pitches beyond the unit's
