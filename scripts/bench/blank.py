@@ -17,10 +17,12 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
-def build():
-    src = os.path.join(ROOT, "scripts", "bench", "blank_patterns.cpp")
+def build(name="blank_patterns"):
+    """Compiles scripts/bench/NAME.cpp against the Release build's core
+    library into build/bench/NAME; returns its path."""
+    src = os.path.join(ROOT, "scripts", "bench", name + ".cpp")
     lib = os.path.join(ROOT, "build", "core", "libthermostamp_core.a")
-    exe = os.path.join(ROOT, "build", "bench", "blank_patterns")
+    exe = os.path.join(ROOT, "build", "bench", name)
     if not os.path.exists(lib):
         sys.exit("no build/core/libthermostamp_core.a: build first (cmake -S . -B build -DCMAKE_BUILD_TYPE=Release)")
     os.makedirs(os.path.dirname(exe), exist_ok=True)

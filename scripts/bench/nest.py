@@ -10,26 +10,12 @@ Usage: scripts/bench/nest.py
 """
 import os
 import subprocess
-import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-def build():
-    src = os.path.join(ROOT, "scripts", "bench", "nest_roll.cpp")
-    lib = os.path.join(ROOT, "build", "core", "libthermostamp_core.a")
-    exe = os.path.join(ROOT, "build", "bench", "nest_roll")
-    if not os.path.exists(lib):
-        sys.exit("no build/core/libthermostamp_core.a: build first (cmake -S . -B build -DCMAKE_BUILD_TYPE=Release)")
-    os.makedirs(os.path.dirname(exe), exist_ok=True)
-    subprocess.run([os.environ.get("CXX", "g++"), "-O3", "-march=native", "-fopenmp", "-std=c++20",
-                    "-I" + os.path.join(ROOT, "core"), src, lib, "-lhdf5_serial", "-lspdlog", "-lfmt",
-                    "-o", exe], check=True)
-    return exe
+from blank import build  # compiles a benchmark against the core library
 
 
 def main():
-    exe = build()
+    exe = build("nest_roll")
     out = subprocess.run([exe], env=dict(os.environ, OMP_NUM_THREADS="1"), check=True, capture_output=True,
                          text=True).stdout.splitlines()
     print("| pattern | gap (mm) | alike (s) | pairs tried (s) | batch of 10 (ms) | of 1 000 (ms) | of 10 000 (ms) "
