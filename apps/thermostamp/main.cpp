@@ -561,8 +561,7 @@ int cmd_blank(const Args& a) {
       if (const auto& b = p.nest->batch) {
         std::snprintf(line, sizeof line,
                       "  %d pattern%s: %.4g m of the roll (%d x %.4g mm = %.4g m at the lanes' rate); ", a.parts,
-                      a.parts == 1 ? "" : "s",
-                      b->length, a.parts, 1000 * p.nest->layout.roll_per_pattern,
+                      a.parts == 1 ? "" : "s", b->length, a.parts, 1000 * p.nest->layout.roll_per_pattern,
                       a.parts * p.nest->layout.roll_per_pattern);
         std::cout << line << p.nest->batch_dxf.string() << "\n";
       }

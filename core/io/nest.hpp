@@ -76,6 +76,10 @@ struct RollLayout {
 RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, double gap, bool try_pairs = true,
                        int bands = 1000, bool try_quarter_turn = false);
 
+// The extent along the roll (min x, max x) of each of a unit's `pieces`
+// patterns (the unit's rings in as many groups of as many rings each).
+std::vector<std::array<double, 2>> piece_extents(const std::vector<Ring2>& unit, int pieces);
+
 // A batch of `count` patterns cut from the layout's lanes: the stretch of
 // roll that holds `count` whole patterns of the lanes (the copies of every
 // lane at the pitch, the lanes at their step and shift across the roll,
@@ -88,10 +92,6 @@ RollLayout lay_on_roll(const std::vector<Ring2>& rings, double roll_width, doubl
 // a wide roll) or more copies of the pattern turned.
 // Throws std::invalid_argument for a count below 1 or above 10 000, or a
 // layout without a lane.
-// The extent along the roll (min x, max x) of each of a unit's `pieces`
-// patterns (the unit's rings in as many groups of as many rings each).
-std::vector<std::array<double, 2>> piece_extents(const std::vector<Ring2>& unit, int pieces);
-
 struct RollCopy {
   int piece = 0;                   // 0 the pattern, 1 the turned copy of a pair
   std::array<double, 2> offset{};  // m, added to the unit's rings of the piece
