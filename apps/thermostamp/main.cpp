@@ -313,6 +313,7 @@ int cmd_run(const Args& a, bool validate_only) {
     }
     for (const std::string& l : sim.mesh_file_lines()) std::cout << l << "\n";
     for (const std::string& l : sim.tool_motion_lines()) std::cout << l << "\n";
+    for (const std::string& l : sim.gripper_lines()) std::cout << l << "\n";
     for (const auto& m : job.materials)
       if (const auto card = ts::material_card_file(job, m); !card.empty())
         std::cout << "material '" << m.name << "': from the material card " << card.string() << "\n";

@@ -992,11 +992,12 @@ void parse_job_into(Job& job) {
 
   if (const json* c = top.optional_raw("constraints")) {
     if (!c->is_array()) throw JobError("/constraints", "expected an array, found " + json_type_name(*c));
+    int grippers = 0;  // default names gripper1, gripper2, ...
     for (std::size_t i = 0; i < c->size(); ++i) {
       ConstraintDef d;
       d.pointer = pointer_append("/constraints", i);
       ObjectReader r((*c)[i], d.pointer);
-      const std::string type = r.choice("type", {"symmetry", "fix", "velocity", "force"});
+      const std::string type = r.choice("type", {"symmetry", "fix", "velocity", "force", "gripper"});
       d.parts = select_parts(r);
       if (type == "symmetry") {
         d.type = ConstraintDef::Type::Symmetry;
@@ -1017,6 +1018,36 @@ void parse_job_into(Job& job) {
           const auto f = r.reals("force", 3);
           d.force = {f[0], f[1], f[2]};
           d.ramp = r.real("ramp", 0.0, 0.0);
+        } else if (type == "gripper") {
+          d.type = ConstraintDef::Type::Gripper;
+          d.name = r.text("name", "gripper" + std::to_string(++grippers));
+          if (d.name.empty()) throw JobError(r.at("name"), "must not be empty");
+          for (const ConstraintDef& o : job.constraints)
+            if (o.type == ConstraintDef::Type::Gripper && o.name == d.name)
+              throw JobError(r.at("name"), "a gripper named '" + d.name + "' is already defined at " + o.pointer);
+          const auto a = r.reals("anchor", 3);
+          d.anchor = {a[0], a[1], a[2]};
+          d.stiffness = r.real("stiffness", std::nullopt, 0.0, true);
+          d.preload = r.real("preload", 0.0, 0.0);
+          d.ramp = r.real("ramp", 0.0, 0.0);
+          d.tension_only = r.boolean("tension_only", true);
+          if (const json* m = r.optional_raw("anchor_motion")) {
+            ObjectReader mo(*m, r.at("anchor_motion"));
+            const bool hv = mo.optional_raw("velocity") != nullptr, hd = mo.optional_raw("displacement") != nullptr;
+            if (int(hv) + int(hd) != 1) throw JobError(mo.pointer(), "give exactly one of \"velocity\" or \"displacement\"");
+            if (hv) {
+              d.anchor_motion.kind = MotionDef::Kind::Velocity;
+              const auto v = mo.reals("velocity", 3);
+              d.anchor_motion.velocity = {v[0], v[1], v[2]};
+            } else {
+              d.anchor_motion.kind = MotionDef::Kind::Displacement;
+              const json& tab = mo.raw("displacement");
+              const std::string tp = mo.at("displacement");
+              if (!tab.is_array() || tab.empty()) throw JobError(tp, "expected rows [t, dx, dy, dz]");
+              d.anchor_motion.table = rows_of_four(tab, tp);
+            }
+            mo.finish();
+          }
         } else {
           d.type = ConstraintDef::Type::Velocity;
           const auto v = r.reals("velocity", 3);

@@ -229,15 +229,27 @@ struct MechanicsDef {
 };
 
 struct ConstraintDef {
-  enum class Type { Symmetry, Fix, Velocity, Force } type = Type::Fix;
+  enum class Type { Symmetry, Fix, Velocity, Force, Gripper } type = Type::Fix;
   std::string pointer;
+  std::string name;  // gripper: its name in messages and summary.json
   std::vector<int> parts;
   int plane = 0;  // symmetry: 0 x, 1 y, 2 z
   std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
   std::array<bool, 3> dofs{false, false, false};
   std::array<double, 3> velocity{0, 0, 0};
   std::array<double, 3> force{0, 0, 0};  // force: total over the nodes in the box (N)
-  double ramp = 0;                       // force: linear ramp time from zero (s)
+  double ramp = 0;                       // force, gripper's preload: linear ramp time from zero (s)
+  // gripper: a spring from the anchor (m) to the centre of the nodes in the
+  // box (their mean position weighted by their mass), which pulls them
+  // with the force preload + stiffness (d - d0), d the spring's length and
+  // d0 its length at t = 0, shared among them by their mass; never
+  // pushing where tension_only. The anchor moves by `anchor_motion`
+  // (Fixed, Velocity or Displacement).
+  std::array<double, 3> anchor{0, 0, 0};
+  double stiffness = 0;  // N/m
+  double preload = 0;    // N
+  bool tension_only = true;
+  MotionDef anchor_motion;
 };
 
 struct OutputDef {

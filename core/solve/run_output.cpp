@@ -300,6 +300,7 @@ void Simulation::Run::log_start() const {
   for (std::size_t p = 0; p < mech.size(); ++p)
     log->info("part '{}': mass {:.6g} kg, added by mass scaling {:.6g} kg ({:.3g} %)", parts[p]->def->name,
               mech[p]->mass_physical, mech[p]->mass_added, 100 * mech[p]->mass_added / mech[p]->mass_physical);
+  for (const std::string& line : sim.gripper_lines()) log->info("{}", line);
   // More than a thousand times the ply's own mass: the inertia, not the
   // material, then decides how the ply deforms.
   for (std::size_t p = 0; p < mech.size(); ++p)
@@ -776,6 +777,20 @@ void Simulation::Run::finish() {
         }
       }
   }
+  if (!sim.grippers_.empty()) {  // each gripper's largest force over the rows of energy.csv
+    const std::size_t w = energy_cols.size();
+    result.energy.gripper_force_max.assign(sim.grippers_.size(), 0.0);
+    result.energy.gripper_force_max_at.assign(sim.grippers_.size(), 0.0);
+    for (std::size_t r = 0; r + w <= energy_rows.size(); r += w)
+      for (std::size_t g = 0; g < sim.grippers_.size(); ++g) {
+        const double* f = &energy_rows[r + 8 + 3 * static_cast<std::size_t>(sim.grippers_[g].constraint)];
+        const double m = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+        if (m > result.energy.gripper_force_max[g]) {
+          result.energy.gripper_force_max[g] = m;
+          result.energy.gripper_force_max_at[g] = energy_rows[r];
+        }
+      }
+  }
   for (const auto& m : sim.mech_) result.energy.added_mass_percent.push_back(100 * m->mass_added / m->mass_physical);
   result.temperature_min = sim.seen_min_;
   result.temperature_max = sim.seen_max_;
@@ -951,6 +966,28 @@ bool Simulation::Run::write_summary(std::string& why) const {
                                       audit.reactions.size() > 3 * c ? audit.reactions[3 * c + 1] : 0.0,
                                       audit.reactions.size() > 3 * c ? audit.reactions[3 * c + 2] : 0.0}}});
     summary["reactions_N"] = reactions;
+    if (!sim.grippers_.empty()) {
+      json grippers = json::array();
+      for (std::size_t g = 0; g < sim.grippers_.size(); ++g) {
+        const Gripper& gr = sim.grippers_[g];
+        const ConstraintDef& c = job.constraints[gr.constraint];
+        std::array<double, 3> c0{0, 0, 0};  // the gripped nodes' centre at t = 0
+        for (std::size_t j = 0; j < gr.nodes.size(); ++j)
+          for (int d = 0; d < 3; ++d) c0[d] += gr.share[j] * parts[gr.nodes[j].first]->x0[3 * gr.nodes[j].second + d];
+        grippers.push_back({{"name", c.name},
+                            {"constraint", c.pointer},
+                            {"nodes", gr.nodes.size()},
+                            {"mass_kg", gr.mass},
+                            {"force_N", gr.force},
+                            {"tension_N", gr.tension},
+                            {"extension_m", gr.extension},
+                            {"centre_displacement_m",
+                             {gr.centre[0] - c0[0], gr.centre[1] - c0[1], gr.centre[2] - c0[2]}},
+                            {"force_max_N", result.energy.gripper_force_max[g]},
+                            {"force_max_at_s", result.energy.gripper_force_max_at[g]}});
+      }
+      summary["grippers"] = grippers;
+    }
     json added = json::object();
     for (std::size_t p = 0; p < mech.size(); ++p)
       added[parts[p]->def->name] = 100 * mech[p]->mass_added / mech[p]->mass_physical;
@@ -1083,6 +1120,13 @@ void Simulation::Run::log_end() const {
     for (std::size_t q = 0; q < result.energy.tool_force_max.size(); ++q)
       log->info("tool '{}': largest force {:.4g} N at t = {} s", job.tools[q].name, result.energy.tool_force_max[q],
                 fmt_g(result.energy.tool_force_max_at[q], 4));
+    for (std::size_t g = 0; g < result.energy.gripper_force_max.size(); ++g) {
+      const Gripper& gr = sim.grippers_[g];
+      log->info("gripper '{}': largest force {:.4g} N at t = {} s; at the end {:.4g} N, its spring {} by {:.4g} mm",
+                job.constraints[gr.constraint].name, result.energy.gripper_force_max[g],
+                fmt_g(result.energy.gripper_force_max_at[g], 4), gr.tension,
+                gr.extension >= 0 ? "extended" : "shortened", 1e3 * std::abs(gr.extension));
+    }
   }
   if (job.thermal) {
     for (std::size_t p = 0; p < parts.size(); ++p) {

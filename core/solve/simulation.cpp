@@ -89,7 +89,11 @@ template <bool kContact, bool kExternal, bool kNormalDamping>
     const double xo = x[k], xn = xo + dxn;
     w_int += is_free ? 0.5 * fi * dxo : 0.0;
     p_int += is_free ? 0.5 * fi * dxn : 0.0;
-    w_ext += is_free ? f_ext * dxo : 0.0;
+    // The loads' work by the trapezoidal rule, as the internal forces'
+    // (a gripper's follows the positions); gravity's is exact as it is.
+    const double f_load = kExternal ? load[k] : 0.0;
+    w_ext += is_free ? (f_ext - 0.5 * f_load) * dxo : 0.0;
+    p_ext += is_free ? 0.5 * f_load * dxn : 0.0;
     w_damp += is_free ? 0.5 * f_damp * dxo : 0.0;
     p_damp += is_free ? 0.5 * f_damp * dxn : 0.0;
     if (kContact) {
@@ -358,6 +362,28 @@ std::vector<std::string> Simulation::mesh_file_lines() const {
   }
   for (const auto& tool : tools_)
     if (std::string line = tool->describe(); !line.empty()) lines.push_back(std::move(line));
+  return lines;
+}
+
+std::vector<std::string> Simulation::gripper_lines() const {
+  std::vector<std::string> lines;
+  for (const Gripper& g : grippers_) {
+    const ConstraintDef& c = job_.constraints[g.constraint];
+    std::string names;
+    for (const int p : c.parts)
+      for (const auto& [gp, gi] : g.nodes)
+        if (gp == p) {
+          names += (names.empty() ? "'" : ", '") + parts_[p]->def->name + "'";
+          break;
+        }
+    lines.push_back(fmt::format(
+        "gripper '{}' ({}): {} node(s) of {} ({:.4g} g), a spring of {:.4g} mm from the anchor ({}, {}, {}) m to their "
+        "centre, {:.4g} N/m (alone with them, a period of {:.3g} ms), preload {:.4g} N{}, {}{}",
+        c.name, c.pointer, g.nodes.size(), names, 1e3 * g.mass, 1e3 * g.length0, fmt_g(c.anchor[0]),
+        fmt_g(c.anchor[1]), fmt_g(c.anchor[2]), c.stiffness, 2e3 * M_PI * std::sqrt(g.mass / c.stiffness), c.preload,
+        c.ramp > 0 ? " over " + fmt_g(c.ramp) + " s" : "", c.tension_only ? "pulling only" : "pulling and pushing",
+        c.anchor_motion.kind == MotionDef::Kind::Fixed ? "" : ", the anchor moving"));
+  }
   return lines;
 }
 
@@ -817,7 +843,7 @@ void Simulation::build_mechanics() {
         bool inside = true;
         for (int d = 0; d < 3; ++d) inside = inside && X[d] >= c.lo[d] && X[d] <= c.hi[d];
         if (!inside) continue;
-        if (c.type == ConstraintDef::Type::Force) continue;  // loads: below
+        if (c.type == ConstraintDef::Type::Force || c.type == ConstraintDef::Type::Gripper) continue;  // loads: below
         for (int d = 0; d < 3; ++d)
           if (c.dofs[d]) {
             m->fixed[3 * i + d] = 1;
@@ -850,6 +876,44 @@ void Simulation::build_mechanics() {
     for (int d = 0; d < 3; ++d) l.per_node[d] = c.force[d] / static_cast<double>(l.nodes.size());
     loads_.push_back(std::move(l));
   }
+  // Grippers: the nodes in the box share the spring's force by their mass,
+  // so that the spring alone moves them as one body.
+  for (std::size_t ci = 0; ci < job_.constraints.size(); ++ci) {
+    const ConstraintDef& c = job_.constraints[ci];
+    if (c.type != ConstraintDef::Type::Gripper) continue;
+    Gripper g;
+    g.constraint = static_cast<int>(ci);
+    for (int p : c.parts) {
+      const PartState& st = *parts_[p];
+      const double rho_h = job_.materials[st.def->material].density * st.def->thickness;
+      for (int i = 0; i < st.mesh.num_nodes(); ++i) {
+        bool inside = true;
+        for (int d = 0; d < 3; ++d) inside = inside && st.x0[3 * i + d] >= c.lo[d] && st.x0[3 * i + d] <= c.hi[d];
+        if (!inside) continue;
+        g.nodes.emplace_back(p, i);
+        g.share.push_back(rho_h * st.area[i]);
+        g.mass += g.share.back();
+      }
+    }
+    if (g.nodes.empty()) throw JobError(c.pointer + "/box", "no node of the part(s) lies inside the box");
+    if (!(g.mass > 0)) throw JobError(c.pointer + "/box", "the nodes inside the box carry no mass");
+    Vec3 centre{0, 0, 0};
+    for (std::size_t k = 0; k < g.nodes.size(); ++k) {
+      g.share[k] /= g.mass;
+      centre = sdk::add(centre, sdk::scale(sdk::load3(parts_[g.nodes[k].first]->x0.data(), g.nodes[k].second), g.share[k]));
+    }
+    g.centre = centre;
+    g.length0 = sdk::norm(sdk::sub(Vec3{c.anchor[0], c.anchor[1], c.anchor[2]}, centre));
+    double size = 0;  // the gripped nodes' extent
+    for (const auto& [p, i] : g.nodes)
+      size = std::max(size, sdk::norm(sdk::sub(sdk::load3(parts_[p]->x0.data(), i), centre)));
+    if (!(g.length0 > 1e-6 * std::max(size, 1e-3)))
+      throw JobError(c.pointer + "/anchor", "lies at the centre of the gripped nodes (" + fmt_g(centre[0]) + ", " +
+                                                fmt_g(centre[1]) + ", " + fmt_g(centre[2]) +
+                                                ") m: the spring has no direction; place the anchor where the "
+                                                "spring pulls from");
+    grippers_.push_back(std::move(g));
+  }
   // Contact stiffness bounds per node (for the stable step and mass scaling)
   // and, for force-controlled tools, the total stiffness they can meet.
   std::vector<std::span<const double>> areas;
@@ -869,6 +933,15 @@ void Simulation::build_mechanics() {
         mech_[p]->k_contact[i] += k[p][i];
         if (job_.contacts[c].second.is_tool) tool_k[job_.contacts[c].second.index] += k[p][i];
       }
+  }
+  // A gripper's spring, stiffness k and tension F at length d, holds node j
+  // with k s_j along the spring and F s_j / d across it (s_j its share):
+  // bounds that enter the stable step and mass scaling as the contact
+  // springs' do, at the preload.
+  for (const Gripper& g : grippers_) {
+    const ConstraintDef& c = job_.constraints[g.constraint];
+    const double k = std::max(c.stiffness, c.preload / g.length0);
+    for (std::size_t j = 0; j < g.nodes.size(); ++j) mech_[g.nodes[j].first]->k_contact[g.nodes[j].second] += k * g.share[j];
   }
   // Stable steps of the initial configuration; mass scaling per element.
   const MechanicsDef& md = job_.mechanics_settings;
@@ -947,6 +1020,8 @@ void Simulation::build_mechanics() {
     m.external = md.gravity[0] != 0 || md.gravity[1] != 0 || md.gravity[2] != 0;
     for (const Load& l : loads_)
       for (const auto& [lp, li] : l.nodes) m.external = m.external || lp == static_cast<int>(p);
+    for (const Gripper& g : grippers_)
+      for (const auto& [gp, gi] : g.nodes) m.external = m.external || gp == static_cast<int>(p);
     for (int i = 0; i < nn; ++i)
       if (m.k_contact[i] > 0) contact_dt_ = std::min(contact_dt_, 2.0 * std::sqrt(m.mass[i] / m.k_contact[i]));
   }
@@ -995,7 +1070,9 @@ void Simulation::check_initial_step(int limiting_tool, double tool_stiffness) co
              " kg) on the contact springs under it (" + fmt_g(tool_stiffness) + " N/m)";
       if (md.dt_safety >= 1e-3) where = tool.pointer + "/motion/mass";
     } else if (contact_dt_ < elements) {
-      what = "the contact springs (penalty times node area, against the node masses)";
+      what = grippers_.empty() ? "the contact springs (penalty times node area, against the node masses)"
+                               : "the contact springs (penalty times node area, against the node masses) or the "
+                                 "grippers' springs (their stiffness against the gripped nodes' mass)";
     }
     throw JobError(where, "the mechanical step " + fmt_g(dt, 3) + " s (dt_safety " + fmt_g(md.dt_safety) +
                               " times the stable step " + fmt_g(stable, 3) + " s, set by " + what +
@@ -1710,6 +1787,39 @@ void Simulation::finish_contact_forces() {
   }
 }
 
+// Each gripper at t: its spring from the anchor to the gripped nodes'
+// centre c = sum_j s_j x_j, of length d, pulls with the tension
+// F = preload (ramped) + k (d - d0) (not below 0 where tension_only), a
+// force F (anchor - c) / d that node j takes s_j of. Serial, in the
+// grippers' order: the same sums for any thread count.
+void Simulation::apply_grippers(double t) {
+  for (Gripper& g : grippers_) {
+    const ConstraintDef& c = job_.constraints[g.constraint];
+    Vec3 centre{0, 0, 0};
+    for (std::size_t j = 0; j < g.nodes.size(); ++j)
+      centre = sdk::add(centre, sdk::scale(sdk::load3(parts_[g.nodes[j].first]->x.data(), g.nodes[j].second), g.share[j]));
+    std::array<double, 3> u{0, 0, 0};
+    if (c.anchor_motion.kind == MotionDef::Kind::Velocity)
+      u = {c.anchor_motion.velocity[0] * t, c.anchor_motion.velocity[1] * t, c.anchor_motion.velocity[2] * t};
+    else if (c.anchor_motion.kind == MotionDef::Kind::Displacement)
+      u = rows_at(c.anchor_motion.table, t);
+    const Vec3 r = sdk::sub(Vec3{c.anchor[0] + u[0], c.anchor[1] + u[1], c.anchor[2] + u[2]}, centre);
+    const double d = sdk::norm(r);
+    const double ramp = c.ramp > 0 ? std::min(1.0, t / c.ramp) : 1.0;
+    double tension = ramp * c.preload + c.stiffness * (d - g.length0);
+    if (c.tension_only) tension = std::max(tension, 0.0);
+    const Vec3 f = d > 0 ? sdk::scale(r, tension / d) : Vec3{0, 0, 0};
+    for (std::size_t j = 0; j < g.nodes.size(); ++j) {
+      double* load = &mech_[g.nodes[j].first]->load[3 * static_cast<std::size_t>(g.nodes[j].second)];
+      for (int k = 0; k < 3; ++k) load[k] += g.share[j] * f[k];
+    }
+    g.force = f;
+    g.centre = centre;
+    g.tension = tension;
+    g.extension = d - g.length0;
+  }
+}
+
 // Central differences: v^{n+1/2} = v^{n-1/2} + dt_avg a^n, x^{n+1} = x^n + dt v^{n+1/2}.
 double Simulation::mechanics_step(double dt, double t, long long step, EnergyAudit& audit) {
   const MechanicsDef& md = job_.mechanics_settings;
@@ -1723,6 +1833,11 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
       for (const auto& [p, i] : l.nodes)
         for (int d = 0; d < 3; ++d) mech_[p]->load[3 * i + d] += factor * l.per_node[d];
     }
+  }
+  if (!grippers_.empty()) {
+    if (loads_.empty())
+      for (auto& m : mech_) std::fill(m->load.begin(), m->load.end(), 0.0);
+    apply_grippers(t);
   }
   // Parts are independent here: with several, one thread each. Each part
   // sums its own works and reactions; the parts' sums are then added in
@@ -1788,6 +1903,8 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     kin_half += sums[5];
     for (std::size_t r = 0; r < nr; ++r) audit.reactions[r] += sums[6 + r];
   }
+  for (const Gripper& g : grippers_)
+    for (int d = 0; d < 3; ++d) audit.reactions[3 * g.constraint + d] += g.force[d];
   // Tools move to t + dt (force control with the plies' force at t).
   for (std::size_t q = 0; q < tools_.size(); ++q)
     tools_[q]->advance(t, dt, dt_avg, {tool_force_[3 * q], tool_force_[3 * q + 1], tool_force_[3 * q + 2]});

@@ -66,6 +66,10 @@ struct EnergyAudit {
   // plies on the tool over the rows of tools.csv (N), and the time of that
   // row (s; the first such row)
   std::vector<double> tool_force_max, tool_force_max_at;
+  // per gripper (in the order of the constraints): the largest magnitude of
+  // its force on the plies over the rows of energy.csv (N) and the time of
+  // that row (s; the first such row)
+  std::vector<double> gripper_force_max, gripper_force_max_at;
 };
 
 // One line on a material's crystallisation kinetics (for the log and
@@ -177,6 +181,8 @@ class Simulation {
   // One line per tool that moves (with mechanics): its velocity, the first
   // and last rows of its displacement table, or its force, mass and damper.
   std::vector<std::string> tool_motion_lines() const;
+  // A line per gripper: its nodes, spring and preload (validate, the log).
+  std::vector<std::string> gripper_lines() const;
   // What the frames of results.h5 will take: their number and times, the
   // bytes of each and of all (before compression). mech_step: the
   // mechanical step at the start (s; 0 without mechanics), below which
@@ -401,6 +407,22 @@ class Simulation {
     std::array<double, 3> per_node{0, 0, 0};    // N, at full value
   };
   std::vector<Load> loads_;                     // `force` entries of the constraints
+  // `gripper` entries of the constraints: a spring from an anchor to the
+  // centre of the gripped nodes, whose force they share by their mass.
+  struct Gripper {
+    int constraint = 0;                         // index in job.constraints
+    std::vector<std::pair<int, int>> nodes;     // (part, node) in the box
+    std::vector<double> share;                  // each node's share of the force (its mass over theirs)
+    double mass = 0;                            // kg, of the gripped nodes (physical)
+    double length0 = 0;                         // m, the spring's length at t = 0
+    // At the last step: the force on the plies (N), the spring's tension
+    // (N) and extension (m), the gripped nodes' centre (m).
+    std::array<double, 3> force{0, 0, 0}, centre{0, 0, 0};
+    double tension = 0, extension = 0;
+  };
+  std::vector<Gripper> grippers_;
+  // Each gripper's force on the plies at t, added to the parts' loads.
+  void apply_grippers(double t);
   double contact_dt_ = std::numeric_limits<double>::infinity();  // contact bound of the stable step
   double tool_dt_ = std::numeric_limits<double>::infinity();     // force-controlled tools' bound
   long long contact_active_ = 0;

@@ -282,11 +282,21 @@ TEST(Restart, ContactSharesOfAThermalStepContinueBitForBit) {
 }
 
 // Isothermal, with elastic-slip friction (tangential springs that carry
-// over from step to step) and the search every step.
+// over from step to step) and the search every step; a gripper at the
+// blank's corner whose anchor moves (its load's work is carried to the
+// next step in the audit's pending sums).
 TEST(Restart, StickingFrictionContinuesBitForBit) {
   json j = coarse_hemisphere("hemisphere_ud_2ply_isothermal.json");
   for (auto& c : j["interactions"])
     if (c.value("type", "") == "contact") c["slip_velocity"] = 0.0;
+  j["constraints"].push_back({{"type", "gripper"},
+                              {"part", "*"},
+                              {"box", {{0.13, 0.13, -1.0}, {1.0, 1.0, 1.0}}},
+                              {"anchor", {0.2, 0.2, 0.0}},
+                              {"stiffness", 2000.0},
+                              {"preload", 5.0},
+                              {"ramp", 0.1},
+                              {"anchor_motion", {{"velocity", {0.0, 0.0, -0.005}}}}});
   check_restart("sticking", j, 0.45);
 }
 
