@@ -629,6 +629,9 @@ void Simulation::build_tools() {
       logger("job")->warn("{}/motion: ignored, tools do not move in a thermal-only job", job_.tools[t].pointer);
     tools_.push_back(std::move(tool));
   }
+  if (!job_.mechanics)
+    for (const ConstraintDef& c : job_.constraints)
+      logger("job")->warn("{}: ignored, constraints act on the mechanics and a thermal-only job has none", c.pointer);
   tool_force_.assign(3 * tools_.size(), 0.0);
   tool_heat_.assign(tools_.size(), 0.0);
   for (std::size_t t = 0; t < tools_.size(); ++t) {

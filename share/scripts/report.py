@@ -47,6 +47,8 @@ Writes into DIR/figures/:
                        of its area that did, and (from 0.40.0) the band of
                        its elements' thickness at constant volume
   energy.png           energy audit against time
+  grippers.png         with grippers (constraints of type gripper): each
+                       gripper's force on the plies against time
   blank_<part>.png     each ply's cut pattern (thermostamp blank, when
                        DIR/blank/blank.json is there): the pattern in the
                        blank with its fibre marks, the blank's edge, and
@@ -808,7 +810,32 @@ def plot_energy(folder, out):
     a2.set_xlabel("time (s)")
     a2.legend(fontsize=8)
     a2.grid(alpha=0.3, which="both")
-    return [save(fig, out, "energy.png")]
+    return [save(fig, out, "energy.png")] + plot_grippers(folder, out, rows)
+
+
+def plot_grippers(folder, out, rows):
+    """Each gripper's force on the plies against time (its constraint's
+    reaction columns of energy.csv; the grippers as summary.json names them)."""
+    try:
+        grippers = json.load(open(os.path.join(folder, "summary.json"))).get("grippers") or []
+    except (OSError, ValueError, AttributeError):
+        return []
+    if not grippers:
+        return []
+    t = [float(r["time"]) for r in rows]
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for g in grippers:
+        c = g["constraint"].rsplit("/", 1)[-1]
+        f = np.array([[float(r["reaction%s_%s" % (c, d)]) for d in "xyz"] for r in rows])
+        ax.plot(t, np.linalg.norm(f, axis=1), label=g["name"])
+    mark_stop([ax], stop_of(folder))
+    mark_restart([ax], restart_of(folder))
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("force on the plies (N)")
+    ax.set_title("gripper forces")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return [save(fig, out, "grippers.png")]
 
 
 def plot_materials(folder, out):

@@ -3917,16 +3917,48 @@ TEST(Compare, GivesTheLargestDifferencesOfTheFiles) {
 }
 
 // `thermostamp report DIR`: the figures of a run (the hemisphere scene,
-// coarse and short); a results file cut short is named in one line while
-// the other files' figures are still made; a folder without results.
+// coarse and short, with a gripper on the stack's corner); a results file
+// cut short is named in one line while the other files' figures are still
+// made; a folder without results. The gripper's line in `validate` and
+// its entry in summary.json.
 TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
   const auto dir = temp_dir("report");
   json j = short_hemisphere(0.01, 0.005, 4);
   for (auto& p : j["output"]["probes"]) p["interval"] = 0.0025;
   j["output"]["shear_angle_limit"] = 1e-5;
+  j["constraints"].push_back({{"type", "gripper"},
+                              {"name", "corner"},
+                              {"part", "*"},
+                              {"box", {{0.13, 0.13, -1.0}, {1.0, 1.0, 1.0}}},
+                              {"anchor", {0.2, 0.2, 0.0}},
+                              {"stiffness", 2000.0},
+                              {"preload", 5.0},
+                              {"ramp", 0.005}});
   std::ofstream(dir / "job.json") << j.dump(2);
+  const auto v = thermostamp("validate " + q(dir / "job.json"));
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  EXPECT_NE(v.out.find("gripper 'corner' (/constraints/2): "), std::string::npos) << v.out;
+  EXPECT_NE(v.out.find("preload 5 N over 0.005 s, pulling only"), std::string::npos) << v.out;
   const auto out = dir / "out";
   ASSERT_EQ(thermostamp("run " + q(dir / "job.json") + " --out " + q(out) + " --quiet").exit_code, 0);
+  {
+    const json s = json::parse(std::ifstream(out / "summary.json"));
+    ASSERT_EQ(s["grippers"].size(), 1u) << s.dump();
+    const json& g = s["grippers"][0];
+    EXPECT_EQ(g["name"], "corner");
+    EXPECT_EQ(g["constraint"], "/constraints/2");
+    EXPECT_GT(g["nodes"].get<int>(), 0);
+    EXPECT_GT(g["mass_kg"].get<double>(), 0.0);
+    // The force on the plies is the constraint's reaction, along the spring.
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(g["force_N"][d], s["reactions_N"][2]["force"][d]);
+    const double f = std::hypot(g["force_N"][0].get<double>(), g["force_N"][1].get<double>(),
+                                g["force_N"][2].get<double>());
+    EXPECT_NEAR(g["tension_N"].get<double>(), f, 1e-12 * f);
+    // Pulling only: the corner, light, has overshot and the spring is slack.
+    EXPECT_NEAR(g["tension_N"].get<double>(), std::max(0.0, 5.0 + 2000.0 * g["extension_m"].get<double>()), 1e-9);
+    EXPECT_GE(g["force_max_N"].get<double>(), f);
+    EXPECT_EQ(g["centre_displacement_m"].size(), 3u);
+  }
   ASSERT_EQ(thermostamp("blank " + q(out) + " --whole --trim sphere:0,0,0,0.1").exit_code, 0);  // blank_<ply>.png
   const auto r = thermostamp("report " + q(out));
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -3934,7 +3966,8 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
       "profile_pole_top.png", "profile_pole_bottom.png", "profile_flank_top.png", "profile_flank_bottom.png",
       "probes_mean.png",      "map_ply_top.png",         "map_ply_bottom.png",    "shear_ply_top.png",
       "shear_ply_bottom.png", "fibre_strain_ply_top.png", "fibre_strain_ply_bottom.png", "tool_forces.png",
-      "plies.png",            "energy.png",              "blank_ply_top.png",     "blank_ply_bottom.png"};
+      "plies.png",            "energy.png",              "blank_ply_top.png",     "blank_ply_bottom.png",
+      "grippers.png"};
   for (const auto& f : figures) {
     std::ifstream png(out / "figures" / f, std::ios::binary);
     char magic[4] = {0, 0, 0, 0};
