@@ -1838,8 +1838,10 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     }
   }
   if (!grippers_.empty()) {
-    if (loads_.empty())
-      for (auto& m : mech_) std::fill(m->load.begin(), m->load.end(), 0.0);
+    if (loads_.empty())  // only the gripped nodes' loads are not zero
+      for (const Gripper& g : grippers_)
+        for (const auto& [p, i] : g.nodes)
+          std::fill_n(&mech_[p]->load[3 * static_cast<std::size_t>(i)], 3, 0.0);
     apply_grippers(t);
   }
   // Parts are independent here: with several, one thread each. Each part
