@@ -1031,6 +1031,7 @@ void parse_job_into(Job& job) {
           d.preload = r.real("preload", 0.0, 0.0);
           d.ramp = r.real("ramp", 0.0, 0.0);
           d.tension_only = r.boolean("tension_only", true);
+          if (r.optional_raw("release")) d.release = r.real("release", std::nullopt, 0.0, true);
           if (const json* m = r.optional_raw("anchor_motion")) {
             ObjectReader mo(*m, r.at("anchor_motion"));
             const bool hv = mo.optional_raw("velocity") != nullptr, hd = mo.optional_raw("displacement") != nullptr;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -249,6 +250,7 @@ struct ConstraintDef {
   double stiffness = 0;  // N/m
   double preload = 0;    // N
   bool tension_only = true;
+  double release = std::numeric_limits<double>::infinity();  // s: from then on the gripper holds no more
   MotionDef anchor_motion;
 };
 

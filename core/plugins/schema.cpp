@@ -326,6 +326,39 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
                      {"required", {"name", "surface"}},
                      {"properties", {{"name", {{"type", "string"}}}, {"surface", surface}, {"motion", motion}, {"temperature", temperature_or_rows}}},
                      {"additionalProperties", false}};
+  // constraints[]: one object per kind, told apart by "type".
+  const json box = {{"type", "array"},
+                    {"items", vec(3)},
+                    {"minItems", 2},
+                    {"maxItems", 2},
+                    {"description", "[[x0, y0, z0], [x1, y1, z1]] (m): the nodes whose initial position is inside"}};
+  const json part_name = {{"type", "string"}, {"description", "a part's name, or \"*\" for every part"}};
+  const json dofs = {{"type", "array"}, {"items", {{"enum", {"x", "y", "z"}}}}};
+  auto constraint_kind = [&](const char* type, std::vector<std::string> required, json properties) {
+    properties["type"] = {{"const", type}};
+    properties["part"] = part_name;
+    required.insert(required.begin(), {"type", "part"});
+    return json{{"type", "object"}, {"required", required}, {"properties", properties}, {"additionalProperties", false}};
+  };
+  const json constraint_kinds = {
+      constraint_kind("symmetry", {"plane"}, {{"plane", {{"enum", {"x", "y", "z"}}}}}),
+      constraint_kind("fix", {"box"}, {{"box", box}, {"dofs", dofs}}),
+      constraint_kind("velocity", {"box", "velocity"}, {{"box", box}, {"velocity", vec(3)}, {"dofs", dofs}}),
+      constraint_kind("force", {"box", "force"},
+                      {{"box", box},
+                       {"force", vec(3)},
+                       {"ramp", {{"type", "number"}, {"minimum", 0}, {"description", "[s]"}}}}),
+      constraint_kind(
+          "gripper", {"box", "anchor", "stiffness"},
+          {{"name", {{"type", "string"}, {"minLength", 1}}},
+           {"box", box},
+           {"anchor", vec(3)},
+           {"stiffness", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[N/m]"}}},
+           {"preload", {{"type", "number"}, {"minimum", 0}, {"description", "[N]"}}},
+           {"ramp", {{"type", "number"}, {"minimum", 0}, {"description", "[s] of the preload"}}},
+           {"tension_only", {{"type", "boolean"}}},
+           {"release", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[s]"}}},
+           {"anchor_motion", {{"oneOf", {motion["oneOf"][0], motion["oneOf"][1]}}}}})};
   json interaction_kinds = contact;
   interaction_kinds.push_back(heat_exchange);
   // A probe of output.probes (job.cpp reads the same keys).
@@ -354,7 +387,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
         {"parts", {{"type", "array"}, {"items", part}}},
         {"tools", {{"type", "array"}, {"items", tool}}},
         {"interactions", {{"type", "array"}, {"items", {{"anyOf", interaction_kinds}}}}},
-        {"constraints", {{"type", "array"}, {"items", {{"type", "object"}}}}},
+        {"constraints", {{"type", "array"}, {"items", {{"oneOf", constraint_kinds}}}}},
         {"solvers",
          {{"type", "object"},
           {"properties", {{"mechanics", {{"type", {"object", "null"}}}}, {"thermal", {{"anyOf", thermal_or_null}}}}},

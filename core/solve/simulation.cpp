@@ -378,11 +378,12 @@ std::vector<std::string> Simulation::gripper_lines() const {
         }
     lines.push_back(fmt::format(
         "gripper '{}' ({}): {} node(s) of {} ({:.4g} g), a spring of {:.4g} mm from the anchor ({}, {}, {}) m to their "
-        "centre, {:.4g} N/m (alone with them, a period of {:.3g} ms), preload {:.4g} N{}, {}{}",
+        "centre, {:.4g} N/m (alone with them, a period of {:.3g} ms), preload {:.4g} N{}, {}{}{}",
         c.name, c.pointer, g.nodes.size(), names, 1e3 * g.mass, 1e3 * g.length0, fmt_g(c.anchor[0]),
         fmt_g(c.anchor[1]), fmt_g(c.anchor[2]), c.stiffness, 2e3 * M_PI * std::sqrt(g.mass / c.stiffness), c.preload,
         c.ramp > 0 ? " over " + fmt_g(c.ramp) + " s" : "", c.tension_only ? "pulling only" : "pulling and pushing",
-        c.anchor_motion.kind == MotionDef::Kind::Fixed ? "" : ", the anchor moving"));
+        c.anchor_motion.kind == MotionDef::Kind::Fixed ? "" : ", the anchor moving",
+        std::isfinite(c.release) ? ", released at " + fmt_g(c.release) + " s" : ""));
   }
   return lines;
 }
@@ -1811,6 +1812,7 @@ void Simulation::apply_grippers(double t) {
     const double ramp = c.ramp > 0 ? std::min(1.0, t / c.ramp) : 1.0;
     double tension = ramp * c.preload + c.stiffness * (d - g.length0);
     if (c.tension_only) tension = std::max(tension, 0.0);
+    if (t >= c.release) tension = 0.0;  // the clamp has opened
     const Vec3 f = d > 0 ? sdk::scale(r, tension / d) : Vec3{0, 0, 0};
     for (std::size_t j = 0; j < g.nodes.size(); ++j) {
       double* load = &mech_[g.nodes[j].first]->load[3 * static_cast<std::size_t>(g.nodes[j].second)];

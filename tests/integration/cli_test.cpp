@@ -4189,7 +4189,8 @@ namespace {
 // `thermostamp schema` describes every shipped job, a specific heat given
 // as rows and crystallisation kinetics with melting rows, and rejects a
 // typo, a row of three numbers, an incomplete rate, a melting share above 1,
-// a holder force row of three numbers and an unknown probe quantity (validated with Debian's python3-jsonschema).
+// a holder force row of three numbers, a gripper without its stiffness and an unknown probe quantity (validated
+// with Debian's python3-jsonschema); every kind of constraint.
 TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   const auto dir = temp_dir("schema");
   const auto r = thermostamp("schema");
@@ -4267,6 +4268,19 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   std::ofstream(dir / "holder_rows.json") << holder_rows.dump();
   holder_rows["tools"][2]["motion"]["force"] = {{0.0, 0.0, -100.0}, {1.0, 0.0, -500.0}};
   std::ofstream(dir / "bad_holder_rows.json") << holder_rows.dump();
+  // Every kind of constraint, and a gripper without its stiffness.
+  json constraints = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply_grippers.json");
+  constraints["constraints"].push_back({{"type", "fix"}, {"part", "ply_top"}, {"box", {{0, 0, 0}, {1, 1, 1}}}, {"dofs", {"z"}}});
+  constraints["constraints"].push_back(
+      {{"type", "velocity"}, {"part", "*"}, {"box", {{0, 0, 0}, {1, 1, 1}}}, {"velocity", {0, 0, 1}}});
+  constraints["constraints"].push_back(
+      {{"type", "force"}, {"part", "*"}, {"box", {{0, 0, 0}, {1, 1, 1}}}, {"force", {0, 0, 1}}, {"ramp", 0.1}});
+  constraints["constraints"][2]["anchor_motion"] = {{"displacement", {{0, 0, 0, 0}, {1, 0, 0, -0.01}}}};
+  constraints["constraints"][3]["release"] = 2.0;
+  constraints["constraints"][3]["tension_only"] = false;
+  std::ofstream(dir / "constraints.json") << constraints.dump();
+  constraints["constraints"][4].erase("stiffness");
+  std::ofstream(dir / "bad_gripper.json") << constraints.dump();
   // A probe with a quantity the kernel does not know.
   json probe = with_checkpoints;
   probe["output"]["probes"][0]["quantities"] = {"temperature_mean", "fibre_strian"};
@@ -4278,7 +4292,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
   good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " " + q(dir / "kinetics.json") + " " +
-          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " " + q(dir / "mesh_file.json") + " " + q(dir / "matrix_latent.json") + " " + q(dir / "holder_rows.json") + " ";
+          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " " + q(dir / "mesh_file.json") + " " + q(dir / "matrix_latent.json") + " " + q(dir / "holder_rows.json") + " " + q(dir / "constraints.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_k_table.json") + " >/dev/null").c_str()), 0);
@@ -4292,6 +4306,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   EXPECT_NE(std::system((py + q(dir / "reorder_generator.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "both_latent.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_holder_rows.json") + " >/dev/null").c_str()), 0);
+  EXPECT_NE(std::system((py + q(dir / "bad_gripper.json") + " >/dev/null").c_str()), 0);
 }
 
 }  // namespace

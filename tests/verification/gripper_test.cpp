@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <utility>
+#include <vector>
 
 #include "job/errors.hpp"
 #include "job/job.hpp"
@@ -124,6 +126,38 @@ TEST(Gripper, SpringThatOnlyPullsLetsGoAtItsFreeLength) {
   EXPECT_LT(r.result.energy.balance_error, 1e-4);
   std::printf("coasting at %.5g m/s (w P / k = %.5g m/s): largest error %.3g m (%.2e of P / k)\n",
               std::sqrt(2 * r.result.energy.kinetic / M), speed, err, err / amplitude);
+}
+
+// A clamp that opens (`release`) at an eighth of the period lets the plate
+// coast at the speed it had: the last force acts at the step before the
+// release, so the plate keeps the half-step velocity after it, w (P / k)
+// sin(w t) at a time within a step of the release (steps of at most 1e-5 s
+// here). After it the plate moves at one speed (its positions on a line to
+// round-off) within the speeds a step before and after the release, and
+// the gripper's force is zero.
+TEST(Gripper, ReleasedClampLetsThePlateCoast) {
+  const double a = 0.02, k = 100.0, P = 1.0, M = kRhoH * a * a, w = std::sqrt(k / M);
+  const double release = 0.25 * M_PI / w, t_end = 4 * release;
+  json j = plate_on_a_spring(a, 0.1, k, P, false, t_end);
+  j["constraints"][0]["release"] = release;
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  std::vector<std::pair<double, double>> after;  // (t, u) once the plate coasts
+  for (const ProbeSample& s : r.result.probes)
+    if (s.quantity == "displacement_x" && s.time > release + 1e-5) after.emplace_back(s.time, s.values[0]);
+  ASSERT_GT(after.size(), 100u);
+  const double speed = (after.back().second - after.front().second) / (after.back().first - after.front().first);
+  double off_line = 0;
+  for (const auto& [t, u] : after)
+    off_line = std::max(off_line, std::abs(u - after.front().second - speed * (t - after.front().first)));
+  const double amplitude = P / k;
+  EXPECT_LT(off_line, 1e-9 * amplitude);
+  EXPECT_GE(speed, w * amplitude * std::sin(w * (release - 1e-5)));
+  EXPECT_LE(speed, w * amplitude * std::sin(w * (release + 1e-5)));
+  EXPECT_EQ(r.result.energy.reactions[0], 0.0);
+  std::printf("coasting at %.6g m/s after the release (%.6g to %.6g m/s within a step of it), off a line by %.2g m\n",
+              speed, w * amplitude * std::sin(w * (release - 1e-5)), w * amplitude * std::sin(w * (release + 1e-5)),
+              off_line);
 }
 
 // A UD strip (fibres along x, L x W) held at x = 0 and gripped at x = L by
@@ -247,6 +281,9 @@ TEST(Gripper, BadInputNamesTheKey) {
                                 0),
             0u)
       << error_of(bad);
+  bad = good;
+  bad["constraints"][0]["release"] = 0.0;
+  EXPECT_EQ(error_of(bad).rfind("/constraints/0/release: must be > 0", 0), 0u) << error_of(bad);
   bad = good;
   bad["constraints"][0]["tension_only"] = "yes";
   EXPECT_EQ(error_of(bad).rfind("/constraints/0/tension_only:", 0), 0u) << error_of(bad);
