@@ -1035,7 +1035,8 @@ void parse_job_into(Job& job) {
           if (const json* m = r.optional_raw("anchor_motion")) {
             ObjectReader mo(*m, r.at("anchor_motion"));
             const bool hv = mo.optional_raw("velocity") != nullptr, hd = mo.optional_raw("displacement") != nullptr;
-            if (int(hv) + int(hd) != 1) throw JobError(mo.pointer(), "give exactly one of \"velocity\" or \"displacement\"");
+            if (int(hv) + int(hd) != 1)
+              throw JobError(mo.pointer(), "give exactly one of \"velocity\" or \"displacement\"");
             if (hv) {
               d.anchor_motion.kind = MotionDef::Kind::Velocity;
               const auto v = mo.reals("velocity", 3);

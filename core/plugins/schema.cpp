@@ -338,7 +338,8 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
     properties["type"] = {{"const", type}};
     properties["part"] = part_name;
     required.insert(required.begin(), {"type", "part"});
-    return json{{"type", "object"}, {"required", required}, {"properties", properties}, {"additionalProperties", false}};
+    return json{
+        {"type", "object"}, {"required", required}, {"properties", properties}, {"additionalProperties", false}};
   };
   const json constraint_kinds = {
       constraint_kind("symmetry", {"plane"}, {{"plane", {{"enum", {"x", "y", "z"}}}}}),

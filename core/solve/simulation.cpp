@@ -904,7 +904,8 @@ void Simulation::build_mechanics() {
     Vec3 centre{0, 0, 0};
     for (std::size_t k = 0; k < g.nodes.size(); ++k) {
       g.share[k] /= g.mass;
-      centre = sdk::add(centre, sdk::scale(sdk::load3(parts_[g.nodes[k].first]->x0.data(), g.nodes[k].second), g.share[k]));
+      const Vec3 x0 = sdk::load3(parts_[g.nodes[k].first]->x0.data(), g.nodes[k].second);
+      centre = sdk::add(centre, sdk::scale(x0, g.share[k]));
     }
     g.centre = centre;
     g.length0 = sdk::norm(sdk::sub(Vec3{c.anchor[0], c.anchor[1], c.anchor[2]}, centre));
@@ -945,7 +946,8 @@ void Simulation::build_mechanics() {
   for (const Gripper& g : grippers_) {
     const ConstraintDef& c = job_.constraints[g.constraint];
     const double k = std::max(c.stiffness, c.preload / g.length0);
-    for (std::size_t j = 0; j < g.nodes.size(); ++j) mech_[g.nodes[j].first]->k_contact[g.nodes[j].second] += k * g.share[j];
+    for (std::size_t j = 0; j < g.nodes.size(); ++j)
+      mech_[g.nodes[j].first]->k_contact[g.nodes[j].second] += k * g.share[j];
   }
   // Stable steps of the initial configuration; mass scaling per element.
   const MechanicsDef& md = job_.mechanics_settings;
@@ -1801,7 +1803,8 @@ void Simulation::apply_grippers(double t) {
     const ConstraintDef& c = job_.constraints[g.constraint];
     Vec3 centre{0, 0, 0};
     for (std::size_t j = 0; j < g.nodes.size(); ++j)
-      centre = sdk::add(centre, sdk::scale(sdk::load3(parts_[g.nodes[j].first]->x.data(), g.nodes[j].second), g.share[j]));
+      const Vec3 x = sdk::load3(parts_[g.nodes[j].first]->x.data(), g.nodes[j].second);
+      centre = sdk::add(centre, sdk::scale(x, g.share[j]));
     std::array<double, 3> u{0, 0, 0};
     if (c.anchor_motion.kind == MotionDef::Kind::Velocity)
       u = {c.anchor_motion.velocity[0] * t, c.anchor_motion.velocity[1] * t, c.anchor_motion.velocity[2] * t};

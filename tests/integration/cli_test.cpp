@@ -4270,7 +4270,8 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   std::ofstream(dir / "bad_holder_rows.json") << holder_rows.dump();
   // Every kind of constraint, and a gripper without its stiffness.
   json constraints = read_job_document(source_dir() / "share" / "jobs" / "hemisphere_ud_2ply_grippers.json");
-  constraints["constraints"].push_back({{"type", "fix"}, {"part", "ply_top"}, {"box", {{0, 0, 0}, {1, 1, 1}}}, {"dofs", {"z"}}});
+  constraints["constraints"].push_back(
+      {{"type", "fix"}, {"part", "ply_top"}, {"box", {{0, 0, 0}, {1, 1, 1}}}, {"dofs", {"z"}}});
   constraints["constraints"].push_back(
       {{"type", "velocity"}, {"part", "*"}, {"box", {{0, 0, 0}, {1, 1, 1}}}, {"velocity", {0, 0, 1}}});
   constraints["constraints"].push_back(
@@ -4292,7 +4293,8 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   for (const char* f : {"share/verification/patch_contact.json", "share/verification/slab_robin.json"})
     good += q(source_dir() / f) + " ";
   good += q(dir / "checkpoints.json") + " " + q(dir / "table.json") + " " + q(dir / "kinetics.json") + " " +
-          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " " + q(dir / "mesh_file.json") + " " + q(dir / "matrix_latent.json") + " " + q(dir / "holder_rows.json") + " " + q(dir / "constraints.json") + " ";
+          q(dir / "kinetics_rows.json") + " " + q(dir / "k_table.json") + " " + q(dir / "mixture.json") + " " + q(dir / "card.json") + " " + q(dir / "mesh_file.json") + " " + q(dir / "matrix_latent.json") + " " + q(dir / "holder_rows.json") + " ";
+  good += q(dir / "constraints.json") + " ";
   EXPECT_EQ(std::system((py + good + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_table.json") + " >/dev/null").c_str()), 0);
   EXPECT_NE(std::system((py + q(dir / "bad_k_table.json") + " >/dev/null").c_str()), 0);
