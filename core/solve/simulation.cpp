@@ -1802,9 +1802,10 @@ void Simulation::apply_grippers(double t) {
   for (Gripper& g : grippers_) {
     const ConstraintDef& c = job_.constraints[g.constraint];
     Vec3 centre{0, 0, 0};
-    for (std::size_t j = 0; j < g.nodes.size(); ++j)
+    for (std::size_t j = 0; j < g.nodes.size(); ++j) {
       const Vec3 x = sdk::load3(parts_[g.nodes[j].first]->x.data(), g.nodes[j].second);
       centre = sdk::add(centre, sdk::scale(x, g.share[j]));
+    }
     std::array<double, 3> u{0, 0, 0};
     if (c.anchor_motion.kind == MotionDef::Kind::Velocity)
       u = {c.anchor_motion.velocity[0] * t, c.anchor_motion.velocity[1] * t, c.anchor_motion.velocity[2] * t};
