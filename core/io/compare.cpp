@@ -144,8 +144,8 @@ Table read_table(const std::filesystem::path& file, bool keyed, bool& found) {
   return t;
 }
 
-// The numbers of a summary, by path (array entries named by their "name"
-// or "constraint" where they have one), without what depends on the
+// The numbers of a summary, by path (array entries named by their "name",
+// else their "constraint", where they have one), without what depends on the
 // machine rather than on the run's results.
 void flatten(const json& j, const std::string& path, std::map<std::string, double>& out) {
   static const char* skip[] = {"wall_time_s", "wall_time_total_s", "peak_memory_MB", "timing_s", "threads",
@@ -161,8 +161,8 @@ void flatten(const json& j, const std::string& path, std::map<std::string, doubl
   } else if (j.is_array()) {
     for (std::size_t k = 0; k < j.size(); ++k) {
       std::string key = std::to_string(k);
-      if (j[k].is_object() && j[k].contains("name") && j[k]["name"].is_string()) key = j[k]["name"];
       if (j[k].is_object() && j[k].contains("constraint") && j[k]["constraint"].is_string()) key = j[k]["constraint"];
+      if (j[k].is_object() && j[k].contains("name") && j[k]["name"].is_string()) key = j[k]["name"];
       flatten(j[k], path + (key.rfind('/', 0) == 0 ? "" : "/") + key, out);
     }
   }
