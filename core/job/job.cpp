@@ -348,6 +348,12 @@ std::array<double, 3> MotionDef::force_at(double t) const {
   return force_table.empty() ? force : rows_at(force_table, t);
 }
 
+std::array<double, 3> MotionDef::prescribed(double t) const {
+  if (kind == Kind::Velocity) return {velocity[0] * t, velocity[1] * t, velocity[2] * t};
+  if (kind == Kind::Displacement) return rows_at(table, t);
+  return {0, 0, 0};
+}
+
 double ToolDef::temperature_over(double t0, double t1) const {
   return temperature_table.empty() ? temperature : rows_mean(temperature_table, t0, t1);
 }
@@ -633,6 +639,22 @@ std::vector<std::array<double, 4>> rows_of_four(const json& rows, const std::str
   return out;
 }
 
+// A motion given by "velocity" (m/s) or by "displacement" rows
+// [t, dx, dy, dz] (m): a tool's, or a gripper's anchor's.
+void read_moved(ObjectReader& mo, MotionDef& motion) {
+  if (mo.optional_raw("velocity")) {
+    motion.kind = MotionDef::Kind::Velocity;
+    const auto v = mo.reals("velocity", 3);
+    motion.velocity = {v[0], v[1], v[2]};
+    return;
+  }
+  motion.kind = MotionDef::Kind::Displacement;
+  const json& tab = mo.raw("displacement");
+  const std::string tp = mo.at("displacement");
+  if (!tab.is_array() || tab.empty()) throw JobError(tp, "expected rows [t, dx, dy, dz]");
+  motion.table = rows_of_four(tab, tp);
+}
+
 void parse_job_into(Job& job) {
   const json& doc = job.document;
   ObjectReader top(doc, "");
@@ -837,16 +859,8 @@ void parse_job_into(Job& job) {
                    hf = mo.optional_raw("force") != nullptr;
         if (int(hv) + int(hd) + int(hf) != 1)
           throw JobError(mo.pointer(), "give exactly one of \"velocity\", \"displacement\" or \"force\"");
-        if (hv) {
-          t.motion.kind = MotionDef::Kind::Velocity;
-          const auto v = mo.reals("velocity", 3);
-          t.motion.velocity = {v[0], v[1], v[2]};
-        } else if (hd) {
-          t.motion.kind = MotionDef::Kind::Displacement;
-          const json& tab = mo.raw("displacement");
-          const std::string tp = mo.at("displacement");
-          if (!tab.is_array() || tab.empty()) throw JobError(tp, "expected rows [t, dx, dy, dz]");
-          t.motion.table = rows_of_four(tab, tp);
+        if (hv || hd) {
+          read_moved(mo, t.motion);
         } else {
           t.motion.kind = MotionDef::Kind::Force;
           const json& fj = mo.raw("force");
@@ -1037,17 +1051,7 @@ void parse_job_into(Job& job) {
             const bool hv = mo.optional_raw("velocity") != nullptr, hd = mo.optional_raw("displacement") != nullptr;
             if (int(hv) + int(hd) != 1)
               throw JobError(mo.pointer(), "give exactly one of \"velocity\" or \"displacement\"");
-            if (hv) {
-              d.anchor_motion.kind = MotionDef::Kind::Velocity;
-              const auto v = mo.reals("velocity", 3);
-              d.anchor_motion.velocity = {v[0], v[1], v[2]};
-            } else {
-              d.anchor_motion.kind = MotionDef::Kind::Displacement;
-              const json& tab = mo.raw("displacement");
-              const std::string tp = mo.at("displacement");
-              if (!tab.is_array() || tab.empty()) throw JobError(tp, "expected rows [t, dx, dy, dz]");
-              d.anchor_motion.table = rows_of_four(tab, tp);
-            }
+            read_moved(mo, d.anchor_motion);
             mo.finish();
           }
         } else {

@@ -140,6 +140,9 @@ struct MotionDef {
   double mass = 0, damping = 0;
   // The force at time t (N): force, or force_table's there.
   std::array<double, 3> force_at(double t) const;
+  // The displacement at time t (m) of a Velocity or Displacement motion
+  // from where it starts (zero for the others).
+  std::array<double, 3> prescribed(double t) const;
 };
 
 struct ToolDef {

@@ -42,6 +42,13 @@ using sdk::Vec3;
 
 namespace {
 
+// Whether the point X lies in the constraint's box (its faces included).
+bool in_box(const ConstraintDef& c, const double* X) {
+  for (int d = 0; d < 3; ++d)
+    if (!(X[d] >= c.lo[d] && X[d] <= c.hi[d])) return false;
+  return true;
+}
+
 // One explicit step of n dofs (central differences, lumped mass): the new
 // half-step velocities and positions, and the works of the previous step
 // by the trapezoid rule (internal, external, damping, contact) with the
@@ -715,11 +722,8 @@ void Simulation::build_mechanics() {
     for (const auto& c : job_.constraints) {
       if (c.type != ConstraintDef::Type::Fix || !(c.dofs[0] && c.dofs[1] && c.dofs[2])) continue;
       if (std::find(c.parts.begin(), c.parts.end(), static_cast<int>(p)) == c.parts.end()) continue;
-      for (int i = 0; i < nn0; ++i) {
-        bool inside = true;
-        for (int d = 0; d < 3; ++d) inside = inside && st.x0[3 * i + d] >= c.lo[d] && st.x0[3 * i + d] <= c.hi[d];
-        if (inside) held[i] = 1;
-      }
+      for (int i = 0; i < nn0; ++i)
+        if (in_box(c, &st.x0[3 * i])) held[i] = 1;
     }
     m->edge_condition.assign(3 * ne0, sdk::kEdgeFree);
     const double tol0 = 1e-6 * max_edge_length(st.mesh);
@@ -844,9 +848,7 @@ void Simulation::build_mechanics() {
           }
           continue;
         }
-        bool inside = true;
-        for (int d = 0; d < 3; ++d) inside = inside && X[d] >= c.lo[d] && X[d] <= c.hi[d];
-        if (!inside) continue;
+        if (!in_box(c, X)) continue;
         if (c.type == ConstraintDef::Type::Force || c.type == ConstraintDef::Type::Gripper) continue;  // loads: below
         for (int d = 0; d < 3; ++d)
           if (c.dofs[d]) {
@@ -867,11 +869,8 @@ void Simulation::build_mechanics() {
     std::vector<std::pair<int, int>> nodes;
     for (int p : c.parts) {
       const PartState& st = *parts_[p];
-      for (int i = 0; i < st.mesh.num_nodes(); ++i) {
-        bool inside = true;
-        for (int d = 0; d < 3; ++d) inside = inside && st.x0[3 * i + d] >= c.lo[d] && st.x0[3 * i + d] <= c.hi[d];
-        if (inside) nodes.emplace_back(p, i);
-      }
+      for (int i = 0; i < st.mesh.num_nodes(); ++i)
+        if (in_box(c, &st.x0[3 * i])) nodes.emplace_back(p, i);
     }
     if (nodes.empty()) throw JobError(c.pointer + "/box", "no node of the part(s) lies inside the box");
     Load l;
@@ -891,9 +890,7 @@ void Simulation::build_mechanics() {
       const PartState& st = *parts_[p];
       const double rho_h = job_.materials[st.def->material].density * st.def->thickness;
       for (int i = 0; i < st.mesh.num_nodes(); ++i) {
-        bool inside = true;
-        for (int d = 0; d < 3; ++d) inside = inside && st.x0[3 * i + d] >= c.lo[d] && st.x0[3 * i + d] <= c.hi[d];
-        if (!inside) continue;
+        if (!in_box(c, &st.x0[3 * i])) continue;
         g.nodes.emplace_back(p, i);
         g.share.push_back(rho_h * st.area[i]);
         g.mass += g.share.back();
@@ -1806,11 +1803,7 @@ void Simulation::apply_grippers(double t) {
       const Vec3 x = sdk::load3(parts_[g.nodes[j].first]->x.data(), g.nodes[j].second);
       centre = sdk::add(centre, sdk::scale(x, g.share[j]));
     }
-    std::array<double, 3> u{0, 0, 0};
-    if (c.anchor_motion.kind == MotionDef::Kind::Velocity)
-      u = {c.anchor_motion.velocity[0] * t, c.anchor_motion.velocity[1] * t, c.anchor_motion.velocity[2] * t};
-    else if (c.anchor_motion.kind == MotionDef::Kind::Displacement)
-      u = rows_at(c.anchor_motion.table, t);
+    const std::array<double, 3> u = c.anchor_motion.prescribed(t);
     const Vec3 r = sdk::sub(Vec3{c.anchor[0] + u[0], c.anchor[1] + u[1], c.anchor[2] + u[2]}, centre);
     const double d = sdk::norm(r);
     const double ramp = c.ramp > 0 ? std::min(1.0, t / c.ramp) : 1.0;

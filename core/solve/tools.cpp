@@ -1027,8 +1027,7 @@ void RigidTool::query_kept(std::size_t n, const double* points, double cutoff, d
 
 std::array<double, 3> RigidTool::prescribed(double t) const {
   const MotionDef& m = def_->motion;
-  if (m.kind == MotionDef::Kind::Velocity) return {m.velocity[0] * t, m.velocity[1] * t, m.velocity[2] * t};
-  if (m.kind == MotionDef::Kind::Displacement) return rows_at(m.table, t);
+  if (m.kind == MotionDef::Kind::Velocity || m.kind == MotionDef::Kind::Displacement) return m.prescribed(t);
   return u_;
 }
 
