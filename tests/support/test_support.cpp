@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <random>
 #include <sstream>
 #include <unistd.h>
@@ -291,6 +292,81 @@ void slab_heat_flows(const std::vector<double>& T, double k, double e, double h,
     q[i + 1] -= f;
   }
   q[n] += h * (Ta - T[n]);
+}
+
+json bias_job(const json& mesh, double speed, double t_end) {
+  const double H = 0.230;
+  return {{"format", "thermostamp-job/1"},
+          {"name", "bias"},
+          {"time", {{"end", t_end}}},
+          {"materials",
+           {{"woven",
+             {{"density", 1500.0},
+              {"membrane",
+               {{"law", "woven_hyperelastic"},
+                {"k_warp", 1.0e5},
+                {"k_weft", 1.0e5},
+                {"k_sh", {kBiasKsh[0], kBiasKsh[1], kBiasKsh[2]}}}}}}}},
+          {"parts",
+           {{{"name", "specimen"},
+             {"mesh", mesh},
+             {"thickness", 0.0005},
+             {"material", "woven"},
+             {"fibre_direction", {1.0, 1.0, 0.0}},
+             {"initial_temperature", 20.0}}}},
+          {"constraints",
+           {{{"type", "fix"},
+             {"part", "specimen"},
+             {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}},
+             {"dofs", {"x", "y", "z"}}},
+            {{"type", "velocity"},
+             {"part", "specimen"},
+             {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}},
+             {"dofs", {"x"}},
+             {"velocity", {speed, 0.0, 0.0}}},
+            {{"type", "fix"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}}, {"dofs", {"y"}}},
+            {{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}}}},
+          {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 10.0}}}, {"thermal", nullptr}}}};
+}
+
+void write_yarn_lattice_gmsh(const std::filesystem::path& file, double width, int nx, int ny) {
+  const double a = width / ny;
+  std::map<std::pair<int, int>, int> id;
+  std::vector<std::array<double, 2>> nodes;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i)
+      if ((i + j) % 2 == 0) {
+        id[{i, j}] = static_cast<int>(nodes.size()) + 1;
+        nodes.push_back({i * a, j * a});
+      }
+  std::vector<std::array<int, 3>> tris;
+  auto add = [&](std::pair<int, int> p, std::pair<int, int> q, std::pair<int, int> r) {
+    std::array<int, 3> t = {id.at(p), id.at(q), id.at(r)};
+    const auto& A = nodes[t[0] - 1];
+    const auto& B = nodes[t[1] - 1];
+    const auto& C = nodes[t[2] - 1];
+    if ((B[0] - A[0]) * (C[1] - A[1]) - (B[1] - A[1]) * (C[0] - A[0]) < 0) std::swap(t[1], t[2]);
+    tris.push_back(t);
+  };
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      if ((i + j) % 2 == 0) continue;  // diamond centres
+      if (i == 0) {
+        add({0, j - 1}, {1, j}, {0, j + 1});
+      } else if (i == nx) {
+        add({nx, j - 1}, {nx, j + 1}, {nx - 1, j});
+      } else {
+        if (j < ny) add({i - 1, j}, {i + 1, j}, {i, j + 1});
+        if (j > 0) add({i - 1, j}, {i, j - 1}, {i + 1, j});
+      }
+    }
+  std::ofstream m(file);
+  m << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << nodes.size() << "\n";
+  for (std::size_t k = 0; k < nodes.size(); ++k) m << k + 1 << ' ' << nodes[k][0] << ' ' << nodes[k][1] << " 0\n";
+  m << "$EndNodes\n$Elements\n" << tris.size() << "\n";
+  for (std::size_t k = 0; k < tris.size(); ++k)
+    m << k + 1 << " 2 0 " << tris[k][0] << ' ' << tris[k][1] << ' ' << tris[k][2] << "\n";
+  m << "$EndElements\n";
 }
 
 void write_shuffled_gmsh(const std::filesystem::path& file, const ShellMesh& mesh, unsigned seed) {

@@ -99,6 +99,19 @@ void write_square_stl(const std::filesystem::path& file, double lo, double hi, d
 // outward normals as the revolved tool's (left of the profile's direction).
 void write_revolved_stl(const std::filesystem::path& file, const json& surface, double step_deg);
 
+// The bias-extension specimen (230 x 115 mm, yarns at +-45 degrees, woven
+// law of shear coefficients kBiasKsh), its left end held, its right end
+// pulled along x at `speed` (y held), z held everywhere; `mesh` is the
+// part's mesh entry. Callers add the output.
+inline constexpr double kBiasKsh[3] = {18.5, 46.4, -21.3};  // N/m
+json bias_job(const json& mesh, double speed, double t_end);
+
+// A lattice of diamonds for a woven specimen with yarns at +-45 degrees
+// to x: nodes at (i a, j a), a = width / ny, for i + j even (0 <= i <= nx,
+// 0 <= j <= ny); each diamond split by its horizontal diagonal, half
+// diamonds at the ends. The triangles' edges follow the yarns. Gmsh 2.2.
+void write_yarn_lattice_gmsh(const std::filesystem::path& file, double width, int nx, int ny);
+
 // The mesh as a Gmsh 2.2 file as mesh generators leave them: its triangles
 // in an order shuffled by `seed` (0: in order), tagged 100 + their index in
 // `mesh`, the nodes tagged 7 + 3 x their index, listed from the last.

@@ -652,40 +652,6 @@ TEST(MaterialStability, UdSheetStretchedAcrossTheFibresAgainstTheClosedForm) {
 }  // namespace ts::test
 
 namespace ts::test {
-namespace {
-
-// The bias-extension specimen (230 x 115 mm, yarns at +-45 degrees, woven
-// law), its left end held, its right end pulled along x at `speed` (y
-// held), z held everywhere; `mesh` is the part's mesh entry. Callers add
-// the output.
-constexpr double kBiasKsh[3] = {18.5, 46.4, -21.3};  // the woven law's shear coefficients (N/m)
-json bias_job(const json& mesh, double speed, double t_end) {
-  const double H = 0.230;
-  return {{"format", "thermostamp-job/1"},
-          {"name", "bias"},
-          {"time", {{"end", t_end}}},
-          {"materials",
-           {{"woven",
-             {{"density", 1500.0},
-              {"membrane",
-               {{"law", "woven_hyperelastic"}, {"k_warp", 1.0e5}, {"k_weft", 1.0e5}, {"k_sh", {kBiasKsh[0], kBiasKsh[1], kBiasKsh[2]}}}}}}}},
-          {"parts",
-           {{{"name", "specimen"},
-             {"mesh", mesh},
-             {"thickness", 0.0005},
-             {"material", "woven"},
-             {"fibre_direction", {1.0, 1.0, 0.0}},
-             {"initial_temperature", 20.0}}}},
-          {"constraints",
-           {{{"type", "fix"}, {"part", "specimen"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "y", "z"}}},
-            {{"type", "velocity"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}},
-             {"dofs", {"x"}}, {"velocity", {speed, 0.0, 0.0}}},
-            {{"type", "fix"}, {"part", "specimen"}, {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}}, {"dofs", {"y"}}},
-            {{"type", "fix"}, {"part", "*"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}}}},
-          {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 10.0}}}, {"thermal", nullptr}}}};
-}
-
-}  // namespace
 
 // Bias-extension test of a woven specimen, 230 x 115 mm, warp and weft at
 // +-45 degrees to the pull, ends clamped. The mesh follows the yarns (a
@@ -703,44 +669,7 @@ TEST(Woven, BiasExtensionFollowsThePinJointedNet) {
   const int nx = 44, ny = 22;  // lattice steps: a = W / 22 = H / 44
   const double a = W / ny;
   const auto dir = temp_dir("bias_extension");
-  {
-    std::map<std::pair<int, int>, int> id;
-    std::vector<std::array<double, 2>> nodes;
-    for (int j = 0; j <= ny; ++j)
-      for (int i = 0; i <= nx; ++i)
-        if ((i + j) % 2 == 0) {
-          id[{i, j}] = static_cast<int>(nodes.size()) + 1;
-          nodes.push_back({i * a, j * a});
-        }
-    std::vector<std::array<int, 3>> tris;
-    auto add = [&](std::pair<int, int> p, std::pair<int, int> q, std::pair<int, int> r) {
-      std::array<int, 3> t = {id.at(p), id.at(q), id.at(r)};
-      const auto& A = nodes[t[0] - 1];
-      const auto& B = nodes[t[1] - 1];
-      const auto& C = nodes[t[2] - 1];
-      if ((B[0] - A[0]) * (C[1] - A[1]) - (B[1] - A[1]) * (C[0] - A[0]) < 0) std::swap(t[1], t[2]);
-      tris.push_back(t);
-    };
-    for (int j = 0; j <= ny; ++j)
-      for (int i = 0; i <= nx; ++i) {
-        if ((i + j) % 2 == 0) continue;  // diamond centres
-        if (i == 0) {
-          add({0, j - 1}, {1, j}, {0, j + 1});
-        } else if (i == nx) {
-          add({nx, j - 1}, {nx, j + 1}, {nx - 1, j});
-        } else {
-          if (j < ny) add({i - 1, j}, {i + 1, j}, {i, j + 1});
-          if (j > 0) add({i - 1, j}, {i, j - 1}, {i + 1, j});
-        }
-      }
-    std::ofstream m(dir / "bias.msh");
-    m << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << nodes.size() << "\n";
-    for (std::size_t k = 0; k < nodes.size(); ++k) m << k + 1 << ' ' << nodes[k][0] << ' ' << nodes[k][1] << " 0\n";
-    m << "$EndNodes\n$Elements\n" << tris.size() << "\n";
-    for (std::size_t k = 0; k < tris.size(); ++k)
-      m << k + 1 << " 2 0 " << tris[k][0] << ' ' << tris[k][1] << ' ' << tris[k][2] << "\n";
-    m << "$EndElements\n";
-  }
+  write_yarn_lattice_gmsh(dir / "bias.msh", W, nx, ny);
   const double* k_sh = kBiasKsh;
   const double d_end = 0.026, speed = 0.1, t_end = d_end / speed;
   json j = bias_job({{"file", (dir / "bias.msh").string()}}, speed, t_end);
