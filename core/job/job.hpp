@@ -253,6 +253,9 @@ struct ConstraintDef {
   double stiffness = 0;  // N/m
   double preload = 0;    // N
   bool tension_only = true;
+  // gripper: the gripped nodes translate as one rigid body (a clamp's jaws
+  // that neither deform nor turn) instead of each following the ply.
+  bool rigid = false;
   double release = std::numeric_limits<double>::infinity();  // s: from then on the gripper holds no more
   MotionDef anchor_motion;
 };

@@ -972,10 +972,28 @@ bool Simulation::Run::write_summary(std::string& why) const {
         const Gripper& gr = sim.grippers_[g];
         const ConstraintDef& c = job.constraints[gr.constraint];
         std::array<double, 3> c0{0, 0, 0};  // the gripped nodes' centre at t = 0
+        std::array<double, 3> cu{0, 0, 0};  // its displacement at the end
         for (std::size_t j = 0; j < gr.nodes.size(); ++j)
-          for (int d = 0; d < 3; ++d) c0[d] += gr.share[j] * parts[gr.nodes[j].first]->x0[3 * gr.nodes[j].second + d];
+          for (int d = 0; d < 3; ++d) {
+            const std::size_t k = 3 * static_cast<std::size_t>(gr.nodes[j].second) + d;
+            c0[d] += gr.share[j] * parts[gr.nodes[j].first]->x0[k];
+            cu[d] += gr.share[j] * (parts[gr.nodes[j].first]->x[k] - parts[gr.nodes[j].first]->x0[k]);
+          }
+        // How far the gripped region has deformed: the largest distance of a
+        // gripped node's displacement from their centre's.
+        double distortion = 0;
+        for (const auto& [p, i] : gr.nodes) {
+          double s2 = 0;
+          for (int d = 0; d < 3; ++d) {
+            const std::size_t k = 3 * static_cast<std::size_t>(i) + d;
+            const double e = parts[p]->x[k] - parts[p]->x0[k] - cu[d];
+            s2 += e * e;
+          }
+          distortion = std::max(distortion, std::sqrt(s2));
+        }
         grippers.push_back({{"name", c.name},
                             {"constraint", c.pointer},
+                            {"jaws", c.rigid ? "rigid" : "flexible"},
                             {"nodes", gr.nodes.size()},
                             {"mass_kg", gr.mass},
                             {"force_N", gr.force},
@@ -983,6 +1001,7 @@ bool Simulation::Run::write_summary(std::string& why) const {
                             {"extension_m", gr.extension},
                             {"centre_displacement_m",
                              {gr.centre[0] - c0[0], gr.centre[1] - c0[1], gr.centre[2] - c0[2]}},
+                            {"jaw_distortion_m", distortion},
                             {"force_max_N", result.energy.gripper_force_max[g]},
                             {"force_max_at_s", result.energy.gripper_force_max_at[g]}});
       }

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -372,6 +373,17 @@ std::vector<std::string> Simulation::mesh_file_lines() const {
   return lines;
 }
 
+// ", rigid jaws" and the directions in which they are held, or nothing.
+std::string Simulation::jaw_words(const Gripper& g) const {
+  if (!job_.constraints[g.constraint].rigid) return "";
+  std::string held;
+  for (int d = 0; d < 3; ++d)
+    if (g.held_by[d] >= 0)
+      held += (held.empty() ? "" : ", ") + std::string(1, static_cast<char>('x' + d)) + " by " +
+              job_.constraints[g.held_by[d]].pointer;
+  return ", rigid jaws" + (held.empty() ? std::string() : " (held in " + held + ")");
+}
+
 std::vector<std::string> Simulation::gripper_lines() const {
   std::vector<std::string> lines;
   for (const Gripper& g : grippers_) {
@@ -385,12 +397,12 @@ std::vector<std::string> Simulation::gripper_lines() const {
         }
     lines.push_back(fmt::format(
         "gripper '{}' ({}): {} node(s) of {} ({:.4g} g), a spring of {:.4g} mm from the anchor ({}, {}, {}) m to their "
-        "centre, {:.4g} N/m (alone with them, a period of {:.3g} ms), preload {:.4g} N{}, {}{}{}",
+        "centre, {:.4g} N/m (alone with them, a period of {:.3g} ms), preload {:.4g} N{}, {}{}{}{}",
         c.name, c.pointer, g.nodes.size(), names, 1e3 * g.mass, 1e3 * g.length0, fmt_g(c.anchor[0]),
         fmt_g(c.anchor[1]), fmt_g(c.anchor[2]), c.stiffness, 2e3 * M_PI * std::sqrt(g.mass / c.stiffness), c.preload,
         c.ramp > 0 ? " over " + fmt_g(c.ramp) + " s" : "", c.tension_only ? "pulling only" : "pulling and pushing",
         c.anchor_motion.kind == MotionDef::Kind::Fixed ? "" : ", the anchor moving",
-        std::isfinite(c.release) ? ", released at " + fmt_g(c.release) + " s" : ""));
+        std::isfinite(c.release) ? ", released at " + fmt_g(c.release) + " s" : "", jaw_words(g)));
   }
   return lines;
 }
@@ -914,6 +926,35 @@ void Simulation::build_mechanics() {
                                                 fmt_g(centre[1]) + ", " + fmt_g(centre[2]) +
                                                 ") m: the spring has no direction; place the anchor where the "
                                                 "spring pulls from");
+    if (c.rigid) {
+      // A gripped node held in a direction holds the jaw in it; one that
+      // is driven would drive the jaw, which is then no gripper.
+      for (const auto& [p, i] : g.nodes)
+        for (int d = 0; d < 3; ++d) {
+          const std::size_t k = 3 * static_cast<std::size_t>(i) + d;
+          if (!mech_[p]->fixed[k]) continue;
+          const int by = mech_[p]->constraint_of[k];
+          if (mech_[p]->prescribed[k] != 0)
+            throw JobError(c.pointer + "/box", "rigid jaws: the box holds " + node_label(parts_[p]->mesh, i) +
+                                                   " of part '" + parts_[p]->def->name + "', which " +
+                                                   job_.constraints[by].pointer +
+                                                   " drives; a gripper's jaws cannot be driven");
+          if (g.held_by[d] < 0) g.held_by[d] = by;
+        }
+      for (const Gripper& o : grippers_) {
+        if (!job_.constraints[o.constraint].rigid) continue;
+        for (const auto& n : g.nodes)
+          if (std::find(o.nodes.begin(), o.nodes.end(), n) != o.nodes.end())
+            throw JobError(c.pointer + "/box", "rigid jaws: the box shares " + node_label(parts_[n.first]->mesh,
+                                                                                          n.second) +
+                                                   " of part '" + parts_[n.first]->def->name + "' with gripper '" +
+                                                   job_.constraints[o.constraint].name +
+                                                   "'; two rigid jaws cannot hold one node");
+      }
+      g.part_nodes.assign(parts_.size(), {});
+      for (const auto& [p, i] : g.nodes) g.part_nodes[p].push_back(i);
+      rigid_jaws_ = true;
+    }
     grippers_.push_back(std::move(g));
   }
   // Contact stiffness bounds per node (for the stable step and mass scaling)
@@ -1822,6 +1863,83 @@ void Simulation::apply_grippers(double t) {
   }
 }
 
+// Rigid jaws: the gripped nodes (free dofs j, masses m_j, velocities v_j,
+// forces F_j including the damping's) take the common velocity
+// V = sum_j (m_j v_j + dt_avg F_j) / sum_j m_j, or V = 0 in a direction in
+// which a gripped node is held, by the force
+// m_j (V - v_j) / dt_avg - F_j added to each node's load. These forces sum
+// to zero (in a held direction: to the support's reaction) and do no work
+// on nodes that move alike. Each part's sums by the thread that owns it;
+// every thread adds them in part order (the same V for any thread count).
+namespace {
+// F_j with the damping's force, as integrate_body takes them.
+inline double jaw_force(const MechPart& m, std::size_t k, double damping, bool normal_damping, bool contact) {
+  const double f_ext = m.external ? m.gravity3[k] + m.load[k] : 0.0;
+  const double fc = contact ? m.f_con[k] : 0.0;
+  const double f_damp = damping * m.mass3[k] * (normal_damping ? m.normal_velocity[k] : m.v[k]);
+  return f_ext + fc - m.f_int[k] - f_damp;
+}
+}  // namespace
+
+// Part p's share of each closed rigid jaw's sums_j m_j v_j + dt_avg F_j and
+// sum_j m_j, per direction, into jaw_sums_.
+void Simulation::rigid_jaw_sums(int p, double t, double dt_avg) {
+  const MechanicsDef& md = job_.mechanics_settings;
+  const bool normal_damping = md.damping_normal && md.damping > 0, contact = !contacts_.empty();
+  const MechPart& m = *mech_[p];
+  double* sums = &jaw_sums_[static_cast<std::size_t>(p) * 6 * grippers_.size()];
+  for (std::size_t gi = 0; gi < grippers_.size(); ++gi) {
+    const Gripper& g = grippers_[gi];
+    const ConstraintDef& c = job_.constraints[g.constraint];
+    if (!c.rigid || t >= c.release) continue;  // an open clamp ties nothing
+    double momentum[3] = {0, 0, 0}, mass[3] = {0, 0, 0};
+    for (const int i : g.part_nodes[p])
+      for (int d = 0; d < 3; ++d) {
+        const std::size_t k = 3 * static_cast<std::size_t>(i) + d;
+        if (m.mass3[k] < 0) continue;  // held
+        momentum[d] += m.mass3[k] * m.v[k] + dt_avg * jaw_force(m, k, md.damping, normal_damping, contact);
+        mass[d] += m.mass3[k];
+      }
+    for (int d = 0; d < 3; ++d) {
+      sums[6 * gi + 2 * d] = momentum[d];
+      sums[6 * gi + 2 * d + 1] = mass[d];
+    }
+  }
+}
+
+// Each closed rigid jaw's force on part p's gripped nodes, added to their
+// loads; in a held direction its sum to `reactions` (part p's, per
+// constraint and direction).
+void Simulation::tie_rigid_jaws(int p, double t, double dt_avg, double* reactions) {
+  const MechanicsDef& md = job_.mechanics_settings;
+  const bool normal_damping = md.damping_normal && md.damping > 0, contact = !contacts_.empty();
+  const int np = static_cast<int>(parts_.size());
+  MechPart& m = *mech_[p];
+  for (std::size_t gi = 0; gi < grippers_.size(); ++gi) {
+    const Gripper& g = grippers_[gi];
+    const ConstraintDef& c = job_.constraints[g.constraint];
+    if (!c.rigid || t >= c.release) continue;
+    for (int d = 0; d < 3; ++d) {
+      double momentum = 0, mass = 0;
+      for (int q = 0; q < np; ++q) {
+        momentum += jaw_sums_[(static_cast<std::size_t>(q) * grippers_.size() + gi) * 6 + 2 * d];
+        mass += jaw_sums_[(static_cast<std::size_t>(q) * grippers_.size() + gi) * 6 + 2 * d + 1];
+      }
+      if (!(mass > 0)) continue;  // every node held
+      const double V = g.held_by[d] >= 0 ? 0.0 : momentum / mass;
+      double support = 0;
+      for (const int i : g.part_nodes[p]) {
+        const std::size_t k = 3 * static_cast<std::size_t>(i) + d;
+        if (m.mass3[k] < 0) continue;
+        const double tie = m.mass3[k] * (V - m.v[k]) / dt_avg - jaw_force(m, k, md.damping, normal_damping, contact);
+        m.load[k] += tie;
+        support += tie;
+      }
+      if (g.held_by[d] >= 0) reactions[3 * static_cast<std::size_t>(g.held_by[d]) + d] += support;
+    }
+  }
+}
+
 // Central differences: v^{n+1/2} = v^{n-1/2} + dt_avg a^n, x^{n+1} = x^n + dt v^{n+1/2}.
 double Simulation::mechanics_step(double dt, double t, long long step, EnergyAudit& audit) {
   const MechanicsDef& md = job_.mechanics_settings;
@@ -1852,9 +1970,18 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
   part_bad_.assign(np, -1);  // per part: first non-finite coordinate
   std::size_t nodes_all = 0;
   for (const auto& st : parts_) nodes_all += st->x.size() / 3;
-  auto integrate_part = [&](int p) {
+  const bool normal_damping = md.damping_normal && md.damping > 0;
+  // A part's forces complete: the contact forces from the other parts'
+  // tasks, the velocities that the damping takes.
+  auto prepare_part = [&](int p) {
     merge_part_contact(p);
+    if (normal_damping) normal_velocities(parts_[p]->mesh, parts_[p]->x.data(), mech_[p]->v.data(), *mech_[p]);
+    if (rigid_jaws_) rigid_jaw_sums(p, t, dt_avg);
+  };
+  if (rigid_jaws_) jaw_sums_.assign(static_cast<std::size_t>(np) * 6 * grippers_.size(), 0.0);
+  auto integrate_part = [&](int p) {
     double* reactions = &part_sums_[p * (6 + nr) + 6];
+    if (rigid_jaws_) tie_rigid_jaws(p, t, dt_avg, reactions);
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
     const std::size_t n = 3 * static_cast<std::size_t>(st.mesh.num_nodes());
@@ -1862,8 +1989,6 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     for (const int k : m.fixed_dofs)
       reactions[3 * m.constraint_of[k] + k % 3] += m.f_int[k] - (m.gravity3[k] + m.load[k]) - m.f_con[k];
     double sums_p[7];
-    const bool normal_damping = md.damping_normal && md.damping > 0;
-    if (normal_damping) normal_velocities(st.mesh, st.x.data(), m.v.data(), m);
     kIntegrateDofs[normal_damping ? 1 : 0][contacts_.empty() ? 0 : 1][m.external ? 1 : 0](
         n, dt, step == 0 ? 0.0 : last_mech_dt_, dt_avg, md.damping, normal_damping ? m.normal_velocity.data() : nullptr,
         m.mass3.data(), m.gravity3.data(),
@@ -1881,15 +2006,28 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     for (int j = 0; j < 6; ++j) sums[j] = sums_p[j];
   };
   // With several parts, each on the thread that owns it (by part, the one
-  // that computed its forces; otherwise dealt in turn).
+  // that computed its forces; otherwise dealt in turn). Rigid jaws, which
+  // may hold nodes of several parts, need every part's sums first: a spin
+  // wait, not an OpenMP barrier (sdk/parallel.hpp).
   if (sdk::team_available(np > 1 && nodes_all > 512)) {
+    std::atomic<int> prepared{0};
 #pragma omp parallel
     {
       const int me = omp_get_thread_num(), team = omp_get_num_threads();
+      if (rigid_jaws_) {
+        for (int p = 0; p < np; ++p)
+          if (thread_of_part(p, team) == me) prepare_part(p);
+        prepared.fetch_add(1, std::memory_order_acq_rel);
+        spin_until([&] { return prepared.load(std::memory_order_acquire) == team; });
+      }
       for (int p = 0; p < np; ++p)
-        if (thread_of_part(p, team) == me) integrate_part(p);
+        if (thread_of_part(p, team) == me) {
+          if (!rigid_jaws_) prepare_part(p);
+          integrate_part(p);
+        }
     }
   } else {
+    for (int p = 0; p < np; ++p) prepare_part(p);
     for (int p = 0; p < np; ++p) integrate_part(p);
   }
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;

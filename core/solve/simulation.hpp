@@ -419,10 +419,23 @@ class Simulation {
     // (N) and extension (m), the gripped nodes' centre (m).
     std::array<double, 3> force{0, 0, 0}, centre{0, 0, 0};
     double tension = 0, extension = 0;
+    // Rigid jaws: the directions in which a gripped node is held (by a
+    // symmetry plane or a `fix`), which hold the whole jaw, and the
+    // constraint that holds it in each (-1: free).
+    std::array<int, 3> held_by{-1, -1, -1};
+    std::vector<std::vector<int>> part_nodes;  // rigid jaws: per part, its gripped nodes
   };
   std::vector<Gripper> grippers_;
+  bool rigid_jaws_ = false;       // a gripper has rigid jaws
+  std::vector<double> jaw_sums_;  // per part, gripper and direction: its share of a rigid jaw's sums
   // Each gripper's force on the plies at t, added to the parts' loads.
   void apply_grippers(double t);
+  // Rigid jaws at t: part p's share of each jaw's momentum and mass; then
+  // to its gripped nodes' loads the forces that give them the jaw's
+  // velocity, and the held directions' supports to its reactions.
+  void rigid_jaw_sums(int p, double t, double dt_avg);
+  void tie_rigid_jaws(int p, double t, double dt_avg, double* reactions);
+  std::string jaw_words(const Gripper& g) const;
   double contact_dt_ = std::numeric_limits<double>::infinity();  // contact bound of the stable step
   double tool_dt_ = std::numeric_limits<double>::infinity();     // force-controlled tools' bound
   long long contact_active_ = 0;

@@ -62,7 +62,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.48.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.49.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -3958,6 +3958,9 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
     EXPECT_NEAR(g["tension_N"].get<double>(), std::max(0.0, 5.0 + 2000.0 * g["extension_m"].get<double>()), 1e-9);
     EXPECT_GE(g["force_max_N"].get<double>(), f);
     EXPECT_EQ(g["centre_displacement_m"].size(), 3u);
+    // Flexible jaws: the gripped corner has deformed with the plies.
+    EXPECT_EQ(g["jaws"], "flexible");
+    EXPECT_GT(g["jaw_distortion_m"].get<double>(), 0.0);
   }
   ASSERT_EQ(thermostamp("blank " + q(out) + " --whole --trim sphere:0,0,0,0.1").exit_code, 0);  // blank_<ply>.png
   const auto r = thermostamp("report " + q(out));
@@ -4279,6 +4282,7 @@ TEST(Schema, ValidatesShippedJobsAndRejectsTypos) {
   constraints["constraints"][2]["anchor_motion"] = {{"displacement", {{0, 0, 0, 0}, {1, 0, 0, -0.01}}}};
   constraints["constraints"][3]["release"] = 2.0;
   constraints["constraints"][3]["tension_only"] = false;
+  constraints["constraints"][3]["jaws"] = "rigid";
   std::ofstream(dir / "constraints.json") << constraints.dump();
   constraints["constraints"][4].erase("stiffness");
   std::ofstream(dir / "bad_gripper.json") << constraints.dump();

@@ -282,9 +282,10 @@ TEST(Restart, ContactSharesOfAThermalStepContinueBitForBit) {
 }
 
 // Isothermal, with elastic-slip friction (tangential springs that carry
-// over from step to step) and the search every step; a gripper at the
-// blank's corner whose anchor moves (its load's work is carried to the
-// next step in the audit's pending sums).
+// over from step to step) and the search every step; a gripper with rigid
+// jaws at the corner of both plies whose anchor moves (its load's work is
+// carried to the next step in the audit's pending sums; its jaws tie nodes
+// of two parts, which two threads integrate).
 TEST(Restart, StickingFrictionContinuesBitForBit) {
   json j = coarse_hemisphere("hemisphere_ud_2ply_isothermal.json");
   for (auto& c : j["interactions"])
@@ -296,7 +297,8 @@ TEST(Restart, StickingFrictionContinuesBitForBit) {
                               {"stiffness", 2000.0},
                               {"preload", 5.0},
                               {"ramp", 0.1},
-                              {"anchor_motion", {{"velocity", {0.0, 0.0, -0.005}}}}});
+                              {"anchor_motion", {{"velocity", {0.0, 0.0, -0.005}}}},
+                              {"jaws", "rigid"}});
   check_restart("sticking", j, 0.45);
 }
 

@@ -2,7 +2,9 @@
 // whose force they share by their mass. A plate gripped whole is a mass on
 // a spring (its period and, with a spring that only pulls, its coasting
 // speed); a UD strip between a held end and a gripper settles where the
-// spring's force equals the strip's homogeneous solution.
+// spring's force equals the strip's homogeneous solution. Rigid jaws move
+// the bias-extension specimen as its clamp does, and a jaw held at one
+// node is held whole.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -237,6 +239,160 @@ TEST(Gripper, StripBetweenAHeldEndAndASpringSettlesAtTheHomogeneousSolution) {
   }
 }
 
+// Rigid jaws in place of the bias-extension test's clamp: the specimen's
+// pulled end gripped with `"jaws": "rigid"` by a spring of 1 N/mm whose
+// anchor moves at 0.1 m/s (the end is not held in y: the jaw stays on the
+// axis by the specimen's symmetry). The jaw moves as one body (its nodes'
+// displacements equal to 1e-12 m), and the specimen follows the
+// pin-jointed net at the jaw's displacement u as under the clamp
+// (Woven.BiasExtensionFollowsThePinJointedNet): the central shear angle
+// within 1 degree of the net's at u up to 30 degrees, the spring's force
+// within 5 % of the net's force at the measured shear angle.
+TEST(Gripper, RigidJawsPullTheBiasSpecimenAsItsClampDoes) {
+  const double H = 0.230, W = 0.115, D = H - W, k = 1000.0, speed = 0.1, t_end = 0.33;
+  const int nx = 44, ny = 22;
+  const double a = W / ny;
+  const auto dir = temp_dir("gripper_bias");
+  write_yarn_lattice_gmsh(dir / "bias.msh", W, nx, ny);
+  json j = bias_job({{"file", (dir / "bias.msh").string()}}, speed, t_end);
+  j["constraints"][1] = {{"type", "gripper"},
+                         {"name", "jaw"},
+                         {"part", "specimen"},
+                         {"box", {{H - 1e-6, -1, -1}, {H + 1e-6, 1, 1}}},
+                         {"anchor", {H + 0.05, W / 2, 0.0}},
+                         {"stiffness", k},
+                         {"jaws", "rigid"},
+                         {"anchor_motion", {{"velocity", {speed, 0.0, 0.0}}}}};
+  j["constraints"].erase(2);  // the end's y is free
+  json probes = json::array();
+  probes.push_back({{"name", "centre"}, {"part", "specimen"}, {"at", {H / 2, W / 2 - a, 0}},
+                    {"quantities", {"shear_angle"}}, {"interval", t_end / 10}});
+  for (const double y : {0.0, W / 2 - a, W})  // nodes of the gripped end
+    probes.push_back({{"name", "jaw" + std::to_string(probes.size())}, {"part", "specimen"}, {"at", {H, y, 0}},
+                      {"quantities", {"displacement_x", "displacement_y"}}, {"interval", t_end / 10}});
+  j["output"] = {{"interval", t_end}, {"fields", {"displacement"}}, {"probes", probes}};
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const double* k_sh = kBiasKsh;
+  auto w = [&](double g) {
+    const double s = std::sin(g);
+    return k_sh[0] * s * s + k_sh[1] * std::pow(s, 4) + k_sh[2] * std::pow(s, 6);
+  };
+  auto gamma = [&](double d) { return M_PI / 2 - 2 * std::acos((D + d) / (std::sqrt(2.0) * D)); };
+  auto e_of_gamma = [&](double g) { return W * (H - 1.5 * W) * w(g) + W * W * w(g / 2); };
+  double worst = 0, spread = 0, uy = 0, u_end = 0;
+  for (int n = 1; n <= 10; ++n) {
+    const double t = n * t_end / 10;
+    const double u = r.sample(2, "displacement_x", t)->values[0];
+    for (int p = 1; p <= 3; ++p) {
+      spread = std::max(spread, std::abs(r.sample(p, "displacement_x", t)->values[0] - u));
+      spread = std::max(spread, std::abs(r.sample(p, "displacement_y", t)->values[0] -
+                                         r.sample(2, "displacement_y", t)->values[0]));
+      uy = std::max(uy, std::abs(r.sample(p, "displacement_y", t)->values[0]));
+    }
+    const double g_fe = std::abs(r.sample(0, "shear_angle", t)->values[0]);
+    worst = std::max(worst, std::abs(g_fe - gamma(u) * 180 / M_PI));
+    u_end = u;
+  }
+  EXPECT_LT(spread, 1e-12);
+  EXPECT_GT(gamma(u_end) * 180 / M_PI, 30.0);  // the jaw has gone far enough
+  EXPECT_LT(worst, 1.0);
+  const double g_fe = std::abs(r.sample(0, "shear_angle", t_end)->values[0]) * M_PI / 180;
+  const double dgdd = (gamma(u_end + 1e-6) - gamma(u_end - 1e-6)) / 2e-6;
+  const double F_net = (e_of_gamma(g_fe + 1e-7) - e_of_gamma(g_fe - 1e-7)) / 2e-7 * dgdd;
+  const double F_fe = r.result.energy.reactions[3 * 1 + 0];
+  EXPECT_NEAR(F_fe / F_net, 1.0, 0.05) << F_fe << " N vs " << F_net << " N";
+  EXPECT_LT(r.result.energy.balance_error, 1e-3);
+  std::printf("rigid jaw at u = %.2f mm: worst shear-angle error %.3f deg; spring force %.4g N, pin-jointed net %.4g "
+              "N at the measured shear angle; jaw nodes apart by %.2g m, off the axis by %.2g m; balance %.2e\n",
+              u_end * 1e3, worst, F_fe, F_net, spread, uy, r.result.energy.balance_error);
+}
+
+// A rigid jaw with a node held in y (a `fix` at its corner) is held in y
+// whole: the UD strip of the test above, gripped over its end column and
+// pulled by a spring whose anchor lies off the axis (20 mm aside, 50 mm
+// ahead), stays in its homogeneous state. Its end moves along x only, to
+// where the spring's x component T (0.05 - u) / d equals the strip's
+// force N(u), T = P + k_g (d - d0); the spring's y component goes into the
+// corner's support (its reaction), and every force on the strip sums to
+// zero. Required as in the test above: 1e-6 (damped transient); the jaw's
+// nodes stay at y to 1e-12 m. With flexible jaws the end column would be
+// pulled aside and the strip sheared.
+TEST(Gripper, RigidJawHeldAtOneNodeIsHeldWhole) {
+  const double L = 0.1, W = 0.02, k = 5.0e4, kg = 1.0e4, P = 100.0, ahead = 0.05, aside = 0.02;
+  json j = {{"format", "thermostamp-job/1"},
+            {"name", "gripped_strip"},
+            {"time", {{"end", 0.25}}},
+            {"materials", {{"ud", ud_material()}}},
+            {"parts",
+             {{{"name", "strip"},
+               {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {L, W}}, {"divisions", {20, 4}},
+                         {"pattern", "crossed"}}},
+               {"thickness", 0.0005},
+               {"material", "ud"},
+               {"fibre_direction", {1.0, 0.0, 0.0}},
+               {"initial_temperature", 280.0}}}},
+            {"constraints",
+             {{{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "z"}}},
+              {{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1e-6, -1}, {1e-6, 1e-6, 1}}}, {"dofs", {"y"}}},
+              {{"type", "fix"}, {"part", "strip"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}},
+              {{"type", "fix"},
+               {"part", "strip"},
+               {"box", {{L - 1e-6, -1e-6, -1}, {L + 1e-6, 1e-6, 1}}},
+               {"dofs", {"y"}}},
+              {{"type", "gripper"},
+               {"part", "strip"},
+               {"box", {{L - 1e-6, -1, -1}, {L + 1e-6, 1, 1}}},
+               {"anchor", {L + ahead, W / 2 + aside, 0.0}},
+               {"stiffness", kg},
+               {"preload", P},
+               {"ramp", 0.05},
+               {"jaws", "rigid"}}}},
+            {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 200.0}}}, {"thermal", nullptr}}},
+            {"output",
+             {{"interval", 0.25},
+              {"fields", {"displacement"}},
+              {"probes",
+               {{{"name", "end"}, {"part", "strip"}, {"at", {L, W / 2, 0}},
+                 {"quantities", {"displacement_x", "displacement_y"}}},
+                {{"name", "edge"}, {"part", "strip"}, {"at", {L, W, 0}}, {"quantities", {"displacement_y"}}},
+                {{"name", "middle"}, {"part", "strip"}, {"at", {L / 2, W, 0}}, {"quantities", {"displacement_y"}}}}}}}};
+  const JobRun r = run_json(j);
+  ASSERT_TRUE(r.result.ok) << r.result.error;
+  const double d0 = std::hypot(ahead, aside);
+  auto strip_force = [&](double u) { return 2 * k * W * std::log(1 + u / L) / (1 + u / L); };
+  auto tension = [&](double u) { return P + kg * (std::hypot(ahead - u, aside) - d0); };
+  auto pull_x = [&](double u) { return tension(u) * (ahead - u) / std::hypot(ahead - u, aside); };
+  double lo = 0, hi = 0.04;
+  for (int it = 0; it < 200; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (strip_force(mid) < pull_x(mid) ? lo : hi) = mid;
+  }
+  const double u = 0.5 * (lo + hi), N = strip_force(u), Fy = tension(u) * aside / std::hypot(ahead - u, aside);
+  const auto& R = r.result.energy.reactions;
+  ASSERT_EQ(R.size(), 15u);
+  const double ux = r.sample(0, "displacement_x", 0.25)->values[0];
+  double uy = 0;
+  for (const ProbeSample& s : r.result.probes)
+    if (s.quantity == "displacement_y") uy = std::max(uy, std::abs(s.values[0]));
+  EXPECT_NEAR(ux / u, 1.0, 1e-6);
+  EXPECT_LT(uy, 1e-12);
+  EXPECT_NEAR(R[12] / N, 1.0, 1e-6);   // the spring's x force on the strip
+  EXPECT_NEAR(R[13] / Fy, 1.0, 1e-6);  // and its y force
+  EXPECT_NEAR(R[10] / -Fy, 1.0, 1e-6);  // the corner's support takes it
+  double sum_x = 0, sum_y = 0;
+  for (std::size_t c = 0; c < 5; ++c) {
+    sum_x += R[3 * c];
+    sum_y += R[3 * c + 1];
+  }
+  EXPECT_LT(std::abs(sum_x), 1e-6 * N);
+  EXPECT_LT(std::abs(sum_y), 1e-6 * N);
+  EXPECT_LT(r.result.energy.balance_error, 1e-6);
+  std::printf("jaw held in y: u %.6g m (%.1e from exact), spring %.6g / %.6g N (x / y), corner %.6g N, off y by "
+              "%.1g m, forces sum to %.1g / %.1g N, balance %.2e\n",
+              ux, ux / u - 1, R[12], R[13], R[10], uy, sum_x, sum_y, r.result.energy.balance_error);
+}
+
 // Input that cannot make a gripper is refused before the run, naming the key.
 TEST(Gripper, BadInputNamesTheKey) {
   auto error_of = [](const json& j) -> std::string {
@@ -287,6 +443,27 @@ TEST(Gripper, BadInputNamesTheKey) {
   bad = good;
   bad["constraints"][0]["tension_only"] = "yes";
   EXPECT_EQ(error_of(bad).rfind("/constraints/0/tension_only:", 0), 0u) << error_of(bad);
+  bad = good;
+  bad["constraints"][0]["jaws"] = "stiff";
+  EXPECT_EQ(error_of(bad).rfind("/constraints/0/jaws:", 0), 0u) << error_of(bad);
+  // Rigid jaws: driven nodes, a node held by two.
+  json rigid = good;
+  rigid["constraints"][0]["jaws"] = "rigid";
+  EXPECT_EQ(error_of(rigid), "");
+  bad = rigid;
+  bad["constraints"].push_back({{"type", "velocity"}, {"part", "plate"}, {"box", {{-1, -1, -1}, {1, 1e-6, 1}}},
+                                {"velocity", {0.0, 0.1, 0.0}}, {"dofs", {"y"}}});
+  EXPECT_EQ(error_of(bad).rfind("/constraints/0/box: rigid jaws: the box holds node ", 0), 0u) << error_of(bad);
+  EXPECT_NE(error_of(bad).find("which /constraints/1 drives"), std::string::npos) << error_of(bad);
+  bad = rigid;
+  bad["constraints"][0]["box"] = {{-1, -1, -1}, {0.011, 1, 1}};
+  bad["constraints"].push_back(bad["constraints"][0]);
+  bad["constraints"][1]["name"] = "other";
+  bad["constraints"][1]["box"] = {{0.009, -1, -1}, {1, 1, 1}};
+  EXPECT_EQ(error_of(bad).rfind("/constraints/1/box: rigid jaws: the box shares node ", 0), 0u) << error_of(bad);
+  EXPECT_NE(error_of(bad).find("with gripper 'spring'"), std::string::npos) << error_of(bad);
+  bad["constraints"][1]["jaws"] = "flexible";  // a flexible one may pull on a rigid jaw
+  EXPECT_EQ(error_of(bad), "");
 }
 
 }  // namespace ts::test
