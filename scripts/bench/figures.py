@@ -9,7 +9,9 @@ With --crystallisation, only the crystallisation studies' figures
 (about 6 minutes); with --blank, only the cut patterns of the hemisphere
 cup cut at r = 80 mm, UD with either fibre layout and woven, and the top
 plies' patterns on a roll 600 mm wide (two minutes); with --conductivity, only the slab cooled with a conductivity
-that follows the temperature against its reference (seconds).
+that follows the temperature against its reference (seconds); with
+--grippers, only the bias-extension specimen pulled by its clamp and by
+grippers with rigid and flexible jaws (seconds).
 """
 import csv
 import json
@@ -239,9 +241,143 @@ def blank(tmp):
     plt.close(fig)
 
 
+def yarn_lattice(path, width, nx, ny):
+    """The bias specimen's mesh along the yarns, as the tests' write_yarn_lattice_gmsh."""
+    a = width / ny
+    ids, nodes = {}, []
+    for j in range(ny + 1):
+        for i in range(nx + 1):
+            if (i + j) % 2 == 0:
+                ids[(i, j)] = len(nodes) + 1
+                nodes.append((i * a, j * a))
+    tris = []
+
+    def add(p, q, r):
+        t = [ids[p], ids[q], ids[r]]
+        A, B, C = (nodes[k - 1] for k in t)
+        if (B[0] - A[0]) * (C[1] - A[1]) - (B[1] - A[1]) * (C[0] - A[0]) < 0:
+            t[1], t[2] = t[2], t[1]
+        tris.append(t)
+    for j in range(ny + 1):
+        for i in range(nx + 1):
+            if (i + j) % 2 == 0:
+                continue
+            if i == 0:
+                add((0, j - 1), (1, j), (0, j + 1))
+            elif i == nx:
+                add((nx, j - 1), (nx, j + 1), (nx - 1, j))
+            else:
+                if j < ny:
+                    add((i - 1, j), (i + 1, j), (i, j + 1))
+                if j > 0:
+                    add((i - 1, j), (i, j - 1), (i + 1, j))
+    with open(path, "w") as f:
+        f.write("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n%d\n" % len(nodes))
+        for k, (x, y) in enumerate(nodes):
+            f.write("%d %.17g %.17g 0\n" % (k + 1, x, y))
+        f.write("$EndNodes\n$Elements\n%d\n" % len(tris))
+        for k, t in enumerate(tris):
+            f.write("%d 2 0 %d %d %d\n" % (k + 1, t[0], t[1], t[2]))
+        f.write("$EndElements\n")
+
+
+def grippers(tmp):
+    """The bias-extension specimen (Gripper.RigidJawsPullTheBiasSpecimenAsItsClampDoes)
+    pulled by the test's clamp, by a gripper with rigid jaws and by one with
+    flexible jaws: the central shear angle and the pulling force against the
+    end's displacement, with the pin-jointed net."""
+    import math
+    H, W, ny, nx, ksh = 0.230, 0.115, 22, 44, (18.5, 46.4, -21.3)
+    a, D = W / ny, 0.230 - 0.115
+    mesh = os.path.join(tmp, "bias.msh")
+    yarn_lattice(mesh, W, nx, ny)
+    edge = [[H - 1e-6, -1, -1], [H + 1e-6, 1, 1]]
+    base = {
+        "format": "thermostamp-job/1", "name": "bias", "time": {"end": 0.33},
+        "materials": {"woven": {"density": 1500.0, "membrane": {
+            "law": "woven_hyperelastic", "k_warp": 1e5, "k_weft": 1e5, "k_sh": list(ksh)}}},
+        "parts": [{"name": "specimen", "mesh": {"file": mesh}, "thickness": 0.0005, "material": "woven",
+                   "fibre_direction": [1, 1, 0], "initial_temperature": 20.0}],
+        "solvers": {"mechanics": {"dt_safety": 0.8, "damping": 10.0}, "thermal": None},
+        "output": {"interval": 0.33, "fields": ["displacement"], "probes": [
+            {"name": "centre", "part": "specimen", "at": [H / 2, W / 2 - a, 0], "quantities": ["shear_angle"],
+             "interval": 0.0033},
+            {"name": "end", "part": "specimen", "at": [H, W / 2 - a, 0], "quantities": ["displacement_x"],
+             "interval": 0.0033}]}}
+    held = {"type": "fix", "part": "specimen", "box": [[-1e-6, -1, -1], [1e-6, 1, 1]], "dofs": ["x", "y", "z"]}
+    flat = {"type": "fix", "part": "*", "box": [[-1, -1, -1], [1, 1, 1]], "dofs": ["z"]}
+    cases = {
+        "the test's clamp (velocity)": [held, {"type": "velocity", "part": "specimen", "box": edge, "dofs": ["x"],
+                                               "velocity": [0.1, 0, 0]},
+                                        {"type": "fix", "part": "specimen", "box": edge, "dofs": ["y"]}, flat],
+    }
+    for jaws in ("rigid", "flexible"):
+        cases["gripper, %s jaws" % jaws] = [held, {"type": "gripper", "name": "jaw", "part": "specimen", "box": edge,
+                                                   "anchor": [H + 0.05, W / 2, 0], "stiffness": 1000.0, "jaws": jaws,
+                                                   "anchor_motion": {"velocity": [0.1, 0, 0]}}, flat]
+
+    def w(g):
+        s = math.sin(g)
+        return ksh[0] * s ** 2 + ksh[1] * s ** 4 + ksh[2] * s ** 6
+
+    def gamma(u):
+        return math.pi / 2 - 2 * math.acos((D + u) / (math.sqrt(2) * D))
+
+    def e_of_gamma(g):
+        return W * (H - 1.5 * W) * w(g) + W * W * w(g / 2)
+
+    def net_force(u, g):  # dE/dgamma at the shear angle g times dgamma/du
+        return (e_of_gamma(g + 1e-7) - e_of_gamma(g - 1e-7)) / 2e-7 * (gamma(u + 1e-6) - gamma(u - 1e-6)) / 2e-6
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for (label, constraints), style in zip(cases.items(), ("k--", "C0-", "C3-")):
+        job = dict(base, constraints=constraints)
+        if label.startswith("the test"):
+            job["time"] = {"end": 0.26}
+        path = os.path.join(tmp, "bias_%d.json" % len(label))
+        with open(path, "w") as f:
+            json.dump(job, f)
+        out = os.path.join(tmp, "bias_%d" % len(label))
+        subprocess.run([EXE, "run", path, "--out", out, "--quiet", "--threads", "1"], check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        shear, u = {}, {}
+        with open(os.path.join(out, "probes.csv")) as f:
+            for r in csv.DictReader(f):
+                (shear if r["quantity"] == "shear_angle" else u)[float(r["time"])] = float(r["value"])
+        with open(os.path.join(out, "energy.csv")) as f:
+            force = {float(r["time"]): float(r["reaction1_x"]) for r in csv.DictReader(f)}
+        ts = sorted(t for t in u if t > 0)
+        ax1.plot([u[t] * 1e3 for t in ts], [abs(shear[t]) for t in ts], style, label=label)
+        tf = sorted(t for t in force if t > 0)
+        ax2.plot([1e3 * u[min(u, key=lambda s: abs(s - t))] for t in tf], [force[t] for t in tf], style, lw=1,
+                 label=label + ": force on the end")
+        if label.startswith("gripper, rigid"):
+            ax2.plot([u[t] * 1e3 for t in ts[4::5]], [net_force(u[t], abs(shear[t]) * math.pi / 180)
+                                                      for t in ts[4::5]], "ko", ms=3,
+                     label="pin-jointed net at the measured shear angle")
+    us = [i * 0.0003 for i in range(1, 97)]
+    ax1.plot([x * 1e3 for x in us], [gamma(x) * 180 / math.pi for x in us], "k:", label="pin-jointed net")
+    ax1.set_xlabel("end displacement (mm)")
+    ax1.set_ylabel("shear angle at the centre (deg)")
+    ax2.set_xlabel("end displacement (mm)")
+    ax2.set_ylabel("force (N)")
+    ax2.set_ylim(0, 12)
+    for ax in (ax1, ax2):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("bias extension: the test's clamp, a gripper with rigid jaws, one with flexible jaws")
+    fig.tight_layout()
+    fig.savefig(os.path.join(FIG, "gripper_bias.png"), dpi=90)
+    plt.close(fig)
+
+
 def main():
     os.makedirs(FIG, exist_ok=True)
     tmp = tempfile.mkdtemp()
+    if "--grippers" in sys.argv:
+        grippers(tmp)
+        shutil.rmtree(tmp)
+        print("figures written to", FIG)
+        return
     if "--blank" in sys.argv:
         blank(tmp)
         shutil.rmtree(tmp)
