@@ -248,13 +248,13 @@ def yarn_lattice(path, width, nx, ny):
     for j in range(ny + 1):
         for i in range(nx + 1):
             if (i + j) % 2 == 0:
-                ids[(i, j)] = len(nodes) + 1
+                ids[(i, j)] = len(nodes)
                 nodes.append((i * a, j * a))
     tris = []
 
     def add(p, q, r):
         t = [ids[p], ids[q], ids[r]]
-        A, B, C = (nodes[k - 1] for k in t)
+        A, B, C = (nodes[k] for k in t)
         if (B[0] - A[0]) * (C[1] - A[1]) - (B[1] - A[1]) * (C[0] - A[0]) < 0:
             t[1], t[2] = t[2], t[1]
         tris.append(t)
@@ -271,14 +271,9 @@ def yarn_lattice(path, width, nx, ny):
                     add((i - 1, j), (i + 1, j), (i, j + 1))
                 if j > 0:
                     add((i - 1, j), (i, j - 1), (i + 1, j))
-    with open(path, "w") as f:
-        f.write("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n%d\n" % len(nodes))
-        for k, (x, y) in enumerate(nodes):
-            f.write("%d %.17g %.17g 0\n" % (k + 1, x, y))
-        f.write("$EndNodes\n$Elements\n%d\n" % len(tris))
-        for k, t in enumerate(tris):
-            f.write("%d 2 0 %d %d %d\n" % (k + 1, t[0], t[1], t[2]))
-        f.write("$EndElements\n")
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from mesh_order import write_msh
+    write_msh(path, nodes, tris)
 
 
 def grippers(tmp):

@@ -62,6 +62,35 @@ json plate_on_a_spring(double a, double d, double k, double preload, bool tensio
                {"interval", t_end / 200}}}}}}};
 }
 
+// A UD strip (fibres along x, L x W = 100 x 20 mm, crossed mesh 20 x 4)
+// held at x = 0 (x and z; y at the corner), flat, to 0.25 s with damping
+// 200 /s, a probe at the middle of its far end; callers add the gripper.
+json gripped_strip() {
+  const double L = 0.1, W = 0.02;
+  return {{"format", "thermostamp-job/1"},
+          {"name", "gripped_strip"},
+          {"time", {{"end", 0.25}}},
+          {"materials", {{"ud", ud_material()}}},
+          {"parts",
+           {{{"name", "strip"},
+             {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {L, W}}, {"divisions", {20, 4}},
+                       {"pattern", "crossed"}}},
+             {"thickness", 0.0005},
+             {"material", "ud"},
+             {"fibre_direction", {1.0, 0.0, 0.0}},
+             {"initial_temperature", 280.0}}}},
+          {"constraints",
+           {{{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "z"}}},
+            {{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1e-6, -1}, {1e-6, 1e-6, 1}}}, {"dofs", {"y"}}},
+            {{"type", "fix"}, {"part", "strip"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}}}},
+          {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 200.0}}}, {"thermal", nullptr}}},
+          {"output",
+           {{"interval", 0.25},
+            {"fields", {"displacement"}},
+            {"probes",
+             {{{"name", "end"}, {"part", "strip"}, {"at", {L, W / 2, 0}}, {"quantities", {"displacement_x"}}}}}}}};
+}
+
 }  // namespace
 
 // The whole plate moves as one mass M on the spring: started at rest with
@@ -179,35 +208,14 @@ TEST(Gripper, StripBetweenAHeldEndAndASpringSettlesAtTheHomogeneousSolution) {
     double preload, moved;
   };
   for (const Case& c : {Case{100.0, 0.0}, Case{0.0, 0.01}}) {
-    json j = {{"format", "thermostamp-job/1"},
-              {"name", "gripped_strip"},
-              {"time", {{"end", 0.25}}},
-              {"materials", {{"ud", ud_material()}}},
-              {"parts",
-               {{{"name", "strip"},
-                 {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {L, W}}, {"divisions", {20, 4}},
-                             {"pattern", "crossed"}}},
-                 {"thickness", 0.0005},
-                 {"material", "ud"},
-                 {"fibre_direction", {1.0, 0.0, 0.0}},
-                 {"initial_temperature", 280.0}}}},
-              {"constraints",
-               {{{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "z"}}},
-                {{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1e-6, -1}, {1e-6, 1e-6, 1}}}, {"dofs", {"y"}}},
-                {{"type", "fix"}, {"part", "strip"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}},
-                {{"type", "gripper"},
-                 {"part", "strip"},
-                 {"box", {{L - 1e-6, -1, -1}, {L + 1e-6, 1, 1}}},
-                 {"anchor", {L + 0.05, W / 2, 0.0}},
-                 {"stiffness", kg},
-                 {"preload", c.preload},
-                 {"ramp", 0.05}}}},
-              {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 200.0}}}, {"thermal", nullptr}}},
-              {"output",
-               {{"interval", 0.25},
-                {"fields", {"displacement"}},
-                {"probes",
-                 {{{"name", "end"}, {"part", "strip"}, {"at", {L, W / 2, 0}}, {"quantities", {"displacement_x"}}}}}}}};
+    json j = gripped_strip();
+    j["constraints"].push_back({{"type", "gripper"},
+                                {"part", "strip"},
+                                {"box", {{L - 1e-6, -1, -1}, {L + 1e-6, 1, 1}}},
+                                {"anchor", {L + 0.05, W / 2, 0.0}},
+                                {"stiffness", kg},
+                                {"preload", c.preload},
+                                {"ramp", 0.05}});
     if (c.moved > 0)
       j["constraints"][3]["anchor_motion"] = {
           {"displacement", {{0.0, 0.0, 0.0, 0.0}, {0.05, c.moved, 0.0, 0.0}, {1.0, c.moved, 0.0, 0.0}}}};
@@ -320,43 +328,24 @@ TEST(Gripper, RigidJawsPullTheBiasSpecimenAsItsClampDoes) {
 // pulled aside and the strip sheared.
 TEST(Gripper, RigidJawHeldAtOneNodeIsHeldWhole) {
   const double L = 0.1, W = 0.02, k = 5.0e4, kg = 1.0e4, P = 100.0, ahead = 0.05, aside = 0.02;
-  json j = {{"format", "thermostamp-job/1"},
-            {"name", "gripped_strip"},
-            {"time", {{"end", 0.25}}},
-            {"materials", {{"ud", ud_material()}}},
-            {"parts",
-             {{{"name", "strip"},
-               {"mesh", {{"generator", "rectangle"}, {"origin", {0, 0, 0}}, {"size", {L, W}}, {"divisions", {20, 4}},
-                         {"pattern", "crossed"}}},
-               {"thickness", 0.0005},
-               {"material", "ud"},
-               {"fibre_direction", {1.0, 0.0, 0.0}},
-               {"initial_temperature", 280.0}}}},
-            {"constraints",
-             {{{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1, -1}, {1e-6, 1, 1}}}, {"dofs", {"x", "z"}}},
-              {{"type", "fix"}, {"part", "strip"}, {"box", {{-1e-6, -1e-6, -1}, {1e-6, 1e-6, 1}}}, {"dofs", {"y"}}},
-              {{"type", "fix"}, {"part", "strip"}, {"box", {{-1, -1, -1}, {1, 1, 1}}}, {"dofs", {"z"}}},
-              {{"type", "fix"},
-               {"part", "strip"},
-               {"box", {{L - 1e-6, -1e-6, -1}, {L + 1e-6, 1e-6, 1}}},
-               {"dofs", {"y"}}},
-              {{"type", "gripper"},
-               {"part", "strip"},
-               {"box", {{L - 1e-6, -1, -1}, {L + 1e-6, 1, 1}}},
-               {"anchor", {L + ahead, W / 2 + aside, 0.0}},
-               {"stiffness", kg},
-               {"preload", P},
-               {"ramp", 0.05},
-               {"jaws", "rigid"}}}},
-            {"solvers", {{"mechanics", {{"dt_safety", 0.8}, {"damping", 200.0}}}, {"thermal", nullptr}}},
-            {"output",
-             {{"interval", 0.25},
-              {"fields", {"displacement"}},
-              {"probes",
-               {{{"name", "end"}, {"part", "strip"}, {"at", {L, W / 2, 0}},
-                 {"quantities", {"displacement_x", "displacement_y"}}},
-                {{"name", "edge"}, {"part", "strip"}, {"at", {L, W, 0}}, {"quantities", {"displacement_y"}}},
-                {{"name", "middle"}, {"part", "strip"}, {"at", {L / 2, W, 0}}, {"quantities", {"displacement_y"}}}}}}}};
+  json j = gripped_strip();
+  j["constraints"].push_back({{"type", "fix"},
+                              {"part", "strip"},
+                              {"box", {{L - 1e-6, -1e-6, -1}, {L + 1e-6, 1e-6, 1}}},
+                              {"dofs", {"y"}}});
+  j["constraints"].push_back({{"type", "gripper"},
+                              {"part", "strip"},
+                              {"box", {{L - 1e-6, -1, -1}, {L + 1e-6, 1, 1}}},
+                              {"anchor", {L + ahead, W / 2 + aside, 0.0}},
+                              {"stiffness", kg},
+                              {"preload", P},
+                              {"ramp", 0.05},
+                              {"jaws", "rigid"}});
+  j["output"]["probes"][0]["quantities"].push_back("displacement_y");
+  j["output"]["probes"].push_back(
+      {{"name", "edge"}, {"part", "strip"}, {"at", {L, W, 0}}, {"quantities", {"displacement_y"}}});
+  j["output"]["probes"].push_back(
+      {{"name", "middle"}, {"part", "strip"}, {"at", {L / 2, W, 0}}, {"quantities", {"displacement_y"}}});
   const JobRun r = run_json(j);
   ASSERT_TRUE(r.result.ok) << r.result.error;
   const double d0 = std::hypot(ahead, aside);
