@@ -1045,7 +1045,9 @@ void parse_job_into(Job& job) {
           d.preload = r.real("preload", 0.0, 0.0);
           d.ramp = r.real("ramp", 0.0, 0.0);
           d.tension_only = r.boolean("tension_only", true);
-          d.rigid = r.choice("jaws", {"flexible", "rigid"}, std::string("flexible")) == "rigid";
+          const std::string jaws = r.choice("jaws", {"flexible", "rigid", "swivelling"}, std::string("flexible"));
+          d.rigid = jaws != "flexible";
+          d.swivelling = jaws == "swivelling";
           if (r.optional_raw("release")) d.release = r.real("release", std::nullopt, 0.0, true);
           if (const json* m = r.optional_raw("anchor_motion")) {
             ObjectReader mo(*m, r.at("anchor_motion"));

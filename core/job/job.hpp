@@ -253,9 +253,12 @@ struct ConstraintDef {
   double stiffness = 0;  // N/m
   double preload = 0;    // N
   bool tension_only = true;
-  // gripper: the gripped nodes translate as one rigid body (a clamp's jaws
-  // that neither deform nor turn) instead of each following the ply.
+  // gripper: the gripped nodes move as one rigid body instead of each
+  // following the ply: translating only (a clamp's jaws that neither deform
+  // nor turn, `"jaws": "rigid"`), or also turning (`"swivelling"`, with
+  // `rigid` true as well).
   bool rigid = false;
+  bool swivelling = false;
   double release = std::numeric_limits<double>::infinity();  // s: from then on the gripper holds no more
   MotionDef anchor_motion;
 };

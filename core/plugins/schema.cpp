@@ -358,7 +358,7 @@ json job_schema(const std::vector<const PluginRecord*>& records) {
            {"preload", {{"type", "number"}, {"minimum", 0}, {"description", "[N]"}}},
            {"ramp", {{"type", "number"}, {"minimum", 0}, {"description", "[s] of the preload"}}},
            {"tension_only", {{"type", "boolean"}}},
-           {"jaws", {{"enum", {"flexible", "rigid"}}}},
+           {"jaws", {{"enum", {"flexible", "rigid", "swivelling"}}}},
            {"release", {{"type", "number"}, {"exclusiveMinimum", 0}, {"description", "[s]"}}},
            {"anchor_motion", {{"oneOf", {motion["oneOf"][0], motion["oneOf"][1]}}}}})};
   json interaction_kinds = contact;

@@ -18,6 +18,7 @@
 #include "io/files.hpp"
 #include "io/logging.hpp"
 #include "solve/interrupt.hpp"
+#include "solve/rigid_body.hpp"
 #include "solve/simulation_internal.hpp"
 #include "solve/stability.hpp"
 #include "solve/tools.hpp"
@@ -979,21 +980,37 @@ bool Simulation::Run::write_summary(std::string& why) const {
             c0[d] += gr.share[j] * parts[gr.nodes[j].first]->x0[k];
             cu[d] += gr.share[j] * (parts[gr.nodes[j].first]->x[k] - parts[gr.nodes[j].first]->x0[k]);
           }
-        // How far the gripped region has deformed: the largest distance of a
-        // gripped node's displacement from their centre's.
+        // How far the gripped region has turned and deformed: the rigid
+        // motion that best carries the nodes' initial places (about their
+        // centre) onto their places at the end, its angle, and the largest
+        // distance of a node from where that motion puts it.
+        double H[9] = {}, R[9];
+        for (std::size_t j = 0; j < gr.nodes.size(); ++j) {
+          const auto [p, i] = gr.nodes[j];
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c)
+              H[3 * r + c] += gr.share[j] * (parts[p]->x0[3 * i + r] - c0[r]) *
+                              (parts[p]->x[3 * i + c] - c0[c] - cu[c]);
+        }
+        best_fit_rotation(H, R);
         double distortion = 0;
         for (const auto& [p, i] : gr.nodes) {
           double s2 = 0;
           for (int d = 0; d < 3; ++d) {
-            const std::size_t k = 3 * static_cast<std::size_t>(i) + d;
-            const double e = parts[p]->x[k] - parts[p]->x0[k] - cu[d];
-            s2 += e * e;
+            double placed = c0[d] + cu[d];
+            for (int e = 0; e < 3; ++e) placed += R[3 * d + e] * (parts[p]->x0[3 * i + e] - c0[e]);
+            const double err = parts[p]->x[3 * static_cast<std::size_t>(i) + d] - placed;
+            s2 += err * err;
           }
           distortion = std::max(distortion, std::sqrt(s2));
         }
+        // The angle from its sine (the skew part) and cosine (the trace).
+        const double sine =
+            0.5 * std::sqrt(std::pow(R[7] - R[5], 2) + std::pow(R[2] - R[6], 2) + std::pow(R[3] - R[1], 2));
+        const double rotation = std::atan2(sine, 0.5 * (R[0] + R[4] + R[8] - 1.0)) * 180.0 / M_PI;
         grippers.push_back({{"name", c.name},
                             {"constraint", c.pointer},
-                            {"jaws", c.rigid ? "rigid" : "flexible"},
+                            {"jaws", c.swivelling ? "swivelling" : c.rigid ? "rigid" : "flexible"},
                             {"nodes", gr.nodes.size()},
                             {"mass_kg", gr.mass},
                             {"force_N", gr.force},
@@ -1002,6 +1019,7 @@ bool Simulation::Run::write_summary(std::string& why) const {
                             {"centre_displacement_m",
                              {gr.centre[0] - c0[0], gr.centre[1] - c0[1], gr.centre[2] - c0[2]}},
                             {"jaw_distortion_m", distortion},
+                            {"jaw_rotation_deg", rotation},
                             {"force_max_N", result.energy.gripper_force_max[g]},
                             {"force_max_at_s", result.energy.gripper_force_max_at[g]}});
       }

@@ -29,6 +29,7 @@
 #include <thermostamp/sdk/simd.hpp>
 
 #include "io/logging.hpp"
+#include "solve/rigid_body.hpp"
 #include "solve/stability.hpp"
 #include "solve/tools.hpp"
 
@@ -375,13 +376,28 @@ std::vector<std::string> Simulation::mesh_file_lines() const {
 
 // ", rigid jaws" and the directions in which they are held, or nothing.
 std::string Simulation::jaw_words(const Gripper& g) const {
-  if (!job_.constraints[g.constraint].rigid) return "";
+  const ConstraintDef& c = job_.constraints[g.constraint];
+  if (!c.rigid) return "";
   std::string held;
   for (int d = 0; d < 3; ++d)
     if (g.held_by[d] >= 0)
       held += (held.empty() ? "" : ", ") + std::string(1, static_cast<char>('x' + d)) + " by " +
               job_.constraints[g.held_by[d]].pointer;
-  return ", rigid jaws" + (held.empty() ? std::string() : " (held in " + held + ")");
+  std::string turning;  // swivelling: about which axes, and where
+  if (c.swivelling) {
+    std::string axes;
+    for (int d = 0; d < 3; ++d)
+      if (g.on_symmetry[d]) axes += std::string(axes.empty() ? "" : " and ") + static_cast<char>('x' + d);
+    const int planes = static_cast<int>(g.on_symmetry[0]) + g.on_symmetry[1] + g.on_symmetry[2];
+    turning = planes >= 2 ? "; on two symmetry planes, so only translating"
+              : planes == 1 ? "; turning about " + axes + " only (a symmetry plane)"
+                            : "";
+    if (g.pin_node >= 0)
+      turning += "; turning about " + node_label(parts_[g.pin_part]->mesh, g.pin_node) + " of part '" +
+                 parts_[g.pin_part]->def->name + "'";
+  }
+  return std::string(c.swivelling ? ", swivelling jaws" : ", rigid jaws") +
+         (held.empty() ? std::string() : " (held in " + held + ")") + turning;
 }
 
 std::vector<std::string> Simulation::gripper_lines() const {
@@ -929,31 +945,40 @@ void Simulation::build_mechanics() {
     if (c.rigid) {
       // A gripped node held in a direction holds the jaw in it; one that
       // is driven would drive the jaw, which is then no gripper.
+      const std::string kind = c.swivelling ? "swivelling jaws" : "rigid jaws";
+      g.size = size > 0 ? size : 1.0;  // m: the rows' length scale
       for (const auto& [p, i] : g.nodes)
         for (int d = 0; d < 3; ++d) {
           const std::size_t k = 3 * static_cast<std::size_t>(i) + d;
           if (!mech_[p]->fixed[k]) continue;
           const int by = mech_[p]->constraint_of[k];
           if (mech_[p]->prescribed[k] != 0)
-            throw JobError(c.pointer + "/box", "rigid jaws: the box holds " + node_label(parts_[p]->mesh, i) +
+            throw JobError(c.pointer + "/box", kind + ": the box holds " + node_label(parts_[p]->mesh, i) +
                                                    " of part '" + parts_[p]->def->name + "', which " +
                                                    job_.constraints[by].pointer +
                                                    " drives; a gripper's jaws cannot be driven");
           if (g.held_by[d] < 0) g.held_by[d] = by;
+          if (job_.constraints[by].type == ConstraintDef::Type::Symmetry) {
+            g.on_symmetry[job_.constraints[by].plane] = true;
+          } else if (g.pin_node < 0) {
+            g.pin_part = p;
+            g.pin_node = i;
+          }
         }
       for (const Gripper& o : grippers_) {
         if (!job_.constraints[o.constraint].rigid) continue;
         for (const auto& n : g.nodes)
           if (std::find(o.nodes.begin(), o.nodes.end(), n) != o.nodes.end())
-            throw JobError(c.pointer + "/box", "rigid jaws: the box shares " + node_label(parts_[n.first]->mesh,
+            throw JobError(c.pointer + "/box", kind + ": the box shares " + node_label(parts_[n.first]->mesh,
                                                                                           n.second) +
                                                    " of part '" + parts_[n.first]->def->name + "' with gripper '" +
                                                    job_.constraints[o.constraint].name +
-                                                   "'; two rigid jaws cannot hold one node");
+                                                   "'; two rigid or swivelling jaws cannot hold one node");
       }
       g.part_nodes.assign(parts_.size(), {});
       for (const auto& [p, i] : g.nodes) g.part_nodes[p].push_back(i);
       rigid_jaws_ = true;
+      swivelling_jaws_ = swivelling_jaws_ || c.swivelling;
     }
     grippers_.push_back(std::move(g));
   }
@@ -1887,11 +1912,15 @@ void Simulation::rigid_jaw_sums(int p, double t, double dt_avg) {
   const MechanicsDef& md = job_.mechanics_settings;
   const bool normal_damping = md.damping_normal && md.damping > 0, contact = !contacts_.empty();
   const MechPart& m = *mech_[p];
-  double* sums = &jaw_sums_[static_cast<std::size_t>(p) * 6 * grippers_.size()];
   for (std::size_t gi = 0; gi < grippers_.size(); ++gi) {
     const Gripper& g = grippers_[gi];
     const ConstraintDef& c = job_.constraints[g.constraint];
     if (!c.rigid || t >= c.release) continue;  // an open clamp ties nothing
+    double* sums = &jaw_sums_[(static_cast<std::size_t>(p) * grippers_.size() + gi) * kJawSums];
+    if (c.swivelling) {
+      swivel_jaw_sums(g, m, parts_[p]->x.data(), g.part_nodes[p], dt_avg, normal_damping, contact, sums);
+      continue;
+    }
     double momentum[3] = {0, 0, 0}, mass[3] = {0, 0, 0};
     for (const int i : g.part_nodes[p])
       for (int d = 0; d < 3; ++d) {
@@ -1901,8 +1930,8 @@ void Simulation::rigid_jaw_sums(int p, double t, double dt_avg) {
         mass[d] += m.mass3[k];
       }
     for (int d = 0; d < 3; ++d) {
-      sums[6 * gi + 2 * d] = momentum[d];
-      sums[6 * gi + 2 * d + 1] = mass[d];
+      sums[2 * d] = momentum[d];
+      sums[2 * d + 1] = mass[d];
     }
   }
 }
@@ -1910,7 +1939,7 @@ void Simulation::rigid_jaw_sums(int p, double t, double dt_avg) {
 // Each closed rigid jaw's force on part p's gripped nodes, added to their
 // loads; in a held direction its sum to `reactions` (part p's, per
 // constraint and direction).
-void Simulation::tie_rigid_jaws(int p, double t, double dt_avg, double* reactions) {
+void Simulation::tie_rigid_jaws(int p, int slot, double t, double dt, double dt_avg, double* reactions) {
   const MechanicsDef& md = job_.mechanics_settings;
   const bool normal_damping = md.damping_normal && md.damping > 0, contact = !contacts_.empty();
   const int np = static_cast<int>(parts_.size());
@@ -1919,11 +1948,16 @@ void Simulation::tie_rigid_jaws(int p, double t, double dt_avg, double* reaction
     const Gripper& g = grippers_[gi];
     const ConstraintDef& c = job_.constraints[g.constraint];
     if (!c.rigid || t >= c.release) continue;
+    if (c.swivelling) {
+      tie_swivelling_jaw(g, &jaw_solution_[(static_cast<std::size_t>(slot) * grippers_.size() + gi) * 9], p, dt, dt_avg,
+                         reactions);
+      continue;
+    }
     for (int d = 0; d < 3; ++d) {
       double momentum = 0, mass = 0;
       for (int q = 0; q < np; ++q) {
-        momentum += jaw_sums_[(static_cast<std::size_t>(q) * grippers_.size() + gi) * 6 + 2 * d];
-        mass += jaw_sums_[(static_cast<std::size_t>(q) * grippers_.size() + gi) * 6 + 2 * d + 1];
+        momentum += jaw_sums_[(static_cast<std::size_t>(q) * grippers_.size() + gi) * kJawSums + 2 * d];
+        mass += jaw_sums_[(static_cast<std::size_t>(q) * grippers_.size() + gi) * kJawSums + 2 * d + 1];
       }
       if (!(mass > 0)) continue;  // every node held
       const double V = g.held_by[d] >= 0 ? 0.0 : momentum / mass;
@@ -1938,6 +1972,188 @@ void Simulation::tie_rigid_jaws(int p, double t, double dt_avg, double* reaction
       if (g.held_by[d] >= 0) reactions[3 * static_cast<std::size_t>(g.held_by[d]) + d] += support;
     }
   }
+}
+
+// Swivelling jaws: the gripped nodes move as one rigid body, by V dt and the
+// rotation R(phi) about the jaw's origin o: v_j = V + (R(phi) - I) y_j / dt,
+// y_j = x_j - o at t. Part p's share of the sums that give (V, phi), over
+// the free dofs of each direction d: the masses, first moments sum m_j y_j
+// and second moments sum m_j y_j y_j^T; the generalised momentum
+// p = sum a (m_j v_j + dt_avg F_j), a = (e_d, y_j x e_d / L)
+// (rigid_body.hpp); and C = sum a a^T over the dofs held otherwise than by
+// a symmetry plane. Layout (kJawSums): masses 0-2, first moments 3-11,
+// second moments 12-29 (xx, yy, zz, xy, xz, yz per direction), p 30-35,
+// C 36-71.
+void Simulation::swivel_jaw_sums(const Gripper& g, const MechPart& m, const double* x, const std::vector<int>& nodes,
+                                 double dt_avg, bool normal_damping, bool contact, double* sums) const {
+  const MechanicsDef& md = job_.mechanics_settings;
+  const double inv_length = 1.0 / g.size;
+  double* pv = sums + 30;
+  double* C = sums + 36;
+  for (const int i : nodes) {
+    const double y[3] = {x[3 * i] - g.origin[0], x[3 * i + 1] - g.origin[1], x[3 * i + 2] - g.origin[2]};
+    for (int d = 0; d < 3; ++d) {
+      const std::size_t k = 3 * static_cast<std::size_t>(i) + d;
+      double a[6];
+      rigid_row(y, d, inv_length, a);
+      if (m.mass3[k] >= 0) {
+        const double mj = m.mass3[k];
+        const double mom = mj * m.v[k] + dt_avg * jaw_force(m, k, md.damping, normal_damping, contact);
+        for (int r = 0; r < 6; ++r) pv[r] += a[r] * mom;
+        sums[d] += mj;
+        for (int e = 0; e < 3; ++e) sums[3 + 3 * d + e] += mj * y[e];
+        double* S = sums + 12 + 6 * d;
+        S[0] += mj * y[0] * y[0];
+        S[1] += mj * y[1] * y[1];
+        S[2] += mj * y[2] * y[2];
+        S[3] += mj * y[0] * y[1];
+        S[4] += mj * y[0] * y[2];
+        S[5] += mj * y[1] * y[2];
+      } else if (job_.constraints[m.constraint_of[k]].type != ConstraintDef::Type::Symmetry) {
+        for (int r = 0; r < 6; ++r)
+          for (int s = 0; s < 6; ++s) C[6 * r + s] += a[r] * a[s];
+      }
+    }
+  }
+}
+
+namespace {
+inline Vec3 cross3(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+inline Vec3 axis3(int d) { return {d == 0 ? 1.0 : 0.0, d == 1 ? 1.0 : 0.0, d == 2 ? 1.0 : 0.0}; }
+}  // namespace
+
+// A swivelling jaw's force on part p's gripped nodes: each takes the rigid
+// velocity V + (R(phi) - I) y_j / dt, which moves the nodes to their places
+// by the rotation R(phi) about the origin, exactly for any angle. (V, phi)
+// give the nodes the generalised momentum p of the sums:
+//
+//     M (V, L sin|phi| phi / (|phi| dt)) + Q(phi) = p,
+//
+// M q the momentum of the velocities' part linear in phi, Q(phi) that of
+// the part (1 - cos|phi|) / |phi|^2 phi x (phi x y) / dt (from the second
+// moments; it carries the turning body's gyroscopic change of momentum
+// over the step), solved by fixed-point iteration from Q = 0 (each
+// iteration gains a factor |phi|, under 1e-3 in a forming step). A
+// symmetry plane with normal e_d that a gripped node lies on holds V_d and
+// the turning about the other two axes (the jaw and its mirror image are
+// one body).
+void Simulation::solve_swivelling_jaw(const Gripper& g, std::size_t gi, double dt, double* solution) const {
+  double sum[kJawSums] = {};
+  for (std::size_t q = 0; q < parts_.size(); ++q) {
+    const double* s = &jaw_sums_[(q * grippers_.size() + gi) * kJawSums];
+    for (std::size_t r = 0; r < kJawSums; ++r) sum[r] += s[r];
+  }
+  const double L = g.size;
+  // M from the moments: row d of the translation-rotation block is
+  // (s1_d x e_d) / L, the rotation block sum_d [e_d]x S_d [e_d]x^T / L^2.
+  double M[36] = {}, C[36], G[36];
+  std::array<Vec3, 3> s1;
+  std::array<std::array<double, 9>, 3> S;  // per direction, full 3 x 3
+  for (int d = 0; d < 3; ++d) {
+    s1[d] = {sum[3 + 3 * d], sum[4 + 3 * d], sum[5 + 3 * d]};
+    const double* P = sum + 12 + 6 * d;
+    S[d] = {P[0], P[3], P[4], P[3], P[1], P[5], P[4], P[5], P[2]};
+    M[7 * d] = sum[d];
+    const Vec3 tr = cross3(s1[d], axis3(d));
+    for (int r = 0; r < 3; ++r) {
+      M[6 * d + 3 + r] += tr[r] / L;
+      M[6 * (3 + r) + d] += tr[r] / L;
+    }
+    // (y x e_d)(y x e_d)^T summed: y x e_d has y_i2 at i1 and -y_i1 at i2
+    // (i1, i2 the next two axes after d).
+    const int i1 = (d + 1) % 3, i2 = (d + 2) % 3;
+    M[6 * (3 + i1) + 3 + i1] += S[d][4 * i2] / (L * L);
+    M[6 * (3 + i2) + 3 + i2] += S[d][4 * i1] / (L * L);
+    M[6 * (3 + i1) + 3 + i2] -= S[d][3 * i1 + i2] / (L * L);
+    M[6 * (3 + i2) + 3 + i1] -= S[d][3 * i1 + i2] / (L * L);
+  }
+  for (int r = 0; r < 36; ++r) C[r] = sum[36 + r];
+  for (int d = 0; d < 3; ++d)
+    if (g.on_symmetry[d]) {
+      C[7 * d] += 1.0;
+      C[7 * (3 + (d + 1) % 3)] += 1.0;
+      C[7 * (3 + (d + 2) % 3)] += 1.0;
+    }
+  constrained_rigid_inverse(M, C, G);
+  double* q = solution;
+  double* phi = solution + 6;
+  phi[0] = phi[1] = phi[2] = 0.0;
+  for (int it = 0; it < 4; ++it) {
+    double rhs[6];
+    for (int r = 0; r < 6; ++r) rhs[r] = sum[30 + r];
+    if (it > 0) {  // less Q(phi)
+      const double th2 = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2];
+      const double th = std::sqrt(th2), h = std::sin(0.5 * th) / (0.5 * th);
+      const double f2 = th > 0 ? 0.5 * h * h / dt : 0.5 / dt;
+      const Vec3 ph{phi[0], phi[1], phi[2]};
+      Vec3 rot{0, 0, 0};
+      for (int d = 0; d < 3; ++d) {
+        rhs[d] -= f2 * cross3(ph, cross3(ph, s1[d]))[d];
+        const double* Sd = S[d].data();
+        const Vec3 Sphi{Sd[0] * ph[0] + Sd[1] * ph[1] + Sd[2] * ph[2], Sd[3] * ph[0] + Sd[4] * ph[1] + Sd[5] * ph[2],
+                        Sd[6] * ph[0] + Sd[7] * ph[1] + Sd[8] * ph[2]};
+        const Vec3 Se{Sd[d], Sd[3 + d], Sd[6 + d]};
+        const Vec3 t1 = cross3(Sphi, axis3(d)), t2 = cross3(Se, axis3(d));
+        for (int r = 0; r < 3; ++r) rot[r] += ph[d] * t1[r] - th2 * t2[r];
+      }
+      for (int r = 0; r < 3; ++r) rhs[3 + r] -= f2 * rot[r] / L;
+    }
+    for (int r = 0; r < 6; ++r) {
+      q[r] = 0;
+      for (int c = 0; c < 6; ++c) q[r] += G[6 * r + c] * rhs[c];
+    }
+    // sin|phi| phi / |phi| = w dt: the angle whose sine that is.
+    double w_dt[3] = {q[3] / L * dt, q[4] / L * dt, q[5] / L * dt};
+    const double chord = std::sqrt(w_dt[0] * w_dt[0] + w_dt[1] * w_dt[1] + w_dt[2] * w_dt[2]);
+    const double f = chord > 0 ? std::asin(std::min(chord, 1.0)) / chord : 1.0;
+    bool same = true;  // converged to the last bit
+    for (int r = 0; r < 3; ++r) {
+      same = same && phi[r] == w_dt[r] * f;
+      phi[r] = w_dt[r] * f;
+    }
+    if (same) break;
+  }
+}
+
+// Each closed swivelling jaw's (V, phi) from the sums of every part, into
+// the thread's slot of jaw_solution_ (9 numbers per gripper).
+void Simulation::solve_swivelling_jaws(int slot, double t, double dt) {
+  for (std::size_t gi = 0; gi < grippers_.size(); ++gi) {
+    const ConstraintDef& c = job_.constraints[grippers_[gi].constraint];
+    if (c.swivelling && t < c.release)
+      solve_swivelling_jaw(grippers_[gi], gi, dt,
+                           &jaw_solution_[(static_cast<std::size_t>(slot) * grippers_.size() + gi) * 9]);
+  }
+}
+
+// A swivelling jaw's force on part p's gripped nodes from its solution
+// (V, phi).
+void Simulation::tie_swivelling_jaw(const Gripper& g, const double* solution, int p, double dt, double dt_avg,
+                                    double* reactions) {
+  const MechanicsDef& md = job_.mechanics_settings;
+  const bool normal_damping = md.damping_normal && md.damping > 0, contact = !contacts_.empty();
+  const double* q = solution;
+  MechPart& m = *mech_[p];
+  const double* x = parts_[p]->x.data();
+  const Rotation rotation(solution + 6);
+  double support[3] = {0, 0, 0};
+  for (const int i : g.part_nodes[p]) {
+    const double y[3] = {x[3 * i] - g.origin[0], x[3 * i + 1] - g.origin[1], x[3 * i + 2] - g.origin[2]};
+    double turn[3];
+    rotation.increment(y, turn);
+    for (int d = 0; d < 3; ++d) {
+      const std::size_t k = 3 * static_cast<std::size_t>(i) + d;
+      if (m.mass3[k] < 0) continue;
+      const double target = q[d] + turn[d] / dt;
+      const double tie = m.mass3[k] * (target - m.v[k]) / dt_avg - jaw_force(m, k, md.damping, normal_damping, contact);
+      m.load[k] += tie;
+      support[d] += tie;
+    }
+  }
+  for (int d = 0; d < 3; ++d)
+    if (g.held_by[d] >= 0) reactions[3 * static_cast<std::size_t>(g.held_by[d]) + d] += support[d];
 }
 
 // Central differences: v^{n+1/2} = v^{n-1/2} + dt_avg a^n, x^{n+1} = x^n + dt v^{n+1/2}.
@@ -1978,10 +2194,19 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
     if (normal_damping) normal_velocities(parts_[p]->mesh, parts_[p]->x.data(), mech_[p]->v.data(), *mech_[p]);
     if (rigid_jaws_) rigid_jaw_sums(p, t, dt_avg);
   };
-  if (rigid_jaws_) jaw_sums_.assign(static_cast<std::size_t>(np) * 6 * grippers_.size(), 0.0);
-  auto integrate_part = [&](int p) {
+  if (rigid_jaws_) {
+    jaw_sums_.assign(static_cast<std::size_t>(np) * kJawSums * grippers_.size(), 0.0);
+    if (swivelling_jaws_)  // a slot per thread (sized once)
+      jaw_solution_.resize(static_cast<std::size_t>(std::max(1, omp_get_max_threads())) * grippers_.size() * 9);
+    // Swivelling jaws turn about their pin (a gripped node held otherwise
+    // than by a symmetry plane), else about the gripped nodes' centre at t.
+    for (Gripper& g : grippers_)
+      if (job_.constraints[g.constraint].swivelling)
+        g.origin = g.pin_node >= 0 ? sdk::load3(parts_[g.pin_part]->x.data(), g.pin_node) : g.centre;
+  }
+  auto integrate_part = [&](int p, int slot) {
     double* reactions = &part_sums_[p * (6 + nr) + 6];
-    if (rigid_jaws_) tie_rigid_jaws(p, t, dt_avg, reactions);
+    if (rigid_jaws_) tie_rigid_jaws(p, slot, t, dt, dt_avg, reactions);
     PartState& st = *parts_[p];
     MechPart& m = *mech_[p];
     const std::size_t n = 3 * static_cast<std::size_t>(st.mesh.num_nodes());
@@ -2019,16 +2244,18 @@ double Simulation::mechanics_step(double dt, double t, long long step, EnergyAud
           if (thread_of_part(p, team) == me) prepare_part(p);
         prepared.fetch_add(1, std::memory_order_acq_rel);
         spin_until([&] { return prepared.load(std::memory_order_acquire) == team; });
+        if (swivelling_jaws_) solve_swivelling_jaws(me, t, dt);  // each thread the same, from the same sums
       }
       for (int p = 0; p < np; ++p)
         if (thread_of_part(p, team) == me) {
           if (!rigid_jaws_) prepare_part(p);
-          integrate_part(p);
+          integrate_part(p, me);
         }
     }
   } else {
     for (int p = 0; p < np; ++p) prepare_part(p);
-    for (int p = 0; p < np; ++p) integrate_part(p);
+    if (swivelling_jaws_) solve_swivelling_jaws(0, t, dt);
+    for (int p = 0; p < np; ++p) integrate_part(p, 0);
   }
   double w_int = 0, w_ext = 0, w_damp = 0, w_con = 0, kin = 0, kin_half = 0;
   for (int p = 0; p < np; ++p) {

@@ -424,17 +424,36 @@ class Simulation {
     // constraint that holds it in each (-1: free).
     std::array<int, 3> held_by{-1, -1, -1};
     std::vector<std::vector<int>> part_nodes;  // rigid jaws: per part, its gripped nodes
+    // Swivelling jaws: the symmetry planes (by normal) that a gripped node
+    // lies on, which allow the jaw only to turn about their normals; the
+    // first gripped node held otherwise (part, node; -1: none), about
+    // which the jaw turns; the jaws' size (m); the origin at t (m).
+    std::array<bool, 3> on_symmetry{false, false, false};
+    int pin_part = -1, pin_node = -1;
+    double size = 0;
+    std::array<double, 3> origin{0, 0, 0};
   };
   std::vector<Gripper> grippers_;
-  bool rigid_jaws_ = false;       // a gripper has rigid jaws
-  std::vector<double> jaw_sums_;  // per part, gripper and direction: its share of a rigid jaw's sums
+  bool rigid_jaws_ = false;       // a gripper has rigid (or swivelling) jaws
+  bool swivelling_jaws_ = false;  // a gripper has swivelling jaws
+  std::vector<double> jaw_solution_;  // per thread and gripper: a swivelling jaw's (V, phi) this step
+  std::vector<double> jaw_sums_;  // per part and gripper: its share of a rigid jaw's sums (kJawSums)
+  static constexpr std::size_t kJawSums = 72;  // swivelling: moments, p, C (swivel_jaw_sums); rigid: the first 6
   // Each gripper's force on the plies at t, added to the parts' loads.
   void apply_grippers(double t);
   // Rigid jaws at t: part p's share of each jaw's momentum and mass; then
   // to its gripped nodes' loads the forces that give them the jaw's
   // velocity, and the held directions' supports to its reactions.
   void rigid_jaw_sums(int p, double t, double dt_avg);
-  void tie_rigid_jaws(int p, double t, double dt_avg, double* reactions);
+  void tie_rigid_jaws(int p, int slot, double t, double dt, double dt_avg, double* reactions);
+  // Swivelling jaws: part p's share of the sums; each jaw's (V, phi) from
+  // every part's (into the thread's slot of jaw_solution_); the ties.
+  void swivel_jaw_sums(const Gripper& g, const MechPart& m, const double* x, const std::vector<int>& nodes,
+                       double dt_avg, bool normal_damping, bool contact, double* sums) const;
+  void solve_swivelling_jaw(const Gripper& g, std::size_t gi, double dt, double* solution) const;
+  void solve_swivelling_jaws(int slot, double t, double dt);
+  void tie_swivelling_jaw(const Gripper& g, const double* solution, int p, double dt, double dt_avg,
+                          double* reactions);
   std::string jaw_words(const Gripper& g) const;
   double contact_dt_ = std::numeric_limits<double>::infinity();  // contact bound of the stable step
   double tool_dt_ = std::numeric_limits<double>::infinity();     // force-controlled tools' bound

@@ -11,7 +11,8 @@ cup cut at r = 80 mm, UD with either fibre layout and woven, and the top
 plies' patterns on a roll 600 mm wide (two minutes); with --conductivity, only the slab cooled with a conductivity
 that follows the temperature against its reference (seconds); with
 --grippers, only the bias-extension specimen pulled by its clamp and by
-grippers with rigid and flexible jaws (seconds).
+grippers with rigid, swivelling and flexible jaws, and plates turned by
+swivelling jaws against rigid-body dynamics (seconds).
 """
 import csv
 import json
@@ -306,7 +307,7 @@ def grippers(tmp):
                                                "velocity": [0.1, 0, 0]},
                                         {"type": "fix", "part": "specimen", "box": edge, "dofs": ["y"]}, flat],
     }
-    for jaws in ("rigid", "flexible"):
+    for jaws in ("rigid", "swivelling", "flexible"):
         cases["gripper, %s jaws" % jaws] = [held, {"type": "gripper", "name": "jaw", "part": "specimen", "box": edge,
                                                    "anchor": [H + 0.05, W / 2, 0], "stiffness": 1000.0, "jaws": jaws,
                                                    "anchor_motion": {"velocity": [0.1, 0, 0]}}, flat]
@@ -324,7 +325,7 @@ def grippers(tmp):
     def net_force(u, g):  # dE/dgamma at the shear angle g times dgamma/du
         return (e_of_gamma(g + 1e-7) - e_of_gamma(g - 1e-7)) / 2e-7 * (gamma(u + 1e-6) - gamma(u - 1e-6)) / 2e-6
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for (label, constraints), style in zip(cases.items(), ("k--", "C0-", "C3-")):
+    for (label, constraints), style in zip(cases.items(), ("k--", "C0-", "C2:", "C3-")):
         job = dict(base, constraints=constraints)
         if label.startswith("the test"):
             job["time"] = {"end": 0.26}
@@ -359,9 +360,105 @@ def grippers(tmp):
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle("bias extension: the test's clamp, a gripper with rigid jaws, one with flexible jaws")
+    fig.suptitle("bias extension: the test's clamp, grippers with rigid, swivelling and flexible jaws")
     fig.tight_layout()
     fig.savefig(os.path.join(FIG, "gripper_bias.png"), dpi=90)
+    plt.close(fig)
+
+
+def swivelling(tmp):
+    """Plates gripped whole by swivelling jaws (Gripper.SwivellingJaws*): a
+    20 x 20 mm plate pulled along x at a corner, free and held by a `fix`
+    at the opposite corner of its x edge (a pin), and with rigid jaws: the
+    turn against time with the rigid body of the mesh's lumped masses
+    (scipy's RK45 at 1e-10 relative tolerance)."""
+    import math
+    import numpy as np
+    from scipy.integrate import solve_ivp
+    a, P, rho_h, t_end, n = 0.02, 0.01, 1294.0 * 0.0005, 0.025, 4
+    # Lumped masses of the crossed pattern: corners of a cell a quarter
+    # turn of its 4 triangles, the centre node a third of the cell.
+    h = a / n
+    nodes = {}
+    for j in range(n):
+        for i in range(n):
+            c = ((i + 0.5) * h, (j + 0.5) * h)
+            nodes[c] = nodes.get(c, 0) + rho_h * h * h / 3
+            for dx, dy in ((0, 0), (1, 0), (1, 1), (0, 1)):
+                k = ((i + dx) * h, (j + dy) * h)
+                nodes[k] = nodes.get(k, 0) + rho_h * h * h / 6
+    M = sum(nodes.values())
+
+    def job(name, pin, jaws):
+        j = {"format": "thermostamp-job/1", "name": name, "time": {"end": t_end},
+             "materials": {"ud": {"density": 1294.0, "membrane": {
+                 "law": "ud_hyperelastic", "k_fibre": 5.0e4, "p_ct": 5.0e3, "k_sh": [2.0e3, 0.0, 0.0]}}},
+             "parts": [{"name": "plate", "mesh": {"generator": "rectangle", "origin": [0, 0, 0], "size": [a, a],
+                                                  "divisions": [n, n], "pattern": "crossed"},
+                        "thickness": 0.0005, "material": "ud", "initial_temperature": 280.0}],
+             "constraints": [
+                 {"type": "gripper", "name": "jaws", "part": "plate", "box": [[-1, -1, -1], [1, 1, 1]],
+                  "anchor": [a / 2, a / 2 + 1.0, 0], "stiffness": 1e-9, "jaws": jaws},
+                 {"type": "gripper", "name": "pull", "part": "plate", "box": [[a - 1e-6, a - 1e-6, -1],
+                                                                              [a + 1e-6, a + 1e-6, 1]],
+                  "anchor": [a + 100.0, a, 0], "stiffness": 1e-9, "preload": P}],
+             "solvers": {"mechanics": {"dt_safety": 0.8}, "thermal": None},
+             "output": {"interval": t_end, "fields": ["displacement"], "probes": [
+                 {"name": "c%d" % c, "part": "plate", "at": at, "quantities": ["displacement_x", "displacement_y"],
+                  "interval": t_end / 50} for c, at in enumerate(([0, 0, 0], [a, a, 0]))]}}
+        if pin:
+            j["constraints"].append({"type": "fix", "part": "plate", "box": [[-1e-6, -1e-6, -1], [1e-6, 1e-6, 1]],
+                                     "dofs": ["x", "y", "z"]})
+        path = os.path.join(tmp, name + ".json")
+        with open(path, "w") as f:
+            json.dump(j, f)
+        out = os.path.join(tmp, name)
+        subprocess.run([EXE, "run", path, "--out", out, "--quiet", "--threads", "1"], check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        u = {}
+        with open(os.path.join(out, "probes.csv")) as f:
+            for r in csv.DictReader(f):
+                u.setdefault(float(r["time"]), {})[(r["probe"], r["quantity"])] = float(r["value"])
+        ts = sorted(u)
+        turn = [math.atan2(a + u[t][("c1", "displacement_y")] - u[t][("c0", "displacement_y")],
+                           a + u[t][("c1", "displacement_x")] - u[t][("c0", "displacement_x")]) - math.pi / 4
+                for t in ts]
+        return np.array(ts), np.array(turn)
+
+    def reference(pin):
+        ctr = np.array([0.0, 0.0]) if pin else np.array([a / 2, a / 2])
+        I = sum(m * ((x - ctr[0]) ** 2 + (y - ctr[1]) ** 2) for (x, y), m in nodes.items())
+        r0 = np.array([a, a]) - ctr
+
+        def rate(t, y):  # theta, omega, cx, cy, vx, vy
+            c, s = math.cos(y[0]), math.sin(y[0])
+            r = np.array([c * r0[0] - s * r0[1], s * r0[0] + c * r0[1]])
+            pt = ctr + (0 if pin else y[2:4]) + r
+            f = np.array([a + 100.0, a]) - pt
+            f *= P / np.linalg.norm(f)
+            acc = [0.0, 0.0] if pin else list(f / M)
+            return [y[1], (r[0] * f[1] - r[1] * f[0]) / I, y[4], y[5]] + acc
+        ts = np.linspace(0, t_end, 200)
+        sol = solve_ivp(rate, (0, t_end), [0, 0, 0, 0, 0, 0], t_eval=ts, rtol=1e-10, atol=1e-14)
+        return ts, sol.y[0]
+
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    for name, pin, jaws, style in (("free", False, "swivelling", "C0o"), ("pin", True, "swivelling", "C2o"),
+                                   ("rigid", False, "rigid", "C3s")):
+        t, th = job(name, pin, jaws)
+        label = {"free": "swivelling jaws, free", "pin": "swivelling jaws, on a pin at (0, 0)",
+                 "rigid": "rigid jaws"}[name]
+        ax.plot(t * 1e3, np.degrees(th), style, ms=3, label=label)
+        if jaws == "swivelling":
+            tr, thr = reference(pin)
+            ax.plot(tr * 1e3, np.degrees(thr), "k-", lw=0.8, label="rigid body, RK45" if not pin else None)
+    ax.set_xlabel("time (ms)")
+    ax.set_ylabel("turn of the plate (deg)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title("a plate gripped whole, pulled at its corner (a, a) along x by 0.01 N", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(FIG, "gripper_swivel.png"), dpi=90)
     plt.close(fig)
 
 
@@ -370,6 +467,7 @@ def main():
     tmp = tempfile.mkdtemp()
     if "--grippers" in sys.argv:
         grippers(tmp)
+        swivelling(tmp)
         shutil.rmtree(tmp)
         print("figures written to", FIG)
         return

@@ -827,7 +827,7 @@ def plot_grippers(folder, out, rows):
     for g in grippers:
         c = g["constraint"].rsplit("/", 1)[-1]
         f = np.array([[float(r["reaction%s_%s" % (c, d)]) for d in "xyz"] for r in rows])
-        label = g["name"] + (" (rigid jaws)" if g.get("jaws") == "rigid" else "")
+        label = g["name"] + (" (%s jaws)" % g["jaws"] if g.get("jaws") in ("rigid", "swivelling") else "")
         ax.plot(t, np.linalg.norm(f, axis=1), label=label)
     mark_stop([ax], stop_of(folder))
     mark_restart([ax], restart_of(folder))

@@ -62,7 +62,7 @@ json tiny_hemisphere(double end, double interval = 0) {
 TEST(Cli, Version) {
   const auto r = thermostamp("--version");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("thermostamp 0.49.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("thermostamp 0.50.0 (plugin SDK 0.22.0, ABI 22)"), std::string::npos) << r.out;
 }
 
 // A command line that cannot be read: exit status 2, one line naming what
@@ -3961,6 +3961,7 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
     // Flexible jaws: the gripped corner has deformed with the plies.
     EXPECT_EQ(g["jaws"], "flexible");
     EXPECT_GT(g["jaw_distortion_m"].get<double>(), 0.0);
+    EXPECT_GE(g["jaw_rotation_deg"].get<double>(), 0.0);
   }
   ASSERT_EQ(thermostamp("blank " + q(out) + " --whole --trim sphere:0,0,0,0.1").exit_code, 0);  // blank_<ply>.png
   const auto r = thermostamp("report " + q(out));

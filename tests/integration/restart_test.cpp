@@ -285,7 +285,8 @@ TEST(Restart, ContactSharesOfAThermalStepContinueBitForBit) {
 // over from step to step) and the search every step; a gripper with rigid
 // jaws at the corner of both plies whose anchor moves (its load's work is
 // carried to the next step in the audit's pending sums; its jaws tie nodes
-// of two parts, which two threads integrate).
+// of two parts, which two threads integrate), and one with swivelling jaws
+// across the symmetry plane y = 0.
 TEST(Restart, StickingFrictionContinuesBitForBit) {
   json j = coarse_hemisphere("hemisphere_ud_2ply_isothermal.json");
   for (auto& c : j["interactions"])
@@ -299,6 +300,14 @@ TEST(Restart, StickingFrictionContinuesBitForBit) {
                               {"ramp", 0.1},
                               {"anchor_motion", {{"velocity", {0.0, 0.0, -0.005}}}},
                               {"jaws", "rigid"}});
+  j["constraints"].push_back({{"type", "gripper"},
+                              {"part", "*"},
+                              {"box", {{0.13, -1.0, -1.0}, {1.0, 0.02, 1.0}}},
+                              {"anchor", {0.2, 0.01, 0.0}},
+                              {"stiffness", 2000.0},
+                              {"preload", 5.0},
+                              {"ramp", 0.1},
+                              {"jaws", "swivelling"}});
   check_restart("sticking", j, 0.45);
 }
 
