@@ -886,6 +886,50 @@ json materials_summary(const Job& job) {
   }
   return out;
 }
+// A gripper's gripped region at the end: its centre at t = 0 and the
+// centre's displacement; the rigid motion that best carries the nodes'
+// initial places (about their centre) onto their places at the end, its
+// angle (degrees), and the largest distance of a node from where that
+// motion puts it (how far the region has deformed).
+struct JawMotion {
+  std::array<double, 3> c0{0, 0, 0}, cu{0, 0, 0};
+  double rotation_deg = 0, distortion = 0;
+};
+template <class G, class Parts>
+JawMotion jaw_motion(const G& gr, const Parts& parts) {
+  JawMotion out;
+  auto& c0 = out.c0;
+  auto& cu = out.cu;
+  for (std::size_t j = 0; j < gr.nodes.size(); ++j)
+    for (int d = 0; d < 3; ++d) {
+      const std::size_t k = 3 * static_cast<std::size_t>(gr.nodes[j].second) + d;
+      c0[d] += gr.share[j] * parts[gr.nodes[j].first]->x0[k];
+      cu[d] += gr.share[j] * (parts[gr.nodes[j].first]->x[k] - parts[gr.nodes[j].first]->x0[k]);
+    }
+  double H[9] = {}, R[9];
+  for (std::size_t j = 0; j < gr.nodes.size(); ++j) {
+    const auto [p, i] = gr.nodes[j];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        H[3 * r + c] += gr.share[j] * (parts[p]->x0[3 * i + r] - c0[r]) * (parts[p]->x[3 * i + c] - c0[c] - cu[c]);
+  }
+  best_fit_rotation(H, R);
+  for (const auto& [p, i] : gr.nodes) {
+    double s2 = 0;
+    for (int d = 0; d < 3; ++d) {
+      double placed = c0[d] + cu[d];
+      for (int e = 0; e < 3; ++e) placed += R[3 * d + e] * (parts[p]->x0[3 * i + e] - c0[e]);
+      const double err = parts[p]->x[3 * static_cast<std::size_t>(i) + d] - placed;
+      s2 += err * err;
+    }
+    out.distortion = std::max(out.distortion, std::sqrt(s2));
+  }
+  // The angle from its sine (the skew part) and cosine (the trace).
+  const double sine =
+      0.5 * std::sqrt(std::pow(R[7] - R[5], 2) + std::pow(R[2] - R[6], 2) + std::pow(R[3] - R[1], 2));
+  out.rotation_deg = std::atan2(sine, 0.5 * (R[0] + R[4] + R[8] - 1.0)) * 180.0 / M_PI;
+  return out;
+}
 }  // namespace
 
 bool Simulation::Run::write_summary(std::string& why) const {
@@ -972,42 +1016,8 @@ bool Simulation::Run::write_summary(std::string& why) const {
       for (std::size_t g = 0; g < sim.grippers_.size(); ++g) {
         const Gripper& gr = sim.grippers_[g];
         const ConstraintDef& c = job.constraints[gr.constraint];
-        std::array<double, 3> c0{0, 0, 0};  // the gripped nodes' centre at t = 0
-        std::array<double, 3> cu{0, 0, 0};  // its displacement at the end
-        for (std::size_t j = 0; j < gr.nodes.size(); ++j)
-          for (int d = 0; d < 3; ++d) {
-            const std::size_t k = 3 * static_cast<std::size_t>(gr.nodes[j].second) + d;
-            c0[d] += gr.share[j] * parts[gr.nodes[j].first]->x0[k];
-            cu[d] += gr.share[j] * (parts[gr.nodes[j].first]->x[k] - parts[gr.nodes[j].first]->x0[k]);
-          }
-        // How far the gripped region has turned and deformed: the rigid
-        // motion that best carries the nodes' initial places (about their
-        // centre) onto their places at the end, its angle, and the largest
-        // distance of a node from where that motion puts it.
-        double H[9] = {}, R[9];
-        for (std::size_t j = 0; j < gr.nodes.size(); ++j) {
-          const auto [p, i] = gr.nodes[j];
-          for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c)
-              H[3 * r + c] += gr.share[j] * (parts[p]->x0[3 * i + r] - c0[r]) *
-                              (parts[p]->x[3 * i + c] - c0[c] - cu[c]);
-        }
-        best_fit_rotation(H, R);
-        double distortion = 0;
-        for (const auto& [p, i] : gr.nodes) {
-          double s2 = 0;
-          for (int d = 0; d < 3; ++d) {
-            double placed = c0[d] + cu[d];
-            for (int e = 0; e < 3; ++e) placed += R[3 * d + e] * (parts[p]->x0[3 * i + e] - c0[e]);
-            const double err = parts[p]->x[3 * static_cast<std::size_t>(i) + d] - placed;
-            s2 += err * err;
-          }
-          distortion = std::max(distortion, std::sqrt(s2));
-        }
-        // The angle from its sine (the skew part) and cosine (the trace).
-        const double sine =
-            0.5 * std::sqrt(std::pow(R[7] - R[5], 2) + std::pow(R[2] - R[6], 2) + std::pow(R[3] - R[1], 2));
-        const double rotation = std::atan2(sine, 0.5 * (R[0] + R[4] + R[8] - 1.0)) * 180.0 / M_PI;
+        const JawMotion jm = jaw_motion(gr, parts);
+        const std::array<double, 3>& c0 = jm.c0;
         grippers.push_back({{"name", c.name},
                             {"constraint", c.pointer},
                             {"jaws", c.swivelling ? "swivelling" : c.rigid ? "rigid" : "flexible"},
@@ -1018,8 +1028,8 @@ bool Simulation::Run::write_summary(std::string& why) const {
                             {"extension_m", gr.extension},
                             {"centre_displacement_m",
                              {gr.centre[0] - c0[0], gr.centre[1] - c0[1], gr.centre[2] - c0[2]}},
-                            {"jaw_distortion_m", distortion},
-                            {"jaw_rotation_deg", rotation},
+                            {"jaw_distortion_m", jm.distortion},
+                            {"jaw_rotation_deg", jm.rotation_deg},
                             {"force_max_N", result.energy.gripper_force_max[g]},
                             {"force_max_at_s", result.energy.gripper_force_max_at[g]}});
       }
@@ -1159,10 +1169,16 @@ void Simulation::Run::log_end() const {
                 fmt_g(result.energy.tool_force_max_at[q], 4));
     for (std::size_t g = 0; g < result.energy.gripper_force_max.size(); ++g) {
       const Gripper& gr = sim.grippers_[g];
-      log->info("gripper '{}': largest force {:.4g} N at t = {} s; at the end {:.4g} N, its spring {} by {:.4g} mm",
-                job.constraints[gr.constraint].name, result.energy.gripper_force_max[g],
-                fmt_g(result.energy.gripper_force_max_at[g], 4), gr.tension,
-                gr.extension >= 0 ? "extended" : "shortened", 1e3 * std::abs(gr.extension));
+      const ConstraintDef& c = job.constraints[gr.constraint];
+      std::string region;  // how the gripped region has turned (and deformed)
+      if (c.swivelling || !c.rigid) {
+        const JawMotion jm = jaw_motion(gr, parts);
+        region = fmt::format("; the gripped region turned by {:.3g} deg", jm.rotation_deg);
+        if (!c.rigid) region += fmt::format(" and deformed by {:.3g} mm beyond that", 1e3 * jm.distortion);
+      }
+      log->info("gripper '{}': largest force {:.4g} N at t = {} s; at the end {:.4g} N, its spring {} by {:.4g} mm{}",
+                c.name, result.energy.gripper_force_max[g], fmt_g(result.energy.gripper_force_max_at[g], 4),
+                gr.tension, gr.extension >= 0 ? "extended" : "shortened", 1e3 * std::abs(gr.extension), region);
     }
   }
   if (job.thermal) {

@@ -374,7 +374,8 @@ std::vector<std::string> Simulation::mesh_file_lines() const {
   return lines;
 }
 
-// ", rigid jaws" and the directions in which they are held, or nothing.
+// ", rigid jaws" or ", swivelling jaws", the directions in which they are
+// held and how swivelling jaws may turn; or nothing.
 std::string Simulation::jaw_words(const Gripper& g) const {
   const ConstraintDef& c = job_.constraints[g.constraint];
   if (!c.rigid) return "";

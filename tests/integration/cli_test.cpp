@@ -3962,6 +3962,12 @@ TEST(Cli, ReportWritesFiguresAndNamesAFileItCannotRead) {
     EXPECT_EQ(g["jaws"], "flexible");
     EXPECT_GT(g["jaw_distortion_m"].get<double>(), 0.0);
     EXPECT_GE(g["jaw_rotation_deg"].get<double>(), 0.0);
+    // The log's last lines say how far the region turned and deformed.
+    std::ostringstream log;
+    log << std::ifstream(out / "log.txt").rdbuf();
+    EXPECT_NE(log.str().find("gripper 'corner': largest force "), std::string::npos);
+    EXPECT_NE(log.str().find("the gripped region turned by "), std::string::npos);
+    EXPECT_NE(log.str().find(" mm beyond that"), std::string::npos);
   }
   ASSERT_EQ(thermostamp("blank " + q(out) + " --whole --trim sphere:0,0,0,0.1").exit_code, 0);  // blank_<ply>.png
   const auto r = thermostamp("report " + q(out));
